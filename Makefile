@@ -1,0 +1,43 @@
+# virtspec-mi: `make demo` and `make test` set everything up on a fresh Debian 12 machine.
+# Set-up is idempotent: a virtual environment in .venv, the project installed into it
+# (editable, with the test extra), and a libLLVM that Dr.Jit 1.5 can use (libllvm19).
+
+PYTHON ?= python3
+VENV   := .venv
+PY     := $(VENV)/bin/python
+STAMP  := $(VENV)/.installed
+SUDO   := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
+PYTEST_ARGS ?=
+
+.PHONY: setup llvm demo test test-fast bench clean
+
+setup: $(STAMP) llvm
+
+$(STAMP): pyproject.toml
+	@[ -x $(PY) ] || $(PYTHON) -m venv $(VENV)
+	$(PY) -m pip install --quiet --upgrade pip
+	$(PY) -m pip install --quiet -e '.[test]'
+	@touch $(STAMP)
+
+# Dr.Jit aborts under libLLVM 14/15/16 (Debian 12's defaults): install 19 when no good one is found.
+llvm: $(STAMP)
+	@$(PY) -m virtspec_mi.llvm find >/dev/null 2>&1 || { \
+	  echo "setup: no libLLVM >= 17 found; installing Debian's libllvm19"; \
+	  $(SUDO) apt-get update -qq && $(SUDO) DEBIAN_FRONTEND=noninteractive apt-get install -y -qq libllvm19 >/dev/null; }
+	@$(PY) -m virtspec_mi.llvm check
+
+demo: setup
+	$(VENV)/bin/virtspec measure scenes/diamond_conical.xml --theta-i 70
+
+# The whole suite, slow statistical tests included (plain `pytest` deselects them).
+test: setup
+	$(PY) -m pytest -m "slow or not slow" $(PYTEST_ARGS)
+
+test-fast: setup
+	$(PY) -m pytest $(PYTEST_ARGS)
+
+bench: setup
+	$(PY) benchmarks/throughput.py
+
+clean:
+	rm -rf $(VENV) build *.egg-info .pytest_cache

@@ -1,0 +1,37 @@
+"""
+virtspec-mi's Mitsuba plugins
+=============================
+
+One plugin per file: ``bsdfs/`` holds specimens, ``integrators/`` the instrument.
+:func:`register` registers them all under the current Mitsuba variant; call it
+through :func:`virtspec_mi.runtime.mitsuba`, which sets the variant first.
+
+=====================  ===========  ==========================================
+name                   kind         module
+=====================  ===========  ==========================================
+``simple_dielectric``  BSDF         :mod:`.bsdfs.simple_dielectric`
+``spectrophotometer``  integrator   :mod:`.integrators.spectrophotometer`
+=====================  ===========  ==========================================
+"""
+
+from __future__ import annotations
+
+__all__ = ["PLUGINS", "register"]
+
+PLUGINS: dict[str, tuple[str, str, str]] = {
+    "simple_dielectric": ("bsdf", ".bsdfs.simple_dielectric", "SimpleDielectric"),
+    "spectrophotometer": ("integrator", ".integrators.spectrophotometer", "Spectrophotometer"),
+}
+
+
+def register() -> None:
+    """Register every plugin of :data:`PLUGINS` under the current Mitsuba variant."""
+
+    import importlib
+
+    import mitsuba as mi
+
+    registrars = {"bsdf": mi.register_bsdf, "integrator": mi.register_integrator}
+    for name, (kind, module, cls) in PLUGINS.items():
+        plugin = getattr(importlib.import_module(module, __name__), cls)
+        registrars[kind](name, lambda props, plugin=plugin: plugin(props))

@@ -1,0 +1,53 @@
+"""
+virtspec-mi: a virtual spectrophotometer built as Mitsuba 3 plugins
+===================================================================
+
+Certified reflectance / transmittance / absorptance readings of Mitsuba BSDFs
+(Baranoski, Rokne & Xu 2001). Importing the package is cheap; the first use of a
+Mitsuba-backed name (``measure``, ``Reading``, ``instrument_scene`` …) selects a
+working libLLVM, the ``llvm_ad_spectral`` variant and registers the plugins.
+"""
+
+from __future__ import annotations
+
+import importlib
+from typing import Any
+
+__version__ = "0.1.0"
+
+__all__ = [
+    "__version__",
+    "measure",
+    "Reading",
+    "Settings",
+    "InstrumentGeometry",
+    "instrument_scene",
+    "load_scene",
+    "find_instrument",
+    "hoeffding_rays",
+    "chebyshev_rays",
+    "hoeffding_mu",
+    "chebyshev_mu",
+    "mitsuba",
+]
+
+_LAZY = {
+    "measure": "virtspec_mi.reading",
+    "Reading": "virtspec_mi.reading",
+    "Settings": "virtspec_mi.settings",
+    "InstrumentGeometry": "virtspec_mi.geometry",
+    "instrument_scene": "virtspec_mi.instrument",
+    "load_scene": "virtspec_mi.instrument",
+    "find_instrument": "virtspec_mi.instrument",
+    "hoeffding_rays": "virtspec_mi.bounds",
+    "chebyshev_rays": "virtspec_mi.bounds",
+    "hoeffding_mu": "virtspec_mi.bounds",
+    "chebyshev_mu": "virtspec_mi.bounds",
+    "mitsuba": "virtspec_mi.runtime",
+}
+
+
+def __getattr__(name: str) -> Any:
+    if name in _LAZY:
+        return getattr(importlib.import_module(_LAZY[name]), name)
+    raise AttributeError(f"module 'virtspec_mi' has no attribute {name!r}")

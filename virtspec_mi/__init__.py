@@ -47,6 +47,20 @@ _LAZY = {
 }
 
 
+def _prefer_working_libllvm() -> None:
+    """Point Dr.Jit at a working libLLVM as early as possible (never raises at import)."""
+
+    from virtspec_mi.llvm import LLVMError, select_libllvm
+
+    try:
+        select_libllvm()
+    except LLVMError:
+        pass  # reported with the fix when Mitsuba is first used (virtspec_mi.runtime)
+
+
+_prefer_working_libllvm()
+
+
 def __getattr__(name: str) -> Any:
     if name in _LAZY:
         return getattr(importlib.import_module(_LAZY[name]), name)

@@ -77,7 +77,7 @@ def hoeffding_rays(mu: float, delta: float) -> int:
 def chebyshev_mu(rays: int, delta: float) -> float:
     """Tolerance μ that ``rays`` rays guarantee at δ under eq. (14): ``μ = 1/(2√(Nδ))``."""
 
-    check_rays(rays)
+    check_rays(rays, math.inf)
     check_delta(delta)
     return 1.0 / (2.0 * math.sqrt(rays * delta))
 
@@ -85,7 +85,7 @@ def chebyshev_mu(rays: int, delta: float) -> float:
 def hoeffding_mu(rays: int, delta: float) -> float:
     """Tolerance μ that ``rays`` rays guarantee at δ under eq. (19): ``μ = √(ln(2/δ)/(2N))``."""
 
-    check_rays(rays)
+    check_rays(rays, math.inf)
     check_delta(delta)
     return math.sqrt(math.log(2.0 / delta) / (2.0 * rays))
 
@@ -116,7 +116,7 @@ def miss_probability(rays: int, rho: float, mu: float) -> float:
 
     from scipy import stats
 
-    check_rays(rays)
+    check_rays(rays, math.inf)
     check_mu(mu)
     n = int(rays)
     # m ≤ N(ρ − μ) or m ≥ N(ρ + μ); the 1e-9 guards the lattice points against rounding.

@@ -69,14 +69,15 @@ def check_delta(delta: Any) -> float:
     return delta
 
 
-def check_rays(rays: Any) -> int:
-    """Rays per reading: a whole number, 1 ≤ rays ≤ 2³² − 1."""
+def check_rays(rays: Any, maximum: float = MAX_RAYS) -> int:
+    """Rays per reading: a whole number, 1 ≤ rays ≤ ``maximum`` (2³² − 1 for a reading)."""
 
     if isinstance(rays, bool) or not float(_number("rays", rays)).is_integer():
         raise ValueError(f"rays must be a whole number >= 1 (got {rays!r})")
     rays = int(float(rays))
-    if not 1 <= rays <= MAX_RAYS:
-        raise ValueError(f"rays must satisfy 1 <= rays <= {MAX_RAYS} (got {rays})")
+    if not 1 <= rays <= maximum:
+        upper = f" <= {int(maximum)}" if math.isfinite(maximum) else ""
+        raise ValueError(f"rays must satisfy 1 <= rays{upper} (got {rays})")
     return rays
 
 

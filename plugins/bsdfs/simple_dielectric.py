@@ -18,7 +18,8 @@ Parameters
 ----------
 eta : float, default 2.419
     Relative index of refraction (interior / exterior), > 0. 2.419 is diamond
-    (the paper's specimen). η = 1 gives R = 0 exactly.
+    (the paper's specimen). η = 1 is no interface: R = 0 exactly, even at grazing
+    incidence.
 
 References
 ----------
@@ -53,6 +54,10 @@ class SimpleDielectric(mi.BSDF):
 
     def sample(self, ctx, si, sample1, sample2, active=True):
         fresnel, cos_theta_t, eta_it, eta_ti = mi.fresnel(mi.Frame3f.cos_theta(si.wi), self.eta)
+        if self.eta == 1.0:
+            # No interface at all: F = 0 at every angle (float32 Fresnel would round the
+            # grazing limit cos θ → 0 up to F = 1).
+            fresnel = mi.Float(0.0)
         reflect = sample1 < fresnel
         bs = dr.zeros(mi.BSDFSample3f)
         bs.wo = dr.select(reflect, mi.reflect(si.wi), mi.refract(si.wi, cos_theta_t, eta_ti))

@@ -42,8 +42,10 @@ settings) is kept in ``integrator.last_reading``. The scene needs a sensor for
 
 Conventions
 -----------
-- Fates are judged in the specimen frame: a ray leaving with wo·n ≥ 0 is reflected
-  (upper hemisphere), wo·n < 0 transmitted; a zero BSDF weight is absorption.
+- Fates are judged in the specimen frame: a ray leaving with wo·n > 0 is reflected
+  (upper hemisphere), wo·n < 0 transmitted; one leaving exactly in the plane
+  (wo·n = 0, grazing) counts on the far side of the specimen if the BSDF sampled a
+  transmission, else on the side it came from. A zero BSDF weight is absorption.
 - A BSDF weight w ∈ [0, 1] survives with probability w (Russian roulette) so each
   ray stays a Bernoulli trial; weights outside [0, 1] or NaN are counted as
   ``weight_violations`` (the reading's guarantee then does not hold).
@@ -262,7 +264,9 @@ class _Kernel:
         bs, weight = self.bsdf.sample(context, si, uniform(4), mi.Point2f(uniform(5), uniform(6)), True)
         w = mi.Spectrum(weight)[0]
         survives = uniform(7) < w
-        upper = bs.wo.z >= 0.0
+        # wo·n = 0 exactly (grazing exit): the sampled event decides — transmission crosses.
+        crossed = mi.has_flag(bs.sampled_type, mi.BSDFFlags.Transmission)
+        upper = dr.select(bs.wo.z != 0.0, bs.wo.z > 0.0, crossed ^ (wi.z >= 0.0))
         fate = dr.select(survives, dr.select(upper, mi.UInt32(1), mi.UInt32(2)), mi.UInt32(0))
         violation = ~((w >= 0.0) & (w <= 1.0))
         return {"origin": origin, "target": target, "wi": wi, "wo": bs.wo, "fate": fate,

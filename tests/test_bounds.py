@@ -1,0 +1,82 @@
+"""Tests of virtspec_mi.bounds: eqs. (15), (23), inverses, Table 1, exact miss probability."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from scipy import stats
+
+from virtspec_mi import bounds
+
+
+def test_hoeffding_rays_paper_value():
+    # eq. (23): ln(2/0.01) / (2 * 0.005**2) = 105,966.3... -> 105,967, i.e. 10**5.025
+    assert bounds.hoeffding_rays(0.005, 0.01) == 105_967
+    assert math.log10(bounds.hoeffding_rays(0.005, 0.01)) == pytest.approx(5.0252, abs=1e-4)
+
+
+def test_chebyshev_rays_paper_value():
+    # eq. (15): 1 / (4 mu^2 delta), exact powers of ten for Table 1
+    assert bounds.chebyshev_rays(0.005, 0.001) == 10_000_000
+    assert bounds.chebyshev_rays(0.005, 0.01) == 1_000_000
+    assert bounds.chebyshev_rays(0.005, 0.1) == 100_000
+
+
+@pytest.mark.parametrize("mu", [0.001, 0.005, 0.02, 0.1])
+@pytest.mark.parametrize("delta", [1e-6, 0.001, 0.01, 0.2])
+def test_inverses_round_trip(mu, delta):
+    n = bounds.hoeffding_rays(mu, delta)
+    # N rays guarantee at least mu; one ray fewer would not.
+    assert bounds.hoeffding_mu(n, delta) <= mu
+    assert bounds.hoeffding_mu(n - 1, delta) > mu if n > 1 else True
+    n = bounds.chebyshev_rays(mu, delta)
+    assert bounds.chebyshev_mu(n, delta) <= mu * (1 + 1e-12)
+
+
+def test_hoeffding_tighter_than_chebyshev_as_delta_shrinks():
+    # eq. (21): k_c / k_e -> infinity as delta -> 0
+    ratios = [bounds.chebyshev_rays(0.005, d) / bounds.hoeffding_rays(0.005, d) for d in (0.1, 0.01, 1e-4)]
+    assert ratios == sorted(ratios) and ratios[-1] > 100
+
+
+def test_table_1_true_log10_and_truncation_note():
+    rows = {row.delta: row for row in bounds.table_1()}
+    assert f"{rows[0.001].hoeffding_log10:.2f}" == "5.18"
+    assert f"{rows[0.01].hoeffding_log10:.2f}" == "5.03"  # the paper truncates to 5.02
+    assert f"{rows[0.1].hoeffding_log10:.2f}" == "4.78"  # the paper truncates to 4.77
+    text = bounds.format_table_1()
+    assert "105,967" in text and "paper 5.02" in text and "paper 4.77" in text
+    assert "paper 5.18" not in text
+
+
+def test_miss_probability_matches_brute_force_binomial():
+    n, rho, mu = 461, 0.3, 0.05
+    m = np.arange(n + 1)
+    brute = stats.binom.pmf(m, n, rho)[np.abs(m / n - rho) >= mu - 1e-12].sum()
+    assert bounds.miss_probability(n, rho, mu) == pytest.approx(brute, rel=1e-9)
+
+
+def test_miss_probability_below_delta_at_certified_n():
+    # The bound is conservative: at N = 105,967 the worst case is ~0.0011 (anchors.md §2e).
+    n = bounds.hoeffding_rays(0.005, 0.01)
+    worst = max(bounds.miss_probability(n, p, 0.005) for p in np.linspace(0.45, 0.55, 41))
+    assert 0.0009 < worst < 0.0013
+    assert bounds.miss_probability(n, 0.0, 0.005) == 0.0
+
+
+@pytest.mark.parametrize(
+    "call, message",
+    [
+        (lambda: bounds.hoeffding_rays(0.0, 0.01), "mu must satisfy 0 < mu < 0.5"),
+        (lambda: bounds.hoeffding_rays(0.5, 0.01), "mu must satisfy 0 < mu < 0.5"),
+        (lambda: bounds.hoeffding_rays(0.005, 0.0), "delta must satisfy 0 < delta < 1"),
+        (lambda: bounds.chebyshev_rays(0.005, 1.0), "delta must satisfy 0 < delta < 1"),
+        (lambda: bounds.hoeffding_mu(0, 0.01), "rays must satisfy 1 <= rays"),
+        (lambda: bounds.rays_for_bound("magic", 0.005, 0.01), "bound must be one of"),
+    ],
+)
+def test_bad_input_names_parameter_and_range(call, message):
+    with pytest.raises(ValueError, match=message):
+        call()

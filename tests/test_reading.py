@@ -1,0 +1,236 @@
+"""
+Tests of virtspec_mi.reading.measure (and, through it, the spectrophotometer kernel).
+
+Statistical checks use fixed seeds and the certified tolerance of the reading: with
+N from eq. (23) each assertion |m/N − ρ| < μ fails for a random seed with probability
+at most δ (exactly, at most ``miss_probability(N, ρ, μ)`` ≈ 0.001 at the defaults).
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+import warnings
+
+import drjit as dr
+import numpy as np
+import pytest
+from scipy import stats
+
+import virtspec_mi as vm
+from virtspec_mi.bounds import hoeffding_rays, miss_probability
+from virtspec_mi.reference import fresnel_reflectance
+
+MU, DELTA = 0.005, 0.01
+
+
+def collimated(scene, theta, **kwargs):
+    return vm.measure(scene, theta_i=theta, beam="collimated", **kwargs)
+
+
+@pytest.mark.parametrize("theta", [0, 30, 60, 80, 89])
+def test_collimated_diamond_is_fresnel_within_certified_mu(diamond, theta):
+    reading = collimated(diamond, theta, seed=0)
+    assert reading.rays == hoeffding_rays(MU, DELTA) == 105_967
+    assert abs(reading.reflectance[0] - fresnel_reflectance(theta, 2.419)) < MU
+    assert abs(reading.transmittance[0] - (1 - fresnel_reflectance(theta, 2.419))) < MU
+
+
+def test_reflects_with_probability_f_not_one_minus_f(diamond):
+    # The paper's text ("if F <= xi the ray is reflected") would give 1 - F = 0.83 at 0 deg.
+    reading = collimated(diamond, 0, seed=1)
+    assert reading.reflectance[0] == pytest.approx(0.172253, abs=MU)
+    assert abs(reading.reflectance[0] - (1 - 0.172253)) > 0.5
+
+
+@pytest.mark.parametrize("beam", ["collimated", "conical"])
+def test_counts_add_up_exactly(diamond, beam):
+    reading = vm.measure(diamond, theta_i=45, beam=beam, wavelengths="400:700:150")
+    assert np.all(reading.reflected + reading.transmitted + reading.absorbed == reading.rays)
+    total = reading.reflectance + reading.transmittance + reading.absorptance
+    np.testing.assert_allclose(total, 1.0, rtol=0, atol=1e-15)
+    assert reading.reflected.dtype == np.int64
+
+
+@pytest.mark.parametrize("theta", [0, 45, 70, 85])
+def test_mitsuba_dielectric_agrees_with_simple_dielectric(mi, theta):
+    mitsuba_dielectric = vm.instrument_scene({"type": "dielectric", "int_ior": 2.419, "ext_ior": 1.0})
+    for beam in ("collimated", "conical"):
+        ours = vm.measure(vm.instrument_scene({"type": "simple_dielectric"}), theta_i=theta, beam=beam, seed=3)
+        theirs = vm.measure(mitsuba_dielectric, theta_i=theta, beam=beam, seed=4)
+        # each is within mu of the same expectation (certified), so they differ by < 2 mu
+        assert abs(ours.reflectance[0] - theirs.reflectance[0]) < 2 * MU
+        assert theirs.weight_violations.sum() == 0
+    assert abs(theirs.reflectance[0] - fresnel_reflectance(theta, 2.419)) < MU or beam == "conical"
+
+
+def test_same_seed_same_counts_whatever_chunk_size_and_threads(diamond):
+    kwargs = dict(theta_i=70, wavelengths=[450, 551, 650], seed=11, sampling="jittered")
+    reference = vm.measure(diamond, **kwargs)
+    small_chunks = vm.measure(diamond, chunk_size=1024 * 7, **kwargs)
+    threads = dr.thread_count()
+    try:
+        dr.set_thread_count(1)
+        one_thread = vm.measure(diamond, chunk_size=50_000, **kwargs)
+    finally:
+        dr.set_thread_count(threads)
+    for other in (small_chunks, one_thread):
+        np.testing.assert_array_equal(other.reflected, reference.reflected)
+        np.testing.assert_array_equal(other.transmitted, reference.transmitted)
+
+
+@pytest.mark.parametrize("sampling", ["jittered", "random", "concentric"])
+def test_first_reading_of_a_batch_equals_a_single_reading(diamond, sampling):
+    # readings are keyed on the global ray index: reading 0 is the same rays either way,
+    # whether its chunk holds one reading (scalar path) or several (gathered path).
+    batch = vm.measure(diamond, theta_i=60, wavelengths=[500, 600, 700], rays=5000, sampling=sampling, seed=5)
+    single = vm.measure(diamond, theta_i=60, wavelengths=[500], rays=5000, sampling=sampling, seed=5)
+    assert batch.reflected[0] == single.reflected[0]
+    other_seed = vm.measure(diamond, theta_i=60, wavelengths=[500, 600, 700], rays=5000, sampling=sampling, seed=6)
+    assert not np.array_equal(other_seed.reflected, batch.reflected)
+
+
+def test_miss_count_agrees_with_exact_binomial(diamond):
+    """
+    K independent readings (one per wavelength: each has its own rays) of a specimen
+    whose rho is known exactly; the number of misses |m/N - rho| >= mu must be
+    consistent with Binomial(K, q), q = miss_probability(N, rho, mu) (anchors.md §2e:
+    a plain "misses <= delta K" check has no power). Two-sided test at level 1e-4.
+    """
+
+    mu, delta, k = 0.05, 0.2, 2000
+    n = hoeffding_rays(mu, delta)  # 461
+    rho = float(fresnel_reflectance(80.0, 2.419))  # 0.4333
+    wavelengths = 400.0 + 0.1 * np.arange(k)
+    reading = collimated(diamond, 80.0, wavelengths=wavelengths, mu=mu, delta=delta, seed=2024)
+    misses = int(np.sum(np.abs(reading.reflectance - rho) >= mu))
+    q = miss_probability(n, rho, mu)
+    assert 0.02 < q < 0.05  # the test has something to detect
+    assert stats.binomtest(misses, k, q).pvalue > 1e-4, (misses, k * q)
+    # unbiased: the pooled estimate is within 4 standard errors of rho
+    pooled = reading.reflected.sum() / (n * k)
+    assert abs(pooled - rho) < 4 * np.sqrt(rho * (1 - rho) / (n * k))
+    # and it has power: half the rays give a miss rate the binomial test rejects
+    half = collimated(diamond, 80.0, wavelengths=wavelengths, rays=n // 2, seed=2025)
+    half_misses = int(np.sum(np.abs(half.reflectance - rho) >= mu))
+    assert stats.binomtest(half_misses, k, q).pvalue < 1e-4
+
+
+# --- hard cases ------------------------------------------------------------------------
+
+
+def test_grazing_collimated_90_degrees_reflects_everything(diamond):
+    # theta_i = 90 is the limit theta -> 90-: cos(pi/2) = 6.1e-17 > 0 in float64, F -> 1.
+    reading = collimated(diamond, 90.0)
+    assert reading.reflectance[0] == 1.0 and reading.transmittance[0] == 0.0
+
+
+def test_grazing_collimated_89_999_degrees(diamond):
+    reading = collimated(diamond, 89.999)
+    expected = fresnel_reflectance(89.999, 2.419)
+    assert 0.999 < expected < 1.0
+    assert abs(reading.reflectance[0] - expected) < MU
+
+
+@pytest.mark.parametrize("theta", [86.0, 89.0, 90.0])
+def test_conical_with_emitter_partly_below_specimen_plane(diamond, theta):
+    reading = vm.measure(diamond, theta_i=theta, beam="conical")
+    assert 0 < reading.backlit_fraction <= 0.5
+    assert np.isfinite(reading.reflectance).all()
+    assert reading.reflected[0] + reading.transmitted[0] + reading.absorbed[0] == reading.rays
+
+
+@pytest.mark.parametrize("beam", ["collimated", "conical"])
+@pytest.mark.parametrize("theta", [0.0, 45.0, 89.0, 90.0])
+def test_index_matched_dielectric_never_reflects(mi, beam, theta):
+    scene = vm.instrument_scene({"type": "simple_dielectric", "eta": 1.0})
+    reading = vm.measure(scene, theta_i=theta, beam=beam)
+    if beam == "conical" and theta > 85.43:
+        # back-lit rays pass straight through into the upper hemisphere: R = backlit share
+        assert abs(reading.reflectance[0] - reading.backlit_fraction) < MU
+    else:
+        assert reading.reflected[0] == 0 and reading.transmittance[0] == 1.0
+
+
+def test_a_single_ray(diamond):
+    reading = vm.measure(diamond, theta_i=30, rays=1, wavelengths=[400, 500, 600])
+    assert reading.rays == 1
+    assert set(reading.reflectance) <= {0.0, 1.0}
+    assert np.all(reading.reflected + reading.transmitted == 1)
+
+
+@pytest.mark.slow
+def test_a_billion_rays_exact_counts_in_bounded_memory(tmp_path):
+    """N = 10^9 in one reading: exact integer counts and < 1 GiB peak memory (fresh process)."""
+
+    script = (
+        "import json, resource, virtspec_mi as vm\n"
+        "r = vm.measure(vm.instrument_scene({'type': 'simple_dielectric'}), theta_i=0, "
+        "beam='collimated', rays=10**9)\n"
+        "print(json.dumps({'r': int(r.reflected[0]), 't': int(r.transmitted[0]), 'a': int(r.absorbed[0]),"
+        " 'rss_kib': resource.getrusage(resource.RUSAGE_SELF).ru_maxrss}))\n"
+    )
+    out = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, check=True)
+    result = json.loads(out.stdout.strip().splitlines()[-1])
+    assert result["r"] + result["t"] + result["a"] == 10**9 and result["a"] == 0
+    # well beyond float32 (2^24) and within the certified tolerance of 10^9 rays at delta = 1e-6
+    assert abs(result["r"] / 1e9 - 0.172253) < vm.hoeffding_mu(10**9, 1e-6)
+    assert result["rss_kib"] < 1024 * 1024
+
+
+# --- Mitsuba built-in specimens and weights ---------------------------------------------
+
+
+def test_diffuse_specimen_reads_its_albedo(mi):
+    scene = vm.instrument_scene({"type": "diffuse", "reflectance": 0.3})
+    for beam in ("collimated", "conical"):
+        reading = vm.measure(scene, theta_i=40, beam=beam, wavelengths=[450, 650])
+        assert np.all(np.abs(reading.reflectance - 0.3) < MU)
+        assert np.all(reading.transmitted == 0)
+
+
+def test_weights_above_one_are_reported_not_hidden(mi):
+    scene = vm.instrument_scene({"type": "diffuse", "reflectance": 1.5})
+    with pytest.warns(RuntimeWarning, match="outside \\[0, 1\\]"):
+        reading = vm.measure(scene, theta_i=10, rays=1000)
+    assert reading.weight_violations[0] == 1000
+    assert "WARNING" in reading.summary()
+
+
+@pytest.mark.parametrize("bsdf", [{"type": "roughconductor"}, {"type": "plastic"}, {"type": "thindielectric"}])
+def test_builtin_bsdfs_measure_without_violations(mi, bsdf):
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        reading = vm.measure(vm.instrument_scene(bsdf), theta_i=30, rays=20_000)
+    assert reading.weight_violations.sum() == 0
+    assert 0 <= reading.reflectance[0] + reading.transmittance[0] <= 1
+
+
+# --- interfaces ------------------------------------------------------------------------
+
+
+def test_mi_render_returns_the_documented_tensor(mi, scenes_dir):
+    scene = mi.load_file(str(scenes_dir / "diamond_collimated.xml"), theta_i="30")
+    image = np.array(mi.render(scene, seed=5, spp=2000))
+    assert image.shape == (1, 3)
+    reading = scene.integrator().last_reading
+    assert reading.rays == 2000 and reading.settings.seed == 5
+    np.testing.assert_allclose(image[0], [reading.reflectance[0], reading.transmittance[0],
+                                          reading.absorptance[0]], rtol=1e-6)
+    same = vm.measure(scene, seed=5, rays=2000)
+    assert same.reflected[0] == reading.reflected[0]
+
+
+def test_scene_integrator_settings_are_the_defaults_of_measure(mi, scenes_dir):
+    scene = mi.load_file(str(scenes_dir / "diamond_conical.xml"))
+    reading = vm.measure(scene)
+    assert (reading.theta_i, reading.settings.beam) == (70.0, "conical")
+    assert vm.measure(scene, theta_i=10, beam="collimated").settings.beam == "collimated"
+
+
+def test_reading_as_dict_is_json_ready(diamond):
+    data = json.loads(json.dumps(vm.measure(diamond, theta_i=5, rays=100).as_dict()))
+    assert {"reflectance", "transmittance", "absorptance", "reflected", "transmitted", "rays",
+            "seconds", "settings", "geometry"} <= set(data)

@@ -1,0 +1,62 @@
+"""Tests of virtspec_mi.settings: the one place that validates input."""
+
+from __future__ import annotations
+
+import pytest
+
+from virtspec_mi.settings import Settings, parse_wavelengths
+
+
+def test_defaults_are_the_papers():
+    s = Settings()
+    assert (s.mu, s.delta, s.bound, s.beam, s.sampling) == (0.005, 0.01, "hoeffding", "conical", "jittered")
+    assert s.rays_per_reading == 105_967
+    assert Settings(rays=1000).rays_per_reading == 1000
+    assert Settings(bound="chebyshev").rays_per_reading == 1_000_000
+
+
+def test_wavelength_parsing():
+    assert parse_wavelengths("400:700:100") == (400.0, 500.0, 600.0, 700.0)
+    assert parse_wavelengths("465, 551 608") == (465.0, 551.0, 608.0)
+    assert parse_wavelengths(551) == (551.0,)
+    assert parse_wavelengths([2500, 400]) == (2500.0, 400.0)
+
+
+@pytest.mark.parametrize(
+    "kwargs, message",
+    [
+        ({"mu": 0}, r"mu must satisfy 0 < mu < 0.5 \(got 0\)"),
+        ({"mu": -0.1}, "mu must satisfy 0 < mu < 0.5"),
+        ({"mu": 0.5}, "mu must satisfy 0 < mu < 0.5"),
+        ({"mu": float("nan")}, "mu must be a number"),
+        ({"delta": 0}, "delta must satisfy 0 < delta < 1"),
+        ({"delta": 1}, "delta must satisfy 0 < delta < 1"),
+        ({"theta_i": -1}, r"theta_i must satisfy 0 <= theta_i <= 90 degrees \(got -1\)"),
+        ({"theta_i": 90.5}, "theta_i must satisfy 0 <= theta_i <= 90"),
+        ({"phi_i": float("inf")}, "phi_i must be a finite number"),
+        ({"wavelengths": []}, "wavelengths must hold at least one wavelength"),
+        ({"wavelengths": ""}, "wavelengths must hold at least one wavelength"),
+        ({"wavelengths": [500, 0]}, "wavelengths must be finite and > 0 nm"),
+        ({"wavelengths": [-400]}, "wavelengths must be finite and > 0 nm"),
+        ({"wavelengths": "400:300:10"}, "needs step > 0 and stop >= start"),
+        ({"wavelengths": "abc"}, "wavelengths must be a number"),
+        ({"rays": 0}, "rays must satisfy 1 <= rays"),
+        ({"rays": 2.5}, "rays must be a whole number"),
+        ({"rays": 2**32}, "rays must satisfy 1 <= rays <= 4294967295"),
+        ({"beam": "laser"}, "beam must be one of conical, collimated"),
+        ({"sampling": "sobol"}, "sampling must be one of jittered, random, concentric"),
+        ({"bound": "magic"}, "bound must be one of"),
+        ({"seed": -1}, "seed must be a whole number"),
+        ({"chunk_size": 10}, "chunk_size must be a whole number"),
+    ],
+)
+def test_bad_input_names_parameter_and_range(kwargs, message):
+    with pytest.raises(ValueError, match=message):
+        Settings(**kwargs)
+
+
+def test_updated_ignores_none_and_revalidates():
+    s = Settings(theta_i=30)
+    assert s.updated(theta_i=None, mu=0.01).theta_i == 30
+    with pytest.raises(ValueError, match="theta_i"):
+        s.updated(theta_i=100)

@@ -1,0 +1,52 @@
+"""Tests of the simple_dielectric BSDF plugin (plugins/bsdfs/simple_dielectric.py)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from virtspec_mi.reference import fresnel_reflectance
+
+
+def sample(mi, bsdf, theta_deg, n=200_000):
+    import drjit as dr
+
+    si = dr.zeros(mi.SurfaceInteraction3f, n)
+    t = np.radians(theta_deg)
+    si.wi = mi.Vector3f(float(np.sin(t)), 0.0, float(np.cos(t)))
+    si.wavelengths = mi.Spectrum(551.0)
+    u = mi.Float(np.random.default_rng(7).random(n).astype(np.float32))
+    bs, weight = bsdf.sample(mi.BSDFContext(), si, u, mi.Point2f(0.5, 0.5), True)
+    return np.array(bs.wo), np.array(weight)[0]
+
+
+def test_loads_with_default_diamond_and_registered_name(mi):
+    bsdf = mi.load_dict({"type": "simple_dielectric"})
+    assert "eta=2.419" in str(bsdf)
+    assert bsdf.wavelength_independent is True
+
+
+@pytest.mark.parametrize("theta", [0.0, 40.0, 75.0])
+def test_reflects_with_fresnel_probability_unit_weight(mi, theta):
+    bsdf = mi.load_dict({"type": "simple_dielectric", "eta": 1.5})
+    wo, weight = sample(mi, bsdf, theta)
+    assert np.all(weight == 1.0)
+    reflected = wo[2] > 0
+    assert reflected.mean() == pytest.approx(fresnel_reflectance(theta, 1.5), abs=4e-3)
+    # reflection is specular: wo = (-wi.x, -wi.y, wi.z)
+    t = np.radians(theta)
+    np.testing.assert_allclose(wo[0][reflected], -np.sin(t), atol=1e-6)
+
+
+def test_refraction_obeys_snell(mi):
+    bsdf = mi.load_dict({"type": "simple_dielectric", "eta": 2.419})
+    wo, _ = sample(mi, bsdf, 60.0)
+    refracted = wo[2] < 0
+    sin_t = np.hypot(wo[0][refracted], wo[1][refracted])
+    np.testing.assert_allclose(sin_t, np.sin(np.radians(60.0)) / 2.419, rtol=1e-5)
+
+
+@pytest.mark.parametrize("eta", [0.0, -1.0, "glass"])
+def test_bad_eta_is_refused(mi, eta):
+    with pytest.raises(Exception, match="'eta' must be a number > 0"):
+        mi.load_dict({"type": "simple_dielectric", "eta": eta})

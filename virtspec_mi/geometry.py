@@ -75,12 +75,6 @@ class InstrumentGeometry:
             object.__setattr__(self, name, check_positive(name, getattr(self, name)))
 
     @property
-    def max_cone_half_angle(self) -> float:
-        """Largest angle (degrees) between a ray and the emitter axis: atan((r₁ + r₂)/D)."""
-
-        return math.degrees(math.atan((self.emitter_radius + self.specimen_radius) / self.distance))
-
-    @property
     def backlit_threshold(self) -> float:
         """θi (degrees) beyond which part of the emitter lies below the specimen plane: atan(D/r₁)."""
 

@@ -29,7 +29,7 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["GOLDEN", "FIXED_DIMENSIONS", "hash32", "chunk_root", "dimension_keys", "to_unit"]
+__all__ = ["GOLDEN", "FIXED_DIMENSIONS", "hash32", "chunk_root", "dimension_key", "dimension_keys", "to_unit"]
 
 GOLDEN: int = 0x9E3779B9
 """φ·2³², the dimension stride of the keys."""
@@ -65,13 +65,18 @@ def chunk_root(seed: int, block: int) -> int:
         return int(hash32(mixed)[0])
 
 
-def dimension_keys(root: int, count: int = FIXED_DIMENSIONS) -> list[int]:
-    """Keys of dimensions 0 … count − 1 under ``root`` (see the module docstring)."""
+def dimension_key(root: Any, dimension: Any) -> Any:
+    """Key of one dimension under ``root``: ``hash32(root + dimension·φ)`` (NumPy or Dr.Jit uint32)."""
 
-    d = np.arange(count, dtype=np.uint64)
+    return hash32(root + dimension * GOLDEN)
+
+
+def dimension_keys(root: int, count: int = FIXED_DIMENSIONS) -> list[int]:
+    """Keys of dimensions 0 … count − 1 under ``root``, computed on the host."""
+
     with np.errstate(over="ignore"):
-        x = ((root + d * GOLDEN) & _MASK).astype(np.uint32)
-        return [int(k) for k in hash32(x)]
+        keys = dimension_key(_u32(root), np.arange(count, dtype=np.uint32))
+    return [int(k) for k in keys]
 
 
 def to_unit(bits: Any, float_type: Any) -> Any:

@@ -65,7 +65,7 @@ import mitsuba as mi
 import numpy as np
 
 from virtspec_mi.geometry import incidence_frame, jittered_cell, sample_disk
-from virtspec_mi.rng import GOLDEN, chunk_root, dimension_keys, hash32, to_unit
+from virtspec_mi.rng import chunk_root, dimension_key, dimension_keys, hash32, to_unit
 from virtspec_mi.settings import Settings
 
 __all__ = ["ReadingPlan", "Spectrophotometer", "tally_readings", "trace_rays"]
@@ -74,6 +74,9 @@ _WORD = 1 << 32
 # Dimensions of the random numbers: 0–1 emitter, 2–3 specimen, 4–6 BSDF, 7 survival;
 # eq. (3) rejection draws from dimension 8 on (attempt k: 8 + 4k + 2·disk, +1).
 _REJECTION_BASE = 8
+# Columns of the per-reading table: wavelength, emitter centre D·ω, emitter axes e_u and
+# e_v, incidence direction ω (towards the emitter), strata per side of the jittered grid.
+_WAVELENGTH, _CENTRE, _E_U, _E_V, _OMEGA, _STRATA = 0, 1, 4, 7, 10, 13
 
 
 @dataclass(frozen=True)
@@ -175,13 +178,13 @@ class _Kernel:
         frame = instrument.to_world
         self.frame = mi.Frame3f(*(mi.Vector3f(*map(float, frame[:3, i])) for i in range(3)))
         self.centre = mi.Point3f(*map(float, frame[:3, 3]))
-        # Per-reading parameters on the host; a chunk picks its readings' rows.
-        table = []
+        # Per-reading parameters on the host, one row per reading; a chunk picks its rows.
+        rows = []
         for plan in plans:
             omega, e_u, e_v = incidence_frame(plan.theta_i, plan.phi_i)
-            strata = int(np.floor(np.sqrt(plan.rays)))
-            table.append([plan.wavelength, *(omega * geometry.distance), *e_u, *e_v, *omega, strata])
-        self.table = np.array(table, dtype=np.float64)
+            strata = np.floor(np.sqrt(plan.rays))
+            rows.append([plan.wavelength, *(omega * geometry.distance), *e_u, *e_v, *omega, strata])
+        self.readings = np.array(rows, dtype=np.float64)
 
     # -- one chunk ---------------------------------------------------------------------
 
@@ -195,7 +198,7 @@ class _Kernel:
         violation = lanes["violation"]
         dr.eval(code, violation)  # the one fused ray kernel
         counts = np.zeros((len(slots), 3), dtype=np.int64)
-        bounds = np.clip(starts[slots] - first, 0, size)
+        bounds, _ = _lane_ranges(first, size, slots, starts)
         ends = np.append(bounds[1:], size)
         if len(slots) == 1:
             packed = np.array([int(dr.sum(code).numpy()[0])], dtype=np.uint64)
@@ -220,9 +223,8 @@ class _Kernel:
             return to_unit(hash32(ray_index ^ keys[dimension]), mi.Float)
 
         # Per-reading parameters: width-1 opaque values for a single reading, else gathered.
-        bounds = np.clip(starts[slots] - first, 0, size).astype(np.uint32)
-        j0 = np.maximum(first - starts[slots], 0).astype(np.uint32)
-        rows = self.table[slots]
+        bounds, j0 = _lane_ranges(first, size, slots, starts)
+        rows = self.readings[slots]
         if len(slots) == 1:
             def column(values: np.ndarray, kind: Any) -> Any:
                 return dr.opaque(kind, values[0].item())
@@ -233,22 +235,25 @@ class _Kernel:
             def column(values: np.ndarray, kind: Any) -> Any:
                 return dr.gather(kind, kind(values), slot)
             ray = lane - column(bounds, mi.UInt32) + column(j0, mi.UInt32)
-        wavelength = column(rows[:, 0], mi.Float)
-        vec = lambda i: mi.Vector3f(*(column(rows[:, i + k], mi.Float) for k in range(3)))  # noqa: E731
+
+        def vector(index: int) -> mi.Vector3f:
+            return mi.Vector3f(*(column(rows[:, index + k], mi.Float) for k in range(3)))
+
+        wavelength = column(rows[:, _WAVELENGTH], mi.Float)
 
         if settings.beam == "collimated":
-            wi = vec(10)
+            wi = vector(_OMEGA)
             target = mi.Point2f(0.0, 0.0)
             origin = mi.Point3f(wi)
         else:
             u0, u1 = uniform(0), uniform(1)
             if settings.sampling == "jittered":
-                u0, u1 = jittered_cell(mi, u0, u1, ray, column(rows[:, 13].astype(np.uint32), mi.UInt32))
+                u0, u1 = jittered_cell(mi, u0, u1, ray, column(rows[:, _STRATA].astype(np.uint32), mi.UInt32))
             emitter = sample_disk(mi, settings.sampling, u0, u1, self.emitter_radius,
                                   lambda r: _rejection(ray_index, root, r, 0))
             target = sample_disk(mi, settings.sampling, uniform(2), uniform(3), self.specimen_radius,
                                  lambda r: _rejection(ray_index, root, r, 1))
-            origin = mi.Point3f(vec(1) + emitter.x * vec(4) + emitter.y * vec(7))
+            origin = mi.Point3f(vector(_CENTRE) + emitter.x * vector(_E_U) + emitter.y * vector(_E_V))
             wi = dr.normalize(origin - mi.Point3f(target.x, target.y, 0.0))
 
         si = dr.zeros(mi.SurfaceInteraction3f)
@@ -282,12 +287,20 @@ def _rejection(ray_index: mi.UInt32, root: int, radius: mi.Float, disk: int) -> 
     x = mi.Float(1.0)
     y = mi.Float(1.0)
     while dr.hint(x * x + y * y > 1.0, label="rejection"):
-        kx = hash32(key + dimension * GOLDEN)
-        ky = hash32(key + (dimension + 1) * GOLDEN)
+        kx = dimension_key(key, dimension)
+        ky = dimension_key(key, dimension + 1)
         x = dr.fma(2.0, to_unit(hash32(ray_index ^ kx), mi.Float), -1.0)
         y = dr.fma(2.0, to_unit(hash32(ray_index ^ ky), mi.Float), -1.0)
         dimension += 4
     return mi.Point2f(x * radius, y * radius)
+
+
+def _lane_ranges(first: int, size: int, slots: np.ndarray, starts: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Per reading of a chunk: its first lane in the chunk, and the index of that lane's ray."""
+
+    bounds = np.clip(starts[slots] - first, 0, size).astype(np.uint32)
+    first_ray = np.maximum(first - starts[slots], 0).astype(np.uint32)
+    return bounds, first_ray
 
 
 def _find_slot(bounds: np.ndarray, lane: mi.UInt32) -> mi.UInt32:
@@ -306,6 +319,8 @@ def _find_slot(bounds: np.ndarray, lane: mi.UInt32) -> mi.UInt32:
 
 def _segment_sums(cumulative: Any, bounds: np.ndarray, ends: np.ndarray) -> np.ndarray:
     """Sums over lane ranges [bounds, ends) from an inclusive cumulative sum."""
+
+    bounds, ends = bounds.astype(np.int64), ends.astype(np.int64)
 
     last = dr.gather(type(cumulative), cumulative, mi.UInt32(np.maximum(ends - 1, 0).astype(np.uint32)))
     before = dr.gather(type(cumulative), cumulative, mi.UInt32(np.maximum(bounds - 1, 0).astype(np.uint32)))

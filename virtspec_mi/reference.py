@@ -104,7 +104,6 @@ __all__ = [
     "specimen_points",
     "conical_average",
     "conical_reflectance",
-    "conical_transmittance",
     "conical_mean_incidence_angle",
     "cone_half_angle_bound",
     "incidence_angle_bounds",
@@ -400,27 +399,6 @@ def conical_reflectance(
     """
 
     return conical_average(lambda c: _reflected_fraction(c, eta), theta_i, phi_i, geometry, nodes)
-
-
-def conical_transmittance(
-    theta_i: float,
-    phi_i: float = 0.0,
-    eta: float = 2.419,
-    geometry: InstrumentGeometry = InstrumentGeometry(),
-    nodes: QuadratureNodes = DEFAULT_NODES,
-) -> float:
-    """
-    Expected conical-hemispherical transmittance: ``1 −`` :func:`conical_reflectance`.
-
-    The specimen is lossless, so every ray is either reflected or transmitted (as
-    judged by the hemisphere it leaves into).
-
-    References
-    ----------
-    Baranoski et al. (2001), eq. (1) (ρ + τ + α = 1 with α = 0).
-    """
-
-    return 1.0 - conical_reflectance(theta_i, phi_i, eta, geometry, nodes)
 
 
 def conical_mean_incidence_angle(

@@ -45,11 +45,14 @@ class Reading:
     reflectance, transmittance, absorptance : ndarray
         ρ = m/N, τ = t/N and α = 1 − ρ − τ per wavelength (exactly, from counts).
     reflected, transmitted, absorbed : ndarray of int64
-        Ray counts per wavelength (absorbed = rays − reflected − transmitted).
+        Ray counts per wavelength (absorbed = rays − reflected − transmitted − capped).
     rays : int
         Rays N per wavelength.
     weight_violations : ndarray of int64
         Rays whose BSDF weight was outside [0, 1] or NaN (0 for a valid specimen).
+    capped : ndarray of int64
+        Rays whose random walk hit the specimen's step cap (see :mod:`virtspec_mi.walk`):
+        counted in none of the three fates, so ρ + τ + α = 1 − capped/N.
     backlit_fraction : float
         Share of the emitter area below the specimen plane (conical beam, θi > atan(D/r₁)):
         those rays strike the specimen's back face.
@@ -70,6 +73,7 @@ class Reading:
     absorbed: np.ndarray
     rays: int
     weight_violations: np.ndarray
+    capped: np.ndarray
     backlit_fraction: float
     seconds: float
     settings: Settings
@@ -105,6 +109,7 @@ class Reading:
             "absorbed": self.absorbed.tolist(),
             "rays": self.rays,
             "weight_violations": self.weight_violations.tolist(),
+            "capped": self.capped.tolist(),
             "backlit_fraction": self.backlit_fraction,
             "seconds": self.seconds,
             "settings": self.settings.as_dict(),
@@ -136,6 +141,8 @@ class Reading:
             lines.append(f"note: {self.backlit_fraction:.2%} of the emitter lies below the specimen plane")
         if self.weight_violations.any():
             lines.append(f"WARNING: {int(self.weight_violations.sum())} BSDF weights outside [0, 1]")
+        if self.capped.any():
+            lines.append(f"WARNING: {int(self.capped.sum())} random walks hit the step cap (in no tally)")
         return "\n".join(lines)
 
 
@@ -199,12 +206,19 @@ def measure(
     start = time.perf_counter()
     counts = tally_readings(instrument, plans, settings)
     seconds = time.perf_counter() - start
-    reflected, transmitted, violations = counts[:, 0], counts[:, 1], counts[:, 2]
-    absorbed = n - reflected - transmitted
+    reflected, transmitted, violations, capped = counts.T
+    absorbed = n - reflected - transmitted - capped
     if violations.any():
         warnings.warn(
             f"{int(violations.sum())} BSDF sample weights fell outside [0, 1]: the specimen is not "
             "energy conserving, so the certified guarantee does not hold for this reading",
+            RuntimeWarning,
+            stacklevel=2,
+        )
+    if capped.any():
+        warnings.warn(
+            f"{int(capped.sum())} random walks reached the specimen's step cap; they are counted "
+            "in Reading.capped and in none of reflectance, transmittance and absorptance",
             RuntimeWarning,
             stacklevel=2,
         )
@@ -219,6 +233,7 @@ def measure(
         absorbed=absorbed,
         rays=n,
         weight_violations=violations,
+        capped=capped,
         backlit_fraction=backlit,
         seconds=seconds,
         settings=settings,

@@ -46,6 +46,9 @@ Conventions
   (upper hemisphere), wo·n < 0 transmitted; one leaving exactly in the plane
   (wo·n = 0, grazing) counts on the far side of the specimen if the BSDF sampled a
   transmission, else on the side it came from. A zero BSDF weight is absorption.
+- A walk that reached its step cap (``bs.sampled_component`` ==
+  :data:`virtspec_mi.walk.CAPPED_COMPONENT`) is counted as ``capped``, apart from the
+  three fates.
 - A BSDF weight w ∈ [0, 1] survives with probability w (Russian roulette) so each
   ray stays a Bernoulli trial; weights outside [0, 1] or NaN are counted as
   ``weight_violations`` (the reading's guarantee then does not hold).
@@ -67,6 +70,7 @@ import numpy as np
 from virtspec_mi.geometry import incidence_frame, jittered_cell, sample_disk
 from virtspec_mi.rng import chunk_root, dimension_key, dimension_keys, hash32, to_unit
 from virtspec_mi.settings import Settings
+from virtspec_mi.walk import CAPPED_COMPONENT
 
 __all__ = ["ReadingPlan", "Spectrophotometer", "tally_readings", "trace_rays"]
 
@@ -126,8 +130,8 @@ class Spectrophotometer(mi.SamplingIntegrator):
 
 def tally_readings(instrument: Any, plans: list[ReadingPlan], settings: Settings) -> np.ndarray:
     """
-    Trace every reading of ``plans`` and return exact counts, shape ``(len(plans), 3)``:
-    reflected, transmitted and weight-violating rays per reading (``int64``).
+    Trace every reading of ``plans`` and return exact counts, shape ``(len(plans), 4)``:
+    reflected, transmitted, weight-violating and capped rays per reading (``int64``).
 
     Readings occupy consecutive ranges of the global ray index; chunks of at most
     ``settings.chunk_size`` rays (never straddling a 2³² boundary of that index) each
@@ -136,7 +140,7 @@ def tally_readings(instrument: Any, plans: list[ReadingPlan], settings: Settings
 
     rays = np.array([plan.rays for plan in plans], dtype=np.int64)
     starts = np.concatenate([[0], np.cumsum(rays)])
-    counts = np.zeros((len(plans), 3), dtype=np.int64)
+    counts = np.zeros((len(plans), 4), dtype=np.int64)
     kernel = _Kernel(instrument, plans, settings)
     first = 0
     while first < starts[-1]:
@@ -156,7 +160,7 @@ def trace_rays(instrument: Any, plan: ReadingPlan, settings: Settings, count: in
     as :func:`tally_readings` (for tests and diagnostics): NumPy arrays of emitter
     points ``origin`` (specimen frame), specimen points ``target``, incident
     directions ``wi`` (towards the emitter), outgoing ``wo`` and ``fate``
-    (0 absorbed, 1 reflected, 2 transmitted).
+    (0 absorbed, 1 reflected, 2 transmitted, 3 capped walk).
     """
 
     kernel = _Kernel(instrument, [plan], settings)
@@ -189,15 +193,15 @@ class _Kernel:
     # -- one chunk ---------------------------------------------------------------------
 
     def run(self, first: int, size: int, slots: np.ndarray, starts: np.ndarray) -> np.ndarray:
-        """Counts (reflected, transmitted, violations) of the readings ``slots`` in a chunk."""
+        """Counts (reflected, transmitted, violations, capped) of the readings ``slots`` in a chunk."""
 
         lanes = self.trace(first, size, slots, starts)
         code = dr.select(lanes["fate"] == 1, mi.UInt64(1), mi.UInt64(0)) | dr.select(
             lanes["fate"] == 2, mi.UInt64(_WORD), mi.UInt64(0)
         )
-        violation = lanes["violation"]
-        dr.eval(code, violation)  # the one fused ray kernel
-        counts = np.zeros((len(slots), 3), dtype=np.int64)
+        rare = (lanes["violation"], lanes["fate"] == 3)
+        dr.eval(code, *rare)  # the one fused ray kernel
+        counts = np.zeros((len(slots), 4), dtype=np.int64)
         bounds, _ = _lane_ranges(first, size, slots, starts)
         ends = np.append(bounds[1:], size)
         if len(slots) == 1:
@@ -206,8 +210,9 @@ class _Kernel:
             packed = _segment_sums(dr.cumsum(code), bounds, ends)
         counts[:, 0] = packed & np.uint64(_WORD - 1)
         counts[:, 1] = packed >> np.uint64(32)
-        if int(dr.count(violation).numpy()[0]) > 0:
-            counts[:, 2] = _segment_sums(dr.cumsum(mi.UInt64(dr.select(violation, 1, 0))), bounds, ends)
+        for column, flags in enumerate(rare, start=2):  # almost always none: skip the scan
+            if int(dr.count(flags).numpy()[0]) > 0:
+                counts[:, column] = _segment_sums(dr.cumsum(mi.UInt64(dr.select(flags, 1, 0))), bounds, ends)
         return counts
 
     def trace(self, first: int, size: int, slots: np.ndarray, starts: np.ndarray) -> dict:
@@ -273,6 +278,7 @@ class _Kernel:
         crossed = mi.has_flag(bs.sampled_type, mi.BSDFFlags.Transmission)
         upper = dr.select(bs.wo.z != 0.0, bs.wo.z > 0.0, crossed ^ (wi.z >= 0.0))
         fate = dr.select(survives, dr.select(upper, mi.UInt32(1), mi.UInt32(2)), mi.UInt32(0))
+        fate = dr.select(bs.sampled_component == CAPPED_COMPONENT, mi.UInt32(3), fate)
         violation = ~((w >= 0.0) & (w <= 1.0))
         return {"origin": origin, "target": target, "wi": wi, "wo": bs.wo, "fate": fate,
                 "violation": violation}

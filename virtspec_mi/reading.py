@@ -29,6 +29,7 @@ import virtspec_mi
 from virtspec_mi.geometry import InstrumentGeometry, backlit_fraction
 from virtspec_mi.instrument import find_instrument
 from virtspec_mi.settings import Settings
+from virtspec_mi.tally import take_readings
 
 __all__ = ["Reading", "measure"]
 
@@ -193,21 +194,20 @@ def measure(
     Baranoski et al. (2001), eqs. (2), (23).
     """
 
-    instrument = find_instrument(scene)  # sets up Mitsuba before the plugin module is imported
-    from virtspec_mi.plugins.integrators.spectrophotometer import ReadingPlan, tally_readings
-
+    instrument = find_instrument(scene)
     base = instrument.integrator.settings if instrument.integrator is not None else Settings()
     settings = base.updated(
         theta_i=theta_i, phi_i=phi_i, wavelengths=wavelengths, mu=mu, delta=delta, rays=rays,
         beam=beam, sampling=sampling, seed=seed, bound=bound, chunk_size=chunk_size,
     )
-    n = settings.rays_per_reading
-    plans = [ReadingPlan(w, settings.theta_i, settings.phi_i, n) for w in settings.wavelengths]
     start = time.perf_counter()
-    counts = tally_readings(instrument, plans, settings)
+    tallies = take_readings(
+        instrument, [(w, settings.theta_i, settings.phi_i) for w in settings.wavelengths], settings
+    )
     seconds = time.perf_counter() - start
-    reflected, transmitted, violations, capped = counts.T
-    absorbed = n - reflected - transmitted - capped
+    n = settings.rays_per_reading
+    reflected, transmitted, absorbed = tallies.reflected, tallies.transmitted, tallies.absorbed
+    violations, capped = tallies.weight_violations, tallies.capped
     if violations.any():
         warnings.warn(
             f"{int(violations.sum())} BSDF sample weights fell outside [0, 1]: the specimen is not "

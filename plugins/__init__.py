@@ -10,6 +10,7 @@ through :func:`virtspec_mi.runtime.mitsuba`, which sets the variant first.
 name                   kind         module
 =====================  ===========  ==========================================
 ``simple_dielectric``  BSDF         :mod:`.bsdfs.simple_dielectric`
+``turbid_slab``        BSDF         :mod:`.bsdfs.turbid_slab`
 ``spectrophotometer``  integrator   :mod:`.integrators.spectrophotometer`
 =====================  ===========  ==========================================
 """
@@ -20,6 +21,7 @@ __all__ = ["PLUGINS", "register"]
 
 PLUGINS: dict[str, tuple[str, str, str]] = {
     "simple_dielectric": ("bsdf", ".bsdfs.simple_dielectric", "SimpleDielectric"),
+    "turbid_slab": ("bsdf", ".bsdfs.turbid_slab", "TurbidSlab"),
     "spectrophotometer": ("integrator", ".integrators.spectrophotometer", "Spectrophotometer"),
 }
 

@@ -63,6 +63,14 @@ class Reading:
         The settings used (μ, δ, bound, beam, sampling, seed, θi, φi).
     geometry : InstrumentGeometry
         r₁, r₂ and D of the scene.
+    specular_reflected, regular_transmitted : ndarray of int64
+        The reflected rays whose sampled event was a mirror (``DeltaReflection``) event
+        and the transmitted rays whose event was a ``DeltaTransmission`` (part of
+        ``reflected`` / ``transmitted``). For ``turbid_slab``: rays that left without
+        scattering (top-face specular reflection, MCML's Rsp, plus unscattered internal
+        bounces; unscattered transmission). See :attr:`specular_reflectance`,
+        :attr:`diffuse_reflectance`, :attr:`regular_transmittance`,
+        :attr:`diffuse_transmittance`.
     """
 
     wavelengths: np.ndarray
@@ -80,6 +88,32 @@ class Reading:
     settings: Settings
     geometry: InstrumentGeometry
     version: str = field(default=virtspec_mi.__version__)
+    specular_reflected: np.ndarray | None = None
+    regular_transmitted: np.ndarray | None = None
+
+    @property
+    def specular_reflectance(self) -> np.ndarray:
+        """ρs: reflected by a mirror (delta) event, per wavelength (CIE regular reflectance; MCML Rsp)."""
+
+        return self.specular_reflected / self.rays
+
+    @property
+    def diffuse_reflectance(self) -> np.ndarray:
+        """ρd = ρ − ρs: reflected by scattering (MCML's Rd)."""
+
+        return (self.reflected - self.specular_reflected) / self.rays
+
+    @property
+    def regular_transmittance(self) -> np.ndarray:
+        """τr: transmitted by a delta event (unscattered, collimated transmittance)."""
+
+        return self.regular_transmitted / self.rays
+
+    @property
+    def diffuse_transmittance(self) -> np.ndarray:
+        """τd = τ − τr: transmitted after scattering."""
+
+        return (self.transmitted - self.regular_transmitted) / self.rays
 
     @property
     def theta_i(self) -> float:
@@ -100,6 +134,14 @@ class Reading:
     def as_dict(self) -> dict[str, Any]:
         """Plain data with every field by name (for ``--json``)."""
 
+        parts = {} if self.specular_reflected is None else {
+            "specular_reflected": self.specular_reflected.tolist(),
+            "regular_transmitted": self.regular_transmitted.tolist(),
+            "specular_reflectance": self.specular_reflectance.tolist(),
+            "diffuse_reflectance": self.diffuse_reflectance.tolist(),
+            "regular_transmittance": self.regular_transmittance.tolist(),
+            "diffuse_transmittance": self.diffuse_transmittance.tolist(),
+        }
         return {
             "wavelengths": self.wavelengths.tolist(),
             "reflectance": self.reflectance.tolist(),
@@ -120,15 +162,19 @@ class Reading:
                 "distance": self.geometry.distance,
             },
             "version": self.version,
+            **parts,
         }
 
     def summary(self) -> str:
         """Human-readable table of the reading."""
 
         s = self.settings
+        incidence = (
+            "cosine-weighted over the hemisphere" if s.beam == "diffuse"
+            else f"theta_i = {s.theta_i:g} deg, phi_i = {s.phi_i:g} deg"
+        )
         lines = [
-            f"{s.beam} reading, theta_i = {s.theta_i:g} deg, phi_i = {s.phi_i:g} deg, "
-            f"sampling = {s.sampling}, seed = {s.seed}",
+            f"{s.beam} reading, {incidence}, sampling = {s.sampling}, seed = {s.seed}",
             f"N = {self.rays:,} rays per wavelength ({s.bound} bound: |rho - m/N| < {s.mu:g} "
             f"with probability >= {1 - s.delta:g}); {self.seconds * 1e3:.1f} ms",
             f"{'lambda/nm':>10} {'reflectance':>12} {'transmittance':>14} {'absorptance':>12}",
@@ -138,6 +184,16 @@ class Reading:
                 f"{wavelength:>10g} {self.reflectance[i]:>12.5f} {self.transmittance[i]:>14.5f} "
                 f"{self.absorptance[i]:>12.5f}"
             )
+        mixed = False if self.specular_reflected is None else (0 < self.specular_reflected) & (self.specular_reflected < self.reflected) | (
+            (0 < self.regular_transmitted) & (self.regular_transmitted < self.transmitted)
+        )
+        if np.any(mixed):  # a specimen with both mirror and scattered light: show the parts
+            lines.append(f"{'lambda/nm':>10} {'specular R':>12} {'diffuse R':>14} {'regular T':>12} {'diffuse T':>12}")
+            for i, wavelength in enumerate(self.wavelengths):
+                lines.append(
+                    f"{wavelength:>10g} {self.specular_reflectance[i]:>12.5f} {self.diffuse_reflectance[i]:>14.5f} "
+                    f"{self.regular_transmittance[i]:>12.5f} {self.diffuse_transmittance[i]:>12.5f}"
+                )
         if self.backlit_fraction > 0:
             lines.append(f"note: {self.backlit_fraction:.2%} of the emitter lies below the specimen plane")
         if self.weight_violations.any():
@@ -238,4 +294,6 @@ def measure(
         seconds=seconds,
         settings=settings,
         geometry=instrument.geometry,
+        specular_reflected=tallies.specular,
+        regular_transmitted=tallies.regular,
     )

@@ -29,8 +29,9 @@ __all__ = [
     "parse_wavelengths",
 ]
 
-BEAMS: tuple[str, ...] = ("conical", "collimated")
-"""``conical``: conical-hemispherical (disk to disk); ``collimated``: directional-hemispherical."""
+BEAMS: tuple[str, ...] = ("conical", "collimated", "diffuse")
+"""``conical``: conical-hemispherical (disk to disk); ``collimated``: directional-hemispherical;
+``diffuse``: hemispherical-hemispherical (cosine-distributed incidence, θi and φi unused)."""
 
 SAMPLINGS: tuple[str, ...] = ("jittered", "random", "concentric")
 """Disk sampling strategies: eq. (4) stratified polar warp, eq. (3) square + rejection, Shirley–Chiu."""

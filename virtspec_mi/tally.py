@@ -30,7 +30,10 @@ class Tallies:
     """
     Exact counts of a list of readings (one entry per reading, ``int64``).
 
-    ``absorbed = rays − reflected − transmitted − capped``.
+    ``absorbed = rays − reflected − transmitted − capped``. ``specular`` counts the
+    reflected rays whose sampled event was a ``DeltaReflection`` and ``regular`` the
+    transmitted rays whose event was a ``DeltaTransmission`` (parts of ``reflected``
+    and ``transmitted``).
     """
 
     rays: np.ndarray
@@ -38,6 +41,8 @@ class Tallies:
     transmitted: np.ndarray
     weight_violations: np.ndarray
     capped: np.ndarray
+    specular: np.ndarray | None = None
+    regular: np.ndarray | None = None
 
     @property
     def absorbed(self) -> np.ndarray:

@@ -25,7 +25,10 @@ rays : integer, default: from the bound
 bound : string, default "hoeffding"
     Ray budget: ``hoeffding`` (eq. 23) or ``chebyshev`` (eq. 15).
 beam : string, default "conical"
-    ``conical`` (conical-hemispherical) or ``collimated`` (directional-hemispherical).
+    ``conical`` (conical-hemispherical), ``collimated`` (directional-hemispherical) or
+    ``diffuse`` (hemispherical-hemispherical: incidence directions cosine-distributed
+    over the upper hemisphere, aimed at uniform points of the specimen disk; θi and
+    φi are not used).
 sampling : string, default "jittered"
     Disk sampling: ``jittered`` (eq. 4), ``random`` (eq. 3) or ``concentric``.
 seed : integer, default 0
@@ -46,6 +49,10 @@ Conventions
   (upper hemisphere), wo·n < 0 transmitted; one leaving exactly in the plane
   (wo·n = 0, grazing) counts on the far side of the specimen if the BSDF sampled a
   transmission, else on the side it came from. A zero BSDF weight is absorption.
+- A surviving ray whose sampled event is a ``DeltaReflection`` and that leaves to the
+  incidence side is counted as specular (regular) reflection, one whose event is a
+  ``DeltaTransmission`` and that crosses as regular transmission (``Reading.
+  specular_reflectance``, ``Reading.regular_transmittance``; both are also in R / T).
 - A walk that reached its step cap (``bs.sampled_component`` ==
   :data:`virtspec_mi.walk.CAPPED_COMPONENT`) is counted as ``capped``, apart from the
   three fates.
@@ -130,8 +137,9 @@ class Spectrophotometer(mi.SamplingIntegrator):
 
 def tally_readings(instrument: Any, plans: list[ReadingPlan], settings: Settings) -> np.ndarray:
     """
-    Trace every reading of ``plans`` and return exact counts, shape ``(len(plans), 4)``:
-    reflected, transmitted, weight-violating and capped rays per reading (``int64``).
+    Trace every reading of ``plans`` and return exact counts, shape ``(len(plans), 6)``:
+    reflected, transmitted, weight-violating, capped, specularly reflected and
+    regularly transmitted rays per reading (``int64``).
 
     Readings occupy consecutive ranges of the global ray index; chunks of at most
     ``settings.chunk_size`` rays (never straddling a 2³² boundary of that index) each
@@ -140,7 +148,7 @@ def tally_readings(instrument: Any, plans: list[ReadingPlan], settings: Settings
 
     rays = np.array([plan.rays for plan in plans], dtype=np.int64)
     starts = np.concatenate([[0], np.cumsum(rays)])
-    counts = np.zeros((len(plans), 4), dtype=np.int64)
+    counts = np.zeros((len(plans), 6), dtype=np.int64)
     kernel = _Kernel(instrument, plans, settings)
     first = 0
     while first < starts[-1]:
@@ -179,6 +187,7 @@ class _Kernel:
         geometry = instrument.geometry
         self.emitter_radius = dr.opaque(mi.Float, geometry.emitter_radius)
         self.specimen_radius = dr.opaque(mi.Float, geometry.specimen_radius)
+        self.distance = dr.opaque(mi.Float, geometry.distance)
         frame = instrument.to_world
         self.frame = mi.Frame3f(*(mi.Vector3f(*map(float, frame[:3, i])) for i in range(3)))
         self.centre = mi.Point3f(*map(float, frame[:3, 3]))
@@ -193,23 +202,27 @@ class _Kernel:
     # -- one chunk ---------------------------------------------------------------------
 
     def run(self, first: int, size: int, slots: np.ndarray, starts: np.ndarray) -> np.ndarray:
-        """Counts (reflected, transmitted, violations, capped) of the readings ``slots`` in a chunk."""
+        """Counts (reflected, transmitted, violations, capped, specular, regular) of ``slots`` in a chunk."""
 
         lanes = self.trace(first, size, slots, starts)
         code = dr.select(lanes["fate"] == 1, mi.UInt64(1), mi.UInt64(0)) | dr.select(
             lanes["fate"] == 2, mi.UInt64(_WORD), mi.UInt64(0)
         )
+        delta = dr.select(lanes["specular"], mi.UInt64(1), mi.UInt64(0)) | dr.select(
+            lanes["regular"], mi.UInt64(_WORD), mi.UInt64(0)
+        )
         rare = (lanes["violation"], lanes["fate"] == 3)
-        dr.eval(code, *rare)  # the one fused ray kernel
-        counts = np.zeros((len(slots), 4), dtype=np.int64)
+        dr.eval(code, delta, *rare)  # the one fused ray kernel
+        counts = np.zeros((len(slots), 6), dtype=np.int64)
         bounds, _ = _lane_ranges(first, size, slots, starts)
         ends = np.append(bounds[1:], size)
-        if len(slots) == 1:
-            packed = np.array([int(dr.sum(code).numpy()[0])], dtype=np.uint64)
-        else:
-            packed = _segment_sums(dr.cumsum(code), bounds, ends)
-        counts[:, 0] = packed & np.uint64(_WORD - 1)
-        counts[:, 1] = packed >> np.uint64(32)
+        for column, packed_code in ((0, code), (4, delta)):  # two 32-bit counts per UInt64
+            if len(slots) == 1:
+                packed = np.array([int(dr.sum(packed_code).numpy()[0])], dtype=np.uint64)
+            else:
+                packed = _segment_sums(dr.cumsum(packed_code), bounds, ends)
+            counts[:, column] = packed & np.uint64(_WORD - 1)
+            counts[:, column + 1] = packed >> np.uint64(32)
         for column, flags in enumerate(rare, start=2):  # almost always none: skip the scan
             if int(dr.count(flags).numpy()[0]) > 0:
                 counts[:, column] = _segment_sums(dr.cumsum(mi.UInt64(dr.select(flags, 1, 0))), bounds, ends)
@@ -246,7 +259,15 @@ class _Kernel:
 
         wavelength = column(rows[:, _WAVELENGTH], mi.Float)
 
-        if settings.beam == "collimated":
+        if settings.beam == "diffuse":
+            u0, u1 = uniform(0), uniform(1)
+            if settings.sampling == "jittered":
+                u0, u1 = jittered_cell(mi, u0, u1, ray, column(rows[:, _STRATA].astype(np.uint32), mi.UInt32))
+            wi = mi.warp.square_to_cosine_hemisphere(mi.Point2f(u0, u1))
+            target = sample_disk(mi, settings.sampling, uniform(2), uniform(3), self.specimen_radius,
+                                 lambda r: _rejection(ray_index, root, r, 1))
+            origin = mi.Point3f(target.x, target.y, 0.0) + wi * self.distance
+        elif settings.beam == "collimated":
             wi = vector(_OMEGA)
             target = mi.Point2f(0.0, 0.0)
             origin = mi.Point3f(wi)
@@ -280,8 +301,10 @@ class _Kernel:
         fate = dr.select(survives, dr.select(upper, mi.UInt32(1), mi.UInt32(2)), mi.UInt32(0))
         fate = dr.select(bs.sampled_component == CAPPED_COMPONENT, mi.UInt32(3), fate)
         violation = ~((w >= 0.0) & (w <= 1.0))
+        specular = (fate == 1) & mi.has_flag(bs.sampled_type, mi.BSDFFlags.DeltaReflection)
+        regular = (fate == 2) & mi.has_flag(bs.sampled_type, mi.BSDFFlags.DeltaTransmission)
         return {"origin": origin, "target": target, "wi": wi, "wo": bs.wo, "fate": fate,
-                "violation": violation}
+                "violation": violation, "specular": specular, "regular": regular}
 
 
 @dr.syntax

@@ -43,7 +43,8 @@ def build_parser() -> argparse.ArgumentParser:
     measure.add_argument("--delta", type=float, help="failure probability, 0 < delta < 1 (default 0.01)")
     measure.add_argument("--rays", type=int, help="rays per wavelength (default: from the bound)")
     measure.add_argument("--bound", choices=["hoeffding", "chebyshev"], help="ray budget rule")
-    measure.add_argument("--beam", choices=["conical", "collimated"], help="beam geometry")
+    measure.add_argument("--beam", choices=["conical", "collimated", "diffuse"],
+                         help="beam geometry (diffuse: cosine-weighted over the hemisphere, theta_i unused)")
     measure.add_argument("--sampling", choices=["jittered", "random", "concentric"], help="disk sampling")
     measure.add_argument("--seed", type=int, help="random seed (default 0)")
     measure.add_argument("--json", action="store_true", help="print the reading as one JSON object")

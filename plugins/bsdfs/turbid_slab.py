@@ -133,12 +133,19 @@ class TurbidSlab(mi.BSDF):
         self.textures: dict[str, Any] = {}
         for name, (default, lower, upper, closed, _) in _SPECTRAL.items():
             value = props.get(name, default) if name in props else default
-            if isinstance(value, (int, float)) and not isinstance(value, bool):
+            if not isinstance(value, (int, float)) or isinstance(value, bool):
+                try:
+                    value = props.get_unbounded_texture(name)
+                except Exception:
+                    raise ValueError(
+                        f"turbid_slab: '{name}' must be a number or a spectrum (got {value!r})"
+                    ) from None
+                if value.class_name() == "UniformSpectrum":  # a constant written as a spectrum
+                    value = float(value.mean()[0])
+            if isinstance(value, (int, float)):
                 self.constants[name] = _check_number(name, value, lower, upper, closed)
-            elif isinstance(value, mi.Texture):
-                self.textures[name] = props.get_unbounded_texture(name)
             else:
-                raise ValueError(f"turbid_slab: '{name}' must be a number or a spectrum (got {value!r})")
+                self.textures[name] = value
         thickness = props.get("thickness", 1.0)
         if isinstance(thickness, str):
             thickness = float(thickness) if thickness.strip().lower() in ("inf", "infinity") else math.nan

@@ -102,6 +102,16 @@ def test_conservative_slab_absorbs_nothing(mi, tau, n_slab):
     assert np.all(r.reflected + r.transmitted == r.rays)
 
 
+def test_pure_forward_scattering_only_absorbs(mi):
+    """g = 1 never changes direction: at normal incidence T = exp(−μa·d) and R = 0 exactly."""
+
+    n = 400_000
+    r = read(slab(mu_a=1.0, mu_s=5.0, g=1.0, thickness=1.0), rays=n)
+    assert r.reflected[0] == 0
+    assert within(r.transmittance[0], math.exp(-1.0), n)
+    assert within(r.regular_transmittance[0], math.exp(-6.0), n)  # never scattered: e^(−μt·d)
+
+
 @pytest.mark.parametrize("beam", ["collimated", "diffuse"])
 def test_clear_slab_of_lower_index_than_its_surroundings(mi, beam):
     """mu_s = 0, n = 1 between media of index 1.5: exact incoherent slab reflectance (TIR included)."""
@@ -242,6 +252,26 @@ def test_numpy_reference_walk_agrees_with_the_plugin(mi):
         p = 0.5 * (measured + expected)
         sigma = math.sqrt(max(p * (1 - p), 1e-6) * (1 / n_plugin + 1 / n_numpy))
         assert abs(measured - expected) <= K * sigma
+
+
+def test_specular_and_regular_parts_follow_the_sampled_event_type(mi, diamond):
+    """The split is general: a delta event is specular/regular, anything else diffuse."""
+
+    r = vm.measure(diamond, rays=50_000)
+    assert np.array_equal(r.specular_reflected, r.reflected)
+    assert np.array_equal(r.regular_transmitted, r.transmitted)
+    lambertian = read({"type": "diffuse"}, rays=50_000)
+    assert lambertian.specular_reflected[0] == 0 and lambertian.reflected[0] > 0
+    assert lambertian.diffuse_reflectance[0] == lambertian.reflectance[0]
+    assert "specular_reflectance" in lambertian.as_dict()
+    # A mixed BSDF is counted per ray, also when one chunk holds several readings.
+    bsdf = slab(mu_a=1.0, mu_s=1.0, thickness=float("inf"), eta=1.5)
+    several = read(bsdf, rays=50_000, wavelengths=[500, 600, 700])
+    alone = read(bsdf, rays=50_000, wavelengths=[500])
+    assert several.specular_reflected[0] == alone.specular_reflected[0]
+    assert several.reflected[0] == alone.reflected[0]
+    assert all(within(p, 0.04, 50_000) for p in several.specular_reflectance)  # R0 = 0.04
+    assert np.all(several.specular_reflected < several.reflected)
 
 
 # --- command line and shipped scene -----------------------------------------------------------

@@ -64,9 +64,9 @@ class Reading:
     geometry : InstrumentGeometry
         r₁, r₂ and D of the scene.
     specular_reflected, regular_transmitted : ndarray of int64
-        The reflected rays whose sampled event was a mirror (``DeltaReflection``) event
-        and the transmitted rays whose event was a ``DeltaTransmission`` (part of
-        ``reflected`` / ``transmitted``). For ``turbid_slab``: rays that left without
+        The reflected and the transmitted rays whose sampled event was a delta event
+        (``DeltaReflection`` or ``DeltaTransmission``; part of ``reflected`` /
+        ``transmitted``). For ``turbid_slab``: rays that left without
         scattering (top-face specular reflection, MCML's Rsp, plus unscattered internal
         bounces; unscattered transmission). See :attr:`specular_reflectance`,
         :attr:`diffuse_reflectance`, :attr:`regular_transmittance`,

@@ -82,7 +82,9 @@ def _scatter_hg(u: NDArray, g: float, xi1: NDArray, xi2: NDArray) -> NDArray:
     if abs(g) < 1e-4:
         cos_t = 2.0 * xi1 - 1.0
     else:
-        cos_t = (1.0 + g * g - ((1.0 - g * g) / (1.0 - g + 2.0 * g * xi1)) ** 2) / (2.0 * g)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            cos_t = (1.0 + g * g - ((1.0 - g * g) / (1.0 - g + 2.0 * g * xi1)) ** 2) / (2.0 * g)
+        cos_t = np.where(np.isnan(cos_t), g, cos_t)  # g = 1, xi1 = 0: 0/0 -> forward
     cos_t = np.clip(cos_t, -1.0, 1.0)
     sin_t = np.sqrt(1.0 - cos_t * cos_t)
     phi = 2.0 * np.pi * xi2

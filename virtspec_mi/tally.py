@@ -30,10 +30,9 @@ class Tallies:
     """
     Exact counts of a list of readings (one entry per reading, ``int64``).
 
-    ``absorbed = rays − reflected − transmitted − capped``. ``specular`` counts the
-    reflected rays whose sampled event was a ``DeltaReflection`` and ``regular`` the
-    transmitted rays whose event was a ``DeltaTransmission`` (parts of ``reflected``
-    and ``transmitted``).
+    ``absorbed = rays − reflected − transmitted − capped``. ``specular`` and ``regular``
+    count the reflected and the transmitted rays whose sampled event was a delta event
+    (parts of ``reflected`` and ``transmitted``).
     """
 
     rays: np.ndarray

@@ -56,6 +56,7 @@ def sample_hg(direction: Any, g: Any, u1: Any, u2: Any) -> Any:
 
     ratio = (1.0 - g * g) / dr.fma(2.0 * g, u1, 1.0 - g)
     anisotropic = (1.0 + g * g - ratio * ratio) / (2.0 * g)
+    anisotropic = dr.select(dr.isnan(anisotropic), g, anisotropic)  # g = 1, ξ₁ = 0: 0/0 → forward
     isotropic = dr.abs(g) < _G_ISOTROPIC
     cos_theta = dr.clip(dr.select(isotropic, dr.fma(2.0, u1, -1.0), anisotropic), -1.0, 1.0)
     sin_theta = dr.safe_sqrt(dr.fma(-cos_theta, cos_theta, 1.0))

@@ -49,10 +49,12 @@ Conventions
   (upper hemisphere), wo·n < 0 transmitted; one leaving exactly in the plane
   (wo·n = 0, grazing) counts on the far side of the specimen if the BSDF sampled a
   transmission, else on the side it came from. A zero BSDF weight is absorption.
-- A surviving ray whose sampled event is a ``DeltaReflection`` and that leaves to the
-  incidence side is counted as specular (regular) reflection, one whose event is a
-  ``DeltaTransmission`` and that crosses as regular transmission (``Reading.
-  specular_reflectance``, ``Reading.regular_transmittance``; both are also in R / T).
+- A reflected (transmitted) ray whose sampled event is a delta event
+  (``DeltaReflection`` or ``DeltaTransmission``) also counts as specular reflection
+  (regular transmission): ``Reading.specular_reflectance``,
+  ``Reading.regular_transmittance``. They are counted per ray for a BSDF whose flags
+  hold both delta and non-delta lobes; for one with only delta lobes they equal R and
+  T, for one without delta lobes they are 0 (Mitsuba's flag contract).
 - A walk that reached its step cap (``bs.sampled_component`` ==
   :data:`virtspec_mi.walk.CAPPED_COMPONENT`) is counted as ``capped``, apart from the
   three fates.
@@ -184,6 +186,11 @@ class _Kernel:
     def __init__(self, instrument: Any, plans: list[ReadingPlan], settings: Settings) -> None:
         self.bsdf = instrument.bsdf
         self.settings = settings
+        # Specular/regular counts: per ray only for a BSDF with both delta and other lobes.
+        flags = self.bsdf.flags()
+        delta = mi.has_flag(flags, mi.BSDFFlags.Delta)
+        smooth = mi.has_flag(flags, mi.BSDFFlags.Smooth) or mi.has_flag(flags, mi.BSDFFlags.Null)
+        self.delta_lobes = "mixed" if delta and smooth else "all" if delta else "none"
         geometry = instrument.geometry
         self.emitter_radius = dr.opaque(mi.Float, geometry.emitter_radius)
         self.specimen_radius = dr.opaque(mi.Float, geometry.specimen_radius)
@@ -208,21 +215,27 @@ class _Kernel:
         code = dr.select(lanes["fate"] == 1, mi.UInt64(1), mi.UInt64(0)) | dr.select(
             lanes["fate"] == 2, mi.UInt64(_WORD), mi.UInt64(0)
         )
-        delta = dr.select(lanes["specular"], mi.UInt64(1), mi.UInt64(0)) | dr.select(
-            lanes["regular"], mi.UInt64(_WORD), mi.UInt64(0)
-        )
         rare = (lanes["violation"], lanes["fate"] == 3)
-        dr.eval(code, delta, *rare)  # the one fused ray kernel
+        if self.delta_lobes == "mixed":
+            delta = dr.select(lanes["specular"], mi.UInt64(1), mi.UInt64(0)) | dr.select(
+                lanes["regular"], mi.UInt64(_WORD), mi.UInt64(0)
+            )
+            dr.eval(code, delta, *rare)  # the one fused ray kernel
+        else:
+            dr.eval(code, *rare)
         counts = np.zeros((len(slots), 6), dtype=np.int64)
         bounds, _ = _lane_ranges(first, size, slots, starts)
         ends = np.append(bounds[1:], size)
-        for column, packed_code in ((0, code), (4, delta)):  # two 32-bit counts per UInt64
+        packed_codes = ((0, code), (4, delta)) if self.delta_lobes == "mixed" else ((0, code),)
+        for column, packed_code in packed_codes:  # two 32-bit counts per UInt64
             if len(slots) == 1:
                 packed = np.array([int(dr.sum(packed_code).numpy()[0])], dtype=np.uint64)
             else:
                 packed = _segment_sums(dr.cumsum(packed_code), bounds, ends)
             counts[:, column] = packed & np.uint64(_WORD - 1)
             counts[:, column + 1] = packed >> np.uint64(32)
+        if self.delta_lobes == "all":  # every event is a delta event: nothing to count
+            counts[:, 4:6] = counts[:, 0:2]
         for column, flags in enumerate(rare, start=2):  # almost always none: skip the scan
             if int(dr.count(flags).numpy()[0]) > 0:
                 counts[:, column] = _segment_sums(dr.cumsum(mi.UInt64(dr.select(flags, 1, 0))), bounds, ends)
@@ -301,8 +314,8 @@ class _Kernel:
         fate = dr.select(survives, dr.select(upper, mi.UInt32(1), mi.UInt32(2)), mi.UInt32(0))
         fate = dr.select(bs.sampled_component == CAPPED_COMPONENT, mi.UInt32(3), fate)
         violation = ~((w >= 0.0) & (w <= 1.0))
-        specular = (fate == 1) & mi.has_flag(bs.sampled_type, mi.BSDFFlags.DeltaReflection)
-        regular = (fate == 2) & mi.has_flag(bs.sampled_type, mi.BSDFFlags.DeltaTransmission)
+        delta = mi.has_flag(bs.sampled_type, mi.BSDFFlags.Delta)
+        specular, regular = (fate == 1) & delta, (fate == 2) & delta
         return {"origin": origin, "target": target, "wi": wi, "wo": bs.wo, "fate": fate,
                 "violation": violation, "specular": specular, "regular": regular}
 

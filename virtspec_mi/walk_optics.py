@@ -39,7 +39,7 @@ def free_path(u: Any, mu_t: Any) -> Any:
 
     import drjit as dr
 
-    return -dr.log(1.0 - u) / mu_t
+    return dr.select(mu_t > 0.0, -dr.log(1.0 - u) / mu_t, dr.inf)  # never 0/0 (u = 0, μt = 0)
 
 
 def sample_hg(direction: Any, g: Any, u1: Any, u2: Any) -> Any:

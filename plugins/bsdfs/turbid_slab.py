@@ -88,7 +88,7 @@ import mitsuba as mi
 from virtspec_mi.walk import CAPPED_COMPONENT, walk_rng
 from virtspec_mi.walk_optics import cross_interface, free_path, sample_hg
 
-__all__ = ["TurbidSlab", "SLAB_COMPONENTS"]
+__all__ = ["TurbidSlab", "SLAB_COMPONENTS", "slab_walk"]
 
 SLAB_COMPONENTS: dict[str, int] = {
     "specular_reflection": 0,

@@ -63,6 +63,9 @@ class Reading:
         The settings used (μ, δ, bound, beam, sampling, seed, θi, φi).
     geometry : InstrumentGeometry
         r₁, r₂ and D of the scene.
+    wavelength_independent : bool
+        True when the specimen declared itself wavelength-independent: it was traced
+        once and every wavelength reports the same counts (see :mod:`virtspec_mi.tally`).
     """
 
     wavelengths: np.ndarray
@@ -80,6 +83,7 @@ class Reading:
     settings: Settings
     geometry: InstrumentGeometry
     version: str = field(default=virtspec_mi.__version__)
+    wavelength_independent: bool = False
 
     @property
     def theta_i(self) -> float:
@@ -120,6 +124,7 @@ class Reading:
                 "distance": self.geometry.distance,
             },
             "version": self.version,
+            "wavelength_independent": self.wavelength_independent,
         }
 
     def summary(self) -> str:
@@ -138,6 +143,8 @@ class Reading:
                 f"{wavelength:>10g} {self.reflectance[i]:>12.5f} {self.transmittance[i]:>14.5f} "
                 f"{self.absorptance[i]:>12.5f}"
             )
+        if self.wavelength_independent and len(self.wavelengths) > 1:
+            lines.append("note: wavelength-independent specimen: traced once, the same rays for every wavelength")
         if self.backlit_fraction > 0:
             lines.append(f"note: {self.backlit_fraction:.2%} of the emitter lies below the specimen plane")
         if self.weight_violations.any():
@@ -238,4 +245,5 @@ def measure(
         seconds=seconds,
         settings=settings,
         geometry=instrument.geometry,
+        wavelength_independent=tallies.wavelength_independent,
     )

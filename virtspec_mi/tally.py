@@ -27,7 +27,7 @@ import numpy as np
 
 from virtspec_mi.settings import Settings
 
-__all__ = ["Tallies", "take_readings"]
+__all__ = ["Tallies", "take_readings", "shares_wavelengths"]
 
 
 @dataclass(frozen=True)
@@ -76,7 +76,7 @@ def take_readings(
 
     n = settings.rays_per_reading
     readings = [(float(w), float(t), float(p)) for w, t, p in readings]
-    shared = bool(getattr(instrument.bsdf, "wavelength_independent", False))
+    shared = shares_wavelengths(instrument)
     if shared:
         first: dict[tuple[float, float], int] = {}
         source = np.array([first.setdefault((t, p), k) for k, (_, t, p) in enumerate(readings)], dtype=np.int64)
@@ -91,3 +91,9 @@ def take_readings(
     if shared:
         counts = counts[np.searchsorted(traced, source)]
     return Tallies(np.full(len(readings), n, dtype=np.int64), *counts.T, wavelength_independent=shared)
+
+
+def shares_wavelengths(instrument: Any) -> bool:
+    """True when the specimen's BSDF declares ``wavelength_independent = True``."""
+
+    return bool(getattr(instrument.bsdf, "wavelength_independent", False))

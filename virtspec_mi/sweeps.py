@@ -150,6 +150,21 @@ class SweepResult:
     def delta(self) -> float:
         return self.settings.delta
 
+    @property
+    def certified_mu(self) -> np.ndarray:
+        """
+        Tolerance each reading's rays guarantee at δ, shape (n_λ, n_θ): the inverse of
+        the sweep's bound (eq. 19 / eq. 14) at N = :attr:`rays`; ≤ μ when N came from
+        the bound, larger when fewer rays were asked for (e.g. ``rays=1000``).
+        """
+
+        from virtspec_mi.bounds import chebyshev_mu, hoeffding_mu
+
+        inverse = {"hoeffding": hoeffding_mu, "chebyshev": chebyshev_mu}.get(self.settings.bound)
+        if inverse is None:  # a bound without a closed-form inverse: its target μ
+            return np.full(self.rays.shape, self.settings.mu)
+        return np.vectorize(lambda n: inverse(int(n), self.settings.delta), otypes=[float])(self.rays)
+
     def quantity(self, name: str) -> np.ndarray:
         """``reflectance``, ``transmittance`` or ``absorptance`` by name."""
 

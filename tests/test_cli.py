@@ -60,3 +60,50 @@ def test_measure_bad_input_is_one_clear_line(scenes_dir, args, message):
 def test_measure_missing_scene_file(tmp_path):
     result = virtspec("measure", str(tmp_path / "none.xml"))
     assert result.returncode == 1 and "scene file not found" in result.stderr
+
+
+# --- sweep and colour ---------------------------------------------------------------------
+
+
+def test_sweep_writes_the_file_and_plot_and_colour_reads_it(scenes_dir, tmp_path):
+    out, figure = tmp_path / "sweep.nc", tmp_path / "sweep.png"
+    result = virtspec("sweep", str(scenes_dir / "diamond_collimated.xml"), "--theta-i", "0:90:45",
+                      "--wavelengths", "400:700:100", "--rays", "2000", "--out", str(out), "--plot", str(figure))
+    assert result.returncode == 0, result.stderr
+    assert "collimated sweep: 3 theta_i x 4 wavelengths" in result.stdout and f"written: {out}" in result.stdout
+    assert result.stderr == ""  # no progress bar: not a terminal
+    assert figure.read_bytes()[:4] == b"\x89PNG"
+    from virtspec_mi.results_io import read_sweep
+
+    saved = read_sweep(out)
+    assert saved.reflectance.shape == (4, 3) and saved.settings.seed == 0
+    colour = virtspec("colour", str(out), "--theta-i", "45")
+    assert colour.returncode == 0, colour.stderr
+    assert "illuminant D65" in colour.stdout and "Lab  =" in colour.stdout
+    assert "Lab  =" in colour.stdout and "sRGB =" in colour.stdout
+    # the grey diamond: a* = b* = 0
+    lab = [float(v) for v in colour.stdout.split("Lab  =")[1].split()[:3]]
+    assert abs(lab[1]) < 1e-6 and abs(lab[2]) < 1e-6
+    missing_angle = virtspec("colour", str(out))
+    assert missing_angle.returncode == 1 and "theta_i must be given" in missing_angle.stderr
+
+
+def test_sweep_densities_print_seconds_and_delta(scenes_dir):
+    result = virtspec("sweep", str(scenes_dir / "diamond_collimated.xml"), "--theta-i", "0:90:1",
+                      "--densities", "2", "3", "--quiet")
+    assert result.returncode == 0, result.stderr
+    lines = result.stdout.splitlines()
+    assert "Delta (eq. 24)" in lines[0]
+    assert lines[1].split()[:2] == ["2", "100"] and lines[2].split()[:2] == ["3", "1,000"]
+    assert 0.005 < float(lines[2].split()[3]) < 0.2  # Delta between 100 and 1000 rays per reading
+
+
+@pytest.mark.parametrize("args, message", [
+    (["--theta-i", "0:100:10"], "theta_i must satisfy 0 <= theta_i <= 90"),
+    (["--theta-i", "10", "--out", "x.txt"], "out must end in one of .nc, .csv, .json"),
+    (["--theta-i", "10", "--plot", "x.pdf"], "plot must end in one of .png, .svg"),
+])
+def test_sweep_bad_input_is_one_line_error(scenes_dir, args, message):
+    result = virtspec("sweep", str(scenes_dir / "diamond_collimated.xml"), *args)
+    assert result.returncode == 1
+    assert result.stderr.startswith("virtspec: error: ") and message in result.stderr

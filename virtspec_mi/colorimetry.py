@@ -13,7 +13,8 @@ Colorimetry of measured spectra through colour-science
 Wavelengths outside the observer's colour-matching range (360–830 nm for CIE 1931
 2°) stay in the data but are left out of the colorimetry; :attr:`Colour.note` says
 which. Inside that range colour-science integrates the spectrum (ASTM E308 weights;
-outside the measured span it extends the spectrum by its end values).
+outside the measured span it extends the spectrum by its end values); spectra not
+evenly sampled at 1, 5, 10 or 20 nm are first linearly interpolated onto 1 nm (noted).
 
 References
 ----------
@@ -161,11 +162,20 @@ def colorimetry(sd: Any, illuminant: str = DEFAULT_ILLUMINANT, observer: str = D
         raise ValueError(f"colorimetry needs at least two wavelengths within {low:g}-{high:g} nm "
                          f"(got {int(inside.sum())})")
     used = colour.SpectralDistribution(values[inside], wavelengths[inside])
+    steps = np.unique(np.round(np.diff(np.sort(wavelengths[inside])), 9))
+    if len(steps) != 1 or steps[0] not in (1, 5, 10, 20):
+        # ASTM E308 integrates 1, 5, 10 or 20 nm data: interpolate others onto 1 nm
+        used = used.copy().interpolate(colour.SpectralShape(used.shape.start, used.shape.end, 1),
+                                       interpolator=colour.LinearInterpolator)
+        note = "; ".join(filter(None, [note, "wavelengths not evenly 1, 5, 10 or 20 nm apart: "
+                                             "linearly interpolated to 1 nm for the colorimetry"]))
     light = colour.SDS_ILLUMINANTS[illuminant]
-    XYZ = np.asarray(colour.sd_to_XYZ(used, cmfs, light), dtype=np.float64)
-    # White point: the perfect reflecting diffuser integrated the same way (same domain).
-    perfect = colour.SpectralDistribution(np.ones(int(inside.sum())), wavelengths[inside])
-    white = colour.XYZ_to_xy(np.asarray(colour.sd_to_XYZ(perfect, cmfs, light)) / 100.0)
+    # colour-science reports every re-sampling it does (ASTM E308 aligns shapes): expected here
+    with colour.utilities.suppress_warnings(colour_runtime_warnings=True):
+        XYZ = np.asarray(colour.sd_to_XYZ(used, cmfs, light), dtype=np.float64)
+        # White point: the perfect reflecting diffuser integrated the same way (same domain).
+        perfect = colour.SpectralDistribution(np.ones(len(used.wavelengths)), used.wavelengths)
+        white = colour.XYZ_to_xy(np.asarray(colour.sd_to_XYZ(perfect, cmfs, light)) / 100.0)
     Lab = np.asarray(colour.XYZ_to_Lab(XYZ / 100.0, white), dtype=np.float64)
     sRGB = np.asarray(colour.XYZ_to_sRGB(XYZ / 100.0, illuminant=white), dtype=np.float64)
     return Colour(XYZ, Lab, sRGB, illuminant, observer, wavelengths[inside], note)

@@ -139,18 +139,6 @@ class SweepResult:
         return self.absorbed / self.rays
 
     @property
-    def phi_i(self) -> float:
-        return self.settings.phi_i
-
-    @property
-    def mu(self) -> float:
-        return self.settings.mu
-
-    @property
-    def delta(self) -> float:
-        return self.settings.delta
-
-    @property
     def certified_mu(self) -> np.ndarray:
         """
         Tolerance each reading's rays guarantee at δ, shape (n_λ, n_θ): the inverse of

@@ -51,6 +51,14 @@ def test_wavelengths_outside_the_cmfs_stay_in_the_data_but_not_in_the_colour():
     assert colour_.XYZ[1] == pytest.approx(30.0, rel=1e-6)  # the 0.9 values were not used
 
 
+def test_uneven_spectra_are_interpolated_with_a_note():
+    wavelengths = np.array([400.0, 450.0, 520.0, 600.0, 700.0])  # not 1, 5, 10 or 20 nm apart
+    grey = colorimetry(_sweep_of(np.full(5, 0.5), wavelengths).to_sd())
+    assert "linearly interpolated to 1 nm" in grey.note
+    assert grey.XYZ[1] == pytest.approx(50.0, rel=1e-6)
+    np.testing.assert_allclose(grey.Lab[1:], 0.0, atol=1e-9)
+
+
 def test_bad_colorimetry_input(diamond):
     result = vm.sweep(diamond, theta_i=[0, 10], wavelengths=[500, 600], rays=100)
     with pytest.raises(ValueError, match="theta_i must be given"):

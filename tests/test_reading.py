@@ -246,3 +246,12 @@ def test_reading_as_dict_is_json_ready(diamond):
     data = json.loads(json.dumps(vm.measure(diamond, theta_i=5, rays=100).as_dict()))
     assert {"reflectance", "transmittance", "absorptance", "reflected", "transmitted", "rays",
             "seconds", "settings", "geometry"} <= set(data)
+
+
+def test_wavelength_independent_specimen_is_traced_once_and_says_so(diamond, traced_diamond):
+    reading = vm.measure(diamond, theta_i=40, wavelengths="400:700:100", rays=3000)
+    assert reading.wavelength_independent and reading.as_dict()["wavelength_independent"]
+    assert len(set(reading.reflected)) == 1
+    assert "wavelength-independent specimen: traced once" in reading.summary()
+    other = vm.measure(traced_diamond, theta_i=40, wavelengths="400:700:100", rays=3000)
+    assert not other.wavelength_independent and len(set(other.reflected)) > 1

@@ -209,3 +209,14 @@ def test_progress_bar_only_when_asked_or_in_a_slow_terminal_sweep(diamond, capsy
     assert capsys.readouterr().err == ""
     vm.sweep(diamond, theta_i="0:90:30", rays=1000, chunk_size=1024, progress=False)
     assert capsys.readouterr().err == ""
+
+
+def test_progress_bar_in_a_terminal_when_the_sweep_is_expected_to_be_slow(diamond, capsys, monkeypatch):
+    import virtspec_mi.sweeps as sweeps
+
+    monkeypatch.setattr(sys.stderr, "isatty", lambda: True)
+    vm.sweep(diamond, theta_i="0:90:10", rays=1000, chunk_size=1024)  # ~ms: under the 2 s threshold
+    assert capsys.readouterr().err == ""
+    monkeypatch.setattr(sweeps, "_PROGRESS_AFTER_S", 0.0)  # now every sweep counts as slow
+    vm.sweep(diamond, theta_i="0:90:10", rays=1000, chunk_size=1024)
+    assert "sweep" in capsys.readouterr().err

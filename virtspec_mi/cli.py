@@ -153,13 +153,15 @@ def _sweep(args: argparse.Namespace) -> int:
         result = run(args.rays, out)
         if args.plot:
             plot_sweep(result, args.plot)
+        # no file: the CSV table on stdout and the summary on stderr, so the table can be piped
+        report = sys.stdout if out is not None else sys.stderr
         if not args.quiet:
-            print(result.summary())
+            print(result.summary(), file=report)
             for label, path in (("written", out), ("plot", args.plot)):
                 if path:
-                    print(f"{label}: {path}")
+                    print(f"{label}: {path}", file=report)
         if out is None:
-            print(csv_text(result), end="")  # no file: the CSV table on stdout
+            print(csv_text(result), end="")
         return 0
 
     if args.rays is not None:

@@ -109,8 +109,9 @@ def spectral_distribution(result: Any, quantity: str = "reflectance", theta_i: f
         raise ValueError(f"a spectrum needs at least two wavelengths (the sweep has {len(result.wavelengths)})")
     values = result.quantity(quantity)[:, column]
     order = np.argsort(result.wavelengths)
-    return colour.SpectralDistribution(values[order], np.asarray(result.wavelengths)[order],
-                                       name=f"{quantity} theta_i={result.theta_i[column]:g}")
+    with colour.utilities.suppress_warnings(colour_runtime_warnings=True):  # "not uniform" is fine here
+        return colour.SpectralDistribution(values[order], np.asarray(result.wavelengths)[order],
+                                           name=f"{quantity} theta_i={result.theta_i[column]:g}")
 
 
 def multi_spectral_distributions(result: Any, theta_i: float | None = None) -> Any:
@@ -161,17 +162,17 @@ def colorimetry(sd: Any, illuminant: str = DEFAULT_ILLUMINANT, observer: str = D
     if inside.sum() < 2:
         raise ValueError(f"colorimetry needs at least two wavelengths within {low:g}-{high:g} nm "
                          f"(got {int(inside.sum())})")
-    used = colour.SpectralDistribution(values[inside], wavelengths[inside])
-    steps = np.unique(np.round(np.diff(np.sort(wavelengths[inside])), 9))
-    if len(steps) != 1 or steps[0] not in (1, 5, 10, 20):
-        # ASTM E308 integrates 1, 5, 10 or 20 nm data: interpolate others onto 1 nm
-        used = used.copy().interpolate(colour.SpectralShape(used.shape.start, used.shape.end, 1),
-                                       interpolator=colour.LinearInterpolator)
-        note = "; ".join(filter(None, [note, "wavelengths not evenly 1, 5, 10 or 20 nm apart: "
-                                             "linearly interpolated to 1 nm for the colorimetry"]))
     light = colour.SDS_ILLUMINANTS[illuminant]
     # colour-science reports every re-sampling it does (ASTM E308 aligns shapes): expected here
     with colour.utilities.suppress_warnings(colour_runtime_warnings=True):
+        used = colour.SpectralDistribution(values[inside], wavelengths[inside])
+        steps = np.unique(np.round(np.diff(np.sort(wavelengths[inside])), 9))
+        if len(steps) != 1 or steps[0] not in (1, 5, 10, 20):
+            # ASTM E308 integrates 1, 5, 10 or 20 nm data: interpolate others onto 1 nm
+            used = used.copy().interpolate(colour.SpectralShape(used.shape.start, used.shape.end, 1),
+                                           interpolator=colour.LinearInterpolator)
+            note = "; ".join(filter(None, [note, "wavelengths not evenly 1, 5, 10 or 20 nm apart: "
+                                                 "linearly interpolated to 1 nm for the colorimetry"]))
         XYZ = np.asarray(colour.sd_to_XYZ(used, cmfs, light), dtype=np.float64)
         # White point: the perfect reflecting diffuser integrated the same way (same domain).
         perfect = colour.SpectralDistribution(np.ones(len(used.wavelengths)), used.wavelengths)

@@ -109,3 +109,17 @@ def test_sweep_bad_input_is_one_line_error(scenes_dir, args, message):
     result = virtspec("sweep", str(scenes_dir / "diamond_collimated.xml"), *args)
     assert result.returncode == 1
     assert result.stderr.startswith("virtspec: error: ") and message in result.stderr
+
+
+def test_colour_reads_colour_science_csv_spectra(diamond, tmp_path, capsys):
+    import virtspec_mi as vm
+    from virtspec_mi.cli import main
+    from virtspec_mi.results_io import write_spectra_csv
+
+    result = vm.sweep(diamond, theta_i=[20], wavelengths="380:780:20", rays=2000)
+    path = write_spectra_csv(result, tmp_path / "spectra.csv")
+    assert main(["colour", str(path), "--quantity", "transmittance"]) == 0
+    printed = capsys.readouterr().out
+    assert f"transmittance of {path}" in printed and "Lab  =" in printed
+    assert main(["colour", str(path), "--quantity", "colour"]) == 1
+    assert "quantity must be one of the file's columns" in capsys.readouterr().err

@@ -102,6 +102,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     except (ValueError, RuntimeError, OSError) as error:
         print(f"virtspec: error: {error}", file=sys.stderr)
         return 1
+    except KeyboardInterrupt:
+        kept = " (finished readings are kept in OUT.partial.json: re-run the same command to resume)"
+        print(f"virtspec: interrupted{kept if getattr(args, 'out', None) else ''}", file=sys.stderr)
+        return 130
 
 
 def _measure(args: argparse.Namespace) -> int:

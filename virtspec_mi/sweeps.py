@@ -56,6 +56,7 @@ __all__ = [
     "sweep",
     "fluctuation",
     "scene_fingerprint",
+    "ray_stride",
 ]
 
 QUANTITIES: tuple[str, ...] = ("reflectance", "transmittance", "absorptance")
@@ -268,7 +269,7 @@ def sweep(
         if len(np.unique(values)) != len(values):
             raise ValueError(f"{name} of a sweep must be distinct (got repeated values)")
     n_lam, n_theta = len(lams), len(angles)
-    n = settings.rays_per_reading
+    n = ray_stride(settings)
     shared = shares_wavelengths(instrument)
     fingerprint = scene_fingerprint(scene, instrument)
     identity = _identity(settings, angles, instrument.geometry, fingerprint, shared)
@@ -319,6 +320,16 @@ def sweep(
         scene=fingerprint,
         wavelength_independent=shared,
     )
+
+
+def ray_stride(settings: Settings) -> int:
+    """
+    Global ray indices reserved per reading of a sweep: reading k owns [k·stride, k·stride + rays_k).
+    It must be at least the most rays any reading may use (``take_readings`` refuses
+    overlapping ranges); with one budget per reading that is ``settings.rays_per_reading``.
+    """
+
+    return settings.rays_per_reading
 
 
 def fluctuation(a: SweepResult | np.ndarray, b: SweepResult | np.ndarray, quantity: str = "reflectance") -> float:

@@ -38,6 +38,7 @@ test-fast: setup
 
 bench: setup
 	$(PY) benchmarks/throughput.py
+	$(PY) benchmarks/sweeps.py
 
 clean:
 	rm -rf $(VENV) build *.egg-info .pytest_cache

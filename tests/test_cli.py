@@ -60,3 +60,66 @@ def test_measure_bad_input_is_one_clear_line(scenes_dir, args, message):
 def test_measure_missing_scene_file(tmp_path):
     result = virtspec("measure", str(tmp_path / "none.xml"))
     assert result.returncode == 1 and "scene file not found" in result.stderr
+
+
+# --- sweep and colour ---------------------------------------------------------------------
+
+
+def test_sweep_writes_the_file_and_plot_and_colour_reads_it(scenes_dir, tmp_path, capsys):
+    out, figure = tmp_path / "sweep.nc", tmp_path / "sweep.png"
+    result = virtspec("sweep", str(scenes_dir / "diamond_collimated.xml"), "--theta-i", "0:90:45",
+                      "--wavelengths", "400:700:100", "--rays", "2000", "--out", str(out), "--plot", str(figure))
+    assert result.returncode == 0, result.stderr
+    assert "collimated sweep: 3 theta_i x 4 wavelengths" in result.stdout and f"written: {out}" in result.stdout
+    assert result.stderr == ""  # no progress bar: not a terminal
+    assert figure.read_bytes()[:4] == b"\x89PNG"
+    from virtspec_mi.results_io import read_sweep
+
+    saved = read_sweep(out)
+    assert saved.reflectance.shape == (4, 3) and saved.settings.seed == 0
+    colour = virtspec("colour", str(out), "--theta-i", "45")
+    assert colour.returncode == 0, colour.stderr
+    assert "illuminant D65" in colour.stdout and "Lab  =" in colour.stdout
+    assert "Lab  =" in colour.stdout and "sRGB =" in colour.stdout
+    # the grey diamond: a* = b* = 0
+    lab = [float(v) for v in colour.stdout.split("Lab  =")[1].split()[:3]]
+    assert abs(lab[1]) < 1e-6 and abs(lab[2]) < 1e-6
+    from virtspec_mi.cli import main  # in-process: one more interpreter start would add ~1.5 s
+
+    assert main(["colour", str(out)]) == 1
+    assert "theta_i must be given" in capsys.readouterr().err
+
+
+def test_sweep_densities_print_seconds_and_delta(scenes_dir):
+    result = virtspec("sweep", str(scenes_dir / "diamond_collimated.xml"), "--theta-i", "0:90:1",
+                      "--densities", "2", "3", "--quiet")
+    assert result.returncode == 0, result.stderr
+    lines = result.stdout.splitlines()
+    assert "Delta (eq. 24)" in lines[0]
+    assert lines[1].split()[:2] == ["2", "100"] and lines[2].split()[:2] == ["3", "1,000"]
+    assert 0.005 < float(lines[2].split()[3]) < 0.2  # Delta between 100 and 1000 rays per reading
+
+
+@pytest.mark.parametrize("args, message", [
+    (["--theta-i", "0:100:10"], "theta_i must satisfy 0 <= theta_i <= 90"),
+    (["--theta-i", "10", "--out", "x.txt"], "out must end in one of .nc, .csv, .json"),
+    (["--theta-i", "10", "--plot", "x.pdf"], "plot must end in one of .png, .svg"),
+])
+def test_sweep_bad_input_is_one_line_error(scenes_dir, args, message):
+    result = virtspec("sweep", str(scenes_dir / "diamond_collimated.xml"), *args)
+    assert result.returncode == 1
+    assert result.stderr.startswith("virtspec: error: ") and message in result.stderr
+
+
+def test_colour_reads_colour_science_csv_spectra(diamond, tmp_path, capsys):
+    import virtspec_mi as vm
+    from virtspec_mi.cli import main
+    from virtspec_mi.results_io import write_spectra_csv
+
+    result = vm.sweep(diamond, theta_i=[20], wavelengths="380:780:20", rays=2000)
+    path = write_spectra_csv(result, tmp_path / "spectra.csv")
+    assert main(["colour", str(path), "--quantity", "transmittance"]) == 0
+    printed = capsys.readouterr().out
+    assert f"transmittance of {path}" in printed and "Lab  =" in printed
+    assert main(["colour", str(path), "--quantity", "colour"]) == 1
+    assert "quantity must be one of the file's columns" in capsys.readouterr().err

@@ -66,14 +66,22 @@ def test_mitsuba_dielectric_agrees_with_simple_dielectric(mi, theta):
     assert abs(theirs.reflectance[0] - fresnel_reflectance(theta, 2.419)) < MU or beam == "conical"
 
 
-def test_same_seed_same_counts_whatever_chunk_size_and_threads(diamond):
+@pytest.fixture(scope="module")
+def traced_diamond(mi):
+    """Mitsuba's own smooth dielectric (diamond): not flagged wavelength-independent, so
+    every wavelength is traced with its own rays."""
+
+    return mi.load_dict(vm.instrument_scene({"type": "dielectric", "int_ior": 2.419, "ext_ior": 1.0}))
+
+
+def test_same_seed_same_counts_whatever_chunk_size_and_threads(traced_diamond):
     kwargs = dict(theta_i=70, wavelengths=[450, 551, 650], seed=11, sampling="jittered")
-    reference = vm.measure(diamond, **kwargs)
-    small_chunks = vm.measure(diamond, chunk_size=1024 * 7, **kwargs)
+    reference = vm.measure(traced_diamond, **kwargs)
+    small_chunks = vm.measure(traced_diamond, chunk_size=1024 * 7, **kwargs)
     threads = dr.thread_count()
     try:
         dr.set_thread_count(1)
-        one_thread = vm.measure(diamond, chunk_size=50_000, **kwargs)
+        one_thread = vm.measure(traced_diamond, chunk_size=50_000, **kwargs)
     finally:
         dr.set_thread_count(threads)
     for other in (small_chunks, one_thread):
@@ -82,20 +90,22 @@ def test_same_seed_same_counts_whatever_chunk_size_and_threads(diamond):
 
 
 @pytest.mark.parametrize("sampling", ["jittered", "random", "concentric"])
-def test_first_reading_of_a_batch_equals_a_single_reading(diamond, sampling):
+def test_first_reading_of_a_batch_equals_a_single_reading(traced_diamond, sampling):
     # readings are keyed on the global ray index: reading 0 is the same rays either way,
     # whether its chunk holds one reading (scalar path) or several (gathered path).
-    batch = vm.measure(diamond, theta_i=60, wavelengths=[500, 600, 700], rays=5000, sampling=sampling, seed=5)
-    single = vm.measure(diamond, theta_i=60, wavelengths=[500], rays=5000, sampling=sampling, seed=5)
+    scene = traced_diamond
+    batch = vm.measure(scene, theta_i=60, wavelengths=[500, 600, 700], rays=5000, sampling=sampling, seed=5)
+    single = vm.measure(scene, theta_i=60, wavelengths=[500], rays=5000, sampling=sampling, seed=5)
     assert batch.reflected[0] == single.reflected[0]
-    other_seed = vm.measure(diamond, theta_i=60, wavelengths=[500, 600, 700], rays=5000, sampling=sampling, seed=6)
+    assert len(set(batch.reflected)) > 1  # the other readings have rays of their own
+    other_seed = vm.measure(scene, theta_i=60, wavelengths=[500, 600, 700], rays=5000, sampling=sampling, seed=6)
     assert not np.array_equal(other_seed.reflected, batch.reflected)
 
 
-def test_miss_count_agrees_with_exact_binomial(diamond):
+def test_miss_count_agrees_with_exact_binomial(traced_diamond):
     """
     K independent readings (one per wavelength: each has its own rays) of a specimen
-    whose rho is known exactly; the number of misses |m/N - rho| >= mu must be
+    whose rho is known exactly (Mitsuba's smooth dielectric: traced per wavelength); the number of misses |m/N - rho| >= mu must be
     consistent with Binomial(K, q), q = miss_probability(N, rho, mu) (anchors.md §2e:
     a plain "misses <= delta K" check has no power). Two-sided test at level 1e-4.
     """
@@ -104,7 +114,7 @@ def test_miss_count_agrees_with_exact_binomial(diamond):
     n = hoeffding_rays(mu, delta)  # 461
     rho = float(fresnel_reflectance(80.0, 2.419))  # 0.4333
     wavelengths = 400.0 + 0.1 * np.arange(k)
-    reading = collimated(diamond, 80.0, wavelengths=wavelengths, mu=mu, delta=delta, seed=2024)
+    reading = collimated(traced_diamond, 80.0, wavelengths=wavelengths, mu=mu, delta=delta, seed=2024)
     misses = int(np.sum(np.abs(reading.reflectance - rho) >= mu))
     q = miss_probability(n, rho, mu)
     assert 0.02 < q < 0.05  # the test has something to detect
@@ -113,7 +123,7 @@ def test_miss_count_agrees_with_exact_binomial(diamond):
     pooled = reading.reflected.sum() / (n * k)
     assert abs(pooled - rho) < 4 * np.sqrt(rho * (1 - rho) / (n * k))
     # and it has power: half the rays give a miss rate the binomial test rejects
-    half = collimated(diamond, 80.0, wavelengths=wavelengths, rays=n // 2, seed=2025)
+    half = collimated(traced_diamond, 80.0, wavelengths=wavelengths, rays=n // 2, seed=2025)
     half_misses = int(np.sum(np.abs(half.reflectance - rho) >= mu))
     assert stats.binomtest(half_misses, k, q).pvalue < 1e-4
 
@@ -236,3 +246,12 @@ def test_reading_as_dict_is_json_ready(diamond):
     data = json.loads(json.dumps(vm.measure(diamond, theta_i=5, rays=100).as_dict()))
     assert {"reflectance", "transmittance", "absorptance", "reflected", "transmitted", "rays",
             "seconds", "settings", "geometry"} <= set(data)
+
+
+def test_wavelength_independent_specimen_is_traced_once_and_says_so(diamond, traced_diamond):
+    reading = vm.measure(diamond, theta_i=40, wavelengths="400:700:100", rays=3000)
+    assert reading.wavelength_independent and reading.as_dict()["wavelength_independent"]
+    assert len(set(reading.reflected)) == 1
+    assert "wavelength-independent specimen: traced once" in reading.summary()
+    other = vm.measure(traced_diamond, theta_i=40, wavelengths="400:700:100", rays=3000)
+    assert not other.wavelength_independent and len(set(other.reflected)) > 1

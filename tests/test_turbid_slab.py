@@ -183,13 +183,16 @@ def test_diffuse_beam_directions_are_cosine_distributed(mi):
 def test_spectral_parameters_are_evaluated_per_wavelength(mi):
     """A spectrum-valued mu_a gives exactly the counts of constant slabs at its node values."""
 
+    # One wavelength per reading, so both specimens use the same rays (a constant slab is
+    # wavelength-independent and would share the first reading's rays across wavelengths).
     spectrum = {"type": "regular", "wavelength_min": 500.0, "wavelength_max": 600.0, "values": "1, 5"}
-    varying = read(slab(mu_a=spectrum, mu_s=3.0), rays=50_000, wavelengths=[500, 600])
-    for column, mu_a in enumerate((1.0, 5.0)):
-        constant = read(slab(mu_a=mu_a, mu_s=3.0), rays=50_000, wavelengths=[500, 600])
-        assert varying.reflected[column] == constant.reflected[column]
-        assert varying.transmitted[column] == constant.transmitted[column]
-    assert varying.reflected[0] != varying.reflected[1]
+    varying = []
+    for wavelength, mu_a in ((500, 1.0), (600, 5.0)):
+        varying.append(read(slab(mu_a=spectrum, mu_s=3.0), rays=50_000, wavelengths=[wavelength]))
+        constant = read(slab(mu_a=mu_a, mu_s=3.0), rays=50_000, wavelengths=[wavelength])
+        assert varying[-1].reflected[0] == constant.reflected[0]
+        assert varying[-1].transmitted[0] == constant.transmitted[0]
+    assert varying[0].reflected[0] != varying[1].reflected[0]
     assert not mi.load_dict(slab(mu_a=spectrum)).wavelength_independent
     assert mi.load_dict(slab(mu_a=2.0)).wavelength_independent
 

@@ -29,6 +29,9 @@ __all__ = [
     "hoeffding_mu",
     "chebyshev_mu",
     "mitsuba",
+    "sweep",
+    "SweepResult",
+    "fluctuation",
 ]
 
 _LAZY = {
@@ -44,6 +47,9 @@ _LAZY = {
     "hoeffding_mu": "virtspec_mi.bounds",
     "chebyshev_mu": "virtspec_mi.bounds",
     "mitsuba": "virtspec_mi.runtime",
+    "sweep": "virtspec_mi.sweeps",
+    "SweepResult": "virtspec_mi.sweeps",
+    "fluctuation": "virtspec_mi.sweeps",
 }
 
 

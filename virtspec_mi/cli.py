@@ -5,6 +5,11 @@ Command line: ``virtspec``
 - ``virtspec bounds --mu 0.005 --delta 0.001 0.01 0.1``: the paper's Table 1.
 - ``virtspec measure SCENE [--theta-i] [--phi-i] [--wavelengths] [--mu] [--delta]
   [--rays] [--beam] [--sampling] [--seed] [--json]``: one certified reading.
+- ``virtspec sweep SCENE --theta-i 0:90:1 [--wavelengths 400:700:10] [--out FILE(.nc|.csv|.json)]
+  [--plot FIG(.png|.svg)] [--densities 3 4 5 6] [--quiet] [measure options]``: a sweep
+  (resumable when ``--out`` is given: see :mod:`virtspec_mi.sweeps`).
+- ``virtspec colour FILE [--theta-i] [--quantity] [--illuminant] [--observer]``: CIE XYZ,
+  L*a*b* and sRGB of a saved spectrum (a sweep file or a colour-science CSV).
 
 Errors in the input (bad ranges, unreadable scenes, a bad libLLVM) print one line
 ``virtspec: error: …`` and exit with status 2 (usage) or 1 (measurement).
@@ -35,20 +40,48 @@ def build_parser() -> argparse.ArgumentParser:
 
     measure = commands.add_parser("measure", help="one certified reading of a scene")
     measure.add_argument("scene", help="Mitsuba XML scene with 'emitter' and 'specimen' disks")
-    measure.add_argument("--theta-i", type=float, help="polar incidence angle, degrees in [0, 90]")
-    measure.add_argument("--phi-i", type=float, help="azimuthal incidence angle, degrees")
-    measure.add_argument("--wavelengths", nargs="+",
-                         help="wavelengths in nm: numbers and start:stop:step ranges")
-    measure.add_argument("--mu", type=float, help="certified tolerance, 0 < mu < 0.5 (default 0.005)")
-    measure.add_argument("--delta", type=float, help="failure probability, 0 < delta < 1 (default 0.01)")
-    measure.add_argument("--rays", type=int, help="rays per wavelength (default: from the bound)")
-    measure.add_argument("--bound", choices=["hoeffding", "chebyshev"], help="ray budget rule")
-    measure.add_argument("--beam", choices=["conical", "collimated", "diffuse"],
-                         help="beam geometry (diffuse: cosine-weighted over the hemisphere, theta_i unused)")
-    measure.add_argument("--sampling", choices=["jittered", "random", "concentric"], help="disk sampling")
-    measure.add_argument("--seed", type=int, help="random seed (default 0)")
+    _measurement_options(measure, sweep=False)
     measure.add_argument("--json", action="store_true", help="print the reading as one JSON object")
+
+    sweep = commands.add_parser("sweep", help="certified readings over theta_i x wavelengths (few kernel launches)")
+    sweep.add_argument("scene", help="Mitsuba XML scene with 'emitter' and 'specimen' disks")
+    _measurement_options(sweep, sweep=True)
+    sweep.add_argument("--out", help="result file .nc, .csv or .json (finished readings are kept in "
+                                     "OUT.partial.json until the sweep ends: re-run to resume)")
+    sweep.add_argument("--plot", help="figure .png or .svg (readings with the certified +-mu band)")
+    sweep.add_argument("--densities", type=float, nargs="+", metavar="LOG10N",
+                       help="sweep at N = 10^d rays for each d; print seconds and the fluctuation of eq. (24)")
+    sweep.add_argument("--quiet", action="store_true", help="no progress bar and no summary")
+
+    colour = commands.add_parser("colour", help="CIE XYZ, L*a*b*, sRGB of a saved spectrum")
+    colour.add_argument("file", help="sweep file (.nc, .csv, .json) or colour-science CSV spectra")
+    colour.add_argument("--theta-i", type=float, help="angle of the sweep to use (needed if it has several)")
+    colour.add_argument("--quantity", default="reflectance", help="reflectance (default) or transmittance")
+    colour.add_argument("--illuminant", default="D65", help="colour.SDS_ILLUMINANTS name (default D65)")
+    colour.add_argument("--observer", default="CIE 1931 2 Degree Standard Observer",
+                        help="colour.MSDS_CMFS name (default CIE 1931 2 degree)")
     return parser
+
+
+def _measurement_options(parser: argparse.ArgumentParser, sweep: bool) -> None:
+    """The options shared by ``measure`` and ``sweep``."""
+
+    if sweep:
+        parser.add_argument("--theta-i", nargs="+", required=True,
+                            help="polar incidence angles, degrees in [0, 90]: numbers and start:stop:step ranges")
+    else:
+        parser.add_argument("--theta-i", type=float, help="polar incidence angle, degrees in [0, 90]")
+    parser.add_argument("--phi-i", type=float, help="azimuthal incidence angle, degrees")
+    parser.add_argument("--wavelengths", nargs="+",
+                        help="wavelengths in nm: numbers and start:stop:step ranges")
+    parser.add_argument("--mu", type=float, help="certified tolerance, 0 < mu < 0.5 (default 0.005)")
+    parser.add_argument("--delta", type=float, help="failure probability, 0 < delta < 1 (default 0.01)")
+    parser.add_argument("--rays", type=int, help="rays per reading (default: from the bound)")
+    parser.add_argument("--bound", choices=["hoeffding", "chebyshev"], help="ray budget rule")
+    parser.add_argument("--beam", choices=["conical", "collimated", "diffuse"],
+                        help="beam geometry (diffuse: cosine-weighted over the hemisphere, theta_i unused)")
+    parser.add_argument("--sampling", choices=["jittered", "random", "concentric"], help="disk sampling")
+    parser.add_argument("--seed", type=int, help="random seed (default 0)")
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -62,10 +95,18 @@ def main(argv: Sequence[str] | None = None) -> int:
 
             print(format_table_1(args.mu, args.delta))
             return 0
+        if args.command == "sweep":
+            return _sweep(args)
+        if args.command == "colour":
+            return _colour(args)
         return _measure(args)
     except (ValueError, RuntimeError, OSError) as error:
         print(f"virtspec: error: {error}", file=sys.stderr)
         return 1
+    except KeyboardInterrupt:
+        kept = " (finished readings are kept in OUT.partial.json: re-run the same command to resume)"
+        print(f"virtspec: interrupted{kept if getattr(args, 'out', None) else ''}", file=sys.stderr)
+        return 130
 
 
 def _measure(args: argparse.Namespace) -> int:
@@ -85,6 +126,89 @@ def _measure(args: argparse.Namespace) -> int:
         bound=args.bound,
     )
     print(json.dumps(reading.as_dict()) if args.json else reading.summary())
+    return 0
+
+
+def _sweep(args: argparse.Namespace) -> int:
+    from pathlib import Path
+
+    from virtspec_mi.plot import check_figure_path, plot_densities, plot_sweep
+    from virtspec_mi.results_io import csv_text, result_format
+    from virtspec_mi.sweeps import fluctuation, sweep
+
+    out = Path(args.out) if args.out else None
+    if out is not None:
+        result_format(out)  # a bad suffix fails before any tracing
+    check_figure_path(args.plot)
+    kwargs = dict(
+        theta_i=" ".join(args.theta_i),
+        wavelengths=" ".join(args.wavelengths) if args.wavelengths else None,
+        phi_i=args.phi_i, mu=args.mu, delta=args.delta, beam=args.beam, sampling=args.sampling,
+        seed=args.seed, bound=args.bound, progress=False if args.quiet else None,
+    )
+
+    def run(rays: int | None, path: Path | None) -> object:
+        checkpoint = path.with_name(path.name + ".partial.json") if path is not None else None
+        result = sweep(args.scene, rays=rays, checkpoint=checkpoint, **kwargs)
+        if path is not None:
+            result.write(path)
+        return result
+
+    if not args.densities:
+        result = run(args.rays, out)
+        if args.plot:
+            plot_sweep(result, args.plot)
+        # no file: the CSV table on stdout and the summary on stderr, so the table can be piped
+        report = sys.stdout if out is not None else sys.stderr
+        if not args.quiet:
+            print(result.summary(), file=report)
+            for label, path in (("written", out), ("plot", args.plot)):
+                if path:
+                    print(f"{label}: {path}", file=report)
+        if out is None:
+            print(csv_text(result), end="")
+        return 0
+
+    if args.rays is not None:
+        raise ValueError("--rays and --densities exclude each other (densities set N = 10^d)")
+    results, deltas = [], [float("nan")]
+    print(f"{'log10 N':>8} {'N':>12} {'seconds':>9} {'Delta (eq. 24)':>15}")
+    for density in args.densities:
+        rays = int(round(10.0 ** density))
+        path = out.with_name(f"{out.stem}_logN{density:g}{out.suffix}") if out is not None else None
+        results.append(run(rays, path))
+        if len(results) > 1:
+            deltas.append(fluctuation(results[-2], results[-1]))
+        delta_text = "" if len(results) == 1 else f"{deltas[-1]:.6f}"
+        print(f"{density:>8g} {rays:>12,} {results[-1].seconds:>9.3f} {delta_text:>15}", flush=True)
+    if args.plot:
+        plot_densities(results, args.densities, deltas, args.plot)
+    return 0
+
+
+def _colour(args: argparse.Namespace) -> int:
+    from pathlib import Path
+
+    from virtspec_mi.colorimetry import colorimetry
+
+    path = Path(args.file)
+    if path.suffix.lower() == ".csv" and path.is_file() and not path.read_text().startswith("# virtspec-mi sweep"):
+        from virtspec_mi.results_io import read_spectra_csv
+
+        spectra = read_spectra_csv(path)
+        if args.quantity not in spectra:
+            raise ValueError(f"quantity must be one of the file's columns {sorted(spectra)} (got {args.quantity!r})")
+        sd = spectra[args.quantity]
+        heading = f"{args.quantity} of {path}"
+    else:
+        from virtspec_mi.results_io import read_sweep
+
+        result = read_sweep(path)
+        sd = result.to_sd(args.quantity, args.theta_i)
+        heading = f"{args.quantity} of {path} ({sd.name})"
+    colour = colorimetry(sd, args.illuminant, args.observer)
+    print(heading)
+    print(colour.summary())
     return 0
 
 

@@ -71,6 +71,9 @@ class Reading:
         bounces; unscattered transmission). See :attr:`specular_reflectance`,
         :attr:`diffuse_reflectance`, :attr:`regular_transmittance`,
         :attr:`diffuse_transmittance`.
+    wavelength_independent : bool
+        True when the specimen declared itself wavelength-independent: it was traced
+        once and every wavelength reports the same counts (see :mod:`virtspec_mi.tally`).
     """
 
     wavelengths: np.ndarray
@@ -114,6 +117,7 @@ class Reading:
         """τd = τ − τr: transmitted after scattering."""
 
         return (self.transmitted - self.regular_transmitted) / self.rays
+    wavelength_independent: bool = False
 
     @property
     def theta_i(self) -> float:
@@ -163,6 +167,7 @@ class Reading:
             },
             "version": self.version,
             **parts,
+            "wavelength_independent": self.wavelength_independent,
         }
 
     def summary(self) -> str:
@@ -194,6 +199,8 @@ class Reading:
                     f"{wavelength:>10g} {self.specular_reflectance[i]:>12.5f} {self.diffuse_reflectance[i]:>14.5f} "
                     f"{self.regular_transmittance[i]:>12.5f} {self.diffuse_transmittance[i]:>12.5f}"
                 )
+        if self.wavelength_independent and len(self.wavelengths) > 1:
+            lines.append("note: wavelength-independent specimen: traced once, the same rays for every wavelength")
         if self.backlit_fraction > 0:
             lines.append(f"note: {self.backlit_fraction:.2%} of the emitter lies below the specimen plane")
         if self.weight_violations.any():
@@ -296,4 +303,5 @@ def measure(
         geometry=instrument.geometry,
         specular_reflected=tallies.specular,
         regular_transmitted=tallies.regular,
+        wavelength_independent=tallies.wavelength_independent,
     )

@@ -27,6 +27,7 @@ __all__ = [
     "check_theta_i",
     "check_positive",
     "parse_wavelengths",
+    "parse_theta_i",
 ]
 
 BEAMS: tuple[str, ...] = ("conical", "collimated", "diffuse")
@@ -108,16 +109,7 @@ def parse_wavelengths(wavelengths: Any) -> tuple[float, ...]:
     ``start:stop:step`` ranges (stop included), e.g. ``"400:700:10"`` or ``"465, 551"``.
     """
 
-    if isinstance(wavelengths, str):
-        values: list[float] = []
-        for token in wavelengths.replace(",", " ").split():
-            values.extend(_parse_range(token) if ":" in token else [_number("wavelengths", token)])
-    elif isinstance(wavelengths, (int, float)) and not isinstance(wavelengths, bool):
-        values = [float(wavelengths)]
-    elif isinstance(wavelengths, Iterable):
-        values = [_number("wavelengths", w) for w in wavelengths]
-    else:
-        raise ValueError(f"wavelengths must be numbers in nm (got {wavelengths!r})")
+    values = _parse_numbers("wavelengths", wavelengths, "nm")
     if not values:
         raise ValueError("wavelengths must hold at least one wavelength (got none)")
     for value in values:
@@ -126,13 +118,41 @@ def parse_wavelengths(wavelengths: Any) -> tuple[float, ...]:
     return tuple(values)
 
 
-def _parse_range(token: str) -> list[float]:
+def parse_theta_i(theta_i: Any) -> tuple[float, ...]:
+    """
+    Polar incidence angles of a sweep in degrees, each 0 ≤ θi ≤ 90, at least one.
+
+    Same forms as :func:`parse_wavelengths`, e.g. ``"0:90:1"`` (91 angles) or ``[0, 45]``.
+    """
+
+    values = _parse_numbers("theta_i", theta_i, "degrees")
+    if not values:
+        raise ValueError("theta_i must hold at least one angle (got none)")
+    return tuple(check_theta_i(value) for value in values)
+
+
+def _parse_numbers(name: str, value: Any, unit: str) -> list[float]:
+    """Numbers from a number, a sequence or a string of numbers and start:stop:step ranges."""
+
+    if isinstance(value, str):
+        values: list[float] = []
+        for token in value.replace(",", " ").split():
+            values.extend(_parse_range(token, name) if ":" in token else [_number(name, token)])
+        return values
+    if isinstance(value, (int, float)) and not isinstance(value, bool):
+        return [float(value)]
+    if isinstance(value, Iterable):
+        return [_number(name, v) for v in value]
+    raise ValueError(f"{name} must be numbers in {unit} (got {value!r})")
+
+
+def _parse_range(token: str, name: str = "wavelengths") -> list[float]:
     parts = token.split(":")
     if len(parts) != 3:
-        raise ValueError(f"wavelengths range must be start:stop:step (got {token!r})")
-    start, stop, step = (_number("wavelengths", p) for p in parts)
+        raise ValueError(f"{name} range must be start:stop:step (got {token!r})")
+    start, stop, step = (_number(name, p) for p in parts)
     if not step > 0 or stop < start:
-        raise ValueError(f"wavelengths range {token!r} needs step > 0 and stop >= start")
+        raise ValueError(f"{name} range {token!r} needs step > 0 and stop >= start")
     count = int(math.floor((stop - start) / step + 1e-9)) + 1
     return [start + i * step for i in range(count)]
 

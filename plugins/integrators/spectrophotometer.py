@@ -137,31 +137,61 @@ class Spectrophotometer(mi.SamplingIntegrator):
         return f"Spectrophotometer[{self.settings}]"
 
 
-def tally_readings(instrument: Any, plans: list[ReadingPlan], settings: Settings) -> np.ndarray:
+def tally_readings(
+    instrument: Any, plans: list[ReadingPlan], settings: Settings, offsets: Any = None
+) -> np.ndarray:
     """
     Trace every reading of ``plans`` and return exact counts, shape ``(len(plans), 6)``:
     reflected, transmitted, weight-violating, capped, specularly reflected and
     regularly transmitted rays per reading (``int64``).
 
-    Readings occupy consecutive ranges of the global ray index; chunks of at most
-    ``settings.chunk_size`` rays (never straddling a 2³² boundary of that index) each
-    run as one kernel, so memory stays bounded and counts do not depend on chunking.
+    Reading k's rays are the global ray indices [offsets[k], offsets[k] + rays_k);
+    ``offsets`` defaults to consecutive ranges (0, rays_0, rays_0 + rays_1, …) and may
+    leave gaps (a sweep keys each reading on its index in the whole sweep, so a reading
+    gets the same rays whichever other readings share the call). Ranges must not
+    overlap. The readings' rays are packed into lanes in list order and cut into chunks
+    of at most ``settings.chunk_size`` rays (never straddling a 2³² boundary of the
+    global index); each chunk runs as one kernel, so memory stays bounded and counts do
+    not depend on chunking.
     """
 
     rays = np.array([plan.rays for plan in plans], dtype=np.int64)
-    starts = np.concatenate([[0], np.cumsum(rays)])
+    starts = np.concatenate([[0], np.cumsum(rays)])  # packed (lane) position of each reading
+    offsets = starts[:-1].copy() if offsets is None else _check_offsets(offsets, rays)
+    # Packed positions where the high word of the global index changes: chunks are cut there.
+    cuts = [starts[-1]]
+    for k in range(len(plans)):
+        first_block, last_block = offsets[k] // _WORD, (offsets[k] + rays[k] - 1) // _WORD
+        cuts.extend(starts[k] + (b * _WORD - offsets[k]) for b in range(first_block + 1, last_block + 1))
+        if k and first_block != (offsets[k - 1] + rays[k - 1] - 1) // _WORD:
+            cuts.append(starts[k])
+    cuts = np.unique(np.array(cuts, dtype=np.int64))
     counts = np.zeros((len(plans), 6), dtype=np.int64)
     kernel = _Kernel(instrument, plans, settings)
     first = 0
     while first < starts[-1]:
-        size = int(min(settings.chunk_size, starts[-1] - first, _WORD - first % _WORD))
+        size = int(min(settings.chunk_size, cuts[np.searchsorted(cuts, first, side="right")] - first))
         slots = np.arange(
             np.searchsorted(starts, first, side="right") - 1,
             np.searchsorted(starts, first + size, side="left"),
         )
-        counts[slots] += kernel.run(first, size, slots, starts)
+        counts[slots] += kernel.run(first, size, slots, starts, offsets)
         first += size
     return counts
+
+
+def _check_offsets(offsets: Any, rays: np.ndarray) -> np.ndarray:
+    """Per-reading starts of the global ray index: whole numbers ≥ 0, ranges disjoint, < 2⁶³."""
+
+    offsets = np.asarray(offsets)
+    if offsets.shape != rays.shape or (offsets.size and not np.issubdtype(offsets.dtype, np.integer)):
+        raise ValueError(f"offsets must be {len(rays)} whole numbers, one per reading")
+    offsets = offsets.astype(np.int64)
+    order = np.argsort(offsets, kind="stable")
+    ends = offsets[order] + rays[order]
+    if offsets.size and (offsets.min() < 0 or np.any(offsets[order][1:] < ends[:-1])):
+        raise ValueError("offsets must be >= 0 and the readings' ray ranges [offset, offset + rays) disjoint")
+    return offsets
 
 
 def trace_rays(instrument: Any, plan: ReadingPlan, settings: Settings, count: int) -> dict:
@@ -174,7 +204,7 @@ def trace_rays(instrument: Any, plan: ReadingPlan, settings: Settings, count: in
     """
 
     kernel = _Kernel(instrument, [plan], settings)
-    lanes = kernel.trace(0, count, np.array([0]), np.array([0, plan.rays]))
+    lanes = kernel.trace(0, count, np.array([0]), np.array([0, plan.rays]), np.array([0]))
     dr.eval(lanes)
     return {name: np.array(value).T if np.ndim(value) > 1 else np.array(value)
             for name, value in lanes.items()}
@@ -208,10 +238,11 @@ class _Kernel:
 
     # -- one chunk ---------------------------------------------------------------------
 
-    def run(self, first: int, size: int, slots: np.ndarray, starts: np.ndarray) -> np.ndarray:
+    def run(self, first: int, size: int, slots: np.ndarray, starts: np.ndarray,
+            offsets: np.ndarray) -> np.ndarray:
         """Counts (reflected, transmitted, violations, capped, specular, regular) of ``slots`` in a chunk."""
 
-        lanes = self.trace(first, size, slots, starts)
+        lanes = self.trace(first, size, slots, starts, offsets)
         code = dr.select(lanes["fate"] == 1, mi.UInt64(1), mi.UInt64(0)) | dr.select(
             lanes["fate"] == 2, mi.UInt64(_WORD), mi.UInt64(0)
         )
@@ -241,17 +272,16 @@ class _Kernel:
                 counts[:, column] = _segment_sums(dr.cumsum(mi.UInt64(dr.select(flags, 1, 0))), bounds, ends)
         return counts
 
-    def trace(self, first: int, size: int, slots: np.ndarray, starts: np.ndarray) -> dict:
-        """Symbolic per-lane quantities of the chunk [first, first + size) (nothing evaluated)."""
+    def trace(self, first: int, size: int, slots: np.ndarray, starts: np.ndarray,
+              offsets: np.ndarray) -> dict:
+        """Symbolic per-lane quantities of the packed lanes [first, first + size) (nothing evaluated)."""
 
         settings = self.settings
         lane = dr.arange(mi.UInt32, size)
-        root = chunk_root(settings.seed, first // _WORD)
-        keys = [dr.opaque(mi.UInt32, k) for k in dimension_keys(root)]
-        ray_index = lane + dr.opaque(mi.UInt32, first % _WORD)
-
-        def uniform(dimension: int) -> mi.Float:
-            return to_unit(hash32(ray_index ^ keys[dimension]), mi.Float)
+        # Lane l of reading k has global ray index g = offsets[k] + (first + l − starts[k]); the
+        # chunk never crosses a 2³² boundary of g, so one root and a per-reading low-word shift.
+        shift = (offsets[slots] - starts[slots] + first) % _WORD
+        root = chunk_root(settings.seed, int(offsets[slots[0]] + first - starts[slots[0]]) // _WORD)
 
         # Per-reading parameters: width-1 opaque values for a single reading, else gathered.
         bounds, j0 = _lane_ranges(first, size, slots, starts)
@@ -266,6 +296,14 @@ class _Kernel:
             def column(values: np.ndarray, kind: Any) -> Any:
                 return dr.gather(kind, kind(values), slot)
             ray = lane - column(bounds, mi.UInt32) + column(j0, mi.UInt32)
+        if np.all(shift == shift[0]):  # consecutive readings (the default layout): one scalar
+            ray_index = lane + dr.opaque(mi.UInt32, int(shift[0]))
+        else:
+            ray_index = lane + column(shift.astype(np.uint32), mi.UInt32)
+        keys = [dr.opaque(mi.UInt32, k) for k in dimension_keys(root)]
+
+        def uniform(dimension: int) -> mi.Float:
+            return to_unit(hash32(ray_index ^ keys[dimension]), mi.Float)
 
         def vector(index: int) -> mi.Vector3f:
             return mi.Vector3f(*(column(rows[:, index + k], mi.Float) for k in range(3)))

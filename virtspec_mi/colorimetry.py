@@ -1,0 +1,182 @@
+"""
+Colorimetry of measured spectra through colour-science
+======================================================
+
+- :func:`spectral_distribution` / :func:`multi_spectral_distributions`: a
+  :class:`~virtspec_mi.sweeps.SweepResult` at one θi as ``colour.SpectralDistribution``
+  (one quantity) or ``colour.MultiSpectralDistributions`` (reflectance,
+  transmittance, absorptance).
+- :func:`colorimetry`: CIE XYZ, CIE L*a*b* and sRGB of a reflectance or
+  transmittance spectrum under an illuminant (CIE D65 by default) and an observer
+  (CIE 1931 2° by default), as a :class:`Colour`.
+
+Wavelengths outside the observer's colour-matching range (360–830 nm for CIE 1931
+2°) stay in the data but are left out of the colorimetry; :attr:`Colour.note` says
+which. Inside that range colour-science integrates the spectrum (ASTM E308 weights;
+outside the measured span it extends the spectrum by its end values); spectra not
+evenly sampled at 1, 5, 10 or 20 nm are first linearly interpolated onto 1 nm (noted).
+
+References
+----------
+CIE 015:2018 *Colorimetry*; ASTM E308; colour-science (Mansencal et al.),
+``colour.sd_to_XYZ``, ``colour.XYZ_to_Lab``, ``colour.XYZ_to_sRGB``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+__all__ = [
+    "DEFAULT_ILLUMINANT",
+    "DEFAULT_OBSERVER",
+    "Colour",
+    "spectral_distribution",
+    "multi_spectral_distributions",
+    "colorimetry",
+]
+
+DEFAULT_ILLUMINANT: str = "D65"
+DEFAULT_OBSERVER: str = "CIE 1931 2 Degree Standard Observer"
+
+
+@dataclass(frozen=True)
+class Colour:
+    """
+    The colour of a spectrum.
+
+    Attributes
+    ----------
+    XYZ : ndarray
+        CIE XYZ tristimulus values, Y = 100 for a perfect reflector.
+    Lab : ndarray
+        CIE L*a*b* relative to the illuminant's white point (the perfect reflecting
+        diffuser integrated over the same wavelengths).
+    sRGB : ndarray
+        Non-linear sRGB in [0, 1] before clipping (values outside mean out of gamut),
+        chromatically adapted (CAT02) to D65 when the illuminant is another.
+    illuminant, observer : str
+        Names in ``colour.SDS_ILLUMINANTS`` and ``colour.MSDS_CMFS``.
+    wavelengths : ndarray
+        The wavelengths used (inside the colour-matching range).
+    note : str
+        Empty, or which wavelengths were left out.
+    """
+
+    XYZ: np.ndarray
+    Lab: np.ndarray
+    sRGB: np.ndarray
+    illuminant: str
+    observer: str
+    wavelengths: np.ndarray
+    note: str = ""
+
+    def summary(self) -> str:
+        lines = [
+            f"illuminant {self.illuminant}, observer {self.observer}, "
+            f"{len(self.wavelengths)} wavelengths {self.wavelengths.min():g}-{self.wavelengths.max():g} nm",
+            "XYZ  = " + " ".join(f"{v:9.4f}" for v in self.XYZ),
+            "Lab  = " + " ".join(f"{v:9.4f}" for v in self.Lab),
+            "sRGB = " + " ".join(f"{v:9.4f}" for v in self.sRGB)
+            + f"  (#{''.join(f'{int(round(255 * c)):02x}' for c in np.clip(self.sRGB, 0, 1))})",
+        ]
+        if self.note:
+            lines.append(f"note: {self.note}")
+        return "\n".join(lines)
+
+
+def _theta_column(result: Any, theta_i: float | None) -> int:
+    angles = np.asarray(result.theta_i, dtype=np.float64)
+    if theta_i is None:
+        if len(angles) != 1:
+            raise ValueError(f"theta_i must be given for a sweep over several angles (one of {angles.tolist()})")
+        return 0
+    matches = np.flatnonzero(np.isclose(angles, float(theta_i), rtol=0, atol=1e-9))
+    if not len(matches):
+        raise ValueError(f"theta_i must be one of the sweep's angles {angles.tolist()} (got {theta_i:g})")
+    return int(matches[0])
+
+
+def spectral_distribution(result: Any, quantity: str = "reflectance", theta_i: float | None = None) -> Any:
+    """One quantity of a sweep at one θi (optional for a one-angle sweep) as a ``colour.SpectralDistribution``."""
+
+    import colour
+
+    column = _theta_column(result, theta_i)
+    if len(result.wavelengths) < 2:
+        raise ValueError(f"a spectrum needs at least two wavelengths (the sweep has {len(result.wavelengths)})")
+    values = result.quantity(quantity)[:, column]
+    order = np.argsort(result.wavelengths)
+    with colour.utilities.suppress_warnings(colour_runtime_warnings=True):  # "not uniform" is fine here
+        return colour.SpectralDistribution(values[order], np.asarray(result.wavelengths)[order],
+                                           name=f"{quantity} theta_i={result.theta_i[column]:g}")
+
+
+def multi_spectral_distributions(result: Any, theta_i: float | None = None) -> Any:
+    """Reflectance, transmittance and absorptance at one θi as ``colour.MultiSpectralDistributions``."""
+
+    import colour
+
+    from virtspec_mi.sweeps import QUANTITIES
+
+    column = _theta_column(result, theta_i)
+    order = np.argsort(result.wavelengths)
+    values = np.stack([result.quantity(q)[:, column][order] for q in QUANTITIES], axis=1)
+    return colour.MultiSpectralDistributions(values, np.asarray(result.wavelengths)[order], labels=QUANTITIES,
+                                             name=f"theta_i={result.theta_i[column]:g}")
+
+
+def colorimetry(sd: Any, illuminant: str = DEFAULT_ILLUMINANT, observer: str = DEFAULT_OBSERVER) -> Colour:
+    """
+    CIE XYZ, L*a*b* and sRGB of a reflectance or transmittance spectrum.
+
+    Parameters
+    ----------
+    sd
+        A ``colour.SpectralDistribution`` (e.g. ``SweepResult.to_sd()``), at least two
+        wavelengths inside the observer's range.
+    illuminant
+        A name of ``colour.SDS_ILLUMINANTS`` (default ``"D65"``).
+    observer
+        A name of ``colour.MSDS_CMFS`` (default CIE 1931 2°).
+    """
+
+    import colour
+
+    if illuminant not in colour.SDS_ILLUMINANTS:
+        raise ValueError(f"illuminant must be a name of colour.SDS_ILLUMINANTS, e.g. D65, A, D50 (got {illuminant!r})")
+    if observer not in colour.MSDS_CMFS:
+        raise ValueError(f"observer must be a name of colour.MSDS_CMFS, e.g. {DEFAULT_OBSERVER!r} (got {observer!r})")
+    cmfs = colour.MSDS_CMFS[observer]
+    low, high = cmfs.shape.start, cmfs.shape.end
+    wavelengths, values = np.asarray(sd.wavelengths, dtype=np.float64), np.asarray(sd.values, dtype=np.float64)
+    inside = (wavelengths >= low) & (wavelengths <= high)
+    note = ""
+    if not inside.all():
+        left_out = wavelengths[~inside]
+        note = (f"{len(left_out)} wavelengths outside the colour-matching range {low:g}-{high:g} nm "
+                f"({', '.join(f'{w:g}' for w in left_out[:5])}{', ...' if len(left_out) > 5 else ''}) "
+                "are kept in the data and left out of the colorimetry")
+    if inside.sum() < 2:
+        raise ValueError(f"colorimetry needs at least two wavelengths within {low:g}-{high:g} nm "
+                         f"(got {int(inside.sum())})")
+    light = colour.SDS_ILLUMINANTS[illuminant]
+    # colour-science reports every re-sampling it does (ASTM E308 aligns shapes): expected here
+    with colour.utilities.suppress_warnings(colour_runtime_warnings=True):
+        used = colour.SpectralDistribution(values[inside], wavelengths[inside])
+        steps = np.unique(np.round(np.diff(np.sort(wavelengths[inside])), 9))
+        if len(steps) != 1 or steps[0] not in (1, 5, 10, 20):
+            # ASTM E308 integrates 1, 5, 10 or 20 nm data: interpolate others onto 1 nm
+            used = used.copy().interpolate(colour.SpectralShape(used.shape.start, used.shape.end, 1),
+                                           interpolator=colour.LinearInterpolator)
+            note = "; ".join(filter(None, [note, "wavelengths not evenly 1, 5, 10 or 20 nm apart: "
+                                                 "linearly interpolated to 1 nm for the colorimetry"]))
+        XYZ = np.asarray(colour.sd_to_XYZ(used, cmfs, light), dtype=np.float64)
+        # White point: the perfect reflecting diffuser integrated the same way (same domain).
+        perfect = colour.SpectralDistribution(np.ones(len(used.wavelengths)), used.wavelengths)
+        white = colour.XYZ_to_xy(np.asarray(colour.sd_to_XYZ(perfect, cmfs, light)) / 100.0)
+    Lab = np.asarray(colour.XYZ_to_Lab(XYZ / 100.0, white), dtype=np.float64)
+    sRGB = np.asarray(colour.XYZ_to_sRGB(XYZ / 100.0, illuminant=white), dtype=np.float64)
+    return Colour(XYZ, Lab, sRGB, illuminant, observer, wavelengths[inside], note)

@@ -10,6 +10,8 @@ through :func:`virtspec_mi.runtime.mitsuba`, which sets the variant first.
 name                   kind         module
 =====================  ===========  ==========================================
 ``simple_dielectric``  BSDF         :mod:`.bsdfs.simple_dielectric`
+``abm_b``              BSDF         :mod:`.bsdfs.abm_b` (walk: :mod:`.bsdfs.abm_walk`)
+``abm_u``              BSDF         :mod:`.bsdfs.abm_u` (walk: :mod:`.bsdfs.abm_walk`)
 ``spectrophotometer``  integrator   :mod:`.integrators.spectrophotometer`
 =====================  ===========  ==========================================
 """
@@ -20,6 +22,8 @@ __all__ = ["PLUGINS", "register"]
 
 PLUGINS: dict[str, tuple[str, str, str]] = {
     "simple_dielectric": ("bsdf", ".bsdfs.simple_dielectric", "SimpleDielectric"),
+    "abm_b": ("bsdf", ".bsdfs.abm_b", "ABMB"),
+    "abm_u": ("bsdf", ".bsdfs.abm_u", "ABMU"),
     "spectrophotometer": ("integrator", ".integrators.spectrophotometer", "Spectrophotometer"),
 }
 

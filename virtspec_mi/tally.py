@@ -20,7 +20,7 @@ from typing import Any, Sequence
 
 import numpy as np
 
-from virtspec_mi.settings import Settings
+from virtspec_mi.settings import Settings, check_wavelength_range
 
 __all__ = ["Tallies", "take_readings"]
 
@@ -53,8 +53,13 @@ def take_readings(
     Trace every (wavelength nm, θi, φi) of ``readings``, each with its own independent
     rays, and return their exact :class:`Tallies`.
 
-    Each reading gets ``settings.rays_per_reading`` rays (eq. 23 by default).
+    Each reading gets ``settings.rays_per_reading`` rays (eq. 23 by default). A specimen
+    with a ``wavelength_range`` attribute refuses wavelengths outside it (``ValueError``).
     """
+
+    bsdf = instrument.bsdf
+    check_wavelength_range([r[0] for r in readings], getattr(bsdf, "wavelength_range", None),
+                           getattr(bsdf, "PLUGIN", "") or type(bsdf).__name__)
 
     from virtspec_mi.plugins.integrators.spectrophotometer import ReadingPlan, tally_readings
 

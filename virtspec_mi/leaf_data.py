@@ -114,6 +114,11 @@ def leaf_data_dir(data_dir: str | os.PathLike | None = None) -> Path:
             f"parameter data_dir) to a directory holding the NPSG files {_needed()} "
             f"(BSD-3, e.g. {ENV_VAR}=../shared/data/abm-npsg)"
         )
+    if not directory.is_dir():
+        raise FileNotFoundError(
+            f"ABM leaf data not found: directory '{directory}' (from {origin}) does not exist; point "
+            f"{ENV_VAR} (or the BSDF parameter data_dir) at a directory holding the NPSG files {_needed()}"
+        )
     missing = [name for name, _, _ in LEAF_DATA_FILES.values() if not (directory / name).is_file()]
     if missing:
         raise FileNotFoundError(

@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 import virtspec_mi as vm
+from virtspec_mi.instrument import SceneError
 from virtspec_mi.tally import take_readings
 from abm_reference import SOYBEAN, SOYBEAN_RAYS, SOYBEAN_WAVELENGTHS, mismatches
 
@@ -58,3 +59,22 @@ def test_sieve_and_detour_changes_the_reading(mi):
     on = soybean_table(True, rays, angles=(8.0,), abaxial=False)[1, 0]
     off = soybean_table(False, rays, angles=(8.0,), abaxial=False)[1, 0]
     assert on[0] - off[0] > 0.015 and off[1] - on[1] > 0.015
+
+
+def test_soybean_scene_from_xml(mi, scenes_dir, leaf_data_dir, monkeypatch):
+    """scenes/soybean_abmb.xml: collimated, 8 deg; data from $VIRTSPEC_LEAF_DATA or data_dir."""
+
+    path = scenes_dir / "soybean_abmb.xml"
+    reading = vm.measure(str(path), rays=20_000)
+    assert reading.settings.beam == "collimated" and reading.theta_i == 8
+    assert reading.wavelengths.tolist() == list(SOYBEAN_WAVELENGTHS)
+    assert reading.capped.sum() == 0
+    # without the variable the scene needs data_dir, and says so
+    monkeypatch.delenv("VIRTSPEC_LEAF_DATA")
+    with pytest.raises(SceneError, match="set the environment variable VIRTSPEC_LEAF_DATA"):
+        vm.measure(str(path), rays=10)
+    scene = mi.load_file(str(path), data_dir=str(leaf_data_dir), side="abaxial", wavelengths="551")
+    table = mi.render(scene, spp=20_000)
+    assert table.shape == (1, 3)
+    r, t, a = np.array(table)[0]
+    assert abs(r + t + a - 1) < 1e-6 and 0.2 < r < 0.27  # abaxial 551 nm: reference R = 0.236

@@ -25,3 +25,9 @@ def test_corn_sieve_on_matches_reference(mi):
 def test_corn_sieve_off_matches_reference(mi):
     rays = 200_000
     assert not mismatches(corn(False, rays, seed=3), np.array(CORN[False]), rays, CORN_RAYS)
+
+
+def test_corn_scene_from_xml(mi, scenes_dir):
+    reading = vm.measure(str(scenes_dir / "corn_abmu.xml"), rays=10_000, wavelengths=[550, 800])
+    assert reading.settings.beam == "collimated" and reading.theta_i == 8
+    assert reading.capped.sum() == 0 and 0.4 < reading.reflectance[1] < 0.5  # reference 0.451

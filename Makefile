@@ -39,6 +39,8 @@ test-fast: setup
 bench: setup
 	$(PY) benchmarks/throughput.py
 	$(PY) benchmarks/sweeps.py
+	$(PY) benchmarks/abm_spectrum.py
+	$(PY) benchmarks/turbid_slab.py
 
 clean:
 	rm -rf $(VENV) build *.egg-info .pytest_cache

@@ -11,6 +11,8 @@ name                   kind         module
 =====================  ===========  ==========================================
 ``simple_dielectric``  BSDF         :mod:`.bsdfs.simple_dielectric`
 ``turbid_slab``        BSDF         :mod:`.bsdfs.turbid_slab`
+``abm_b``              BSDF         :mod:`.bsdfs.abm_b` (walk: :mod:`.bsdfs.abm_walk`)
+``abm_u``              BSDF         :mod:`.bsdfs.abm_u` (walk: :mod:`.bsdfs.abm_walk`)
 ``spectrophotometer``  integrator   :mod:`.integrators.spectrophotometer`
 =====================  ===========  ==========================================
 """
@@ -22,6 +24,8 @@ __all__ = ["PLUGINS", "register"]
 PLUGINS: dict[str, tuple[str, str, str]] = {
     "simple_dielectric": ("bsdf", ".bsdfs.simple_dielectric", "SimpleDielectric"),
     "turbid_slab": ("bsdf", ".bsdfs.turbid_slab", "TurbidSlab"),
+    "abm_b": ("bsdf", ".bsdfs.abm_b", "ABMB"),
+    "abm_u": ("bsdf", ".bsdfs.abm_u", "ABMU"),
     "spectrophotometer": ("integrator", ".integrators.spectrophotometer", "Spectrophotometer"),
 }
 

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
 
 import pytest
@@ -10,6 +11,9 @@ import virtspec_mi
 
 ROOT = Path(__file__).resolve().parents[1]
 SCENES = ROOT / "scenes"
+# The NPSG leaf data (third party, not committed) for the ABM specimens: ../shared beside
+# the checkout unless VIRTSPEC_LEAF_DATA points elsewhere.
+LEAF_DATA = Path(os.environ.setdefault("VIRTSPEC_LEAF_DATA", str(ROOT.parent / "shared" / "data" / "abm-npsg")))
 
 
 @pytest.fixture(scope="session")
@@ -29,3 +33,10 @@ def diamond(mi):
 @pytest.fixture(scope="session")
 def scenes_dir() -> Path:
     return SCENES
+
+
+@pytest.fixture(scope="session")
+def leaf_data_dir() -> Path:
+    """Directory of the NPSG leaf data used by the ABM tests."""
+
+    return LEAF_DATA

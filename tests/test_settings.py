@@ -60,3 +60,12 @@ def test_updated_ignores_none_and_revalidates():
     assert s.updated(theta_i=None, mu=0.01).theta_i == 30
     with pytest.raises(ValueError, match="theta_i"):
         s.updated(theta_i=100)
+
+
+def test_check_wavelength_range():
+    from virtspec_mi.settings import check_wavelength_range
+
+    check_wavelength_range([400.0, 2500.0], (400, 2500), "abm_b")  # both ends included
+    check_wavelength_range([1.0, 1e6], None, "any")  # no declared range: anything goes
+    with pytest.raises(ValueError, match=r"400 <= wavelength <= 2500 nm for the specimen abm_u \(got 399, 2501\)"):
+        check_wavelength_range([399.0, 551.0, 2501.0], (400, 2500), "abm_u")

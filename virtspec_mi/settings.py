@@ -28,6 +28,7 @@ __all__ = [
     "check_positive",
     "parse_wavelengths",
     "parse_theta_i",
+    "check_wavelength_range",
 ]
 
 BEAMS: tuple[str, ...] = ("conical", "collimated", "diffuse")
@@ -116,6 +117,24 @@ def parse_wavelengths(wavelengths: Any) -> tuple[float, ...]:
         if not (value > 0.0 and math.isfinite(value)):
             raise ValueError(f"wavelengths must be finite and > 0 nm (got {value:g})")
     return tuple(values)
+
+
+def check_wavelength_range(wavelengths: Iterable[float], span: tuple[float, float] | None, specimen: str) -> None:
+    """
+    Refuse wavelengths outside ``span`` = (lowest, highest) nm of a specimen that declares
+    one (a BSDF attribute ``wavelength_range``, e.g. the ABM leaves' data range); ``None``
+    accepts any.
+    """
+
+    if span is None:
+        return
+    low, high = (float(v) for v in span)
+    outside = [w for w in wavelengths if not low <= w <= high]
+    if outside:
+        raise ValueError(
+            f"wavelengths must satisfy {low:g} <= wavelength <= {high:g} nm for the specimen "
+            f"{specimen} (got {', '.join(f'{w:g}' for w in outside[:5])}{' ...' if len(outside) > 5 else ''})"
+        )
 
 
 def parse_theta_i(theta_i: Any) -> tuple[float, ...]:

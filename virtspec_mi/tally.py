@@ -25,7 +25,7 @@ from typing import Any, Sequence
 
 import numpy as np
 
-from virtspec_mi.settings import Settings
+from virtspec_mi.settings import Settings, check_wavelength_range
 
 __all__ = ["Tallies", "take_readings", "shares_wavelengths"]
 
@@ -74,7 +74,14 @@ def take_readings(
     When the specimen's BSDF has ``wavelength_independent = True``, readings with the
     same (θi, φi) are traced once — with the rays (offset) of the first of them in the
     list — and all report those counts.
+
+    A specimen with a ``wavelength_range`` attribute refuses wavelengths outside it
+    (``ValueError``).
     """
+
+    bsdf = instrument.bsdf
+    check_wavelength_range([r[0] for r in readings], getattr(bsdf, "wavelength_range", None),
+                           getattr(bsdf, "PLUGIN", "") or type(bsdf).__name__)
 
     from virtspec_mi.plugins.integrators.spectrophotometer import ReadingPlan, tally_readings
 

@@ -1,0 +1,350 @@
+"""
+The ABM leaf random walk shared by ``abm_b`` and ``abm_u``
+==========================================================
+
+A leaf is a stack of K = 6 flat, laterally infinite interfaces between tissues
+(leaf normal +z, adaxial surface on top; interface 0 at the top). A ray carries only
+its interface index k and its direction ω. Each interface event is, in this order:
+
+1. an absorption test for the slab just crossed (only the mesophyll absorbs): the ray
+   is absorbed when −ln ξ · g(cos θ) < α t, with g(c) = cos(c) when the sieve-and-detour
+   switch is on (the NPSG default) and g(c) = c (plain Beer–Lambert) when off;
+2. a Fresnel choice (unpolarised, total internal reflection → R = 1): reflect with
+   probability F, else refract;
+3. a Warn cosine-lobe perturbation of the new direction about the specular one,
+   p(ω) ∝ cos^e θ_p with e the interface's aspect ratio (e = ∞: none), resampled
+   while the perturbed ray leaves the hemisphere the unperturbed one went to.
+
+The walk ends when the ray leaves through the top (k = −1), the bottom (k = K) or is
+absorbed. Analog Monte Carlo: unit weight for an exit, 0 for absorption. The whole
+walk runs inside ``BSDF.sample`` as one Dr.Jit symbolic loop, its random numbers from
+:func:`virtspec_mi.walk.walk_rng`. Wavelength-dependent quantities (α·d_m and the three
+refractive indices) are Dr.Jit arrays on the data grid gathered per lane from
+``si.wavelengths[0]``: many wavelengths share one compiled kernel.
+
+Conventions
+-----------
+- **Sides.** ``side = "adaxial"`` puts the leaf's adaxial surface on the specimen's
+  upper side (normal +z), ``"abaxial"`` turns the leaf over. Light arriving from above
+  (the instrument's θi ∈ [0°, 90°]) then strikes that surface; back-lit rays
+  (wi·n < 0) strike the other one. The instrument counts by the specimen's
+  hemispheres, so **reflectance is always the light leaving on the lit side** — the
+  reference's R for abaxial incidence (its "abax 8°" = ``side="abaxial"``, θi = 8°).
+- ``sampled_type`` is ``GlossyReflection`` when the ray leaves on the side it came
+  from, else ``GlossyTransmission``; ``sampled_component`` is 0 / 1, or
+  :data:`virtspec_mi.walk.CAPPED_COMPONENT` for a walk that reached ``max_steps``
+  interface events (or, never seen in practice, 1000 rejected lobe samples).
+- No ``eval``/``pdf``: a sample-only BSDF (both return 0).
+- ``wavelength_range = (400, 2500)`` nm: the instrument refuses other wavelengths
+  with a ``ValueError`` before tracing.
+
+References
+----------
+Baranoski & Rokne (1997), CGF 16(3); Baranoski (2006), RSE 100:335–347; Baranoski & Eng
+(2007), IEEE TGRS 45(8) (sieve and detour). Implemented from ``shared/research/abm.md``
+§1.3–1.7 (NPSG reference C++ ``run_abm.cpp``, ``abmb_interfaces.cpp``,
+``abmu_interfaces.cpp``).
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any, NamedTuple
+
+import drjit as dr
+import mitsuba as mi
+import numpy as np
+
+from virtspec_mi.leaf_data import (
+    GRID,
+    GRID_STEP,
+    LOOKUPS,
+    WAVELENGTH_RANGE,
+    load_leaf_data,
+    mesophyll_absorption,
+)
+from virtspec_mi.walk import CAPPED_COMPONENT, walk_rng
+
+__all__ = [
+    "AIR",
+    "CUTICLE",
+    "MESOPHYLL",
+    "ANTIDERMAL",
+    "Interface",
+    "ABMLeaf",
+    "WALKING",
+    "EXIT_TOP",
+    "EXIT_BOTTOM",
+    "ABSORBED",
+    "CAPPED",
+]
+
+# Media (refractive index): air n = 1, cuticle n_c(λ), mesophyll n_m(λ), antidermal wall n_a(λ).
+AIR, CUTICLE, MESOPHYLL, ANTIDERMAL = 0, 1, 2, 3
+# Walk states.
+WALKING, EXIT_TOP, EXIT_BOTTOM, ABSORBED, CAPPED = 0, 1, 2, 3, 4
+MAX_LOBE_TRIES: int = 1000
+"""Rejected Warn-lobe samples after which a walk is reported capped (P ≈ 2⁻¹⁰⁰⁰ for a valid ray)."""
+
+
+class Interface(NamedTuple):
+    """
+    One interface of the stack (abm.md §1.2, §1.4).
+
+    ``above``/``below`` are media; ``e_da``, ``e_db``, ``e_ub``, ``e_ua`` name the
+    aspect-ratio parameter used as the lobe exponent (``None`` = ∞, no perturbation)
+    for: going down and reflected, going down and refracted, going up and reflected,
+    going up and refracted. ``slab_above``/``slab_below`` = (a, b): the slab on that
+    side has optical thickness α·d_m·(a + b·u), u ~ U(0, 1) once per ray (ABM-U's
+    random split of the mesophyll); (0, 0) = not absorbing.
+    """
+
+    above: int
+    below: int
+    e_da: str | None
+    e_db: str | None
+    e_ub: str | None
+    e_ua: str | None
+    slab_above: tuple[float, float] = (0.0, 0.0)
+    slab_below: tuple[float, float] = (0.0, 0.0)
+
+
+# name -> (check, allowed range in words); applied to every numeric parameter.
+_POSITIVE = (lambda v: v > 0, "a finite number > 0")
+_NON_NEGATIVE = (lambda v: v >= 0, "a finite number >= 0")
+_CHECKS: dict[str, tuple[Any, str]] = {
+    "thickness": _POSITIVE,
+    "mesophyll_fraction": (lambda v: 0 < v <= 1, "a number with 0 < mesophyll_fraction <= 1"),
+    "chlorophyll_a": _NON_NEGATIVE,
+    "chlorophyll_b": _NON_NEGATIVE,
+    "carotenoids": _NON_NEGATIVE,
+    "protein": _NON_NEGATIVE,
+    "cellulose": _NON_NEGATIVE,
+    "lignin": _NON_NEGATIVE,
+    "cuticle_aspect_ratio": _POSITIVE,
+    "epidermis_aspect_ratio": _POSITIVE,
+    "palisade_aspect_ratio": _POSITIVE,
+    "spongy_aspect_ratio": _POSITIVE,
+}
+_SIDES = ("adaxial", "abaxial")
+# Row code of the per-(interface, direction) table: bits 0-1 medium the ray comes from,
+# bits 2-3 medium it goes to, bits 4-6 the slab just crossed: optical thickness
+# α·d_m·(a + b·u) with a = bit 4, b = +1 (bit 5) or -1 (bit 6).
+_SLAB_BITS = {(0.0, 0.0): 0, (1.0, 0.0): 16, (0.0, 1.0): 32, (1.0, -1.0): 16 | 64}
+
+
+def _cos_unit(x: mi.Float) -> mi.Float:
+    """cos x for 0 ≤ x ≤ 1 (the sieve-detour factor of a cosine): Taylor series to x¹², error < 2e-9."""
+
+    x2 = x * x
+    poly = dr.fma(x2, 1.0 / 479001600.0, -1.0 / 3628800.0)
+    for coefficient in (1.0 / 40320.0, -1.0 / 720.0, 1.0 / 24.0, -0.5, 1.0):
+        poly = dr.fma(poly, x2, coefficient)
+    return poly
+
+
+class ABMLeaf(mi.BSDF):
+    """
+    Base of the ABM leaf plugins: parameters, spectral tables and the random walk.
+
+    Subclasses set :attr:`PLUGIN` (registry name), :attr:`DEFAULTS` (every numeric
+    parameter with its default) and :attr:`INTERFACES` (the six-interface table).
+    """
+
+    PLUGIN: str = ""
+    DEFAULTS: dict[str, float] = {}
+    INTERFACES: tuple[Interface, ...] = ()
+    wavelength_range: tuple[float, float] = WAVELENGTH_RANGE
+    """Wavelengths (nm) the specimen is defined for; the instrument checks readings against it."""
+
+    def __init__(self, props: mi.Properties) -> None:
+        super().__init__(props)
+        self.params = {name: self._number(props, name, default) for name, default in self.DEFAULTS.items()}
+        self.sieve_detour = self._choice(props, "sieve_detour", True, (True, False))
+        self.side = self._choice(props, "side", "adaxial", _SIDES)
+        self.lookup = self._choice(props, "lookup", "step", LOOKUPS)
+        self.data_dir = props.get("data_dir", "")
+        if not isinstance(self.data_dir, str):
+            raise ValueError(f"{self.PLUGIN}: 'data_dir' must be a string path (got {self.data_dir!r})")
+        steps = props.get("max_steps", 100_000)
+        if isinstance(steps, bool) or not isinstance(steps, int) or not 1 <= steps < 2**31:
+            raise ValueError(f"{self.PLUGIN}: 'max_steps' must be an integer, 1 <= max_steps < 2^31 (got {steps!r})")
+        self.max_steps = steps
+        self._build_tables()
+        both_sides = mi.BSDFFlags.FrontSide | mi.BSDFFlags.BackSide
+        self.m_components = [
+            mi.BSDFFlags.GlossyReflection | both_sides,
+            mi.BSDFFlags.GlossyTransmission | both_sides | mi.BSDFFlags.NonSymmetric,
+        ]
+        self.m_flags = self.m_components[0] | self.m_components[1]
+
+    # -- parameters -------------------------------------------------------------------
+
+    def _number(self, props: mi.Properties, name: str, default: float) -> float:
+        value = props.get(name, default)
+        check, allowed = _CHECKS[name]
+        if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value) \
+                or not check(value):
+            raise ValueError(f"{self.PLUGIN}: '{name}' must be {allowed} (got {value!r})")
+        return float(value)
+
+    def _choice(self, props: mi.Properties, name: str, default: Any, allowed: tuple) -> Any:
+        value = props.get(name, default)
+        if value not in allowed or type(value) is not type(default):
+            words = " or ".join(repr(a).lower() if isinstance(a, bool) else repr(a) for a in allowed)
+            raise ValueError(f"{self.PLUGIN}: '{name}' must be {words} (got {value!r})")
+        return value
+
+    @property
+    def mesophyll_thickness(self) -> float:
+        """d_m = f_m · h in m (abm.md §1.3)."""
+
+        return self.params["mesophyll_fraction"] * self.params["thickness"]
+
+    def absorption_coefficient(self) -> np.ndarray:
+        """α(λ) of the mesophyll on the data grid (m⁻¹), for this leaf's concentrations."""
+
+        p = self.params
+        return mesophyll_absorption(
+            self.data, chlorophyll_a=p["chlorophyll_a"], chlorophyll_b=p["chlorophyll_b"],
+            carotenoids=p["carotenoids"], protein=p["protein"], cellulose=p["cellulose"], lignin=p["lignin"],
+        )
+
+    def _build_tables(self) -> None:
+        """Spectral tables (per grid wavelength) and per-(interface, direction) rows as Dr.Jit arrays."""
+
+        self.data = load_leaf_data(self.data_dir)
+        self._tau = mi.Float(self.absorption_coefficient() * self.mesophyll_thickness)
+        self._n_c = mi.Float(self.data.n_cuticle)
+        self._n_m = mi.Float(self.data.n_mesophyll)
+        self._n_a = mi.Float(self.data.n_antidermal)
+        exponent = {None: math.inf, **{name: self.params[name] for name in self.params if name.endswith("_aspect_ratio")}}
+        codes, exponents = [], []  # row 2k: moving down at interface k; row 2k + 1: moving up
+        for face in self.INTERFACES:
+            for n1, n2, e_refl, e_refr, slab in (
+                (face.above, face.below, face.e_da, face.e_db, face.slab_above),
+                (face.below, face.above, face.e_ub, face.e_ua, face.slab_below),
+            ):
+                codes.append(n1 | n2 << 2 | _SLAB_BITS[slab])
+                exponents += [exponent[e_refl], exponent[e_refr]]
+        self._row_code = mi.UInt32(np.array(codes, dtype=np.uint32))
+        self._row_exponent = mi.Float(np.array(exponents, dtype=np.float64))
+
+    # -- sampling ---------------------------------------------------------------------
+
+    def _spectral(self, wavelength: mi.Float) -> tuple[mi.Float, mi.Float, mi.Float, mi.Float]:
+        """α·d_m, n_c, n_m, n_a per lane (``lookup``: step = ⌊(λ − 400)/5⌋, or linear)."""
+
+        last = GRID.size - 1
+        x = (wavelength - WAVELENGTH_RANGE[0]) * (1.0 / GRID_STEP)
+        tables = (self._tau, self._n_c, self._n_m, self._n_a)
+        if self.lookup == "step":
+            j = mi.UInt32(dr.clip(dr.floor(x), 0, last))
+            return tuple(dr.gather(mi.Float, t, j) for t in tables)
+        j = mi.UInt32(dr.clip(dr.floor(x), 0, last - 1))
+        f = dr.clip(x - mi.Float(j), 0.0, 1.0)
+        return tuple(dr.lerp(dr.gather(mi.Float, t, j), dr.gather(mi.Float, t, j + 1), f) for t in tables)
+
+    def sample(self, ctx, si, sample1, sample2, active=True):
+        rng = walk_rng(sample1, sample2)
+        tau, n_c, n_m, n_a = self._spectral(si.wavelengths[0])
+        flip = -1.0 if self.side == "abaxial" else 1.0  # leaf z = flip · specimen z
+        w = mi.Vector3f(-si.wi.x, -si.wi.y, -flip * si.wi.z)  # direction of travel, leaf frame
+        from_top = w.z < 0.0
+        k = dr.select(from_top, mi.Int32(0), mi.Int32(len(self.INTERFACES) - 1))
+        u = rng.next_float32()  # ABM-U's mesophyll split (unused by ABM-B's table)
+        alive = mi.Bool(active) & dr.full(mi.Bool, True, dr.width(sample1))
+        status = dr.select(alive, mi.UInt32(WALKING), mi.UInt32(ABSORBED))
+        status, w = self._walk(rng, status, w, k, tau * u, tau, n_c, n_m, n_a)
+
+        exits = (status == EXIT_TOP) | (status == EXIT_BOTTOM)
+        reflected = (status == EXIT_TOP) == from_top
+        bs = dr.zeros(mi.BSDFSample3f)
+        bs.wo = mi.Vector3f(w.x, w.y, flip * w.z)
+        bs.pdf = dr.select(exits, 1.0, 0.0)
+        bs.eta = 1.0
+        bs.sampled_component = dr.select(
+            status == CAPPED, mi.UInt32(CAPPED_COMPONENT), dr.select(reflected, mi.UInt32(0), mi.UInt32(1))
+        )
+        bs.sampled_type = dr.select(
+            reflected, mi.UInt32(+mi.BSDFFlags.GlossyReflection), mi.UInt32(+mi.BSDFFlags.GlossyTransmission)
+        )
+        return bs, dr.select(exits, mi.Spectrum(1.0), mi.Spectrum(0.0))
+
+    @dr.syntax
+    def _walk(self, rng, status, w, k, tau_u, tau, n_c, n_m, n_a):
+        """The symbolic walk loop (abm.md §1.5, §1.7); returns (status, direction)."""
+
+        last = len(self.INTERFACES) - 1
+        steps = mi.UInt32(0)
+        while dr.hint(status == WALKING, label="abm_walk"):
+            down = w.z < 0.0
+            row = mi.UInt32(dr.clip(k, 0, last)) * 2 + dr.select(down, mi.UInt32(0), mi.UInt32(1))
+            code = dr.gather(mi.UInt32, self._row_code, row)
+            m1, m2 = code & 3, (code >> 2) & 3
+            slab = dr.select((code & 16) != 0, tau, 0.0) + dr.select(
+                (code & 32) != 0, tau_u, dr.select((code & 64) != 0, -tau_u, 0.0))
+            cos_i = dr.abs(w.z)
+            # 1. absorption in the slab just crossed: p = -ln ξ / α · g(cos θ) < t, ξ ∈ (0, 1]
+            g = _cos_unit(cos_i) if self.sieve_detour else cos_i
+            absorbed = -dr.log(1.0 - rng.next_float32()) * g < slab
+            # 2. Fresnel choice
+            n1 = dr.select(m1 == CUTICLE, n_c, dr.select(m1 == MESOPHYLL, n_m, dr.select(m1 == ANTIDERMAL, n_a, 1.0)))
+            n2 = dr.select(m2 == CUTICLE, n_c, dr.select(m2 == MESOPHYLL, n_m, dr.select(m2 == ANTIDERMAL, n_a, 1.0)))
+            fresnel, cos_t, _, eta_ti = mi.fresnel(cos_i, n2 / n1)
+            reflect = rng.next_float32() < fresnel
+            # 3. new direction: mirror, or refraction (tangential part scaled by n1/n2)
+            specular = dr.select(
+                reflect,
+                mi.Vector3f(w.x, w.y, -w.z),
+                mi.Vector3f(eta_ti * w.x, eta_ti * w.y, dr.select(down, -1.0, 1.0) * dr.abs(cos_t)),
+            )
+            exponent = dr.gather(mi.Float, self._row_exponent, row * 2 + dr.select(reflect, mi.UInt32(0), mi.UInt32(1)))
+            go_down = down ^ reflect
+            # 4. Warn lobe about the specular direction, resampled until it stays on its side
+            frame = mi.Frame3f(specular)
+            perturb = ~absorbed & (exponent < math.inf)
+            pending = mi.Bool(perturb)
+            tries = mi.UInt32(0)
+            new_w = mi.Vector3f(specular)
+            while dr.hint(pending, label="abm_lobe"):
+                cos_p = dr.exp2(dr.log2(rng.next_float32()) / (exponent + 1.0))
+                sin_p = dr.safe_sqrt(1.0 - cos_p * cos_p)
+                sin_phi, cos_phi = dr.sincos(dr.two_pi * rng.next_float32())
+                new_w = frame.to_world(mi.Vector3f(sin_p * cos_phi, sin_p * sin_phi, cos_p))
+                tries += 1
+                pending = (((new_w.z < 0.0) != go_down) | (new_w.z == 0.0)) & (tries < MAX_LOBE_TRIES)
+            lobe_failed = perturb & (((new_w.z < 0.0) != go_down) | (new_w.z == 0.0))
+            # 5. next state
+            w = dr.select(absorbed, w, new_w)
+            k = dr.select(absorbed, k, k + dr.select(go_down, mi.Int32(1), mi.Int32(-1)))
+            steps += 1
+            status = dr.select(
+                absorbed,
+                mi.UInt32(ABSORBED),
+                dr.select(k < 0, mi.UInt32(EXIT_TOP), dr.select(k > last, mi.UInt32(EXIT_BOTTOM), mi.UInt32(WALKING))),
+            )
+            status = dr.select(lobe_failed | ((status == WALKING) & (steps >= self.max_steps)), mi.UInt32(CAPPED), status)
+        return status, w
+
+    # -- the rest of the BSDF interface ------------------------------------------------
+
+    def eval(self, ctx, si, wo, active=True):
+        return mi.Spectrum(0.0)
+
+    def pdf(self, ctx, si, wo, active=True):
+        return mi.Float(0.0)
+
+    def eval_pdf(self, ctx, si, wo, active=True):
+        return mi.Spectrum(0.0), mi.Float(0.0)
+
+    def traverse(self, callback) -> None:
+        pass
+
+    def parameters_changed(self, keys) -> None:
+        pass
+
+    def to_string(self) -> str:
+        params = ", ".join(f"{name}={value:g}" for name, value in self.params.items())
+        return (f"{type(self).__name__}[{params}, sieve_detour={self.sieve_detour}, side={self.side}, "
+                f"lookup={self.lookup}, max_steps={self.max_steps}]")

@@ -34,7 +34,7 @@ def test_measure_json_has_every_field(scenes_dir):
     assert result.returncode == 0, result.stderr
     data = json.loads(result.stdout)
     assert data["wavelengths"] == [400.0, 500.0, 600.0, 700.0]
-    assert data["rays"] == 5000 and data["settings"]["seed"] == 3
+    assert data["rays"] == [5000] * 4 and data["settings"]["seed"] == 3
     assert data["settings"]["beam"] == "collimated" and data["settings"]["theta_i"] == 30.0
     for r, t, a in zip(data["reflected"], data["transmitted"], data["absorbed"]):
         assert r + t + a == 5000

@@ -4,7 +4,8 @@ Command line: ``virtspec``
 
 - ``virtspec bounds --mu 0.005 --delta 0.001 0.01 0.1``: the paper's Table 1.
 - ``virtspec measure SCENE [--theta-i] [--phi-i] [--wavelengths] [--mu] [--delta]
-  [--rays] [--beam] [--sampling] [--seed] [--json]``: one certified reading.
+  [--rays] [--bound] [--joint] [--pilot-rays] [--pilot-delta] [--beam] [--sampling]
+  [--seed] [--json]``: one certified reading.
 
 Errors in the input (bad ranges, unreadable scenes, a bad libLLVM) print one line
 ``virtspec: error: …`` and exit with status 2 (usage) or 1 (measurement).
@@ -42,7 +43,12 @@ def build_parser() -> argparse.ArgumentParser:
     measure.add_argument("--mu", type=float, help="certified tolerance, 0 < mu < 0.5 (default 0.005)")
     measure.add_argument("--delta", type=float, help="failure probability, 0 < delta < 1 (default 0.01)")
     measure.add_argument("--rays", type=int, help="rays per wavelength (default: from the bound)")
-    measure.add_argument("--bound", choices=["hoeffding", "chebyshev"], help="ray budget rule")
+    measure.add_argument("--bound", choices=["hoeffding", "chebyshev", "exact", "two-stage"],
+                         help="ray budget rule (default hoeffding, eq. 23)")
+    measure.add_argument("--joint", action="store_true", default=None,
+                         help="certify reflectance and transmittance together (each at delta/2)")
+    measure.add_argument("--pilot-rays", type=int, help="two-stage pilot rays (default ceil(10/mu))")
+    measure.add_argument("--pilot-delta", type=float, help="two-stage pilot failure probability (default delta/10)")
     measure.add_argument("--beam", choices=["conical", "collimated"], help="beam geometry")
     measure.add_argument("--sampling", choices=["jittered", "random", "concentric"], help="disk sampling")
     measure.add_argument("--seed", type=int, help="random seed (default 0)")
@@ -82,6 +88,9 @@ def _measure(args: argparse.Namespace) -> int:
         sampling=args.sampling,
         seed=args.seed,
         bound=args.bound,
+        joint=args.joint,
+        pilot_rays=args.pilot_rays,
+        pilot_delta=args.pilot_delta,
     )
     print(json.dumps(reading.as_dict()) if args.json else reading.summary())
     return 0

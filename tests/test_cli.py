@@ -60,3 +60,27 @@ def test_measure_bad_input_is_one_clear_line(scenes_dir, args, message):
 def test_measure_missing_scene_file(tmp_path):
     result = virtspec("measure", str(tmp_path / "none.xml"))
     assert result.returncode == 1 and "scene file not found" in result.stderr
+
+
+@pytest.mark.parametrize("bound, rays", [("exact", [66_501]), ("two-stage", None)])
+def test_measure_bounds_and_intervals_in_json(scenes_dir, bound, rays):
+    result = virtspec("measure", str(scenes_dir / "diamond_collimated.xml"), "--theta-i", "10",
+                      "--bound", bound, "--json")
+    assert result.returncode == 0, result.stderr
+    data = json.loads(result.stdout)
+    assert data["bound"] == bound and data["settings"]["bound"] == bound
+    if rays is not None:
+        assert data["rays"] == rays and data["pilot_rays"] is None
+    else:
+        assert data["pilot_rays"] == [2000] and data["rays_spent"][0] == data["rays"][0] + 2000
+    low, high = data["reflectance_interval"][0]
+    assert low <= data["reflectance"][0] <= high
+
+
+def test_measure_joint_and_pilot_options(scenes_dir):
+    result = virtspec("measure", str(scenes_dir / "diamond_collimated.xml"), "--bound", "two-stage",
+                      "--mu", "0.05", "--delta", "0.2", "--joint", "--pilot-rays", "150", "--pilot-delta", "0.05")
+    assert result.returncode == 0, result.stderr
+    assert "+ 150 pilot" in result.stdout and "R and T together" in result.stdout
+    bad = virtspec("measure", str(scenes_dir / "diamond_collimated.xml"), "--pilot-delta", "0.5")
+    assert bad.returncode == 1 and "pilot_delta must satisfy 0 < pilot_delta < delta" in bad.stderr

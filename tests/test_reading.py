@@ -236,3 +236,73 @@ def test_reading_as_dict_is_json_ready(diamond):
     data = json.loads(json.dumps(vm.measure(diamond, theta_i=5, rays=100).as_dict()))
     assert {"reflectance", "transmittance", "absorptance", "reflected", "transmitted", "rays",
             "seconds", "settings", "geometry"} <= set(data)
+
+
+# --- ray budgets and intervals ---------------------------------------------------------
+
+
+def test_exact_bound_reading(diamond):
+    reading = collimated(diamond, 45, bound="exact", wavelengths=[450, 650], seed=21)
+    assert reading.rays.tolist() == [66_501, 66_501] and reading.bound == "exact"
+    assert reading.pilot_rays is None and reading.rays_spent.tolist() == [66_501, 66_501]
+    assert np.all(np.abs(reading.reflectance - fresnel_reflectance(45, 2.419)) < MU)
+
+
+def test_two_stage_reading_spends_pilot_and_sized_second_batch(diamond):
+    from virtspec_mi import twostage
+
+    wavelengths = [450, 550, 650]
+    reading = collimated(diamond, 0, bound="two-stage", wavelengths=wavelengths, seed=7)
+    assert reading.pilot_rays.tolist() == [2000] * 3
+    assert np.all(reading.rays_spent == reading.rays + 2000)
+    # R = 0.17: far fewer rays than Hoeffding's 105,967, and within mu
+    assert np.all(reading.rays < 50_000) and len(set(reading.rays.tolist())) > 1
+    assert np.all(np.abs(reading.reflectance - 0.172253) < MU)
+    assert np.all(reading.reflected + reading.transmitted + reading.absorbed == reading.rays)
+    # the pilot is the ordinary stream of the seed; the second batch a fresh stream
+    pilot = collimated(diamond, 0, rays=2000, wavelengths=wavelengths, seed=7)
+    n2 = twostage.stage_two_rays(np.stack([pilot.reflected, pilot.transmitted, pilot.absorbed], axis=1),
+                                 2000, MU, DELTA, DELTA / 10)
+    assert reading.rays.tolist() == n2.tolist()
+    second = collimated(diamond, 0, rays=int(reading.rays[0]), wavelengths=[450],
+                        seed=twostage.stage_two_seed(7))
+    assert second.reflected[0] == reading.reflected[0]
+    same_seed = collimated(diamond, 0, rays=int(reading.rays[0]), wavelengths=[450], seed=7)
+    assert same_seed.reflected[0] != reading.reflected[0]  # not the pilot's rays again
+
+
+def test_joint_certification_splits_delta(diamond):
+    reading = collimated(diamond, 30, joint=True, rays=None, wavelengths=[500])
+    assert reading.rays.tolist() == [119_830]  # Hoeffding at delta/2 (anchors.md section 3)
+    assert reading.interval_delta == DELTA / 2
+    assert "R and T together" in reading.summary()
+
+
+def test_intervals_on_every_reading(diamond):
+    reading = collimated(diamond, 60, wavelengths=[400, 500, 600, 700], seed=31)
+    rho = fresnel_reflectance(60, 2.419)
+    for name, truth in [("reflectance", rho), ("transmittance", 1 - rho)]:
+        interval = getattr(reading, f"{name}_interval")
+        assert interval.shape == (4, 2)
+        assert np.all(interval[:, 0] <= getattr(reading, name)) and np.all(getattr(reading, name) <= interval[:, 1])
+        # each covers the truth with probability >= 0.99 (fixed seed)
+        assert np.all((interval[:, 0] <= truth) & (truth <= interval[:, 1]))
+        # and it is narrower than the certified +-mu at N = 105,967 (2 sigma ~ 0.0023)
+        assert np.all(interval[:, 1] - interval[:, 0] < 2 * MU)
+    assert np.all(reading.absorptance_interval[:, 0] == 0.0)
+    data = reading.as_dict()
+    assert data["bound"] == "hoeffding" and data["interval_delta"] == DELTA
+    assert np.allclose(data["reflectance_interval"], reading.reflectance_interval)
+    assert "Clopper-Pearson 0.99 intervals" in reading.summary()
+
+
+def test_integrator_accepts_the_budget_parameters(mi):
+    scene_dict = vm.instrument_scene({"type": "simple_dielectric"})
+    scene_dict["integrator"] = {"type": "spectrophotometer", "bound": "two-stage", "mu": 0.05, "delta": 0.2,
+                                "pilot_rays": 300, "joint": True, "beam": "collimated"}
+    reading = vm.measure(mi.load_dict(scene_dict))
+    assert reading.bound == "two-stage" and reading.pilot_rays.tolist() == [300]
+    assert reading.settings.joint and reading.interval_delta == 0.1
+    scene_dict["integrator"] = {"type": "spectrophotometer", "bound": "sloppy"}
+    with pytest.raises(Exception, match="bound must be one of hoeffding, chebyshev, exact, two-stage"):
+        mi.load_dict(scene_dict)

@@ -45,7 +45,11 @@ def test_wavelength_parsing():
         ({"rays": 2**32}, "rays must satisfy 1 <= rays <= 4294967295"),
         ({"beam": "laser"}, "beam must be one of conical, collimated"),
         ({"sampling": "sobol"}, "sampling must be one of jittered, random, concentric"),
-        ({"bound": "magic"}, "bound must be one of"),
+        ({"bound": "magic"}, "bound must be one of hoeffding, chebyshev, exact, two-stage"),
+        ({"pilot_rays": 0}, "rays must satisfy 1 <= rays"),
+        ({"pilot_delta": 0.01}, r"pilot_delta must satisfy 0 < pilot_delta < delta = 0.01 \(got 0.01\)"),
+        ({"pilot_delta": 0}, "pilot_delta must satisfy 0 < pilot_delta < delta"),
+        ({"joint": "yes"}, "joint must be true or false"),
         ({"seed": -1}, "seed must be a whole number"),
         ({"chunk_size": 10}, "chunk_size must be a whole number"),
     ],
@@ -60,3 +64,17 @@ def test_updated_ignores_none_and_revalidates():
     assert s.updated(theta_i=None, mu=0.01).theta_i == 30
     with pytest.raises(ValueError, match="theta_i"):
         s.updated(theta_i=100)
+
+
+def test_budget_settings():
+    assert Settings(bound="exact").rays_per_reading == 66_501
+    # joint: each of R and T at delta/2 (Hoeffding 119,830, anchors.md section 3)
+    assert Settings(joint=True).rays_per_reading == 119_830
+    assert Settings(joint=True).quantity_delta == 0.005 and Settings().quantity_delta == 0.01
+    two = Settings(bound="two-stage")
+    assert two.adaptive and not Settings(bound="two-stage", rays=100).adaptive
+    assert (two.pilot_rays_per_reading, two.pilot_delta_value) == (2000, 0.001)
+    assert Settings(bound="two-stage", mu=0.05, pilot_rays=300).pilot_rays_per_reading == 300
+    with pytest.raises(ValueError, match="two-stage"):
+        two.rays_per_reading
+    assert two.as_dict()["rays"] is None and two.as_dict()["pilot_rays"] == 2000

@@ -68,11 +68,10 @@ def main(argv: list[str] | None = None) -> int:
     virtspec_mi.mitsuba()
     load = os.getloadavg()[0]
     started = time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime())
-    # warm the kernels once (JIT compilation is not part of a reading's cost)
-    validation.coverage(specimens()[1], "hoeffding", mu=mu, delta=delta, readings=4, seed=1)
-
     rows = []
     for specimen in specimens():
+        # warm the specimen's kernels (JIT compilation is not part of a reading's cost)
+        validation.coverage(specimen, "hoeffding", mu=mu, delta=delta, readings=4, seed=1)
         for bound in BOUNDS:
             result = validation.coverage(specimen, bound, mu=mu, delta=delta, readings=k, seed=args.seed)
             rows.append((specimen, result))

@@ -306,3 +306,17 @@ def test_integrator_accepts_the_budget_parameters(mi):
     scene_dict["integrator"] = {"type": "spectrophotometer", "bound": "sloppy"}
     with pytest.raises(Exception, match="bound must be one of hoeffding, chebyshev, exact, two-stage"):
         mi.load_dict(scene_dict)
+
+
+@pytest.mark.parametrize("bound, joint, rays", [("hoeffding", "false", 105_967), ("chebyshev", "false", 1_000_000),
+                                                ("exact", "false", 66_501), ("exact", "true", 78_901),
+                                                ("two-stage", "false", None)])
+def test_xml_scene_takes_every_bound(mi, scenes_dir, bound, joint, rays):
+    scene = mi.load_file(str(scenes_dir / "diamond_collimated.xml"), theta_i="20", bound=bound, joint=joint)
+    reading = vm.measure(scene, seed=3)
+    assert reading.bound == bound and reading.settings.joint == (joint == "true")
+    if rays is not None:
+        assert reading.rays.tolist() == [rays]
+    else:
+        assert reading.pilot_rays.tolist() == [2000] and reading.rays[0] < 60_000
+    assert abs(reading.reflectance[0] - fresnel_reflectance(20, 2.419)) < MU

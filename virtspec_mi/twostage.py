@@ -120,7 +120,7 @@ def _sizing(counts: np.ndarray, n1: int, mu: float, delta: float, pilot_delta: f
 
     share = counts.shape[1] if joint else 1
     d1, d2 = pilot_delta / share, (delta - pilot_delta) / share
-    shipped = _shipped_stage_two().get((mu, delta, n1, pilot_delta, bool(joint) and share == 2))
+    shipped = None if joint and share != 2 else _shipped_stage_two().get((mu, delta, n1, pilot_delta, joint))
     if shipped is not None:
         return np.asarray(shipped, dtype=np.int64)[counts].max(axis=1)
     table = {k: _rays_for_count(int(k), n1, mu, d2, d1) for k in np.unique(counts)}

@@ -41,6 +41,7 @@ bench: setup
 	$(PY) benchmarks/sweeps.py
 	$(PY) benchmarks/abm_spectrum.py
 	$(PY) benchmarks/turbid_slab.py
+	$(PY) benchmarks/speed_vs_error.py
 
 clean:
 	rm -rf $(VENV) build *.egg-info .pytest_cache

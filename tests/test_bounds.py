@@ -75,8 +75,73 @@ def test_miss_probability_below_delta_at_certified_n():
         (lambda: bounds.chebyshev_rays(0.005, 1.0), "delta must satisfy 0 < delta < 1"),
         (lambda: bounds.hoeffding_mu(0, 0.01), "rays must satisfy 1 <= rays"),
         (lambda: bounds.rays_for_bound("magic", 0.005, 0.01), "bound must be one of"),
+        (lambda: bounds.rays_for_bound("two-stage", 0.005, 0.01), "sizes each reading from a pilot"),
+        (lambda: bounds.exact_rays(0.005, 1.5), "delta must satisfy 0 < delta < 1"),
+        (lambda: bounds.max_miss_probability(100, 0.05, 0.6, 0.4), "lo and hi must satisfy"),
     ],
 )
 def test_bad_input_names_parameter_and_range(call, message):
     with pytest.raises(ValueError, match=message):
         call()
+
+
+# --- the exact binomial rule ----------------------------------------------------------
+
+
+def test_exact_rays_at_the_defaults_is_66501():
+    # anchors.md section 3: 66,501, 0.63x the Hoeffding rays; 66,453 ... 66,500 fail.
+    n = bounds.exact_rays(0.005, 0.01)
+    assert n == 66_501 and round(n / bounds.hoeffding_rays(0.005, 0.01), 2) == 0.63
+    assert bounds.max_miss_probability(n, 0.005) <= 0.01
+    assert bounds.max_miss_probability(66_500, 0.005) > 0.01  # not monotone in N:
+    assert bounds.max_miss_probability(66_401, 0.005) <= 0.01  # an earlier N passes
+
+
+def _dense_miss(n, mu, rho):
+    """Brute force: P(|m/N - rho| >= mu) from the whole pmf, for many rho at once."""
+
+    m = np.arange(n + 1)[:, None]
+    return (stats.binom.pmf(m, n, rho) * (np.abs(m / n - rho) >= mu - 1e-12)).sum(axis=0)
+
+
+def test_max_miss_probability_is_the_supremum_over_rho():
+    n, mu = 181, 0.05
+    sup = bounds.max_miss_probability(n, mu)
+    # nothing on a dense grid exceeds the lattice supremum
+    assert _dense_miss(n, mu, np.linspace(0.0, 1.0, 20001)).max() <= sup + 1e-12
+    # and the supremum is attained at a jump point
+    jumps = np.array([a / n + mu for a in range(n)] + [b / n - mu for b in range(1, n + 1)])
+    assert _dense_miss(n, mu, jumps[(jumps >= 0) & (jumps <= 1)]).max() == pytest.approx(sup, rel=1e-9)
+    # on a sub-interval, likewise
+    lo, hi = 0.1, 0.3
+    sub = bounds.max_miss_probability(n, mu, lo, hi)
+    assert _dense_miss(n, mu, np.linspace(lo, hi, 4001)).max() <= sub + 1e-12
+    assert sub < sup
+
+
+@pytest.mark.parametrize("mu, delta", [(0.05, 0.2), (0.1, 0.1), pytest.param(0.02, 0.05, marks=pytest.mark.slow)])
+def test_exact_rays_brute_force(mu, delta):
+    """The rule's N and every N up to Hoeffding's pass; N - 1 does not (so no smaller N is 'all-pass')."""
+
+    n = bounds._exact_rays(mu, delta, 0.0, 1.0)  # computed, not the shipped table
+    top = bounds.hoeffding_rays(mu, delta)
+    assert all(bounds.max_miss_probability(k, mu) <= delta for k in range(n, top + 1))
+    assert bounds.max_miss_probability(n - 1, mu) > delta
+    assert n < top
+
+
+def test_shipped_exact_table_matches_the_computation():
+    from virtspec_mi.budget_tables import EXACT
+
+    assert EXACT[(0.005, 0.01)] == 66_501
+    for key in [(0.05, 0.2), (0.05, 0.001), (0.02, 0.01), (0.01, 0.1), (0.005, 0.2)]:
+        assert bounds._exact_rays(*key, 0.0, 1.0) == EXACT[key], key
+
+
+@pytest.mark.slow
+def test_shipped_exact_table_matches_the_computation_everywhere():
+    from virtspec_mi.budget_tables import EXACT
+
+    for key, n in EXACT.items():
+        if key[0] >= 0.005:
+            assert bounds._exact_rays(*key, 0.0, 1.0) == n, key

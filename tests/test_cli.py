@@ -34,7 +34,7 @@ def test_measure_json_has_every_field(scenes_dir):
     assert result.returncode == 0, result.stderr
     data = json.loads(result.stdout)
     assert data["wavelengths"] == [400.0, 500.0, 600.0, 700.0]
-    assert data["rays"] == 5000 and data["settings"]["seed"] == 3
+    assert data["rays"] == [5000] * 4 and data["settings"]["seed"] == 3
     assert data["settings"]["beam"] == "collimated" and data["settings"]["theta_i"] == 30.0
     for r, t, a in zip(data["reflected"], data["transmitted"], data["absorbed"]):
         assert r + t + a == 5000
@@ -123,3 +123,27 @@ def test_colour_reads_colour_science_csv_spectra(diamond, tmp_path, capsys):
     assert f"transmittance of {path}" in printed and "Lab  =" in printed
     assert main(["colour", str(path), "--quantity", "colour"]) == 1
     assert "quantity must be one of the file's columns" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("bound, rays", [("exact", [66_501]), ("two-stage", None)])
+def test_measure_bounds_and_intervals_in_json(scenes_dir, bound, rays):
+    result = virtspec("measure", str(scenes_dir / "diamond_collimated.xml"), "--theta-i", "10",
+                      "--bound", bound, "--json")
+    assert result.returncode == 0, result.stderr
+    data = json.loads(result.stdout)
+    assert data["bound"] == bound and data["settings"]["bound"] == bound
+    if rays is not None:
+        assert data["rays"] == rays and data["pilot_rays"] is None
+    else:
+        assert data["pilot_rays"] == [2000] and data["rays_spent"][0] == data["rays"][0] + 2000
+    low, high = data["reflectance_interval"][0]
+    assert low <= data["reflectance"][0] <= high
+
+
+def test_measure_joint_and_pilot_options(scenes_dir):
+    result = virtspec("measure", str(scenes_dir / "diamond_collimated.xml"), "--bound", "two-stage",
+                      "--mu", "0.05", "--delta", "0.2", "--joint", "--pilot-rays", "150", "--pilot-delta", "0.05")
+    assert result.returncode == 0, result.stderr
+    assert "+ 150 pilot" in result.stdout and "R and T together" in result.stdout
+    bad = virtspec("measure", str(scenes_dir / "diamond_collimated.xml"), "--pilot-delta", "0.5")
+    assert bad.returncode == 1 and "pilot_delta must satisfy 0 < pilot_delta < delta" in bad.stderr

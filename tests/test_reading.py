@@ -33,7 +33,7 @@ def collimated(scene, theta, **kwargs):
 @pytest.mark.parametrize("theta", [0, 30, 60, 80, 89])
 def test_collimated_diamond_is_fresnel_within_certified_mu(diamond, theta):
     reading = collimated(diamond, theta, seed=0)
-    assert reading.rays == hoeffding_rays(MU, DELTA) == 105_967
+    assert reading.rays.tolist() == [hoeffding_rays(MU, DELTA)] == [105_967]
     assert abs(reading.reflectance[0] - fresnel_reflectance(theta, 2.419)) < MU
     assert abs(reading.transmittance[0] - (1 - fresnel_reflectance(theta, 2.419))) < MU
 
@@ -166,7 +166,7 @@ def test_index_matched_dielectric_never_reflects(mi, beam, theta):
 
 def test_a_single_ray(diamond):
     reading = vm.measure(diamond, theta_i=30, rays=1, wavelengths=[400, 500, 600])
-    assert reading.rays == 1
+    assert reading.rays.tolist() == [1, 1, 1]
     assert set(reading.reflectance) <= {0.0, 1.0}
     assert np.all(reading.reflected + reading.transmitted == 1)
 
@@ -228,7 +228,7 @@ def test_mi_render_returns_the_documented_tensor(mi, scenes_dir):
     image = np.array(mi.render(scene, seed=5, spp=2000))
     assert image.shape == (1, 3)
     reading = scene.integrator().last_reading
-    assert reading.rays == 2000 and reading.settings.seed == 5
+    assert reading.rays.tolist() == [2000] and reading.settings.seed == 5
     np.testing.assert_allclose(image[0], [reading.reflectance[0], reading.transmittance[0],
                                           reading.absorptance[0]], rtol=1e-6)
     same = vm.measure(scene, seed=5, rays=2000)
@@ -255,3 +255,112 @@ def test_wavelength_independent_specimen_is_traced_once_and_says_so(diamond, tra
     assert "wavelength-independent specimen: traced once" in reading.summary()
     other = vm.measure(traced_diamond, theta_i=40, wavelengths="400:700:100", rays=3000)
     assert not other.wavelength_independent and len(set(other.reflected)) > 1
+
+
+# --- ray budgets and intervals ---------------------------------------------------------
+# False-failure rates for a random seed (the seeds are fixed, so outcomes are deterministic):
+# "within mu" at the exact N fails with probability q = miss_probability(66,501, 0.18, 0.005)
+# = 6e-4 per wavelength; under two-stage with its exact mixture, <= 0.0059 per wavelength;
+# a 0.99 Clopper-Pearson interval misses the truth with probability <= 0.01 per interval.
+
+
+def test_exact_bound_reading(diamond):
+    reading = collimated(diamond, 45, bound="exact", wavelengths=[450, 650], seed=21)
+    assert reading.rays.tolist() == [66_501, 66_501] and reading.bound == "exact"
+    assert reading.pilot_rays is None and reading.rays_spent.tolist() == [66_501, 66_501]
+    assert np.all(np.abs(reading.reflectance - fresnel_reflectance(45, 2.419)) < MU)
+
+
+def test_two_stage_reading_spends_pilot_and_sized_second_batch(traced_diamond):
+    from virtspec_mi import twostage
+
+    wavelengths = [450, 550, 650]  # traced_diamond: each wavelength has its own rays
+    reading = collimated(traced_diamond, 0, bound="two-stage", wavelengths=wavelengths, seed=7)
+    assert reading.pilot_rays.tolist() == [2000] * 3
+    assert np.all(reading.rays_spent == reading.rays + 2000)
+    # R = 0.17: far fewer rays than Hoeffding's 105,967, and within mu
+    assert np.all(reading.rays < 50_000) and len(set(reading.rays.tolist())) > 1
+    assert np.all(np.abs(reading.reflectance - 0.172253) < MU)
+    assert np.all(reading.reflected + reading.transmitted + reading.absorbed == reading.rays)
+    # the pilot is the ordinary stream of the seed; the second batch a fresh stream
+    pilot = collimated(traced_diamond, 0, rays=2000, wavelengths=wavelengths, seed=7)
+    n2 = twostage.stage_two_rays(np.stack([pilot.reflected, pilot.transmitted, pilot.absorbed], axis=1),
+                                 2000, MU, DELTA, DELTA / 10)
+    assert reading.rays.tolist() == n2.tolist()
+    second = collimated(traced_diamond, 0, rays=int(reading.rays[0]), wavelengths=[450],
+                        seed=twostage.stage_two_seed(7))
+    assert second.reflected[0] == reading.reflected[0]
+    same_seed = collimated(traced_diamond, 0, rays=int(reading.rays[0]), wavelengths=[450], seed=7)
+    assert same_seed.reflected[0] != reading.reflected[0]  # not the pilot's rays again
+
+
+def test_joint_certification_splits_delta(diamond):
+    reading = collimated(diamond, 30, joint=True, rays=None, wavelengths=[500])
+    assert reading.rays.tolist() == [119_830]  # Hoeffding at delta/2 (anchors.md section 3)
+    assert reading.interval_delta == DELTA / 2
+    assert "R and T together" in reading.summary()
+
+
+def test_intervals_on_every_reading(diamond):
+    reading = collimated(diamond, 60, wavelengths=[400, 500, 600, 700], seed=31)
+    rho = fresnel_reflectance(60, 2.419)
+    for name, truth in [("reflectance", rho), ("transmittance", 1 - rho)]:
+        interval = getattr(reading, f"{name}_interval")
+        assert interval.shape == (4, 2)
+        assert np.all(interval[:, 0] <= getattr(reading, name)) and np.all(getattr(reading, name) <= interval[:, 1])
+        # each covers the truth with probability >= 0.99 (fixed seed)
+        assert np.all((interval[:, 0] <= truth) & (truth <= interval[:, 1]))
+        # and it is narrower than the certified +-mu at N = 105,967 (2 sigma ~ 0.0023)
+        assert np.all(interval[:, 1] - interval[:, 0] < 2 * MU)
+    assert np.all(reading.absorptance_interval[:, 0] == 0.0)
+    data = reading.as_dict()
+    assert data["bound"] == "hoeffding" and data["interval_delta"] == DELTA
+    assert np.allclose(data["reflectance_interval"], reading.reflectance_interval)
+    assert "Clopper-Pearson 0.99 intervals" in reading.summary()
+
+
+def test_integrator_accepts_the_budget_parameters(mi):
+    scene_dict = vm.instrument_scene({"type": "simple_dielectric"})
+    scene_dict["integrator"] = {"type": "spectrophotometer", "bound": "two-stage", "mu": 0.05, "delta": 0.2,
+                                "pilot_rays": 300, "joint": True, "beam": "collimated"}
+    reading = vm.measure(mi.load_dict(scene_dict))
+    assert reading.bound == "two-stage" and reading.pilot_rays.tolist() == [300]
+    assert reading.settings.joint and reading.interval_delta == 0.1
+    scene_dict["integrator"] = {"type": "spectrophotometer", "bound": "sloppy"}
+    with pytest.raises(Exception, match="bound must be one of hoeffding, chebyshev, exact, two-stage"):
+        mi.load_dict(scene_dict)
+
+
+@pytest.mark.parametrize("bound, joint, rays", [("hoeffding", "false", 105_967), ("chebyshev", "false", 1_000_000),
+                                                ("exact", "false", 66_501), ("exact", "true", 78_901),
+                                                ("two-stage", "false", None)])
+def test_xml_scene_takes_every_bound(mi, scenes_dir, bound, joint, rays):
+    scene = mi.load_file(str(scenes_dir / "diamond_collimated.xml"), theta_i="20", bound=bound, joint=joint)
+    reading = vm.measure(scene, seed=3)
+    assert reading.bound == bound and reading.settings.joint == (joint == "true")
+    if rays is not None:
+        assert reading.rays.tolist() == [rays]
+    else:
+        assert reading.pilot_rays.tolist() == [2000] and reading.rays[0] < 60_000
+    assert abs(reading.reflectance[0] - fresnel_reflectance(20, 2.419)) < MU
+
+
+@pytest.mark.parametrize("bound, calls", [("exact", 1), ("two-stage", 2)])
+def test_budgets_run_batched(monkeypatch, traced_diamond, bound, calls):
+    """A spectrum is one kernel call (fixed N) or two (every pilot, then every second batch)."""
+
+    from virtspec_mi.plugins.integrators import spectrophotometer
+
+    seen = []
+    original = spectrophotometer.tally_readings
+
+    def counting(instrument, plans, settings, offsets=None):
+        seen.append([plan.rays for plan in plans])
+        return original(instrument, plans, settings, offsets)
+
+    monkeypatch.setattr(spectrophotometer, "tally_readings", counting)
+    reading = vm.measure(traced_diamond, theta_i=75, bound=bound, wavelengths="400:700:20", mu=0.02, delta=0.05)
+    assert len(seen) == calls and all(len(rays) == 16 for rays in seen)
+    assert seen[-1] == reading.rays.tolist()
+    if bound == "two-stage":
+        assert seen[0] == [500] * 16 and len(set(seen[1])) > 1  # each reading sized on its own

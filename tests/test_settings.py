@@ -45,7 +45,11 @@ def test_wavelength_parsing():
         ({"rays": 2**32}, "rays must satisfy 1 <= rays <= 4294967295"),
         ({"beam": "laser"}, "beam must be one of conical, collimated"),
         ({"sampling": "sobol"}, "sampling must be one of jittered, random, concentric"),
-        ({"bound": "magic"}, "bound must be one of"),
+        ({"bound": "magic"}, "bound must be one of hoeffding, chebyshev, exact, two-stage"),
+        ({"pilot_rays": 0}, "rays must satisfy 1 <= rays"),
+        ({"pilot_delta": 0.01}, r"pilot_delta must satisfy 0 < pilot_delta < delta = 0.01 \(got 0.01\)"),
+        ({"pilot_delta": 0}, "pilot_delta must satisfy 0 < pilot_delta < delta"),
+        ({"joint": "yes"}, "joint must be true or false"),
         ({"seed": -1}, "seed must be a whole number"),
         ({"chunk_size": 10}, "chunk_size must be a whole number"),
     ],
@@ -69,3 +73,17 @@ def test_check_wavelength_range():
     check_wavelength_range([1.0, 1e6], None, "any")  # no declared range: anything goes
     with pytest.raises(ValueError, match=r"400 <= wavelength <= 2500 nm for the specimen abm_u \(got 399, 2501\)"):
         check_wavelength_range([399.0, 551.0, 2501.0], (400, 2500), "abm_u")
+
+
+def test_budget_settings():
+    assert Settings(bound="exact").rays_per_reading == 66_501
+    # joint: each of R and T at delta/2 (Hoeffding 119,830, anchors.md section 3)
+    assert Settings(joint=True).rays_per_reading == 119_830
+    assert Settings(joint=True).quantity_delta == 0.005 and Settings().quantity_delta == 0.01
+    two = Settings(bound="two-stage")
+    assert two.adaptive and not Settings(bound="two-stage", rays=100).adaptive
+    assert (two.pilot_rays_per_reading, two.pilot_delta_value) == (2000, 0.001)
+    assert Settings(bound="two-stage", mu=0.05, pilot_rays=300).pilot_rays_per_reading == 300
+    with pytest.raises(ValueError, match="two-stage"):
+        two.rays_per_reading
+    assert two.as_dict()["rays"] is None and two.as_dict()["pilot_rays"] == 2000

@@ -9,21 +9,32 @@ knowledge of ρ:
 
 - :func:`chebyshev_rays`: the ordinary Chebyshev bound, ``N = ⌈1/(4μ²δ)⌉``, eq. (15);
 - :func:`hoeffding_rays`: the exponential Chebyshev (Hoeffding) bound,
-  ``N = ⌈ln(2/δ)/(2μ²)⌉``, eq. (20)/(23) — the default of virtspec-mi.
+  ``N = ⌈ln(2/δ)/(2μ²)⌉``, eq. (20)/(23) — the default of virtspec-mi;
+- :func:`exact_rays`: the exact binomial rule (not in the paper, see below).
 
 The inverses (:func:`chebyshev_mu`, :func:`hoeffding_mu`) give the tolerance that N
 rays guarantee at δ, and :func:`miss_probability` is the *exact* probability that a
 reading of N rays misses ρ by μ or more (used to test the instrument's statistics).
+
+Beyond the paper, :func:`exact_rays` is the smallest fixed N whose *exact* binomial
+failure probability ``sup_ρ P(|m/N − ρ| ≥ μ)`` is ≤ δ (:func:`max_miss_probability`):
+the same rigorous guarantee as eq. (23) with about 0.63× the rays at μ = 0.005,
+δ = 0.01 (66,501 instead of 105,967). The adaptive ``"two-stage"`` rule lives in
+:mod:`virtspec_mi.twostage`.
 
 References
 ----------
 Baranoski, G.V.G., Rokne, J.G., Xu, G. (2001). Virtual spectrophotometric
 measurements for biologically and physically based rendering. The Visual Computer
 17, 506–518: eqs. (10)–(23) and Table 1.
+
+``../shared/research/anchors.md`` §2(e), §3 and Appendix A (exact failure probability,
+lattice jump points, 66,501).
 """
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 from typing import Callable, Sequence
@@ -38,8 +49,11 @@ __all__ = [
     "hoeffding_rays",
     "chebyshev_mu",
     "hoeffding_mu",
+    "BOUND_NAMES",
+    "exact_rays",
     "rays_for_bound",
     "miss_probability",
+    "max_miss_probability",
     "Table1Row",
     "table_1",
     "format_table_1",
@@ -90,18 +104,147 @@ def hoeffding_mu(rays: int, delta: float) -> float:
     return math.sqrt(math.log(2.0 / delta) / (2.0 * rays))
 
 
+def max_miss_probability(rays: int, mu: float, lo: float = 0.0, hi: float = 1.0) -> float:
+    """
+    ``sup_{ρ ∈ [lo, hi]} P(|m/N − ρ| ≥ μ)``, exactly, for ``m ~ Binomial(N, ρ)``.
+
+    The miss probability is ``P(m ≤ a) + P(m ≥ b)`` with ``a = ⌊N(ρ − μ)⌋`` and
+    ``b = ⌈N(ρ + μ)⌉``. Between consecutive *lattice jump points* ``ρ = a/N + μ``
+    (where ``m = a`` joins the lower tail) and ``ρ = b/N − μ`` (where ``m = b`` joins
+    the upper tail) a and b are fixed, so the miss probability is
+    ``1 − P(a < m < b)``, and the probability of a fixed window of counts is
+    unimodal in ρ (the ratio of the binomial pmf at its two ends is monotone in ρ).
+    The miss probability is therefore quasi-convex on each piece and its supremum
+    over [lo, hi] is attained at a jump point or at lo or hi, where both tails are
+    taken inclusive: evaluating those points (vectorised) gives the exact supremum.
+    ``P(m ≥ b, ρ) = P(N − m ≤ N − b, 1 − ρ)`` makes it symmetric about ρ = ½, so only
+    half of the interval is evaluated when it straddles ½.
+
+    References
+    ----------
+    anchors.md §2(e) and Appendix A.
+    """
+
+    from scipy import special
+
+    check_rays(rays, math.inf)
+    check_mu(mu)
+    n = int(rays)
+    lo, hi = max(0.0, float(lo)), min(1.0, float(hi))
+    if not lo <= hi:
+        raise ValueError(f"lo and hi must satisfy 0 <= lo <= hi <= 1 (got {lo:g}, {hi:g})")
+    if lo > 0.5:  # mirror into the lower half
+        lo, hi = 1.0 - hi, 1.0 - lo
+    elif hi > 0.5:
+        lo, hi = min(lo, 1.0 - hi), 0.5
+    lower = np.arange(max(0, math.floor(n * (lo - mu))), math.ceil(n * (hi - mu)) + 1) / n + mu
+    upper = np.arange(max(0, math.floor(n * (lo + mu))), math.ceil(n * (hi + mu)) + 1) / n - mu
+    rho = np.concatenate([lower, upper, [lo, hi]])
+    rho = rho[(rho >= lo) & (rho <= hi)]
+    # Inclusive tails at the jump points: the 1e-9 forgives the rounding of a/N + μ.
+    a = np.floor(n * (rho - mu) + 1e-9)
+    b = np.ceil(n * (rho + mu) - 1e-9)
+    miss = np.where(a >= 0, special.bdtr(np.maximum(a, 0), n, rho), 0.0)
+    miss = miss + np.where(b <= n, special.bdtrc(np.clip(b - 1, 0, n), n, rho), 0.0)
+    return float(miss.max())
+
+
+def exact_rays(mu: float, delta: float, lo: float = 0.0, hi: float = 1.0) -> int:
+    """
+    Smallest fixed N certified by the exact binomial law: ``sup_ρ P(|m/N − ρ| ≥ μ) ≤ δ``
+    for N and every larger number of rays (ρ over [lo, hi]; all of [0, 1] by default).
+
+    The failure probability is *not* monotone in N. The acceptance window
+    ``N(ρ − μ) < m < N(ρ + μ)`` holds, in the worst case, ``⌈2μN⌉ − 1`` counts; within
+    each *period* of N over which that number is constant (1/(2μ) rays long) the
+    worst-case failure grows with N (the same counts cover a shrinking share of a
+    widening binomial) and it drops at the start of the next period. At μ = 0.005,
+    δ = 0.01 the N = 66,401 … 66,452 pass, 66,453 … 66,500 fail and every N from
+    66,501 on passes. The rule returns the first N of the first period whose last
+    N passes (66,501), found from the normal approximation by stepping over periods,
+    and verifies with :func:`max_miss_probability` the returned N and the ends of the
+    next two periods (so "N or more rays" is certified, which the two-stage rule
+    relies on when it takes the largest of several N). Results are cached, and the
+    common (μ, δ) ship in a table (``virtspec_mi.budget_tables``), so choosing N costs
+    microseconds there; other (μ, δ) take one search per process (milliseconds at
+    μ ≥ 0.02, seconds at μ = 0.005, about 30 s at μ = 0.001).
+
+    References
+    ----------
+    anchors.md §3 ("Exact binomial, fixed, worst case over p": 66,501; −37.2 %).
+    """
+
+    mu, delta = check_mu(mu), check_delta(delta)
+    lo, hi = max(0.0, float(lo)), min(1.0, float(hi))
+    if (lo, hi) == (0.0, 1.0) and (mu, delta) in _shipped_exact():
+        return _shipped_exact()[(mu, delta)]
+    return _exact_rays(mu, delta, lo, hi)
+
+
+def _shipped_exact() -> dict[tuple[float, float], int]:
+    """exact_rays at common (μ, δ), from ``virtspec_mi.budget_tables`` (tests recompute them)."""
+
+    try:
+        from virtspec_mi.budget_tables import EXACT
+    except ImportError:  # while tools/budget_tables.py regenerates the tables
+        return {}
+    return EXACT
+
+
+@functools.lru_cache(maxsize=4096)
+def _exact_rays(mu: float, delta: float, lo: float, hi: float) -> int:
+    from scipy import stats
+
+    def passes(n: int) -> bool:
+        return max_miss_probability(n, mu, lo, hi) <= delta
+
+    def start(j: int) -> int:  # first N of period j: 2μN > j − 1
+        return max(1, math.floor((j - 1) / (2 * mu) * (1 + 1e-12)) + 1)
+
+    def end(j: int) -> int:  # last N of period j: 2μN ≤ j
+        return start(j + 1) - 1
+
+    worst = min(max(0.5, lo), hi) if lo <= 0.5 else lo  # the ρ in [lo, hi] nearest ½
+    z = stats.norm.isf(delta / 2)
+    guess = max(1.0, z * z * worst * (1 - worst) / (mu * mu))
+    j = max(1, math.ceil(2 * mu * guess))
+    # Hoeffding's N (and every larger N) is certified for any interval: never go beyond it.
+    ceiling = hoeffding_rays(mu, delta)
+    if passes(end(j)):
+        while j > 1 and passes(end(j - 1)):
+            j -= 1
+    else:
+        while not passes(end(j)):
+            j += 1
+            if start(j) >= ceiling:
+                return ceiling
+    while not (passes(start(j)) and passes(end(j + 1)) and passes(end(j + 2))):
+        j += 1
+        if start(j) >= ceiling:
+            return ceiling
+    return start(j)
+
+
 BOUNDS: dict[str, Callable[[float, float], int]] = {
     "hoeffding": hoeffding_rays,
     "chebyshev": chebyshev_rays,
+    "exact": exact_rays,
 }
-"""Ray-budget rules by name; ``"hoeffding"`` (eq. 23) is the default."""
+"""Fixed ray-budget rules by name; ``"hoeffding"`` (eq. 23) is the default."""
+
+BOUND_NAMES: tuple[str, ...] = (*BOUNDS, "two-stage")
+"""Every ray-budget rule: the fixed ones of :data:`BOUNDS` and the adaptive ``"two-stage"``
+(:mod:`virtspec_mi.twostage`: a pilot batch sizes a fresh second batch per reading)."""
 
 
 def rays_for_bound(bound: str, mu: float, delta: float) -> int:
-    """Rays per reading under the named rule of :data:`BOUNDS`."""
+    """Rays per reading under the named fixed rule of :data:`BOUNDS`."""
 
+    if bound == "two-stage":
+        raise ValueError("bound 'two-stage' sizes each reading from a pilot batch (virtspec_mi.twostage); "
+                         f"rays_for_bound takes a fixed rule: one of {sorted(BOUNDS)}")
     if bound not in BOUNDS:
-        raise ValueError(f"bound must be one of {sorted(BOUNDS)} (got {bound!r})")
+        raise ValueError(f"bound must be one of {sorted(BOUND_NAMES)} (got {bound!r})")
     return BOUNDS[bound](mu, delta)
 
 

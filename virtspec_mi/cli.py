@@ -4,7 +4,8 @@ Command line: ``virtspec``
 
 - ``virtspec bounds --mu 0.005 --delta 0.001 0.01 0.1``: the paper's Table 1.
 - ``virtspec measure SCENE [--theta-i] [--phi-i] [--wavelengths] [--mu] [--delta]
-  [--rays] [--beam] [--sampling] [--seed] [--json]``: one certified reading.
+  [--rays] [--bound] [--joint] [--pilot-rays] [--pilot-delta] [--beam] [--sampling]
+  [--seed] [--json]``: one certified reading.
 - ``virtspec sweep SCENE --theta-i 0:90:1 [--wavelengths 400:700:10] [--out FILE(.nc|.csv|.json)]
   [--plot FIG(.png|.svg)] [--densities 3 4 5 6] [--quiet] [measure options]``: a sweep
   (resumable when ``--out`` is given: see :mod:`virtspec_mi.sweeps`).
@@ -77,7 +78,12 @@ def _measurement_options(parser: argparse.ArgumentParser, sweep: bool) -> None:
     parser.add_argument("--mu", type=float, help="certified tolerance, 0 < mu < 0.5 (default 0.005)")
     parser.add_argument("--delta", type=float, help="failure probability, 0 < delta < 1 (default 0.01)")
     parser.add_argument("--rays", type=int, help="rays per reading (default: from the bound)")
-    parser.add_argument("--bound", choices=["hoeffding", "chebyshev"], help="ray budget rule")
+    parser.add_argument("--bound", choices=["hoeffding", "chebyshev", "exact", "two-stage"],
+                        help="ray budget rule (default hoeffding, eq. 23)")
+    parser.add_argument("--joint", action="store_true", default=None,
+                        help="certify reflectance and transmittance together (each at delta/2)")
+    parser.add_argument("--pilot-rays", type=int, help="two-stage pilot rays (default ceil(10/mu))")
+    parser.add_argument("--pilot-delta", type=float, help="two-stage pilot failure probability (default delta/10)")
     parser.add_argument("--beam", choices=["conical", "collimated", "diffuse"],
                         help="beam geometry (diffuse: cosine-weighted over the hemisphere, theta_i unused)")
     parser.add_argument("--sampling", choices=["jittered", "random", "concentric"], help="disk sampling")
@@ -124,6 +130,9 @@ def _measure(args: argparse.Namespace) -> int:
         sampling=args.sampling,
         seed=args.seed,
         bound=args.bound,
+        joint=args.joint,
+        pilot_rays=args.pilot_rays,
+        pilot_delta=args.pilot_delta,
     )
     print(json.dumps(reading.as_dict()) if args.json else reading.summary())
     return 0
@@ -144,7 +153,8 @@ def _sweep(args: argparse.Namespace) -> int:
         theta_i=" ".join(args.theta_i),
         wavelengths=" ".join(args.wavelengths) if args.wavelengths else None,
         phi_i=args.phi_i, mu=args.mu, delta=args.delta, beam=args.beam, sampling=args.sampling,
-        seed=args.seed, bound=args.bound, progress=False if args.quiet else None,
+        seed=args.seed, bound=args.bound, joint=args.joint, pilot_rays=args.pilot_rays,
+        pilot_delta=args.pilot_delta, progress=False if args.quiet else None,
     )
 
     def run(rays: int | None, path: Path | None) -> object:

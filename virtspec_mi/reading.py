@@ -8,8 +8,10 @@ then the paper's defaults), sizes each reading with the ray budget and returns a
 :class:`Reading`: reflectance ρ = m/N (eq. 2), transmittance τ and absorptance
 α = 1 − ρ − τ per wavelength, with the exact counts behind them.
 
-With N from eq. (23), each of ρ and τ is within μ of its expectation with
-probability ≥ 1 − δ (each on its own; the pair jointly needs a split δ).
+With N from eq. (23) (or the ``exact`` and ``two-stage`` budgets), each of ρ and τ is
+within μ of its expectation with probability ≥ 1 − δ (each on its own; ``joint=True``
+certifies the pair together by giving each δ/2). Every reading also carries the
+Clopper–Pearson interval of ρ, τ and α at the δ of each quantity.
 
 References
 ----------
@@ -28,6 +30,7 @@ import numpy as np
 import virtspec_mi
 from virtspec_mi.geometry import InstrumentGeometry, backlit_fraction
 from virtspec_mi.instrument import find_instrument
+from virtspec_mi.intervals import clopper_pearson
 from virtspec_mi.settings import Settings
 from virtspec_mi.tally import take_readings
 
@@ -47,8 +50,12 @@ class Reading:
         ρ = m/N, τ = t/N and α = 1 − ρ − τ per wavelength (exactly, from counts).
     reflected, transmitted, absorbed : ndarray of int64
         Ray counts per wavelength (absorbed = rays − reflected − transmitted − capped).
-    rays : int
-        Rays N per wavelength.
+    rays : ndarray of int64
+        Rays N per wavelength behind the estimates (equal for a fixed bound; each
+        reading's own second batch N₂ for ``two-stage``).
+    pilot_rays : ndarray of int64 or None
+        Two-stage pilot rays per wavelength (spent, not in the estimates); ``None`` for
+        a fixed bound. ``rays_spent`` = rays + pilot_rays.
     weight_violations : ndarray of int64
         Rays whose BSDF weight was outside [0, 1] or NaN (0 for a valid specimen).
     capped : ndarray of int64
@@ -83,7 +90,7 @@ class Reading:
     reflected: np.ndarray
     transmitted: np.ndarray
     absorbed: np.ndarray
-    rays: int
+    rays: np.ndarray
     weight_violations: np.ndarray
     capped: np.ndarray
     backlit_fraction: float
@@ -118,6 +125,7 @@ class Reading:
 
         return (self.transmitted - self.regular_transmitted) / self.rays
     wavelength_independent: bool = False
+    pilot_rays: np.ndarray | None = None
 
     @property
     def theta_i(self) -> float:
@@ -134,6 +142,47 @@ class Reading:
     @property
     def delta(self) -> float:
         return self.settings.delta
+
+    @property
+    def bound(self) -> str:
+        """The ray budget used: the settings' bound, or ``"rays"`` when N was given explicitly."""
+
+        return self.settings.bound if self.settings.rays is None else "rays"
+
+    @property
+    def rays_spent(self) -> np.ndarray:
+        """All rays traced per wavelength (two-stage: pilot included)."""
+
+        rays = np.broadcast_to(np.asarray(self.rays, dtype=np.int64), self.wavelengths.shape)
+        return rays if self.pilot_rays is None else rays + self.pilot_rays
+
+    @property
+    def interval_delta(self) -> float:
+        """δ of each interval: the reading's δ, or δ/2 with ``joint`` (R and T together at δ)."""
+
+        return self.settings.quantity_delta
+
+    def _interval(self, counts: np.ndarray) -> np.ndarray:
+        lower, upper = clopper_pearson(counts, self.rays, self.interval_delta)
+        return np.stack([lower, upper], axis=-1)
+
+    @property
+    def reflectance_interval(self) -> np.ndarray:
+        """Clopper–Pearson interval ``[lower, upper]`` of ρ per wavelength, shape (n, 2)."""
+
+        return self._interval(self.reflected)
+
+    @property
+    def transmittance_interval(self) -> np.ndarray:
+        """Clopper–Pearson interval of τ per wavelength, shape (n, 2)."""
+
+        return self._interval(self.transmitted)
+
+    @property
+    def absorptance_interval(self) -> np.ndarray:
+        """Clopper–Pearson interval of α per wavelength (from the absorbed count), shape (n, 2)."""
+
+        return self._interval(self.absorbed)
 
     def as_dict(self) -> dict[str, Any]:
         """Plain data with every field by name (for ``--json``)."""
@@ -154,7 +203,14 @@ class Reading:
             "reflected": self.reflected.tolist(),
             "transmitted": self.transmitted.tolist(),
             "absorbed": self.absorbed.tolist(),
-            "rays": self.rays,
+            "rays": np.asarray(self.rays).tolist(),
+            "rays_spent": self.rays_spent.tolist(),
+            "pilot_rays": None if self.pilot_rays is None else self.pilot_rays.tolist(),
+            "bound": self.bound,
+            "interval_delta": self.interval_delta,
+            "reflectance_interval": self.reflectance_interval.tolist(),
+            "transmittance_interval": self.transmittance_interval.tolist(),
+            "absorptance_interval": self.absorptance_interval.tolist(),
             "weight_violations": self.weight_violations.tolist(),
             "capped": self.capped.tolist(),
             "backlit_fraction": self.backlit_fraction,
@@ -178,16 +234,25 @@ class Reading:
             "cosine-weighted over the hemisphere" if s.beam == "diffuse"
             else f"theta_i = {s.theta_i:g} deg, phi_i = {s.phi_i:g} deg"
         )
+        rays = np.asarray(self.rays)
+        low, high = int(rays.min()), int(rays.max())
+        count = f"{low:,}" if low == high else f"{low:,} to {high:,}"
+        pilot = "" if self.pilot_rays is None else f" + {int(self.pilot_rays.max()):,} pilot"
+        together = "R and T together" if s.joint else "|rho - m/N|"
         lines = [
             f"{s.beam} reading, {incidence}, sampling = {s.sampling}, seed = {s.seed}",
-            f"N = {self.rays:,} rays per wavelength ({s.bound} bound: |rho - m/N| < {s.mu:g} "
+            f"N = {count}{pilot} rays per wavelength ({self.bound} bound: {together} < {s.mu:g} "
             f"with probability >= {1 - s.delta:g}); {self.seconds * 1e3:.1f} ms",
-            f"{'lambda/nm':>10} {'reflectance':>12} {'transmittance':>14} {'absorptance':>12}",
+            f"{'lambda/nm':>10} {'reflectance':>12} {'transmittance':>14} {'absorptance':>12}"
+            f"   Clopper-Pearson {1 - self.interval_delta:g} intervals (R; T)",
         ]
+        r_int, t_int = self.reflectance_interval, self.transmittance_interval
         for i, wavelength in enumerate(self.wavelengths):
             lines.append(
                 f"{wavelength:>10g} {self.reflectance[i]:>12.5f} {self.transmittance[i]:>14.5f} "
-                f"{self.absorptance[i]:>12.5f}"
+                f"{self.absorptance[i]:>12.5f}   [{r_int[i, 0]:.5f}, {r_int[i, 1]:.5f}]; "
+                f"[{t_int[i, 0]:.5f}, {t_int[i, 1]:.5f}]"
+                + ("" if low == high else f"  N = {int(rays[i]):,}")
             )
         mixed = False if self.specular_reflected is None else (0 < self.specular_reflected) & (self.specular_reflected < self.reflected) | (
             (0 < self.regular_transmitted) & (self.regular_transmitted < self.transmitted)
@@ -224,6 +289,9 @@ def measure(
     seed: int | None = None,
     bound: str | None = None,
     chunk_size: int | None = None,
+    joint: bool | None = None,
+    pilot_rays: int | None = None,
+    pilot_delta: float | None = None,
 ) -> Reading:
     """
     Measure the specimen of ``scene`` and return a certified :class:`Reading`.
@@ -245,9 +313,15 @@ def measure(
     seed
         Random seed; the same seed gives the same counts whatever the chunking.
     bound
-        ``hoeffding`` (eq. 23, default) or ``chebyshev`` (eq. 15).
+        ``hoeffding`` (eq. 23, default), ``chebyshev`` (eq. 15), ``exact`` (the smallest
+        N certified by the exact binomial law) or ``two-stage`` (pilot + sized second
+        batch per wavelength, :mod:`virtspec_mi.twostage`).
     chunk_size
         Rays per kernel launch (memory), default 2²².
+    joint
+        Certify reflectance and transmittance together (each at δ/2); default False.
+    pilot_rays, pilot_delta
+        Two-stage pilot size n₁ (default ⌈10/μ⌉) and failure probability δ₁ (default δ/10).
 
     Any argument left ``None`` comes from the scene's ``spectrophotometer``
     integrator when it has one, else from the defaults above.
@@ -262,13 +336,14 @@ def measure(
     settings = base.updated(
         theta_i=theta_i, phi_i=phi_i, wavelengths=wavelengths, mu=mu, delta=delta, rays=rays,
         beam=beam, sampling=sampling, seed=seed, bound=bound, chunk_size=chunk_size,
+        joint=joint, pilot_rays=pilot_rays, pilot_delta=pilot_delta,
     )
     start = time.perf_counter()
     tallies = take_readings(
         instrument, [(w, settings.theta_i, settings.phi_i) for w in settings.wavelengths], settings
     )
     seconds = time.perf_counter() - start
-    n = settings.rays_per_reading
+    n = tallies.rays
     reflected, transmitted, absorbed = tallies.reflected, tallies.transmitted, tallies.absorbed
     violations, capped = tallies.weight_violations, tallies.capped
     if violations.any():
@@ -304,4 +379,5 @@ def measure(
         specular_reflected=tallies.specular,
         regular_transmitted=tallies.regular,
         wavelength_independent=tallies.wavelength_independent,
+        pilot_rays=None if tallies.pilot is None else tallies.pilot.rays,
     )

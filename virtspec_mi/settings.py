@@ -192,7 +192,14 @@ class Settings:
     rays
         Rays per reading; ``None`` takes them from ``bound`` with μ and δ.
     bound
-        Ray-budget rule of :data:`virtspec_mi.bounds.BOUNDS` (default ``"hoeffding"``).
+        Ray-budget rule of :data:`virtspec_mi.bounds.BOUND_NAMES`: ``"hoeffding"`` (eq. 23,
+        default), ``"chebyshev"`` (eq. 15), ``"exact"`` or ``"two-stage"``.
+    pilot_rays, pilot_delta
+        Two-stage pilot size n₁ (default ⌈10/μ⌉) and its failure probability δ₁
+        (default δ/10), 0 < δ₁ < δ; see :mod:`virtspec_mi.twostage`.
+    joint
+        Certify reflectance and transmittance jointly (each at δ/2, Bonferroni) instead
+        of each on its own at δ.
     beam, sampling
         One of :data:`BEAMS` and :data:`SAMPLINGS`.
     seed
@@ -212,6 +219,9 @@ class Settings:
     sampling: str = "jittered"
     seed: int = 0
     chunk_size: int = 1 << 22
+    pilot_rays: int | None = None
+    pilot_delta: float | None = None
+    joint: bool = False
 
     def __post_init__(self) -> None:
         set_ = object.__setattr__
@@ -225,10 +235,22 @@ class Settings:
         set_(self, "delta", check_delta(self.delta))
         if self.rays is not None:
             set_(self, "rays", check_rays(self.rays))
-        from virtspec_mi.bounds import BOUNDS
+        from virtspec_mi.bounds import BOUND_NAMES
 
-        if self.bound not in BOUNDS:
-            raise ValueError(f"bound must be one of {', '.join(BOUNDS)} (got {self.bound!r})")
+        if self.bound not in BOUND_NAMES:
+            raise ValueError(f"bound must be one of {', '.join(BOUND_NAMES)} (got {self.bound!r})")
+        if self.pilot_rays is not None:
+            set_(self, "pilot_rays", check_rays(self.pilot_rays))
+        if self.pilot_delta is not None:
+            pilot_delta = _number("pilot_delta", self.pilot_delta)
+            if not 0.0 < pilot_delta < self.delta:
+                raise ValueError(
+                    f"pilot_delta must satisfy 0 < pilot_delta < delta = {self.delta:g} (got {pilot_delta:g})"
+                )
+            set_(self, "pilot_delta", pilot_delta)
+        if not isinstance(self.joint, (bool, int)) or self.joint not in (0, 1):
+            raise ValueError(f"joint must be true or false (got {self.joint!r})")
+        set_(self, "joint", bool(self.joint))
         if self.beam not in BEAMS:
             raise ValueError(f"beam must be one of {', '.join(BEAMS)} (got {self.beam!r})")
         if self.sampling not in SAMPLINGS:
@@ -244,13 +266,44 @@ class Settings:
 
     @property
     def rays_per_reading(self) -> int:
-        """``rays`` if given, else the bound's N for μ and δ (eq. 23 by default)."""
+        """
+        ``rays`` if given, else the fixed bound's N for μ and the quantity δ (eq. 23 by
+        default); ``ValueError`` for ``"two-stage"``, which sizes each reading itself.
+        """
 
         if self.rays is not None:
             return self.rays
         from virtspec_mi.bounds import rays_for_bound
 
-        return rays_for_bound(self.bound, self.mu, self.delta)
+        return rays_for_bound(self.bound, self.mu, self.quantity_delta)
+
+    @property
+    def adaptive(self) -> bool:
+        """True when each reading is sized by a pilot batch (``two-stage`` without ``rays``)."""
+
+        return self.rays is None and self.bound == "two-stage"
+
+    @property
+    def quantity_delta(self) -> float:
+        """δ of each certified quantity: δ, or δ/2 with ``joint`` (R and T together at δ)."""
+
+        return self.delta / 2 if self.joint else self.delta
+
+    @property
+    def pilot_rays_per_reading(self) -> int:
+        """Two-stage pilot size n₁: ``pilot_rays`` or ⌈10/μ⌉."""
+
+        from virtspec_mi.twostage import default_pilot_rays
+
+        return self.pilot_rays if self.pilot_rays is not None else default_pilot_rays(self.mu)
+
+    @property
+    def pilot_delta_value(self) -> float:
+        """Two-stage pilot failure probability δ₁: ``pilot_delta`` or δ/10."""
+
+        from virtspec_mi.twostage import default_pilot_delta
+
+        return self.pilot_delta if self.pilot_delta is not None else default_pilot_delta(self.delta)
 
     def updated(self, **changes: Any) -> "Settings":
         """A copy with the given fields replaced (``None`` values are ignored), re-validated."""
@@ -266,8 +319,11 @@ class Settings:
             "wavelengths": list(self.wavelengths),
             "mu": self.mu,
             "delta": self.delta,
-            "rays": self.rays_per_reading,
+            "rays": None if self.adaptive else self.rays_per_reading,
             "bound": self.bound,
+            "joint": self.joint,
+            **({"pilot_rays": self.pilot_rays_per_reading, "pilot_delta": self.pilot_delta_value}
+               if self.adaptive else {}),
             "beam": self.beam,
             "sampling": self.sampling,
             "seed": self.seed,

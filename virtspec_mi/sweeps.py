@@ -224,6 +224,9 @@ def sweep(
     sampling: str | None = None,
     seed: int | None = None,
     bound: str | None = None,
+    joint: bool | None = None,
+    pilot_rays: int | None = None,
+    pilot_delta: float | None = None,
     chunk_size: int | None = None,
     checkpoint: str | os.PathLike | None = None,
     progress: bool | None = None,
@@ -240,8 +243,9 @@ def sweep(
         ``"0:90:1"`` (stop included), each in [0, 90], all distinct.
     wavelengths
         nm, same forms (e.g. ``"400:700:10"``), all distinct; default from the scene or 551.
-    phi_i, mu, delta, rays, beam, sampling, seed, bound, chunk_size
-        As for :func:`virtspec_mi.measure` (one value for the whole sweep).
+    phi_i, mu, delta, rays, beam, sampling, seed, bound, joint, pilot_rays, pilot_delta, chunk_size
+        As for :func:`virtspec_mi.measure` (one value for the whole sweep); with
+        ``bound="two-stage"`` each reading is sized by its own pilot, all of them batched.
     checkpoint
         Path of a JSON file recording finished readings as the sweep goes; an existing
         file of the same sweep is resumed (see the module docstring). Removed when the
@@ -262,7 +266,8 @@ def sweep(
     base = instrument.integrator.settings if instrument.integrator is not None else Settings()
     settings = base.updated(
         theta_i=float(angles[0]), phi_i=phi_i, wavelengths=wavelengths, mu=mu, delta=delta, rays=rays,
-        beam=beam, sampling=sampling, seed=seed, bound=bound, chunk_size=chunk_size,
+        beam=beam, sampling=sampling, seed=seed, bound=bound, joint=joint, pilot_rays=pilot_rays,
+        pilot_delta=pilot_delta, chunk_size=chunk_size,
     )
     lams = np.array(settings.wavelengths)
     for name, values in (("theta_i", angles), ("wavelengths", lams)):
@@ -326,10 +331,19 @@ def ray_stride(settings: Settings) -> int:
     """
     Global ray indices reserved per reading of a sweep: reading k owns [k·stride, k·stride + rays_k).
     It must be at least the most rays any reading may use (``take_readings`` refuses
-    overlapping ranges); with one budget per reading that is ``settings.rays_per_reading``.
+    overlapping ranges): ``settings.rays_per_reading`` for a fixed budget; for
+    ``two-stage``, the larger of the pilot n₁ and the Hoeffding N at the second stage's
+    δ − δ₁ (per quantity), which no second batch exceeds (the exact rule over any interval
+    of ρ needs at most the rays of eq. (23) at the same δ).
     """
 
-    return settings.rays_per_reading
+    if not settings.adaptive:
+        return settings.rays_per_reading
+    from virtspec_mi.bounds import hoeffding_rays
+
+    share = 2 if settings.joint else 1
+    stage_two = hoeffding_rays(settings.mu, (settings.delta - settings.pilot_delta_value) / share)
+    return max(settings.pilot_rays_per_reading, stage_two)
 
 
 def fluctuation(a: SweepResult | np.ndarray, b: SweepResult | np.ndarray, quantity: str = "reflectance") -> float:

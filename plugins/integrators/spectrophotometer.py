@@ -23,7 +23,15 @@ delta : float, default 0.01
 rays : integer, default: from the bound
     Rays per reading (overrides the bound), 1 ≤ rays ≤ 2³² − 1.
 bound : string, default "hoeffding"
-    Ray budget: ``hoeffding`` (eq. 23) or ``chebyshev`` (eq. 15).
+    Ray budget: ``hoeffding`` (eq. 23), ``chebyshev`` (eq. 15), ``exact`` (smallest N
+    certified by the exact binomial law) or ``two-stage`` (pilot batch, then a fresh
+    batch sized per reading; see :mod:`virtspec_mi.twostage`).
+joint : boolean, default false
+    Certify reflectance and transmittance together (each at δ/2).
+pilot_rays : integer, default ⌈10/μ⌉
+    Two-stage pilot rays per reading, 1 ≤ pilot_rays ≤ 2³² − 1.
+pilot_delta : float, default δ/10
+    Two-stage pilot failure probability, 0 < pilot_delta < δ.
 beam : string, default "conical"
     ``conical`` (conical-hemispherical), ``collimated`` (directional-hemispherical) or
     ``diffuse`` (hemispherical-hemispherical: incidence directions cosine-distributed
@@ -108,7 +116,7 @@ class Spectrophotometer(mi.SamplingIntegrator):
     def __init__(self, props: mi.Properties) -> None:
         super().__init__(props)
         names = ("theta_i", "phi_i", "wavelengths", "mu", "delta", "rays", "bound", "beam",
-                 "sampling", "seed", "chunk_size")
+                 "sampling", "seed", "chunk_size", "joint", "pilot_rays", "pilot_delta")
         values = {name: props.get(name) for name in names if name in props}
         if "wavelengths" in values and not isinstance(values["wavelengths"], str):
             values["wavelengths"] = [values["wavelengths"]]

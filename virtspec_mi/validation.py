@@ -1,0 +1,178 @@
+"""
+Coverage harness: do certified readings miss as often as the binomial law says?
+==============================================================================
+
+For specimens whose reflectance ρ is known exactly, :func:`coverage` takes K
+independent readings in **one** :func:`virtspec_mi.tally.take_readings` call (at
+551 nm, one reading per azimuth φi = 360°·k/K: every reading has its own rays, and
+these isotropic specimens do not depend on φi — nor on wavelength, but readings that
+differ only in wavelength share rays, see :mod:`virtspec_mi.tally`), counts the *misses* ``|m/N − ρ| ≥ μ`` and compares that count
+with its exact law: Binomial(K, q), with q the exact miss probability of the rule —
+:func:`virtspec_mi.bounds.miss_probability` at the rule's N for a fixed rule, the
+exact mixture over the pilot count (:func:`virtspec_mi.twostage.two_stage_law`) for
+``two-stage``. The test is two-sided (an exact binomial test): a plain "misses ≤ δK"
+check has almost no power, because the rules are conservative (anchors.md §2e).
+
+Specimens (:data:`SPECIMENS`): the paper's diamond (``simple_dielectric``, η = 2.419)
+under a collimated beam at θi = 0°, 45° and 80° (ρ = Fresnel reflectance,
+:func:`virtspec_mi.reference.fresnel_reflectance`; the rest transmitted), Mitsuba's
+``diffuse`` with albedo 0.3 (ρ = 0.3, the rest absorbed) and an absorber (``diffuse``
+with reflectance 0: ρ = 0, so q = 0 and no reading may miss).
+
+References
+----------
+anchors.md §2(e) (end-to-end coverage with the real ray tracer) and §3.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from virtspec_mi.settings import Settings
+
+__all__ = ["Specimen", "SPECIMENS", "Coverage", "coverage", "predicted_miss_probability"]
+
+
+@dataclass(frozen=True)
+class Specimen:
+    """A specimen whose reflectance is known exactly, and how to measure it."""
+
+    name: str
+    bsdf: dict
+    theta_i: float
+    beam: str
+    reflectance: float
+    other: str
+    """Fate of the rays not reflected: ``"transmitted"`` or ``"absorbed"``."""
+
+
+def _specimens() -> tuple[Specimen, ...]:
+    from virtspec_mi.reference import fresnel_reflectance
+
+    diamond = [
+        Specimen(f"diamond {theta:g} deg", {"type": "simple_dielectric", "eta": 2.419}, theta, "collimated",
+                 float(fresnel_reflectance(theta, 2.419)), "transmitted")
+        for theta in (0.0, 45.0, 80.0)
+    ]
+    return (
+        *diamond,
+        Specimen("diffuse 0.3", {"type": "diffuse", "reflectance": 0.3}, 30.0, "collimated", 0.3, "absorbed"),
+        Specimen("absorber", {"type": "diffuse", "reflectance": 0.0}, 30.0, "collimated", 0.0, "absorbed"),
+    )
+
+
+SPECIMENS: tuple[Specimen, ...] = _specimens()
+"""Diamond collimated at 0°, 45°, 80°; ``diffuse`` albedo 0.3; an absorber (ρ = 0)."""
+
+
+@dataclass(frozen=True)
+class Coverage:
+    """Outcome of :func:`coverage` for one specimen and one rule."""
+
+    specimen: str
+    bound: str
+    mu: float
+    delta: float
+    readings: int
+    rays: float
+    """Mean rays per reading behind the estimate."""
+    rays_spent: float
+    """Mean rays traced per reading (two-stage: pilot included)."""
+    seconds: float
+    """Wall time of the one :func:`take_readings` call (tracing and sizing)."""
+    misses: int
+    miss_probability: float
+    """q, the exact probability that one reading misses."""
+    mean_abs_error: float
+    """Mean |m/N − ρ| over the readings."""
+    max_abs_error: float
+    """Largest |m/N − ρ| over the readings."""
+    pvalue: float
+    """Two-sided exact binomial test of ``misses`` against Binomial(readings, q)."""
+    miss_interval: tuple[float, float]
+    """Clopper–Pearson 95 % interval of the observed miss rate."""
+
+    def passed(self, level: float = 1e-4) -> bool:
+        """The miss count is consistent with Binomial(K, q) at the given level."""
+
+        return self.pvalue > level
+
+    @property
+    def within_delta(self) -> bool:
+        """The observed miss rate is consistent with ≤ δ (its 95 % interval reaches below δ)."""
+
+        return self.miss_interval[0] <= self.delta
+
+
+def predicted_miss_probability(specimen: Specimen, settings: Settings) -> float:
+    """Exact probability that one reading of ``specimen`` under ``settings`` misses by μ or more."""
+
+    from virtspec_mi import bounds, twostage
+
+    rho = specimen.reflectance
+    if settings.adaptive:
+        return twostage.two_stage_law(
+            rho, settings.mu, settings.delta, settings.pilot_rays_per_reading, settings.pilot_delta_value,
+            joint=settings.joint, other=specimen.other,
+        ).miss_probability
+    rays = settings.rays if settings.rays is not None else bounds.rays_for_bound(
+        settings.bound, settings.mu, settings.quantity_delta)
+    return bounds.miss_probability(rays, rho, settings.mu)
+
+
+def coverage(
+    specimen: Specimen,
+    bound: str,
+    *,
+    mu: float = 0.05,
+    delta: float = 0.2,
+    readings: int = 1000,
+    seed: int = 0,
+    **settings: Any,
+) -> Coverage:
+    """
+    Take ``readings`` independent readings of ``specimen`` under ``bound`` in one batched
+    :func:`take_readings` call and test the miss count against its exact binomial law.
+
+    ``settings`` go to :class:`Settings` (``joint``, ``pilot_rays``, ``pilot_delta``,
+    ``rays``, ``chunk_size`` …). Defaults are the cheap test setting μ = 0.05, δ = 0.2.
+    """
+
+    from scipy import stats
+
+    import virtspec_mi
+    from virtspec_mi.instrument import find_instrument, instrument_scene
+    from virtspec_mi.intervals import clopper_pearson
+    from virtspec_mi.tally import take_readings
+
+    mi = virtspec_mi.mitsuba()
+    if readings < 1:
+        raise ValueError(f"readings must be a whole number >= 1 (got {readings!r})")
+    azimuths = 360.0 * np.arange(readings) / readings
+    config = Settings(theta_i=specimen.theta_i, beam=specimen.beam, wavelengths=551.0, mu=mu,
+                      delta=delta, bound=bound, seed=seed, **settings)
+    instrument = find_instrument(mi.load_dict(instrument_scene(specimen.bsdf)))
+    start = time.perf_counter()
+    tallies = take_readings(instrument, [(551.0, config.theta_i, phi) for phi in azimuths], config)
+    seconds = time.perf_counter() - start
+    n, m, rho = tallies.rays, tallies.reflected, specimen.reflectance
+    # |m/N − ρ| ≥ μ on the counts, with the same lattice convention as miss_probability
+    miss = (m <= np.floor(n * (rho - mu) + 1e-9)) | (m >= np.ceil(n * (rho + mu) - 1e-9))
+    misses = int(miss.sum())
+    q = predicted_miss_probability(specimen, config)
+    if q <= 0.0:
+        pvalue = 1.0 if misses == 0 else 0.0
+    else:
+        pvalue = float(stats.binomtest(misses, readings, min(q, 1.0)).pvalue)
+    lower, upper = clopper_pearson(misses, readings, 0.05)
+    return Coverage(
+        specimen=specimen.name, bound=bound, mu=config.mu, delta=config.delta, readings=readings,
+        rays=float(n.mean()), rays_spent=float(tallies.rays_spent.mean()), seconds=seconds, misses=misses,
+        miss_probability=float(q), mean_abs_error=float(np.mean(np.abs(m / n - rho))),
+        max_abs_error=float(np.max(np.abs(m / n - rho))), pvalue=pvalue,
+        miss_interval=(float(lower), float(upper)),
+    )

@@ -220,3 +220,28 @@ def test_progress_bar_in_a_terminal_when_the_sweep_is_expected_to_be_slow(diamon
     monkeypatch.setattr(sweeps, "_PROGRESS_AFTER_S", 0.0)  # now every sweep counts as slow
     vm.sweep(diamond, theta_i="0:90:10", rays=1000, chunk_size=1024)
     assert "sweep" in capsys.readouterr().err
+
+
+# --- ray budgets in sweeps ---------------------------------------------------------------
+
+
+def test_two_stage_sweep_sizes_each_reading_and_matches_measure(mi, tmp_path):
+    """Two-stage sweeps: each reading its own N2, batched; the sweep's first reading equals
+    measure()'s (both start at ray 0; later readings sit at the sweep's stride)."""
+
+    scene = mi.load_dict(vm.instrument_scene({"type": "dielectric", "int_ior": 2.419, "ext_ior": 1.0}))
+    kwargs = dict(wavelengths=[450, 650], beam="collimated", bound="two-stage", mu=0.02, delta=0.05, seed=5)
+    result = vm.sweep(scene, theta_i=[0, 60, 85], **kwargs)
+    assert len(set(result.rays.ravel().tolist())) > 1  # sized per reading from its own pilot
+    single = vm.measure(scene, theta_i=0, **kwargs)
+    assert result.rays[0, 0] == single.rays[0] and result.reflected[0, 0] == single.reflected[0]
+    # every interval holds its estimate, at the sweep's delta, and goes into the files
+    lower, upper = result.interval("reflectance")
+    assert np.all((lower <= result.reflectance) & (result.reflectance <= upper))
+    assert lower[0, 0] == single.reflectance_interval[0, 0]
+    dataset = result.to_dataset()
+    np.testing.assert_array_equal(dataset["transmittance_upper"].values, result.interval("transmittance")[1])
+    assert dataset["reflectance_lower"].attrs["clopper_pearson_delta"] == 0.05
+    for suffix in (".csv", ".json"):
+        path = result.write(tmp_path / f"two_stage{suffix}")
+        assert "absorptance_upper" in path.read_text()

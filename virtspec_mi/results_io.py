@@ -6,7 +6,9 @@ Sweep results as files: xarray / NetCDF, CSV, JSON and colour-science CSV spectr
   as an ``xarray.Dataset`` with dims ``wavelength`` (nm) and ``theta_i`` (degrees):
   variables ``reflectance``, ``transmittance``, ``absorptance`` (float64) and the exact
   counts ``reflected``, ``transmitted``, ``absorbed``, ``weight_violations``,
-  ``capped`` and ``rays`` (int64); attributes hold every setting (μ, δ, bound, beam,
+  ``capped`` and ``rays`` (int64), and each quantity's Clopper–Pearson interval at the
+  sweep's δ (``reflectance_lower`` / ``reflectance_upper`` …, derived from the counts;
+  also CSV columns and JSON keys); attributes hold every setting (μ, δ, bound, beam,
   sampling, seed, φi), the geometry (r₁, r₂, D), the scene fingerprint, the package
   version, the seconds, ``wavelength_independent`` and the whole settings as JSON.
 - :func:`write_sweep` / :func:`read_sweep` by suffix: ``.nc`` (NetCDF-4 through
@@ -50,6 +52,13 @@ SUFFIXES: tuple[str, ...] = (".nc", ".csv", ".json")
 
 _COUNTS = ("reflected", "transmitted", "absorbed", "weight_violations", "capped", "rays")
 _QUANTITIES = ("reflectance", "transmittance", "absorptance")
+_BOUNDS = ("lower", "upper")  # Clopper–Pearson interval columns: <quantity>_lower, <quantity>_upper
+
+
+def _intervals(result: Any) -> dict[str, np.ndarray]:
+    """Each quantity's Clopper–Pearson bounds per reading, by column name (derived, never read back)."""
+
+    return {f"{q}_{end}": values for q in _QUANTITIES for end, values in zip(_BOUNDS, result.interval(q))}
 _CSV_HEADER = "# virtspec-mi sweep "
 
 
@@ -110,6 +119,7 @@ def to_dataset(result: Any) -> Any:
 
     dims = ("wavelength", "theta_i")
     variables = {name: (dims, np.asarray(result.quantity(name), dtype=np.float64)) for name in _QUANTITIES}
+    variables.update({name: (dims, np.asarray(values, dtype=np.float64)) for name, values in _intervals(result).items()})
     variables.update({name: (dims, np.asarray(getattr(result, name), dtype=np.int64)) for name in _COUNTS})
     dataset = xr.Dataset(
         variables,
@@ -121,6 +131,8 @@ def to_dataset(result: Any) -> Any:
     dataset["theta_i"].attrs["units"] = "degree"
     for name in _QUANTITIES:
         dataset[name].attrs["certified_tolerance_mu"] = result.settings.mu
+        for end in _BOUNDS:
+            dataset[f"{name}_{end}"].attrs["clopper_pearson_delta"] = result.interval_delta
     return dataset
 
 
@@ -141,6 +153,7 @@ def write_sweep(result: Any, path: str | os.PathLike) -> Path:
     elif suffix == ".json":
         data = {**_metadata(result), "wavelength": result.wavelengths.tolist(), "theta_i": result.theta_i.tolist()}
         data.update({name: result.quantity(name).tolist() for name in _QUANTITIES})
+        data.update({name: values.tolist() for name, values in _intervals(result).items()})
         data.update({name: getattr(result, name).tolist() for name in _COUNTS})
         path.write_text(json.dumps(data, indent=1))
     else:
@@ -154,11 +167,13 @@ def csv_text(result: Any) -> str:
     buffer = io.StringIO()
     buffer.write(_CSV_HEADER + json.dumps(_metadata(result)) + "\n")
     writer = csv.writer(buffer, lineterminator="\n")
-    writer.writerow(["wavelength", "theta_i", *_QUANTITIES, *_COUNTS])
+    intervals = _intervals(result)
+    writer.writerow(["wavelength", "theta_i", *_QUANTITIES, *intervals, *_COUNTS])
     for i, wavelength in enumerate(result.wavelengths):
         for j, theta in enumerate(result.theta_i):
             writer.writerow([repr(float(wavelength)), repr(float(theta)),
                              *(repr(float(result.quantity(q)[i, j])) for q in _QUANTITIES),
+                             *(repr(float(values[i, j])) for values in intervals.values()),
                              *(int(getattr(result, c)[i, j]) for c in _COUNTS)])
     return buffer.getvalue()
 

@@ -154,6 +154,24 @@ class SweepResult:
             return np.full(self.rays.shape, self.settings.mu)
         return np.vectorize(lambda n: inverse(int(n), self.settings.delta), otypes=[float])(self.rays)
 
+    @property
+    def interval_delta(self) -> float:
+        """δ of each interval: the sweep's δ, or δ/2 with ``joint`` (R and T together at δ)."""
+
+        return self.settings.quantity_delta
+
+    def interval(self, quantity: str = "reflectance") -> tuple[np.ndarray, np.ndarray]:
+        """
+        Clopper–Pearson interval ``(lower, upper)`` of ``quantity`` per reading at
+        :attr:`interval_delta`, each of shape (n_λ, n_θ) (as ``Reading.reflectance_interval``).
+        """
+
+        from virtspec_mi.intervals import clopper_pearson
+
+        self.quantity(quantity)  # validates the name
+        counts = {"reflectance": self.reflected, "transmittance": self.transmitted, "absorptance": self.absorbed}
+        return clopper_pearson(counts[quantity], self.rays, self.interval_delta)
+
     def quantity(self, name: str) -> np.ndarray:
         """``reflectance``, ``transmittance`` or ``absorptance`` by name."""
 

@@ -245,3 +245,10 @@ def test_two_stage_sweep_sizes_each_reading_and_matches_measure(mi, tmp_path):
     for suffix in (".csv", ".json"):
         path = result.write(tmp_path / f"two_stage{suffix}")
         assert "absorptance_upper" in path.read_text()
+
+
+def test_sweep_warns_when_the_certificate_does_not_hold(mi):
+    scene = vm.instrument_scene({"type": "diffuse", "reflectance": 1.5})
+    with pytest.warns(RuntimeWarning, match="outside \\[0, 1\\]"):
+        result = vm.sweep(scene, theta_i=[10, 20], rays=500)
+    assert result.weight_violations.sum() == 1000

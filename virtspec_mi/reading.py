@@ -34,7 +34,7 @@ from virtspec_mi.intervals import clopper_pearson
 from virtspec_mi.settings import Settings
 from virtspec_mi.tally import take_readings
 
-__all__ = ["Reading", "measure"]
+__all__ = ["Reading", "measure", "warn_if_uncertified"]
 
 
 @dataclass(frozen=True)
@@ -346,20 +346,7 @@ def measure(
     n = tallies.rays
     reflected, transmitted, absorbed = tallies.reflected, tallies.transmitted, tallies.absorbed
     violations, capped = tallies.weight_violations, tallies.capped
-    if violations.any():
-        warnings.warn(
-            f"{int(violations.sum())} BSDF sample weights fell outside [0, 1]: the specimen is not "
-            "energy conserving, so the certified guarantee does not hold for this reading",
-            RuntimeWarning,
-            stacklevel=2,
-        )
-    if capped.any():
-        warnings.warn(
-            f"{int(capped.sum())} random walks reached the specimen's step cap; they are counted "
-            "in Reading.capped and in none of reflectance, transmittance and absorptance",
-            RuntimeWarning,
-            stacklevel=2,
-        )
+    warn_if_uncertified(violations, capped)
     backlit = backlit_fraction(instrument.geometry, settings.theta_i) if settings.beam == "conical" else 0.0
     return Reading(
         wavelengths=np.array(settings.wavelengths),
@@ -381,3 +368,25 @@ def measure(
         wavelength_independent=tallies.wavelength_independent,
         pilot_rays=None if tallies.pilot is None else tallies.pilot.rays,
     )
+
+
+def warn_if_uncertified(violations: np.ndarray, capped: np.ndarray, stacklevel: int = 3) -> None:
+    """
+    ``RuntimeWarning`` when rays escaped the certificate: BSDF weights outside [0, 1]
+    (the specimen is not energy conserving) or random walks stopped by a step cap.
+    """
+
+    if np.any(violations):
+        warnings.warn(
+            f"{int(np.sum(violations))} BSDF sample weights fell outside [0, 1]: the specimen is not "
+            "energy conserving, so the certified guarantee does not hold for this reading",
+            RuntimeWarning,
+            stacklevel=stacklevel,
+        )
+    if np.any(capped):
+        warnings.warn(
+            f"{int(np.sum(capped))} random walks reached the specimen's step cap; they are counted "
+            "in capped and in none of reflectance, transmittance and absorptance",
+            RuntimeWarning,
+            stacklevel=stacklevel,
+        )

@@ -47,6 +47,7 @@ import numpy as np
 import virtspec_mi
 from virtspec_mi.geometry import InstrumentGeometry
 from virtspec_mi.settings import Settings, parse_theta_i
+from virtspec_mi.reading import warn_if_uncertified
 from virtspec_mi.tally import shares_wavelengths, take_readings
 
 __all__ = [
@@ -325,6 +326,7 @@ def sweep(
     finally:
         bar.close()
     state.finish()
+    warn_if_uncertified(state.counts[2], state.counts[3])
 
     def grid(values: np.ndarray) -> np.ndarray:
         return values.reshape(n_theta, n_lam).T.copy()

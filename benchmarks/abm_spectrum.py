@@ -13,6 +13,10 @@ Measures, in one run:
    rays per reading, best of 2.
 3. **Agreement** — the full spectrum's R/T at the 8° wavelengths quoted in abm.md §4.1
    (NPSG C++, 10⁵ rays), as a sanity check of what was timed.
+4. With ``--against REV`` (a git revision): the full spectrum with the ABM walk of that
+   revision (``plugins/bsdfs/abm_walk.py`` read from git into a temporary module, never
+   shipped) and with the current walk, alternately, best CPU time of 2 each: the speed-up
+   in one run, and whether the two gave identical counts.
 
 The NPSG C++ figures quoted by the issue, on this machine class: the full spectrum at
 10⁵ rays per wavelength with 2 threads in about 58 s (0.73 Mray/s), and 10⁶ rays at
@@ -24,6 +28,7 @@ Run::
     .venv/bin/python benchmarks/abm_spectrum.py              # full run, ~1 min on a loaded 2-core machine
     .venv/bin/python benchmarks/abm_spectrum.py --quick      # 10x fewer rays everywhere
     .venv/bin/python benchmarks/abm_spectrum.py --markdown   # results as markdown
+    .venv/bin/python benchmarks/abm_spectrum.py --against ece9609   # also: old walk vs current
 
 Needs the NPSG leaf data: ``VIRTSPEC_LEAF_DATA`` (default here: ../shared/data/abm-npsg
 beside the checkout). Other work on the machine slows every figure; the 1-minute load
@@ -33,8 +38,11 @@ average is printed with the results.
 from __future__ import annotations
 
 import argparse
+import importlib.util
 import os
+import subprocess
 import sys
+import tempfile
 import time
 from pathlib import Path
 
@@ -71,10 +79,45 @@ def timed(call, repeats: int):
     return best, cpu, result
 
 
+def walk_against(revision: str, mi, measure_scene, rays: int) -> list[str]:
+    """Full spectrum with the ABM walk of ``revision`` and with the current one, side by side."""
+
+    import virtspec_mi.plugins.bsdfs.abm_b as abm_b
+
+    source = subprocess.run(["git", "-C", str(ROOT), "show", f"{revision}:plugins/bsdfs/abm_walk.py"],
+                            check=True, capture_output=True, text=True).stdout
+    with tempfile.NamedTemporaryFile("w", suffix=".py", delete=False) as handle:
+        handle.write(source)
+    spec = importlib.util.spec_from_file_location("abm_walk_against", handle.name)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    os.unlink(handle.name)
+    older = type("ABMBAgainst", (module.ABMLeaf,), {
+        "PLUGIN": "abm_b", "DEFAULTS": abm_b.SOYBEAN, "INTERFACES": abm_b.ABMB.INTERFACES})
+    mi.register_bsdf("abm_b_against", lambda props: older(props))
+    scenes = {name: mi.load_dict(vm.instrument_scene({"type": name})) for name in ("abm_b_against", "abm_b")}
+    for scene in scenes.values():
+        measure_scene(scene, [551, 1450], 1000)  # compile
+    best = {name: (float("inf"), None) for name in scenes}
+    for _ in range(2):
+        for name, scene in scenes.items():
+            start = time.process_time()
+            result = measure_scene(scene, "400:2500:5", rays)
+            cpu = time.process_time() - start
+            if cpu < best[name][0]:
+                best[name] = (cpu, result)
+    (before, old), (after, new) = best["abm_b_against"], best["abm_b"]
+    same = all(np.array_equal(getattr(old, f), getattr(new, f)) for f in ("reflectance", "transmittance", "capped"))
+    return [f"walk of {revision} vs current, full spectrum ({rays:,} x 421), best CPU time of 2 each, "
+            f"alternating: {before:.2f} s vs {after:.2f} s -> speed-up {before / after:.2f}x; "
+            f"counts {'identical' if same else 'differ'}"]
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--quick", action="store_true", help="10x fewer rays (smoke run)")
     parser.add_argument("--markdown", action="store_true", help="print the results as markdown")
+    parser.add_argument("--against", metavar="REV", help="also time the ABM walk of this git revision")
     args = parser.parse_args(argv)
 
     mi = vm.mitsuba()
@@ -127,6 +170,10 @@ def main(argv: list[str] | None = None) -> int:
     noise = 4.5 * np.sqrt(0.25 / full_rays + 0.25 / 100_000) + 0.0005  # Z = 4.5, p = 0.5, rounding
     lines.append(f"agreement with the NPSG 8 deg spectrum (13 wavelengths, R and T): max |diff| {worst:.4f} "
                  f"(4.5-sigma MC bound of both sides: {noise:.4f})")
+
+    if args.against:
+        lines += walk_against(args.against, mi, lambda scene, wavelengths, rays: vm.measure(
+            scene, theta_i=8, beam="collimated", wavelengths=wavelengths, rays=rays), full_rays)
 
     info = machine()
     info["load"] = f"{os.getloadavg()[0]:.2f}"

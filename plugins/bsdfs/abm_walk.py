@@ -20,7 +20,10 @@ absorbed. Analog Monte Carlo: unit weight for an exit, 0 for absorption. The who
 walk runs inside ``BSDF.sample`` as one Dr.Jit symbolic loop, its random numbers from
 :func:`virtspec_mi.walk.walk_rng`. Wavelength-dependent quantities (α·d_m and the three
 refractive indices) are Dr.Jit arrays on the data grid gathered per lane from
-``si.wavelengths[0]``: many wavelengths share one compiled kernel.
+``si.wavelengths[0]``: many wavelengths share one compiled kernel. The per-(interface,
+direction) table (media, slab, lobe exponents) is read by a tree of selects rather than a
+per-step ``dr.gather`` (cheaper on AVX2), its exponents as opaque values (one kernel for
+every leaf), and the lobe's rejection loop carries only the local sample and its world z.
 
 Conventions
 -----------
@@ -143,6 +146,22 @@ def _cos_unit(x: mi.Float) -> mi.Float:
     return poly
 
 
+def _pick(values: list, index: mi.UInt32) -> Any:
+    """
+    ``values[index]`` for a short list of Dr.Jit scalars, as a tree of selects on the bits of
+    ``index`` (a per-lane ``dr.gather`` from a tiny table costs more on AVX2).
+    """
+
+    level = list(values)
+    bit = 0
+    while len(level) > 1:
+        take = (index & (1 << bit)) != 0
+        level = [dr.select(take, level[i + 1], level[i]) if i + 1 < len(level) else level[i]
+                 for i in range(0, len(level), 2)]
+        bit += 1
+    return level[0]
+
+
 class ABMLeaf(mi.BSDF):
     """
     Base of the ABM leaf plugins: parameters, spectral tables and the random walk.
@@ -227,8 +246,9 @@ class ABMLeaf(mi.BSDF):
             ):
                 codes.append(n1 | n2 << 2 | _SLAB_BITS[slab])
                 exponents += [exponent[e_refl], exponent[e_refr]]
-        self._row_code = mi.UInt32(np.array(codes, dtype=np.uint32))
-        self._row_exponent = mi.Float(np.array(exponents, dtype=np.float64))
+        # Row codes are structural (literals); exponents are opaque: one kernel for every leaf.
+        self._row_code = [mi.UInt32(c) for c in codes]
+        self._row_exponent = [dr.opaque(mi.Float, e) for e in exponents]
 
     # -- sampling ---------------------------------------------------------------------
 
@@ -280,7 +300,7 @@ class ABMLeaf(mi.BSDF):
         while dr.hint(status == WALKING, label="abm_walk"):
             down = w.z < 0.0
             row = mi.UInt32(dr.clip(k, 0, last)) * 2 + dr.select(down, mi.UInt32(0), mi.UInt32(1))
-            code = dr.gather(mi.UInt32, self._row_code, row)
+            code = _pick(self._row_code, row)
             m1, m2 = code & 3, (code >> 2) & 3
             slab = dr.select((code & 16) != 0, tau, 0.0) + dr.select(
                 (code & 32) != 0, tau_u, dr.select((code & 64) != 0, -tau_u, 0.0))
@@ -299,22 +319,27 @@ class ABMLeaf(mi.BSDF):
                 mi.Vector3f(w.x, w.y, -w.z),
                 mi.Vector3f(eta_ti * w.x, eta_ti * w.y, dr.select(down, -1.0, 1.0) * dr.abs(cos_t)),
             )
-            exponent = dr.gather(mi.Float, self._row_exponent, row * 2 + dr.select(reflect, mi.UInt32(0), mi.UInt32(1)))
+            exponent = _pick(self._row_exponent, row * 2 + dr.select(reflect, mi.UInt32(0), mi.UInt32(1)))
             go_down = down ^ reflect
             # 4. Warn lobe about the specular direction, resampled until it stays on its side
             frame = mi.Frame3f(specular)
             perturb = ~absorbed & (exponent < math.inf)
             pending = mi.Bool(perturb)
             tries = mi.UInt32(0)
-            new_w = mi.Vector3f(specular)
+            local = mi.Vector3f(0.0, 0.0, 1.0)  # loop state kept small: the local sample and its world z
+            z = mi.Float(specular.z)
+            sz, tz, nz = frame.s.z, frame.t.z, frame.n.z
             while dr.hint(pending, label="abm_lobe"):
                 cos_p = dr.exp2(dr.log2(rng.next_float32()) / (exponent + 1.0))
                 sin_p = dr.safe_sqrt(1.0 - cos_p * cos_p)
                 sin_phi, cos_phi = dr.sincos(dr.two_pi * rng.next_float32())
-                new_w = frame.to_world(mi.Vector3f(sin_p * cos_phi, sin_p * sin_phi, cos_p))
+                local = mi.Vector3f(sin_p * cos_phi, sin_p * sin_phi, cos_p)
+                z = dr.fma(nz, local.z, dr.fma(tz, local.y, sz * local.x))  # as Frame3f.to_world
                 tries += 1
-                pending = (((new_w.z < 0.0) != go_down) | (new_w.z == 0.0)) & (tries < MAX_LOBE_TRIES)
-            lobe_failed = perturb & (((new_w.z < 0.0) != go_down) | (new_w.z == 0.0))
+                pending = (((z < 0.0) != go_down) | (z == 0.0)) & (tries < MAX_LOBE_TRIES)
+            turned = frame.to_world(local)
+            new_w = dr.select(perturb, mi.Vector3f(turned.x, turned.y, z), specular)
+            lobe_failed = perturb & (((z < 0.0) != go_down) | (z == 0.0))
             # 5. next state
             w = dr.select(absorbed, w, new_w)
             k = dr.select(absorbed, k, k + dr.select(go_down, mi.Int32(1), mi.Int32(-1)))

@@ -11,6 +11,8 @@ Writes a Markdown table and a PNG plot; prints the issue's targets beside the fi
 
     .venv/bin/python benchmarks/speed_vs_error.py            # K = 400 readings per cell
     .venv/bin/python benchmarks/speed_vs_error.py --quick    # K = 100
+
+``run_cells``, ``markdown_table`` and ``plot`` are also used by notebooks/07_speed_vs_error.ipynb.
 """
 
 from __future__ import annotations
@@ -55,14 +57,14 @@ def machine() -> str:
 
 
 def run_cells(cells: list[validation.Specimen], k: int, mu: float, delta: float, seed: int,
-              bounds_: tuple[str, ...] = BOUNDS, log=sys.stderr) -> list[tuple[validation.Specimen, validation.Coverage]]:
+              budgets: tuple[str, ...] = BOUNDS, log=sys.stderr) -> list[tuple[validation.Specimen, validation.Coverage]]:
     """K readings of every (specimen, bound) cell through ``validation.coverage`` (kernels warmed first)."""
 
     rows = []
     for specimen in cells:
         # warm the specimen's kernels (JIT compilation is not part of a reading's cost)
         validation.coverage(specimen, "hoeffding", mu=mu, delta=delta, readings=4, seed=1)
-        for bound in bounds_:
+        for bound in budgets:
             result = validation.coverage(specimen, bound, mu=mu, delta=delta, readings=k, seed=seed)
             rows.append((specimen, result))
             if log is not None:

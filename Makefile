@@ -9,7 +9,7 @@ STAMP  := $(VENV)/.installed
 SUDO   := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
 PYTEST_ARGS ?=
 
-.PHONY: setup llvm demo test test-fast bench clean
+.PHONY: setup llvm demo test test-fast bench notebooks clean
 
 setup: $(STAMP) llvm
 
@@ -35,6 +35,11 @@ test: setup
 
 test-fast: setup
 	$(PY) -m pytest $(PYTEST_ARGS)
+
+# Execute the notebooks (the paper reproduced) at full size and write their outputs back
+# (several minutes); the test suite runs them at the reduced size.
+notebooks: setup
+	$(PY) notebooks/run.py --size full --inplace
 
 bench: setup
 	$(PY) benchmarks/throughput.py

@@ -11,6 +11,8 @@ Writes a Markdown table and a PNG plot; prints the issue's targets beside the fi
 
     .venv/bin/python benchmarks/speed_vs_error.py            # K = 400 readings per cell
     .venv/bin/python benchmarks/speed_vs_error.py --quick    # K = 100
+
+``run_cells``, ``markdown_table`` and ``plot`` are also used by notebooks/07_speed_vs_error.ipynb.
 """
 
 from __future__ import annotations
@@ -54,6 +56,42 @@ def machine() -> str:
     return f"{model}, {os.cpu_count()} cores, Python {platform.python_version()}"
 
 
+def run_cells(cells: list[validation.Specimen], k: int, mu: float, delta: float, seed: int,
+              budgets: tuple[str, ...] = BOUNDS, log=sys.stderr) -> list[tuple[validation.Specimen, validation.Coverage]]:
+    """K readings of every (specimen, bound) cell through ``validation.coverage`` (kernels warmed first)."""
+
+    rows = []
+    for specimen in cells:
+        # warm the specimen's kernels (JIT compilation is not part of a reading's cost)
+        validation.coverage(specimen, "hoeffding", mu=mu, delta=delta, readings=4, seed=1)
+        for bound in budgets:
+            result = validation.coverage(specimen, bound, mu=mu, delta=delta, readings=k, seed=seed)
+            rows.append((specimen, result))
+            if log is not None:
+                print(f"{specimen.name:>14} {bound:>10}: {result.rays_spent:>11,.0f} rays/reading, "
+                      f"{result.seconds:6.2f} s, misses {result.misses}/{k} "
+                      f"(q K = {result.miss_probability * k:.2f})", file=log, flush=True)
+    return rows
+
+
+def markdown_table(rows: list, k: int) -> list[str]:
+    """The report's Markdown table, one line per (specimen, bound) cell."""
+
+    header = ("| specimen | rho | bound | rays/reading (estimate) | rays spent | x Hoeffding | s per reading (ms) "
+              "| mean abs error | max abs error | misses / K | miss rate 95 % CI | exact q | binomial p | ok |")
+    lines = [header, "|" + "---|" * (header.count("|") - 1)]
+    hoeffding = {s.name: r.rays_spent for s, r in rows if r.bound == "hoeffding"}
+    for specimen, r in rows:
+        ok = r.passed() and r.within_delta
+        lines.append(
+            f"| {specimen.name} | {specimen.reflectance:.4f} | {r.bound} | {r.rays:,.0f} | {r.rays_spent:,.0f} "
+            f"| {r.rays_spent / hoeffding[specimen.name]:.3f} | {1e3 * r.seconds / k:.3f} | {r.mean_abs_error:.2e} "
+            f"| {r.max_abs_error:.2e} | {r.misses}/{k} | [{r.miss_interval[0]:.4f}, {r.miss_interval[1]:.4f}] "
+            f"| {r.miss_probability:.2e} | {r.pvalue:.3f} | {'yes' if ok else 'NO'} |"
+        )
+    return lines
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[1])
     parser.add_argument("--quick", action="store_true", help="K = 100 readings per cell")
@@ -68,29 +106,8 @@ def main(argv: list[str] | None = None) -> int:
     virtspec_mi.mitsuba()
     load = os.getloadavg()[0]
     started = time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime())
-    rows = []
-    for specimen in specimens():
-        # warm the specimen's kernels (JIT compilation is not part of a reading's cost)
-        validation.coverage(specimen, "hoeffding", mu=mu, delta=delta, readings=4, seed=1)
-        for bound in BOUNDS:
-            result = validation.coverage(specimen, bound, mu=mu, delta=delta, readings=k, seed=args.seed)
-            rows.append((specimen, result))
-            print(f"{specimen.name:>14} {bound:>10}: {result.rays_spent:>11,.0f} rays/reading, "
-                  f"{result.seconds:6.2f} s, misses {result.misses}/{k} (q K = {result.miss_probability * k:.2f})",
-                  file=sys.stderr, flush=True)
-
-    header = ("| specimen | rho | bound | rays/reading (estimate) | rays spent | x Hoeffding | s per reading (ms) "
-              "| mean abs error | max abs error | misses / K | miss rate 95 % CI | exact q | binomial p | ok |")
-    lines = [header, "|" + "---|" * (header.count("|") - 1)]
-    hoeffding = {s.name: r.rays_spent for s, r in rows if r.bound == "hoeffding"}
-    for specimen, r in rows:
-        ok = r.passed() and r.within_delta
-        lines.append(
-            f"| {specimen.name} | {specimen.reflectance:.4f} | {r.bound} | {r.rays:,.0f} | {r.rays_spent:,.0f} "
-            f"| {r.rays_spent / hoeffding[specimen.name]:.3f} | {1e3 * r.seconds / k:.3f} | {r.mean_abs_error:.2e} "
-            f"| {r.max_abs_error:.2e} | {r.misses}/{k} | [{r.miss_interval[0]:.4f}, {r.miss_interval[1]:.4f}] "
-            f"| {r.miss_probability:.2e} | {r.pvalue:.3f} | {'yes' if ok else 'NO'} |"
-        )
+    rows = run_cells(specimens(), k, mu, delta, args.seed)
+    lines = markdown_table(rows, k)
     exact_ratio = bounds.exact_rays(mu, delta) / bounds.hoeffding_rays(mu, delta)
     laws = {rho: two_stage_law(rho, mu, delta) for rho in (0.05, 0.5)}
     measured = {s.reflectance: r.rays_spent for s, r in rows if r.bound == "two-stage"}
@@ -117,18 +134,18 @@ def main(argv: list[str] | None = None) -> int:
     text = "\n".join(lines + [""] + targets + [""] + footer)
     args.out.mkdir(parents=True, exist_ok=True)
     (args.out / "speed_vs_error.md").write_text(text + "\n")
-    _plot(rows, k, delta, args.out / "speed_vs_error.png")
+    plot(rows, k, delta, args.out / "speed_vs_error.png")
     print(text)
     return 0
 
 
-def _plot(rows: list, k: int, delta: float, path: Path) -> None:
-    import matplotlib
+def plot(rows: list, k: int, delta: float, path: Path | None = None, dpi: int = 110):
+    """Rays per reading and observed miss rate of each cell; saved to ``path`` when given."""
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    from matplotlib.figure import Figure
 
-    fig, (left, right) = plt.subplots(1, 2, figsize=(12, 4.5))
+    fig = Figure(figsize=(12, 4.5))
+    left, right = fig.subplots(1, 2)
     names = list(dict.fromkeys(s.name for s, _ in rows))
     x = np.arange(len(names))
     for i, bound in enumerate(BOUNDS):
@@ -151,7 +168,9 @@ def _plot(rows: list, k: int, delta: float, path: Path) -> None:
     right.legend(fontsize=7, ncol=2)
     fig.suptitle("Ray budgets: rays per reading and observed miss rate")
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
+    if path is not None:
+        fig.savefig(path, dpi=dpi)
+    return fig
 
 
 if __name__ == "__main__":

@@ -300,7 +300,7 @@ def warm_reading(repeats: int = 20) -> dict:
         start = time.perf_counter()
         reading = virtspec_mi.measure(scene, theta_i=THETA_I)
         times.append(time.perf_counter() - start)
-    return {"rays": reading.rays, "median_ms": 1e3 * statistics.median(times),
+    return {"rays": int(reading.rays[0]), "median_ms": 1e3 * statistics.median(times),
             "min_ms": 1e3 * min(times), "repeats": repeats}
 
 

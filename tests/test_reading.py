@@ -364,3 +364,11 @@ def test_budgets_run_batched(monkeypatch, traced_diamond, bound, calls):
     assert seen[-1] == reading.rays.tolist()
     if bound == "two-stage":
         assert seen[0] == [500] * 16 and len(set(seen[1])) > 1  # each reading sized on its own
+
+
+@pytest.mark.parametrize("bound, joint", [("exact", "false"), ("two-stage", "true")])
+def test_conical_xml_scene_takes_the_bound(mi, scenes_dir, bound, joint):
+    scene = mi.load_file(str(scenes_dir / "diamond_conical.xml"), bound=bound, joint=joint)
+    reading = vm.measure(scene)
+    assert reading.bound == bound and reading.settings.joint == (joint == "true")
+    assert reading.settings.beam == "conical" and reading.theta_i == 70

@@ -34,7 +34,7 @@ from virtspec_mi.intervals import clopper_pearson
 from virtspec_mi.settings import Settings
 from virtspec_mi.tally import take_readings
 
-__all__ = ["Reading", "measure", "warn_if_uncertified"]
+__all__ = ["Reading", "measure", "uncertified_lines", "warn_if_uncertified"]
 
 
 @dataclass(frozen=True)
@@ -268,10 +268,7 @@ class Reading:
             lines.append("note: wavelength-independent specimen: traced once, the same rays for every wavelength")
         if self.backlit_fraction > 0:
             lines.append(f"note: {self.backlit_fraction:.2%} of the emitter lies below the specimen plane")
-        if self.weight_violations.any():
-            lines.append(f"WARNING: {int(self.weight_violations.sum())} BSDF weights outside [0, 1]")
-        if self.capped.any():
-            lines.append(f"WARNING: {int(self.capped.sum())} random walks hit the step cap (in no tally)")
+        lines += uncertified_lines(self.weight_violations, self.capped)
         return "\n".join(lines)
 
 
@@ -390,3 +387,14 @@ def warn_if_uncertified(violations: np.ndarray, capped: np.ndarray, stacklevel: 
             RuntimeWarning,
             stacklevel=stacklevel,
         )
+
+
+def uncertified_lines(violations: np.ndarray, capped: np.ndarray) -> list[str]:
+    """Summary lines for rays that escaped the certificate (none for a sound reading)."""
+
+    lines = []
+    if np.any(violations):
+        lines.append(f"WARNING: {int(np.sum(violations))} BSDF weights outside [0, 1]")
+    if np.any(capped):
+        lines.append(f"WARNING: {int(np.sum(capped))} random walks hit the step cap (in no tally)")
+    return lines

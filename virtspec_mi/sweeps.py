@@ -47,7 +47,7 @@ import numpy as np
 import virtspec_mi
 from virtspec_mi.geometry import InstrumentGeometry
 from virtspec_mi.settings import Settings, parse_theta_i
-from virtspec_mi.reading import warn_if_uncertified
+from virtspec_mi.reading import uncertified_lines, warn_if_uncertified
 from virtspec_mi.tally import shares_wavelengths, take_readings
 
 __all__ = [
@@ -223,10 +223,7 @@ class SweepResult:
         if self.wavelength_independent and len(self.wavelengths) > 1:
             lines.append("note: wavelength-independent specimen: traced once per theta_i, "
                          "the same rays for every wavelength")
-        if self.weight_violations.any():
-            lines.append(f"WARNING: {int(self.weight_violations.sum())} BSDF weights outside [0, 1]")
-        if self.capped.any():
-            lines.append(f"WARNING: {int(self.capped.sum())} random walks hit the step cap (in no tally)")
+        lines += uncertified_lines(self.weight_violations, self.capped)
         return "\n".join(lines)
 
 

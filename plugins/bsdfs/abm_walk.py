@@ -58,6 +58,7 @@ import drjit as dr
 import mitsuba as mi
 import numpy as np
 
+
 from virtspec_mi.leaf_data import (
     GRID,
     GRID_STEP,
@@ -66,6 +67,7 @@ from virtspec_mi.leaf_data import (
     load_leaf_data,
     mesophyll_absorption,
 )
+from virtspec_mi.plugins.bsdfs.sampled_only import SampledOnlyBSDF
 from virtspec_mi.walk import CAPPED_COMPONENT, walk_rng
 
 __all__ = [
@@ -162,7 +164,7 @@ def _pick(values: list, index: mi.UInt32) -> Any:
     return level[0]
 
 
-class ABMLeaf(mi.BSDF):
+class ABMLeaf(SampledOnlyBSDF):
     """
     Base of the ABM leaf plugins: parameters, spectral tables and the random walk.
 
@@ -353,21 +355,6 @@ class ABMLeaf(mi.BSDF):
         return status, w
 
     # -- the rest of the BSDF interface ------------------------------------------------
-
-    def eval(self, ctx, si, wo, active=True):
-        return mi.Spectrum(0.0)
-
-    def pdf(self, ctx, si, wo, active=True):
-        return mi.Float(0.0)
-
-    def eval_pdf(self, ctx, si, wo, active=True):
-        return mi.Spectrum(0.0), mi.Float(0.0)
-
-    def traverse(self, callback) -> None:
-        pass
-
-    def parameters_changed(self, keys) -> None:
-        pass
 
     def to_string(self) -> str:
         params = ", ".join(f"{name}={value:g}" for name, value in self.params.items())

@@ -31,10 +31,12 @@ from __future__ import annotations
 import drjit as dr
 import mitsuba as mi
 
+from virtspec_mi.plugins.bsdfs.sampled_only import SampledOnlyBSDF
+
 __all__ = ["SimpleDielectric"]
 
 
-class SimpleDielectric(mi.BSDF):
+class SimpleDielectric(SampledOnlyBSDF):
     """Coin-flip Fresnel dielectric with unit weights (see the module docstring)."""
 
     wavelength_independent: bool = True
@@ -70,21 +72,6 @@ class SimpleDielectric(mi.BSDF):
             mi.UInt32(+mi.BSDFFlags.DeltaTransmission),
         )
         return bs, dr.select(active, mi.Spectrum(1.0), mi.Spectrum(0.0))
-
-    def eval(self, ctx, si, wo, active=True):
-        return mi.Spectrum(0.0)
-
-    def pdf(self, ctx, si, wo, active=True):
-        return mi.Float(0.0)
-
-    def eval_pdf(self, ctx, si, wo, active=True):
-        return mi.Spectrum(0.0), mi.Float(0.0)
-
-    def traverse(self, callback) -> None:
-        pass
-
-    def parameters_changed(self, keys) -> None:
-        pass
 
     def to_string(self) -> str:
         return f"SimpleDielectric[eta={self.eta}]"

@@ -85,6 +85,8 @@ from typing import Any
 import drjit as dr
 import mitsuba as mi
 
+from virtspec_mi.plugins.bsdfs.sampled_only import SampledOnlyBSDF
+
 from virtspec_mi.walk import CAPPED_COMPONENT, walk_rng
 from virtspec_mi.walk_optics import cross_interface, free_path, sample_hg
 
@@ -124,7 +126,7 @@ def _check_number(name: str, value: float, lower: float, upper: float, closed: b
     return value
 
 
-class TurbidSlab(mi.BSDF):
+class TurbidSlab(SampledOnlyBSDF):
     """MCML-style analog random walk in a Fresnel-bounded HG slab (see the module docstring)."""
 
     def __init__(self, props: mi.Properties) -> None:
@@ -212,21 +214,6 @@ class TurbidSlab(mi.BSDF):
         )
         weight = dr.select(exited & active, mi.Spectrum(1.0), mi.Spectrum(0.0))
         return bs, weight
-
-    def eval(self, ctx, si, wo, active=True):
-        return mi.Spectrum(0.0)
-
-    def pdf(self, ctx, si, wo, active=True):
-        return mi.Float(0.0)
-
-    def eval_pdf(self, ctx, si, wo, active=True):
-        return mi.Spectrum(0.0), mi.Float(0.0)
-
-    def traverse(self, callback) -> None:
-        pass
-
-    def parameters_changed(self, keys) -> None:
-        pass
 
     def to_string(self) -> str:
         parts = [f"{k}={v:g}" for k, v in self.constants.items()]

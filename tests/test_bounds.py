@@ -9,6 +9,8 @@ import pytest
 from scipy import stats
 
 from virtspec_mi import bounds
+from virtspec_mi.budgets import BUDGETS
+from virtspec_mi.settings import Settings
 
 
 def test_hoeffding_rays_paper_value():
@@ -74,8 +76,8 @@ def test_miss_probability_below_delta_at_certified_n():
         (lambda: bounds.hoeffding_rays(0.005, 0.0), "delta must satisfy 0 < delta < 1"),
         (lambda: bounds.chebyshev_rays(0.005, 1.0), "delta must satisfy 0 < delta < 1"),
         (lambda: bounds.hoeffding_mu(0, 0.01), "rays must satisfy 1 <= rays"),
-        (lambda: bounds.rays_for_bound("magic", 0.005, 0.01), "bound must be one of"),
-        (lambda: bounds.rays_for_bound("two-stage", 0.005, 0.01), "sizes each reading from a pilot"),
+        (lambda: Settings(bound="magic"), "bound must be one of"),
+        (lambda: BUDGETS["two-stage"].rays(0.005, 0.01), "sizes each reading from a pilot"),
         (lambda: bounds.exact_rays(0.005, 1.5), "delta must satisfy 0 < delta < 1"),
         (lambda: bounds.max_miss_probability(100, 0.05, 0.6, 0.4), "lo and hi must satisfy"),
     ],

@@ -73,7 +73,7 @@ def test_sweep_writes_the_file_and_plot_and_colour_reads_it(scenes_dir, tmp_path
     assert "collimated sweep: 3 theta_i x 4 wavelengths" in result.stdout and f"written: {out}" in result.stdout
     assert result.stderr == ""  # no progress bar: not a terminal
     assert figure.read_bytes()[:4] == b"\x89PNG"
-    from virtspec_mi.results_io import read_sweep
+    from virtspec_mi.api import read_result as read_sweep
 
     saved = read_sweep(out)
     assert saved.reflectance.shape == (4, 3) and saved.settings.seed == 0

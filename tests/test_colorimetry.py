@@ -17,15 +17,18 @@ CHART = "ColorChecker N Ohta"
 
 
 def _sweep_of(values, wavelengths, **kwargs):
-    from virtspec_mi.geometry import InstrumentGeometry
-    from virtspec_mi.settings import Settings
-    from virtspec_mi.sweeps import SweepResult
+    from dataclasses import replace
 
-    rays = np.full((len(wavelengths), 1), 10**6, dtype=np.int64)
-    reflected = np.round(np.asarray(values)[:, None] * 10**6).astype(np.int64)
-    zeros = np.zeros_like(rays)
-    return SweepResult(np.asarray(wavelengths, float), np.array([0.0]), reflected, zeros, zeros, zeros, rays,
-                       0.0, Settings(wavelengths=wavelengths), InstrumentGeometry(8, 12.5, 100))
+    from virtspec_mi.counts import Counts
+    from virtspec_mi.geometry import InstrumentGeometry
+    from virtspec_mi.result import Result
+    from virtspec_mi.settings import Settings
+
+    shape = (len(wavelengths), 1)
+    counts = replace(Counts.zeros(shape), rays=np.full(shape, 10**6, dtype=np.int64),
+                     reflected=np.round(np.asarray(values)[:, None] * 10**6).astype(np.int64))
+    return Result(("wavelength", "theta_i"), {"wavelength": np.asarray(wavelengths, float), "theta_i": np.array([0.0])},
+                  counts, None, Settings(wavelengths=wavelengths), InstrumentGeometry(8, 12.5, 100), 0.0)
 
 
 def test_a_grey_spectrum_is_neutral_and_its_lightness_follows_y():

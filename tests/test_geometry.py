@@ -51,7 +51,7 @@ def trace(instrument):
     """``trace(theta, phi, sampling, rays, seed, beam)`` → the traced rays (cached)."""
 
     # The plugin module needs Mitsuba's variant, which find_instrument has set.
-    from virtspec_mi.plugins.integrators.spectrophotometer import ReadingPlan, trace_rays
+    from virtspec_mi.kernel.tracer import ReadingPlan, trace_rays
 
     cache: dict = {}
 

@@ -1,5 +1,5 @@
 """
-Tests of virtspec_mi.reading.measure (and, through it, the spectrophotometer kernel).
+Tests of virtspec_mi.api.measure (and, through it, the spectrophotometer kernel).
 
 Statistical checks use fixed seeds and the certified tolerance of the reading: with
 N from eq. (23) each assertion |m/N − ρ| < μ fails for a random seed with probability
@@ -349,16 +349,16 @@ def test_xml_scene_takes_every_bound(mi, scenes_dir, bound, joint, rays):
 def test_budgets_run_batched(monkeypatch, traced_diamond, bound, calls):
     """A spectrum is one kernel call (fixed N) or two (every pilot, then every second batch)."""
 
-    from virtspec_mi.plugins.integrators import spectrophotometer
+    from virtspec_mi.kernel import tracer
 
     seen = []
-    original = spectrophotometer.tally_readings
+    original = tracer.tally_readings
 
     def counting(instrument, plans, settings, offsets=None):
         seen.append([plan.rays for plan in plans])
         return original(instrument, plans, settings, offsets)
 
-    monkeypatch.setattr(spectrophotometer, "tally_readings", counting)
+    monkeypatch.setattr(tracer, "tally_readings", counting)
     reading = vm.measure(traced_diamond, theta_i=75, bound=bound, wavelengths="400:700:20", mu=0.02, delta=0.05)
     assert len(seen) == calls and all(len(rays) == 16 for rays in seen)
     assert seen[-1] == reading.rays.tolist()

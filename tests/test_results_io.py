@@ -6,7 +6,16 @@ import numpy as np
 import pytest
 
 import virtspec_mi as vm
-from virtspec_mi.results_io import read_spectra_csv, read_sweep, to_dataset, write_spectra_csv, write_sweep
+from virtspec_mi.api import read_result as read_sweep
+from virtspec_mi.results_io import read_spectra_csv, write_spectra_csv
+
+
+def to_dataset(result):
+    return result.to_dataset()
+
+
+def write_sweep(result, path):
+    return result.write(path)
 
 
 @pytest.fixture(scope="module")
@@ -46,10 +55,10 @@ def test_bad_files_give_clear_errors(result, tmp_path):
     with pytest.raises(ValueError, match=r"out must end in one of \.nc, \.csv, \.json"):
         write_sweep(result, tmp_path / "sweep.txt")
     (tmp_path / "other.csv").write_text("a,b\n1,2\n")
-    with pytest.raises(ValueError, match="not a virtspec-mi sweep CSV"):
+    with pytest.raises(ValueError, match="not a virtspec-mi result CSV"):
         read_sweep(tmp_path / "other.csv")
     (tmp_path / "other.json").write_text('{"a": 1}')
-    with pytest.raises(ValueError, match="not a virtspec-mi sweep file"):
+    with pytest.raises(ValueError, match="not a virtspec-mi result"):
         read_sweep(tmp_path / "other.json")
     with pytest.raises(ValueError, match="not found"):
         read_sweep(tmp_path / "missing.nc")

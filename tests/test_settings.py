@@ -4,7 +4,8 @@ from __future__ import annotations
 
 import pytest
 
-from virtspec_mi.settings import Settings, parse_wavelengths
+from virtspec_mi.checks import parse_wavelengths
+from virtspec_mi.settings import Settings
 
 
 def test_defaults_are_the_papers():
@@ -67,7 +68,7 @@ def test_updated_ignores_none_and_revalidates():
 
 
 def test_check_wavelength_range():
-    from virtspec_mi.settings import check_wavelength_range
+    from virtspec_mi.checks import check_wavelength_range
 
     check_wavelength_range([400.0, 2500.0], (400, 2500), "abm_b")  # both ends included
     check_wavelength_range([1.0, 1e6], None, "any")  # no declared range: anything goes

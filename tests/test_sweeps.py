@@ -1,5 +1,5 @@
 """
-Tests of virtspec_mi.sweeps: sweep(), SweepResult, fluctuation (eq. 24), resumable
+Tests of virtspec_mi.api.sweep: sweep(), its Result, fluctuation (eq. 24), resumable
 checkpoints and the progress bar.
 
 Statistical checks use fixed seeds and a union bound over the readings of a sweep:
@@ -23,7 +23,7 @@ import pytest
 import virtspec_mi as vm
 from virtspec_mi.bounds import hoeffding_mu
 from virtspec_mi.reference import fresnel_reflectance
-from virtspec_mi.sweeps import CheckpointError
+from virtspec_mi.checkpoint import CheckpointError
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -111,9 +111,9 @@ def test_fluctuation_shrinks_with_ray_density(diamond):
 def _interrupting(monkeypatch, after: int):
     """Make the sweep's take_readings raise KeyboardInterrupt after ``after`` batches."""
 
-    import virtspec_mi.sweeps as sweeps
+    import virtspec_mi.engine as engine
 
-    real, calls = sweeps.take_readings, []
+    real, calls = engine.take_readings, []
 
     def flaky(*args, **kwargs):
         if len(calls) == after:
@@ -121,7 +121,7 @@ def _interrupting(monkeypatch, after: int):
         calls.append(1)
         return real(*args, **kwargs)
 
-    monkeypatch.setattr(sweeps, "take_readings", flaky)
+    monkeypatch.setattr(engine, "take_readings", flaky)
     return calls
 
 
@@ -191,7 +191,7 @@ def test_killing_a_real_sweep_process_and_rerunning_gives_the_uninterrupted_resu
     subprocess.run(command + ["--out", str(out)], cwd=tmp_path, check=True)
     assert not partial.exists()
     subprocess.run(command + ["--out", str(tmp_path / "whole.nc")], cwd=tmp_path, check=True)
-    from virtspec_mi.results_io import read_sweep
+    from virtspec_mi.api import read_result as read_sweep
 
     resumed, whole = read_sweep(out), read_sweep(tmp_path / "whole.nc")
     for name in ("reflected", "transmitted", "absorbed", "rays"):
@@ -212,12 +212,12 @@ def test_progress_bar_only_when_asked_or_in_a_slow_terminal_sweep(diamond, capsy
 
 
 def test_progress_bar_in_a_terminal_when_the_sweep_is_expected_to_be_slow(diamond, capsys, monkeypatch):
-    import virtspec_mi.sweeps as sweeps
+    import virtspec_mi.progress as progress
 
     monkeypatch.setattr(sys.stderr, "isatty", lambda: True)
     vm.sweep(diamond, theta_i="0:90:10", rays=1000, chunk_size=1024)  # ~ms: under the 2 s threshold
     assert capsys.readouterr().err == ""
-    monkeypatch.setattr(sweeps, "_PROGRESS_AFTER_S", 0.0)  # now every sweep counts as slow
+    monkeypatch.setattr(progress, "_PROGRESS_AFTER_S", 0.0)  # now every sweep counts as slow
     vm.sweep(diamond, theta_i="0:90:10", rays=1000, chunk_size=1024)
     assert "sweep" in capsys.readouterr().err
 
@@ -242,9 +242,9 @@ def test_two_stage_sweep_sizes_each_reading_and_matches_measure(mi, tmp_path):
     dataset = result.to_dataset()
     np.testing.assert_array_equal(dataset["transmittance_upper"].values, result.interval("transmittance")[1])
     assert dataset["reflectance_lower"].attrs["clopper_pearson_delta"] == 0.05
-    for suffix in (".csv", ".json"):
+    for suffix, column in ((".csv", "absorptance_upper"), (".json", "absorptance_interval")):
         path = result.write(tmp_path / f"two_stage{suffix}")
-        assert "absorptance_upper" in path.read_text()
+        assert column in path.read_text()
 
 
 def test_sweep_warns_when_the_certificate_does_not_hold(mi):

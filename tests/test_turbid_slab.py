@@ -157,8 +157,8 @@ def test_diffuse_beam_gives_the_hemispherical_fresnel_reflectance(mi):
 
 
 def test_diffuse_beam_directions_are_cosine_distributed(mi):
-    from virtspec_mi.instrument import find_instrument
-    from virtspec_mi.plugins.integrators.spectrophotometer import ReadingPlan, trace_rays
+    from virtspec_mi.scene import find_instrument
+    from virtspec_mi.kernel.tracer import ReadingPlan, trace_rays
 
     instrument = find_instrument(vm.instrument_scene({"type": "simple_dielectric"}))
     for sampling in ("jittered", "random"):

@@ -4,7 +4,7 @@ virtspec-mi: a virtual spectrophotometer built as Mitsuba 3 plugins
 
 Certified reflectance / transmittance / absorptance readings of Mitsuba BSDFs
 (Baranoski, Rokne & Xu 2001). Importing the package is cheap; the first use of a
-Mitsuba-backed name (``measure``, ``Reading``, ``instrument_scene`` …) selects a
+Mitsuba-backed name (``measure``, ``sweep``, ``instrument_scene`` …) selects a
 working libLLVM, the ``llvm_ad_spectral`` variant and registers the plugins.
 """
 
@@ -18,7 +18,10 @@ __version__ = "0.1.0"
 __all__ = [
     "__version__",
     "measure",
-    "Reading",
+    "sweep",
+    "read_result",
+    "fluctuation",
+    "Result",
     "Settings",
     "InstrumentGeometry",
     "instrument_scene",
@@ -28,28 +31,27 @@ __all__ = [
     "chebyshev_rays",
     "hoeffding_mu",
     "chebyshev_mu",
+    "BUDGETS",
     "mitsuba",
-    "sweep",
-    "SweepResult",
-    "fluctuation",
 ]
 
 _LAZY = {
-    "measure": "virtspec_mi.reading",
-    "Reading": "virtspec_mi.reading",
+    "measure": "virtspec_mi.api",
+    "sweep": "virtspec_mi.api",
+    "read_result": "virtspec_mi.api",
+    "fluctuation": "virtspec_mi.api",
+    "Result": "virtspec_mi.result",
     "Settings": "virtspec_mi.settings",
     "InstrumentGeometry": "virtspec_mi.geometry",
-    "instrument_scene": "virtspec_mi.instrument",
-    "load_scene": "virtspec_mi.instrument",
-    "find_instrument": "virtspec_mi.instrument",
+    "instrument_scene": "virtspec_mi.scene",
+    "load_scene": "virtspec_mi.scene",
+    "find_instrument": "virtspec_mi.scene",
     "hoeffding_rays": "virtspec_mi.bounds",
     "chebyshev_rays": "virtspec_mi.bounds",
     "hoeffding_mu": "virtspec_mi.bounds",
     "chebyshev_mu": "virtspec_mi.bounds",
+    "BUDGETS": "virtspec_mi.budgets",
     "mitsuba": "virtspec_mi.runtime",
-    "sweep": "virtspec_mi.sweeps",
-    "SweepResult": "virtspec_mi.sweeps",
-    "fluctuation": "virtspec_mi.sweeps",
 }
 
 

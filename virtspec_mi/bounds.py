@@ -37,21 +37,20 @@ from __future__ import annotations
 import functools
 import math
 from dataclasses import dataclass
-from typing import Callable, Sequence
+from typing import Sequence
 
 import numpy as np
 
-from virtspec_mi.settings import check_delta, check_mu, check_rays
+from virtspec_mi.checks import check_delta, check_mu, check_rays
 
 __all__ = [
-    "BOUNDS",
     "chebyshev_rays",
     "hoeffding_rays",
     "chebyshev_mu",
     "hoeffding_mu",
-    "BOUND_NAMES",
     "exact_rays",
-    "rays_for_bound",
+    "exact_mu",
+    "EXACT_MU_MAX_RAYS",
     "miss_probability",
     "max_miss_probability",
     "Table1Row",
@@ -225,27 +224,38 @@ def _exact_rays(mu: float, delta: float, lo: float, hi: float) -> int:
     return start(j)
 
 
-BOUNDS: dict[str, Callable[[float, float], int]] = {
-    "hoeffding": hoeffding_rays,
-    "chebyshev": chebyshev_rays,
-    "exact": exact_rays,
-}
-"""Fixed ray-budget rules by name; ``"hoeffding"`` (eq. 23) is the default."""
-
-BOUND_NAMES: tuple[str, ...] = (*BOUNDS, "two-stage")
-"""Every ray-budget rule: the fixed ones of :data:`BOUNDS` and the adaptive ``"two-stage"``
-(:mod:`virtspec_mi.twostage`: a pilot batch sizes a fresh second batch per reading)."""
+EXACT_MU_MAX_RAYS: int = 20_000
+"""Largest N for which :func:`exact_mu` inverts the exact law by bisection (≤ 0.5 s);
+above it the Hoeffding tolerance (eq. 19), valid for any N, is returned instead."""
 
 
-def rays_for_bound(bound: str, mu: float, delta: float) -> int:
-    """Rays per reading under the named fixed rule of :data:`BOUNDS`."""
+@functools.lru_cache(maxsize=1024)
+def exact_mu(rays: int, delta: float) -> float:
+    """
+    Tolerance μ that ``rays`` rays guarantee at δ under the exact binomial law: the
+    smallest μ (to 10⁻⁶ relative, rounded up) with ``max_miss_probability(N, μ) ≤ δ``,
+    i.e. ``P(|m/N − ρ| ≥ μ) ≤ δ`` for every ρ. The miss probability falls as μ grows,
+    so bisection finds it. For N above :data:`EXACT_MU_MAX_RAYS` the bisection would
+    cost seconds; Hoeffding's μ (eq. 19), which holds for every N and every ρ and is at
+    most ~25 % larger, is returned then.
 
-    if bound == "two-stage":
-        raise ValueError("bound 'two-stage' sizes each reading from a pilot batch (virtspec_mi.twostage); "
-                         f"rays_for_bound takes a fixed rule: one of {sorted(BOUNDS)}")
-    if bound not in BOUNDS:
-        raise ValueError(f"bound must be one of {sorted(BOUND_NAMES)} (got {bound!r})")
-    return BOUNDS[bound](mu, delta)
+    References
+    ----------
+    anchors.md §2(e) (exact failure probability); Baranoski et al. (2001), eq. (19).
+    """
+
+    rays, delta = check_rays(rays, math.inf), check_delta(delta)
+    upper = hoeffding_mu(rays, delta)
+    if rays > EXACT_MU_MAX_RAYS or upper >= 0.5:
+        return upper
+    lower = 0.0
+    while upper - lower > 1e-6 * upper:
+        middle = 0.5 * (lower + upper)
+        if max_miss_probability(rays, middle) <= delta:
+            upper = middle
+        else:
+            lower = middle
+    return upper
 
 
 def miss_probability(rays: int, rho: float, mu: float) -> float:

@@ -55,7 +55,8 @@ def build_parser() -> argparse.ArgumentParser:
     sweep.add_argument("--quiet", action="store_true", help="no progress bar and no summary")
 
     colour = commands.add_parser("colour", help="CIE XYZ, L*a*b*, sRGB of a saved spectrum")
-    colour.add_argument("file", help="sweep file (.nc, .csv, .json) or colour-science CSV spectra")
+    colour.add_argument("file", help="result file (.nc, .csv, .json; also `measure --json` output) or "
+                                     "colour-science CSV spectra")
     colour.add_argument("--theta-i", type=float, help="angle of the sweep to use (needed if it has several)")
     colour.add_argument("--quantity", default="reflectance", help="reflectance (default) or transmittance")
     colour.add_argument("--illuminant", default="D65", help="colour.SDS_ILLUMINANTS name (default D65)")
@@ -65,29 +66,41 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def _measurement_options(parser: argparse.ArgumentParser, sweep: bool) -> None:
-    """The options shared by ``measure`` and ``sweep``."""
+    """
+    One flag per field of :class:`~virtspec_mi.settings.Settings` (``--theta-i`` …): the
+    choices, defaults and help come from the field; values go to ``Settings`` as given
+    (it validates them). A flag left out takes the scene's value, else the default.
+    """
 
-    if sweep:
-        parser.add_argument("--theta-i", nargs="+", required=True,
-                            help="polar incidence angles, degrees in [0, 90]: numbers and start:stop:step ranges")
-    else:
-        parser.add_argument("--theta-i", type=float, help="polar incidence angle, degrees in [0, 90]")
-    parser.add_argument("--phi-i", type=float, help="azimuthal incidence angle, degrees")
-    parser.add_argument("--wavelengths", nargs="+",
-                        help="wavelengths in nm: numbers and start:stop:step ranges")
-    parser.add_argument("--mu", type=float, help="certified tolerance, 0 < mu < 0.5 (default 0.005)")
-    parser.add_argument("--delta", type=float, help="failure probability, 0 < delta < 1 (default 0.01)")
-    parser.add_argument("--rays", type=int, help="rays per reading (default: from the bound)")
-    parser.add_argument("--bound", choices=["hoeffding", "chebyshev", "exact", "two-stage"],
-                        help="ray budget rule (default hoeffding, eq. 23)")
-    parser.add_argument("--joint", action="store_true", default=None,
-                        help="certify reflectance and transmittance together (each at delta/2)")
-    parser.add_argument("--pilot-rays", type=int, help="two-stage pilot rays (default ceil(10/mu))")
-    parser.add_argument("--pilot-delta", type=float, help="two-stage pilot failure probability (default delta/10)")
-    parser.add_argument("--beam", choices=["conical", "collimated", "diffuse"],
-                        help="beam geometry (diffuse: cosine-weighted over the hemisphere, theta_i unused)")
-    parser.add_argument("--sampling", choices=["jittered", "random", "concentric"], help="disk sampling")
-    parser.add_argument("--seed", type=int, help="random seed (default 0)")
+    from dataclasses import fields
+
+    from virtspec_mi.settings import Settings
+
+    for item in fields(Settings):
+        flag = "--" + item.name.replace("_", "-")
+        meta = item.metadata
+        default = f"default: the scene's, else {item.default!r}" if item.default is not None else "default: the scene's"
+        if item.name == "joint":
+            parser.add_argument(flag, action="store_true", default=None, help=f"{meta['help']} ({default})")
+            continue
+        if item.name == "theta_i" and sweep:
+            parser.add_argument(flag, nargs="+", help="polar incidence angles, degrees in [0, 90]: numbers and "
+                                                      "start:stop:step ranges (default: the scene's, else 0)")
+            continue
+        choices = meta["choices"]
+        described = "; ".join(f"{k}: {v}" for k, v in choices.items()) if choices else ""
+        parser.add_argument(flag, nargs="+" if item.name == "wavelengths" else None,
+                            choices=list(choices) if choices else None,
+                            help=f"{meta['help']}{' (' + described + ')' if described else ''} ({default})")
+
+
+def _settings(args: argparse.Namespace) -> dict:
+    """The settings given on the command line (lists joined into one string)."""
+
+    from virtspec_mi.settings import SETTING_NAMES
+
+    values = {name: getattr(args, name, None) for name in SETTING_NAMES}
+    return {name: " ".join(value) if isinstance(value, list) else value for name, value in values.items()}
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -116,24 +129,9 @@ def main(argv: Sequence[str] | None = None) -> int:
 
 
 def _measure(args: argparse.Namespace) -> int:
-    from virtspec_mi.reading import measure
+    from virtspec_mi.api import measure
 
-    reading = measure(
-        args.scene,
-        theta_i=args.theta_i,
-        phi_i=args.phi_i,
-        wavelengths=" ".join(args.wavelengths) if args.wavelengths else None,
-        mu=args.mu,
-        delta=args.delta,
-        rays=args.rays,
-        beam=args.beam,
-        sampling=args.sampling,
-        seed=args.seed,
-        bound=args.bound,
-        joint=args.joint,
-        pilot_rays=args.pilot_rays,
-        pilot_delta=args.pilot_delta,
-    )
+    reading = measure(args.scene, **_settings(args))
     print(json.dumps(reading.as_dict()) if args.json else reading.summary())
     return 0
 
@@ -141,21 +139,16 @@ def _measure(args: argparse.Namespace) -> int:
 def _sweep(args: argparse.Namespace) -> int:
     from pathlib import Path
 
+    from virtspec_mi.api import fluctuation, sweep
     from virtspec_mi.plot import check_figure_path, plot_densities, plot_sweep
     from virtspec_mi.results_io import csv_text, result_format
-    from virtspec_mi.sweeps import fluctuation, sweep
 
     out = Path(args.out) if args.out else None
     if out is not None:
         result_format(out)  # a bad suffix fails before any tracing
     check_figure_path(args.plot)
-    kwargs = dict(
-        theta_i=" ".join(args.theta_i),
-        wavelengths=" ".join(args.wavelengths) if args.wavelengths else None,
-        phi_i=args.phi_i, mu=args.mu, delta=args.delta, beam=args.beam, sampling=args.sampling,
-        seed=args.seed, bound=args.bound, joint=args.joint, pilot_rays=args.pilot_rays,
-        pilot_delta=args.pilot_delta, progress=False if args.quiet else None,
-    )
+    kwargs = {**_settings(args), "progress": False if args.quiet else None}
+    given_rays = kwargs.pop("rays")
 
     def run(rays: int | None, path: Path | None) -> object:
         checkpoint = path.with_name(path.name + ".partial.json") if path is not None else None
@@ -165,7 +158,7 @@ def _sweep(args: argparse.Namespace) -> int:
         return result
 
     if not args.densities:
-        result = run(args.rays, out)
+        result = run(given_rays, out)
         if args.plot:
             plot_sweep(result, args.plot)
         # no file: the CSV table on stdout and the summary on stderr, so the table can be piped
@@ -176,10 +169,10 @@ def _sweep(args: argparse.Namespace) -> int:
                 if path:
                     print(f"{label}: {path}", file=report)
         if out is None:
-            print(csv_text(result), end="")
+            print(csv_text(result.to_dataset()), end="")
         return 0
 
-    if args.rays is not None:
+    if given_rays is not None:
         raise ValueError("--rays and --densities exclude each other (densities set N = 10^d)")
     results, deltas = [], [float("nan")]
     print(f"{'log10 N':>8} {'N':>12} {'seconds':>9} {'Delta (eq. 24)':>15}")
@@ -199,22 +192,19 @@ def _sweep(args: argparse.Namespace) -> int:
 def _colour(args: argparse.Namespace) -> int:
     from pathlib import Path
 
+    from virtspec_mi.api import read_result
     from virtspec_mi.colorimetry import colorimetry
+    from virtspec_mi.results_io import is_result_csv, read_spectra_csv
 
     path = Path(args.file)
-    if path.suffix.lower() == ".csv" and path.is_file() and not path.read_text().startswith("# virtspec-mi sweep"):
-        from virtspec_mi.results_io import read_spectra_csv
-
+    if path.suffix.lower() == ".csv" and path.is_file() and not is_result_csv(path):
         spectra = read_spectra_csv(path)
         if args.quantity not in spectra:
             raise ValueError(f"quantity must be one of the file's columns {sorted(spectra)} (got {args.quantity!r})")
         sd = spectra[args.quantity]
         heading = f"{args.quantity} of {path}"
     else:
-        from virtspec_mi.results_io import read_sweep
-
-        result = read_sweep(path)
-        sd = result.to_sd(args.quantity, args.theta_i)
+        sd = read_result(path).to_sd(args.quantity, args.theta_i)
         heading = f"{args.quantity} of {path} ({sd.name})"
     colour = colorimetry(sd, args.illuminant, args.observer)
     print(heading)

@@ -3,7 +3,7 @@ Colorimetry of measured spectra through colour-science
 ======================================================
 
 - :func:`spectral_distribution` / :func:`multi_spectral_distributions`: a
-  :class:`~virtspec_mi.sweeps.SweepResult` at one θi as ``colour.SpectralDistribution``
+  :class:`~virtspec_mi.result.Result` (one reading or a sweep) at one θi as ``colour.SpectralDistribution``
   (one quantity) or ``colour.MultiSpectralDistributions`` (reflectance,
   transmittance, absorptance).
 - :func:`colorimetry`: CIE XYZ, CIE L*a*b* and sRGB of a reflectance or
@@ -28,6 +28,8 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
+
+from virtspec_mi.counts import QUANTITIES
 
 __all__ = [
     "DEFAULT_ILLUMINANT",
@@ -104,6 +106,7 @@ def spectral_distribution(result: Any, quantity: str = "reflectance", theta_i: f
 
     import colour
 
+    result = result.as_grid()
     column = _theta_column(result, theta_i)
     if len(result.wavelengths) < 2:
         raise ValueError(f"a spectrum needs at least two wavelengths (the sweep has {len(result.wavelengths)})")
@@ -119,8 +122,7 @@ def multi_spectral_distributions(result: Any, theta_i: float | None = None) -> A
 
     import colour
 
-    from virtspec_mi.sweeps import QUANTITIES
-
+    result = result.as_grid()
     column = _theta_column(result, theta_i)
     order = np.argsort(result.wavelengths)
     values = np.stack([result.quantity(q)[:, column][order] for q in QUANTITIES], axis=1)
@@ -135,8 +137,9 @@ def colorimetry(sd: Any, illuminant: str = DEFAULT_ILLUMINANT, observer: str = D
     Parameters
     ----------
     sd
-        A ``colour.SpectralDistribution`` (e.g. ``SweepResult.to_sd()``), at least two
-        wavelengths inside the observer's range.
+        A ``colour.SpectralDistribution`` (e.g. ``result.to_sd()``), at least two
+        wavelengths inside the observer's range, or a :class:`~virtspec_mi.result.Result`
+        at one θi (its reflectance spectrum).
     illuminant
         A name of ``colour.SDS_ILLUMINANTS`` (default ``"D65"``).
     observer
@@ -145,6 +148,8 @@ def colorimetry(sd: Any, illuminant: str = DEFAULT_ILLUMINANT, observer: str = D
 
     import colour
 
+    if hasattr(sd, "to_sd"):  # a Result: its reflectance spectrum
+        sd = sd.to_sd()
     if illuminant not in colour.SDS_ILLUMINANTS:
         raise ValueError(f"illuminant must be a name of colour.SDS_ILLUMINANTS, e.g. D65, A, D50 (got {illuminant!r})")
     if observer not in colour.MSDS_CMFS:

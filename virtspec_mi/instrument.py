@@ -1,51 +1,33 @@
 """
-Scene ↔ instrument
-==================
+The instrument inside a loaded scene
+====================================
 
-A virtspec-mi scene is an ordinary Mitsuba scene holding two ``disk`` shapes with
-ids ``emitter`` and ``specimen`` (the specimen carries the BSDF under test), and
-optionally a ``spectrophotometer`` integrator with the measurement settings and a
-placeholder sensor (``mi.render`` needs one; the instrument ignores it).
+A virtspec-mi scene is an ordinary Mitsuba scene holding two ``disk`` shapes with ids
+``emitter`` and ``specimen`` (the specimen carries the BSDF under test), and optionally
+a ``spectrophotometer`` integrator with the measurement settings.
+:func:`read_instrument` reads the geometry from the two disks of a *loaded* scene: r₁
+and r₂ are their radii, D the distance between their centres; the specimen's
+``to_world`` defines the measurement frame (normal = upper hemisphere, its local x
+axis = φi = 0). The emitter's own position only sets D: each reading rotates it to
+(θi, φi) about the specimen centre. Loading scenes from XML or dicts is
+:mod:`virtspec_mi.scene`'s job.
 
-- :func:`load_scene` accepts an XML path, a scene dict or a loaded ``mi.Scene`` and
-  turns Mitsuba's loader errors into messages that name the problem.
-- :func:`find_instrument` reads the geometry from the two disks: r₁ and r₂ are their
-  radii, D the distance between their centres; the specimen's ``to_world`` defines
-  the measurement frame (normal = upper hemisphere, its local x axis = φi = 0). The
-  emitter's own position only sets D: each reading rotates it to (θi, φi) about the
-  specimen centre.
-- :func:`instrument_scene` builds the paper's instrument (r₁ = 8, r₂ = 12.5,
-  D = 100, in mm) around any BSDF dict.
+References
+----------
+Baranoski et al. (2001), Fig. 1 and Sect. 3.2.
 """
 
 from __future__ import annotations
 
 import math
-import os
 from dataclasses import dataclass
-from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from virtspec_mi.geometry import (
-    PAPER_DISTANCE,
-    PAPER_EMITTER_RADIUS,
-    PAPER_SPECIMEN_RADIUS,
-    InstrumentGeometry,
-)
-from virtspec_mi.runtime import mitsuba
+from virtspec_mi.geometry import InstrumentGeometry
 
-__all__ = [
-    "EMITTER_ID",
-    "SPECIMEN_ID",
-    "SceneError",
-    "Instrument",
-    "load_scene",
-    "find_instrument",
-    "instrument_scene",
-    "placeholder_sensor",
-]
+__all__ = ["EMITTER_ID", "SPECIMEN_ID", "SceneError", "Instrument", "read_instrument"]
 
 EMITTER_ID: str = "emitter"
 SPECIMEN_ID: str = "specimen"
@@ -74,31 +56,11 @@ class Instrument:
         return integrator if hasattr(integrator, "settings") else None
 
 
-def load_scene(scene: Any) -> Any:
-    """A loaded ``mi.Scene`` from an XML path, a scene dict or an ``mi.Scene``."""
+def read_instrument(scene: Any) -> Instrument:
+    """Locate the emitter and specimen disks of a loaded ``mi.Scene`` and read the geometry."""
 
-    mi = mitsuba()
-    if isinstance(scene, mi.Scene):
-        return scene
-    try:
-        if isinstance(scene, (str, os.PathLike)):
-            path = Path(scene)
-            if not path.is_file():
-                raise SceneError(f"scene file not found: {path}")
-            return mi.load_file(str(path))
-        if isinstance(scene, dict):
-            return mi.load_dict(scene)
-    except SceneError:
-        raise
-    except Exception as error:  # Mitsuba raises RuntimeError/ValueError with its parser text
-        raise SceneError(f"could not load scene {_describe(scene)}: {_clean(error)}") from error
-    raise SceneError(f"scene must be an XML path, a dict or a mitsuba Scene (got {type(scene).__name__})")
+    import mitsuba as mi
 
-
-def find_instrument(scene: Any) -> Instrument:
-    """Locate the emitter and specimen disks of ``scene`` and read the geometry."""
-
-    scene = load_scene(scene)
     shapes = {shape.id(): shape for shape in scene.shapes()}
     missing = [name for name in (EMITTER_ID, SPECIMEN_ID) if name not in shapes]
     if missing:
@@ -113,7 +75,7 @@ def find_instrument(scene: Any) -> Instrument:
             f"the instrument traces only the '{EMITTER_ID}' and '{SPECIMEN_ID}' disks; remove the "
             f"other shapes {others} (they would be silently ignored)"
         )
-    params = mitsuba().traverse(scene)
+    params = mi.traverse(scene)
     emitter_matrix = _disk_matrix(params, shapes[EMITTER_ID], EMITTER_ID)
     specimen_matrix = _disk_matrix(params, shapes[SPECIMEN_ID], SPECIMEN_ID)
     r1, _ = _disk_radius_and_frame(emitter_matrix, EMITTER_ID)
@@ -123,50 +85,6 @@ def find_instrument(scene: Any) -> Instrument:
         raise SceneError("the emitter and specimen disks share their centre: distance D must be > 0")
     bsdf = shapes[SPECIMEN_ID].bsdf()
     return Instrument(scene, shapes[SPECIMEN_ID], bsdf, frame, InstrumentGeometry(r1, r2, distance))
-
-
-def instrument_scene(
-    bsdf: dict,
-    *,
-    emitter_radius: float = PAPER_EMITTER_RADIUS,
-    specimen_radius: float = PAPER_SPECIMEN_RADIUS,
-    distance: float = PAPER_DISTANCE,
-    integrator: dict | None = None,
-) -> dict:
-    """
-    A scene dict of the paper's instrument around ``bsdf`` (a Mitsuba BSDF dict).
-
-    The specimen disk lies in z = 0 with normal +z; the emitter disk faces it from
-    (0, 0, D). ``integrator`` (a dict of ``spectrophotometer`` parameters) is added
-    when given.
-    """
-
-    geometry = InstrumentGeometry(emitter_radius, specimen_radius, distance)
-    mi = mitsuba()
-    scene: dict[str, Any] = {
-        "type": "scene",
-        EMITTER_ID: {
-            "type": "disk",
-            "to_world": mi.ScalarTransform4f().translate([0.0, 0.0, geometry.distance])
-            @ mi.ScalarTransform4f().scale(geometry.emitter_radius)
-            @ mi.ScalarTransform4f().rotate([1.0, 0.0, 0.0], 180.0),
-        },
-        SPECIMEN_ID: {
-            "type": "disk",
-            "to_world": mi.ScalarTransform4f().scale(geometry.specimen_radius),
-            "bsdf": bsdf,
-        },
-        "readout": placeholder_sensor(),
-    }
-    if integrator is not None:
-        scene["integrator"] = {"type": "spectrophotometer", **integrator}
-    return scene
-
-
-def placeholder_sensor() -> dict:
-    """A 1×1 sensor: ``mi.render`` insists on one; the spectrophotometer ignores it."""
-
-    return {"type": "perspective", "film": {"type": "hdrfilm", "width": 1, "height": 1}}
 
 
 def _disk_matrix(params: Any, shape: Any, name: str) -> np.ndarray:
@@ -197,12 +115,3 @@ def _disk_radius_and_frame(matrix: np.ndarray, name: str) -> tuple[float, np.nda
     frame = np.eye(4)
     frame[:3, 0], frame[:3, 1], frame[:3, 2], frame[:3, 3] = x, np.cross(normal, x), normal, matrix[:3, 3]
     return ra, frame
-
-
-def _describe(scene: Any) -> str:
-    return f"'{scene}'" if isinstance(scene, (str, os.PathLike)) else f"({type(scene).__name__})"
-
-
-def _clean(error: Exception) -> str:
-    text = str(error).strip()
-    return text.splitlines()[-1] if text else type(error).__name__

@@ -22,7 +22,7 @@ from typing import Any
 
 import numpy as np
 
-from virtspec_mi.settings import check_delta
+from virtspec_mi.checks import check_delta
 
 __all__ = ["clopper_pearson"]
 

@@ -4,7 +4,8 @@ Plots of sweeps with matplotlib (PNG and SVG)
 
 - :func:`plot_sweep`: a reading against θi (the paper's Fig. 5) or against
   wavelength (a spectrum), one curve per wavelength (resp. per θi) and per sweep,
-  each with its certified ±μ band.
+  each with the band of its certified tolerance (the μ its rays guarantee; none
+  where a reading is not certified).
 - :func:`plot_densities`: sweeps at successive ray densities N = 10^d side by side
   (Fig. 5), their fluctuation Δ of eq. (24) (Fig. 6a) and their seconds (Fig. 6b).
 
@@ -41,6 +42,7 @@ def check_figure_path(path: str | os.PathLike | None) -> Path | None:
 
 
 def _draw(axes: Any, result: Any, quantity: str, label: str | None) -> None:
+    result = result.as_grid()
     values = result.quantity(quantity)
     mu = result.certified_mu
     by_angle = len(result.theta_i) > 1 or len(result.wavelengths) == 1
@@ -55,7 +57,7 @@ def _draw(axes: Any, result: Any, quantity: str, label: str | None) -> None:
         axes.fill_between(x[order], (curve - band)[order], (curve + band)[order], color=line.get_color(),
                           alpha=0.2, lw=0)
     axes.set_xlabel("θi (degrees)" if by_angle else "wavelength (nm)")
-    axes.set_ylabel(f"{quantity} (band: certified ±μ at δ = {result.settings.delta:g})")
+    axes.set_ylabel(f"{quantity} (band: ± the certified tolerance at δ = {result.interval_delta:g})")
 
 
 def plot_sweep(results: Any, path: str | os.PathLike | None = None, *, quantity: str = "reflectance",
@@ -76,6 +78,7 @@ def plot_sweep(results: Any, path: str | os.PathLike | None = None, *, quantity:
     axes = figure.add_subplot()
     for result, label in zip(results, labels):
         _draw(axes, result, quantity, label)
+    results = [r.as_grid() for r in results]
     if sum(len(r.theta_i if len(r.theta_i) == 1 else r.wavelengths) for r in results) <= 12:
         axes.legend(fontsize="small")
     axes.grid(alpha=0.3)

@@ -1,287 +1,163 @@
 """
-Measurement settings and the one place that validates them
-==========================================================
+Measurement settings: defined once, validated once
+==================================================
 
-Every user-facing entry point (the integrator's XML/dict parameters, :func:`measure`,
-the CLI) builds a :class:`Settings`; its checks name the parameter and the allowed
-range, so bad input never reaches a kernel as a crash or a NaN.
+:class:`Settings` is the one definition of the 14 settings of a measurement. Each
+field carries its default, its check (from :mod:`virtspec_mi.checks`, naming the
+parameter and its allowed range) and its help text; everything else is derived from
+these fields:
 
-Defaults are the paper's: μ = 0.005, δ = 0.01, the exponential Chebyshev bound,
-conical beam, jittered sampling, λ = 551 nm, θi = φi = 0°.
+- :func:`virtspec_mi.measure` and :func:`virtspec_mi.sweep` take them as keywords
+  (:func:`settings_keywords` gives their signatures);
+- the ``spectrophotometer`` integrator reads them as XML/dict parameters;
+- the command line makes one ``--flag`` per field (choices, defaults and help from
+  the field).
+
+Validation happens once, when a :class:`Settings` is built: code below this boundary
+takes validated values. Values may arrive as strings (XML, command line): the checks
+convert them. Defaults are the paper's: μ = 0.005, δ = 0.01, the exponential Chebyshev
+bound (eq. 23), conical beam, jittered sampling (eq. 4), λ = 551 nm, θi = φi = 0°.
+
+References
+----------
+Baranoski et al. (2001), eqs. (3), (4), (23); Sect. 3.2.
 """
 
 from __future__ import annotations
 
+import inspect
 import math
-from dataclasses import dataclass, replace
-from typing import Any, Iterable
+from dataclasses import dataclass, field, fields, replace
+from typing import Any, Callable
 
-__all__ = [
-    "BEAMS",
-    "SAMPLINGS",
-    "MAX_RAYS",
-    "Settings",
-    "check_mu",
-    "check_delta",
-    "check_rays",
-    "check_theta_i",
-    "check_positive",
-    "parse_wavelengths",
-    "parse_theta_i",
-    "check_wavelength_range",
-]
+from virtspec_mi.budgets import BUDGETS, RayBudget
+from virtspec_mi.checks import (
+    check_delta,
+    check_mu,
+    check_rays,
+    check_theta_i,
+    number,
+    parse_wavelengths,
+)
 
-BEAMS: tuple[str, ...] = ("conical", "collimated", "diffuse")
-"""``conical``: conical-hemispherical (disk to disk); ``collimated``: directional-hemispherical;
-``diffuse``: hemispherical-hemispherical (cosine-distributed incidence, θi and φi unused)."""
+__all__ = ["BEAMS", "SAMPLINGS", "Settings", "SETTING_NAMES", "settings_keywords", "with_settings"]
 
-SAMPLINGS: tuple[str, ...] = ("jittered", "random", "concentric")
-"""Disk sampling strategies: eq. (4) stratified polar warp, eq. (3) square + rejection, Shirley–Chiu."""
+BEAMS: dict[str, str] = {
+    "conical": "conical-hemispherical: disk to disk",
+    "collimated": "directional-hemispherical: every ray along the incidence direction",
+    "diffuse": "hemispherical-hemispherical: cosine-distributed incidence, theta_i and phi_i unused",
+}
+"""Beam geometries and what each measures."""
 
-MAX_RAYS: int = 2**32 - 1
-"""Most rays one reading may use (its rays are numbered with 32 bits)."""
-
-
-def _number(name: str, value: Any) -> float:
-    if isinstance(value, bool) or not isinstance(value, (int, float)):
-        try:
-            value = float(value)
-        except (TypeError, ValueError):
-            raise ValueError(f"{name} must be a number (got {value!r})") from None
-    value = float(value)
-    if math.isnan(value):
-        raise ValueError(f"{name} must be a number (got NaN)")
-    return value
+SAMPLINGS: dict[str, str] = {
+    "jittered": "stratified polar warp, eq. (4)",
+    "random": "square and rejection, eq. (3)",
+    "concentric": "Shirley-Chiu concentric map",
+}
+"""Disk sampling strategies."""
 
 
-def check_mu(mu: Any) -> float:
-    """μ, the certified tolerance: 0 < μ < 0.5."""
-
-    mu = _number("mu", mu)
-    if not 0.0 < mu < 0.5:
-        raise ValueError(f"mu must satisfy 0 < mu < 0.5 (got {mu:g})")
-    return mu
-
-
-def check_delta(delta: Any) -> float:
-    """δ, the allowed failure probability: 0 < δ < 1."""
-
-    delta = _number("delta", delta)
-    if not 0.0 < delta < 1.0:
-        raise ValueError(f"delta must satisfy 0 < delta < 1 (got {delta:g})")
-    return delta
+def _choice(name: str, choices: dict[str, Any]) -> Callable[[Any], str]:
+    def check(value: Any) -> str:
+        if value not in choices:
+            raise ValueError(f"{name} must be one of {', '.join(choices)} (got {value!r})")
+        return value
+    return check
 
 
-def check_rays(rays: Any, maximum: float = MAX_RAYS) -> int:
-    """Rays per reading: a whole number, 1 ≤ rays ≤ ``maximum`` (2³² − 1 for a reading)."""
-
-    if isinstance(rays, bool) or not float(_number("rays", rays)).is_integer():
-        raise ValueError(f"rays must be a whole number >= 1 (got {rays!r})")
-    rays = int(float(rays))
-    if not 1 <= rays <= maximum:
-        upper = f" <= {int(maximum)}" if math.isfinite(maximum) else ""
-        raise ValueError(f"rays must satisfy 1 <= rays{upper} (got {rays})")
-    return rays
+def _check_phi(value: Any) -> float:
+    phi = number("phi_i", value)
+    if not math.isfinite(phi):
+        raise ValueError(f"phi_i must be a finite number of degrees (got {phi:g})")
+    return phi
 
 
-def check_theta_i(theta_i: Any) -> float:
-    """Polar incidence angle in degrees: 0 ≤ θi ≤ 90."""
-
-    theta_i = _number("theta_i", theta_i)
-    if not 0.0 <= theta_i <= 90.0:
-        raise ValueError(f"theta_i must satisfy 0 <= theta_i <= 90 degrees (got {theta_i:g})")
-    return theta_i
-
-
-def check_positive(name: str, value: Any) -> float:
-    """A length that must be finite and > 0 (radii, distance)."""
-
-    value = _number(name, value)
-    if not (value > 0.0 and math.isfinite(value)):
-        raise ValueError(f"{name} must be a finite number > 0 (got {value:g})")
-    return value
+def _check_joint(value: Any) -> bool:
+    if isinstance(value, str) and value.lower() in ("true", "false"):
+        return value.lower() == "true"
+    if not isinstance(value, (bool, int)) or value not in (0, 1):
+        raise ValueError(f"joint must be true or false (got {value!r})")
+    return bool(value)
 
 
-def parse_wavelengths(wavelengths: Any) -> tuple[float, ...]:
-    """
-    Wavelengths in nm, each finite and > 0, at least one.
-
-    Accepts a number, a sequence, or a string of comma/space separated numbers and
-    ``start:stop:step`` ranges (stop included), e.g. ``"400:700:10"`` or ``"465, 551"``.
-    """
-
-    values = _parse_numbers("wavelengths", wavelengths, "nm")
-    if not values:
-        raise ValueError("wavelengths must hold at least one wavelength (got none)")
-    for value in values:
-        if not (value > 0.0 and math.isfinite(value)):
-            raise ValueError(f"wavelengths must be finite and > 0 nm (got {value:g})")
-    return tuple(values)
+def _check_pilot_delta(value: Any) -> float:
+    return number("pilot_delta", value)  # its range, 0 < pilot_delta < delta, needs delta: see __post_init__
 
 
-def check_wavelength_range(wavelengths: Iterable[float], span: tuple[float, float] | None, specimen: str) -> None:
-    """
-    Refuse wavelengths outside ``span`` = (lowest, highest) nm of a specimen that declares
-    one (a BSDF attribute ``wavelength_range``, e.g. the ABM leaves' data range); ``None``
-    accepts any.
-    """
-
-    if span is None:
-        return
-    low, high = (float(v) for v in span)
-    outside = [w for w in wavelengths if not low <= w <= high]
-    if outside:
-        raise ValueError(
-            f"wavelengths must satisfy {low:g} <= wavelength <= {high:g} nm for the specimen "
-            f"{specimen} (got {', '.join(f'{w:g}' for w in outside[:5])}{' ...' if len(outside) > 5 else ''})"
-        )
+def _whole(name: str, low: int, high: int, shown: str) -> Callable[[Any], int]:
+    def check(value: Any) -> int:
+        as_float = None if isinstance(value, bool) else number(name, value)
+        if as_float is None or not (as_float.is_integer() and low <= as_float <= high):
+            raise ValueError(f"{name} must be a whole number with {shown} (got {value!r})")
+        return int(as_float)
+    return check
 
 
-def parse_theta_i(theta_i: Any) -> tuple[float, ...]:
-    """
-    Polar incidence angles of a sweep in degrees, each 0 ≤ θi ≤ 90, at least one.
+def _setting(default: Any, check: Callable[[Any], Any], help: str, choices: dict | None = None) -> Any:
+    """A :class:`Settings` field: default, check and help text (the one definition)."""
 
-    Same forms as :func:`parse_wavelengths`, e.g. ``"0:90:1"`` (91 angles) or ``[0, 45]``.
-    """
-
-    values = _parse_numbers("theta_i", theta_i, "degrees")
-    if not values:
-        raise ValueError("theta_i must hold at least one angle (got none)")
-    return tuple(check_theta_i(value) for value in values)
-
-
-def _parse_numbers(name: str, value: Any, unit: str) -> list[float]:
-    """Numbers from a number, a sequence or a string of numbers and start:stop:step ranges."""
-
-    if isinstance(value, str):
-        values: list[float] = []
-        for token in value.replace(",", " ").split():
-            values.extend(_parse_range(token, name) if ":" in token else [_number(name, token)])
-        return values
-    if isinstance(value, (int, float)) and not isinstance(value, bool):
-        return [float(value)]
-    if isinstance(value, Iterable):
-        return [_number(name, v) for v in value]
-    raise ValueError(f"{name} must be numbers in {unit} (got {value!r})")
-
-
-def _parse_range(token: str, name: str = "wavelengths") -> list[float]:
-    parts = token.split(":")
-    if len(parts) != 3:
-        raise ValueError(f"{name} range must be start:stop:step (got {token!r})")
-    start, stop, step = (_number(name, p) for p in parts)
-    if not step > 0 or stop < start:
-        raise ValueError(f"{name} range {token!r} needs step > 0 and stop >= start")
-    count = int(math.floor((stop - start) / step + 1e-9)) + 1
-    return [start + i * step for i in range(count)]
+    return field(default=default, metadata={"check": check, "help": help, "choices": choices})
 
 
 @dataclass(frozen=True)
 class Settings:
     """
-    Everything that defines a reading besides the scene; validated on construction.
+    Everything that defines a measurement besides the scene; validated on construction.
 
-    Parameters
-    ----------
-    theta_i, phi_i
-        Incidence angles in degrees (θi ∈ [0, 90]; φi any finite value).
-    wavelengths
-        Wavelengths in nm (one reading per wavelength).
-    mu, delta
-        Certified tolerance and failure probability of each reading.
-    rays
-        Rays per reading; ``None`` takes them from ``bound`` with μ and δ.
-    bound
-        Ray-budget rule of :data:`virtspec_mi.bounds.BOUND_NAMES`: ``"hoeffding"`` (eq. 23,
-        default), ``"chebyshev"`` (eq. 15), ``"exact"`` or ``"two-stage"``.
-    pilot_rays, pilot_delta
-        Two-stage pilot size n₁ (default ⌈10/μ⌉) and its failure probability δ₁
-        (default δ/10), 0 < δ₁ < δ; see :mod:`virtspec_mi.twostage`.
-    joint
-        Certify reflectance and transmittance jointly (each at δ/2, Bonferroni) instead
-        of each on its own at δ.
-    beam, sampling
-        One of :data:`BEAMS` and :data:`SAMPLINGS`.
-    seed
-        Seed of the counter-based random numbers, 0 ≤ seed < 2³².
-    chunk_size
-        Rays per kernel launch (memory bound), ≥ 1024.
+    Every field is listed with its default, allowed values and meaning in
+    ``Settings.describe()`` (the same text the CLI's ``--help`` shows).
     """
 
-    theta_i: float = 0.0
-    phi_i: float = 0.0
-    wavelengths: tuple[float, ...] = (551.0,)
-    mu: float = 0.005
-    delta: float = 0.01
-    rays: int | None = None
-    bound: str = "hoeffding"
-    beam: str = "conical"
-    sampling: str = "jittered"
-    seed: int = 0
-    chunk_size: int = 1 << 22
-    pilot_rays: int | None = None
-    pilot_delta: float | None = None
-    joint: bool = False
+    theta_i: float = _setting(0.0, check_theta_i, "polar incidence angle, degrees in [0, 90]")
+    phi_i: float = _setting(0.0, _check_phi, "azimuthal incidence angle from the specimen's x axis, degrees")
+    wavelengths: tuple[float, ...] = _setting(
+        (551.0,), parse_wavelengths, "wavelengths in nm (> 0): numbers and start:stop:step ranges, e.g. 400:700:10")
+    mu: float = _setting(0.005, check_mu, "certified tolerance, 0 < mu < 0.5")
+    delta: float = _setting(0.01, check_delta, "failure probability, 0 < delta < 1")
+    rays: int | None = _setting(None, check_rays, "rays per reading, 1 ... 2**32 - 1 (overrides the bound)")
+    bound: str = _setting("hoeffding", _choice("bound", BUDGETS), "ray budget rule", BUDGETS)
+    joint: bool = _setting(False, _check_joint, "certify reflectance and transmittance together (each at delta/2)")
+    pilot_rays: int | None = _setting(None, check_rays, "two-stage pilot rays per reading (default ceil(10/mu))")
+    pilot_delta: float | None = _setting(
+        None, _check_pilot_delta, "two-stage pilot failure probability, 0 < pilot_delta < delta (default delta/10)")
+    beam: str = _setting("conical", _choice("beam", BEAMS), "beam geometry", BEAMS)
+    sampling: str = _setting("jittered", _choice("sampling", SAMPLINGS), "disk sampling", SAMPLINGS)
+    seed: int = _setting(0, _whole("seed", 0, 2**32 - 1, "0 <= seed < 2**32"), "seed of the random numbers")
+    chunk_size: int = _setting(
+        1 << 22, _whole("chunk_size", 1024, 2**30, "1024 <= chunk_size <= 2**30"),
+        "rays per kernel launch (bounds memory; results do not depend on it)")
 
     def __post_init__(self) -> None:
-        set_ = object.__setattr__
-        set_(self, "theta_i", check_theta_i(self.theta_i))
-        phi = _number("phi_i", self.phi_i)
-        if not math.isfinite(phi):
-            raise ValueError(f"phi_i must be a finite number of degrees (got {phi:g})")
-        set_(self, "phi_i", phi)
-        set_(self, "wavelengths", parse_wavelengths(self.wavelengths))
-        set_(self, "mu", check_mu(self.mu))
-        set_(self, "delta", check_delta(self.delta))
-        if self.rays is not None:
-            set_(self, "rays", check_rays(self.rays))
-        from virtspec_mi.bounds import BOUND_NAMES
+        for item in fields(self):
+            value = getattr(self, item.name)
+            if value is not None:
+                object.__setattr__(self, item.name, item.metadata["check"](value))
+        if self.pilot_delta is not None and not 0.0 < self.pilot_delta < self.delta:
+            raise ValueError(
+                f"pilot_delta must satisfy 0 < pilot_delta < delta = {self.delta:g} (got {self.pilot_delta:g})")
 
-        if self.bound not in BOUND_NAMES:
-            raise ValueError(f"bound must be one of {', '.join(BOUND_NAMES)} (got {self.bound!r})")
-        if self.pilot_rays is not None:
-            set_(self, "pilot_rays", check_rays(self.pilot_rays))
-        if self.pilot_delta is not None:
-            pilot_delta = _number("pilot_delta", self.pilot_delta)
-            if not 0.0 < pilot_delta < self.delta:
-                raise ValueError(
-                    f"pilot_delta must satisfy 0 < pilot_delta < delta = {self.delta:g} (got {pilot_delta:g})"
-                )
-            set_(self, "pilot_delta", pilot_delta)
-        if not isinstance(self.joint, (bool, int)) or self.joint not in (0, 1):
-            raise ValueError(f"joint must be true or false (got {self.joint!r})")
-        set_(self, "joint", bool(self.joint))
-        if self.beam not in BEAMS:
-            raise ValueError(f"beam must be one of {', '.join(BEAMS)} (got {self.beam!r})")
-        if self.sampling not in SAMPLINGS:
-            raise ValueError(f"sampling must be one of {', '.join(SAMPLINGS)} (got {self.sampling!r})")
-        seed = _number("seed", self.seed)
-        if not (seed.is_integer() and 0 <= seed < 2**32):
-            raise ValueError(f"seed must be a whole number with 0 <= seed < 2**32 (got {self.seed!r})")
-        set_(self, "seed", int(seed))
-        chunk = _number("chunk_size", self.chunk_size)
-        if not (chunk.is_integer() and 1024 <= chunk <= 2**30):
-            raise ValueError(f"chunk_size must be a whole number in [1024, 2**30] (got {self.chunk_size!r})")
-        set_(self, "chunk_size", int(chunk))
+    @classmethod
+    def describe(cls) -> str:
+        """One line per setting: name, default, meaning and allowed values."""
+
+        lines = []
+        for item in fields(cls):
+            choices = item.metadata["choices"]
+            allowed = f" ({', '.join(choices)})" if choices else ""
+            lines.append(f"{item.name} = {item.default!r}: {item.metadata['help']}{allowed}")
+        return "\n".join(lines)
 
     @property
-    def rays_per_reading(self) -> int:
-        """
-        ``rays`` if given, else the fixed bound's N for μ and the quantity δ (eq. 23 by
-        default); ``ValueError`` for ``"two-stage"``, which sizes each reading itself.
-        """
+    def budget(self) -> RayBudget:
+        """The ray-budget rule object of :data:`virtspec_mi.budgets.BUDGETS` named by ``bound``."""
 
-        if self.rays is not None:
-            return self.rays
-        from virtspec_mi.bounds import rays_for_bound
-
-        return rays_for_bound(self.bound, self.mu, self.quantity_delta)
+        return BUDGETS[self.bound]
 
     @property
     def adaptive(self) -> bool:
-        """True when each reading is sized by a pilot batch (``two-stage`` without ``rays``)."""
+        """True when each reading is sized by its own pilot (an adaptive rule without ``rays``)."""
 
-        return self.rays is None and self.bound == "two-stage"
+        return self.rays is None and self.budget.adaptive
 
     @property
     def quantity_delta(self) -> float:
@@ -290,20 +166,28 @@ class Settings:
         return self.delta / 2 if self.joint else self.delta
 
     @property
+    def rays_per_reading(self) -> int:
+        """``rays`` if given, else the fixed rule's N at μ and the quantity δ (``ValueError`` if adaptive)."""
+
+        return self.rays if self.rays is not None else self.budget.rays(self.mu, self.quantity_delta)
+
+    @property
+    def most_rays_per_reading(self) -> int:
+        """The most rays one reading may trace in one batch (its key range in a sweep)."""
+
+        return self.rays if self.rays is not None else self.budget.most_rays(self)
+
+    @property
     def pilot_rays_per_reading(self) -> int:
-        """Two-stage pilot size n₁: ``pilot_rays`` or ⌈10/μ⌉."""
+        """Two-stage pilot size n₁: ``pilot_rays`` or the rule's default ⌈10/μ⌉."""
 
-        from virtspec_mi.twostage import default_pilot_rays
-
-        return self.pilot_rays if self.pilot_rays is not None else default_pilot_rays(self.mu)
+        return self.pilot_rays if self.pilot_rays is not None else self.budget.default_pilot_rays(self.mu)
 
     @property
     def pilot_delta_value(self) -> float:
-        """Two-stage pilot failure probability δ₁: ``pilot_delta`` or δ/10."""
+        """Two-stage pilot failure probability δ₁: ``pilot_delta`` or the rule's default δ/10."""
 
-        from virtspec_mi.twostage import default_pilot_delta
-
-        return self.pilot_delta if self.pilot_delta is not None else default_pilot_delta(self.delta)
+        return self.pilot_delta if self.pilot_delta is not None else self.budget.default_pilot_delta(self.delta)
 
     def updated(self, **changes: Any) -> "Settings":
         """A copy with the given fields replaced (``None`` values are ignored), re-validated."""
@@ -311,7 +195,7 @@ class Settings:
         return replace(self, **{k: v for k, v in changes.items() if v is not None})
 
     def as_dict(self) -> dict[str, Any]:
-        """Plain-data view (for JSON and result files)."""
+        """Plain-data view (for JSON and result files): every field, rays and pilot sizes resolved."""
 
         return {
             "theta_i": self.theta_i,
@@ -329,3 +213,32 @@ class Settings:
             "seed": self.seed,
         }
 
+
+SETTING_NAMES: tuple[str, ...] = tuple(item.name for item in fields(Settings))
+"""The names of every setting, in definition order."""
+
+
+def settings_keywords(function: Callable, exclude: tuple[str, ...] = ()) -> inspect.Signature:
+    """
+    ``function``'s signature with every setting appended as a keyword-only ``name=None``
+    (a setting left ``None`` comes from the scene's integrator, else from the default).
+    """
+
+    own = [p for p in inspect.signature(function).parameters.values() if p.kind is not p.VAR_KEYWORD]
+    names = {p.name for p in own}
+    extra = [inspect.Parameter(name, inspect.Parameter.KEYWORD_ONLY, default=None)
+             for name in SETTING_NAMES if name not in names and name not in exclude]
+    return inspect.signature(function).replace(parameters=[*own, *extra])
+
+
+def with_settings(base: Settings, overrides: dict[str, Any], caller: str) -> Settings:
+    """
+    ``base`` with the settings named in ``overrides`` replaced (``None`` keeps the base
+    value); an unknown name raises ``TypeError`` listing the settings.
+    """
+
+    unknown = sorted(set(overrides) - set(SETTING_NAMES))
+    if unknown:
+        raise TypeError(f"{caller}() got unexpected keyword argument(s) {', '.join(unknown)}; "
+                        f"the settings are {', '.join(SETTING_NAMES)}")
+    return base.updated(**overrides)

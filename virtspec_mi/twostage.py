@@ -43,7 +43,7 @@ import numpy as np
 
 from virtspec_mi.bounds import exact_rays, miss_probability
 from virtspec_mi.intervals import clopper_pearson
-from virtspec_mi.settings import check_delta, check_mu, check_rays
+from virtspec_mi.checks import check_delta, check_mu, check_rays
 
 __all__ = [
     "STAGE_TWO_SEED_MASK",

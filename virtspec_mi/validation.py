@@ -119,8 +119,8 @@ def predicted_miss_probability(specimen: Specimen, settings: Settings) -> float:
             rho, settings.mu, settings.delta, settings.pilot_rays_per_reading, settings.pilot_delta_value,
             joint=settings.joint, other=specimen.other,
         ).miss_probability
-    rays = settings.rays if settings.rays is not None else bounds.rays_for_bound(
-        settings.bound, settings.mu, settings.quantity_delta)
+    # N from the rule itself (not the settings' sizing, which the power test tampers with)
+    rays = settings.rays if settings.rays is not None else settings.budget.rays(settings.mu, settings.quantity_delta)
     return bounds.miss_probability(rays, rho, settings.mu)
 
 
@@ -144,20 +144,18 @@ def coverage(
 
     from scipy import stats
 
-    import virtspec_mi
-    from virtspec_mi.instrument import find_instrument, instrument_scene
+    from virtspec_mi.engine import take_readings
     from virtspec_mi.intervals import clopper_pearson
-    from virtspec_mi.tally import take_readings
+    from virtspec_mi.scene import find_instrument, instrument_scene
 
-    mi = virtspec_mi.mitsuba()
     if readings < 1:
         raise ValueError(f"readings must be a whole number >= 1 (got {readings!r})")
     azimuths = 360.0 * np.arange(readings) / readings
     config = Settings(theta_i=specimen.theta_i, beam=specimen.beam, wavelengths=551.0, mu=mu,
                       delta=delta, bound=bound, seed=seed, **settings)
-    instrument = find_instrument(mi.load_dict(instrument_scene(specimen.bsdf)))
+    instrument = find_instrument(instrument_scene(specimen.bsdf))
     start = time.perf_counter()
-    tallies = take_readings(instrument, [(551.0, config.theta_i, phi) for phi in azimuths], config)
+    tallies, pilot = take_readings(instrument, [(551.0, config.theta_i, phi) for phi in azimuths], config)
     seconds = time.perf_counter() - start
     n, m, rho = tallies.rays, tallies.reflected, specimen.reflectance
     # |m/N − ρ| ≥ μ on the counts, with the same lattice convention as miss_probability
@@ -171,7 +169,7 @@ def coverage(
     lower, upper = clopper_pearson(misses, readings, 0.05)
     return Coverage(
         specimen=specimen.name, bound=bound, mu=config.mu, delta=config.delta, readings=readings,
-        rays=float(n.mean()), rays_spent=float(tallies.rays_spent.mean()), seconds=seconds, misses=misses,
+        rays=float(n.mean()), rays_spent=float((n if pilot is None else n + pilot.rays).mean()), seconds=seconds, misses=misses,
         miss_probability=float(q), mean_abs_error=float(np.mean(np.abs(m / n - rho))),
         max_abs_error=float(np.max(np.abs(m / n - rho))), pvalue=pvalue,
         miss_interval=(float(lower), float(upper)),

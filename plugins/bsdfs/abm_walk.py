@@ -18,7 +18,7 @@ its interface index k and its direction ω. Each interface event is, in this ord
 The walk ends when the ray leaves through the top (k = −1), the bottom (k = K) or is
 absorbed. Analog Monte Carlo: unit weight for an exit, 0 for absorption. The whole
 walk runs inside ``BSDF.sample`` as one Dr.Jit symbolic loop, its random numbers from
-:func:`virtspec_mi.walk.walk_rng`. Wavelength-dependent quantities (α·d_m and the three
+:func:`virtspec_mi.kernel.walk.walk_rng`. Wavelength-dependent quantities (α·d_m and the three
 refractive indices) are Dr.Jit arrays on the data grid gathered per lane from
 ``si.wavelengths[0]``: many wavelengths share one compiled kernel. The per-(interface,
 direction) table (media, slab, lobe exponents) is read by a tree of selects rather than a
@@ -35,7 +35,7 @@ Conventions
   reference's R for abaxial incidence (its "abax 8°" = ``side="abaxial"``, θi = 8°).
 - ``sampled_type`` is ``GlossyReflection`` when the ray leaves on the side it came
   from, else ``GlossyTransmission``; ``sampled_component`` is 0 / 1, or
-  :data:`virtspec_mi.walk.CAPPED_COMPONENT` for a walk that reached ``max_steps``
+  :data:`virtspec_mi.kernel.walk.CAPPED_COMPONENT` for a walk that reached ``max_steps``
   interface events (or, never seen in practice, 1000 rejected lobe samples).
 - No ``eval``/``pdf``: a sample-only BSDF (both return 0).
 - ``wavelength_range = (400, 2500)`` nm: the instrument refuses other wavelengths
@@ -68,7 +68,7 @@ from virtspec_mi.leaf_data import (
     mesophyll_absorption,
 )
 from virtspec_mi.plugins.bsdfs.sampled_only import SampledOnlyBSDF
-from virtspec_mi.walk import CAPPED_COMPONENT, walk_rng
+from virtspec_mi.kernel.walk import CAPPED_COMPONENT, walk_rng
 
 __all__ = [
     "AIR",

@@ -87,8 +87,8 @@ import mitsuba as mi
 
 from virtspec_mi.plugins.bsdfs.sampled_only import SampledOnlyBSDF
 
-from virtspec_mi.walk import CAPPED_COMPONENT, walk_rng
-from virtspec_mi.walk_optics import cross_interface, free_path, sample_hg
+from virtspec_mi.kernel.walk import CAPPED_COMPONENT, walk_rng
+from virtspec_mi.kernel.walk_optics import cross_interface, free_path, sample_hg
 
 __all__ = ["TurbidSlab", "SLAB_COMPONENTS", "slab_walk"]
 

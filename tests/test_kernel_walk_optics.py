@@ -1,4 +1,4 @@
-"""The shared optical pieces of random walks (virtspec_mi.walk_optics) against closed forms."""
+"""The shared optical pieces of random walks (virtspec_mi.kernel.walk_optics) against closed forms."""
 
 from __future__ import annotations
 
@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from virtspec_mi.reference import fresnel_reflectance_cos
-from virtspec_mi.walk_optics import cross_interface, free_path, sample_hg
+from virtspec_mi.kernel.walk_optics import cross_interface, free_path, sample_hg
 
 N = 200_000
 K = 5.0  # 5 sigma per comparison: false-failure probability 5.7e-7 each

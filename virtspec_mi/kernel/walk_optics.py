@@ -4,7 +4,7 @@ Optical pieces of random walks: Fresnel interfaces and Henyey–Greenstein scatt
 
 Small Dr.Jit functions shared by random-walk specimens (``turbid_slab``, layered
 leaf models). They work on per-lane arrays, have no state and draw no random numbers
-themselves (the caller passes uniforms from its :func:`virtspec_mi.walk.walk_rng`),
+themselves (the caller passes uniforms from its :func:`virtspec_mi.kernel.walk.walk_rng`),
 so they can be called inside ``@dr.syntax`` symbolic loops.
 
 Directions are *propagation* directions (where the light goes) in a frame whose z

@@ -1,5 +1,5 @@
 """
-Tests of virtspec_mi.tally.take_readings: per-reading ray offsets (the key of a
+Tests of virtspec_mi.engine.take_readings: per-reading ray offsets (the key of a
 reading's random numbers) and the tracing-once of wavelength-independent specimens.
 """
 
@@ -9,9 +9,9 @@ import numpy as np
 import pytest
 
 import virtspec_mi as vm
-from virtspec_mi.instrument import find_instrument
+from virtspec_mi.scene import find_instrument
 from virtspec_mi.settings import Settings
-from virtspec_mi.tally import take_readings
+from virtspec_mi.engine import shares_wavelengths, take_readings
 
 WORD = 2**32
 
@@ -37,26 +37,26 @@ def test_a_reading_gets_the_same_rays_alone_or_with_others(dielectric, beam, sam
     settings = Settings(rays=3000, beam=beam, sampling=sampling, seed=9, chunk_size=4096)
     # gaps, unsorted, and one range straddling a 2**32 boundary of the global ray index
     offsets = np.array([7 * 3000, 2 * 3000, WORD - 1000, 5 * WORD + 11])
-    together = take_readings(dielectric, READINGS, settings, offsets=offsets)
+    together, _ = take_readings(dielectric, READINGS, settings, offsets=offsets)
     for k, reading in enumerate(READINGS):
-        alone = take_readings(dielectric, [reading], settings, offsets=offsets[k:k + 1])
+        alone, _ = take_readings(dielectric, [reading], settings, offsets=offsets[k:k + 1])
         assert alone.reflected[0] == together.reflected[k]
         assert alone.transmitted[0] == together.transmitted[k]
     # and the counts do not depend on the chunk size either
-    bigger = take_readings(dielectric, READINGS, Settings(rays=3000, beam=beam, sampling=sampling, seed=9),
+    bigger, _ = take_readings(dielectric, READINGS, Settings(rays=3000, beam=beam, sampling=sampling, seed=9),
                            offsets=offsets)
     np.testing.assert_array_equal(bigger.reflected, together.reflected)
     # a different offset is different rays
-    moved = take_readings(dielectric, READINGS[:1], settings, offsets=[offsets[0] + 3000])
+    moved, _ = take_readings(dielectric, READINGS[:1], settings, offsets=[offsets[0] + 3000])
     assert moved.reflected[0] != together.reflected[0]
 
 
 def test_default_offsets_are_consecutive_ranges(dielectric):
     settings = Settings(rays=2000, seed=3)
-    default = take_readings(dielectric, READINGS, settings)
-    explicit = take_readings(dielectric, READINGS, settings, offsets=np.arange(4) * 2000)
+    default, _ = take_readings(dielectric, READINGS, settings)
+    explicit, _ = take_readings(dielectric, READINGS, settings, offsets=np.arange(4) * 2000)
     np.testing.assert_array_equal(default.reflected, explicit.reflected)
-    assert not default.wavelength_independent
+    assert not shares_wavelengths(dielectric)
 
 
 @pytest.mark.parametrize("offsets, message", [
@@ -73,10 +73,10 @@ def test_bad_offsets_are_refused(dielectric, offsets, message):
 def test_wavelength_independent_specimen_is_traced_once_per_incidence(diamond_instrument):
     settings = Settings(rays=4000, seed=2)
     readings = [(w, t, 0.0) for t in (20.0, 60.0) for w in (400.0, 550.0, 700.0)]
-    tallies = take_readings(diamond_instrument, readings, settings, offsets=np.arange(6) * 4000)
-    assert tallies.wavelength_independent
+    tallies, _ = take_readings(diamond_instrument, readings, settings, offsets=np.arange(6) * 4000)
+    assert shares_wavelengths(diamond_instrument)
     assert len(set(tallies.reflected[:3])) == 1 and len(set(tallies.reflected[3:])) == 1
     # the shared counts are those of the first reading of each incidence, at its offset
-    first = take_readings(diamond_instrument, [readings[3]], settings, offsets=[3 * 4000])
+    first, _ = take_readings(diamond_instrument, [readings[3]], settings, offsets=[3 * 4000])
     assert first.reflected[0] == tallies.reflected[3]
     np.testing.assert_array_equal(tallies.rays, 4000)

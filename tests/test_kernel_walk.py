@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import virtspec_mi as vm
-from virtspec_mi.walk import CAPPED_COMPONENT, walk_rng
+from virtspec_mi.kernel.walk import CAPPED_COMPONENT, walk_rng
 
 
 @pytest.fixture(scope="module")

@@ -1,0 +1,159 @@
+"""
+The measurement API: :func:`measure`, :func:`sweep`, :func:`read_result`, :func:`fluctuation`
+===========================================================================================
+
+:func:`measure` takes a scene (XML path, dict or ``mi.Scene``), resolves the settings
+(explicit keywords, then the scene's ``spectrophotometer`` integrator, then the
+defaults of :class:`~virtspec_mi.settings.Settings`), sizes each reading with the ray
+budget and returns a :class:`~virtspec_mi.result.Result` with the dim ``wavelength``:
+reflectance ρ = m/N (eq. 2), transmittance τ and absorptance α = 1 − ρ − τ per
+wavelength, with the exact counts behind them and the certificate they give.
+
+:func:`sweep` measures a grid (wavelength × θi) at one φi — the paper's Fig. 5 or a
+spectrum — and returns the same type with dims ``(wavelength, theta_i)``. Its reading
+k (k = i_θ·n_λ + i_λ) owns the global ray indices [k·stride, k·stride + N): its counts
+depend on (seed, k) only, which makes a sweep resumable from a checkpoint and its
+readings independent of how they are batched (:func:`virtspec_mi.engine.run`).
+
+Both take every setting of :class:`~virtspec_mi.settings.Settings` as a keyword (their
+signatures are derived from it); a bad value raises ``ValueError`` naming the setting
+and its allowed range.
+
+References
+----------
+Baranoski et al. (2001), eqs. (2), (23), (24); Figs. 5 and 6.
+"""
+
+from __future__ import annotations
+
+import os
+from typing import Any
+
+import numpy as np
+
+from virtspec_mi.checks import parse_theta_i
+from virtspec_mi.engine import measure_reading, run
+from virtspec_mi.instrument import Instrument
+from virtspec_mi.result import Result
+from virtspec_mi.scene import find_instrument, scene_fingerprint
+from virtspec_mi.settings import Settings, settings_keywords, with_settings
+
+__all__ = ["measure", "sweep", "read_result", "fluctuation"]
+
+
+def measure(scene: Any, **settings: Any) -> Result:
+    """
+    Measure the specimen of ``scene`` and return a certified :class:`~virtspec_mi.result.Result`
+    over wavelength (θi a scalar label).
+
+    Parameters
+    ----------
+    scene
+        XML path, scene dict or loaded ``mi.Scene`` with ``emitter`` and ``specimen`` disks.
+    **settings
+        Any setting of :class:`~virtspec_mi.settings.Settings` (``theta_i``, ``phi_i``,
+        ``wavelengths``, ``mu``, ``delta``, ``rays``, ``bound``, ``joint``,
+        ``pilot_rays``, ``pilot_delta``, ``beam``, ``sampling``, ``seed``,
+        ``chunk_size``); one left ``None`` comes from the scene's ``spectrophotometer``
+        integrator when it has one, else from the default.
+
+    References
+    ----------
+    Baranoski et al. (2001), eqs. (2), (23).
+    """
+
+    instrument = find_instrument(scene)
+    result = measure_reading(instrument, with_settings(_scene_settings(instrument), settings, "measure"))
+    result.warn_if_uncertified(stacklevel=3)
+    return result
+
+
+def sweep(
+    scene: Any,
+    *,
+    theta_i: Any = None,
+    checkpoint: str | os.PathLike | None = None,
+    progress: bool | None = None,
+    **settings: Any,
+) -> Result:
+    """
+    Certified readings of ``scene`` over every (wavelength, θi) pair.
+
+    Parameters
+    ----------
+    scene
+        XML path, scene dict or loaded ``mi.Scene`` (as for :func:`measure`).
+    theta_i
+        Incidence angles in degrees: a number, a sequence or a string such as
+        ``"0:90:1"`` (stop included), each in [0, 90], all distinct; default: the
+        scene's θi (or 0).
+    checkpoint
+        Path of a JSON file recording finished readings as the sweep goes; an existing
+        file of the same sweep is resumed (:mod:`virtspec_mi.checkpoint`). Removed when
+        the sweep completes.
+    progress
+        ``True``: always a tqdm bar on stderr; ``False``: never; ``None`` (default):
+        only when stderr is a terminal and the sweep is expected to last more than ~2 s.
+    **settings
+        As for :func:`measure` (one value for the whole sweep); ``wavelengths`` must be
+        distinct. With ``bound="two-stage"`` each reading is sized by its own pilot, all
+        of them batched.
+
+    References
+    ----------
+    Baranoski et al. (2001), eq. (23), Fig. 5.
+    """
+
+    instrument = find_instrument(scene)
+    base = with_settings(_scene_settings(instrument), settings, "sweep")
+    angles = np.array(parse_theta_i(base.theta_i if theta_i is None else theta_i))
+    resolved = base.updated(theta_i=float(angles[0]))
+    for name, values in (("theta_i", angles), ("wavelengths", np.array(resolved.wavelengths))):
+        if len(np.unique(values)) != len(values):
+            raise ValueError(f"{name} of a sweep must be distinct (got repeated values)")
+    result = run(instrument, resolved, angles, keyed=True, scene=scene_fingerprint(scene, instrument),
+                 checkpoint=checkpoint, progress=progress)
+    result.warn_if_uncertified(stacklevel=3)
+    return result
+
+
+measure.__signature__ = settings_keywords(measure)  # type: ignore[attr-defined]
+sweep.__signature__ = settings_keywords(sweep)  # type: ignore[attr-defined]
+
+
+def read_result(path: str | os.PathLike) -> Result:
+    """A result from a file written by ``Result.write`` or printed by ``virtspec measure --json``."""
+
+    return Result.read(path)
+
+
+def fluctuation(a: Result | np.ndarray, b: Result | np.ndarray, quantity: str = "reflectance") -> float:
+    """
+    Average magnitude of the fluctuations between two sweeps, eq. (24):
+
+        Δ = Σᵢ |ρᵢ^(N_j) − ρᵢ^(N_{j−1})| / n
+
+    over the n readings of the sweeps (all their (wavelength, θi) pairs), for
+    ``quantity`` (reflectance by default). ``a`` and ``b`` are results over the same grid
+    (typically at successive ray densities N_{j−1} and N_j), or arrays of one shape.
+
+    References
+    ----------
+    Baranoski et al. (2001), eq. (24), Fig. 6a.
+    """
+
+    if isinstance(a, Result) and isinstance(b, Result):
+        for name in ("wavelengths", "theta_i"):
+            if not np.array_equal(getattr(a, name), getattr(b, name)):
+                raise ValueError(f"fluctuation needs sweeps over the same {name} (they differ)")
+        a, b = a.quantity(quantity), b.quantity(quantity)
+    a, b = np.asarray(a, dtype=np.float64), np.asarray(b, dtype=np.float64)
+    if a.shape != b.shape or a.size == 0:
+        raise ValueError(f"fluctuation needs two non-empty arrays of one shape (got {a.shape} and {b.shape})")
+    return float(np.mean(np.abs(a - b)))
+
+
+def _scene_settings(instrument: Instrument) -> Settings:
+    """The settings of the scene's ``spectrophotometer`` integrator, else the defaults."""
+
+    return instrument.integrator.settings if instrument.integrator is not None else Settings()

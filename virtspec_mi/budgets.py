@@ -1,0 +1,175 @@
+"""
+Ray budgets as objects: one entry per rule
+==========================================
+
+:data:`BUDGETS` maps each rule's name (the ``bound`` setting) to an object that knows
+everything the rest of the package asks of a rule — colour-science's ``method=``
+dispatch is the model, so no module compares rule names:
+
+- :meth:`RayBudget.rays` — rays per reading for (μ, δ) (fixed rules);
+- :meth:`RayBudget.tolerance` — the μ that N rays guarantee at δ under this rule (the
+  certificate a reading of N rays may state);
+- :attr:`RayBudget.adaptive` — whether each reading is sized by a pilot batch;
+- :meth:`RayBudget.most_rays` — the largest number of rays one reading may trace in
+  one batch (the key range a sweep reserves per reading).
+
+=============  ==========================================  =====================================
+name           rays for (μ, δ)                             tolerance of N rays at δ
+=============  ==========================================  =====================================
+``hoeffding``  ⌈ln(2/δ)/(2μ²)⌉, eq. (23)                   √(ln(2/δ)/(2N)), eq. (19)
+``chebyshev``  ⌈1/(4μ²δ)⌉, eq. (15)                        1/(2√(Nδ)), eq. (14)
+``exact``      smallest N certified by the binomial law    its exact inverse (:func:`exact_mu`)
+``two-stage``  pilot n₁, then N₂ sized from the pilot      μ for its own N₂; ``exact`` for a given N
+=============  ==========================================  =====================================
+
+References
+----------
+Baranoski et al. (2001), eqs. (14), (15), (19), (23); anchors.md §3 (exact and
+two-stage rules).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from virtspec_mi import twostage
+from virtspec_mi.bounds import (
+    EXACT_MU_MAX_RAYS,
+    chebyshev_mu,
+    chebyshev_rays,
+    exact_mu,
+    exact_rays,
+    hoeffding_mu,
+    hoeffding_rays,
+)
+
+__all__ = ["RayBudget", "Hoeffding", "Chebyshev", "Exact", "TwoStage", "BUDGETS"]
+
+
+class RayBudget:
+    """A fixed ray-budget rule: every reading gets :meth:`rays` rays."""
+
+    name: str = ""
+    adaptive: bool = False
+    """True when each reading is sized by its own pilot batch."""
+
+    def rays(self, mu: float, delta: float) -> int:
+        """Rays per reading that certify |m/N − ρ| < μ with probability ≥ 1 − δ."""
+
+        raise NotImplementedError
+
+    def tolerance(self, rays: int, delta: float) -> float:
+        """The μ that ``rays`` rays guarantee at δ under this rule."""
+
+        raise NotImplementedError
+
+    def certified(self, rays: int, delta: float, mu: float) -> float:
+        """
+        The tolerance a reading of ``rays`` rays may state at δ when μ was asked for: μ
+        itself where the rule certifies μ for ``rays`` (N ≥ the rule's N for (μ, δ); every
+        rule here certifies N and all larger N), else :meth:`tolerance` — and never more
+        than :meth:`tolerance`.
+        """
+
+        tolerance = self.tolerance(rays, delta)
+        if tolerance <= mu:
+            return tolerance
+        return mu if rays >= self.rays(mu, delta) else tolerance
+
+    def most_rays(self, settings: Any) -> int:
+        """The most rays one reading of ``settings`` may trace in one batch."""
+
+        return self.rays(settings.mu, settings.quantity_delta)
+
+    @staticmethod
+    def default_pilot_rays(mu: float) -> int:
+        """Two-stage pilot size n₁ when none is given: ⌈10/μ⌉ (:mod:`virtspec_mi.twostage`)."""
+
+        return twostage.default_pilot_rays(mu)
+
+    @staticmethod
+    def default_pilot_delta(delta: float) -> float:
+        """Two-stage pilot failure probability δ₁ when none is given: δ/10."""
+
+        return twostage.default_pilot_delta(delta)
+
+    def __repr__(self) -> str:
+        return f"{type(self).__name__}()"
+
+
+class Hoeffding(RayBudget):
+    """The exponential Chebyshev (Hoeffding) bound, eq. (23): the default."""
+
+    name = "hoeffding"
+
+    def rays(self, mu: float, delta: float) -> int:
+        return hoeffding_rays(mu, delta)
+
+    def tolerance(self, rays: int, delta: float) -> float:
+        return hoeffding_mu(rays, delta)
+
+
+class Chebyshev(RayBudget):
+    """The ordinary Chebyshev bound, eq. (15)."""
+
+    name = "chebyshev"
+
+    def rays(self, mu: float, delta: float) -> int:
+        return chebyshev_rays(mu, delta)
+
+    def tolerance(self, rays: int, delta: float) -> float:
+        return chebyshev_mu(rays, delta)
+
+
+class Exact(RayBudget):
+    """The smallest N certified by the exact binomial law (:func:`virtspec_mi.bounds.exact_rays`)."""
+
+    name = "exact"
+
+    def rays(self, mu: float, delta: float) -> int:
+        return exact_rays(mu, delta)
+
+    def tolerance(self, rays: int, delta: float) -> float:
+        return exact_mu(int(rays), delta)
+
+    def certified(self, rays: int, delta: float, mu: float) -> float:
+        # Below EXACT_MU_MAX_RAYS the tolerance is the exact inverse already: no search for N.
+        if rays <= EXACT_MU_MAX_RAYS:
+            return self.tolerance(rays, delta)
+        return super().certified(rays, delta, mu)
+
+
+class TwoStage(RayBudget):
+    """
+    A pilot of n₁ rays, then a fresh batch of N₂ rays sized by the exact rule over the
+    pilot's interval (:mod:`virtspec_mi.twostage`): each reading sized so is certified
+    at μ. Given a fixed N (``rays=``) it states the exact rule's tolerance, on which its
+    sizing is built.
+    """
+
+    name = "two-stage"
+    adaptive = True
+    fixed = Exact()
+
+    def tolerance(self, rays: int, delta: float) -> float:
+        return self.fixed.tolerance(rays, delta)
+
+    def certified(self, rays: int, delta: float, mu: float) -> float:
+        return self.fixed.certified(rays, delta, mu)
+
+    def rays(self, mu: float, delta: float) -> int:
+        raise ValueError("bound 'two-stage' sizes each reading from a pilot batch (virtspec_mi.twostage); "
+                         "give rays= or use a fixed rule: hoeffding, chebyshev or exact")
+
+    def most_rays(self, settings: Any) -> int:
+        """
+        The larger of the pilot n₁ and Hoeffding's N at the second stage's δ − δ₁ (per
+        quantity): the exact rule over any interval of ρ never needs more.
+        """
+
+        share = 2 if settings.joint else 1
+        stage_two = hoeffding_rays(settings.mu, (settings.delta - settings.pilot_delta_value) / share)
+        return max(settings.pilot_rays_per_reading, stage_two)
+
+BUDGETS: dict[str, RayBudget] = {budget.name: budget for budget in (Hoeffding(), Chebyshev(), Exact(), TwoStage())}
+"""Every ray-budget rule by name; ``"hoeffding"`` (eq. 23) is the default."""

@@ -1,0 +1,111 @@
+"""
+Exact ray counts by name: the fates and the counts record
+=========================================================
+
+Every ray of a reading has one :class:`Fate`; a reading's counts are exact integers
+(``int64``) held by name in :class:`Counts` — never columns by position. The kernel
+produces them (:mod:`virtspec_mi.kernel.tracer`), the engine sums and reshapes them and
+the result (:mod:`virtspec_mi.result`) derives every quantity from them.
+
+References
+----------
+Baranoski et al. (2001), eq. (2) (ρ = m/N) and Sect. 3 (each ray is reflected,
+transmitted or absorbed).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, fields, replace
+from enum import IntEnum
+from typing import Any, Callable
+
+import numpy as np
+
+__all__ = ["Fate", "QUANTITIES", "WEIGHT_ROUNDING", "Counts"]
+
+
+class Fate(IntEnum):
+    """What happened to one ray (the kernel's per-ray code)."""
+
+    ABSORBED = 0
+    REFLECTED = 1
+    """Left into the upper hemisphere of the specimen (wo·n > 0)."""
+    TRANSMITTED = 2
+    """Left into the lower hemisphere (wo·n < 0)."""
+    CAPPED = 3
+    """A random walk stopped by the specimen's step cap: no fate, in none of R, T, A."""
+
+
+QUANTITIES: tuple[str, ...] = ("reflectance", "transmittance", "absorptance")
+"""The certified quantities ρ, τ, α, from the reflected, transmitted and absorbed counts."""
+
+WEIGHT_ROUNDING: float = 1e-4
+"""
+Rounding tolerance ε of BSDF sample weights. A weight w is a survival probability; one in
+(1, 1 + ε] or [−ε, 0) is float32 rounding of a weight of 1 or 0 (Mitsuba's microfacet
+models return up to 1 + 6·10⁻⁵) and is used as 1 or 0, counted in ``rounded_weights``;
+each such ray moves the estimate by at most ε/N. Weights beyond, or NaN, are real
+violations (``weight_violations``): the specimen is not energy conserving.
+"""
+
+
+@dataclass(frozen=True)
+class Counts:
+    """
+    Exact counts of one or many readings, every field an ``int64`` array of one shape.
+
+    ``absorbed = rays − reflected − transmitted − capped``. ``specular_reflected`` and
+    ``regular_transmitted`` are the reflected and transmitted rays whose sampled event
+    was a delta event (parts of ``reflected`` / ``transmitted``). ``largest_weight``
+    (float64) is the largest real violating weight seen per reading (NaN if none, or if
+    every violating weight was NaN).
+    """
+
+    rays: np.ndarray
+    reflected: np.ndarray
+    transmitted: np.ndarray
+    capped: np.ndarray
+    weight_violations: np.ndarray
+    rounded_weights: np.ndarray
+    specular_reflected: np.ndarray
+    regular_transmitted: np.ndarray
+    largest_weight: np.ndarray
+
+    @classmethod
+    def zeros(cls, shape: Any) -> "Counts":
+        """Counts of ``shape`` readings that have traced nothing yet."""
+
+        return cls(**{f.name: np.full(shape, np.nan) if f.name == "largest_weight"
+                      else np.zeros(shape, dtype=np.int64) for f in fields(cls)})
+
+    @property
+    def absorbed(self) -> np.ndarray:
+        return self.rays - self.reflected - self.transmitted - self.capped
+
+    def count(self, fate: Fate) -> np.ndarray:
+        """The number of rays of each reading with ``fate``."""
+
+        return {Fate.ABSORBED: self.absorbed, Fate.REFLECTED: self.reflected,
+                Fate.TRANSMITTED: self.transmitted, Fate.CAPPED: self.capped}[Fate(fate)]
+
+    def map(self, function: Callable[[np.ndarray], np.ndarray]) -> "Counts":
+        """The same counts with ``function`` applied to every field (select, reshape …)."""
+
+        return replace(self, **{f.name: function(getattr(self, f.name)) for f in fields(self)})
+
+    def put(self, index: Any, other: "Counts") -> None:
+        """Write ``other``'s counts into readings ``index`` of these (in place)."""
+
+        for item in fields(self):
+            getattr(self, item.name)[index] = getattr(other, item.name)
+
+    def as_dict(self) -> dict[str, np.ndarray]:
+        """Every field by name (``absorbed`` included)."""
+
+        return {**{f.name: getattr(self, f.name) for f in fields(self)}, "absorbed": self.absorbed}
+
+    @classmethod
+    def names(cls) -> tuple[str, ...]:
+        """The stored fields, in order."""
+
+        return tuple(f.name for f in fields(cls))

@@ -1,0 +1,226 @@
+"""
+The engine: from planned readings to exact counts and results
+=============================================================
+
+:func:`take_readings` is the one path from a list of readings — each a (wavelength,
+θi, φi) — to exact :class:`~virtspec_mi.counts.Counts`: it sizes every reading with
+the settings' ray budget (:mod:`virtspec_mi.budgets`) and traces all of them through
+the ray kernel (:mod:`virtspec_mi.kernel.tracer`) in as few launches as memory allows
+(chunks of ``settings.chunk_size`` rays that may span many readings).
+:func:`run` lays a grid of readings (wavelength × θi) out for it — in one call, or in
+batches keyed on each reading's index so that a run can be checkpointed, resumed and
+shown with a progress bar — and returns one :class:`~virtspec_mi.result.Result`.
+
+Model only what is needed: a specimen whose BSDF declares
+``wavelength_independent = True`` (e.g. ``simple_dielectric``) is traced once per
+incidence (θi, φi); readings that differ only in wavelength share those rays and counts.
+
+A fixed budget (``hoeffding``, ``chebyshev``, ``exact``, or explicit ``rays``) is one
+batched call. ``two-stage`` is two: one batched pilot call over all readings (seed
+``settings.seed``), then one batched call with each reading's own N₂ from its pilot
+counts (:func:`virtspec_mi.twostage.stage_two_rays`), traced with the distinct seed
+:func:`virtspec_mi.twostage.stage_two_seed` so its rays are fresh; only the second
+call's counts form the estimates (the pilot's are kept apart).
+
+References
+----------
+Baranoski et al. (2001), eqs. (2) and (23).
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import asdict
+from typing import Any, Sequence
+
+import numpy as np
+
+from virtspec_mi import twostage
+from virtspec_mi.checkpoint import Checkpoint
+from virtspec_mi.checks import check_wavelength_range
+from virtspec_mi.counts import Counts
+from virtspec_mi.progress import Progress
+from virtspec_mi.result import Result
+from virtspec_mi.settings import Settings
+
+__all__ = ["take_readings", "shares_wavelengths", "run", "measure_reading"]
+
+
+def take_readings(
+    instrument: Any,
+    readings: Sequence[tuple[float, float, float]],
+    settings: Settings,
+    offsets: Sequence[int] | np.ndarray | None = None,
+) -> tuple[Counts, Counts | None]:
+    """
+    Trace every (wavelength nm, θi, φi) of ``readings``, each with its own independent
+    rays, and return their exact counts and, for ``two-stage``, the pilot's (else ``None``).
+
+    Each reading gets ``settings.rays_per_reading`` rays (eq. 23 by default), or, with
+    ``bound="two-stage"``, a pilot batch and its own second batch (see above).
+    ``offsets`` (optional) gives each reading's first global ray index, so that a
+    reading's random numbers depend only on (seed, offset) and not on the other
+    readings of the call (default: consecutive ranges of the traced readings; see
+    :func:`~virtspec_mi.kernel.tracer.tally_readings`); both two-stage batches use the
+    same offsets, with different seeds.
+
+    When the specimen's BSDF has ``wavelength_independent = True``, readings with the
+    same (θi, φi) are traced once — with the rays (offset) of the first of them in the
+    list — and all report those counts. A specimen with a ``wavelength_range``
+    attribute refuses wavelengths outside it (``ValueError``).
+    """
+
+    bsdf = instrument.bsdf
+    check_wavelength_range([r[0] for r in readings], getattr(bsdf, "wavelength_range", None),
+                           getattr(bsdf, "PLUGIN", "") or type(bsdf).__name__)
+    readings = [(float(w), float(t), float(p)) for w, t, p in readings]
+    if offsets is not None and len(offsets) != len(readings):
+        raise ValueError(f"offsets must hold one start per reading ({len(readings)}), got {len(offsets)}")
+    if shares_wavelengths(instrument):
+        first: dict[tuple[float, float], int] = {}
+        source = np.array([first.setdefault((t, p), k) for k, (_, t, p) in enumerate(readings)], dtype=np.int64)
+        traced = np.unique(source)
+    else:
+        source = traced = np.arange(len(readings))
+    traced_readings = [readings[k] for k in traced]
+    traced_offsets = None if offsets is None else np.asarray(offsets)[traced]
+    pilot = None
+    if settings.adaptive:
+        counts, pilot = _two_stage(instrument, traced_readings, settings, traced_offsets)
+    else:
+        rays = np.full(len(traced), settings.rays_per_reading)
+        counts = _fixed(instrument, traced_readings, settings, rays, traced_offsets)
+    back = np.searchsorted(traced, source)
+    return counts.map(lambda v: v[back]), None if pilot is None else pilot.map(lambda v: v[back])
+
+
+def shares_wavelengths(instrument: Any) -> bool:
+    """True when the specimen's BSDF declares ``wavelength_independent = True``."""
+
+    return bool(getattr(instrument.bsdf, "wavelength_independent", False))
+
+
+def run(
+    instrument: Any,
+    settings: Settings,
+    theta_i: Sequence[float],
+    *,
+    keyed: bool,
+    scene: str = "",
+    checkpoint: Any = None,
+    progress: bool | None = False,
+) -> Result:
+    """
+    Every reading of the grid ``settings.wavelengths`` × ``theta_i`` at ``settings.phi_i``,
+    as one :class:`~virtspec_mi.result.Result` with dims ``("wavelength", "theta_i")``.
+
+    ``keyed=False``: one :func:`take_readings` call with consecutive ray ranges (how
+    ``measure`` has always numbered its rays). ``keyed=True``: reading k
+    (k = i_θ·n_λ + i_λ) owns the global ray indices [k·stride, k·stride + rays_k), with
+    stride = ``settings.most_rays_per_reading``, so its counts depend on (seed, k) only;
+    readings run in batches of about ``chunk_size`` rays, each recorded in
+    ``checkpoint`` (a path; see :mod:`virtspec_mi.checkpoint`) and shown by
+    ``progress`` (see :mod:`virtspec_mi.progress`).
+    """
+
+    angles = np.asarray(theta_i, dtype=np.float64)
+    lams = np.asarray(settings.wavelengths, dtype=np.float64)
+    n_lam, n_theta = len(lams), len(angles)
+    flat_lam, flat_theta = np.tile(lams, n_theta), np.repeat(angles, n_lam)
+    shared = shares_wavelengths(instrument)
+    counts, pilot = Counts.zeros(n_lam * n_theta), Counts.zeros(n_lam * n_theta)
+    if not keyed:
+        start = time.perf_counter()
+        traced, traced_pilot = take_readings(
+            instrument, [(w, t, settings.phi_i) for w, t in zip(flat_lam, flat_theta)], settings)
+        seconds = time.perf_counter() - start
+        counts = traced
+        pilot = traced_pilot
+    else:
+        stride = settings.most_rays_per_reading
+        units = ([np.arange(i * n_lam, (i + 1) * n_lam) for i in range(n_theta)] if shared
+                 else [np.array([k]) for k in range(n_lam * n_theta)])
+        per_batch = max(1, settings.chunk_size // stride)
+        batches = [np.concatenate(units[i:i + per_batch]) for i in range(0, len(units), per_batch)]
+        state = Checkpoint.open(checkpoint, _identity(settings, angles, instrument, scene, shared), n_lam * n_theta)
+        todo = [b for b in (b[~state.done[b]] for b in batches) if len(b)]
+        bar = Progress(progress, total=sum(len(b) for b in todo) // (n_lam if shared else 1))
+        try:
+            for batch in todo:
+                start = time.perf_counter()
+                traced, traced_pilot = take_readings(
+                    instrument, [(flat_lam[k], flat_theta[k], settings.phi_i) for k in batch], settings,
+                    offsets=batch.astype(np.int64) * stride)
+                state.record(batch, traced, traced_pilot, time.perf_counter() - start)
+                bar.update(len(batch) // (n_lam if shared else 1), time.perf_counter() - start)
+        finally:
+            bar.close()
+        state.finish()
+        counts, pilot, seconds = state.counts, state.pilot, state.seconds
+        if not settings.adaptive:
+            pilot = None
+
+    def grid(values: np.ndarray) -> np.ndarray:
+        return values.reshape(n_theta, n_lam).T.copy()
+
+    return Result(
+        dims=("wavelength", "theta_i"),
+        coords={"wavelength": lams, "theta_i": angles},
+        counts=counts.map(grid),
+        pilot=None if pilot is None else pilot.map(grid),
+        settings=settings.updated(theta_i=float(angles[0])),
+        geometry=instrument.geometry,
+        seconds=seconds,
+        scene=scene,
+        wavelength_independent=shared,
+    )
+
+
+def measure_reading(instrument: Any, settings: Settings) -> Result:
+    """
+    One reading per wavelength of ``settings`` at its θi on an instrument read from a
+    loaded scene: a :class:`~virtspec_mi.result.Result` with the dim ``wavelength``
+    (what :func:`virtspec_mi.measure` and the ``spectrophotometer`` integrator return).
+    """
+
+    return run(instrument, settings, [settings.theta_i], keyed=False).squeeze()
+
+
+def _identity(settings: Settings, angles: np.ndarray, instrument: Any, scene: str, shared: bool) -> dict[str, Any]:
+    """Everything that decides a keyed run's counts (chunk size and version do not)."""
+
+    common = {k: v for k, v in settings.as_dict().items() if k != "theta_i"}
+    return {
+        **common,
+        "theta_i": [float(t) for t in angles],
+        "geometry": asdict(instrument.geometry),
+        "scene": scene,
+        "wavelength_independent": shared,
+    }
+
+
+def _fixed(instrument: Any, readings: Sequence[tuple[float, float, float]], settings: Settings,
+           rays: np.ndarray, offsets: np.ndarray | None) -> Counts:
+    """One batched kernel call: reading i gets ``rays[i]`` rays from global index ``offsets[i]``."""
+
+    # Dr.Jit loads libLLVM on import: the kernel is imported once Mitsuba is set up
+    # (virtspec_mi.runtime refuses a bad libLLVM with the fix, never the abort).
+    from virtspec_mi.kernel.tracer import ReadingPlan, tally_readings
+
+    plans = [ReadingPlan(w, t, p, int(n)) for (w, t, p), n in zip(readings, rays)]
+    return tally_readings(instrument, plans, settings, offsets)
+
+
+def _two_stage(instrument: Any, readings: Sequence[tuple[float, float, float]], settings: Settings,
+               offsets: np.ndarray | None) -> tuple[Counts, Counts]:
+    """Pilot batch, N₂ per reading from its counts, fresh second batch (two calls in all)."""
+
+    pilot_rays = np.full(len(readings), settings.pilot_rays_per_reading)
+    pilot = _fixed(instrument, readings, settings, pilot_rays, offsets)
+    columns = [pilot.reflected, pilot.transmitted] + ([] if settings.joint else [pilot.absorbed])
+    second = twostage.stage_two_rays(
+        np.stack(columns, axis=1), settings.pilot_rays_per_reading, settings.mu, settings.delta,
+        settings.pilot_delta_value, joint=settings.joint,
+    )
+    stage_two = settings.updated(seed=twostage.stage_two_seed(settings.seed))
+    return _fixed(instrument, readings, stage_two, second, offsets), pilot

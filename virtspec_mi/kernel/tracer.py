@@ -1,0 +1,371 @@
+"""
+The ray kernel: rays → specimen BSDF → fate → exact integer counts
+=================================================================
+
+One reading = one (wavelength, θi, φi) with its own N independent rays. All readings
+of a call run in chunks of one fused Dr.Jit kernel each: counter-based random numbers
+(:mod:`virtspec_mi.kernel.rng`) → emitter and specimen points
+(:mod:`virtspec_mi.kernel.disk`) → incident direction → the specimen BSDF's ``sample``
+(:class:`virtspec_mi.plugins` specimens or Mitsuba built-ins) → :class:`~virtspec_mi.counts.Fate`
+→ exact integer tallies by name (:class:`~virtspec_mi.counts.Counts`).
+:func:`virtspec_mi.engine.take_readings` drives it.
+
+Conventions
+-----------
+- Fates are judged in the specimen frame: a ray leaving with wo·n > 0 is reflected
+  (upper hemisphere), wo·n < 0 transmitted; one leaving exactly in the plane
+  (wo·n = 0, grazing) counts on the far side of the specimen if the BSDF sampled a
+  transmission, else on the side it came from. A zero BSDF weight is absorption.
+- A reflected (transmitted) ray whose sampled event is a delta event
+  (``DeltaReflection`` or ``DeltaTransmission``) also counts as specular reflection
+  (regular transmission). They are counted per ray for a BSDF whose flags hold both
+  delta and non-delta lobes; for one with only delta lobes they equal R and T, for one
+  without delta lobes they are 0 (Mitsuba's flag contract).
+- A walk that reached its step cap (``bs.sampled_component`` ==
+  :data:`virtspec_mi.kernel.walk.CAPPED_COMPONENT`) is :attr:`Fate.CAPPED`.
+- A BSDF weight w ∈ [0, 1] survives with probability w (Russian roulette), so each ray
+  stays a Bernoulli trial. Weights within :data:`~virtspec_mi.counts.WEIGHT_ROUNDING`
+  of [0, 1] are rounding (counted in ``rounded_weights``; the roulette uses them as 1 or
+  0 by construction); weights beyond, or NaN, are ``weight_violations`` and the largest
+  is kept.
+- Rays are traced in ``TransportMode.Importance`` (light travels from the emitter).
+- The emitter disk neither occludes nor self-intersects its rays, and no general
+  intersection is needed: each conical ray is aimed at a sampled specimen point and hits
+  it by construction; a collimated ray hits the specimen centre.
+
+References
+----------
+Baranoski et al. (2001), eqs. (2)–(4), Sect. 3.2.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import drjit as dr
+import mitsuba as mi
+import numpy as np
+
+from virtspec_mi.counts import WEIGHT_ROUNDING, Counts, Fate
+from virtspec_mi.geometry import incidence_frame
+from virtspec_mi.kernel.disk import jittered_cell, sample_disk
+from virtspec_mi.kernel.rng import chunk_root, dimension_key, dimension_keys, hash32, to_unit
+from virtspec_mi.kernel.walk import CAPPED_COMPONENT
+from virtspec_mi.settings import Settings
+
+__all__ = ["ReadingPlan", "tally_readings", "trace_rays"]
+
+_WORD = 1 << 32
+# Dimensions of the random numbers: 0–1 emitter, 2–3 specimen, 4–6 BSDF, 7 survival;
+# eq. (3) rejection draws from dimension 8 on (attempt k: 8 + 4k + 2·disk, +1).
+_REJECTION_BASE = 8
+# Columns of the per-reading table: wavelength, emitter centre D·ω, emitter axes e_u and
+# e_v, incidence direction ω (towards the emitter), strata per side of the jittered grid.
+_WAVELENGTH, _CENTRE, _E_U, _E_V, _OMEGA, _STRATA = 0, 1, 4, 7, 10, 13
+# Bits of the per-ray code of rare events (almost always all zero: one reduction skips them).
+_VIOLATION, _CAPPED, _ROUNDED = 1, 2, 4
+
+
+@dataclass(frozen=True)
+class ReadingPlan:
+    """One reading for the kernel: wavelength (nm), incidence (degrees) and its rays."""
+
+    wavelength: float
+    theta_i: float
+    phi_i: float
+    rays: int
+
+
+def tally_readings(
+    instrument: Any, plans: list[ReadingPlan], settings: Settings, offsets: Any = None
+) -> Counts:
+    """
+    Trace every reading of ``plans`` and return their exact :class:`~virtspec_mi.counts.Counts`
+    (one entry per plan).
+
+    Reading k's rays are the global ray indices [offsets[k], offsets[k] + rays_k);
+    ``offsets`` defaults to consecutive ranges (0, rays_0, rays_0 + rays_1, …) and may
+    leave gaps (a sweep keys each reading on its index in the whole sweep, so a reading
+    gets the same rays whichever other readings share the call). Ranges must not
+    overlap. The readings' rays are packed into lanes in list order and cut into chunks
+    of at most ``settings.chunk_size`` rays (never straddling a 2³² boundary of the
+    global index); each chunk runs as one kernel, so memory stays bounded and counts do
+    not depend on chunking.
+    """
+
+    rays = np.array([plan.rays for plan in plans], dtype=np.int64)
+    starts = np.concatenate([[0], np.cumsum(rays)])  # packed (lane) position of each reading
+    offsets = starts[:-1].copy() if offsets is None else _check_offsets(offsets, rays)
+    # Packed positions where the high word of the global index changes: chunks are cut there.
+    cuts = [starts[-1]]
+    for k in range(len(plans)):
+        first_block, last_block = offsets[k] // _WORD, (offsets[k] + rays[k] - 1) // _WORD
+        cuts.extend(starts[k] + (b * _WORD - offsets[k]) for b in range(first_block + 1, last_block + 1))
+        if k and first_block != (offsets[k - 1] + rays[k - 1] - 1) // _WORD:
+            cuts.append(starts[k])
+    cuts = np.unique(np.array(cuts, dtype=np.int64))
+    counts = Counts.zeros(len(plans))
+    counts.rays[:] = rays
+    kernel = _Kernel(instrument, plans, settings)
+    first = 0
+    while first < starts[-1]:
+        size = int(min(settings.chunk_size, cuts[np.searchsorted(cuts, first, side="right")] - first))
+        slots = np.arange(
+            np.searchsorted(starts, first, side="right") - 1,
+            np.searchsorted(starts, first + size, side="left"),
+        )
+        kernel.run(first, size, slots, starts, offsets, counts)
+        first += size
+    return counts
+
+
+def _check_offsets(offsets: Any, rays: np.ndarray) -> np.ndarray:
+    """Per-reading starts of the global ray index: whole numbers ≥ 0, ranges disjoint, < 2⁶³."""
+
+    offsets = np.asarray(offsets)
+    if offsets.shape != rays.shape or (offsets.size and not np.issubdtype(offsets.dtype, np.integer)):
+        raise ValueError(f"offsets must be {len(rays)} whole numbers, one per reading")
+    offsets = offsets.astype(np.int64)
+    order = np.argsort(offsets, kind="stable")
+    ends = offsets[order] + rays[order]
+    if offsets.size and (offsets.min() < 0 or np.any(offsets[order][1:] < ends[:-1])):
+        raise ValueError("offsets must be >= 0 and the readings' ray ranges [offset, offset + rays) disjoint")
+    return offsets
+
+
+def trace_rays(instrument: Any, plan: ReadingPlan, settings: Settings, count: int) -> dict:
+    """
+    The first ``count`` rays of one reading, ray by ray, through the same kernel code
+    as :func:`tally_readings` (for tests and diagnostics): NumPy arrays of emitter
+    points ``origin`` (specimen frame), specimen points ``target``, incident
+    directions ``wi`` (towards the emitter), outgoing ``wo``, ``fate`` (a
+    :class:`~virtspec_mi.counts.Fate` code) and the BSDF ``weight``.
+    """
+
+    kernel = _Kernel(instrument, [plan], settings)
+    lanes = kernel.trace(0, count, np.array([0]), np.array([0, plan.rays]), np.array([0]))
+    dr.eval(lanes)
+    return {name: np.array(value).T if np.ndim(value) > 1 else np.array(value)
+            for name, value in lanes.items()}
+
+
+class _Kernel:
+    """The per-chunk ray kernel of one :func:`tally_readings` call."""
+
+    def __init__(self, instrument: Any, plans: list[ReadingPlan], settings: Settings) -> None:
+        self.bsdf = instrument.bsdf
+        self.settings = settings
+        # Specular/regular counts: per ray only for a BSDF with both delta and other lobes.
+        flags = self.bsdf.flags()
+        delta = mi.has_flag(flags, mi.BSDFFlags.Delta)
+        smooth = mi.has_flag(flags, mi.BSDFFlags.Smooth) or mi.has_flag(flags, mi.BSDFFlags.Null)
+        self.delta_lobes = "mixed" if delta and smooth else "all" if delta else "none"
+        geometry = instrument.geometry
+        self.emitter_radius = dr.opaque(mi.Float, geometry.emitter_radius)
+        self.specimen_radius = dr.opaque(mi.Float, geometry.specimen_radius)
+        self.distance = dr.opaque(mi.Float, geometry.distance)
+        frame = instrument.to_world
+        self.frame = mi.Frame3f(*(mi.Vector3f(*map(float, frame[:3, i])) for i in range(3)))
+        self.centre = mi.Point3f(*map(float, frame[:3, 3]))
+        # Per-reading parameters on the host, one row per reading; a chunk picks its rows.
+        rows = []
+        for plan in plans:
+            omega, e_u, e_v = incidence_frame(plan.theta_i, plan.phi_i)
+            strata = np.floor(np.sqrt(plan.rays))
+            rows.append([plan.wavelength, *(omega * geometry.distance), *e_u, *e_v, *omega, strata])
+        self.readings = np.array(rows, dtype=np.float64)
+
+    # -- one chunk ---------------------------------------------------------------------
+
+    def run(self, first: int, size: int, slots: np.ndarray, starts: np.ndarray,
+            offsets: np.ndarray, counts: Counts) -> None:
+        """Add the counts of the packed lanes [first, first + size) to readings ``slots`` of ``counts``."""
+
+        lanes = self.trace(first, size, slots, starts, offsets)
+        fate = lanes["fate"]
+        # Two 32-bit counts per UInt64 lane: (reflected, transmitted), (specular, regular).
+        code = dr.select(fate == int(Fate.REFLECTED), mi.UInt64(1), mi.UInt64(0)) | dr.select(
+            fate == int(Fate.TRANSMITTED), mi.UInt64(_WORD), mi.UInt64(0)
+        )
+        rare = lanes["rare"]
+        packed_codes = {("reflected", "transmitted"): code}
+        if self.delta_lobes == "mixed":
+            packed_codes[("specular_reflected", "regular_transmitted")] = dr.select(
+                lanes["specular"], mi.UInt64(1), mi.UInt64(0)) | dr.select(lanes["regular"], mi.UInt64(_WORD), mi.UInt64(0))
+        dr.eval(*packed_codes.values(), rare)  # the one fused ray kernel
+        bounds, _ = _lane_ranges(first, size, slots, starts)
+        ends = np.append(bounds[1:], size)
+        for (low, high), packed_code in packed_codes.items():
+            if len(slots) == 1:
+                packed = np.array([int(dr.sum(packed_code).numpy()[0])], dtype=np.uint64)
+            else:
+                packed = _segment_sums(dr.cumsum(packed_code), bounds, ends)
+            getattr(counts, low)[slots] += (packed & np.uint64(_WORD - 1)).astype(np.int64)
+            getattr(counts, high)[slots] += (packed >> np.uint64(32)).astype(np.int64)
+        if self.delta_lobes == "all":  # every event is a delta event: nothing to count
+            counts.specular_reflected[slots] = counts.reflected[slots]
+            counts.regular_transmitted[slots] = counts.transmitted[slots]
+        if int(dr.max(rare).numpy()[0]) == 0:  # the usual case: one reduction, nothing rare
+            return
+        for name, bit in (("weight_violations", _VIOLATION), ("capped", _CAPPED), ("rounded_weights", _ROUNDED)):
+            flags = mi.UInt64(dr.select((rare & bit) != 0, 1, 0))
+            getattr(counts, name)[slots] += _segment_sums(dr.cumsum(flags), bounds, ends).astype(np.int64)
+        self._largest_weights(lanes["weight"], rare, bounds, slots, counts)
+
+    @staticmethod
+    def _largest_weights(weight: Any, rare: Any, bounds: np.ndarray, slots: np.ndarray, counts: Counts) -> None:
+        """Keep the largest violating weight of each reading (rare: only lanes that violate)."""
+
+        lanes = dr.compress((rare & _VIOLATION) != 0)
+        if dr.width(lanes) == 0:
+            return
+        values = np.array(dr.gather(mi.Float, weight, lanes), dtype=np.float64)
+        where = np.searchsorted(bounds.astype(np.int64), np.array(lanes, dtype=np.int64), side="right") - 1
+        largest = counts.largest_weight
+        for slot, value in zip(slots[where], values):
+            if not np.isnan(value):
+                largest[slot] = value if np.isnan(largest[slot]) else max(largest[slot], value)
+
+    def trace(self, first: int, size: int, slots: np.ndarray, starts: np.ndarray,
+              offsets: np.ndarray) -> dict:
+        """Symbolic per-lane quantities of the packed lanes [first, first + size) (nothing evaluated)."""
+
+        settings = self.settings
+        lane = dr.arange(mi.UInt32, size)
+        # Lane l of reading k has global ray index g = offsets[k] + (first + l − starts[k]); the
+        # chunk never crosses a 2³² boundary of g, so one root and a per-reading low-word shift.
+        shift = (offsets[slots] - starts[slots] + first) % _WORD
+        root = chunk_root(settings.seed, int(offsets[slots[0]] + first - starts[slots[0]]) // _WORD)
+
+        # Per-reading parameters: width-1 opaque values for a single reading, else gathered.
+        bounds, j0 = _lane_ranges(first, size, slots, starts)
+        rows = self.readings[slots]
+        if len(slots) == 1:
+            def column(values: np.ndarray, kind: Any) -> Any:
+                return dr.opaque(kind, values[0].item())
+            ray = lane + column(j0, mi.UInt32)
+        else:
+            slot = _find_slot(bounds, lane)
+
+            def column(values: np.ndarray, kind: Any) -> Any:
+                return dr.gather(kind, kind(values), slot)
+            ray = lane - column(bounds, mi.UInt32) + column(j0, mi.UInt32)
+        if np.all(shift == shift[0]):  # consecutive readings (the default layout): one scalar
+            ray_index = lane + dr.opaque(mi.UInt32, int(shift[0]))
+        else:
+            ray_index = lane + column(shift.astype(np.uint32), mi.UInt32)
+        keys = [dr.opaque(mi.UInt32, k) for k in dimension_keys(root)]
+
+        def uniform(dimension: int) -> mi.Float:
+            return to_unit(hash32(ray_index ^ keys[dimension]), mi.Float)
+
+        def vector(index: int) -> mi.Vector3f:
+            return mi.Vector3f(*(column(rows[:, index + k], mi.Float) for k in range(3)))
+
+        wavelength = column(rows[:, _WAVELENGTH], mi.Float)
+
+        if settings.beam == "diffuse":
+            u0, u1 = uniform(0), uniform(1)
+            if settings.sampling == "jittered":
+                u0, u1 = jittered_cell(mi, u0, u1, ray, column(rows[:, _STRATA].astype(np.uint32), mi.UInt32))
+            wi = mi.warp.square_to_cosine_hemisphere(mi.Point2f(u0, u1))
+            target = sample_disk(mi, settings.sampling, uniform(2), uniform(3), self.specimen_radius,
+                                 lambda r: _rejection(ray_index, root, r, 1))
+            origin = mi.Point3f(target.x, target.y, 0.0) + wi * self.distance
+        elif settings.beam == "collimated":
+            wi = vector(_OMEGA)
+            target = mi.Point2f(0.0, 0.0)
+            origin = mi.Point3f(wi)
+        else:
+            u0, u1 = uniform(0), uniform(1)
+            if settings.sampling == "jittered":
+                u0, u1 = jittered_cell(mi, u0, u1, ray, column(rows[:, _STRATA].astype(np.uint32), mi.UInt32))
+            emitter = sample_disk(mi, settings.sampling, u0, u1, self.emitter_radius,
+                                  lambda r: _rejection(ray_index, root, r, 0))
+            target = sample_disk(mi, settings.sampling, uniform(2), uniform(3), self.specimen_radius,
+                                 lambda r: _rejection(ray_index, root, r, 1))
+            origin = mi.Point3f(vector(_CENTRE) + emitter.x * vector(_E_U) + emitter.y * vector(_E_V))
+            wi = dr.normalize(origin - mi.Point3f(target.x, target.y, 0.0))
+
+        si = dr.zeros(mi.SurfaceInteraction3f)
+        si.wi = wi
+        si.wavelengths = mi.Spectrum(wavelength)
+        si.sh_frame = self.frame
+        si.n = self.frame.n
+        si.p = self.centre + self.frame.s * target.x + self.frame.t * target.y
+        radius = dr.norm(target)
+        azimuth = dr.atan2(target.y, target.x) * dr.inv_two_pi
+        si.uv = mi.Point2f(radius / self.specimen_radius, dr.select(azimuth < 0, azimuth + 1.0, azimuth))
+        context = mi.BSDFContext(mi.TransportMode.Importance)
+        bs, weight = self.bsdf.sample(context, si, uniform(4), mi.Point2f(uniform(5), uniform(6)), True)
+        w = mi.Spectrum(weight)[0]
+        survives = uniform(7) < w
+        # wo·n = 0 exactly (grazing exit): the sampled event decides — transmission crosses.
+        crossed = mi.has_flag(bs.sampled_type, mi.BSDFFlags.Transmission)
+        upper = dr.select(bs.wo.z != 0.0, bs.wo.z > 0.0, crossed ^ (wi.z >= 0.0))
+        fate = dr.select(survives, dr.select(upper, mi.UInt32(int(Fate.REFLECTED)), mi.UInt32(int(Fate.TRANSMITTED))),
+                         mi.UInt32(int(Fate.ABSORBED)))
+        capped = bs.sampled_component == CAPPED_COMPONENT
+        fate = dr.select(capped, mi.UInt32(int(Fate.CAPPED)), fate)
+        # u < w makes a weight in (1, 1 + ε] always survive and one in [−ε, 0) never: rounding.
+        exact = (w >= 0.0) & (w <= 1.0)
+        rounded = ~exact & (w >= -WEIGHT_ROUNDING) & (w <= 1.0 + WEIGHT_ROUNDING)
+        violation = ~exact & ~rounded
+        rare = (dr.select(violation, mi.UInt32(_VIOLATION), 0) | dr.select(capped, mi.UInt32(_CAPPED), 0)
+                | dr.select(rounded, mi.UInt32(_ROUNDED), 0))
+        delta = mi.has_flag(bs.sampled_type, mi.BSDFFlags.Delta)
+        specular, regular = (fate == int(Fate.REFLECTED)) & delta, (fate == int(Fate.TRANSMITTED)) & delta
+        return {"origin": origin, "target": target, "wi": wi, "wo": bs.wo, "fate": fate, "weight": w,
+                "rare": rare, "specular": specular, "regular": regular}
+
+
+@dr.syntax
+def _rejection(ray_index: mi.UInt32, root: int, radius: mi.Float, disk: int) -> mi.Point2f:
+    """Eq. (3): uniform points of the square [−r, r]² until one falls in the disk."""
+
+    key = dr.opaque(mi.UInt32, root)
+    dimension = mi.UInt32(_REJECTION_BASE + 2 * disk)
+    x = mi.Float(1.0)
+    y = mi.Float(1.0)
+    while dr.hint(x * x + y * y > 1.0, label="rejection"):
+        kx = dimension_key(key, dimension)
+        ky = dimension_key(key, dimension + 1)
+        x = dr.fma(2.0, to_unit(hash32(ray_index ^ kx), mi.Float), -1.0)
+        y = dr.fma(2.0, to_unit(hash32(ray_index ^ ky), mi.Float), -1.0)
+        dimension += 4
+    return mi.Point2f(x * radius, y * radius)
+
+
+def _lane_ranges(first: int, size: int, slots: np.ndarray, starts: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Per reading of a chunk: its first lane in the chunk, and the index of that lane's ray."""
+
+    bounds = np.clip(starts[slots] - first, 0, size).astype(np.uint32)
+    first_ray = np.maximum(first - starts[slots], 0).astype(np.uint32)
+    return bounds, first_ray
+
+
+def _find_slot(bounds: np.ndarray, lane: mi.UInt32) -> mi.UInt32:
+    """Index of the last reading whose first lane is ≤ ``lane`` (binary lifting, padded to 2^k)."""
+
+    steps = max(1, int(np.ceil(np.log2(len(bounds)))))
+    padded = np.full(1 << steps, 0xFFFFFFFF, dtype=np.uint32)
+    padded[: len(bounds)] = bounds
+    table = mi.UInt32(padded)
+    slot = mi.UInt32(0)
+    for step in reversed(range(steps)):
+        probe = slot + (1 << step)
+        slot = dr.select(dr.gather(mi.UInt32, table, probe) <= lane, probe, slot)
+    return slot
+
+
+def _segment_sums(cumulative: Any, bounds: np.ndarray, ends: np.ndarray) -> np.ndarray:
+    """Sums over lane ranges [bounds, ends) from an inclusive cumulative sum."""
+
+    bounds, ends = bounds.astype(np.int64), ends.astype(np.int64)
+
+    last = dr.gather(type(cumulative), cumulative, mi.UInt32(np.maximum(ends - 1, 0).astype(np.uint32)))
+    before = dr.gather(type(cumulative), cumulative, mi.UInt32(np.maximum(bounds - 1, 0).astype(np.uint32)))
+    last, before = np.array(last, dtype=np.uint64), np.array(before, dtype=np.uint64)
+    before[bounds == 0] = 0
+    return last - before

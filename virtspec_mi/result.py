@@ -1,0 +1,584 @@
+"""
+One result type for one reading or many: :class:`Result`
+========================================================
+
+A :class:`Result` holds exact :class:`~virtspec_mi.counts.Counts` over labelled
+dimensions (xarray conventions): a single reading of :func:`virtspec_mi.measure` has the
+dim ``wavelength`` (θi is a scalar coordinate), a sweep has ``(wavelength, theta_i)``;
+new dimensions add labels, not classes. Everything else is derived here, once, from the
+counts: reflectance ρ = m/N (eq. 2), transmittance, absorptance, the specular/regular
+parts, the Clopper–Pearson intervals, the back-lit fraction and the **certified
+tolerance** — the μ that the rays actually spent guarantee at δ under the rule used
+(:mod:`virtspec_mi.budgets`), or "not certified" (NaN) where no rule applies.
+
+The same methods serve one reading or many: :meth:`Result.summary`,
+:meth:`Result.as_dict` (JSON), :meth:`Result.to_dataset` (``xarray.Dataset``),
+:meth:`Result.write` / :meth:`Result.read` (NetCDF, CSV, JSON;
+:mod:`virtspec_mi.results_io`), :meth:`Result.to_sd` / :meth:`Result.to_msds` /
+:meth:`Result.colour` (colour-science; :mod:`virtspec_mi.colorimetry`) and
+:meth:`Result.plot` (:mod:`virtspec_mi.plot`).
+
+References
+----------
+Baranoski et al. (2001), eqs. (2), (14), (19), (23); Clopper & Pearson (1934).
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import warnings
+from dataclasses import asdict, dataclass, field, replace
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from virtspec_mi import __version__
+from virtspec_mi.counts import QUANTITIES, WEIGHT_ROUNDING, Counts
+from virtspec_mi.geometry import InstrumentGeometry, backlit_fraction
+from virtspec_mi.intervals import clopper_pearson
+from virtspec_mi.settings import Settings
+
+__all__ = ["Result"]
+
+_PARTS = ("specular_reflectance", "diffuse_reflectance", "regular_transmittance", "diffuse_transmittance")
+
+
+def _counts(name: str, doc: str) -> property:
+    return property(lambda self: getattr(self.counts, name), doc=doc)
+
+
+def _round_up(value: float, digits: int = 3) -> float:
+    """``value`` rounded *up* to ``digits`` significant digits (a printed tolerance never shrinks)."""
+
+    if not np.isfinite(value) or value <= 0:
+        return value
+    scale = 10.0 ** (np.floor(np.log10(value)) - digits + 1)
+    return float(np.ceil(value / scale * (1 - 1e-12)) * scale)
+
+
+@dataclass(frozen=True)
+class Result:
+    """
+    Certified readings over labelled dimensions (see the module docstring).
+
+    Attributes
+    ----------
+    dims : tuple of str
+        The dimensions of every per-reading array, e.g. ``("wavelength",)`` or
+        ``("wavelength", "theta_i")``.
+    coords : dict of str to ndarray
+        Labels: ``wavelength`` (nm) and ``theta_i`` (degrees); a coordinate that is not a
+        dim is a 0-d array (θi of a single reading).
+    counts : Counts
+        Exact counts by name behind the estimates.
+    pilot : Counts or None
+        Two-stage pilot counts (spent, not in the estimates); ``None`` for a fixed budget.
+    settings : Settings
+        The settings used (its ``theta_i`` is the first angle).
+    geometry : InstrumentGeometry
+        r₁, r₂ and D of the scene.
+    seconds : float
+        Wall time spent tracing (summed over interrupted and resumed runs).
+    scene : str
+        Fingerprint of the scene (``sha256:…``), or "".
+    wavelength_independent : bool
+        The specimen declared itself wavelength-independent: readings that differ only
+        in wavelength were traced once and share their counts.
+    version : str
+        virtspec-mi version that made the result.
+    """
+
+    dims: tuple[str, ...]
+    coords: dict[str, np.ndarray]
+    counts: Counts
+    pilot: Counts | None
+    settings: Settings
+    geometry: InstrumentGeometry
+    seconds: float
+    scene: str = ""
+    wavelength_independent: bool = False
+    version: str = field(default=__version__)
+
+    # -- labels ------------------------------------------------------------------------
+
+    @property
+    def shape(self) -> tuple[int, ...]:
+        return tuple(len(self.coords[d]) for d in self.dims)
+
+    @property
+    def wavelengths(self) -> np.ndarray:
+        """Wavelengths in nm, in the order requested."""
+
+        return self.coords["wavelength"]
+
+    @property
+    def theta_i(self) -> Any:
+        """Polar incidence in degrees: a float for a single reading, an array for a θi dim."""
+
+        value = self.coords["theta_i"]
+        return float(value) if np.ndim(value) == 0 else value
+
+    @property
+    def phi_i(self) -> float:
+        return self.settings.phi_i
+
+    @property
+    def mu(self) -> float:
+        """The tolerance asked for (see :attr:`certified_mu` for the one the rays give)."""
+
+        return self.settings.mu
+
+    @property
+    def delta(self) -> float:
+        return self.settings.delta
+
+    # -- counts by name ----------------------------------------------------------------
+
+    rays = _counts("rays", "Rays N per reading behind the estimates (int64).")
+    reflected = _counts("reflected", "Rays reflected into the upper hemisphere, per reading.")
+    transmitted = _counts("transmitted", "Rays transmitted into the lower hemisphere, per reading.")
+    capped = _counts("capped", "Random walks stopped by the specimen's step cap: in none of R, T, A.")
+    weight_violations = _counts("weight_violations", "Rays whose BSDF weight was outside [−ε, 1 + ε] or NaN.")
+    rounded_weights = _counts("rounded_weights", "Rays whose BSDF weight was within ε of [0, 1] (rounding).")
+    specular_reflected = _counts("specular_reflected", "Reflected rays whose sampled event was a delta event.")
+    regular_transmitted = _counts("regular_transmitted", "Transmitted rays whose sampled event was a delta event.")
+    largest_weight = _counts("largest_weight", "Largest violating BSDF weight per reading (NaN: none).")
+
+    @property
+    def absorbed(self) -> np.ndarray:
+        """Absorbed rays: rays − reflected − transmitted − capped."""
+
+        return self.counts.absorbed
+
+    @property
+    def pilot_rays(self) -> np.ndarray | None:
+        """Two-stage pilot rays per reading (spent, not in the estimates); ``None`` for a fixed budget."""
+
+        return None if self.pilot is None else self.pilot.rays
+
+    @property
+    def rays_spent(self) -> np.ndarray:
+        """All rays traced per reading (two-stage: pilot included)."""
+
+        return self.rays if self.pilot is None else self.rays + self.pilot.rays
+
+    # -- estimates ---------------------------------------------------------------------
+
+    @property
+    def reflectance(self) -> np.ndarray:
+        """ρ = m/N per reading (eq. 2)."""
+
+        return self.reflected / self.rays
+
+    @property
+    def transmittance(self) -> np.ndarray:
+        """τ = t/N per reading."""
+
+        return self.transmitted / self.rays
+
+    @property
+    def absorptance(self) -> np.ndarray:
+        """α = absorbed/N per reading (ρ + τ + α = 1 − capped/N)."""
+
+        return self.absorbed / self.rays
+
+    @property
+    def specular_reflectance(self) -> np.ndarray:
+        """ρs: reflected by a mirror (delta) event (CIE regular reflectance; MCML Rsp)."""
+
+        return self.specular_reflected / self.rays
+
+    @property
+    def diffuse_reflectance(self) -> np.ndarray:
+        """ρd = ρ − ρs: reflected by scattering (MCML's Rd)."""
+
+        return (self.reflected - self.specular_reflected) / self.rays
+
+    @property
+    def regular_transmittance(self) -> np.ndarray:
+        """τr: transmitted by a delta event (unscattered, collimated transmittance)."""
+
+        return self.regular_transmitted / self.rays
+
+    @property
+    def diffuse_transmittance(self) -> np.ndarray:
+        """τd = τ − τr: transmitted after scattering."""
+
+        return (self.transmitted - self.regular_transmitted) / self.rays
+
+    def quantity(self, name: str) -> np.ndarray:
+        """``reflectance``, ``transmittance`` or ``absorptance`` by name."""
+
+        if name not in QUANTITIES:
+            raise ValueError(f"quantity must be one of {', '.join(QUANTITIES)} (got {name!r})")
+        return getattr(self, name)
+
+    @property
+    def backlit_fraction(self) -> Any:
+        """
+        Share of the emitter area below the specimen plane (conical beam, θi > atan(D/r₁)):
+        those rays strike the specimen's back face. A float for one θi, else per θi.
+        """
+
+        angles = np.atleast_1d(self.coords["theta_i"])
+        values = np.array([backlit_fraction(self.geometry, t) if self.settings.beam == "conical" else 0.0
+                           for t in angles])
+        return float(values[0]) if np.ndim(self.coords["theta_i"]) == 0 else values
+
+    # -- the certificate ---------------------------------------------------------------
+
+    @property
+    def bound(self) -> str:
+        """The ray budget used: the settings' bound, or ``"rays"`` when N was given explicitly."""
+
+        return self.settings.bound if self.settings.rays is None else "rays"
+
+    @property
+    def interval_delta(self) -> float:
+        """δ of each certified quantity and interval: δ, or δ/2 with ``joint``."""
+
+        return self.settings.quantity_delta
+
+    @property
+    def rounding_bias(self) -> np.ndarray:
+        """Largest shift of each estimate by BSDF weights rounded to 0 or 1: rounded_weights·ε/N."""
+
+        return self.rounded_weights * WEIGHT_ROUNDING / self.rays
+
+    @property
+    def certified(self) -> np.ndarray:
+        """True for the readings a rule certifies: no weight violations and no capped walks."""
+
+        return (self.weight_violations == 0) & (self.capped == 0)
+
+    @property
+    def certified_mu(self) -> np.ndarray:
+        """
+        The tolerance each reading's rays guarantee at its δ (:attr:`interval_delta`),
+        per reading: μ for a reading sized by an adaptive rule (two-stage), else the
+        rule's :meth:`~virtspec_mi.budgets.RayBudget.certified` tolerance of its N —
+        ≤ μ when N came from the rule, larger when fewer rays were asked for (e.g.
+        ``rays=1000`` gives 0.0515 under eq. (19)) — plus :attr:`rounding_bias`. NaN
+        where no rule applies (weight violations or capped walks).
+        """
+
+        s = self.settings
+        if s.adaptive:
+            tolerance = np.full(self.shape, s.mu)
+        else:
+            unique, inverse = np.unique(self.rays, return_inverse=True)
+            values = np.array([s.budget.certified(int(n), self.interval_delta, s.mu) for n in unique])
+            tolerance = values[inverse].reshape(self.shape)
+        return np.where(self.certified, tolerance + self.rounding_bias, np.nan)
+
+    def interval(self, quantity: str = "reflectance") -> tuple[np.ndarray, np.ndarray]:
+        """Clopper–Pearson interval ``(lower, upper)`` of ``quantity`` per reading at :attr:`interval_delta`."""
+
+        self.quantity(quantity)  # validates the name
+        counts = {"reflectance": self.reflected, "transmittance": self.transmitted, "absorptance": self.absorbed}
+        return clopper_pearson(counts[quantity], self.rays, self.interval_delta)
+
+    @property
+    def reflectance_interval(self) -> np.ndarray:
+        """Clopper–Pearson interval ``[lower, upper]`` of ρ per reading, shape (…, 2)."""
+
+        return np.stack(self.interval("reflectance"), axis=-1)
+
+    @property
+    def transmittance_interval(self) -> np.ndarray:
+        """Clopper–Pearson interval of τ per reading, shape (…, 2)."""
+
+        return np.stack(self.interval("transmittance"), axis=-1)
+
+    @property
+    def absorptance_interval(self) -> np.ndarray:
+        """Clopper–Pearson interval of α per reading, shape (…, 2)."""
+
+        return np.stack(self.interval("absorptance"), axis=-1)
+
+    def warn_if_uncertified(self, stacklevel: int = 3) -> None:
+        """``RuntimeWarning`` for every reason a reading escaped its certificate."""
+
+        for line in self._uncertified():
+            warnings.warn(line, RuntimeWarning, stacklevel=stacklevel)
+
+    def _uncertified(self) -> list[str]:
+        lines = []
+        if np.any(self.weight_violations):
+            largest = self.largest_weight[~np.isnan(self.largest_weight)]
+            seen = f", the largest {largest.max():.6g}" if largest.size else " (NaN)"
+            lines.append(f"{int(np.sum(self.weight_violations))} BSDF sample weights fell outside [0, 1] by more "
+                         f"than the rounding tolerance {WEIGHT_ROUNDING:g}{seen}: the specimen is not energy "
+                         "conserving, so these readings are not certified")
+        if np.any(self.capped):
+            lines.append(f"{int(np.sum(self.capped))} random walks reached the specimen's step cap; they are counted "
+                         "in capped and in none of reflectance, transmittance and absorptance (not certified)")
+        return lines
+
+    # -- views -------------------------------------------------------------------------
+
+    def as_grid(self) -> "Result":
+        """The same result with θi as a dimension (a single reading becomes a one-angle grid)."""
+
+        if "theta_i" in self.dims:
+            return self
+        coords = {**self.coords, "theta_i": np.atleast_1d(self.coords["theta_i"])}
+        return replace(self, dims=(*self.dims, "theta_i"), coords=coords,
+                       counts=self.counts.map(lambda v: v[..., np.newaxis]),
+                       pilot=None if self.pilot is None else self.pilot.map(lambda v: v[..., np.newaxis]))
+
+    def squeeze(self) -> "Result":
+        """The same result without a θi dimension of length one (θi becomes a scalar label)."""
+
+        if "theta_i" not in self.dims or len(self.coords["theta_i"]) != 1:
+            return self
+        axis = self.dims.index("theta_i")
+        coords = {**self.coords, "theta_i": np.asarray(self.coords["theta_i"][0])}
+        return replace(self, dims=tuple(d for d in self.dims if d != "theta_i"), coords=coords,
+                       counts=self.counts.map(lambda v: np.take(v, 0, axis=axis)),
+                       pilot=None if self.pilot is None else self.pilot.map(lambda v: np.take(v, 0, axis=axis)))
+
+    def __repr__(self) -> str:
+        sizes = ", ".join(f"{d}: {n}" for d, n in zip(self.dims, self.shape))
+        mu = self.certified_mu
+        certified = "not certified" if np.all(np.isnan(mu)) else f"certified mu <= {_round_up(float(np.nanmax(mu))):g}"
+        return (f"<virtspec_mi.Result ({sizes}) {self.settings.beam}, {self.bound} bound, "
+                f"N = {_span(self.rays)}, {certified} at delta = {self.interval_delta:g}>")
+
+    # -- text --------------------------------------------------------------------------
+
+    def summary(self) -> str:
+        """Human-readable summary: settings, the certificate, and a table for a single reading."""
+
+        s = self.settings
+        incidence = ("cosine-weighted over the hemisphere" if s.beam == "diffuse"
+                     else f"theta_i = {self._angles()} deg, phi_i = {s.phi_i:g} deg")
+        if self.dims == ("wavelength",):
+            head = f"{s.beam} reading, {incidence}, sampling = {s.sampling}, seed = {s.seed}"
+        else:
+            sizes = " x ".join(f"{n} {'wavelengths' if d == 'wavelength' else d}"
+                               for d, n in reversed(list(zip(self.dims, self.shape))))
+            head = f"{s.beam} sweep: {sizes} (phi_i = {s.phi_i:g} deg, sampling = {s.sampling}, seed = {s.seed})"
+        lines = [head, self._certificate() + f"; {self.seconds * 1e3:.1f} ms"]
+        if self.dims == ("wavelength",):
+            lines += self._table()
+        if self.wavelength_independent and len(self.wavelengths) > 1:
+            lines.append("note: wavelength-independent specimen: traced once"
+                         + ("" if self.dims == ("wavelength",) else " per theta_i") + ", the same rays for every wavelength")
+        backlit = np.atleast_1d(self.backlit_fraction)
+        if np.any(backlit > 0):
+            lines.append(f"note: up to {backlit.max():.2%} of the emitter lies below the specimen plane "
+                         f"(theta_i > {self.geometry.backlit_threshold:.2f} deg): those rays strike the back face")
+        if np.any(self.rounded_weights):
+            lines.append(f"note: {int(self.rounded_weights.sum())} BSDF weights within {WEIGHT_ROUNDING:g} of [0, 1] "
+                         f"were rounded (bias <= {_round_up(float(self.rounding_bias.max())):g}, in the tolerance)")
+        lines += [f"WARNING: {line}" for line in self._uncertified()]
+        return "\n".join(lines)
+
+    def _angles(self) -> str:
+        angles = np.atleast_1d(self.coords["theta_i"])
+        return f"{angles[0]:g}" if len(angles) == 1 else f"{angles.min():g}..{angles.max():g}"
+
+    def _certificate(self) -> str:
+        s = self.settings
+        unit = "wavelength" if self.dims == ("wavelength",) else "reading"
+        pilot = "" if self.pilot is None else f" + {int(self.pilot.rays.max()):,} pilot"
+        counted = f"N = {_span(self.rays)}{pilot} rays per {unit}"
+        mu = self.certified_mu
+        if np.all(np.isnan(mu)):
+            return f"{counted} (NOT CERTIFIED: see the warnings below)"
+        worst = _round_up(float(np.nanmax(mu)))
+        together = "R and T together" if s.joint else "|rho - m/N|"
+        rule = f"{s.bound} bound" if s.rays is None else f"rays given; {s.bound} bound"
+        text = f"{counted} ({rule}: {together} < {worst:g} with probability >= {1 - s.delta:g}"
+        if worst > s.mu * (1 + 1e-9):
+            text += f"; mu = {s.mu:g} was asked: these rays guarantee only {worst:g}"
+        if np.any(np.isnan(mu)):
+            text += "; some readings NOT CERTIFIED"
+        return text + ")"
+
+    def _table(self) -> list[str]:
+        rays = self.rays
+        lines = [f"{'lambda/nm':>10} {'reflectance':>12} {'transmittance':>14} {'absorptance':>12}"
+                 f"   Clopper-Pearson {1 - self.interval_delta:g} intervals (R; T)"]
+        r_int, t_int = self.reflectance_interval, self.transmittance_interval
+        varies = rays.min() != rays.max()
+        for i, wavelength in enumerate(self.wavelengths):
+            lines.append(
+                f"{wavelength:>10g} {self.reflectance[i]:>12.5f} {self.transmittance[i]:>14.5f} "
+                f"{self.absorptance[i]:>12.5f}   [{r_int[i, 0]:.5f}, {r_int[i, 1]:.5f}]; "
+                f"[{t_int[i, 0]:.5f}, {t_int[i, 1]:.5f}]" + (f"  N = {int(rays[i]):,}" if varies else ""))
+        mixed = ((0 < self.specular_reflected) & (self.specular_reflected < self.reflected)) | (
+            (0 < self.regular_transmitted) & (self.regular_transmitted < self.transmitted))
+        if np.any(mixed):  # a specimen with both mirror and scattered light: show the parts
+            lines.append(f"{'lambda/nm':>10} {'specular R':>12} {'diffuse R':>14} {'regular T':>12} {'diffuse T':>12}")
+            for i, wavelength in enumerate(self.wavelengths):
+                lines.append(f"{wavelength:>10g} " + " ".join(
+                    f"{getattr(self, part)[i]:>{width}.5f}" for part, width in zip(_PARTS, (12, 14, 12, 12))))
+        return lines
+
+    # -- plain data, datasets and files ------------------------------------------------
+
+    def as_dict(self) -> dict[str, Any]:
+        """
+        Every field by name as plain data (JSON-ready; NaN as ``None``): counts, estimates,
+        parts, intervals, the certificate, the pilot, settings, geometry and provenance.
+        Arrays are nested lists over :attr:`dims`. :meth:`from_dict` reads it back.
+        """
+
+        def plain(values: Any) -> Any:
+            values = np.asarray(values)
+            if values.dtype.kind == "f":
+                return np.where(np.isnan(values), None, values).tolist()
+            return values.tolist()
+
+        return {
+            "format": "virtspec-mi result 1",
+            "dims": list(self.dims),
+            "wavelengths": plain(self.wavelengths),
+            "theta_i": plain(self.coords["theta_i"]),
+            **{name: plain(values) for name, values in self.counts.as_dict().items()},
+            **{name: plain(self.quantity(name)) for name in QUANTITIES},
+            **{name: plain(getattr(self, name)) for name in _PARTS},
+            **{f"{name}_interval": plain(getattr(self, f"{name}_interval")) for name in QUANTITIES},
+            "interval_delta": self.interval_delta,
+            "bound": self.bound,
+            "certified_mu": plain(self.certified_mu),
+            "rounding_bias": plain(self.rounding_bias),
+            "backlit_fraction": plain(self.backlit_fraction),
+            "rays_spent": plain(self.rays_spent),
+            "pilot_rays": None if self.pilot is None else plain(self.pilot.rays),
+            "pilot": None if self.pilot is None else {k: plain(v) for k, v in self.pilot.as_dict().items()},
+            "seconds": self.seconds,
+            "settings": {**asdict(self.settings), "wavelengths": list(self.settings.wavelengths)},
+            "geometry": asdict(self.geometry),
+            "scene": self.scene,
+            "wavelength_independent": self.wavelength_independent,
+            "version": self.version,
+        }
+
+    @classmethod
+    def from_dict(cls, data: dict[str, Any]) -> "Result":
+        """The result of :meth:`as_dict` (``ValueError`` if ``data`` is not one)."""
+
+        try:
+            if data.get("format") != "virtspec-mi result 1":
+                raise KeyError("format")
+            dims = tuple(data["dims"])
+
+            def counts(source: dict[str, Any]) -> Counts:
+                return Counts(**{name: np.array(source[name], dtype=np.float64 if name == "largest_weight"
+                                                else np.int64) for name in Counts.names()})
+
+            return cls(
+                dims=dims,
+                coords={"wavelength": np.asarray(data["wavelengths"], dtype=np.float64),
+                        "theta_i": np.asarray(data["theta_i"], dtype=np.float64)},
+                counts=counts(data),
+                pilot=None if data["pilot"] is None else counts(data["pilot"]),
+                settings=Settings(**data["settings"]),
+                geometry=InstrumentGeometry(**data["geometry"]),
+                seconds=float(data["seconds"]),
+                scene=str(data["scene"]),
+                wavelength_independent=bool(data["wavelength_independent"]),
+                version=str(data["version"]),
+            )
+        except (KeyError, TypeError, ValueError, AttributeError) as error:
+            raise ValueError(f"not a virtspec-mi result (missing or bad {error})") from None
+
+    def to_dataset(self) -> Any:
+        """
+        An ``xarray.Dataset`` over :attr:`dims`: the estimates and parts (float64), every
+        count (int64), each quantity's Clopper–Pearson bounds ``<quantity>_lower`` /
+        ``_upper`` and ``certified_mu``; attributes hold the settings, geometry and
+        provenance (``result_json``: the whole result, from which :meth:`from_dataset`
+        rebuilds it).
+        """
+
+        import xarray as xr
+
+        data = self.as_dict()
+        variables: dict[str, Any] = {}
+        for name in (*QUANTITIES, *_PARTS, *Counts.names(), "absorbed", "certified_mu", "rounding_bias"):
+            values = np.asarray(getattr(self, name))
+            variables[name] = (self.dims, values.astype(np.int64 if values.dtype.kind in "iu" else np.float64))
+        for name in QUANTITIES:
+            lower, upper = self.interval(name)
+            bound = {"clopper_pearson_delta": self.interval_delta}
+            variables[f"{name}_lower"] = (self.dims, lower, bound)
+            variables[f"{name}_upper"] = (self.dims, upper, bound)
+        coords = {"wavelength": ("wavelength", self.wavelengths),
+                  "theta_i": ("theta_i", self.coords["theta_i"]) if "theta_i" in self.dims else self.theta_i}
+        s = self.settings
+        attrs = {"mu": s.mu, "delta": s.delta, "bound": s.bound, "joint": int(s.joint), "beam": s.beam,
+                 "sampling": s.sampling, "seed": s.seed, "phi_i": s.phi_i, "interval_delta": self.interval_delta,
+                 **asdict(self.geometry), "seconds": self.seconds, "scene": self.scene,
+                 "wavelength_independent": int(self.wavelength_independent), "version": self.version,
+                 "result_json": json.dumps(data)}
+        dataset = xr.Dataset(variables, coords=coords, attrs=attrs)
+        dataset["wavelength"].attrs["units"] = "nm"
+        dataset["theta_i"].attrs["units"] = "degree"
+        dataset["certified_mu"].attrs["meaning"] = ("tolerance the rays guarantee at interval_delta under the "
+                                                    "rule used; NaN: not certified")
+        return dataset
+
+    @classmethod
+    def from_dataset(cls, dataset: Any) -> "Result":
+        """The result of a dataset made by :meth:`to_dataset`."""
+
+        if "result_json" not in dataset.attrs:
+            raise ValueError("not a virtspec-mi result (no result_json attribute)")
+        return cls.from_dict(json.loads(dataset.attrs["result_json"]))
+
+    def write(self, path: str | os.PathLike) -> Path:
+        """Write to ``.nc`` (NetCDF-4), ``.csv`` or ``.json`` by suffix (:mod:`virtspec_mi.results_io`)."""
+
+        from virtspec_mi import results_io
+
+        return results_io.write(self.to_dataset(), self.as_dict(), path)
+
+    @classmethod
+    def read(cls, path: str | os.PathLike) -> "Result":
+        """Read a result written by :meth:`write` (or printed by ``virtspec measure --json``)."""
+
+        from virtspec_mi import results_io
+
+        kind, content = results_io.read(path)
+        return cls.from_dataset(content) if kind == "dataset" else cls.from_dict(content)
+
+    # -- colour and plots --------------------------------------------------------------
+
+    def to_sd(self, quantity: str = "reflectance", theta_i: float | None = None) -> Any:
+        """One quantity at one θi as a ``colour.SpectralDistribution`` (:mod:`virtspec_mi.colorimetry`)."""
+
+        from virtspec_mi.colorimetry import spectral_distribution
+
+        return spectral_distribution(self.as_grid(), quantity, theta_i)
+
+    def to_msds(self, theta_i: float | None = None) -> Any:
+        """R, T and A at one θi as a ``colour.MultiSpectralDistributions``."""
+
+        from virtspec_mi.colorimetry import multi_spectral_distributions
+
+        return multi_spectral_distributions(self.as_grid(), theta_i)
+
+    def colour(self, quantity: str = "reflectance", theta_i: float | None = None, **options: Any) -> Any:
+        """CIE XYZ, L*a*b* and sRGB of one quantity at one θi (``illuminant=``, ``observer=``)."""
+
+        from virtspec_mi.colorimetry import colorimetry
+
+        return colorimetry(self.to_sd(quantity, theta_i), **options)
+
+    def plot(self, path: str | os.PathLike | None = None, **options: Any) -> Any:
+        """Plot against θi or wavelength with the certified band (:func:`virtspec_mi.plot.plot_sweep`)."""
+
+        from virtspec_mi.plot import plot_sweep
+
+        return plot_sweep(self, path, **options)
+
+
+def _span(rays: np.ndarray) -> str:
+    low, high = int(np.min(rays)), int(np.max(rays))
+    return f"{low:,}" if low == high else f"{low:,} to {high:,}"

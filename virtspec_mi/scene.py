@@ -1,0 +1,135 @@
+"""
+Scenes: loading, building and fingerprinting instrument scenes
+==============================================================
+
+- :func:`load_scene` accepts an XML path, a scene dict or a loaded ``mi.Scene`` and
+  turns Mitsuba's loader errors into messages that name the problem;
+- :func:`find_instrument` loads a scene and reads its instrument
+  (:func:`virtspec_mi.instrument.read_instrument`);
+- :func:`instrument_scene` builds the paper's instrument (r₁ = 8, r₂ = 12.5, D = 100, in
+  mm) around any BSDF dict;
+- :func:`scene_fingerprint` names a scene in result files and checkpoints.
+
+References
+----------
+Baranoski et al. (2001), Sect. 5.1 (the instrument's dimensions).
+"""
+
+from __future__ import annotations
+
+import hashlib
+import os
+from dataclasses import asdict
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from virtspec_mi.geometry import (
+    PAPER_DISTANCE,
+    PAPER_EMITTER_RADIUS,
+    PAPER_SPECIMEN_RADIUS,
+    InstrumentGeometry,
+)
+from virtspec_mi.instrument import EMITTER_ID, SPECIMEN_ID, Instrument, SceneError, read_instrument
+from virtspec_mi.runtime import mitsuba
+
+__all__ = ["load_scene", "find_instrument", "instrument_scene", "placeholder_sensor", "scene_fingerprint"]
+
+
+def load_scene(scene: Any) -> Any:
+    """A loaded ``mi.Scene`` from an XML path, a scene dict or an ``mi.Scene``."""
+
+    mi = mitsuba()
+    if isinstance(scene, mi.Scene):
+        return scene
+    try:
+        if isinstance(scene, (str, os.PathLike)):
+            path = Path(scene)
+            if not path.is_file():
+                raise SceneError(f"scene file not found: {path}")
+            return mi.load_file(str(path))
+        if isinstance(scene, dict):
+            return mi.load_dict(scene)
+    except SceneError:
+        raise
+    except Exception as error:  # Mitsuba raises RuntimeError/ValueError with its parser text
+        raise SceneError(f"could not load scene {_describe(scene)}: {_clean(error)}") from error
+    raise SceneError(f"scene must be an XML path, a dict or a mitsuba Scene (got {type(scene).__name__})")
+
+
+def find_instrument(scene: Any) -> Instrument:
+    """Load ``scene`` (XML path, dict or ``mi.Scene``) and read its instrument."""
+
+    return read_instrument(load_scene(scene))
+
+
+def instrument_scene(
+    bsdf: dict,
+    *,
+    emitter_radius: float = PAPER_EMITTER_RADIUS,
+    specimen_radius: float = PAPER_SPECIMEN_RADIUS,
+    distance: float = PAPER_DISTANCE,
+    integrator: dict | None = None,
+) -> dict:
+    """
+    A scene dict of the paper's instrument around ``bsdf`` (a Mitsuba BSDF dict).
+
+    The specimen disk lies in z = 0 with normal +z; the emitter disk faces it from
+    (0, 0, D). ``integrator`` (a dict of ``spectrophotometer`` parameters) is added
+    when given.
+    """
+
+    geometry = InstrumentGeometry(emitter_radius, specimen_radius, distance)
+    mi = mitsuba()
+    scene: dict[str, Any] = {
+        "type": "scene",
+        EMITTER_ID: {
+            "type": "disk",
+            "to_world": mi.ScalarTransform4f().translate([0.0, 0.0, geometry.distance])
+            @ mi.ScalarTransform4f().scale(geometry.emitter_radius)
+            @ mi.ScalarTransform4f().rotate([1.0, 0.0, 0.0], 180.0),
+        },
+        SPECIMEN_ID: {
+            "type": "disk",
+            "to_world": mi.ScalarTransform4f().scale(geometry.specimen_radius),
+            "bsdf": bsdf,
+        },
+        "readout": placeholder_sensor(),
+    }
+    if integrator is not None:
+        scene["integrator"] = {"type": "spectrophotometer", **integrator}
+    return scene
+
+
+def placeholder_sensor() -> dict:
+    """A 1×1 sensor: ``mi.render`` insists on one; the spectrophotometer ignores it."""
+
+    return {"type": "perspective", "film": {"type": "hdrfilm", "width": 1, "height": 1}}
+
+
+def scene_fingerprint(scene: Any, instrument: Instrument) -> str:
+    """
+    A short fingerprint of a scene for result files and checkpoints: SHA-256 over the
+    XML file's bytes (or the dict's ``repr``), the specimen BSDF's description, the
+    specimen frame and the geometry.
+    """
+
+    digest = hashlib.sha256()
+    if isinstance(scene, (str, os.PathLike)):
+        digest.update(Path(scene).read_bytes())
+    elif isinstance(scene, dict):
+        digest.update(repr(sorted(scene.items(), key=lambda item: str(item[0]))).encode())
+    digest.update(str(instrument.bsdf).encode())
+    digest.update(np.asarray(instrument.to_world, dtype=np.float64).round(9).tobytes())
+    digest.update(repr(asdict(instrument.geometry)).encode())
+    return f"sha256:{digest.hexdigest()[:16]}"
+
+
+def _describe(scene: Any) -> str:
+    return f"'{scene}'" if isinstance(scene, (str, os.PathLike)) else f"({type(scene).__name__})"
+
+
+def _clean(error: Exception) -> str:
+    text = str(error).strip()
+    return text.splitlines()[-1] if text else type(error).__name__

@@ -40,7 +40,6 @@ from __future__ import annotations
 import argparse
 import importlib.util
 import os
-import subprocess
 import sys
 import tempfile
 import time
@@ -53,7 +52,7 @@ os.environ.setdefault("VIRTSPEC_LEAF_DATA", str(ROOT.parent / "shared" / "data" 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 import virtspec_mi as vm  # noqa: E402
-from throughput import machine, machine_lines  # noqa: E402  (shared machine report)
+from revisions import machine, machine_lines, show  # noqa: E402  (shared with the other benchmarks)
 
 CERTIFIED = vm.hoeffding_rays(0.005, 0.01)
 NPSG_FULL_SECONDS, NPSG_FULL_RAYS = 58.0, 100_000  # 421 wavelengths, 2 threads
@@ -84,8 +83,7 @@ def walk_against(revision: str, mi, measure_scene, rays: int) -> list[str]:
 
     import virtspec_mi.plugins.bsdfs.abm_b as abm_b
 
-    source = subprocess.run(["git", "-C", str(ROOT), "show", f"{revision}:plugins/bsdfs/abm_walk.py"],
-                            check=True, capture_output=True, text=True).stdout
+    source = show(revision, "plugins/bsdfs/abm_walk.py")
     with tempfile.NamedTemporaryFile("w", suffix=".py", delete=False) as handle:
         handle.write(source)
     spec = importlib.util.spec_from_file_location("abm_walk_against", handle.name)

@@ -39,7 +39,7 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from throughput import machine, machine_lines  # noqa: E402  (one machine description for all benchmarks)
+from revisions import machine, machine_lines  # noqa: E402  (one machine description for all benchmarks)
 
 import virtspec_mi as vm  # noqa: E402
 

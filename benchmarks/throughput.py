@@ -19,10 +19,16 @@ paper's diamond (``simple_dielectric``, η = 2.419; r₁ = 8, r₂ = 12.5, D = 1
 3. **bare Dr.Jit** — the hardware ceiling: one Dr.Jit kernel of the same maths
    (the project's counter-based RNG and keys, jittered polar warp, rotation,
    normalize, a hand-written Fresnel coin flip, one ``dr.sum`` over packed UInt64
-   counts) with no Mitsuba BSDF or SurfaceInteraction; chunks of 2²², every
-   per-call scalar passed with ``dr.opaque`` so the kernel is compiled once.
+   counts) with no Mitsuba BSDF or SurfaceInteraction; self-contained (the RNG and
+   warps copied bit for bit, only ``virtspec_mi.mitsuba()`` imported); chunks of
+   2²², every per-call scalar passed with ``dr.opaque`` so the kernel is compiled once.
    It draws the same random numbers as (1), so its counts should equal (1)'s up
    to float rounding of F.
+
+With ``--against REV`` it measures instead only (1) and (3), for the working tree and
+for the git revision REV side by side, to show that a change kept the Mitsuba reading
+at no less than its previous ratio to the bare kernel (the machine's speed cancels
+out of the ratio; see ``--against`` below).
 
 It also measures the peak memory (max RSS) and time of one 10⁹-ray reading in a
 fresh subprocess, a warm certified reading at the default budget (105,967 rays;
@@ -38,24 +44,53 @@ Run::
     make bench                                      # = .venv/bin/python benchmarks/throughput.py
     .venv/bin/python benchmarks/throughput.py --quick      # 10⁶ / 10⁷ rays, no 10⁹ run
     .venv/bin/python benchmarks/throughput.py --markdown   # results as a markdown block
+    .venv/bin/python benchmarks/throughput.py --against HEAD~1          # 10⁸ rays, 7 rounds
+    .venv/bin/python benchmarks/throughput.py --against ebc84c5 --quick # 10⁷ rays, 10 rounds
+    .venv/bin/python benchmarks/throughput.py --against main --rounds 15 --markdown
 
 The full run takes 15-30 s on a 2-core machine (the 10⁹-ray reading ~5 s, NumPy
 ~2-3 s, the rest is repeats and process start-ups); other work on the machine
 slows every figure, so the 1-minute load average is printed with the results.
+
+``--against REV``
+-----------------
+
+The older revision is checked out into a throwaway directory (``git worktree add
+--detach``, removed afterwards with ``git worktree remove --force``; the checkout's
+own index and branch are never touched), with the symlink ``virtspec_mi/plugins ->
+../plugins`` that a plain ``PYTHONPATH`` import needs (the package maps
+``virtspec_mi.plugins`` to the top-level ``plugins/``; see ``benchmarks/revisions.py``).
+Each side — the working tree as it is, uncommitted changes included, and REV — is
+measured by a worker process of this script with ``PYTHONPATH`` at its checkout; the
+worker reports ``virtspec_mi.__file__`` and the script stops unless every loaded
+``virtspec_mi`` module comes from that checkout (not from the editable install). The
+workers use only public API found in old revisions too (``virtspec_mi.measure``,
+``instrument_scene``, ``mitsuba``; ``reading.reflected``, ``reading.rays``), and the
+bare kernel is this file's own self-contained code, identical for both sides.
+
+Both workers warm up (compile, one untimed call at full size), then the revisions
+take turns, A B A B …: per round and revision, one Mitsuba reading then one bare
+kernel run, 10⁸ rays each (10⁷ with ``--quick``), 7 rounds (10 with ``--quick``;
+``--rounds K``). Printed per revision: Mray/s of each (best of the rounds), the ratio
+Mitsuba / bare of those bests and the median (min – max) of the per-round ratios; then
+the ratio of ratios working tree / REV with a verdict against the round-to-round
+spread, whether the two revisions' Mitsuba counts are identical, bare − Mitsuba
+counts, the SIMD width (AVX-512 or AVX2), the machine and the 1-minute load average.
+``--against HEAD`` runs the same code on both sides: its ratio of ratios shows the
+noise (on a shared 2-core machine, ±5-10 % at ``--quick`` sizes).
 """
 
 from __future__ import annotations
 
 import argparse
-import datetime
 import json
 import math
 import os
-import platform
 import resource
 import statistics
 import subprocess
 import sys
+import tempfile
 import time
 from dataclasses import dataclass
 from functools import partial
@@ -63,6 +98,10 @@ from pathlib import Path
 from typing import Any, Callable
 
 import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+import revisions  # noqa: E402  (machine description, git revisions)
+from revisions import machine, machine_lines  # noqa: E402,F401  (also imported from here by others)
 
 ROOT = Path(__file__).resolve().parents[1]
 VIRTSPEC = ROOT / ".venv" / "bin" / "virtspec"
@@ -192,6 +231,20 @@ def numpy_counts(rays: int) -> tuple[int, int]:
 
 
 # --- (3) bare Dr.Jit kernel ---------------------------------------------------------------
+#
+# The kernel uses the project's own counter-based RNG and disk warps (in virtspec_mi.kernel
+# since the core was reshaped, at the package's top level before), so each revision's bare
+# kernel draws the same random numbers as its Mitsuba reading: the check "counts bare
+# Dr.Jit - Mitsuba" shows any difference.
+
+import virtspec_mi  # noqa: E402  (the revision on PYTHONPATH, or the working tree)
+
+if (Path(virtspec_mi.__file__).parent / "kernel").is_dir():
+    from virtspec_mi.kernel.disk import jittered_cell, polar_warp
+    from virtspec_mi.kernel.rng import chunk_root, dimension_keys, hash32, to_unit
+else:  # a revision before virtspec_mi.kernel (the editable install would supply the new one)
+    from virtspec_mi.geometry import jittered_cell, polar_warp
+    from virtspec_mi.rng import chunk_root, dimension_keys, hash32, to_unit
 
 
 def drjit_chunk(first: int, size: int, strata: int) -> tuple[int, int]:
@@ -204,8 +257,6 @@ def drjit_chunk(first: int, size: int, strata: int) -> tuple[int, int]:
 
     import drjit as dr
     import virtspec_mi
-    from virtspec_mi.geometry import jittered_cell, polar_warp
-    from virtspec_mi.rng import chunk_root, dimension_keys, hash32, to_unit
 
     mi = virtspec_mi.mitsuba()
     keys = [dr.opaque(mi.UInt32, k) for k in dimension_keys(chunk_root(SEED, first // WORD), 5)]
@@ -315,33 +366,183 @@ def cold_process(repeats: int = 3) -> dict:
     return {"median_s": statistics.median(times), "runs_s": times}
 
 
-def machine() -> dict:
-    """CPU model, cores, SIMD flags, Dr.Jit threads, libLLVM, versions and the date (UTC)."""
+# --- --against REV: the Mitsuba / bare ratio of two revisions, side by side ----------------
+#
+# Each revision is measured by a worker process of this very script (``--worker ROOT``):
+# PYTHONPATH = ROOT puts ROOT's virtspec_mi ahead of the editable install, so the
+# Mitsuba reading is ROOT's code while the bare kernel (self-contained, above) is the same
+# on both sides. A worker compiles both kernels, runs each once at full size, then answers
+# one JSON line per request on stdin ({"method", "rays"}) with one JSON line on its own
+# stdout ({"seconds", "reflected"}); whatever else writes to stdout goes to its stderr.
+# Workers use public API only (measure, instrument_scene, mitsuba; reading.reflected and
+# reading.rays), which older revisions have too.
 
-    import drjit as dr
-    import mitsuba
+AGAINST_METHODS = ("Mitsuba", "bare Dr.Jit")
 
-    model, flags = platform.processor() or "unknown", set()
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            key, _, value = line.partition(":")
-            if key.strip() == "model name":
-                model = value.strip()
-            elif key.strip() == "flags":
-                flags = set(value.split())
-    except OSError:
-        pass
-    return {
-        "cpu": model,
-        "cores": os.cpu_count(),
-        "avx2": "avx2" in flags,
-        "avx512": any(flag.startswith("avx512") for flag in flags),
-        "threads": dr.thread_count(),
-        "llvm": ".".join(map(str, dr.detail.llvm_version())),
-        "versions": f"drjit {dr.__version__}, mitsuba {mitsuba.__version__}, numpy {np.__version__}, "
-                    f"python {platform.python_version()}",
-        "date": datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d %H:%M UTC"),
-    }
+
+def mitsuba_reflected(scene: dict, rays: int) -> int:
+    """Reflected count of one ``virtspec_mi.measure`` reading (public API only)."""
+
+    import virtspec_mi
+
+    reading = virtspec_mi.measure(scene, theta_i=THETA_I, phi_i=PHI_I, rays=rays, seed=SEED)
+    if int(reading.rays[0]) != rays:
+        raise RuntimeError(f"asked for {rays} rays, the reading traced {int(reading.rays[0])}")
+    return int(reading.reflected[0])
+
+
+def worker(root: Path, rays: int) -> int:
+    """``--worker ROOT``: measure on request with ROOT's virtspec_mi (see the section comment)."""
+
+    replies = os.fdopen(os.dup(1), "w", buffering=1)
+    os.dup2(2, 1)  # stray output of Python or of native code must not corrupt the replies
+    sys.stdout = sys.stderr
+
+    import virtspec_mi
+
+    virtspec_mi.mitsuba()
+    scene = virtspec_mi.instrument_scene(BSDF)
+    calls = {"Mitsuba": partial(mitsuba_reflected, scene), "bare Dr.Jit": lambda n: drjit_counts(n)[0]}
+    for call in calls.values():
+        call(1000)  # compile
+        call(rays)  # and one untimed call at full size
+    modules = [name for name in sys.modules if name == "virtspec_mi" or name.startswith("virtspec_mi.")]
+    hello = {"virtspec_mi": virtspec_mi.__file__, "modules": len(modules),
+             "foreign": revisions.foreign_modules(root), "runtime": revisions.runtime()}
+    print(json.dumps(hello), file=replies)
+    for line in sys.stdin:
+        request = json.loads(line)
+        start = time.perf_counter()
+        reflected = calls[request["method"]](request["rays"])
+        seconds = time.perf_counter() - start
+        print(json.dumps({"seconds": seconds, "reflected": reflected}), file=replies)
+    return 0
+
+
+class Side:
+    """One revision under test: a worker process of this script importing virtspec_mi from ``root``."""
+
+    def __init__(self, label: str, root: Path, rays: int):
+        self.label, self.root = label, root
+        self.log = tempfile.TemporaryFile("w+")
+        self.process = subprocess.Popen(
+            [sys.executable, str(Path(__file__).resolve()), "--worker", str(root), "--rays", str(rays)],
+            cwd=root, env=revisions.python_env(root), stdin=subprocess.PIPE, stdout=subprocess.PIPE,
+            stderr=self.log, text=True, bufsize=1)
+        self.hello: dict = {}
+
+    def receive(self) -> dict:
+        line = self.process.stdout.readline()
+        if not line:
+            self.process.wait()
+            self.log.seek(0)
+            tail = "".join(self.log.readlines()[-30:])
+            raise RuntimeError(f"the worker for {self.label} stopped (exit {self.process.returncode}):\n{tail}")
+        return json.loads(line)
+
+    def start(self) -> None:
+        """Wait for the worker to be warm, and check that it runs ``root``'s virtspec_mi."""
+
+        self.hello = self.receive()
+        top = os.path.realpath(self.root) + os.sep
+        if not os.path.realpath(self.hello["virtspec_mi"]).startswith(top) or self.hello["foreign"]:
+            raise RuntimeError(f"the worker for {self.label} imported code from outside {self.root}: "
+                               f"virtspec_mi from {self.hello['virtspec_mi']}; {self.hello['foreign']}")
+
+    def measure(self, method: str, rays: int) -> dict:
+        """One timed call in the worker: its wall ``seconds`` and its ``reflected`` count."""
+
+        print(json.dumps({"method": method, "rays": rays}), file=self.process.stdin, flush=True)
+        return self.receive()
+
+    def close(self) -> None:
+        """End the worker (EOF on its stdin; killed if it has not exited within a minute)."""
+
+        self.process.stdin.close()
+        try:
+            self.process.wait(timeout=60)
+        except subprocess.TimeoutExpired:
+            self.process.kill()
+            self.process.wait()
+        self.process.stdout.close()
+        self.log.close()
+
+
+def against(revision: str, rays: int, rounds: int, markdown: bool) -> int:
+    """Mitsuba and bare rays/s of the working tree and of ``revision``, interleaved; the ratios."""
+
+    load_before = revisions.load_average()
+    commit = revisions.resolve(revision)
+    current = f"working tree ({revisions.describe_worktree()})"
+    older = f"{revision} ({commit[:7]})"
+    seconds: dict[tuple[str, str], list[float]] = {}
+    reflected: dict[tuple[str, str], set[int]] = {}
+    with revisions.worktree(commit) as checkout:
+        sides: list[Side] = []
+        try:
+            sides += [Side(current, ROOT, rays), Side(older, checkout, rays)]  # both warm up at once
+            for side in sides:
+                side.start()
+            for _ in range(rounds):  # A B A B ...: a slow spell of the machine hits both revisions
+                for side in sides:
+                    for method in AGAINST_METHODS:
+                        reply = side.measure(method, rays)
+                        seconds.setdefault((side.label, method), []).append(reply["seconds"])
+                        reflected.setdefault((side.label, method), set()).add(reply["reflected"])
+        finally:
+            for side in sides:
+                side.close()
+    load_after = revisions.load_average()
+
+    labels = [current, older]
+    best = {key: rays / min(values) / 1e6 for key, values in seconds.items()}  # Mray/s
+    ratio = {label: best[label, "Mitsuba"] / best[label, "bare Dr.Jit"] for label in labels}
+    per_round = {label: [b / m for m, b in zip(seconds[label, "Mitsuba"], seconds[label, "bare Dr.Jit"])]
+                 for label in labels}
+    median = {label: statistics.median(values) for label, values in per_round.items()}
+    rows = [[label, f"{best[label, 'Mitsuba']:.1f}", f"{best[label, 'bare Dr.Jit']:.1f}", f"{ratio[label]:.3f}",
+             f"{median[label]:.3f} ({min(per_round[label]):.3f} - {max(per_round[label]):.3f})"]
+            for label in labels]
+
+    change, change_median = ratio[current] / ratio[older], median[current] / median[older]
+    spread = max((max(values) - min(values)) / statistics.median(values) for values in per_round.values())
+    if change >= 1.0:
+        verdict_line = "the Mitsuba reading is at no less than its previous ratio to the bare kernel" + (
+            "" if change > 1.0 + spread else " (a gain within the round-to-round spread)")
+    elif change >= 1.0 - spread:
+        verdict_line = ("below its previous ratio, by less than the round-to-round spread: not resolved at "
+                        "this noise (more rays or --rounds)")
+    else:
+        verdict_line = "BELOW its previous ratio to the bare kernel, by more than the round-to-round spread"
+    single = {key: next(iter(values)) if len(values) == 1 else None for key, values in reflected.items()}
+    same = single[current, "Mitsuba"] is not None and single[current, "Mitsuba"] == single[older, "Mitsuba"]
+
+    def bare_minus_mitsuba(label: str) -> str:
+        bare, mitsuba = single[label, "bare Dr.Jit"], single[label, "Mitsuba"]
+        return f"{label}: " + ("counts vary between rounds" if None in (bare, mitsuba) else f"{bare - mitsuba:+d}")
+
+    info = {**revisions.cpu(), **sides[0].hello["runtime"], "date": revisions.now(),
+            "load": f"{load_before:.2f} before the run, {load_after:.2f} after"}
+    lines = [
+        f"{rays:.0e} rays per reading (conical diamond, theta_i = {THETA_I:g}, one wavelength, seed {SEED}), warm; "
+        f"{rounds} interleaved rounds (A B A B ...; per revision a Mitsuba reading, then the bare kernel); "
+        f"Mray/s best of {rounds}; one worker process per revision; the bare kernel is the same code in both",
+        f"ratio of ratios, working tree / {older}: {change:.3f} (of the per-round medians: {change_median:.3f}) "
+        f"-> {verdict_line}; per-round ratios spread up to {100 * spread:.0f}%",
+        "Mitsuba counts " + (f"identical in both revisions ({single[current, 'Mitsuba']:,} reflected of {rays:,})"
+                             if same else "DIFFER between the revisions: " + "; ".join(
+                                 f"{label}: {sorted(reflected[label, 'Mitsuba'])}" for label in labels)),
+        "reflected, bare Dr.Jit - Mitsuba (same random numbers): " + ", ".join(map(bare_minus_mitsuba, labels)),
+    ]
+    lines += [f"{side.label}: virtspec_mi imported from {side.hello['virtspec_mi']} "
+              f"(all {side.hello['modules']} loaded virtspec_mi modules under {side.root})" for side in sides]
+    if sides[1].hello["runtime"] != sides[0].hello["runtime"]:
+        lines.append(f"{older} ran with {sides[1].hello['runtime']}")
+    lines.append(f"SIMD width: {revisions.simd(info)} (/proc/cpuinfo flags); 1-minute load average: {info['load']}")
+    header = ["revision", "Mitsuba Mray/s", "bare Dr.Jit Mray/s", "Mitsuba / bare",
+              "per-round ratios: median (min - max)"]
+    print(format_markdown(rows, lines, info, header) if markdown else format_text(rows, lines, info, header))
+    return 0
 
 
 # --- report -------------------------------------------------------------------------------
@@ -404,32 +605,20 @@ def report_rows(runs: dict[tuple[str, int], Run], big: dict | None, warm: dict, 
 HEADER = ["method", "rays", "seconds", "Mray/s", "reflectance", "note"]
 
 
-def format_text(rows: list[list[str]], lines: list[str], info: dict) -> str:
-    widths = [max(len(row[i]) for row in [HEADER, *rows]) for i in range(len(HEADER))]
+def format_text(rows: list[list[str]], lines: list[str], info: dict, header: list[str] = HEADER) -> str:
+    widths = [max(len(row[i]) for row in [header, *rows]) for i in range(len(header))]
     fmt = lambda row: "  ".join(cell.ljust(w) for cell, w in zip(row, widths)).rstrip()  # noqa: E731
-    out = [fmt(HEADER), fmt(["-" * w for w in widths]), *map(fmt, rows), ""]
+    out = [fmt(header), fmt(["-" * w for w in widths]), *map(fmt, rows), ""]
     out += lines
     out += ["", *machine_lines(info)]
     return "\n".join(out)
 
 
-def format_markdown(rows: list[list[str]], lines: list[str], info: dict) -> str:
-    out = ["| " + " | ".join(HEADER) + " |", "|" + "|".join("---" for _ in HEADER) + "|"]
+def format_markdown(rows: list[list[str]], lines: list[str], info: dict, header: list[str] = HEADER) -> str:
+    out = ["| " + " | ".join(header) + " |", "|" + "|".join("---" for _ in header) + "|"]
     out += ["| " + " | ".join(row) + " |" for row in rows]
     out += [""] + [f"- {line}" for line in lines] + [""] + [f"- {line}" for line in machine_lines(info)]
     return "\n".join(out)
-
-
-def machine_lines(info: dict) -> list[str]:
-    return [
-        f"command: {' '.join(sys.argv)}",
-        f"date: {info['date']}",
-        f"machine: {info['cpu']}, {info['cores']} cores, AVX2 {'yes' if info['avx2'] else 'no'}, "
-        f"AVX-512 {'yes' if info['avx512'] else 'no'}; Dr.Jit threads {info['threads']}; "
-        f"libLLVM {info['llvm']}",
-        f"versions: {info['versions']}",
-        f"load average (1 min): {info['load']}",
-    ]
 
 
 # --- main ---------------------------------------------------------------------------------
@@ -440,7 +629,18 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--quick", action="store_true",
                         help="10^6 / 10^7 rays and no 10^9-ray subprocess (a smoke run)")
     parser.add_argument("--markdown", action="store_true", help="print the results as markdown")
+    parser.add_argument("--against", metavar="REV",
+                        help="only compare the Mitsuba / bare Dr.Jit ratio of the working tree with that of "
+                             "git revision REV, side by side (10^8 rays, 10^7 with --quick)")
+    parser.add_argument("--rounds", type=int, help="interleaved rounds of --against (default 7; 10 with --quick)")
+    parser.add_argument("--worker", metavar="ROOT", type=Path, help=argparse.SUPPRESS)
+    parser.add_argument("--rays", type=int, help=argparse.SUPPRESS)
     args = parser.parse_args(argv)
+    if args.worker is not None:
+        return worker(args.worker, args.rays)
+    if args.against is not None:
+        rounds = args.rounds or (10 if args.quick else 7)
+        return against(args.against, 10**7 if args.quick else 10**8, max(rounds, 1), args.markdown)
     small, large = (10**6, 10**7) if args.quick else (10**7, 10**8)
     load_before = os.getloadavg()[0]  # other work on the machine skews every figure
 

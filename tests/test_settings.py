@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import pytest
 
+import virtspec_mi as vm
 from virtspec_mi.checks import parse_wavelengths
 from virtspec_mi.settings import Settings
 
@@ -88,3 +89,44 @@ def test_budget_settings():
     with pytest.raises(ValueError, match="two-stage"):
         two.rays_per_reading
     assert two.as_dict()["rays"] is None and two.as_dict()["pilot_rays"] == 2000
+
+
+# --- one definition: API keywords, integrator parameters and CLI flags derive from it ----
+
+
+def test_every_setting_is_an_api_keyword_an_xml_parameter_and_a_cli_flag(mi):
+    import inspect
+    import re
+    import subprocess
+    import sys
+
+    from virtspec_mi.plugins.integrators import spectrophotometer
+    from virtspec_mi.settings import SETTING_NAMES
+
+    for function in (vm.measure, vm.sweep):
+        parameters = inspect.signature(function).parameters
+        assert set(SETTING_NAMES) <= set(parameters), function.__name__
+    documented = re.findall(r"^(\w+) : ", spectrophotometer.__doc__, flags=re.M)
+    assert documented == list(SETTING_NAMES)
+    for command in ("measure", "sweep"):
+        text = subprocess.run([sys.executable, "-m", "virtspec_mi.cli", command, "--help"],
+                              capture_output=True, text=True).stdout
+        for name in SETTING_NAMES:
+            assert "--" + name.replace("_", "-") in text, (command, name)
+
+
+def test_unknown_settings_and_booleans_are_refused(diamond):
+    with pytest.raises(TypeError, match="unexpected keyword argument.*theta; the settings are theta_i"):
+        vm.measure(diamond, theta=10)
+    for name, value in (("theta_i", True), ("seed", True), ("wavelengths", [True]), ("mu", False)):
+        with pytest.raises(ValueError, match=name):
+            Settings(**{name: value})
+
+
+def test_strings_from_xml_and_the_command_line_are_validated_once():
+    settings = Settings(theta_i="45", seed="7", rays="1000", joint="true", wavelengths="400 500")
+    assert (settings.theta_i, settings.seed, settings.rays, settings.joint) == (45.0, 7, 1000, True)
+    assert settings.wavelengths == (400.0, 500.0)
+    with pytest.raises(ValueError, match=r"theta_i must satisfy 0 <= theta_i <= 90 degrees \(got 95\)"):
+        Settings(theta_i="95")
+    assert "theta_i = 0.0: polar incidence angle" in Settings.describe()

@@ -129,4 +129,4 @@ def test_strings_from_xml_and_the_command_line_are_validated_once():
     assert settings.wavelengths == (400.0, 500.0)
     with pytest.raises(ValueError, match=r"theta_i must satisfy 0 <= theta_i <= 90 degrees \(got 95\)"):
         Settings(theta_i="95")
-    assert "theta_i = 0.0: polar incidence angle" in Settings.describe()
+    assert "theta_i = 0: polar incidence angle" in Settings.describe()

@@ -2,7 +2,7 @@
 Sampling weights of Mitsuba's built-in BSDFs, as the instrument sees them
 =========================================================================
 
-The spectrophotometer kernel (``plugins/integrators/spectrophotometer.py``,
+The spectrophotometer kernel (:mod:`virtspec_mi.kernel.tracer`,
 ``_Kernel.trace``) samples the specimen with ``bsdf.sample`` in
 :attr:`mitsuba.TransportMode.Importance` and lets the ray survive with probability
 :math:`w` = ``mi.Spectrum(weight)[0]`` (Russian roulette). That trial is an unbiased

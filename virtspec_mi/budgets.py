@@ -50,6 +50,8 @@ class RayBudget:
     """A fixed ray-budget rule: every reading gets :meth:`rays` rays."""
 
     name: str = ""
+    description: str = ""
+    """One line: the rule and its equation (CLI help, summaries)."""
     adaptive: bool = False
     """True when each reading is sized by its own pilot batch."""
 
@@ -101,6 +103,7 @@ class Hoeffding(RayBudget):
     """The exponential Chebyshev (Hoeffding) bound, eq. (23): the default."""
 
     name = "hoeffding"
+    description = "N = ceil(ln(2/delta)/(2 mu^2)), eq. (23)"
 
     def rays(self, mu: float, delta: float) -> int:
         return hoeffding_rays(mu, delta)
@@ -113,6 +116,7 @@ class Chebyshev(RayBudget):
     """The ordinary Chebyshev bound, eq. (15)."""
 
     name = "chebyshev"
+    description = "N = ceil(1/(4 mu^2 delta)), eq. (15)"
 
     def rays(self, mu: float, delta: float) -> int:
         return chebyshev_rays(mu, delta)
@@ -125,6 +129,7 @@ class Exact(RayBudget):
     """The smallest N certified by the exact binomial law (:func:`virtspec_mi.bounds.exact_rays`)."""
 
     name = "exact"
+    description = "the smallest N the exact binomial law certifies"
 
     def rays(self, mu: float, delta: float) -> int:
         return exact_rays(mu, delta)
@@ -148,6 +153,7 @@ class TwoStage(RayBudget):
     """
 
     name = "two-stage"
+    description = "a pilot of pilot_rays, then a fresh batch sized per reading by the exact rule"
     adaptive = True
     fixed = Exact()
 

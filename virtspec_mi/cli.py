@@ -8,7 +8,7 @@ Command line: ``virtspec``
   [--seed] [--json]``: one certified reading.
 - ``virtspec sweep SCENE --theta-i 0:90:1 [--wavelengths 400:700:10] [--out FILE(.nc|.csv|.json)]
   [--plot FIG(.png|.svg)] [--densities 3 4 5 6] [--quiet] [measure options]``: a sweep
-  (resumable when ``--out`` is given: see :mod:`virtspec_mi.sweeps`).
+  (resumable when ``--out`` is given: see :mod:`virtspec_mi.checkpoint`).
 - ``virtspec colour FILE [--theta-i] [--quantity] [--illuminant] [--observer]``: CIE XYZ,
   L*a*b* and sRGB of a saved spectrum (a sweep file or a colour-science CSV).
 
@@ -74,24 +74,22 @@ def _measurement_options(parser: argparse.ArgumentParser, sweep: bool) -> None:
 
     from dataclasses import fields
 
-    from virtspec_mi.settings import Settings
+    from virtspec_mi.settings import Settings, help_text, shown
 
     for item in fields(Settings):
         flag = "--" + item.name.replace("_", "-")
-        meta = item.metadata
-        default = f"default: the scene's, else {item.default!r}" if item.default is not None else "default: the scene's"
+        choices = item.metadata["choices"]
+        default = f"default: the scene's, else {shown(item.default)}" if item.default is not None else \
+            "default: the scene's, else from the rule"
         if item.name == "joint":
-            parser.add_argument(flag, action="store_true", default=None, help=f"{meta['help']} ({default})")
+            parser.add_argument(flag, action="store_true", default=None, help=f"{help_text(item)} ({default})")
             continue
         if item.name == "theta_i" and sweep:
             parser.add_argument(flag, nargs="+", help="polar incidence angles, degrees in [0, 90]: numbers and "
                                                       "start:stop:step ranges (default: the scene's, else 0)")
             continue
-        choices = meta["choices"]
-        described = "; ".join(f"{k}: {v}" for k, v in choices.items()) if choices else ""
         parser.add_argument(flag, nargs="+" if item.name == "wavelengths" else None,
-                            choices=list(choices) if choices else None,
-                            help=f"{meta['help']}{' (' + described + ')' if described else ''} ({default})")
+                            choices=list(choices) if choices else None, help=f"{help_text(item)} ({default})")
 
 
 def _settings(args: argparse.Namespace) -> dict:

@@ -5,7 +5,7 @@ Confidence intervals for ray counts
 :func:`clopper_pearson` gives the exact (Clopper–Pearson) two-sided confidence
 interval of a binomial proportion from k successes in n trials: it covers the true
 proportion with probability at least ``1 − δ`` for every proportion and every n
-(equal tails of δ/2, from the beta quantiles). Every :class:`virtspec_mi.Reading`
+(equal tails of δ/2, from the beta quantiles). Every :class:`virtspec_mi.Result`
 carries one for its reflectance, transmittance and absorptance, at the δ of each
 quantity; the two-stage ray budget (:mod:`virtspec_mi.twostage`) sizes its second
 batch from the pilot's interval.

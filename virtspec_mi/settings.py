@@ -40,7 +40,7 @@ from virtspec_mi.checks import (
     parse_wavelengths,
 )
 
-__all__ = ["BEAMS", "SAMPLINGS", "Settings", "SETTING_NAMES", "settings_keywords", "with_settings"]
+__all__ = ["BEAMS", "SAMPLINGS", "Settings", "SETTING_NAMES", "settings_keywords", "with_settings", "shown", "help_text"]
 
 BEAMS: dict[str, str] = {
     "conical": "conical-hemispherical: disk to disk",
@@ -138,14 +138,9 @@ class Settings:
 
     @classmethod
     def describe(cls) -> str:
-        """One line per setting: name, default, meaning and allowed values."""
+        """One line per setting: name, default, meaning and allowed values (the CLI's help says the same)."""
 
-        lines = []
-        for item in fields(cls):
-            choices = item.metadata["choices"]
-            allowed = f" ({', '.join(choices)})" if choices else ""
-            lines.append(f"{item.name} = {item.default!r}: {item.metadata['help']}{allowed}")
-        return "\n".join(lines)
+        return "\n".join(f"{item.name} = {shown(item.default)}: {help_text(item)}" for item in fields(cls))
 
     @property
     def budget(self) -> RayBudget:
@@ -212,6 +207,26 @@ class Settings:
             "sampling": self.sampling,
             "seed": self.seed,
         }
+
+
+def shown(value: Any) -> str:
+    """A default as a user writes it: ``551``, ``0``, ``hoeffding``, ``none``."""
+
+    if value is None:
+        return "none"
+    if isinstance(value, tuple):
+        return ", ".join(shown(v) for v in value)
+    return f"{value:g}" if isinstance(value, float) else str(value)
+
+
+def help_text(item: Any) -> str:
+    """A setting's help text with its choices and what each means."""
+
+    choices = item.metadata["choices"]
+    if not choices:
+        return item.metadata["help"]
+    meanings = "; ".join(f"{name}: {getattr(value, 'description', value)}" for name, value in choices.items())
+    return f"{item.metadata['help']} ({meanings})"
 
 
 SETTING_NAMES: tuple[str, ...] = tuple(item.name for item in fields(Settings))

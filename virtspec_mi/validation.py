@@ -3,10 +3,10 @@ Coverage harness: do certified readings miss as often as the binomial law says?
 ==============================================================================
 
 For specimens whose reflectance ρ is known exactly, :func:`coverage` takes K
-independent readings in **one** :func:`virtspec_mi.tally.take_readings` call (at
+independent readings in **one** :func:`virtspec_mi.engine.take_readings` call (at
 551 nm, one reading per azimuth φi = 360°·k/K: every reading has its own rays, and
 these isotropic specimens do not depend on φi — nor on wavelength, but readings that
-differ only in wavelength share rays, see :mod:`virtspec_mi.tally`), counts the *misses* ``|m/N − ρ| ≥ μ`` and compares that count
+differ only in wavelength share rays, see :mod:`virtspec_mi.engine`), counts the *misses* ``|m/N − ρ| ≥ μ`` and compares that count
 with its exact law: Binomial(K, q), with q the exact miss probability of the rule —
 :func:`virtspec_mi.bounds.miss_probability` at the rule's N for a fixed rule, the
 exact mixture over the pilot count (:func:`virtspec_mi.twostage.two_stage_law`) for

@@ -61,7 +61,7 @@ data_dir : string, default ""
     ``VIRTSPEC_LEAF_DATA`` (see :mod:`virtspec_mi.leaf_data`).
 max_steps : integer, default 100000
     Cap on interface events per walk; a walk reaching it is counted in
-    ``Reading.capped`` (never in R, T or A). The longest soybean walks are ≈ 200 events.
+    ``Result.capped`` (never in R, T or A). The longest soybean walks are ≈ 200 events.
 
 Defaults: soybean, LOPEX 0219/0220 (NPSG online ABM-B model, abm.md §2).
 

@@ -63,7 +63,7 @@ data_dir : string, default ""
     ``VIRTSPEC_LEAF_DATA`` (see :mod:`virtspec_mi.leaf_data`).
 max_steps : integer, default 100000
     Cap on interface events per walk; a walk reaching it is counted in
-    ``Reading.capped`` (never in R, T or A).
+    ``Result.capped`` (never in R, T or A).
 
 Defaults: corn, LOPEX 0141/0142 (NPSG online ABM-U model, abm.md §2).
 

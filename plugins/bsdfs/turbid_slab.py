@@ -28,8 +28,8 @@ Quantities (as the ``spectrophotometer`` counts them)
   scattering event is a ``DeltaReflection`` / ``DeltaTransmission`` (mirror or
   straight-through direction), one that scattered at least once a
   ``DiffuseReflection`` / ``DiffuseTransmission``. The instrument counts the delta
-  events as ``Reading.specular_reflectance`` (Rs; CIE "regular reflectance") and
-  ``Reading.regular_transmittance`` (Tc, the unscattered, collimated transmittance);
+  events as ``Result.specular_reflectance`` (Rs; CIE "regular reflectance") and
+  ``Result.regular_transmittance`` (Tc, the unscattered, collimated transmittance);
   ``diffuse_reflectance`` = R − Rs (MCML's Rd), ``diffuse_transmittance`` = T − Tc.
 - Rs is the top-face Fresnel reflection plus light that crossed the slab without
   scattering and came back out of the top face after internal reflection(s) — the
@@ -58,7 +58,7 @@ eta_below : float or spectrum, default 1.0
 max_steps : integer, default 1000000
     Cap on free flights per walk (≥ 1). A walk still inside after ``max_steps`` flights
     reports ``CAPPED_COMPONENT`` (weight 0) and the instrument counts it in
-    ``Reading.capped``, in none of R, T and A.
+    ``Result.capped``, in none of R, T and A.
 
 A spectral parameter is any Mitsuba spectrum/texture (``<spectrum name="mu_a"
 value="400:12, 700:3"/>`` in XML, or ``{"type": "regular", ...}`` in a dict), read

@@ -12,7 +12,7 @@ random walk inside ``BSDF.sample``. They share two conventions with the
   stream and counts stay independent of chunking.
 - **Capped walks.** A walk stopped by a step cap has no fate. The BSDF reports it by
   setting ``bs.sampled_component = CAPPED_COMPONENT`` (weight 0); the integrator counts
-  such rays in ``Reading.capped``, apart from reflected, transmitted and absorbed, so a
+  such rays in ``Result.capped``, apart from reflected, transmitted and absorbed, so a
   cap is never silently folded into a tally.
 
 References

@@ -1,0 +1,75 @@
+"""
+The README's code runs: every ``python`` block and every shell command of it is executed.
+
+Python blocks run one by one, each in a fresh namespace (so each must import what it
+uses); shell commands are the lines of ``sh`` blocks and the ``$ ``-prefixed lines of
+output blocks, run with the project's ``virtspec`` on ``PATH`` (``make`` and ``export``
+lines set the machine up and are left to CI). Everything runs in a scratch directory
+that holds ``scenes/`` and sees ``../shared`` as the checkout does, so the commands
+work as written and write nothing into the checkout.
+"""
+
+from __future__ import annotations
+
+import os
+import re
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+BLOCK = re.compile(r"^```(\w*)\n(.*?)^```", re.M | re.S)
+SKIPPED = ("make ", "export ")
+
+
+def blocks(kind: str) -> list[str]:
+    return [body for language, body in BLOCK.findall((ROOT / "README.md").read_text()) if language == kind]
+
+
+def shell_commands() -> list[str]:
+    commands = []
+    for language, body in BLOCK.findall((ROOT / "README.md").read_text()):
+        for line in body.splitlines():
+            if language == "sh":
+                command = re.sub(r"\s+#.*$", "", line).strip()
+            elif language == "" and line.startswith("$ "):
+                command = line[2:].strip()
+            else:
+                continue
+            if command and not command.startswith("#") and not command.startswith(SKIPPED):
+                commands.append(command)
+    return commands
+
+
+@pytest.fixture(scope="module")
+def workdir(tmp_path_factory):
+    """A scratch checkout-like folder: scenes/, docs/, and ../shared beside it."""
+
+    base = tmp_path_factory.mktemp("readme")
+    work = base / "work"
+    (work / "docs").mkdir(parents=True)
+    (work / "scenes").symlink_to(ROOT / "scenes")
+    (base / "shared").symlink_to(ROOT.parent / "shared")
+    return work
+
+
+def test_the_readme_has_code_to_run():
+    assert len(blocks("python")) >= 6 and len(shell_commands()) >= 10
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("index", range(len(blocks("python"))))
+def test_python_block_runs(index, workdir, monkeypatch):
+    monkeypatch.chdir(workdir)
+    source = blocks("python")[index]
+    exec(compile(source, f"README.md python block {index}", "exec"), {"__name__": "__readme__"})
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("command", shell_commands())
+def test_shell_command_runs(command, workdir):
+    env = dict(os.environ, PATH=f"{Path(sys.executable).parent}{os.pathsep}{os.environ['PATH']}")
+    result = subprocess.run(["bash", "-c", command], cwd=workdir, env=env, capture_output=True, text=True)
+    assert result.returncode == 0, f"{command}\n{result.stderr[-2000:]}"

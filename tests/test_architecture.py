@@ -20,11 +20,12 @@ What counts as an import edge ``A -> B`` (A, B project modules):
   initialised before A's body runs. Since every module lives inside ``virtspec_mi``, no
   *implicit* edge ever points at the root package; only a statement that names it
   (``import virtspec_mi``, ``from virtspec_mi import twostage``) does.
-* NOT counted: imports whose module name is computed at run time, i.e. the root package's
-  lazy ``_LAZY`` table (``importlib.import_module(_LAZY[name])`` in ``__getattr__``: resolved
-  on attribute access, not on import) and the plugin registry
-  (``importlib.import_module(module, __name__)`` over ``virtspec_mi.plugins.PLUGINS``).
-  Real import statements in ``__init__.py`` files do count.
+* the plugin registry: ``virtspec_mi.plugins.register()`` imports every module of its
+  ``PLUGINS`` table (read from the file as a literal), so ``virtspec_mi.plugins`` has an
+  edge to each of them;
+* NOT counted: the root package's lazy ``_LAZY`` table (``importlib.import_module(_LAZY[name])``
+  in ``__getattr__``: resolved on attribute access, not on import). Real import statements
+  in ``__init__.py`` files do count.
 
 The layering rules use :data:`LAYERS` below, a short list meant to be edited as modules are
 renamed; rules only bite for modules that exist.
@@ -188,7 +189,24 @@ def import_graph() -> tuple[Graph, dict[tuple[str, str], list[Site]]]:
             site = (str(path.relative_to(ROOT)), line)
             if site not in sites[name, target]:
                 sites[name, target].append(site)
+    for target, line in registered_plugins(files):
+        graph["virtspec_mi.plugins"].add(target)
+        sites["virtspec_mi.plugins", target].append(("plugins/__init__.py", line))
     return graph, sites
+
+
+def registered_plugins(files: dict[str, tuple[Path, bool]]) -> list[tuple[str, int]]:
+    """The modules ``virtspec_mi.plugins.register()`` imports: its ``PLUGINS`` table, as a literal."""
+
+    if "virtspec_mi.plugins" not in files:
+        return []
+    tree = ast.parse(files["virtspec_mi.plugins"][0].read_text(encoding="utf-8"))
+    for node in ast.walk(tree):
+        targets = [node.target] if isinstance(node, ast.AnnAssign) else getattr(node, "targets", [])
+        if any(isinstance(t, ast.Name) and t.id == "PLUGINS" for t in targets) and node.value is not None:
+            table = ast.literal_eval(node.value)
+            return [("virtspec_mi.plugins" + module, node.lineno) for _, module, _ in table.values()]
+    return []
 
 
 # ------------------------------------------------------------------------ cycle finder
@@ -335,6 +353,7 @@ def test_the_import_graph_sees_the_project(project_graph):
 
     graph, _ = project_graph
     assert "virtspec_mi" in graph and "virtspec_mi.plugins" in graph
+    assert "virtspec_mi.plugins.integrators.spectrophotometer" in graph["virtspec_mi.plugins"]
     assert any(name.startswith("virtspec_mi.plugins.") for name in graph)
     assert sum(map(len, graph.values())) > len(graph) // 2
 

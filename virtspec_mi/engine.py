@@ -128,37 +128,14 @@ def run(
     n_lam, n_theta = len(lams), len(angles)
     flat_lam, flat_theta = np.tile(lams, n_theta), np.repeat(angles, n_lam)
     shared = shares_wavelengths(instrument)
-    counts, pilot = Counts.zeros(n_lam * n_theta), Counts.zeros(n_lam * n_theta)
     if not keyed:
         start = time.perf_counter()
-        traced, traced_pilot = take_readings(
+        counts, pilot = take_readings(
             instrument, [(w, t, settings.phi_i) for w, t in zip(flat_lam, flat_theta)], settings)
         seconds = time.perf_counter() - start
-        counts = traced
-        pilot = traced_pilot
     else:
-        stride = settings.most_rays_per_reading
-        units = ([np.arange(i * n_lam, (i + 1) * n_lam) for i in range(n_theta)] if shared
-                 else [np.array([k]) for k in range(n_lam * n_theta)])
-        per_batch = max(1, settings.chunk_size // stride)
-        batches = [np.concatenate(units[i:i + per_batch]) for i in range(0, len(units), per_batch)]
-        state = Checkpoint.open(checkpoint, _identity(settings, angles, instrument, scene, shared), n_lam * n_theta)
-        todo = [b for b in (b[~state.done[b]] for b in batches) if len(b)]
-        bar = Progress(progress, total=sum(len(b) for b in todo) // (n_lam if shared else 1))
-        try:
-            for batch in todo:
-                start = time.perf_counter()
-                traced, traced_pilot = take_readings(
-                    instrument, [(flat_lam[k], flat_theta[k], settings.phi_i) for k in batch], settings,
-                    offsets=batch.astype(np.int64) * stride)
-                state.record(batch, traced, traced_pilot, time.perf_counter() - start)
-                bar.update(len(batch) // (n_lam if shared else 1), time.perf_counter() - start)
-        finally:
-            bar.close()
-        state.finish()
-        counts, pilot, seconds = state.counts, state.pilot, state.seconds
-        if not settings.adaptive:
-            pilot = None
+        counts, pilot, seconds = _run_keyed(instrument, settings, flat_lam, flat_theta, shared, scene,
+                                            checkpoint, progress)
 
     def grid(values: np.ndarray) -> np.ndarray:
         return values.reshape(n_theta, n_lam).T.copy()
@@ -174,6 +151,35 @@ def run(
         scene=scene,
         wavelength_independent=shared,
     )
+
+
+def _run_keyed(instrument: Any, settings: Settings, flat_lam: np.ndarray, flat_theta: np.ndarray, shared: bool,
+               scene: str, checkpoint: Any, progress: bool | None) -> tuple[Counts, Counts | None, float]:
+    """The readings of :func:`run` keyed on their index, in checkpointed batches of about ``chunk_size`` rays."""
+
+    n_lam, size = len(settings.wavelengths), len(flat_lam)
+    stride = settings.most_rays_per_reading
+    units = ([np.arange(i, i + n_lam) for i in range(0, size, n_lam)] if shared
+             else [np.array([k]) for k in range(size)])
+    per_batch = max(1, settings.chunk_size // stride)
+    batches = [np.concatenate(units[i:i + per_batch]) for i in range(0, len(units), per_batch)]
+    angles = flat_theta[::n_lam]
+    state = Checkpoint.open(checkpoint, _identity(settings, angles, instrument, scene, shared), size)
+    todo = [b for b in (b[~state.done[b]] for b in batches) if len(b)]
+    per_unit = n_lam if shared else 1
+    bar = Progress(progress, total=sum(len(b) for b in todo) // per_unit)
+    try:
+        for batch in todo:
+            start = time.perf_counter()
+            counts, pilot = take_readings(
+                instrument, [(flat_lam[k], flat_theta[k], settings.phi_i) for k in batch], settings,
+                offsets=batch.astype(np.int64) * stride)
+            state.record(batch, counts, pilot, time.perf_counter() - start)
+            bar.update(len(batch) // per_unit, time.perf_counter() - start)
+    finally:
+        bar.close()
+    state.finish()
+    return state.counts, state.pilot if settings.adaptive else None, state.seconds
 
 
 def measure_reading(instrument: Any, settings: Settings) -> Result:

@@ -51,7 +51,7 @@ violations (``weight_violations``): the specimen is not energy conserving.
 """
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class Counts:
     """
     Exact counts of one or many readings, every field an ``int64`` array of one shape.

@@ -58,7 +58,7 @@ def _round_up(value: float, digits: int = 3) -> float:
     return float(np.ceil(value / scale * (1 - 1e-12)) * scale)
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class Result:
     """
     Certified readings over labelled dimensions (see the module docstring).

@@ -222,10 +222,7 @@ class _Kernel:
             return
         values = np.array(dr.gather(mi.Float, weight, lanes), dtype=np.float64)
         where = np.searchsorted(bounds.astype(np.int64), np.array(lanes, dtype=np.int64), side="right") - 1
-        largest = counts.largest_weight
-        for slot, value in zip(slots[where], values):
-            if not np.isnan(value):
-                largest[slot] = value if np.isnan(largest[slot]) else max(largest[slot], value)
+        np.fmax.at(counts.largest_weight, slots[where], values)  # fmax skips NaN weights
 
     def trace(self, first: int, size: int, slots: np.ndarray, starts: np.ndarray,
               offsets: np.ndarray) -> dict:

@@ -401,3 +401,11 @@ def test_specimens_needing_uv_partials_are_refused_with_the_reason(mi):
     with pytest.raises(ValueError, match=r"BumpMap cannot be sampled by the instrument .*eval_1_grad.*no uv "
                                          r"partials .*bumpmap.* not supported"):
         vm.measure(vm.instrument_scene(bump), rays=100)
+
+
+def test_a_scene_dict_with_a_none_value_is_refused_not_a_crash(mi):
+    # Mitsuba 3.9.1's load_dict ends the process with a segmentation fault on a None value
+    from virtspec_mi.instrument import SceneError
+
+    with pytest.raises(SceneError, match=r"\[specimen.bsdf.eta\] has no value \(None\)"):
+        vm.measure(vm.instrument_scene({"type": "simple_dielectric", "eta": None}), rays=10)

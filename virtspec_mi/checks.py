@@ -87,9 +87,10 @@ MAX_CHUNK_SIZE: int = 2**25
 Most rays per kernel launch (``chunk_size``). Peak memory grows linearly with the
 chunk: measured 12 B/ray (``simple_dielectric``, ``diffuse``, ``abm_b``), 20 B/ray
 (``turbid_slab``: two packed counts) and 41 B/ray (coloured ``plastic`` at 89°: weight
-violations, the rare-event path) at 2²², 2²⁴ and 2²⁶ rays — so at most about
-1.3 GiB above the process's ~120 MiB at 2²⁵ (11 GiB and more at 2³⁰).
-Throughput does not grow beyond 2²² (the default).
+violations, the rare-event path) at 2²², 2²⁴, 2²⁵ and 2²⁶ rays
+(``python tools/chunk_memory.py``) — so at most about 1.3 GiB above the process's
+~120 MiB at 2²⁵ (11 GiB and more at 2³⁰). Throughput does not grow beyond 2²² (the
+default).
 """
 
 WAVELENGTH_RANGE: tuple[float, float] = (1e-3, 1e6)

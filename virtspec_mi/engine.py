@@ -67,7 +67,11 @@ def take_readings(
     When the specimen's BSDF has ``wavelength_independent = True``, readings with the
     same (θi, φi) are traced once — with the rays (offset) of the first of them in the
     list — and all report those counts. A specimen with a ``wavelength_range``
-    attribute refuses wavelengths outside it (``ValueError``).
+    attribute refuses wavelengths outside it, and one with a ``check_wavelengths``
+    method parameters out of range at them (``ValueError``). Before anything is traced,
+    the call is held to :data:`~virtspec_mi.checks.MAX_READINGS` readings and
+    :data:`~virtspec_mi.checks.MAX_TOTAL_RAYS` rays, and every reading's N (the
+    two-stage N₂ included) to :data:`~virtspec_mi.checks.MAX_RAYS`.
     """
 
     check_readings(len(readings), 0)

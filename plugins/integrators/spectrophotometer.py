@@ -15,7 +15,8 @@ theta_i : float, default 0
 phi_i : float, default 0
     Azimuthal incidence angle in degrees (from the specimen's local x axis).
 wavelengths : string or float, default "551"
-    Wavelengths in nm: numbers and ``start:stop:step`` ranges, comma/space separated.
+    Wavelengths in nm: numbers and ``start:stop:step`` ranges, comma/space separated;
+    each 0.001 ≤ λ ≤ 10⁶ nm, at most 100,000 of them.
 mu : float, default 0.005
     Certified tolerance μ of each reading, 0 < μ < 0.5.
 delta : float, default 0.01
@@ -42,7 +43,8 @@ sampling : string, default "jittered"
 seed : integer, default 0
     Seed of the counter-based random numbers, 0 ≤ seed < 2³².
 chunk_size : integer, default 4194304
-    Rays per kernel launch (bounds memory; results do not depend on it).
+    Rays per kernel launch, 1024 ≤ chunk_size ≤ 2²⁵ (bounds memory; results do not
+    depend on it).
 
 These are the fields of :class:`virtspec_mi.settings.Settings` (the one definition;
 this list is checked against it by the tests). ``mi.render(scene, seed=s, spp=n)``

@@ -20,48 +20,86 @@ from __future__ import annotations
 
 import argparse
 import json
+import signal
 import sys
 from typing import Sequence
 
 __all__ = ["main", "build_parser"]
 
 
+_EXAMPLES = {
+    "bounds": "example: virtspec bounds --mu 0.005 --delta 0.001 0.01 0.1",
+    "measure": "examples:\n  virtspec measure scenes/diamond_conical.xml --theta-i 70\n"
+               "  virtspec measure scenes/soybean_abmb.xml --wavelengths 400:2500:5 --bound two-stage --json",
+    "sweep": "examples:\n  virtspec sweep scenes/diamond_collimated.xml --theta-i 0:90:1 --out fig5.nc --plot fig5.png\n"
+             "  virtspec sweep scenes/diamond_collimated.xml --theta-i 0:90:1 --densities 3 4 5 6",
+    "colour": "examples:\n  virtspec colour spectrum.csv\n"
+              "  virtspec colour fig5.nc --theta-i 30 --illuminant A --quantity transmittance",
+    "llvm": "example: virtspec llvm check",
+}
+
+
 def build_parser() -> argparse.ArgumentParser:
-    """The ``virtspec`` argument parser."""
+    """The ``virtspec`` argument parser (the measurement flags come from the ``Settings`` fields)."""
+
+    from virtspec_mi import __version__
+    from virtspec_mi.counts import QUANTITIES
 
     parser = argparse.ArgumentParser(
-        prog="virtspec", description="Virtual spectrophotometer: certified R/T/A readings of Mitsuba BSDFs."
-    )
-    commands = parser.add_subparsers(dest="command", required=True)
+        prog="virtspec", description="Virtual spectrophotometer: certified reflectance, transmittance and "
+                                     "absorptance readings of Mitsuba BSDFs (Baranoski, Rokne & Xu 2001).")
+    parser.add_argument("--version", action="version", version=f"virtspec-mi {__version__}")
+    commands = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
 
-    bounds = commands.add_parser("bounds", help="rays per reading under eq. (15) and eq. (23) (Table 1)")
+    def command(name: str, summary: str, description: str) -> argparse.ArgumentParser:
+        return commands.add_parser(name, help=summary, description=description, epilog=_EXAMPLES[name],
+                                   formatter_class=argparse.RawDescriptionHelpFormatter)
+
+    bounds = command("bounds", "rays per reading under every ray budget (the paper's Table 1)",
+                     "Rays per reading that certify |m/N - rho| < mu with probability >= 1 - delta: the "
+                     "paper's Table 1 (eqs. 15 and 23), then every rule of bound=.")
     bounds.add_argument("--mu", type=float, default=0.005, help="certified tolerance (default 0.005)")
     bounds.add_argument("--delta", type=float, nargs="+", default=[0.001, 0.01, 0.1],
                         help="failure probabilities (default 0.001 0.01 0.1)")
 
-    measure = commands.add_parser("measure", help="one certified reading of a scene")
+    measure = command("measure", "one certified reading of a scene (over its wavelengths)",
+                      "Measure the specimen of a scene: reflectance, transmittance and absorptance per "
+                      "wavelength, with the tolerance the rays spent guarantee. Every setting defaults to "
+                      "the scene's spectrophotometer integrator, else to the paper's defaults.")
     measure.add_argument("scene", help="Mitsuba XML scene with 'emitter' and 'specimen' disks")
     _measurement_options(measure, sweep=False)
-    measure.add_argument("--json", action="store_true", help="print the reading as one JSON object")
+    measure.add_argument("--json", action="store_true",
+                         help="print the reading as one JSON object (a result file: `virtspec colour` reads it)")
 
-    sweep = commands.add_parser("sweep", help="certified readings over theta_i x wavelengths (few kernel launches)")
+    sweep = command("sweep", "certified readings over theta_i x wavelengths (few kernel launches)",
+                    "Measure a grid of readings (wavelengths x theta_i) at one phi_i, each with its own rays "
+                    "and certificate; resumable when --out is given.")
     sweep.add_argument("scene", help="Mitsuba XML scene with 'emitter' and 'specimen' disks")
     _measurement_options(sweep, sweep=True)
     sweep.add_argument("--out", help="result file .nc, .csv or .json (finished readings are kept in "
                                      "OUT.partial.json until the sweep ends: re-run to resume)")
-    sweep.add_argument("--plot", help="figure .png or .svg (readings with the certified +-mu band)")
+    sweep.add_argument("--plot", help="figure .png or .svg (readings with the band of their certified tolerance)")
     sweep.add_argument("--densities", type=float, nargs="+", metavar="LOG10N",
                        help="sweep at N = 10^d rays for each d; print seconds and the fluctuation of eq. (24)")
     sweep.add_argument("--quiet", action="store_true", help="no progress bar and no summary")
 
-    colour = commands.add_parser("colour", help="CIE XYZ, L*a*b*, sRGB of a saved spectrum")
+    colour = command("colour", "CIE XYZ, L*a*b*, sRGB of a saved spectrum",
+                     "Colorimetry (colour-science, ASTM E308) of one quantity of a result file at one theta_i, "
+                     "or of a colour-science CSV spectrum.")
     colour.add_argument("file", help="result file (.nc, .csv, .json; also `measure --json` output) or "
                                      "colour-science CSV spectra")
     colour.add_argument("--theta-i", type=float, help="angle of the sweep to use (needed if it has several)")
-    colour.add_argument("--quantity", default="reflectance", help="reflectance (default) or transmittance")
+    colour.add_argument("--quantity", default="reflectance",
+                        help=f"the spectrum to use: {', '.join(QUANTITIES)} of a result file, or a column of "
+                             "a colour-science CSV (default reflectance)")
     colour.add_argument("--illuminant", default="D65", help="colour.SDS_ILLUMINANTS name (default D65)")
     colour.add_argument("--observer", default="CIE 1931 2 Degree Standard Observer",
                         help="colour.MSDS_CMFS name (default CIE 1931 2 degree)")
+
+    llvm = command("llvm", "find or check the libLLVM Dr.Jit uses (set-up)",
+                   "find: print a libLLVM >= 17 on this machine (exit 1 if none); check: load it in Dr.Jit "
+                   "and print its version, or say how to fix it.")
+    llvm.add_argument("action", choices=["find", "check"])
     return parser
 
 
@@ -104,14 +142,22 @@ def _settings(args: argparse.Namespace) -> dict:
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of ``virtspec``; returns the exit status."""
 
+    signal.signal(signal.SIGPIPE, signal.SIG_DFL)  # a closed pipe (virtspec bounds | head) ends us quietly
     parser = build_parser()
     args = parser.parse_args(argv)
     try:
         if args.command == "bounds":
             from virtspec_mi.bounds import format_table_1
+            from virtspec_mi.budgets import format_budgets
 
             print(format_table_1(args.mu, args.delta))
+            print()
+            print(format_budgets(args.mu, args.delta))
             return 0
+        if args.command == "llvm":
+            from virtspec_mi.llvm import main as llvm_main
+
+            return llvm_main([args.action])
         if args.command == "sweep":
             return _sweep(args)
         if args.command == "colour":

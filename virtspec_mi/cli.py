@@ -95,11 +95,45 @@ def build_parser() -> argparse.ArgumentParser:
     colour.add_argument("--illuminant", default="D65", help="colour.SDS_ILLUMINANTS name (default D65)")
     colour.add_argument("--observer", default="CIE 1931 2 Degree Standard Observer",
                         help="colour.MSDS_CMFS name (default CIE 1931 2 degree)")
+    colour.add_argument("--json", action="store_true",
+                        help="print one JSON object: XYZ, Lab, sRGB and its hex, coverage, note")
 
     llvm = command("llvm", "find or check the libLLVM Dr.Jit uses (set-up)",
                    "find: print a libLLVM >= 17 on this machine (exit 1 if none); check: load it in Dr.Jit "
                    "and print its version, or say how to fix it.")
     llvm.add_argument("action", choices=["find", "check"])
+
+    _EXAMPLES["compare"] = ("examples:\n  virtspec compare spectrum.nc measured.csv --plot compare.png\n"
+                            "  virtspec compare reading.json npsg.csv --quantity transmittance --json")
+    compare = command("compare", "a result against a measured spectrum: residuals, tolerance, Delta E 2000",
+                      "Compare one quantity of a result file at one theta_i with a measured spectrum over their "
+                      "common wavelengths (the measured one interpolated onto the result's, never extrapolated): "
+                      "residuals, RMSE, the share of points within the certified tolerance (+ the measurement "
+                      "uncertainty) and Delta E 2000. MEASURED: a colour-science CSV spectral file, a plain "
+                      "wavelength,value[,uncertainty] CSV, a NetCDF file or another result file.")
+    compare.add_argument("result", help="result file (.nc, .csv, .json; also `measure --json` output)")
+    compare.add_argument("measured", help="measured spectrum (.csv, .txt, .nc, or a result file)")
+    _comparison_options(compare)
+    compare.add_argument("--plot", help="figure .png or .svg: both spectra and the residuals")
+    compare.add_argument("--json", action="store_true", help="print the comparison as one JSON object")
+
+    _EXAMPLES["plot"] = ("examples:\n  virtspec plot fig5.nc --wavelengths 400 550 700 --out fig5.png\n"
+                         "  virtspec plot spectrum.nc --quantity transmittance\n"
+                         "  virtspec plot spectrum.nc --against measured.csv --out compare.svg")
+    plot = command("plot", "figure of a result file (a sweep or a reading), optionally against a measured spectrum",
+                   "Plot one quantity of a result file against theta_i (a sweep over angles: one curve per "
+                   "wavelength) or wavelength (one curve per theta_i), with the band of the certified tolerance; "
+                   "with --against, the result over a measured spectrum and the residuals (as compare --plot).")
+    plot.add_argument("file", help="result file (.nc, .csv, .json; also `measure --json` output)")
+    plot.add_argument("--quantity", choices=list(QUANTITIES), default="reflectance",
+                      help="quantity to draw (default reflectance)")
+    plot.add_argument("--theta-i", nargs="+", help="angles of the result to draw (default all; one with --against)")
+    plot.add_argument("--wavelengths", nargs="+", help="wavelengths of the result to draw, e.g. 400 550 700 or "
+                                                       "400:700:50 (default all)")
+    plot.add_argument("--against", metavar="MEASURED", help="measured spectrum to overlay (as for compare)")
+    plot.add_argument("--uncertainty", type=float,
+                      help="measurement uncertainty of MEASURED (overrides its uncertainty column)")
+    plot.add_argument("--out", help="figure .png or .svg (default: FILE with the suffix .png)")
     return parser
 
 
@@ -162,6 +196,10 @@ def main(argv: Sequence[str] | None = None) -> int:
             return _sweep(args)
         if args.command == "colour":
             return _colour(args)
+        if args.command == "compare":
+            return _compare(args)
+        if args.command == "plot":
+            return _plot(args)
         return _measure(args)
     except (ValueError, RuntimeError, OSError) as error:
         print(f"virtspec: error: {error}", file=sys.stderr)
@@ -251,8 +289,81 @@ def _colour(args: argparse.Namespace) -> int:
         sd = read_result(path).to_sd(args.quantity, args.theta_i)
         heading = f"{args.quantity} of {path} ({sd.name})"
     colour = colorimetry(sd, args.illuminant, args.observer)
+    if args.json:
+        print(json.dumps({"file": str(path), "quantity": args.quantity, "spectrum": heading, **colour.as_dict()}))
+        return 0
     print(heading)
     print(colour.summary())
+    return 0
+
+
+def _comparison_options(parser: argparse.ArgumentParser) -> None:
+    """The flags of ``virtspec compare``: quantity, theta_i, uncertainty, illuminant, observer."""
+
+    from virtspec_mi.counts import QUANTITIES
+
+    parser.add_argument("--quantity", choices=list(QUANTITIES), default="reflectance",
+                        help="quantity compared: the result's and the measured column of that name "
+                             "(default reflectance)")
+    parser.add_argument("--theta-i", type=float, help="angle of the result to use (needed if it has several)")
+    parser.add_argument("--uncertainty", type=float,
+                        help="measurement uncertainty, added to the certified tolerance (overrides the file's "
+                             "uncertainty column)")
+    parser.add_argument("--illuminant", default="D65", help="colour.SDS_ILLUMINANTS name for Delta E 2000 "
+                                                            "(default D65)")
+    parser.add_argument("--observer", default="CIE 1931 2 Degree Standard Observer",
+                        help="colour.MSDS_CMFS name (default CIE 1931 2 degree)")
+
+
+def _compare(args: argparse.Namespace) -> int:
+    from virtspec_mi.compare import compare
+    from virtspec_mi.plot import check_figure_path
+
+    check_figure_path(args.plot)  # a bad suffix fails before any work
+    comparison = compare(args.result, args.measured, quantity=args.quantity, theta_i=args.theta_i,
+                         measurement_uncertainty=args.uncertainty, illuminant=args.illuminant,
+                         observer=args.observer)
+    if args.plot:
+        comparison.plot(args.plot)
+    if args.json:
+        print(json.dumps(comparison.as_dict()))
+        return 0
+    print(comparison.summary())
+    if args.plot:
+        print(f"plot: {args.plot}")
+    return 0
+
+
+def _plot(args: argparse.Namespace) -> int:
+    from dataclasses import replace
+    from pathlib import Path
+
+    from virtspec_mi.api import read_result
+    from virtspec_mi.checks import parse_theta_i, parse_wavelengths
+    from virtspec_mi.compare import compare
+    from virtspec_mi.plot import check_figure_path, plot_sweep, select
+
+    path = Path(args.file)
+    against = Path(args.against) if args.against else None
+    default = f"{path.stem}_vs_{against.stem}.png" if against is not None else f"{path.stem}.png"
+    out = check_figure_path(args.out or path.with_name(default))
+    theta_i = parse_theta_i(" ".join(args.theta_i)) if args.theta_i else None
+    wavelengths = parse_wavelengths(" ".join(args.wavelengths)) if args.wavelengths else None
+    result = read_result(path)
+    if against is None:
+        plot_sweep(result, out, quantity=args.quantity, name=path.name, wavelengths=wavelengths, theta_i=theta_i)
+        print(f"plot: {out}")
+        return 0
+    if theta_i is not None and len(theta_i) != 1:
+        raise ValueError(f"--theta-i must be one angle with --against (got {len(theta_i)})")
+    if wavelengths is not None:
+        result = select(result, wavelengths=wavelengths)
+    comparison = compare(result, against, quantity=args.quantity, theta_i=theta_i[0] if theta_i else None,
+                         measurement_uncertainty=args.uncertainty)
+    comparison = replace(comparison, result_name=path.name)
+    comparison.plot(out)
+    print(comparison.summary())
+    print(f"plot: {out}")
     return 0
 
 

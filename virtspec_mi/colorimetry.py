@@ -104,6 +104,22 @@ class Colour:
             lines.append(f"note: {self.note}")
         return "\n".join(lines)
 
+    def as_dict(self) -> dict[str, Any]:
+        """Plain data (JSON-ready): XYZ, Lab, sRGB and its hex, illuminant, observer, wavelengths, coverage, note."""
+
+        clipped = np.clip(self.sRGB, 0, 1)
+        return {
+            "XYZ": self.XYZ.tolist(),
+            "Lab": self.Lab.tolist(),
+            "sRGB": self.sRGB.tolist(),
+            "hex": "#" + "".join(f"{int(round(255 * c)):02x}" for c in clipped),
+            "illuminant": self.illuminant,
+            "observer": self.observer,
+            "wavelengths": self.wavelengths.tolist(),
+            "coverage": float(self.coverage),
+            "note": self.note,
+        }
+
 
 def _theta_column(result: Any, theta_i: float | None) -> int:
     angles = np.asarray(result.theta_i, dtype=np.float64)

@@ -9,8 +9,11 @@ Command line: ``virtspec``
 - ``virtspec sweep SCENE --theta-i 0:90:1 [--wavelengths 400:700:10] [--out FILE(.nc|.csv|.json)]
   [--plot FIG(.png|.svg)] [--densities 3 4 5 6] [--quiet] [measure options]``: a sweep
   (resumable when ``--out`` is given: see :mod:`virtspec_mi.checkpoint`).
-- ``virtspec colour FILE [--theta-i] [--quantity] [--illuminant] [--observer]``: CIE XYZ,
-  L*a*b* and sRGB of a saved spectrum (a sweep file or a colour-science CSV).
+- ``virtspec colour FILE [--theta-i] [--quantity] [--illuminant] [--observer] [--json]``: CIE
+  XYZ, L*a*b* and sRGB of a saved spectrum (a result file or a colour-science CSV).
+- ``virtspec compare RESULT MEASURED [...]``: a result against a measured spectrum
+  (:mod:`virtspec_mi.compare`); ``virtspec plot FILE [...]``: a figure of a result file.
+- ``virtspec llvm {find,check}``: the libLLVM Dr.Jit uses (``make setup`` calls it).
 
 Errors in the input (bad ranges, unreadable scenes, a bad libLLVM) print one line
 ``virtspec: error: …`` and exit with status 2 (usage) or 1 (measurement).

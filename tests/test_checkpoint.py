@@ -1,7 +1,8 @@
 """
 Tests of virtspec_mi.checkpoint: one run per checkpoint (an OS lock, checked with real
-processes), writability checked before any tracing, and tampered checkpoints refused
-with the reason — never accepted, never deleted.
+processes), writability checked before any tracing, tampered checkpoints refused with
+the reason — never accepted, never deleted — and what ``virtspec sweep --out`` says
+about its checkpoint (Ctrl-C, resume).
 """
 
 from __future__ import annotations
@@ -295,3 +296,72 @@ def test_slow_saves_are_spaced_out_and_what_is_left_is_saved_on_the_way_out(diam
         vm.sweep(diamond, out=tmp_path / "sweep.nc", **KWARGS)
     assert saves == [5, 10]  # resumed with 4; the last batches were saved before the output was written
     assert len(json.loads(checkpoint.read_text())["done"]) == 10
+
+
+# --- the command line: Ctrl-C, resume, outputs -------------------------------------------
+
+
+def _interrupt_after(monkeypatch, batches: int) -> None:
+    """Ctrl-C (KeyboardInterrupt) once ``batches`` batches of the sweep have been traced."""
+
+    import virtspec_mi.engine as engine
+
+    real, calls = engine.take_readings, []
+
+    def flaky(*args, **kwargs):
+        if len(calls) == batches:
+            raise KeyboardInterrupt
+        calls.append(1)
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(engine, "take_readings", flaky)
+
+
+def test_ctrl_c_names_the_checkpoint_and_the_rerun_says_what_it_reused(scenes_dir, tmp_path, monkeypatch, capsys):
+    from virtspec_mi.cli import main
+
+    out = tmp_path / "fig5.nc"
+    partial = tmp_path / "fig5.nc.partial.json"
+    command = ["sweep", str(scenes_dir / "diamond_collimated.xml"), "--theta-i", "0:90:10", "--rays", "2000",
+               "--chunk-size", "2048", "--out", str(out)]
+    with monkeypatch.context() as patch:
+        _interrupt_after(patch, 4)
+        assert main(command) == 130
+    err = capsys.readouterr().err
+    assert f"virtspec: interrupted (finished readings are kept in {partial}: re-run the same command" in err
+    assert "OUT.partial.json" not in err
+    assert main(command) == 0
+    captured = capsys.readouterr()
+    assert f"resumed from {partial}: 4 of 10 readings reused" in captured.err
+    assert f"written: {out}" in captured.out and not partial.exists()
+    densities = ["sweep", str(scenes_dir / "diamond_collimated.xml"), "--theta-i", "0:90:10", "--densities", "2",
+                 "3", "--chunk-size", "1024", "--out", str(out)]
+    with monkeypatch.context() as patch:
+        _interrupt_after(patch, 5)  # density 2: 1 batch, density 3: 10 batches
+        assert main(densities) == 130
+    assert f"kept in {tmp_path / 'fig5_logN3.nc.partial.json'}:" in capsys.readouterr().err
+
+
+def test_ctrl_c_before_any_reading_finished(scenes_dir, tmp_path, monkeypatch, capsys):
+    from virtspec_mi.cli import main
+
+    out = tmp_path / "fig5.csv"
+    with monkeypatch.context() as patch:
+        _interrupt_after(patch, 0)
+        assert main(["sweep", str(scenes_dir / "diamond_collimated.xml"), "--theta-i", "0", "--rays", "100",
+                     "--out", str(out)]) == 130
+    err = capsys.readouterr().err
+    assert err.startswith("virtspec: interrupted") and "kept in" not in err
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_sweep_out_that_is_a_directory_fails_before_tracing(scenes_dir, tmp_path, monkeypatch, capsys):
+    import virtspec_mi.engine as engine
+    from virtspec_mi.cli import main
+
+    (tmp_path / "taken.nc").mkdir()
+    monkeypatch.setattr(engine, "take_readings", lambda *a, **k: pytest.fail("traced before the check"))
+    assert main(["sweep", str(scenes_dir / "diamond_collimated.xml"), "--theta-i", "0", "--rays", "100",
+                 "--out", str(tmp_path / "taken.nc")]) == 1
+    err = capsys.readouterr().err
+    assert err.startswith("virtspec: error: out ") and "is a directory" in err

@@ -208,8 +208,11 @@ def main(argv: Sequence[str] | None = None) -> int:
         print(f"virtspec: error: {error}", file=sys.stderr)
         return 1
     except KeyboardInterrupt:
-        kept = " (finished readings are kept in OUT.partial.json: re-run the same command to resume)"
-        print(f"virtspec: interrupted{kept if getattr(args, 'out', None) else ''}", file=sys.stderr)
+        partial = getattr(args, "checkpoint", None)  # the checkpoint of the sweep under way (set by _sweep)
+        kept = "" if partial is None else (
+            f" (finished readings are kept in {partial}: re-run the same command to resume)" if partial.exists()
+            else " (no reading had finished: nothing to resume)")
+        print(f"virtspec: interrupted{kept}", file=sys.stderr)
         return 130
 
 
@@ -225,22 +228,19 @@ def _sweep(args: argparse.Namespace) -> int:
     from pathlib import Path
 
     from virtspec_mi.api import fluctuation, sweep
+    from virtspec_mi.checkpoint import checkpoint_for
     from virtspec_mi.plot import check_figure_path, plot_densities, plot_sweep
-    from virtspec_mi.results_io import csv_text, result_format
+    from virtspec_mi.results_io import check_output, csv_text
 
-    out = Path(args.out) if args.out else None
-    if out is not None:
-        result_format(out)  # a bad suffix fails before any tracing
+    out = check_output(args.out) if args.out else None  # a bad suffix or directory fails before any tracing
     check_figure_path(args.plot)
     kwargs = {**_settings(args), "progress": False if args.quiet else None}
     given_rays = kwargs.pop("rays")
 
     def run(rays: int | None, path: Path | None) -> object:
-        checkpoint = path.with_name(path.name + ".partial.json") if path is not None else None
-        result = sweep(args.scene, rays=rays, checkpoint=checkpoint, **kwargs)
-        if path is not None:
-            result.write(path)
-        return result
+        # the sweep writes `path` atomically, and only then removes its checkpoint PATH.partial.json
+        args.checkpoint = checkpoint_for(path) if path is not None else None  # named if interrupted
+        return sweep(args.scene, rays=rays, out=path, **kwargs)
 
     if not args.densities:
         result = run(given_rays, out)

@@ -120,7 +120,11 @@ def run(
     stride = ``settings.most_rays_per_reading``, so its counts depend on (seed, k) only;
     readings run in batches of about ``chunk_size`` rays, each recorded in
     ``checkpoint`` (a path; see :mod:`virtspec_mi.checkpoint`) and shown by
-    ``progress`` (see :mod:`virtspec_mi.progress`).
+    ``progress`` (see :mod:`virtspec_mi.progress`). A run that resumes from
+    ``checkpoint`` says so on stderr (unless ``progress`` is ``False``). The checkpoint
+    is left in place when the run completes: the caller removes it once the result is
+    safe (:func:`virtspec_mi.checkpoint.remove`), and holds it meanwhile
+    (:func:`virtspec_mi.checkpoint.claim`).
     """
 
     angles = np.asarray(theta_i, dtype=np.float64)
@@ -164,10 +168,17 @@ def _run_keyed(instrument: Any, settings: Settings, flat_lam: np.ndarray, flat_t
     per_batch = max(1, settings.chunk_size // stride)
     batches = [np.concatenate(units[i:i + per_batch]) for i in range(0, len(units), per_batch)]
     angles = flat_theta[::n_lam]
-    state = Checkpoint.open(checkpoint, _identity(settings, angles, instrument, scene, shared), size)
+    if settings.adaptive:  # a pilot of n1 rays, then a second batch of at most the stride
+        rays, pilot_rays = (0, stride), (settings.pilot_rays_per_reading,) * 2
+    else:
+        rays, pilot_rays = (settings.rays_per_reading,) * 2, (0, 0)
+    state = Checkpoint.open(checkpoint, _identity(settings, angles, instrument, scene, shared), size,
+                            rays=rays, pilot_rays=pilot_rays, group=n_lam if shared else 1)
     todo = [b for b in (b[~state.done[b]] for b in batches) if len(b)]
     per_unit = n_lam if shared else 1
     bar = Progress(progress, total=sum(len(b) for b in todo) // per_unit)
+    if state.reused:
+        bar.note(f"resumed from {checkpoint}: {state.reused} of {size} readings reused")
     try:
         for batch in todo:
             start = time.perf_counter()
@@ -178,7 +189,7 @@ def _run_keyed(instrument: Any, settings: Settings, flat_lam: np.ndarray, flat_t
             bar.update(len(batch) // per_unit, time.perf_counter() - start)
     finally:
         bar.close()
-    state.finish()
+        state.flush()  # every finished reading is on disk, interrupted or not (saving may be spaced out)
     return state.counts, state.pilot if settings.adaptive else None, state.seconds
 
 

@@ -4,7 +4,8 @@ Progress of a long run: a tqdm bar on stderr, only when it helps
 
 ``progress=True``: always a bar; ``False``: never; ``None`` (default): only when
 stderr is a terminal and the run is expected to last more than about 2 s (the
-estimate comes from the batches done so far).
+estimate comes from the batches done so far). A note about the run (e.g. that it
+resumed from a checkpoint) goes to stderr too, unless ``progress=False``.
 """
 
 from __future__ import annotations
@@ -41,6 +42,16 @@ class Progress:
                 return
         if self.bar is not None:
             self.bar.update(count)
+
+    def note(self, text: str) -> None:
+        """One line on stderr about the run (unless ``progress=False``: then nothing is shown)."""
+
+        if self.mode is False:
+            return
+        if self.bar is not None:
+            self.bar.write(text, file=sys.stderr)
+        else:
+            print(text, file=sys.stderr, flush=True)
 
     def close(self) -> None:
         if self.bar is not None:

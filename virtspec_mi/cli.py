@@ -80,7 +80,7 @@ def build_parser() -> argparse.ArgumentParser:
     sweep.add_argument("scene", help="Mitsuba XML scene with 'emitter' and 'specimen' disks")
     _measurement_options(sweep, sweep=True)
     sweep.add_argument("--out", help="result file .nc, .csv or .json (finished readings are kept in "
-                                     "OUT.partial.json until the sweep ends: re-run to resume)")
+                                     "FILE.partial.json until the result file is written: re-run to resume)")
     sweep.add_argument("--plot", help="figure .png or .svg (readings with the band of their certified tolerance)")
     sweep.add_argument("--densities", type=float, nargs="+", metavar="LOG10N",
                        help="sweep at N = 10^d rays for each d; print seconds and the fluctuation of eq. (24)")

@@ -99,6 +99,8 @@ def test_sweep_densities_print_seconds_and_delta(scenes_dir):
     assert "Delta (eq. 24)" in lines[0]
     assert lines[1].split()[:2] == ["2", "100"] and lines[2].split()[:2] == ["3", "1,000"]
     assert 0.005 < float(lines[2].split()[3]) < 0.2  # Delta between 100 and 1000 rays per reading
+    # Fig. 6b: no density's seconds include the kernel's compilation (a warm-up sweep ran first)
+    assert lines[3].startswith("(seconds after a warm-up sweep at log10 N = 2")
 
 
 @pytest.mark.parametrize("args, message", [

@@ -217,3 +217,27 @@ def test_defaults_are_soybean_and_corn(mi):
     assert u.params["thickness"] == 2.04e-4 and u.params["cuticle_aspect_ratio"] == 10.0
     assert np.isclose(b.mesophyll_thickness, 8.3e-5) and b.side == "adaxial" and b.lookup == "step"
     assert "ABMB[" in str(b)
+
+
+# --- issue 12: numbers float32 cannot hold are refused; huge absorption computes without overflow ----
+
+
+@pytest.mark.parametrize("params, message", [
+    ({"thickness": 1e300}, r"'thickness' must be a finite number > 0 \(a float32"),  # NumPy's overflow warning before
+    ({"thickness": 1e-40}, r"'thickness' must be a finite number > 0 \(a float32"),
+    ({"protein": True}, "'protein' must be a finite number >= 0"),
+    ({"cuticle_aspect_ratio": float("inf")}, "'cuticle_aspect_ratio' must be a finite number > 0"),
+])
+def test_values_float32_cannot_hold_are_refused(mi, params, message):
+    with pytest.raises(SceneError, match=message):
+        vm.measure(leaf("abm_b", **params), rays=10)
+
+
+def test_absorption_beyond_float32_absorbs_without_overflow(mi):
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # NumPy's "overflow encountered in cast" was printed here
+        reading = vm.measure(leaf("abm_b", thickness=1e30, chlorophyll_a=3e38), rays=2000, wavelengths=[551, 800])
+    check_reading(reading)
+    assert np.all(reading.transmitted == 0)  # every ray that enters the mesophyll is absorbed

@@ -372,3 +372,32 @@ def test_conical_xml_scene_takes_the_bound(mi, scenes_dir, bound, joint):
     reading = vm.measure(scene)
     assert reading.bound == bound and reading.settings.joint == (joint == "true")
     assert reading.settings.beam == "conical" and reading.theta_i == 70
+
+
+# --- issue 12: one clear ValueError instead of a traceback ---------------------------------------
+
+
+@pytest.mark.parametrize("spp", [-5, 2**32, 2**40])
+def test_render_refuses_a_bad_spp_naming_it(mi, scenes_dir, spp):
+    scene = mi.load_file(str(scenes_dir / "diamond_conical.xml"))
+    # before: Dr.Jit's RuntimeError "error while performing a custom differentiable operation"
+    with pytest.raises(ValueError, match=r"spectrophotometer: spp must be a whole number with 0 <= spp <= "
+                                         rf"4294967295 .*\(got {spp}\)"):
+        mi.render(scene, spp=spp)
+    with pytest.raises(ValueError, match="spp must be a whole number"):
+        scene.integrator().render(scene, spp=spp)
+    assert np.array(mi.render(scene, spp=1000)).shape == (1, 3)  # and the same scene still renders
+
+
+def test_render_leaves_other_integrators_errors_alone(mi):
+    scene = mi.load_dict({"type": "scene", "integrator": {"type": "path"},
+                          "sensor": {"type": "perspective", "film": {"type": "hdrfilm", "width": 2, "height": 2}}})
+    assert np.array(mi.render(scene, spp=1)).shape[:2] == (2, 2)
+
+
+def test_specimens_needing_uv_partials_are_refused_with_the_reason(mi):
+    bump = {"type": "bumpmap", "arbitrary": {"type": "checkerboard"}, "bsdf": {"type": "diffuse"}}
+    # before: RuntimeError "[Texture] Texture::eval_1_grad(): not implemented!" from the kernel
+    with pytest.raises(ValueError, match=r"BumpMap cannot be sampled by the instrument .*eval_1_grad.*no uv "
+                                         r"partials .*bumpmap.* not supported"):
+        vm.measure(vm.instrument_scene(bump), rays=100)

@@ -147,3 +147,34 @@ def test_shipped_exact_table_matches_the_computation_everywhere():
     for key, n in EXACT.items():
         if key[0] >= 0.005:
             assert bounds._exact_rays(*key, 0.0, 1.0) == n, key
+
+
+# --- issue 12: the bounds never divide by zero, overflow or hang --------------------------------
+
+
+@pytest.mark.parametrize("call, message", [
+    (lambda: bounds.hoeffding_rays(1e-300, 0.01), "the hoeffding bound for mu = 1e-300, delta = 0.01 needs more than "
+                                                  "1.8e308 rays"),  # ZeroDivisionError before
+    (lambda: bounds.chebyshev_rays(1e-200, 1e-300), "the chebyshev bound for mu = 1e-200"),  # OverflowError before
+    (lambda: bounds.exact_rays(1e-300, 0.01), "the exact bound for mu = 1e-300"),
+    (lambda: bounds.max_miss_probability(2**32 - 1, 0.005), r"at most 4,000,000 are evaluated"),
+])
+def test_extreme_inputs_are_refused_with_the_rule_and_the_limit(call, message):
+    with pytest.raises(ValueError, match=message):
+        call()
+
+
+def test_exact_rays_falls_back_to_hoeffding_where_the_exact_law_costs_too_much():
+    import time
+
+    start = time.perf_counter()
+    assert bounds.exact_rays(1e-4, 0.01) == bounds.hoeffding_rays(1e-4, 0.01)  # N ~ 2.6e8: hours before
+    assert bounds.exact_rays(1e-9, 0.3) == bounds.hoeffding_rays(1e-9, 0.3)
+    assert time.perf_counter() - start < 1.0
+    # a narrow pilot interval is cheap: the exact law is still evaluated
+    assert bounds.exact_rays(1e-4, 0.01, 0.0, 1e-4) < bounds.hoeffding_rays(1e-4, 0.01) / 10
+
+
+def test_the_certificate_of_given_rays_at_a_tiny_mu():
+    for name in ("hoeffding", "chebyshev", "exact"):
+        assert BUDGETS[name].certified(1000, 0.01, 1e-300) == BUDGETS[name].tolerance(1000, 0.01)

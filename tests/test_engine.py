@@ -80,3 +80,57 @@ def test_wavelength_independent_specimen_is_traced_once_per_incidence(diamond_in
     first, _ = take_readings(diamond_instrument, [readings[3]], settings, offsets=[3 * 4000])
     assert first.reflected[0] == tallies.reflected[3]
     np.testing.assert_array_equal(tallies.rays, 4000)
+
+
+# --- issue 12: nothing hangs; every N is range-checked before tracing ---------------------------
+
+
+def _refused_fast(call, message: str) -> None:
+    import time
+
+    start = time.perf_counter()
+    with pytest.raises(ValueError, match=message):
+        call()
+    assert time.perf_counter() - start < 0.5
+
+
+def test_huge_budgets_are_refused_in_milliseconds(diamond):
+    white = vm.instrument_scene({"type": "diffuse", "reflectance": {"type": "uniform", "value": 1.0}})
+    _refused_fast(lambda: vm.measure(white, theta_i=88, mu=2.4e-5), "needs N = 4,599,233,825 rays per reading")
+    _refused_fast(lambda: vm.measure(diamond, mu=1e-9), "hoeffding bound for mu = 1e-09")  # N = 2.6e18
+    _refused_fast(lambda: vm.measure(diamond, mu=1e-9, bound="exact"), "exact bound for mu = 1e-09")
+    _refused_fast(lambda: vm.measure(diamond, mu=1e-9, bound="two-stage"), "two-stage pilot")
+    _refused_fast(lambda: vm.sweep(diamond, mu=2e-5, bound="two-stage", pilot_rays=100, theta_i=[0, 10]),
+                  "two-stage bound for mu = 2e-05")
+    _refused_fast(lambda: vm.sweep(diamond, theta_i="0:90:1e-7"), "holds 900,000,001 values")
+
+
+def test_readings_and_rays_per_call_are_capped(diamond):
+    _refused_fast(lambda: vm.sweep(diamond, wavelengths="400:1399:1", theta_i="0:90:0.09", rays=1),
+                  r"at most 1,000,000 readings .*got 1,001,000")
+    dielectric = vm.instrument_scene({"type": "dielectric"})
+    _refused_fast(lambda: vm.sweep(dielectric, wavelengths="400:2900:1", rays=2**32 - 1, theta_i=[10]),
+                  r"at most 1e\+13 rays")
+    # a wavelength-independent specimen traces one reading per angle: its rays are counted once
+    instrument = find_instrument(diamond)
+    with pytest.raises(ValueError, match=r"at most 1e\+13 rays \(got 12,884,901,885,000 = 3,000 readings"):
+        take_readings(instrument, [(500.0, float(t), 0.0) for t in np.linspace(0, 90, 3000)],
+                      Settings(rays=2**32 - 1))
+
+
+def test_the_second_stage_is_range_checked_before_it_is_traced(diamond, monkeypatch):
+    from virtspec_mi import engine, twostage
+
+    monkeypatch.setattr(twostage, "stage_two_rays", lambda *args, **kwargs: np.array([2**32], dtype=np.int64))
+    traced = []
+    original = engine._fixed
+    monkeypatch.setattr(engine, "_fixed", lambda *args: traced.append(args[3]) or original(*args))
+    with pytest.raises(ValueError, match="the two-stage second batch for mu = 0.05, delta = 0.2 needs N = "
+                                         "4,294,967,296"):
+        vm.measure(diamond, bound="two-stage", mu=0.05, delta=0.2)
+    assert len(traced) == 1  # the pilot only
+
+
+def test_a_tiny_mu_with_given_rays_is_a_reading(diamond):
+    reading = vm.measure(diamond, mu=1e-300, rays=1000)
+    assert reading.certified_mu[0] == pytest.approx(vm.bounds.hoeffding_mu(1000, 0.01), rel=1e-3)

@@ -48,7 +48,7 @@ def test_wavelength_parsing():
         ({"beam": "laser"}, "beam must be one of conical, collimated"),
         ({"sampling": "sobol"}, "sampling must be one of jittered, random, concentric"),
         ({"bound": "magic"}, "bound must be one of hoeffding, chebyshev, exact, two-stage"),
-        ({"pilot_rays": 0}, "rays must satisfy 1 <= rays"),
+        ({"pilot_rays": 0}, r"pilot_rays must satisfy 1 <= pilot_rays <= 4294967295 \(got 0\)"),
         ({"pilot_delta": 0.01}, r"pilot_delta must satisfy 0 < pilot_delta < delta = 0.01 \(got 0.01\)"),
         ({"pilot_delta": 0}, "pilot_delta must satisfy 0 < pilot_delta < delta"),
         ({"joint": "yes"}, "joint must be true or false"),
@@ -130,3 +130,58 @@ def test_strings_from_xml_and_the_command_line_are_validated_once():
     with pytest.raises(ValueError, match=r"theta_i must satisfy 0 <= theta_i <= 90 degrees \(got 95\)"):
         Settings(theta_i="95")
     assert "theta_i = 0: polar incidence angle" in Settings.describe()
+
+
+# --- issue 12: every N, however obtained, passes the same range check: 1 ... 2**32 - 1 ---------
+
+
+@pytest.mark.parametrize("kwargs, message", [
+    # wrapped silently to N mod 2**32 before
+    ({"theta_i": 88, "mu": 2.4e-5}, r"^the hoeffding bound for mu = 2.4e-05, delta = 0.01 needs N = 4,599,233,825 "
+                                    r"rays per reading, more than the 4,294,967,295 \(2\*\*32 - 1\)"),
+    ({"mu": 1e-9}, "the hoeffding bound for mu = 1e-09, delta = 0.01 needs N = 2,649,158,683,274,017,792"),
+    ({"mu": 1e-9, "bound": "exact"}, "the exact bound for mu = 1e-09"),
+    ({"mu": 1e-5, "bound": "chebyshev"}, "the chebyshev bound for mu = 1e-05, delta = 0.01 needs N = 250,000,000,000 "),
+    ({"mu": 2e-5, "joint": True}, r"delta = 0.01 \(each quantity at delta/2: joint\) needs N = 7,489,330,684"),
+    ({"mu": 1e-300}, r"the hoeffding bound for mu = 1e-300, delta = 0.01 needs more than 1.8e308 rays"),  # ZeroDivisionError
+    ({"delta": 1e-300, "bound": "chebyshev"}, r"chebyshev bound for mu = 0.005, delta = 1e-300 needs N = 1e\+304"),
+    ({"mu": 1e-200, "delta": 1e-300, "bound": "chebyshev"}, "needs more than 1.8e308 rays"),  # OverflowError
+])
+def test_the_bound_never_asks_for_more_than_two_to_the_32(kwargs, message):
+    settings = Settings(**kwargs)
+    with pytest.raises(ValueError, match=message):
+        settings.rays_per_reading
+    with pytest.raises(ValueError, match=message):
+        settings.most_rays_per_reading
+    assert Settings(**kwargs, rays=1000).rays_per_reading == 1000  # explicit rays: mu is only what was asked
+
+
+def test_two_stage_sizes_are_range_checked():
+    with pytest.raises(ValueError, match=r"the default two-stage pilot ceil\(10/mu\) for mu = 1e-09 needs N = "
+                                         r"10,000,000,000"):
+        Settings(bound="two-stage", mu=1e-9).pilot_rays_per_reading
+    with pytest.raises(ValueError, match="the two-stage bound for mu = 2e-05, delta = 0.01 needs N"):
+        Settings(bound="two-stage", mu=2e-5, pilot_rays=100).most_rays_per_reading
+    with pytest.raises(ValueError, match="default two-stage pilot"):
+        Settings(bound="two-stage", mu=3e-308).pilot_rays_per_reading  # 10/mu overflows a float
+
+
+@pytest.mark.parametrize("kwargs, message", [
+    ({"mu": 1e-310}, r"mu must satisfy 0 < mu < 0.5 and be at least 2.23e-308"),
+    ({"delta": 5e-324}, r"delta must satisfy 0 < delta < 1 and be at least 2.23e-308"),
+    ({"delta": 3e-308, "joint": True}, r"delta/2 \(joint\) must satisfy"),
+    ({"delta": 1e-307, "bound": "two-stage"}, r"pilot_delta must satisfy .* at least 2.23e-308"),
+    ({"delta": 1e-300, "pilot_delta": 1e-300 * (1 - 2**-52), "bound": "two-stage"}, r"\(delta - pilot_delta\)"),
+])
+def test_probabilities_derived_from_delta_are_normal_floats(kwargs, message):
+    with pytest.raises(ValueError, match=message):
+        Settings(**kwargs)
+
+
+def test_chunk_size_is_capped_by_memory():
+    from virtspec_mi.checks import MAX_CHUNK_SIZE
+
+    assert MAX_CHUNK_SIZE == 2**25 and Settings(chunk_size=2**25).chunk_size == 2**25
+    with pytest.raises(ValueError, match=r"chunk_size must be a whole number with 1024 <= chunk_size <= 2\*\*25 "
+                                         r"\(got 67108864\)"):
+        Settings(chunk_size=2**26)

@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+import virtspec_mi as vm
 from virtspec_mi.reference import fresnel_reflectance
 
 
@@ -50,3 +51,22 @@ def test_refraction_obeys_snell(mi):
 def test_bad_eta_is_refused(mi, eta):
     with pytest.raises(Exception, match="'eta' must be a number > 0"):
         mi.load_dict({"type": "simple_dielectric", "eta": eta})
+
+
+# --- issue 12: parameters float32 cannot hold, and booleans, are refused ----------------
+
+
+@pytest.mark.parametrize("eta", [float("inf"), float("nan"), 1e-40, 1e39, 9e-7, 1.1e6, True])
+def test_eta_outside_its_range_or_not_a_number_is_refused(mi, eta):
+    # inf read R = 0, T = 1; 1e-40 (a float32 denormal) disagreed between measure and trace_rays.
+    with pytest.raises(Exception, match=r"'eta' must be a number > 0 with 1e-06 <= eta <= 1e\+06"):
+        mi.load_dict({"type": "simple_dielectric", "eta": eta})
+
+
+@pytest.mark.parametrize("eta", [1e-6, 1e6])
+def test_eta_at_the_ends_of_its_range_gives_fresnel_readings(mi, eta):
+    scene = vm.instrument_scene({"type": "simple_dielectric", "eta": eta})
+    for theta in (0.0, 30.0, 89.0, 90.0):
+        reading = vm.measure(scene, rays=2000, theta_i=theta, beam="collimated")
+        assert reading.certified.all() and int(reading.invalid_directions[0]) == 0
+        assert abs(float(reading.reflectance[0]) - fresnel_reflectance(theta, eta)) <= float(reading.certified_mu[0])

@@ -365,3 +365,53 @@ def test_adding_doubling_grid_and_hard_cases(mi, beam):
             if not within(measured, expected, n, AD_ACCURACY):
                 failures.append((albedo, tau, g, n_slab, name, measured, expected))
     assert not failures, failures
+
+
+# --- issue 12: values float32 cannot hold, booleans and out-of-range spectra are refused ------
+
+
+@pytest.mark.parametrize("name, value, match", [
+    ("mu_a", 1e-40, "'mu_a' must satisfy 0 <= mu_a"),  # a float32 denormal
+    ("mu_s", 1e39, "'mu_s' must satisfy"),  # inf in float32
+    ("g", True, "'g' must be a number or a spectrum"),
+    ("eta", float("nan"), "'eta' must satisfy 0 < eta"),
+    ("thickness", 1e39, "'thickness' must be a number > 0 or inf"),
+    ("thickness", True, "'thickness' must be a number > 0 or inf"),
+    ("thickness", 1e-31, r"'thickness' must be a number > 0 or inf \(1e-30 <= thickness <= 1e\+30\)"),
+    ("mu_a", 1e31, r"'mu_a' must satisfy 0 <= mu_a <= 1e\+30 \(0 or at least 1e-30\)"),
+    ("mu_s", 1e-31, "'mu_s' must satisfy 0 <= mu_s <= 1e"),
+    ("eta_above", 1e7, r"'eta_above' must satisfy 0 < eta_above <= 1e\+06 \(at least 1e-06\)"),
+])
+def test_values_float32_cannot_hold_are_refused(mi, name, value, match):
+    with pytest.raises(Exception, match=match):
+        mi.load_dict(slab(**{name: value}))
+
+
+def _spectrum(low: float, high: float) -> dict:
+    return {"type": "regular", "wavelength_min": 400, "wavelength_max": 700, "values": f"{low}, {high}"}
+
+
+@pytest.mark.parametrize("name, spectrum, wavelengths, match", [
+    ("g", _spectrum(1.5, 1.5), [551], r"'g' \(a spectrum\) must satisfy -1 <= g <= 1 .*got 1.5 at 551.0 nm"),
+    ("g", _spectrum(0.2, 0.9), [450, 550], None),
+    ("mu_a", _spectrum(1e31, 2.0), [400, 700], r"'mu_a' \(a spectrum\) must satisfy 0 <= mu_a .*got 1e\+31 at 400.0 nm"),
+    # a spectrum is 0 outside its range: an index of 0 at 800 nm
+    ("eta", _spectrum(1.3, 1.4), [500, 800], r"'eta' \(a spectrum\) must satisfy 0 < eta .*got 0 at 800.0 nm"),
+])
+def test_spectral_parameters_are_checked_at_the_wavelengths_traced(mi, name, spectrum, wavelengths, match):
+    scene = vm.instrument_scene(slab(**{name: spectrum, "mu_s": 5.0}))
+    if match is None:
+        reading = vm.measure(scene, rays=2000, wavelengths=wavelengths)
+        assert np.all(reading.reflected + reading.transmitted + reading.absorbed == 2000)
+        return
+    with pytest.raises(ValueError, match=match):
+        vm.measure(scene, rays=2000, wavelengths=wavelengths)
+    with pytest.raises(ValueError, match=match):
+        vm.sweep(scene, rays=2000, wavelengths=wavelengths, theta_i=[0, 30])
+
+
+def test_a_semi_infinite_slab_needs_extinction_at_every_wavelength(mi):
+    scene = vm.instrument_scene(slab(mu_a=_spectrum(1.0, 2.0), mu_s=0.0, thickness=float("inf")))
+    assert vm.measure(scene, rays=100, wavelengths=500).absorbed.tolist() == [100]
+    with pytest.raises(ValueError, match=r"semi-infinite slab .* needs mu_a \+ mu_s > 0 \(got 0 at 800.0 nm\)"):
+        vm.measure(scene, rays=100, wavelengths=[500, 800])  # the spectrum is 0 outside 400-700 nm

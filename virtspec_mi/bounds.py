@@ -37,11 +37,11 @@ from __future__ import annotations
 import functools
 import math
 from dataclasses import dataclass
-from typing import Sequence
+from typing import Any, Sequence
 
 import numpy as np
 
-from virtspec_mi.checks import check_delta, check_mu, check_rays
+from virtspec_mi.checks import MAX_RAYS, check_delta, check_mu, check_rays
 
 __all__ = [
     "chebyshev_rays",
@@ -51,6 +51,7 @@ __all__ = [
     "exact_rays",
     "exact_mu",
     "EXACT_MU_MAX_RAYS",
+    "EXACT_MAX_POINTS",
     "miss_probability",
     "max_miss_probability",
     "Table1Row",
@@ -70,7 +71,7 @@ def chebyshev_rays(mu: float, delta: float) -> int:
 
     check_mu(mu)
     check_delta(delta)
-    return _ceil(1.0 / (4.0 * mu * mu * delta))
+    return _ceil(_ratio(1.0, 4.0 * mu * mu * delta), "chebyshev", mu, delta)
 
 
 def hoeffding_rays(mu: float, delta: float) -> int:
@@ -84,7 +85,13 @@ def hoeffding_rays(mu: float, delta: float) -> int:
 
     check_mu(mu)
     check_delta(delta)
-    return _ceil(math.log(2.0 / delta) / (2.0 * mu * mu))
+    return _hoeffding(mu, delta, "hoeffding")
+
+
+def _hoeffding(mu: float, delta: float, rule: str) -> int:
+    """Eq. (23) after validation; ``rule`` names the bound in the message when N overflows."""
+
+    return _ceil(_ratio(math.log(2.0 / delta), 2.0 * mu * mu), rule, mu, delta)
 
 
 def chebyshev_mu(rays: int, delta: float) -> float:
@@ -132,6 +139,10 @@ def max_miss_probability(rays: int, mu: float, lo: float = 0.0, hi: float = 1.0)
     lo, hi = max(0.0, float(lo)), min(1.0, float(hi))
     if not lo <= hi:
         raise ValueError(f"lo and hi must satisfy 0 <= lo <= hi <= 1 (got {lo:g}, {hi:g})")
+    if _lattice_points(n, mu, lo, hi) > EXACT_MAX_POINTS:
+        raise ValueError(f"rays = {n:,} at mu = {mu!r} over [{lo:g}, {hi:g}] needs the exact law at about "
+                         f"{_lattice_points(n, mu, lo, hi):,.0f} lattice points; at most {EXACT_MAX_POINTS:,} "
+                         "are evaluated (about 8 s and 0.5 GB)")
     if lo > 0.5:  # mirror into the lower half
         lo, hi = 1.0 - hi, 1.0 - lo
     elif hi > 0.5:
@@ -146,6 +157,22 @@ def max_miss_probability(rays: int, mu: float, lo: float = 0.0, hi: float = 1.0)
     miss = np.where(a >= 0, special.bdtr(np.maximum(a, 0), n, rho), 0.0)
     miss = miss + np.where(b <= n, special.bdtrc(np.clip(b - 1, 0, n), n, rho), 0.0)
     return float(miss.max())
+
+
+EXACT_MAX_POINTS: int = 4_000_000
+"""
+Most lattice points at which :func:`max_miss_probability` evaluates the exact law in one
+call (about N·(hi − lo + 2μ)): about 8 s and 0.5 GB on this project's machine. Beyond
+it :func:`max_miss_probability` refuses and :func:`exact_rays` returns Hoeffding's N,
+which certifies every ρ (at most 1.6× the exact N): at ρ over [0, 1] this happens below
+μ ≈ 0.0007 (δ = 0.01).
+"""
+
+
+def _lattice_points(n: int, mu: float, lo: float, hi: float) -> float:
+    """About how many points :func:`max_miss_probability` evaluates for N = ``n`` over [lo, hi]."""
+
+    return n * min(1.0, hi - lo + 2.0 * mu)
 
 
 def exact_rays(mu: float, delta: float, lo: float = 0.0, hi: float = 1.0) -> int:
@@ -163,7 +190,10 @@ def exact_rays(mu: float, delta: float, lo: float = 0.0, hi: float = 1.0) -> int
     N passes (66,501), found from the normal approximation by stepping over periods,
     and verifies with :func:`max_miss_probability` the returned N and the ends of the
     next two periods (so "N or more rays" is certified, which the two-stage rule
-    relies on when it takes the largest of several N). Results are cached, and the
+    relies on when it takes the largest of several N). Where that would evaluate the
+    exact law at more than :data:`EXACT_MAX_POINTS` lattice points (below μ ≈ 0.0007
+    over all of [0, 1]) it returns Hoeffding's N instead, which certifies every ρ and
+    every larger N (and is never smaller). Results are cached, and the
     common (μ, δ) ship in a table (``virtspec_mi.budget_tables``), so choosing N costs
     microseconds there; other (μ, δ) take one search per process (milliseconds at
     μ ≥ 0.02, seconds at μ = 0.005, about 30 s at μ = 0.001).
@@ -194,8 +224,26 @@ def _shipped_exact() -> dict[tuple[float, float], int]:
 def _exact_rays(mu: float, delta: float, lo: float, hi: float) -> int:
     from scipy import stats
 
+    # Hoeffding's N (and every larger N) is certified for any interval: never go beyond it,
+    # nor evaluate the exact law where that costs more than EXACT_MAX_POINTS points.
+    ceiling = _hoeffding(mu, delta, "exact")
+
+    class _TooCostly(Exception):
+        pass
+
     def passes(n: int) -> bool:
+        if _lattice_points(n, mu, lo, hi) > EXACT_MAX_POINTS:
+            raise _TooCostly
         return max_miss_probability(n, mu, lo, hi) <= delta
+
+    try:
+        return _search_exact(passes, mu, delta, lo, hi, ceiling, stats.norm.isf(delta / 2))
+    except _TooCostly:
+        return ceiling
+
+
+def _search_exact(passes: Any, mu: float, delta: float, lo: float, hi: float, ceiling: int, z: float) -> int:
+    """The period search of :func:`exact_rays` (``passes(N)``: the exact law holds at N)."""
 
     def start(j: int) -> int:  # first N of period j: 2μN > j − 1
         return max(1, math.floor((j - 1) / (2 * mu) * (1 + 1e-12)) + 1)
@@ -204,11 +252,8 @@ def _exact_rays(mu: float, delta: float, lo: float, hi: float) -> int:
         return start(j + 1) - 1
 
     worst = min(max(0.5, lo), hi) if lo <= 0.5 else lo  # the ρ in [lo, hi] nearest ½
-    z = stats.norm.isf(delta / 2)
     guess = max(1.0, z * z * worst * (1 - worst) / (mu * mu))
     j = max(1, math.ceil(2 * mu * guess))
-    # Hoeffding's N (and every larger N) is certified for any interval: never go beyond it.
-    ceiling = hoeffding_rays(mu, delta)
     if passes(end(j)):
         while j > 1 and passes(end(j - 1)):
             j -= 1
@@ -344,8 +389,20 @@ def format_table_1(mu: float = 0.005, deltas: Sequence[float] = (0.001, 0.01, 0.
     return "\n".join(lines)
 
 
-def _ceil(x: float) -> int:
-    """⌈x⌉ that forgives floating-point noise just above an integer (e.g. 1e6 + 1e-10)."""
+def _ratio(numerator: float, denominator: float) -> float:
+    """numerator / denominator, ``inf`` where the denominator underflowed to 0 (μ ≈ 1e-300)."""
 
+    return numerator / denominator if denominator > 0.0 else math.inf
+
+
+def _ceil(x: float, rule: str, mu: float, delta: float) -> int:
+    """
+    ⌈x⌉ that forgives floating-point noise just above an integer (e.g. 1e6 + 1e-10);
+    ``ValueError`` naming the rule, μ and δ when x is beyond the float range.
+    """
+
+    if not math.isfinite(x):
+        raise ValueError(f"the {rule} bound for mu = {mu!r}, delta = {delta!r} needs more than 1.8e308 rays per "
+                         f"reading; one reading may trace at most {MAX_RAYS:,} (2**32 - 1): raise mu or delta")
     nearest = round(x)
     return int(nearest) if abs(x - nearest) <= 1e-9 * max(1.0, abs(x)) else int(np.ceil(x))

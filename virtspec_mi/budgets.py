@@ -76,7 +76,11 @@ class RayBudget:
         tolerance = self.tolerance(rays, delta)
         if tolerance <= mu:
             return tolerance
-        return mu if rays >= self.rays(mu, delta) else tolerance
+        try:
+            needed = self.rays(mu, delta)
+        except ValueError:  # the rule's N is beyond any float (mu ~ 1e-300): these rays are fewer
+            return tolerance
+        return mu if rays >= needed else tolerance
 
     def most_rays(self, settings: Any) -> int:
         """The most rays one reading of ``settings`` may trace in one batch."""

@@ -21,7 +21,7 @@ from typing import Any, Callable
 
 import numpy as np
 
-__all__ = ["Fate", "QUANTITIES", "WEIGHT_ROUNDING", "Counts"]
+__all__ = ["Fate", "QUANTITIES", "WEIGHT_ROUNDING", "DIRECTION_TOLERANCE", "Counts"]
 
 
 class Fate(IntEnum):
@@ -34,6 +34,12 @@ class Fate(IntEnum):
     """Left into the lower hemisphere (wo·n < 0)."""
     CAPPED = 3
     """A random walk stopped by the specimen's step cap: no fate, in none of R, T, A."""
+    INVALID = 4
+    """
+    The BSDF returned an invalid outgoing direction (NaN or infinite components, or a
+    length off 1 by more than :data:`DIRECTION_TOLERANCE`) with a weight that could let
+    the ray survive: no fate, in none of R, T, A (``invalid_directions``).
+    """
 
 
 QUANTITIES: tuple[str, ...] = ("reflectance", "transmittance", "absorptance")
@@ -51,12 +57,23 @@ violations (``weight_violations``): the specimen is not energy conserving.
 """
 
 
+DIRECTION_TOLERANCE: float = 1e-3
+"""
+Largest departure of a BSDF's outgoing direction from unit length, | |wo| − 1 |, that the
+instrument accepts. Sampled directions are unit vectors up to float32 rounding (about
+10⁻⁷; a few 10⁻⁶ after the hundreds of steps of a random walk); a direction beyond, or
+with a NaN or infinite component, cannot be judged reflected or transmitted (NaN
+compares false with everything) and counts in ``invalid_directions``.
+"""
+
+
 @dataclass(frozen=True, eq=False)
 class Counts:
     """
     Exact counts of one or many readings, every field an ``int64`` array of one shape.
 
-    ``absorbed = rays − reflected − transmitted − capped``. ``specular_reflected`` and
+    ``absorbed = rays − reflected − transmitted − capped − invalid_directions``: capped
+    walks and invalid directions (:attr:`Fate.INVALID`) are in no fate. ``specular_reflected`` and
     ``regular_transmitted`` are the reflected and transmitted rays whose sampled event
     was a delta event (parts of ``reflected`` / ``transmitted``). ``largest_weight``
     (float64) is the largest real violating weight seen per reading (NaN if none, or if
@@ -67,6 +84,7 @@ class Counts:
     reflected: np.ndarray
     transmitted: np.ndarray
     capped: np.ndarray
+    invalid_directions: np.ndarray
     weight_violations: np.ndarray
     rounded_weights: np.ndarray
     specular_reflected: np.ndarray
@@ -82,13 +100,14 @@ class Counts:
 
     @property
     def absorbed(self) -> np.ndarray:
-        return self.rays - self.reflected - self.transmitted - self.capped
+        return self.rays - self.reflected - self.transmitted - self.capped - self.invalid_directions
 
     def count(self, fate: Fate) -> np.ndarray:
         """The number of rays of each reading with ``fate``."""
 
         return {Fate.ABSORBED: self.absorbed, Fate.REFLECTED: self.reflected,
-                Fate.TRANSMITTED: self.transmitted, Fate.CAPPED: self.capped}[Fate(fate)]
+                Fate.TRANSMITTED: self.transmitted, Fate.CAPPED: self.capped,
+                Fate.INVALID: self.invalid_directions}[Fate(fate)]
 
     def map(self, function: Callable[[np.ndarray], np.ndarray]) -> "Counts":
         """The same counts with ``function`` applied to every field (select, reshape …)."""

@@ -37,7 +37,7 @@ import numpy as np
 
 from virtspec_mi import twostage
 from virtspec_mi.checkpoint import Checkpoint
-from virtspec_mi.checks import check_wavelength_range
+from virtspec_mi.checks import check_readings, check_rays_needed, check_wavelength_range, shown_value
 from virtspec_mi.counts import Counts
 from virtspec_mi.progress import Progress
 from virtspec_mi.result import Result
@@ -70,9 +70,8 @@ def take_readings(
     attribute refuses wavelengths outside it (``ValueError``).
     """
 
-    bsdf = instrument.bsdf
-    check_wavelength_range([r[0] for r in readings], getattr(bsdf, "wavelength_range", None),
-                           getattr(bsdf, "PLUGIN", "") or type(bsdf).__name__)
+    check_readings(len(readings), 0)
+    _check_specimen(instrument.bsdf, sorted({float(r[0]) for r in readings}))
     readings = [(float(w), float(t), float(p)) for w, t, p in readings]
     if offsets is not None and len(offsets) != len(readings):
         raise ValueError(f"offsets must hold one start per reading ({len(readings)}), got {len(offsets)}")
@@ -82,6 +81,7 @@ def take_readings(
         traced = np.unique(source)
     else:
         source = traced = np.arange(len(readings))
+    check_readings(len(readings), len(traced) * _most_rays_spent(settings))
     traced_readings = [readings[k] for k in traced]
     traced_offsets = None if offsets is None else np.asarray(offsets)[traced]
     pilot = None
@@ -92,6 +92,28 @@ def take_readings(
         counts = _fixed(instrument, traced_readings, settings, rays, traced_offsets)
     back = np.searchsorted(traced, source)
     return counts.map(lambda v: v[back]), None if pilot is None else pilot.map(lambda v: v[back])
+
+
+def _check_specimen(bsdf: Any, wavelengths: list[float]) -> None:
+    """
+    Refuse, before tracing, wavelengths the specimen does not take: outside its
+    ``wavelength_range`` (the ABM leaves' data), or where its ``check_wavelengths``
+    finds a spectral parameter out of range (``turbid_slab``'s spectra).
+    """
+
+    check_wavelength_range(wavelengths, getattr(bsdf, "wavelength_range", None),
+                           getattr(bsdf, "PLUGIN", "") or type(bsdf).__name__)
+    check = getattr(bsdf, "check_wavelengths", None)
+    if check is not None:
+        check(wavelengths)
+
+
+def _most_rays_spent(settings: Settings) -> int:
+    """The most rays one reading of ``settings`` traces, pilot included (≤ 2³² − 1 each)."""
+
+    if not settings.adaptive:
+        return settings.rays_per_reading
+    return settings.pilot_rays_per_reading + settings.most_rays_per_reading
 
 
 def shares_wavelengths(instrument: Any) -> bool:
@@ -130,8 +152,9 @@ def run(
     angles = np.asarray(theta_i, dtype=np.float64)
     lams = np.asarray(settings.wavelengths, dtype=np.float64)
     n_lam, n_theta = len(lams), len(angles)
-    flat_lam, flat_theta = np.tile(lams, n_theta), np.repeat(angles, n_lam)
     shared = shares_wavelengths(instrument)
+    check_readings(n_lam * n_theta, (n_theta if shared else n_lam * n_theta) * _most_rays_spent(settings))
+    flat_lam, flat_theta = np.tile(lams, n_theta), np.repeat(angles, n_lam)
     if not keyed:
         start = time.perf_counter()
         counts, pilot = take_readings(
@@ -239,5 +262,7 @@ def _two_stage(instrument: Any, readings: Sequence[tuple[float, float, float]], 
         np.stack(columns, axis=1), settings.pilot_rays_per_reading, settings.mu, settings.delta,
         settings.pilot_delta_value, joint=settings.joint,
     )
+    check_rays_needed(int(second.max(initial=1)), f"the two-stage second batch for mu = {shown_value(settings.mu)}, "
+                                         f"delta = {shown_value(settings.delta)}")
     stage_two = settings.updated(seed=twostage.stage_two_seed(settings.seed))
     return _fixed(instrument, readings, stage_two, second, offsets), pilot

@@ -35,7 +35,7 @@ from typing import Any
 import numpy as np
 
 from virtspec_mi import __version__
-from virtspec_mi.counts import QUANTITIES, WEIGHT_ROUNDING, Counts
+from virtspec_mi.counts import DIRECTION_TOLERANCE, QUANTITIES, WEIGHT_ROUNDING, Counts
 from virtspec_mi.geometry import InstrumentGeometry, backlit_fraction
 from virtspec_mi.intervals import clopper_pearson
 from virtspec_mi.settings import Settings
@@ -140,6 +140,8 @@ class Result:
     reflected = _counts("reflected", "Rays reflected into the upper hemisphere, per reading.")
     transmitted = _counts("transmitted", "Rays transmitted into the lower hemisphere, per reading.")
     capped = _counts("capped", "Random walks stopped by the specimen's step cap: in none of R, T, A.")
+    invalid_directions = _counts(
+        "invalid_directions", "Rays the BSDF sent in an invalid direction (NaN, infinite, not unit): in none of R, T, A.")
     weight_violations = _counts("weight_violations", "Rays whose BSDF weight was outside [−ε, 1 + ε] or NaN.")
     rounded_weights = _counts("rounded_weights", "Rays whose BSDF weight was within ε of [0, 1] (rounding).")
     specular_reflected = _counts("specular_reflected", "Reflected rays whose sampled event was a delta event.")
@@ -148,7 +150,7 @@ class Result:
 
     @property
     def absorbed(self) -> np.ndarray:
-        """Absorbed rays: rays − reflected − transmitted − capped."""
+        """Absorbed rays: rays − reflected − transmitted − capped − invalid_directions."""
 
         return self.counts.absorbed
 
@@ -180,7 +182,7 @@ class Result:
 
     @property
     def absorptance(self) -> np.ndarray:
-        """α = absorbed/N per reading (ρ + τ + α = 1 − capped/N)."""
+        """α = absorbed/N per reading (ρ + τ + α = 1 − (capped + invalid_directions)/N)."""
 
         return self.absorbed / self.rays
 
@@ -249,9 +251,9 @@ class Result:
 
     @property
     def certified(self) -> np.ndarray:
-        """True for the readings a rule certifies: no weight violations and no capped walks."""
+        """True for the readings a rule certifies: no weight violations, capped walks or invalid directions."""
 
-        return (self.weight_violations == 0) & (self.capped == 0)
+        return (self.weight_violations == 0) & (self.capped == 0) & (self.invalid_directions == 0)
 
     @property
     def certified_mu(self) -> np.ndarray:
@@ -261,7 +263,7 @@ class Result:
         rule's :meth:`~virtspec_mi.budgets.RayBudget.certified` tolerance of its N —
         ≤ μ when N came from the rule, larger when fewer rays were asked for (e.g.
         ``rays=1000`` gives 0.0515 under eq. (19)) — plus :attr:`rounding_bias`. NaN
-        where no rule applies (weight violations or capped walks).
+        where no rule applies (weight violations, capped walks or invalid directions).
         """
 
         s = self.settings
@@ -315,6 +317,10 @@ class Result:
         if np.any(self.capped):
             lines.append(f"{int(np.sum(self.capped))} random walks reached the specimen's step cap; they are counted "
                          "in capped and in none of reflectance, transmittance and absorptance (not certified)")
+        if np.any(self.invalid_directions):
+            lines.append(f"{int(np.sum(self.invalid_directions))} rays left the specimen BSDF in an invalid direction "
+                         f"(NaN, infinite, or length off 1 by more than {DIRECTION_TOLERANCE:g}); they are counted in "
+                         "invalid_directions and in none of reflectance, transmittance and absorptance (not certified)")
         return lines
 
     # -- views -------------------------------------------------------------------------
@@ -469,6 +475,8 @@ class Result:
             dims = tuple(data["dims"])
 
             def counts(source: dict[str, Any]) -> Counts:
+                # Results written before invalid directions were counted have none.
+                source = {"invalid_directions": np.zeros_like(np.asarray(source["rays"]), dtype=np.int64), **source}
                 return Counts(**{name: np.array(source[name], dtype=np.float64 if name == "largest_weight"
                                                 else np.int64) for name in Counts.names()})
 

@@ -8,7 +8,10 @@ first call
 1. points Dr.Jit at a working libLLVM (:mod:`virtspec_mi.llvm`) and refuses a bad one,
 2. selects the Mitsuba variant (``llvm_ad_spectral``; ``VIRTSPEC_VARIANT`` overrides it,
    e.g. ``cuda_ad_spectral`` on a GPU machine),
-3. registers the project's plugins (:mod:`virtspec_mi.plugins`) under that variant.
+3. registers the project's plugins (:mod:`virtspec_mi.plugins`) under that variant, and
+   lets ``mi.render`` raise the ``spectrophotometer`` integrator's ``ValueError`` (e.g. a
+   bad ``spp``) as itself rather than wrapped in Dr.Jit's ``RuntimeError``
+   (:func:`virtspec_mi.plugins.integrators.spectrophotometer.clear_render_errors`).
 """
 
 from __future__ import annotations
@@ -44,7 +47,9 @@ def mitsuba() -> ModuleType:
         mi.set_variant(name)
     if name not in _registered:
         from virtspec_mi.plugins import register
+        from virtspec_mi.plugins.integrators.spectrophotometer import clear_render_errors
 
         register()
+        mi.render = clear_render_errors(mi.render)
         _registered.add(name)
     return mi

@@ -50,12 +50,24 @@ def load_scene(scene: Any) -> Any:
                 raise SceneError(f"scene file not found: {path}")
             return mi.load_file(str(path))
         if isinstance(scene, dict):
+            _check_dict(scene)
             return mi.load_dict(scene)
     except SceneError:
         raise
     except Exception as error:  # Mitsuba raises RuntimeError/ValueError with its parser text
         raise SceneError(f"could not load scene {_describe(scene)}: {_clean(error)}") from error
     raise SceneError(f"scene must be an XML path, a dict or a mitsuba Scene (got {type(scene).__name__})")
+
+
+def _check_dict(scene: dict, path: str = "") -> None:
+    """Refuse what Mitsuba 3.9.1's ``load_dict`` crashes on (a ``None`` value: a segmentation fault)."""
+
+    for key, value in scene.items():
+        where = f"{path}.{key}" if path else str(key)
+        if value is None:
+            raise SceneError(f"could not load scene (dict): [{where}] has no value (None)")
+        if isinstance(value, dict):
+            _check_dict(value, where)
 
 
 def find_instrument(scene: Any) -> Instrument:

@@ -32,12 +32,16 @@ from typing import Any, Callable
 
 from virtspec_mi.budgets import BUDGETS, RayBudget
 from virtspec_mi.checks import (
+    MAX_CHUNK_SIZE,
+    WAVELENGTH_RANGE,
     check_delta,
     check_mu,
     check_rays,
+    check_rays_needed,
     check_theta_i,
     number,
     parse_wavelengths,
+    shown_value,
 )
 
 __all__ = ["BEAMS", "SAMPLINGS", "Settings", "SETTING_NAMES", "settings_keywords", "with_settings", "shown", "help_text"]
@@ -59,7 +63,7 @@ SAMPLINGS: dict[str, str] = {
 
 def _choice(name: str, choices: dict[str, Any]) -> Callable[[Any], str]:
     def check(value: Any) -> str:
-        if value not in choices:
+        if not isinstance(value, str) or value not in choices:
             raise ValueError(f"{name} must be one of {', '.join(choices)} (got {value!r})")
         return value
     return check
@@ -68,7 +72,7 @@ def _choice(name: str, choices: dict[str, Any]) -> Callable[[Any], str]:
 def _check_phi(value: Any) -> float:
     phi = number("phi_i", value)
     if not math.isfinite(phi):
-        raise ValueError(f"phi_i must be a finite number of degrees (got {phi:g})")
+        raise ValueError(f"phi_i must be a finite number of degrees (got {shown_value(phi)})")
     return phi
 
 
@@ -84,12 +88,22 @@ def _check_pilot_delta(value: Any) -> float:
     return number("pilot_delta", value)  # its range, 0 < pilot_delta < delta, needs delta: see __post_init__
 
 
+def _rays(name: str) -> Callable[[Any], int]:
+    def check(value: Any) -> int:
+        return check_rays(value, name=name)
+    return check
+
+
 def _whole(name: str, low: int, high: int, shown: str) -> Callable[[Any], int]:
     def check(value: Any) -> int:
-        as_float = None if isinstance(value, bool) else number(name, value)
-        if as_float is None or not (as_float.is_integer() and low <= as_float <= high):
-            raise ValueError(f"{name} must be a whole number with {shown} (got {value!r})")
-        return int(as_float)
+        if isinstance(value, int) and not isinstance(value, bool):
+            whole = value  # any size: never through a float
+        else:
+            as_float = None if isinstance(value, bool) else number(name, value)
+            whole = int(as_float) if as_float is not None and as_float.is_integer() else None
+        if whole is None or not low <= whole <= high:
+            raise ValueError(f"{name} must be a whole number with {shown} (got {shown_value(value)})")
+        return whole
     return check
 
 
@@ -111,21 +125,24 @@ class Settings:
     theta_i: float = _setting(0.0, check_theta_i, "polar incidence angle, degrees in [0, 90]")
     phi_i: float = _setting(0.0, _check_phi, "azimuthal incidence angle from the specimen's x axis, degrees")
     wavelengths: tuple[float, ...] = _setting(
-        (551.0,), parse_wavelengths, "wavelengths in nm (> 0): numbers and start:stop:step ranges, e.g. 400:700:10")
+        (551.0,), parse_wavelengths,
+        f"wavelengths in nm ({WAVELENGTH_RANGE[0]:g} ... {WAVELENGTH_RANGE[1]:g}): numbers and start:stop:step "
+        "ranges, e.g. 400:700:10")
     mu: float = _setting(0.005, check_mu, "certified tolerance, 0 < mu < 0.5")
     delta: float = _setting(0.01, check_delta, "failure probability, 0 < delta < 1")
-    rays: int | None = _setting(None, check_rays, "rays per reading, 1 ... 2**32 - 1 (overrides the bound)")
+    rays: int | None = _setting(None, _rays("rays"), "rays per reading, 1 ... 2**32 - 1 (overrides the bound)")
     bound: str = _setting("hoeffding", _choice("bound", BUDGETS), "ray budget rule", BUDGETS)
     joint: bool = _setting(False, _check_joint, "certify reflectance and transmittance together (each at delta/2)")
-    pilot_rays: int | None = _setting(None, check_rays, "two-stage pilot rays per reading (default ceil(10/mu))")
+    pilot_rays: int | None = _setting(
+        None, _rays("pilot_rays"), "two-stage pilot rays per reading, 1 ... 2**32 - 1 (default ceil(10/mu))")
     pilot_delta: float | None = _setting(
         None, _check_pilot_delta, "two-stage pilot failure probability, 0 < pilot_delta < delta (default delta/10)")
     beam: str = _setting("conical", _choice("beam", BEAMS), "beam geometry", BEAMS)
     sampling: str = _setting("jittered", _choice("sampling", SAMPLINGS), "disk sampling", SAMPLINGS)
     seed: int = _setting(0, _whole("seed", 0, 2**32 - 1, "0 <= seed < 2**32"), "seed of the random numbers")
     chunk_size: int = _setting(
-        1 << 22, _whole("chunk_size", 1024, 2**30, "1024 <= chunk_size <= 2**30"),
-        "rays per kernel launch (bounds memory; results do not depend on it)")
+        1 << 22, _whole("chunk_size", 1024, MAX_CHUNK_SIZE, "1024 <= chunk_size <= 2**25"),
+        "rays per kernel launch, 1024 ... 2**25 (bounds memory; results do not depend on it)")
 
     def __post_init__(self) -> None:
         for item in fields(self):
@@ -133,8 +150,24 @@ class Settings:
             if value is not None:
                 object.__setattr__(self, item.name, item.metadata["check"](value))
         if self.pilot_delta is not None and not 0.0 < self.pilot_delta < self.delta:
-            raise ValueError(
-                f"pilot_delta must satisfy 0 < pilot_delta < delta = {self.delta:g} (got {self.pilot_delta:g})")
+            raise ValueError(f"pilot_delta must satisfy 0 < pilot_delta < delta = {shown_value(self.delta)} "
+                             f"(got {shown_value(self.pilot_delta)})")
+        self._check_derived_deltas()
+
+    def _check_derived_deltas(self) -> None:
+        """
+        The probabilities derived from δ (δ/2 with ``joint``; the two-stage δ₁ and δ − δ₁,
+        halved with ``joint``) must be normal floats like δ: refused here, before tracing.
+        """
+
+        share = 2 if self.joint else 1
+        derived = {"delta/2 (joint)": self.quantity_delta} if self.joint else {}
+        if self.rays is None and self.budget.adaptive:
+            pilot = self.pilot_delta_value
+            derived[f"pilot_delta{'/2' if self.joint else ''}"] = pilot / share
+            derived[f"(delta - pilot_delta){'/2' if self.joint else ''}"] = (self.delta - pilot) / share
+        for name, value in derived.items():
+            check_delta(value, name=name)
 
     @classmethod
     def describe(cls) -> str:
@@ -162,21 +195,37 @@ class Settings:
 
     @property
     def rays_per_reading(self) -> int:
-        """``rays`` if given, else the fixed rule's N at μ and the quantity δ (``ValueError`` if adaptive)."""
+        """
+        ``rays`` if given, else the fixed rule's N at μ and the quantity δ (``ValueError``
+        if adaptive, or if N exceeds :data:`~virtspec_mi.checks.MAX_RAYS`).
+        """
 
-        return self.rays if self.rays is not None else self.budget.rays(self.mu, self.quantity_delta)
+        if self.rays is not None:
+            return self.rays
+        return check_rays_needed(self.budget.rays(self.mu, self.quantity_delta), self._rule())
 
     @property
     def most_rays_per_reading(self) -> int:
-        """The most rays one reading may trace in one batch (its key range in a sweep)."""
+        """The most rays one reading may trace in one batch (its key range in a sweep), ≤ 2³² − 1."""
 
-        return self.rays if self.rays is not None else self.budget.most_rays(self)
+        if self.rays is not None:
+            return self.rays
+        return check_rays_needed(self.budget.most_rays(self), self._rule())
 
     @property
     def pilot_rays_per_reading(self) -> int:
-        """Two-stage pilot size n₁: ``pilot_rays`` or the rule's default ⌈10/μ⌉."""
+        """Two-stage pilot size n₁: ``pilot_rays`` or the rule's default ⌈10/μ⌉ (≤ 2³² − 1)."""
 
-        return self.pilot_rays if self.pilot_rays is not None else self.budget.default_pilot_rays(self.mu)
+        if self.pilot_rays is not None:
+            return self.pilot_rays
+        return check_rays_needed(self.budget.default_pilot_rays(self.mu),
+                                 f"the default two-stage pilot ceil(10/mu) for mu = {shown_value(self.mu)}")
+
+    def _rule(self) -> str:
+        """The ray budget in words, for messages: rule, μ and δ."""
+
+        joint = " (each quantity at delta/2: joint)" if self.joint else ""
+        return f"the {self.bound} bound for mu = {shown_value(self.mu)}, delta = {shown_value(self.delta)}{joint}"
 
     @property
     def pilot_delta_value(self) -> float:

@@ -63,7 +63,11 @@ the pilot's (which uses ``seed``), so its rays are fresh; the map is a bijection
 def default_pilot_rays(mu: float) -> int:
     """Default pilot size ``⌈10/μ⌉`` (2,000 at μ = 0.005, anchors.md §3)."""
 
-    return math.ceil(10.0 / check_mu(mu) - 1e-9)
+    rays = 10.0 / check_mu(mu) - 1e-9
+    if not math.isfinite(rays):
+        raise ValueError(f"the default two-stage pilot ceil(10/mu) for mu = {mu!r} is beyond the float range; "
+                         "give pilot_rays (1 ... 2**32 - 1)")
+    return math.ceil(rays)
 
 
 def default_pilot_delta(delta: float) -> float:

@@ -68,6 +68,7 @@ from virtspec_mi.leaf_data import (
     load_leaf_data,
     mesophyll_absorption,
 )
+from virtspec_mi.checks import FLOAT32_MAX, check_float32
 from virtspec_mi.plugins.bsdfs.sampled_only import SampledOnlyBSDF
 from virtspec_mi.kernel.walk import CAPPED_COMPONENT, walk_rng
 
@@ -278,12 +279,8 @@ class ABMLeaf(SampledOnlyBSDF):
     # -- parameters -------------------------------------------------------------------
 
     def _number(self, props: mi.Properties, name: str, default: float) -> float:
-        value = props.get(name, default)
         check, allowed = _CHECKS[name]
-        if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value) \
-                or not check(value):
-            raise ValueError(f"{self.PLUGIN}: '{name}' must be {allowed} (got {value!r})")
-        return float(value)
+        return check_float32(f"{self.PLUGIN}: '{name}'", props.get(name, default), f"be {allowed}", check)
 
     def _choice(self, props: mi.Properties, name: str, default: Any, allowed: tuple) -> Any:
         value = props.get(name, default)
@@ -311,7 +308,10 @@ class ABMLeaf(SampledOnlyBSDF):
         """Spectral tables (per grid wavelength) and per-(interface, direction) rows as Dr.Jit arrays."""
 
         self.data = load_leaf_data(self.data_dir)
-        self._tau = mi.Float(self.absorption_coefficient() * self.mesophyll_thickness)
+        # α·d_m beyond float32 (a leaf metres thick, concentrations of 1e30) absorbs every
+        # ray that enters the mesophyll, as the largest float32 does: no overflow to inf.
+        tau = np.minimum(self.absorption_coefficient() * self.mesophyll_thickness, FLOAT32_MAX)
+        self._tau = mi.Float(tau)
         self._n_c = mi.Float(self.data.n_cuticle)
         self._n_m = mi.Float(self.data.n_mesophyll)
         self._n_a = mi.Float(self.data.n_antidermal)

@@ -17,7 +17,8 @@ The model ignores wavelength: :attr:`SimpleDielectric.wavelength_independent` is
 Parameters
 ----------
 eta : float, default 2.419
-    Relative index of refraction (interior / exterior), > 0. 2.419 is diamond
+    Relative index of refraction (interior / exterior), 10⁻⁶ ≤ η ≤ 10⁶ (:data:`ETA_RANGE`;
+    booleans, NaN and infinities are refused). 2.419 is diamond
     (the paper's specimen). η = 1 is no interface: R = 0 exactly, even at grazing
     incidence.
 
@@ -31,9 +32,17 @@ from __future__ import annotations
 import drjit as dr
 import mitsuba as mi
 
+from virtspec_mi.checks import check_float32
 from virtspec_mi.plugins.bsdfs.sampled_only import SampledOnlyBSDF
 
-__all__ = ["SimpleDielectric"]
+__all__ = ["SimpleDielectric", "ETA_RANGE"]
+
+ETA_RANGE: tuple[float, float] = (1e-6, 1e6)
+"""
+Relative indices η accepted. Mitsuba's float32 Fresnel arithmetic (η², 1/η²) is exact
+enough here (tested at both ends, θi = 0, 30, 89, 90°); beyond it gives NaN directions
+(η ≤ 10⁻²⁰) or wrong grazing reflectances (η ≥ 10¹⁴).
+"""
 
 
 class SimpleDielectric(SampledOnlyBSDF):
@@ -43,10 +52,9 @@ class SimpleDielectric(SampledOnlyBSDF):
 
     def __init__(self, props: mi.Properties) -> None:
         super().__init__(props)
-        eta = props.get("eta", 2.419)
-        if not isinstance(eta, (int, float)) or not eta > 0:
-            raise ValueError(f"simple_dielectric: 'eta' must be a number > 0 (got {eta!r})")
-        self.eta = float(eta)
+        low, high = ETA_RANGE
+        self.eta = check_float32("simple_dielectric: 'eta'", props.get("eta", 2.419),
+                                 f"be a number > 0 with {low:g} <= eta <= {high:g}", lambda value: low <= value <= high)
         both_sides = mi.BSDFFlags.FrontSide | mi.BSDFFlags.BackSide
         self.m_components = [
             mi.BSDFFlags.DeltaReflection | both_sides,

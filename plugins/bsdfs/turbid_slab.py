@@ -40,16 +40,17 @@ Quantities (as the ``spectrophotometer`` counts them)
 Parameters
 ----------
 mu_a : float or spectrum, default 1.0
-    Absorption coefficient μa ≥ 0, per length unit (e.g. cm⁻¹ with ``thickness`` in cm).
+    Absorption coefficient μa ≥ 0, per length unit (e.g. cm⁻¹ with ``thickness`` in cm);
+    0 or 10⁻³⁰ … 10³⁰ (:data:`COEFFICIENT_RANGE`).
 mu_s : float or spectrum, default 0.0
-    Scattering coefficient μs ≥ 0, in the same unit.
+    Scattering coefficient μs ≥ 0, in the same unit and range.
 g : float or spectrum, default 0.0
     Henyey–Greenstein anisotropy, −1 ≤ g ≤ 1 (0 isotropic, ±1 pure forward/backward).
 thickness : float, default 1.0
-    Slab thickness d > 0 in the length unit of μa and μs; ``inf`` is a semi-infinite
+    Slab thickness d > 0 in the length unit of μa and μs, 10⁻³⁰ … 10³⁰; ``inf`` is a semi-infinite
     medium (then μa + μs must be > 0). Optical thickness is (μa + μs)·d, albedo μs/(μa + μs).
 eta : float or spectrum, default 1.0
-    Refractive index n > 0 of the slab.
+    Refractive index n > 0 of the slab, 10⁻⁶ … 10⁶ (:data:`INDEX_RANGE`, as the other two).
 eta_above : float or spectrum, default 1.0
     Refractive index > 0 of the medium above the slab (the side of the normal, where
     light comes from).
@@ -65,7 +66,9 @@ value="400:12, 700:3"/>`` in XML, or ``{"type": "regular", ...}`` in a dict), re
 unbounded and evaluated per ray at the ray's wavelength (channel 0 of
 ``si.wavelengths``; outside a spectrum's range Mitsuba's own extrapolation applies,
 usually 0). Numbers are checked here (``ValueError`` naming the parameter and the
-allowed range); spectra are taken as given. When every parameter is a number the slab
+allowed range; booleans, non-finite values and values float32 cannot hold are refused);
+spectra are checked at the wavelengths of a measurement before it is traced
+(:meth:`TurbidSlab.check_wavelengths`). When every parameter is a number the slab
 declares :attr:`TurbidSlab.wavelength_independent` ``True``.
 
 References
@@ -80,17 +83,19 @@ of turbid media by using the adding-doubling method*, Appl. Opt. 32, 559–568
 from __future__ import annotations
 
 import math
-from typing import Any
+from typing import Any, Callable, Sequence
 
 import drjit as dr
 import mitsuba as mi
+import numpy as np
 
+from virtspec_mi.checks import check_float32
 from virtspec_mi.plugins.bsdfs.sampled_only import SampledOnlyBSDF
 
 from virtspec_mi.kernel.walk import CAPPED_COMPONENT, walk_rng
 from virtspec_mi.kernel.walk_optics import cross_interface, free_path, sample_hg
 
-__all__ = ["TurbidSlab", "SLAB_COMPONENTS", "slab_walk"]
+__all__ = ["TurbidSlab", "SLAB_COMPONENTS", "COEFFICIENT_RANGE", "INDEX_RANGE", "slab_walk"]
 
 SLAB_COMPONENTS: dict[str, int] = {
     "specular_reflection": 0,
@@ -100,30 +105,45 @@ SLAB_COMPONENTS: dict[str, int] = {
 }
 """``bs.sampled_component`` of each exit (absorbed rays report 1 with weight 0)."""
 
-# name: (default, lower, upper, lower bound included, meaning)
+# Ranges the walk's float32 arithmetic keeps exact enough: free paths −ln ξ/μt (−ln ξ ≤ 17)
+# and depths stay finite and normal; Fresnel at relative indices up to 10¹² (η² and 1/η²).
+COEFFICIENT_RANGE: tuple[float, float] = (1e-30, 1e30)
+"""Nonzero μa, μs (per length unit) and finite thicknesses lie in this range."""
+INDEX_RANGE: tuple[float, float] = (1e-6, 1e6)
+"""Refractive indices lie in this range."""
+
+# name: (default, lower, upper, lower bound included, smallest nonzero magnitude, meaning)
 _SPECTRAL = {
-    "mu_a": (1.0, 0.0, math.inf, True, "absorption coefficient"),
-    "mu_s": (0.0, 0.0, math.inf, True, "scattering coefficient"),
-    "g": (0.0, -1.0, 1.0, True, "Henyey-Greenstein anisotropy"),
-    "eta": (1.0, 0.0, math.inf, False, "slab refractive index"),
-    "eta_above": (1.0, 0.0, math.inf, False, "refractive index above the slab"),
-    "eta_below": (1.0, 0.0, math.inf, False, "refractive index below the slab"),
+    "mu_a": (1.0, 0.0, COEFFICIENT_RANGE[1], True, COEFFICIENT_RANGE[0], "absorption coefficient"),
+    "mu_s": (0.0, 0.0, COEFFICIENT_RANGE[1], True, COEFFICIENT_RANGE[0], "scattering coefficient"),
+    "g": (0.0, -1.0, 1.0, True, 0.0, "Henyey-Greenstein anisotropy"),
+    "eta": (1.0, 0.0, INDEX_RANGE[1], False, INDEX_RANGE[0], "slab refractive index"),
+    "eta_above": (1.0, 0.0, INDEX_RANGE[1], False, INDEX_RANGE[0], "refractive index above the slab"),
+    "eta_below": (1.0, 0.0, INDEX_RANGE[1], False, INDEX_RANGE[0], "refractive index below the slab"),
 }
 
 # Walk states.
 _INSIDE, _TOP, _BOTTOM, _ABSORBED = 0, 1, 2, 3
 
 
-def _check_number(name: str, value: float, lower: float, upper: float, closed: bool) -> float:
-    value = float(value)
-    low_ok = value >= lower if closed else value > lower
-    if not (low_ok and value <= upper and math.isfinite(value)):
-        left = "<=" if closed else "<"
-        raise ValueError(
-            f"turbid_slab: '{name}' must satisfy {lower:g} {left} {name} <= {upper:g} and be finite "
-            f"(got {value:g})"
-        )
-    return value
+def _allowed(name: str) -> tuple[str, Callable[[Any], Any]]:
+    """The range of a spectral parameter in words, and its test (works on floats and arrays)."""
+
+    _, lower, upper, closed, smallest, _ = _SPECTRAL[name]
+    words = f"{lower:g} {'<=' if closed else '<'} {name} <= {upper:g}"
+    if smallest:
+        words += f" ({'0 or ' if closed else ''}at least {smallest:g})"
+
+    def test(value: Any) -> Any:
+        inside = ((value >= lower) if closed else (value > lower)) & (value <= upper) & np.isfinite(value)
+        return inside & ((value == 0) | (np.abs(value) >= smallest))
+
+    return words, test
+
+
+def _check_number(name: str, value: float) -> float:
+    words, test = _allowed(name)
+    return check_float32(f"turbid_slab: '{name}'", value, f"satisfy {words} and be finite", test)
 
 
 class TurbidSlab(SampledOnlyBSDF):
@@ -133,7 +153,7 @@ class TurbidSlab(SampledOnlyBSDF):
         super().__init__(props)
         self.constants: dict[str, float] = {}
         self.textures: dict[str, Any] = {}
-        for name, (default, lower, upper, closed, _) in _SPECTRAL.items():
+        for name, (default, *_) in _SPECTRAL.items():
             value = props.get(name, default) if name in props else default
             if not isinstance(value, (int, float)) or isinstance(value, bool):
                 try:
@@ -145,15 +165,16 @@ class TurbidSlab(SampledOnlyBSDF):
                 if value.class_name() == "UniformSpectrum":  # a constant written as a spectrum
                     value = float(value.mean()[0])
             if isinstance(value, (int, float)):
-                self.constants[name] = _check_number(name, value, lower, upper, closed)
+                self.constants[name] = _check_number(name, value)
             else:
                 self.textures[name] = value
         thickness = props.get("thickness", 1.0)
         if isinstance(thickness, str):
             thickness = float(thickness) if thickness.strip().lower() in ("inf", "infinity") else math.nan
-        if isinstance(thickness, bool) or not isinstance(thickness, (int, float)) or not thickness > 0:
-            raise ValueError(f"turbid_slab: 'thickness' must be a number > 0 or inf (got {thickness!r})")
-        self.thickness = float(thickness)
+        low, high = COEFFICIENT_RANGE
+        self.thickness = check_float32(
+            "turbid_slab: 'thickness'", thickness, f"be a number > 0 or inf ({low:g} <= thickness <= {high:g})",
+            lambda value: value == math.inf or low <= value <= high, allow_inf=True)
         mu_t = self.constants.get("mu_a", 1.0) + self.constants.get("mu_s", 1.0)
         if math.isinf(self.thickness) and not self.textures.keys() & {"mu_a", "mu_s"} and mu_t == 0:
             raise ValueError("turbid_slab: a semi-infinite slab (thickness = inf) needs mu_a + mu_s > 0")
@@ -176,6 +197,33 @@ class TurbidSlab(SampledOnlyBSDF):
         self.m_flags = self.m_components[0] | self.m_components[1] | self.m_components[2] | self.m_components[3]
 
     # -- parameters per lane -------------------------------------------------------------
+
+    def check_wavelengths(self, wavelengths: Sequence[float]) -> None:
+        """
+        Refuse (``ValueError`` naming the parameter, its range and the wavelength) a
+        spectral parameter out of its range at a wavelength about to be traced, e.g. ``g``
+        given as a spectrum of 1.5; called by the engine before tracing.
+        """
+
+        if not self.textures:
+            return
+        lams = np.asarray(wavelengths, dtype=np.float64)
+        si = dr.zeros(mi.SurfaceInteraction3f, len(lams))
+        si.wavelengths = mi.Spectrum(mi.Float(lams))
+        values = {name: np.array(texture.eval(si)[0], dtype=np.float64) for name, texture in self.textures.items()}
+        for name, value in values.items():
+            words, test = _allowed(name)
+            bad = np.flatnonzero(~test(value))
+            if bad.size:
+                k = bad[0]
+                raise ValueError(f"turbid_slab: '{name}' (a spectrum) must satisfy {words} and be finite at every "
+                                 f"wavelength traced (got {float(value[k]):.7g} at {float(lams[k])!r} nm)")
+        if math.isinf(self.thickness) and values.keys() & {"mu_a", "mu_s"}:
+            mu_t = sum(values.get(name, self.constants.get(name, 0.0)) for name in ("mu_a", "mu_s"))
+            empty = np.flatnonzero(np.broadcast_to(mu_t, lams.shape) == 0)
+            if empty.size:
+                raise ValueError(f"turbid_slab: a semi-infinite slab (thickness = inf) needs mu_a + mu_s > 0 "
+                                 f"(got 0 at {float(lams[empty[0]])!r} nm)")
 
     def _value(self, name: str, si: mi.SurfaceInteraction3f) -> mi.Float:
         if name in self._opaque:

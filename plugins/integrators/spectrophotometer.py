@@ -48,21 +48,32 @@ These are the fields of :class:`virtspec_mi.settings.Settings` (the one definiti
 this list is checked against it by the tests). ``mi.render(scene, seed=s, spp=n)``
 returns a ``TensorXf`` of shape ``(len(wavelengths), 3)``: per wavelength (rows, in the
 order given) the reflectance, transmittance and absorptance. ``spp`` > 0 sets the rays
-per reading; ``seed`` is added to the ``seed`` parameter. The full
-:class:`~virtspec_mi.result.Result` is kept in ``integrator.last_reading``. The scene
-needs a sensor for ``mi.render`` (any; it is not used).
+per reading (0 ≤ ``spp`` ≤ 2³² − 1; 0: from the settings); ``seed`` is added to the
+``seed`` parameter. The full :class:`~virtspec_mi.result.Result` is kept in
+``integrator.last_reading``. The scene needs a sensor for ``mi.render`` (any; it is not
+used).
+
+A bad ``spp`` (or any input the engine refuses) raises ``ValueError`` naming it. Dr.Jit
+runs ``mi.render`` inside a custom operation that turns every exception into a
+``RuntimeError``; :func:`clear_render_errors` wraps ``mi.render`` (installed by
+:func:`virtspec_mi.runtime.mitsuba`) so that this integrator's ``ValueError`` reaches
+the caller as itself; other integrators and errors are untouched.
 """
 
 from __future__ import annotations
 
+import functools
+from typing import Any, Callable
+
 import mitsuba as mi
 import numpy as np
 
+from virtspec_mi.checks import MAX_RAYS, shown_value
 from virtspec_mi.engine import measure_reading
 from virtspec_mi.instrument import read_instrument
 from virtspec_mi.settings import SETTING_NAMES, Settings
 
-__all__ = ["Spectrophotometer"]
+__all__ = ["Spectrophotometer", "check_spp", "clear_render_errors"]
 
 _WORD = 1 << 32
 
@@ -80,8 +91,8 @@ class Spectrophotometer(mi.SamplingIntegrator):
         self.last_reading = None
 
     def render(self, scene, sensor=None, seed=0, spp=0, develop=True, evaluate=True):
-        settings = self.settings.updated(seed=(self.settings.seed + int(seed)) % _WORD,
-                                         rays=int(spp) if spp else None)
+        rays = check_spp(spp)
+        settings = self.settings.updated(seed=(self.settings.seed + int(seed)) % _WORD, rays=rays or None)
         reading = measure_reading(read_instrument(scene), settings)
         reading.warn_if_uncertified(stacklevel=2)
         self.last_reading = reading
@@ -93,3 +104,38 @@ class Spectrophotometer(mi.SamplingIntegrator):
 
     def to_string(self) -> str:
         return f"Spectrophotometer[{self.settings}]"
+
+
+def check_spp(spp: Any) -> int:
+    """``mi.render``'s ``spp``: a whole number, 0 (rays from the settings) ≤ spp ≤ 2³² − 1."""
+
+    if isinstance(spp, bool) or not isinstance(spp, (int, np.integer)) or not 0 <= spp <= MAX_RAYS:
+        raise ValueError(f"spectrophotometer: spp must be a whole number with 0 <= spp <= {MAX_RAYS} "
+                         f"(the rays per reading; 0: from the settings) (got {shown_value(spp)})")
+    return int(spp)
+
+
+def clear_render_errors(render: Callable) -> Callable:
+    """
+    ``mi.render`` that re-raises this integrator's ``ValueError`` (bad ``spp``, settings,
+    wavelengths …) as itself, not as the ``RuntimeError`` Dr.Jit's custom operation makes
+    of it; everything else as ``render`` does.
+    """
+
+    if getattr(render, "clears_spectrophotometer_errors", False):
+        return render
+
+    @functools.wraps(render)
+    def wrapper(scene: Any, *args: Any, **kwargs: Any) -> Any:
+        try:
+            return render(scene, *args, **kwargs)
+        except RuntimeError as error:
+            integrator = kwargs.get("integrator") or (args[2] if len(args) > 2 else None)
+            if integrator is None and isinstance(scene, mi.Scene):
+                integrator = scene.integrator()
+            if isinstance(integrator, Spectrophotometer) and isinstance(error.__cause__, ValueError):
+                raise error.__cause__ from None
+            raise
+
+    wrapper.clears_spectrophotometer_errors = True  # type: ignore[attr-defined]
+    return wrapper

@@ -23,6 +23,12 @@ Conventions
   without delta lobes they are 0 (Mitsuba's flag contract).
 - A walk that reached its step cap (``bs.sampled_component`` ==
   :data:`virtspec_mi.kernel.walk.CAPPED_COMPONENT`) is :attr:`Fate.CAPPED`.
+- An outgoing direction with a NaN or infinite component, or a length off 1 by more
+  than :data:`~virtspec_mi.counts.DIRECTION_TOLERANCE`, sampled with a weight w > 0 is
+  :attr:`Fate.INVALID` (``invalid_directions``): it cannot be judged reflected or
+  transmitted, and counts in no fate, like a capped walk.
+- Per-ray values a BSDF returns at width 1 (a constant weight, say) are broadcast to
+  the chunk, so every per-ray flag is counted once per ray.
 - A BSDF weight w ∈ [0, 1] survives with probability w (Russian roulette), so each ray
   stays a Bernoulli trial. Weights within :data:`~virtspec_mi.counts.WEIGHT_ROUNDING`
   of [0, 1] are rounding (counted in ``rounded_weights``; the roulette uses them as 1 or
@@ -47,7 +53,8 @@ import drjit as dr
 import mitsuba as mi
 import numpy as np
 
-from virtspec_mi.counts import WEIGHT_ROUNDING, Counts, Fate
+from virtspec_mi.checks import check_rays
+from virtspec_mi.counts import DIRECTION_TOLERANCE, WEIGHT_ROUNDING, Counts, Fate
 from virtspec_mi.geometry import incidence_frame
 from virtspec_mi.kernel.disk import jittered_cell, sample_disk
 from virtspec_mi.kernel.rng import chunk_root, dimension_key, dimension_keys, hash32, to_unit
@@ -64,7 +71,11 @@ _REJECTION_BASE = 8
 # e_v, incidence direction ω (towards the emitter), strata per side of the jittered grid.
 _WAVELENGTH, _CENTRE, _E_U, _E_V, _OMEGA, _STRATA = 0, 1, 4, 7, 10, 13
 # Bits of the per-ray code of rare events (almost always all zero: one reduction skips them).
-_VIOLATION, _CAPPED, _ROUNDED = 1, 2, 4
+_VIOLATION, _CAPPED, _ROUNDED, _INVALID = 1, 2, 4, 8
+_RARE_COUNTS = (("weight_violations", _VIOLATION), ("capped", _CAPPED), ("rounded_weights", _ROUNDED),
+                ("invalid_directions", _INVALID))
+# Squared lengths of a valid outgoing direction.
+_LENGTH2 = ((1.0 - DIRECTION_TOLERANCE) ** 2, (1.0 + DIRECTION_TOLERANCE) ** 2)
 
 
 @dataclass(frozen=True)
@@ -94,17 +105,12 @@ def tally_readings(
     not depend on chunking.
     """
 
+    for plan in plans:
+        check_rays(plan.rays)  # 1 ... 2³² − 1: a reading crosses at most one 2³² boundary below
     rays = np.array([plan.rays for plan in plans], dtype=np.int64)
     starts = np.concatenate([[0], np.cumsum(rays)])  # packed (lane) position of each reading
     offsets = starts[:-1].copy() if offsets is None else _check_offsets(offsets, rays)
-    # Packed positions where the high word of the global index changes: chunks are cut there.
-    cuts = [starts[-1]]
-    for k in range(len(plans)):
-        first_block, last_block = offsets[k] // _WORD, (offsets[k] + rays[k] - 1) // _WORD
-        cuts.extend(starts[k] + (b * _WORD - offsets[k]) for b in range(first_block + 1, last_block + 1))
-        if k and first_block != (offsets[k - 1] + rays[k - 1] - 1) // _WORD:
-            cuts.append(starts[k])
-    cuts = np.unique(np.array(cuts, dtype=np.int64))
+    cuts = _cuts(starts, offsets, rays)
     counts = Counts.zeros(len(plans))
     counts.rays[:] = rays
     kernel = _Kernel(instrument, plans, settings)
@@ -118,6 +124,21 @@ def tally_readings(
         kernel.run(first, size, slots, starts, offsets, counts)
         first += size
     return counts
+
+
+def _cuts(starts: np.ndarray, offsets: np.ndarray, rays: np.ndarray) -> np.ndarray:
+    """
+    Packed positions where the high word of the global ray index changes (chunks are cut
+    there), and the end: inside a reading that crosses a 2³² boundary (at most one, as
+    rays ≤ 2³² − 1), and where a reading starts in another 2³² block than the one the
+    previous reading ended in. O(readings), NumPy only.
+    """
+
+    first_block, last_block = offsets // _WORD, (offsets + rays - 1) // _WORD
+    crossing = last_block > first_block
+    inside = starts[:-1][crossing] + (first_block[crossing] + 1) * _WORD - offsets[crossing]
+    new_block = starts[1:-1][first_block[1:] != last_block[:-1]]
+    return np.unique(np.concatenate([starts[-1:], inside, new_block]).astype(np.int64))
 
 
 def _check_offsets(offsets: Any, rays: np.ndarray) -> np.ndarray:
@@ -208,7 +229,7 @@ class _Kernel:
             counts.regular_transmitted[slots] = counts.transmitted[slots]
         if int(dr.max(rare).numpy()[0]) == 0:  # the usual case: one reduction, nothing rare
             return
-        for name, bit in (("weight_violations", _VIOLATION), ("capped", _CAPPED), ("rounded_weights", _ROUNDED)):
+        for name, bit in _RARE_COUNTS:
             flags = mi.UInt64(dr.select((rare & bit) != 0, 1, 0))
             getattr(counts, name)[slots] += _segment_sums(dr.cumsum(flags), bounds, ends).astype(np.int64)
         self._largest_weights(lanes["weight"], rare, bounds, slots, counts)
@@ -295,26 +316,49 @@ class _Kernel:
         azimuth = dr.atan2(target.y, target.x) * dr.inv_two_pi
         si.uv = mi.Point2f(radius / self.specimen_radius, dr.select(azimuth < 0, azimuth + 1.0, azimuth))
         context = mi.BSDFContext(mi.TransportMode.Importance)
-        bs, weight = self.bsdf.sample(context, si, uniform(4), mi.Point2f(uniform(5), uniform(6)), True)
-        w = mi.Spectrum(weight)[0]
+        bs, weight = self._sample(context, si, uniform(4), mi.Point2f(uniform(5), uniform(6)))
+        # Per ray, at the chunk's width (a BSDF may return width-1 literals).
+        w = _full(mi.Spectrum(weight)[0], size)
+        wo = mi.Vector3f(*(_full(c, size) for c in (bs.wo.x, bs.wo.y, bs.wo.z)))
+        sampled_type, component = _full(bs.sampled_type, size), _full(bs.sampled_component, size)
         survives = uniform(7) < w
         # wo·n = 0 exactly (grazing exit): the sampled event decides — transmission crosses.
-        crossed = mi.has_flag(bs.sampled_type, mi.BSDFFlags.Transmission)
-        upper = dr.select(bs.wo.z != 0.0, bs.wo.z > 0.0, crossed ^ (wi.z >= 0.0))
+        crossed = mi.has_flag(sampled_type, mi.BSDFFlags.Transmission)
+        upper = dr.select(wo.z != 0.0, wo.z > 0.0, crossed ^ (wi.z >= 0.0))
         fate = dr.select(survives, dr.select(upper, mi.UInt32(int(Fate.REFLECTED)), mi.UInt32(int(Fate.TRANSMITTED))),
                          mi.UInt32(int(Fate.ABSORBED)))
-        capped = bs.sampled_component == CAPPED_COMPONENT
+        # NaN, infinite or not unit length (NaN fails both comparisons): no hemisphere to judge.
+        length2 = dr.squared_norm(wo)
+        invalid = ~((length2 >= _LENGTH2[0]) & (length2 <= _LENGTH2[1])) & (w > 0.0)
+        fate = dr.select(invalid, mi.UInt32(int(Fate.INVALID)), fate)
+        capped = component == CAPPED_COMPONENT
         fate = dr.select(capped, mi.UInt32(int(Fate.CAPPED)), fate)
+        invalid &= ~capped
         # u < w makes a weight in (1, 1 + ε] always survive and one in [−ε, 0) never: rounding.
         exact = (w >= 0.0) & (w <= 1.0)
         rounded = ~exact & (w >= -WEIGHT_ROUNDING) & (w <= 1.0 + WEIGHT_ROUNDING)
         violation = ~exact & ~rounded
         rare = (dr.select(violation, mi.UInt32(_VIOLATION), 0) | dr.select(capped, mi.UInt32(_CAPPED), 0)
-                | dr.select(rounded, mi.UInt32(_ROUNDED), 0))
-        delta = mi.has_flag(bs.sampled_type, mi.BSDFFlags.Delta)
+                | dr.select(rounded, mi.UInt32(_ROUNDED), 0) | dr.select(invalid, mi.UInt32(_INVALID), 0))
+        delta = mi.has_flag(sampled_type, mi.BSDFFlags.Delta)
         specular, regular = (fate == int(Fate.REFLECTED)) & delta, (fate == int(Fate.TRANSMITTED)) & delta
-        return {"origin": origin, "target": target, "wi": wi, "wo": bs.wo, "fate": fate, "weight": w,
+        return {"origin": origin, "target": target, "wi": wi, "wo": wo, "fate": fate, "weight": w,
                 "rare": rare, "specular": specular, "regular": regular}
+
+    def _sample(self, context: Any, si: Any, sample1: Any, sample2: Any) -> tuple[Any, Any]:
+        """The specimen BSDF's ``sample``; a feature it needs that the instrument lacks is a ``ValueError``."""
+
+        try:
+            return self.bsdf.sample(context, si, sample1, sample2, True)
+        except RuntimeError as error:
+            if "not implemented" not in str(error):
+                raise
+            raise ValueError(
+                f"the specimen BSDF {self.bsdf.class_name() if hasattr(self.bsdf, 'class_name') else self.bsdf} "
+                f"cannot be sampled by the instrument ({error}): its surface interaction holds a position, "
+                "normal, shading frame, uv and wavelength, but no uv partials (dp_du, dp_dv) and no ray "
+                "differentials, so features that differentiate a texture over the surface — bumpmap, or "
+                "normalmap and textures that need gradients or footprints — are not supported") from None
 
 
 @dr.syntax
@@ -332,6 +376,12 @@ def _rejection(ray_index: mi.UInt32, root: int, radius: mi.Float, disk: int) -> 
         y = dr.fma(2.0, to_unit(hash32(ray_index ^ ky), mi.Float), -1.0)
         dimension += 4
     return mi.Point2f(x * radius, y * radius)
+
+
+def _full(value: Any, size: int) -> Any:
+    """``value`` at width ``size``: a width-1 array broadcast (e.g. a constant BSDF weight), else as is."""
+
+    return value if dr.width(value) == size else value + dr.zeros(type(value), size)
 
 
 def _lane_ranges(first: int, size: int, slots: np.ndarray, starts: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

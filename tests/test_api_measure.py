@@ -401,3 +401,20 @@ def test_specimens_needing_uv_partials_are_refused_with_the_reason(mi):
     with pytest.raises(ValueError, match=r"BumpMap cannot be sampled by the instrument .*eval_1_grad.*no uv "
                                          r"partials .*bumpmap.* not supported"):
         vm.measure(vm.instrument_scene(bump), rays=100)
+
+
+def test_a_long_measurement_shows_progress_in_a_terminal(traced_diamond, capsys, monkeypatch):
+    import sys
+
+    import virtspec_mi.progress as progress
+
+    monkeypatch.setattr(sys.stderr, "isatty", lambda: True)
+    kwargs = dict(theta_i=30, wavelengths="400:700:10", rays=20_000, chunk_size=65_536)
+    quiet = vm.measure(traced_diamond, **kwargs)  # ~ms: under the 2 s threshold
+    assert capsys.readouterr().err == ""
+    monkeypatch.setattr(progress, "_PROGRESS_AFTER_S", 0.0)  # now every measurement counts as slow
+    shown = vm.measure(traced_diamond, **kwargs)
+    assert "readings" in capsys.readouterr().err
+    np.testing.assert_array_equal(shown.reflected, quiet.reflected)  # the bar changes no count
+    vm.measure(traced_diamond, progress=False, **kwargs)
+    assert capsys.readouterr().err == ""

@@ -162,16 +162,15 @@ def test_concurrent_writers_never_show_a_partial_file(tmp_path):
 
     path = tmp_path / "shared.json"
     results = [_grid_result(30, 91, seed) for seed in range(2)]
-    datasets = [(r.to_dataset(), r.as_dict()) for r in results]
     from virtspec_mi.results_io import write
 
-    write(*datasets[0], path)
+    write(results[0], path)
     errors, stop = [], threading.Event()
 
     def writer(k: int) -> None:
         try:
             for _ in range(10):
-                write(*datasets[k], path)
+                write(results[k], path)
         except Exception as error:  # noqa: BLE001 - any failure fails the test
             errors.append(error)
 

@@ -44,7 +44,7 @@ from virtspec_mi.settings import Settings, settings_keywords, with_settings
 __all__ = ["measure", "sweep", "read_result", "fluctuation"]
 
 
-def measure(scene: Any, **settings: Any) -> Result:
+def measure(scene: Any, *, progress: bool | None = None, **settings: Any) -> Result:
     """
     Measure the specimen of ``scene`` and return a certified :class:`~virtspec_mi.result.Result`
     over wavelength (θi a scalar label).
@@ -59,6 +59,10 @@ def measure(scene: Any, **settings: Any) -> Result:
         ``pilot_rays``, ``pilot_delta``, ``beam``, ``sampling``, ``seed``,
         ``chunk_size``); one left ``None`` comes from the scene's ``spectrophotometer``
         integrator when it has one, else from the default.
+    progress
+        ``True``: always a tqdm bar of the readings on stderr; ``False``: never; ``None``
+        (default): only when stderr is a terminal and the readings are expected to last
+        more than ~2 s (a spectrum of many wavelengths).
 
     References
     ----------
@@ -66,7 +70,8 @@ def measure(scene: Any, **settings: Any) -> Result:
     """
 
     instrument = find_instrument(scene)
-    result = measure_reading(instrument, with_settings(_scene_settings(instrument), settings, "measure"))
+    settings = with_settings(_scene_settings(instrument), settings, "measure")
+    result = measure_reading(instrument, settings, progress=progress)
     result.warn_if_uncertified(stacklevel=3)
     return result
 

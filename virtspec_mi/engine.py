@@ -51,6 +51,7 @@ def take_readings(
     readings: Sequence[tuple[float, float, float]],
     settings: Settings,
     offsets: Sequence[int] | np.ndarray | None = None,
+    progress: bool | None = False,
 ) -> tuple[Counts, Counts | None]:
     """
     Trace every (wavelength nm, θi, φi) of ``readings``, each with its own independent
@@ -67,7 +68,9 @@ def take_readings(
     When the specimen's BSDF has ``wavelength_independent = True``, readings with the
     same (θi, φi) are traced once — with the rays (offset) of the first of them in the
     list — and all report those counts. A specimen with a ``wavelength_range``
-    attribute refuses wavelengths outside it (``ValueError``).
+    attribute refuses wavelengths outside it (``ValueError``). ``progress`` shows the
+    readings traced (per chunk; both stages of ``two-stage``) by the rule of
+    :mod:`virtspec_mi.progress`.
     """
 
     check_readings(len(readings), 0)
@@ -85,11 +88,15 @@ def take_readings(
     traced_readings = [readings[k] for k in traced]
     traced_offsets = None if offsets is None else np.asarray(offsets)[traced]
     pilot = None
-    if settings.adaptive:
-        counts, pilot = _two_stage(instrument, traced_readings, settings, traced_offsets)
-    else:
-        rays = np.full(len(traced), settings.rays_per_reading)
-        counts = _fixed(instrument, traced_readings, settings, rays, traced_offsets)
+    bar = Progress(progress, total=len(traced) * (2 if settings.adaptive else 1), desc="readings")
+    try:
+        if settings.adaptive:
+            counts, pilot = _two_stage(instrument, traced_readings, settings, traced_offsets, bar)
+        else:
+            rays = np.full(len(traced), settings.rays_per_reading)
+            counts = _fixed(instrument, traced_readings, settings, rays, traced_offsets, bar.reach)
+    finally:
+        bar.close()
     back = np.searchsorted(traced, source)
     return counts.map(lambda v: v[back]), None if pilot is None else pilot.map(lambda v: v[back])
 
@@ -137,7 +144,7 @@ def run(
     as one :class:`~virtspec_mi.result.Result` with dims ``("wavelength", "theta_i")``.
 
     ``keyed=False``: one :func:`take_readings` call with consecutive ray ranges (how
-    ``measure`` has always numbered its rays). ``keyed=True``: reading k
+    ``measure`` has always numbered its rays), its bar updated per chunk. ``keyed=True``: reading k
     (k = i_θ·n_λ + i_λ) owns the global ray indices [k·stride, k·stride + rays_k), with
     stride = ``settings.most_rays_per_reading``, so its counts depend on (seed, k) only;
     readings run in batches of about ``chunk_size`` rays, each recorded in
@@ -158,7 +165,7 @@ def run(
     if not keyed:
         start = time.perf_counter()
         counts, pilot = take_readings(
-            instrument, [(w, t, settings.phi_i) for w, t in zip(flat_lam, flat_theta)], settings)
+            instrument, [(w, t, settings.phi_i) for w, t in zip(flat_lam, flat_theta)], settings, progress=progress)
         seconds = time.perf_counter() - start
     else:
         counts, pilot, seconds = _run_keyed(instrument, settings, flat_lam, flat_theta, shared, scene,
@@ -216,14 +223,15 @@ def _run_keyed(instrument: Any, settings: Settings, flat_lam: np.ndarray, flat_t
     return state.counts, state.pilot if settings.adaptive else None, state.seconds
 
 
-def measure_reading(instrument: Any, settings: Settings) -> Result:
+def measure_reading(instrument: Any, settings: Settings, progress: bool | None = False) -> Result:
     """
     One reading per wavelength of ``settings`` at its θi on an instrument read from a
     loaded scene: a :class:`~virtspec_mi.result.Result` with the dim ``wavelength``
     (what :func:`virtspec_mi.measure` and the ``spectrophotometer`` integrator return).
+    ``progress``: a bar of the readings traced (see :mod:`virtspec_mi.progress`).
     """
 
-    return run(instrument, settings, [settings.theta_i], keyed=False).squeeze()
+    return run(instrument, settings, [settings.theta_i], keyed=False, progress=progress).squeeze()
 
 
 def _identity(settings: Settings, angles: np.ndarray, instrument: Any, scene: str, shared: bool) -> dict[str, Any]:
@@ -240,7 +248,7 @@ def _identity(settings: Settings, angles: np.ndarray, instrument: Any, scene: st
 
 
 def _fixed(instrument: Any, readings: Sequence[tuple[float, float, float]], settings: Settings,
-           rays: np.ndarray, offsets: np.ndarray | None) -> Counts:
+           rays: np.ndarray, offsets: np.ndarray | None, on_chunk: Any = None) -> Counts:
     """One batched kernel call: reading i gets ``rays[i]`` rays from global index ``offsets[i]``."""
 
     # Dr.Jit loads libLLVM on import: the kernel is imported once Mitsuba is set up
@@ -248,15 +256,15 @@ def _fixed(instrument: Any, readings: Sequence[tuple[float, float, float]], sett
     from virtspec_mi.kernel.tracer import ReadingPlan, tally_readings
 
     plans = [ReadingPlan(w, t, p, int(n)) for (w, t, p), n in zip(readings, rays)]
-    return tally_readings(instrument, plans, settings, offsets)
+    return tally_readings(instrument, plans, settings, offsets, on_chunk)
 
 
 def _two_stage(instrument: Any, readings: Sequence[tuple[float, float, float]], settings: Settings,
-               offsets: np.ndarray | None) -> tuple[Counts, Counts]:
+               offsets: np.ndarray | None, bar: Progress) -> tuple[Counts, Counts]:
     """Pilot batch, N₂ per reading from its counts, fresh second batch (two calls in all)."""
 
     pilot_rays = np.full(len(readings), settings.pilot_rays_per_reading)
-    pilot = _fixed(instrument, readings, settings, pilot_rays, offsets)
+    pilot = _fixed(instrument, readings, settings, pilot_rays, offsets, bar.reach)
     columns = [pilot.reflected, pilot.transmitted] + ([] if settings.joint else [pilot.absorbed])
     second = twostage.stage_two_rays(
         np.stack(columns, axis=1), settings.pilot_rays_per_reading, settings.mu, settings.delta,
@@ -265,4 +273,5 @@ def _two_stage(instrument: Any, readings: Sequence[tuple[float, float, float]], 
     check_rays_needed(int(second.max(initial=1)), f"the two-stage second batch for mu = {shown_value(settings.mu)}, "
                                          f"delta = {shown_value(settings.delta)}")
     stage_two = settings.updated(seed=twostage.stage_two_seed(settings.seed))
-    return _fixed(instrument, readings, stage_two, second, offsets), pilot
+    done = len(readings)  # the second stage's readings follow the pilots' on the bar
+    return _fixed(instrument, readings, stage_two, second, offsets, lambda n: bar.reach(done + n)), pilot

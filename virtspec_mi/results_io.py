@@ -58,18 +58,21 @@ SUFFIXES: tuple[str, ...] = (".nc", ".csv", ".json")
 _CSV_HEADER = "# virtspec-mi result "
 
 
-def write(dataset: Any, plain: dict[str, Any], path: str | os.PathLike) -> Path:
-    """Write a result (its ``dataset`` and its ``plain`` data) to ``path``; the suffix picks the format."""
+def write(result: Any, path: str | os.PathLike) -> Path:
+    """
+    Write ``result`` to ``path``; the suffix picks the format, and only what it needs is
+    built: ``result.to_dataset()`` for ``.nc`` and ``.csv``, ``result.as_dict()`` for ``.json``.
+    """
 
     path = Path(path)
     suffix = result_format(path)
     with _atomic(path) as temporary:
         if suffix == ".nc":
-            dataset.to_netcdf(temporary, engine="netcdf4")
+            result.to_dataset().to_netcdf(temporary, engine="netcdf4")
         elif suffix == ".json":
-            temporary.write_text(json.dumps(plain, indent=1))
+            temporary.write_text(json.dumps(result.as_dict(), indent=1))
         else:
-            temporary.write_text(csv_text(dataset))
+            temporary.write_text(csv_text(result.to_dataset()))
     return path
 
 

@@ -21,10 +21,10 @@ $(STAMP): pyproject.toml
 
 # Dr.Jit aborts under libLLVM 14/15/16 (Debian 12's defaults): install 19 when no good one is found.
 llvm: $(STAMP)
-	@$(PY) -m virtspec_mi.llvm find >/dev/null 2>&1 || { \
+	@$(PY) -m virtspec_mi llvm find >/dev/null 2>&1 || { \
 	  echo "setup: no libLLVM >= 17 found; installing Debian's libllvm19"; \
 	  $(SUDO) apt-get update -qq && $(SUDO) DEBIAN_FRONTEND=noninteractive apt-get install -y -qq libllvm19 >/dev/null; }
-	@$(PY) -m virtspec_mi.llvm check
+	@$(PY) -m virtspec_mi llvm check
 
 demo: setup
 	$(VENV)/bin/virtspec measure scenes/diamond_conical.xml --theta-i 70

@@ -15,12 +15,19 @@ Prints, in one run:
     wavelength (not flagged wavelength-independent; the script checks). Side by side:
     one ``virtspec_mi.sweep`` call vs a loop of 301 single-wavelength
     ``virtspec_mi.measure`` calls; seconds, rays/s and the ratio.
+(c) **CSV of a large sweep** — a 91 θi × 1000 wavelength result (91,000 readings, built
+    from counts: nothing traced) written as CSV: ``virtspec_mi.results_io.csv_text`` of
+    its dataset, in cells (rows × columns) per second (target ≥ 10⁶ cells/s; the text
+    grows linearly with the cells), best of the repeats; and the whole
+    ``Result.write(".csv")`` (which also builds the dataset: every Clopper–Pearson
+    interval).
 
 Run::
 
-    .venv/bin/python benchmarks/sweeps.py              # 5 repeats of (a), 3 of (b)
-    .venv/bin/python benchmarks/sweeps.py --quick      # 2 repeats of (a), 1 of (b)
+    .venv/bin/python benchmarks/sweeps.py              # 5 repeats of (a), 3 of (b) and (c)
+    .venv/bin/python benchmarks/sweeps.py --quick      # 2 repeats of (a), 1 of (b) and (c)
     .venv/bin/python benchmarks/sweeps.py --markdown   # the results as a markdown block
+    .venv/bin/python benchmarks/sweeps.py --csv-only   # (c) alone (no Mitsuba)
 
 Takes 10–30 s on a 2-core machine. Other work on the machine slows every figure, so
 the 1-minute load average is printed with the results; the ratio (b) is the figure
@@ -80,26 +87,71 @@ def spectrum(repeats: int) -> dict:
             "spread": float(result.reflectance.max() - result.reflectance.min())}
 
 
+def csv_grid(repeats: int) -> dict:
+    from dataclasses import replace
+    from tempfile import TemporaryDirectory
+
+    from virtspec_mi.counts import Counts
+    from virtspec_mi.geometry import InstrumentGeometry
+    from virtspec_mi.result import Result
+    from virtspec_mi.results_io import csv_text
+    from virtspec_mi.settings import Settings
+
+    wavelengths, angles = np.arange(400.0, 1400.0, 1.0), np.arange(91.0)
+    shape, rng = (len(wavelengths), len(angles)), np.random.default_rng(0)
+    reflected = rng.integers(0, 50_000, shape)
+    counts = replace(Counts.zeros(shape), rays=np.full(shape, 100_000, dtype=np.int64), reflected=reflected,
+                     transmitted=rng.integers(0, 50_000, shape), specular_reflected=reflected // 3)
+    result = Result(("wavelength", "theta_i"), {"wavelength": wavelengths, "theta_i": angles}, counts, None,
+                    Settings(wavelengths=list(wavelengths)), InstrumentGeometry(8, 12.5, 100), 0.0)
+    dataset = result.to_dataset()
+    cells = dataset.sizes["wavelength"] * dataset.sizes["theta_i"] * (len(dataset.data_vars) + 2)
+    text_times, write_times = [], []
+    with TemporaryDirectory() as folder:
+        for _ in range(repeats):
+            start = time.perf_counter()
+            text = csv_text(dataset)
+            text_times.append(time.perf_counter() - start)
+            start = time.perf_counter()
+            result.write(Path(folder) / "grid.csv")
+            write_times.append(time.perf_counter() - start)
+    return {"cells": cells, "text": min(text_times), "write": min(write_times), "mb": len(text) / 1e6,
+            "readings": result.rays.size}
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[1])
     parser.add_argument("--quick", action="store_true", help="fewer repeats")
     parser.add_argument("--markdown", action="store_true", help="print a markdown block for RESULTS.md")
+    parser.add_argument("--csv-only", action="store_true", help="only (c), the CSV of a large sweep")
     args = parser.parse_args(argv)
     load_before = os.getloadavg()[0]
-    a = fig5(2 if args.quick else 5)
-    b = spectrum(1 if args.quick else 3)
+    rows = []
+    if not args.csv_only:
+        a = fig5(2 if args.quick else 5)
+        b = spectrum(1 if args.quick else 3)
+        target = "met" if a["median"] <= 0.25 else "NOT met"
+        rows += [
+            ["(a) Fig. 5 sweep, 91 angles, diamond, collimated", f"{a['rays']:,} rays",
+             f"{a['median']:.3f} (best {a['best']:.3f})", f"{a['rays'] / a['median'] / 1e6:.0f} Mray/s",
+             f"target <= 0.25 s: {target}; traced once per angle"],
+            ["(b) 301 wavelengths, one sweep() call", f"{b['rays']:,} rays", f"{b['sweep']:.3f}",
+             f"{b['rays'] / b['sweep'] / 1e6:.0f} Mray/s", "diffuse, regular spectrum, traced per wavelength"],
+            ["(b) 301 wavelengths, loop of 301 measure() calls", f"{b['rays']:,} rays", f"{b['loop']:.3f}",
+             f"{b['rays'] / b['loop'] / 1e6:.0f} Mray/s", f"ratio loop / sweep = {b['loop'] / b['sweep']:.1f}"],
+        ]
+    c = csv_grid(1 if args.quick else 3)
+    rate = c["cells"] / c["text"]
+    rows += [
+        ["(c) CSV of 91 theta_i x 1000 wavelengths: csv_text", f"{c['cells']:,} cells", f"{c['text']:.3f}",
+         f"{rate / 1e6:.2f} Mcell/s", f"target >= 1 Mcell/s: {'met' if rate >= 1e6 else 'NOT met'}; "
+                                        f"{c['readings']:,} rows, {c['mb']:.0f} MB"],
+        ["(c) the same, Result.write('.csv') in all", f"{c['cells']:,} cells", f"{c['write']:.3f}",
+         f"{c['cells'] / c['write'] / 1e6:.2f} Mcell/s", "builds the dataset (intervals) and writes atomically"],
+    ]
     info = machine()
     info["load"] = f"{load_before:.2f} before the run, {os.getloadavg()[0]:.2f} after"
-    target = "met" if a["median"] <= 0.25 else "NOT met"
-    rows = [
-        ["(a) Fig. 5 sweep, 91 angles, diamond, collimated", f"{a['rays']:,}", f"{a['median']:.3f} (best {a['best']:.3f})",
-         f"{a['rays'] / a['median'] / 1e6:.0f}", f"target <= 0.25 s: {target}; traced once per angle"],
-        ["(b) 301 wavelengths, one sweep() call", f"{b['rays']:,}", f"{b['sweep']:.3f}",
-         f"{b['rays'] / b['sweep'] / 1e6:.0f}", "diffuse, regular spectrum, traced per wavelength"],
-        ["(b) 301 wavelengths, loop of 301 measure() calls", f"{b['rays']:,}", f"{b['loop']:.3f}",
-         f"{b['rays'] / b['loop'] / 1e6:.0f}", f"ratio loop / sweep = {b['loop'] / b['sweep']:.1f}"],
-    ]
-    header = ["case", "rays", "seconds", "Mray/s", "note"]
+    header = ["case", "work", "seconds", "rate", "note"]
     if args.markdown:
         print("| " + " | ".join(header) + " |")
         print("|" + "---|" * len(header))
@@ -110,7 +162,7 @@ def main(argv: list[str] | None = None) -> int:
             print(f"- {line}")
     else:
         for row in rows:
-            print(f"{row[0]:<50} {row[1]:>12} rays {row[2]:>22} s {row[3]:>5} Mray/s  {row[4]}")
+            print(f"{row[0]:<50} {row[1]:>18} {row[2]:>22} s {row[3]:>14}  {row[4]}")
         print("\n".join(machine_lines(info)))
     return 0
 

@@ -354,9 +354,9 @@ def test_budgets_run_batched(monkeypatch, traced_diamond, bound, calls):
     seen = []
     original = tracer.tally_readings
 
-    def counting(instrument, plans, settings, offsets=None):
+    def counting(instrument, plans, settings, offsets=None, on_chunk=None):
         seen.append([plan.rays for plan in plans])
-        return original(instrument, plans, settings, offsets)
+        return original(instrument, plans, settings, offsets, on_chunk)
 
     monkeypatch.setattr(tracer, "tally_readings", counting)
     reading = vm.measure(traced_diamond, theta_i=75, bound=bound, wavelengths="400:700:20", mu=0.02, delta=0.05)
@@ -409,3 +409,20 @@ def test_a_scene_dict_with_a_none_value_is_refused_not_a_crash(mi):
 
     with pytest.raises(SceneError, match=r"\[specimen.bsdf.eta\] has no value \(None\)"):
         vm.measure(vm.instrument_scene({"type": "simple_dielectric", "eta": None}), rays=10)
+
+
+def test_a_long_measurement_shows_progress_in_a_terminal(traced_diamond, capsys, monkeypatch):
+    import sys
+
+    import virtspec_mi.progress as progress
+
+    monkeypatch.setattr(sys.stderr, "isatty", lambda: True)
+    kwargs = dict(theta_i=30, wavelengths="400:700:10", rays=20_000, chunk_size=65_536)
+    quiet = vm.measure(traced_diamond, **kwargs)  # ~ms: under the 2 s threshold
+    assert capsys.readouterr().err == ""
+    monkeypatch.setattr(progress, "_PROGRESS_AFTER_S", 0.0)  # now every measurement counts as slow
+    shown = vm.measure(traced_diamond, **kwargs)
+    assert "readings" in capsys.readouterr().err
+    np.testing.assert_array_equal(shown.reflected, quiet.reflected)  # the bar changes no count
+    vm.measure(traced_diamond, progress=False, **kwargs)
+    assert capsys.readouterr().err == ""

@@ -252,3 +252,106 @@ def test_sweep_warns_when_the_certificate_does_not_hold(mi):
     with pytest.warns(RuntimeWarning, match="outside \\[0, 1\\]"):
         result = vm.sweep(scene, theta_i=[10, 20], rays=500)
     assert result.weight_violations.sum() == 1000
+
+
+# --- outputs: nothing finished is lost ----------------------------------------------------
+
+
+def _finished(checkpoint: Path) -> int:
+    return len(json.loads(checkpoint.read_text())["done"])
+
+
+def test_sweep_out_writes_the_file_and_then_removes_the_checkpoint(diamond, tmp_path):
+    kwargs = dict(theta_i="0:90:10", rays=2000, chunk_size=1024 * 2)
+    out = tmp_path / "sweep.json"
+    result = vm.sweep(diamond, out=out, **kwargs)
+    np.testing.assert_array_equal(vm.read_result(out).reflected, result.reflected)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["sweep.json"]
+
+
+@pytest.mark.parametrize("fault", ["directory appears", "disk full at rename", "disk full mid-write"])
+def test_a_failed_output_write_keeps_every_finished_reading(diamond, monkeypatch, tmp_path, fault):
+    import errno
+
+    import virtspec_mi.engine as engine
+    import virtspec_mi.results_io as results_io
+
+    kwargs = dict(theta_i="0:90:10", rays=2000, seed=6, chunk_size=1024 * 2)
+    whole = vm.sweep(diamond, **kwargs)
+    out = tmp_path / "sweep.csv"
+    checkpoint = tmp_path / "sweep.csv.partial.json"
+    with monkeypatch.context() as patch:
+        if fault == "directory appears":  # e.g. another program made a directory of that name meanwhile
+            real = engine.take_readings
+
+            def making_a_directory(*args, **kw):
+                out.mkdir(exist_ok=True)
+                return real(*args, **kw)
+
+            patch.setattr(engine, "take_readings", making_a_directory)
+        elif fault == "disk full at rename":
+            real_replace = os.replace
+
+            def full(source, target):
+                if Path(target) == out:
+                    raise OSError(errno.ENOSPC, "No space left on device")
+                return real_replace(source, target)
+
+            patch.setattr(results_io.os, "replace", full)
+        else:
+            real_write = Path.write_text
+
+            def half_written(self, text, *args, **kw):
+                if ".partial.json" in self.name:  # the checkpoint's own writes go through
+                    return real_write(self, text, *args, **kw)
+                with open(self, "w") as handle:
+                    handle.write(text[: len(text) // 2])
+                raise OSError(errno.ENOSPC, "No space left on device")
+
+            patch.setattr(Path, "write_text", half_written)
+        with pytest.raises(OSError, match=f"could not write {out}.*kept in {checkpoint}"):
+            vm.sweep(diamond, out=out, **kwargs)
+    assert _finished(checkpoint) == 10  # the whole sweep is still on disk
+    assert not out.is_file()
+    assert not [p for p in tmp_path.iterdir() if p.name.endswith(".tmp") or p.name.endswith(".lock")]
+    if out.is_dir():
+        out.rmdir()
+    with monkeypatch.context() as patch:  # the re-run traces nothing: every reading is reused
+        patch.setattr(engine, "take_readings", lambda *a, **k: pytest.fail("traced again"))
+        resumed = vm.sweep(diamond, out=out, **kwargs)
+    for name in ("reflected", "transmitted", "rays"):
+        np.testing.assert_array_equal(getattr(vm.read_result(out), name), getattr(whole, name))
+        np.testing.assert_array_equal(getattr(resumed, name), getattr(whole, name))
+    assert not checkpoint.exists()
+
+
+def test_an_output_that_cannot_be_written_fails_before_any_tracing(diamond, monkeypatch, tmp_path):
+    import virtspec_mi.engine as engine
+
+    monkeypatch.setattr(engine, "take_readings", lambda *a, **k: pytest.fail("traced before the check"))
+    (tmp_path / "taken.nc").mkdir()
+    (tmp_path / "file").write_text("")
+    for out, message in ((tmp_path / "taken.nc", "is a directory"),
+                         (tmp_path / "missing" / "a.nc", "does not exist"),
+                         (tmp_path / "file" / "a.nc", "is not a directory"),
+                         (tmp_path / "a.txt", "out must end in one of")):
+        with pytest.raises(ValueError, match=message):
+            vm.sweep(diamond, theta_i=[0, 10], rays=100, out=out)
+
+
+def test_a_resumed_sweep_says_so_on_stderr(diamond, monkeypatch, tmp_path, capsys):
+    kwargs = dict(theta_i="0:90:10", rays=2000, chunk_size=1024 * 2)
+    checkpoint = tmp_path / "sweep.partial.json"
+    _interrupting(monkeypatch, after=3)
+    with pytest.raises(KeyboardInterrupt):
+        vm.sweep(diamond, checkpoint=checkpoint, **kwargs)
+    monkeypatch.undo()
+    capsys.readouterr()
+    vm.sweep(diamond, checkpoint=checkpoint, progress=False, **kwargs)  # progress=False: silent
+    assert capsys.readouterr().err == ""
+    _interrupting(monkeypatch, after=3)
+    with pytest.raises(KeyboardInterrupt):
+        vm.sweep(diamond, checkpoint=checkpoint, **kwargs)
+    monkeypatch.undo()
+    vm.sweep(diamond, checkpoint=checkpoint, **kwargs)
+    assert f"resumed from {checkpoint}: 3 of 10 readings reused" in capsys.readouterr().err

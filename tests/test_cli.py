@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import re
 import subprocess
 import sys
 
@@ -98,6 +99,8 @@ def test_sweep_densities_print_seconds_and_delta(scenes_dir):
     assert "Delta (eq. 24)" in lines[0]
     assert lines[1].split()[:2] == ["2", "100"] and lines[2].split()[:2] == ["3", "1,000"]
     assert 0.005 < float(lines[2].split()[3]) < 0.2  # Delta between 100 and 1000 rays per reading
+    # Fig. 6b: no density's seconds include the kernel's compilation (a warm-up sweep ran first)
+    assert lines[3].startswith("(seconds after a warm-up sweep at log10 N = 2")
 
 
 @pytest.mark.parametrize("args, message", [
@@ -147,3 +150,39 @@ def test_measure_joint_and_pilot_options(scenes_dir):
     assert "+ 150 pilot" in result.stdout and "R and T together" in result.stdout
     bad = virtspec("measure", str(scenes_dir / "diamond_collimated.xml"), "--pilot-delta", "0.5")
     assert bad.returncode == 1 and "pilot_delta must satisfy 0 < pilot_delta < delta" in bad.stderr
+
+
+# --- the command line as a newcomer meets it ----------------------------------------------
+
+
+def test_version_and_python_dash_m():
+    import virtspec_mi
+
+    for command in ([sys.executable, "-m", "virtspec_mi", "--version"],
+                    [sys.executable, "-m", "virtspec_mi.cli", "--version"]):
+        result = subprocess.run(command, capture_output=True, text=True)
+        assert result.returncode == 0 and result.stdout.strip() == f"virtspec-mi {virtspec_mi.__version__}"
+
+
+def test_a_closed_pipe_ends_the_command_quietly():
+    result = subprocess.run(f"{sys.executable} -m virtspec_mi bounds | head -1", shell=True,
+                            capture_output=True, text=True)
+    assert result.stdout.startswith("Rays per reading") and result.stderr == ""
+
+
+def test_bounds_shows_every_budget():
+    result = virtspec("bounds", "--delta", "0.01")
+    assert result.returncode == 0
+    assert all(name in result.stdout for name in ("hoeffding", "chebyshev", "exact", "two-stage"))
+    assert "66,501" in result.stdout and "2,000 + at most" in result.stdout
+
+
+@pytest.mark.parametrize("command", ["bounds", "measure", "sweep", "colour", "llvm"])
+def test_every_subcommand_has_a_description_and_an_example(command):
+    text = re.sub(r"-\s+", "-", virtspec(command, "--help").stdout)  # argparse wraps at hyphens
+    assert "example" in text and f"virtspec {command}" in text.split("example", 1)[1]
+    if command in ("measure", "sweep"):
+        assert "conical-hemispherical" in text and "directional-hemispherical" in text
+        assert "hemispherical-hemispherical" in text and "default: the scene's" in text
+    if command == "colour":
+        assert "absorptance" in text

@@ -105,3 +105,21 @@ def test_colorchecker_patches_are_reproduced_within_delta_e_2000_of_0_5(mi):
         assert delta_e < 0.5, (name, delta_e)
         worst = max(worst, delta_e)
     assert worst > 0  # the measurement is noisy: a zero would mean the reference was compared with itself
+
+
+def test_a_sparse_spectrum_states_its_coverage_and_too_little_is_refused():
+    from virtspec_mi.colorimetry import MIN_COVERAGE, colorimetry
+
+    wide = colorimetry(_sweep_of([0.5] * 31, np.arange(400, 701, 10)).to_sd())
+    assert wide.coverage > 0.99 and "covering 99.8% of the colour-matching weight" in wide.summary()
+    sparse = _sweep_of([0.4, 0.5, 0.6, 0.5, 0.4], [465, 550, 620, 700, 800]).to_sd()
+    with pytest.raises(ValueError, match=r"covers 465-800 nm, only 70\.5% of the colour-matching weight"):
+        colorimetry(sparse)
+    assert MIN_COVERAGE == 0.95
+
+
+def test_spectra_csv_needs_six_wavelengths(tmp_path):
+    from virtspec_mi.results_io import write_spectra_csv
+
+    with pytest.raises(ValueError, match="colour-science CSV spectra need at least 6 wavelengths"):
+        write_spectra_csv(_sweep_of([0.1, 0.2, 0.3], [400, 500, 600]), tmp_path / "few.csv")

@@ -21,7 +21,7 @@ import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
 BLOCK = re.compile(r"^```(\w*)\n(.*?)^```", re.M | re.S)
-SKIPPED = ("make ", "export ")
+SKIPPED = ("make ", "export ", ". ")  # set-up lines: make, environment, activation
 
 
 def blocks(kind: str) -> list[str]:

@@ -166,3 +166,11 @@ def test_a_sweep_keeps_parts_pilot_capped_and_backlit(mi, diamond, tmp_path):
     np.testing.assert_array_equal(two.rays_spent, two.rays + 500)
     back = vm.read_result(two.write(tmp_path / "two.json"))
     np.testing.assert_array_equal(back.pilot.reflected, two.pilot.reflected)
+
+
+def test_a_result_reads_well_in_a_terminal_and_in_jupyter(grey_reading):
+    text = repr(grey_reading)
+    assert text.startswith("<virtspec_mi.Result (wavelength: 16) collimated") and "certified mu <=" in text
+    page = grey_reading._repr_html_()
+    assert "virtspec_mi.Result" in page and "certified_mu" in page and "reflectance" in page
+    assert "result_json" not in page and page.count("<div") > 5

@@ -72,3 +72,125 @@ def test_colour_science_csv_spectra_round_trip(result, tmp_path):
     # colour-science writes 12 significant digits
     np.testing.assert_allclose(spectra["reflectance"].values, result.reflectance[:, 1], rtol=1e-11)
     np.testing.assert_allclose(spectra["absorptance"].values, result.absorptance[:, 1], rtol=1e-11)
+
+
+# --- atomic writes, large CSVs ------------------------------------------------------------
+
+
+def _grid_result(n_lam: int, n_theta: int, seed: int = 0):
+    """A sweep result built from counts (no tracing): random R, T counts of 10^5 rays."""
+
+    from dataclasses import replace
+
+    from virtspec_mi.counts import Counts
+    from virtspec_mi.result import Result
+    from virtspec_mi.settings import Settings
+
+    rng = np.random.default_rng(seed)
+    shape = (n_lam, n_theta)
+    reflected = rng.integers(0, 50_000, shape)
+    counts = replace(Counts.zeros(shape), rays=np.full(shape, 10**5, dtype=np.int64), reflected=reflected,
+                     transmitted=rng.integers(0, 50_000, shape), specular_reflected=reflected // 3)
+    wavelengths = 400.0 + np.arange(n_lam)
+    return Result(("wavelength", "theta_i"), {"wavelength": wavelengths, "theta_i": np.linspace(0, 90, n_theta)},
+                  counts, None, Settings(wavelengths=list(wavelengths)), vm.InstrumentGeometry(8, 12.5, 100), 1.5)
+
+
+@pytest.mark.parametrize("legacy", [False, "1.13"])  # numpy's print options: its own, and colour-science's
+def test_csv_of_a_large_grid_has_every_reading_and_exact_numbers(tmp_path, legacy):
+    import csv
+
+    result = _grid_result(60, 91)
+    dataset = result.to_dataset()
+    with np.printoptions(legacy=legacy):
+        path = result.write(tmp_path / "large.csv")
+    with path.open(newline="") as handle:
+        assert handle.readline().startswith("# virtspec-mi result {")
+        rows = list(csv.reader(handle))
+    header, rows = rows[0], rows[1:]
+    assert set(header) == {"wavelength", "theta_i", *dataset.data_vars} and len(header) == len(set(header))
+    assert len(rows) == 60 * 91 and {len(row) for row in rows} == {len(header)}
+    flat = dataset.to_dataframe().reset_index()
+    for k, column in enumerate(header):  # every number as written reads back exactly (NaN: an empty field)
+        written = np.array([float(row[k]) if row[k] else np.nan for row in rows])
+        np.testing.assert_array_equal(written, flat[column].to_numpy(dtype=np.float64), err_msg=column)
+    assert flat["wavelength"].iloc[1] == 400.0 and flat["theta_i"].iloc[1] == 1.0  # one row per (wavelength, theta_i)
+
+
+@pytest.mark.parametrize("suffix", [".nc", ".csv", ".json"])
+@pytest.mark.parametrize("fault", ["rename", "mid-write"])
+def test_a_failed_write_leaves_the_old_file_and_no_temporary(result, tmp_path, monkeypatch, suffix, fault):
+    import errno
+    import os
+
+    import xarray as xr
+
+    import virtspec_mi.results_io as results_io
+
+    path = write_sweep(result, tmp_path / f"sweep{suffix}")
+    before = path.read_bytes()
+    full = OSError(errno.ENOSPC, "No space left on device")
+    if fault == "rename":
+        def replace(source, target):
+            raise full
+
+        monkeypatch.setattr(results_io.os, "replace", replace)
+    else:
+        def half_text(self, text, *args, **kwargs):
+            os.truncate(self, 0) if self.exists() else None
+            with open(self, "a") as handle:
+                handle.write(text[: len(text) // 2])
+            raise full
+
+        def half_netcdf(self, target, *args, **kwargs):
+            with open(target, "wb") as handle:
+                handle.write(b"CDF\x01 half")
+            raise full
+
+        monkeypatch.setattr(type(path), "write_text", half_text)
+        monkeypatch.setattr(xr.Dataset, "to_netcdf", half_netcdf)
+    with pytest.raises(OSError, match="No space left"):
+        write_sweep(result, path)
+    monkeypatch.undo()
+    assert path.read_bytes() == before
+    assert [p.name for p in tmp_path.iterdir()] == [path.name]
+
+
+def test_concurrent_writers_never_show_a_partial_file(tmp_path):
+    import json
+    import threading
+
+    path = tmp_path / "shared.json"
+    results = [_grid_result(30, 91, seed) for seed in range(2)]
+    from virtspec_mi.results_io import write
+
+    write(results[0], path)
+    errors, stop = [], threading.Event()
+
+    def writer(k: int) -> None:
+        try:
+            for _ in range(10):
+                write(results[k], path)
+        except Exception as error:  # noqa: BLE001 - any failure fails the test
+            errors.append(error)
+
+    def reader() -> None:
+        while not stop.is_set():
+            try:
+                json.loads(path.read_text())
+            except Exception as error:  # noqa: BLE001
+                errors.append(error)
+                return
+
+    threads = [threading.Thread(target=writer, args=(k,)) for k in (0, 1, 0, 1)]
+    watcher = threading.Thread(target=reader)
+    watcher.start()
+    for thread in threads:
+        thread.start()
+    for thread in threads:
+        thread.join()
+    stop.set()
+    watcher.join()
+    assert errors == []
+    assert read_sweep(path).as_dict() in [r.as_dict() for r in results]
+    assert [p.name for p in tmp_path.iterdir()] == ["shared.json"]

@@ -27,21 +27,24 @@ Baranoski et al. (2001), eqs. (2), (23), (24); Figs. 5 and 6.
 from __future__ import annotations
 
 import os
+from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from virtspec_mi.checkpoint import checkpoint_for, claim, remove
 from virtspec_mi.checks import parse_theta_i
 from virtspec_mi.engine import measure_reading, run
 from virtspec_mi.instrument import Instrument
 from virtspec_mi.result import Result
+from virtspec_mi.results_io import check_output
 from virtspec_mi.scene import find_instrument, scene_fingerprint
 from virtspec_mi.settings import Settings, settings_keywords, with_settings
 
 __all__ = ["measure", "sweep", "read_result", "fluctuation"]
 
 
-def measure(scene: Any, **settings: Any) -> Result:
+def measure(scene: Any, *, progress: bool | None = None, **settings: Any) -> Result:
     """
     Measure the specimen of ``scene`` and return a certified :class:`~virtspec_mi.result.Result`
     over wavelength (θi a scalar label).
@@ -56,6 +59,10 @@ def measure(scene: Any, **settings: Any) -> Result:
         ``pilot_rays``, ``pilot_delta``, ``beam``, ``sampling``, ``seed``,
         ``chunk_size``); one left ``None`` comes from the scene's ``spectrophotometer``
         integrator when it has one, else from the default.
+    progress
+        ``True``: always a tqdm bar of the readings on stderr; ``False``: never; ``None``
+        (default): only when stderr is a terminal and the readings are expected to last
+        more than ~2 s (a spectrum of many wavelengths).
 
     References
     ----------
@@ -63,7 +70,8 @@ def measure(scene: Any, **settings: Any) -> Result:
     """
 
     instrument = find_instrument(scene)
-    result = measure_reading(instrument, with_settings(_scene_settings(instrument), settings, "measure"))
+    settings = with_settings(_scene_settings(instrument), settings, "measure")
+    result = measure_reading(instrument, settings, progress=progress)
     result.warn_if_uncertified(stacklevel=3)
     return result
 
@@ -73,6 +81,7 @@ def sweep(
     *,
     theta_i: Any = None,
     checkpoint: str | os.PathLike | None = None,
+    out: str | os.PathLike | None = None,
     progress: bool | None = None,
     **settings: Any,
 ) -> Result:
@@ -89,11 +98,21 @@ def sweep(
         scene's θi (or 0).
     checkpoint
         Path of a JSON file recording finished readings as the sweep goes; an existing
-        file of the same sweep is resumed (:mod:`virtspec_mi.checkpoint`). Removed when
-        the sweep completes.
+        file of the same sweep is resumed (:mod:`virtspec_mi.checkpoint`; a note on
+        stderr says how many readings were reused). Held by one sweep at a time (an OS
+        lock; another run gets ``ValueError``) and checked writable before any tracing.
+        Removed when the sweep completes — with ``out``, only once the output file is
+        written. A corrupt or foreign checkpoint raises
+        :class:`~virtspec_mi.checkpoint.CheckpointError` and is left as it is.
+    out
+        Result file (``.nc``, ``.csv`` or ``.json``, :meth:`Result.write`) to write,
+        atomically, when the sweep completes; checked before any tracing. The
+        checkpoint defaults to ``OUT.partial.json``: if the write fails (a full disk …)
+        every finished reading stays there and the same call, re-run, only writes.
     progress
-        ``True``: always a tqdm bar on stderr; ``False``: never; ``None`` (default):
-        only when stderr is a terminal and the sweep is expected to last more than ~2 s.
+        ``True``: always a tqdm bar on stderr; ``False``: never (and no note on
+        stderr); ``None`` (default): only when stderr is a terminal and the sweep is
+        expected to last more than ~2 s.
     **settings
         As for :func:`measure` (one value for the whole sweep); ``wavelengths`` must be
         distinct. With ``bound="two-stage"`` each reading is sized by its own pilot, all
@@ -104,6 +123,10 @@ def sweep(
     Baranoski et al. (2001), eq. (23), Fig. 5.
     """
 
+    checkpoint, out = _file_path(checkpoint, "checkpoint"), _file_path(out, "out")
+    if out is not None:
+        check_output(out)
+        checkpoint = checkpoint if checkpoint is not None else checkpoint_for(out)
     instrument = find_instrument(scene)
     base = with_settings(_scene_settings(instrument), settings, "sweep")
     angles = np.array(parse_theta_i(base.theta_i if theta_i is None else theta_i))
@@ -111,10 +134,41 @@ def sweep(
     for name, values in (("theta_i", angles), ("wavelengths", np.array(resolved.wavelengths))):
         if len(np.unique(values)) != len(values):
             raise ValueError(f"{name} of a sweep must be distinct (got repeated values)")
-    result = run(instrument, resolved, angles, keyed=True, scene=scene_fingerprint(scene, instrument),
-                 checkpoint=checkpoint, progress=progress)
+    fingerprint = scene_fingerprint(scene, instrument)
+    if checkpoint is None:
+        result = run(instrument, resolved, angles, keyed=True, scene=fingerprint, progress=progress)
+    else:
+        with claim(checkpoint):  # one run per checkpoint, writable: checked before any tracing
+            result = run(instrument, resolved, angles, keyed=True, scene=fingerprint, checkpoint=checkpoint,
+                         progress=progress)
+            if out is not None:
+                _write(result, out, checkpoint)
+            remove(checkpoint)  # the readings are safe: returned, and written to out when given
     result.warn_if_uncertified(stacklevel=3)
     return result
+
+
+def _file_path(value: Any, name: str) -> Path | None:
+    """``value`` (a file path or ``None``) as a ``Path``; ``ValueError`` naming ``name`` otherwise."""
+
+    if value is None:
+        return None
+    if not isinstance(value, (str, os.PathLike)):
+        raise ValueError(f"{name} must be a file path (str or os.PathLike) or None (got {type(value).__name__} "
+                         f"{value!r})")
+    return Path(value)
+
+
+def _write(result: Result, out: Path, checkpoint: Path) -> None:
+    """Write ``result`` to ``out``; if that fails the error says where the finished readings are kept."""
+
+    try:
+        result.write(out)
+    except (OSError, RuntimeError) as error:  # netCDF reports some failures as RuntimeError
+        failure = OSError(f"could not write {out} ({getattr(error, 'strerror', None) or error}); every finished "
+                          f"reading is kept in {checkpoint}: re-run the same sweep to write it")
+        failure.errno = getattr(error, "errno", None)  # e.g. errno.ENOSPC, for callers that check it
+        raise failure from error
 
 
 measure.__signature__ = settings_keywords(measure)  # type: ignore[attr-defined]

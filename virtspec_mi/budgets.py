@@ -30,7 +30,7 @@ two-stage rules).
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, Sequence
 
 from virtspec_mi import twostage
 from virtspec_mi.bounds import (
@@ -43,7 +43,7 @@ from virtspec_mi.bounds import (
     hoeffding_rays,
 )
 
-__all__ = ["RayBudget", "Hoeffding", "Chebyshev", "Exact", "TwoStage", "BUDGETS"]
+__all__ = ["RayBudget", "Hoeffding", "Chebyshev", "Exact", "TwoStage", "BUDGETS", "format_budgets"]
 
 
 class RayBudget:
@@ -177,9 +177,37 @@ class TwoStage(RayBudget):
         quantity): the exact rule over any interval of ρ never needs more.
         """
 
-        share = 2 if settings.joint else 1
-        stage_two = hoeffding_rays(settings.mu, (settings.delta - settings.pilot_delta_value) / share)
+        stage_two = self.most_second_rays(settings.mu, settings.delta, settings.pilot_delta_value, settings.joint)
         return max(settings.pilot_rays_per_reading, stage_two)
+
+    @staticmethod
+    def most_second_rays(mu: float, delta: float, pilot_delta: float, joint: bool = False) -> int:
+        """The most rays a second batch can get: Hoeffding's N at (δ − δ₁), per quantity."""
+
+        return hoeffding_rays(mu, (delta - pilot_delta) / (2 if joint else 1))
 
 BUDGETS: dict[str, RayBudget] = {budget.name: budget for budget in (Hoeffding(), Chebyshev(), Exact(), TwoStage())}
 """Every ray-budget rule by name; ``"hoeffding"`` (eq. 23) is the default."""
+
+
+def format_budgets(mu: float, deltas: Sequence[float]) -> str:
+    """
+    Rays per reading under every rule of :data:`BUDGETS` at μ for each δ, as text: the
+    fixed rules' N, and for ``two-stage`` its pilot n₁ plus the most rays its second
+    batch can take (Hoeffding's N at δ − δ₁); what it spends on average depends on ρ
+    (:func:`virtspec_mi.twostage.two_stage_law`; notebook 01 tabulates it).
+    """
+
+    two_stage = BUDGETS["two-stage"]
+    header = f"{'delta':>8}" + "".join(f"  {name:>{width}}" for name, width in
+                                       (("hoeffding", 10), ("chebyshev", 12), ("exact", 10), ("two-stage", 22)))
+    lines = [f"Rays per reading under each rule (bound=...), mu = {mu:g}", header]
+    for delta in deltas:
+        pilot = two_stage.default_pilot_rays(mu)
+        most = two_stage.most_second_rays(mu, delta, two_stage.default_pilot_delta(delta))
+        lines.append(f"{delta:>8g}  {hoeffding_rays(mu, delta):>10,}  {chebyshev_rays(mu, delta):>12,}  "
+                     f"{exact_rays(mu, delta):>10,}  {f'{pilot:,} + at most {most:,}':>22}")
+    lines.append("two-stage: a pilot, then a second batch sized per reading from the pilot's interval "
+                 "(on average far fewer rays than the most, e.g. 19,442 at rho = 0.05 for mu = 0.005, "
+                 "delta = 0.01)")
+    return "\n".join(lines)

@@ -9,8 +9,11 @@ Command line: ``virtspec``
 - ``virtspec sweep SCENE --theta-i 0:90:1 [--wavelengths 400:700:10] [--out FILE(.nc|.csv|.json)]
   [--plot FIG(.png|.svg)] [--densities 3 4 5 6] [--quiet] [measure options]``: a sweep
   (resumable when ``--out`` is given: see :mod:`virtspec_mi.checkpoint`).
-- ``virtspec colour FILE [--theta-i] [--quantity] [--illuminant] [--observer]``: CIE XYZ,
-  L*a*b* and sRGB of a saved spectrum (a sweep file or a colour-science CSV).
+- ``virtspec colour FILE [--theta-i] [--quantity] [--illuminant] [--observer] [--json]``: CIE
+  XYZ, L*a*b* and sRGB of a saved spectrum (a result file or a colour-science CSV).
+- ``virtspec compare RESULT MEASURED [...]``: a result against a measured spectrum
+  (:mod:`virtspec_mi.compare`); ``virtspec plot FILE [...]``: a figure of a result file.
+- ``virtspec llvm {find,check}``: the libLLVM Dr.Jit uses (``make setup`` calls it).
 
 Errors in the input (bad ranges, unreadable scenes, a bad libLLVM) print one line
 ``virtspec: error: …`` and exit with status 2 (usage) or 1 (measurement).
@@ -20,48 +23,120 @@ from __future__ import annotations
 
 import argparse
 import json
+import signal
 import sys
 from typing import Sequence
 
 __all__ = ["main", "build_parser"]
 
 
+_EXAMPLES = {
+    "bounds": "example: virtspec bounds --mu 0.005 --delta 0.001 0.01 0.1",
+    "measure": "examples:\n  virtspec measure scenes/diamond_conical.xml --theta-i 70\n"
+               "  virtspec measure scenes/soybean_abmb.xml --wavelengths 400:2500:5 --bound two-stage --json",
+    "sweep": "examples:\n  virtspec sweep scenes/diamond_collimated.xml --theta-i 0:90:1 --out fig5.nc --plot fig5.png\n"
+             "  virtspec sweep scenes/diamond_collimated.xml --theta-i 0:90:1 --densities 3 4 5 6",
+    "colour": "examples:\n  virtspec colour spectrum.csv\n"
+              "  virtspec colour fig5.nc --theta-i 30 --illuminant A --quantity transmittance",
+    "llvm": "example: virtspec llvm check",
+}
+
+
 def build_parser() -> argparse.ArgumentParser:
-    """The ``virtspec`` argument parser."""
+    """The ``virtspec`` argument parser (the measurement flags come from the ``Settings`` fields)."""
+
+    from virtspec_mi import __version__
+    from virtspec_mi.counts import QUANTITIES
 
     parser = argparse.ArgumentParser(
-        prog="virtspec", description="Virtual spectrophotometer: certified R/T/A readings of Mitsuba BSDFs."
-    )
-    commands = parser.add_subparsers(dest="command", required=True)
+        prog="virtspec", description="Virtual spectrophotometer: certified reflectance, transmittance and "
+                                     "absorptance readings of Mitsuba BSDFs (Baranoski, Rokne & Xu 2001).")
+    parser.add_argument("--version", action="version", version=f"virtspec-mi {__version__}")
+    commands = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
 
-    bounds = commands.add_parser("bounds", help="rays per reading under eq. (15) and eq. (23) (Table 1)")
+    def command(name: str, summary: str, description: str) -> argparse.ArgumentParser:
+        return commands.add_parser(name, help=summary, description=description, epilog=_EXAMPLES[name],
+                                   formatter_class=argparse.RawDescriptionHelpFormatter)
+
+    bounds = command("bounds", "rays per reading under every ray budget (the paper's Table 1)",
+                     "Rays per reading that certify |m/N - rho| < mu with probability >= 1 - delta: the "
+                     "paper's Table 1 (eqs. 15 and 23), then every rule of bound=.")
     bounds.add_argument("--mu", type=float, default=0.005, help="certified tolerance (default 0.005)")
     bounds.add_argument("--delta", type=float, nargs="+", default=[0.001, 0.01, 0.1],
                         help="failure probabilities (default 0.001 0.01 0.1)")
 
-    measure = commands.add_parser("measure", help="one certified reading of a scene")
+    measure = command("measure", "one certified reading of a scene (over its wavelengths)",
+                      "Measure the specimen of a scene: reflectance, transmittance and absorptance per "
+                      "wavelength, with the tolerance the rays spent guarantee. Every setting defaults to "
+                      "the scene's spectrophotometer integrator, else to the paper's defaults.")
     measure.add_argument("scene", help="Mitsuba XML scene with 'emitter' and 'specimen' disks")
     _measurement_options(measure, sweep=False)
-    measure.add_argument("--json", action="store_true", help="print the reading as one JSON object")
+    measure.add_argument("--json", action="store_true",
+                         help="print the reading as one JSON object (a result file: `virtspec colour` reads it)")
 
-    sweep = commands.add_parser("sweep", help="certified readings over theta_i x wavelengths (few kernel launches)")
+    sweep = command("sweep", "certified readings over theta_i x wavelengths (few kernel launches)",
+                    "Measure a grid of readings (wavelengths x theta_i) at one phi_i, each with its own rays "
+                    "and certificate; resumable when --out is given.")
     sweep.add_argument("scene", help="Mitsuba XML scene with 'emitter' and 'specimen' disks")
     _measurement_options(sweep, sweep=True)
     sweep.add_argument("--out", help="result file .nc, .csv or .json (finished readings are kept in "
-                                     "OUT.partial.json until the sweep ends: re-run to resume)")
-    sweep.add_argument("--plot", help="figure .png or .svg (readings with the certified +-mu band)")
+                                     "FILE.partial.json until the result file is written: re-run to resume)")
+    sweep.add_argument("--plot", help="figure .png or .svg (readings with the band of their certified tolerance)")
     sweep.add_argument("--densities", type=float, nargs="+", metavar="LOG10N",
                        help="sweep at N = 10^d rays for each d; print seconds and the fluctuation of eq. (24)")
     sweep.add_argument("--quiet", action="store_true", help="no progress bar and no summary")
 
-    colour = commands.add_parser("colour", help="CIE XYZ, L*a*b*, sRGB of a saved spectrum")
+    colour = command("colour", "CIE XYZ, L*a*b*, sRGB of a saved spectrum",
+                     "Colorimetry (colour-science, ASTM E308) of one quantity of a result file at one theta_i, "
+                     "or of a colour-science CSV spectrum.")
     colour.add_argument("file", help="result file (.nc, .csv, .json; also `measure --json` output) or "
                                      "colour-science CSV spectra")
     colour.add_argument("--theta-i", type=float, help="angle of the sweep to use (needed if it has several)")
-    colour.add_argument("--quantity", default="reflectance", help="reflectance (default) or transmittance")
+    colour.add_argument("--quantity", default="reflectance",
+                        help=f"the spectrum to use: {', '.join(QUANTITIES)} of a result file, or a column of "
+                             "a colour-science CSV (default reflectance)")
     colour.add_argument("--illuminant", default="D65", help="colour.SDS_ILLUMINANTS name (default D65)")
     colour.add_argument("--observer", default="CIE 1931 2 Degree Standard Observer",
                         help="colour.MSDS_CMFS name (default CIE 1931 2 degree)")
+    colour.add_argument("--json", action="store_true",
+                        help="print one JSON object: XYZ, Lab, sRGB and its hex, coverage, note")
+
+    llvm = command("llvm", "find or check the libLLVM Dr.Jit uses (set-up)",
+                   "find: print a libLLVM >= 17 on this machine (exit 1 if none); check: load it in Dr.Jit "
+                   "and print its version, or say how to fix it.")
+    llvm.add_argument("action", choices=["find", "check"])
+
+    _EXAMPLES["compare"] = ("examples:\n  virtspec compare spectrum.nc measured.csv --plot compare.png\n"
+                            "  virtspec compare reading.json npsg.csv --quantity transmittance --json")
+    compare = command("compare", "a result against a measured spectrum: residuals, tolerance, Delta E 2000",
+                      "Compare one quantity of a result file at one theta_i with a measured spectrum over their "
+                      "common wavelengths (the measured one interpolated onto the result's, never extrapolated): "
+                      "residuals, RMSE, the share of points within the certified tolerance (+ the measurement "
+                      "uncertainty) and Delta E 2000. MEASURED: a colour-science CSV spectral file, a plain "
+                      "wavelength,value[,uncertainty] CSV, a NetCDF file or another result file.")
+    compare.add_argument("result", help="result file (.nc, .csv, .json; also `measure --json` output)")
+    compare.add_argument("measured", help="measured spectrum (.csv, .txt, .nc, or a result file)")
+    _comparison_options(compare)
+    compare.add_argument("--plot", help="figure .png or .svg: both spectra and the residuals")
+    compare.add_argument("--json", action="store_true", help="print the comparison as one JSON object")
+
+    _EXAMPLES["plot"] = ("examples:\n  virtspec plot fig5.nc --wavelengths 400 550 700 --out fig5.png\n"
+                         "  virtspec plot spectrum.nc --quantity transmittance\n"
+                         "  virtspec plot spectrum.nc --against measured.csv --out compare.svg")
+    plot = command("plot", "figure of a result file (a sweep or a reading), optionally against a measured spectrum",
+                   "Plot one quantity of a result file against theta_i (a sweep over angles: one curve per "
+                   "wavelength) or wavelength (one curve per theta_i), with the band of the certified tolerance; "
+                   "with --against, the result over a measured spectrum and the residuals (as compare --plot).")
+    plot.add_argument("file", help="result file (.nc, .csv, .json; also `measure --json` output)")
+    plot.add_argument("--quantity", choices=list(QUANTITIES), default="reflectance",
+                      help="quantity to draw (default reflectance)")
+    plot.add_argument("--theta-i", nargs="+", help="angles of the result to draw (default all; one with --against)")
+    plot.add_argument("--wavelengths", nargs="+", help="wavelengths of the result to draw, e.g. 400 550 700 or "
+                                                       "400:700:50 (default all)")
+    plot.add_argument("--against", metavar="MEASURED", help="measured spectrum to overlay (as for compare)")
+    plot.add_argument("--uncertainty", type=float,
+                      help="measurement uncertainty of MEASURED (overrides its uncertainty column)")
+    plot.add_argument("--out", help="figure .png or .svg (default: FILE with the suffix .png)")
     return parser
 
 
@@ -104,25 +179,40 @@ def _settings(args: argparse.Namespace) -> dict:
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of ``virtspec``; returns the exit status."""
 
+    signal.signal(signal.SIGPIPE, signal.SIG_DFL)  # a closed pipe (virtspec bounds | head) ends us quietly
     parser = build_parser()
     args = parser.parse_args(argv)
     try:
         if args.command == "bounds":
             from virtspec_mi.bounds import format_table_1
+            from virtspec_mi.budgets import format_budgets
 
             print(format_table_1(args.mu, args.delta))
+            print()
+            print(format_budgets(args.mu, args.delta))
             return 0
+        if args.command == "llvm":
+            from virtspec_mi.llvm import main as llvm_main
+
+            return llvm_main([args.action])
         if args.command == "sweep":
             return _sweep(args)
         if args.command == "colour":
             return _colour(args)
+        if args.command == "compare":
+            return _compare(args)
+        if args.command == "plot":
+            return _plot(args)
         return _measure(args)
     except (ValueError, RuntimeError, OSError) as error:
         print(f"virtspec: error: {error}", file=sys.stderr)
         return 1
     except KeyboardInterrupt:
-        kept = " (finished readings are kept in OUT.partial.json: re-run the same command to resume)"
-        print(f"virtspec: interrupted{kept if getattr(args, 'out', None) else ''}", file=sys.stderr)
+        partial = getattr(args, "checkpoint", None)  # the checkpoint of the sweep under way (set by _sweep)
+        kept = "" if partial is None else (
+            f" (finished readings are kept in {partial}: re-run the same command to resume)" if partial.exists()
+            else " (no reading had finished: nothing to resume)")
+        print(f"virtspec: interrupted{kept}", file=sys.stderr)
         return 130
 
 
@@ -138,22 +228,19 @@ def _sweep(args: argparse.Namespace) -> int:
     from pathlib import Path
 
     from virtspec_mi.api import fluctuation, sweep
+    from virtspec_mi.checkpoint import checkpoint_for
     from virtspec_mi.plot import check_figure_path, plot_densities, plot_sweep
-    from virtspec_mi.results_io import csv_text, result_format
+    from virtspec_mi.results_io import check_output, csv_text
 
-    out = Path(args.out) if args.out else None
-    if out is not None:
-        result_format(out)  # a bad suffix fails before any tracing
+    out = check_output(args.out) if args.out else None  # a bad suffix or directory fails before any tracing
     check_figure_path(args.plot)
     kwargs = {**_settings(args), "progress": False if args.quiet else None}
     given_rays = kwargs.pop("rays")
 
     def run(rays: int | None, path: Path | None) -> object:
-        checkpoint = path.with_name(path.name + ".partial.json") if path is not None else None
-        result = sweep(args.scene, rays=rays, checkpoint=checkpoint, **kwargs)
-        if path is not None:
-            result.write(path)
-        return result
+        # the sweep writes `path` atomically, and only then removes its checkpoint PATH.partial.json
+        args.checkpoint = checkpoint_for(path) if path is not None else None  # named if interrupted
+        return sweep(args.scene, rays=rays, out=path, **kwargs)
 
     if not args.densities:
         result = run(given_rays, out)
@@ -172,6 +259,9 @@ def _sweep(args: argparse.Namespace) -> int:
 
     if given_rays is not None:
         raise ValueError("--rays and --densities exclude each other (densities set N = 10^d)")
+    # Fig. 6b: time linear in N. The first sweep compiles the kernel (Dr.Jit caches it for every
+    # N): run it once at the smallest density first, so no density's seconds include compilation.
+    warm_up = sweep(args.scene, rays=int(round(10.0 ** min(args.densities))), **{**kwargs, "progress": False})
     results, deltas = [], [float("nan")]
     print(f"{'log10 N':>8} {'N':>12} {'seconds':>9} {'Delta (eq. 24)':>15}")
     for density in args.densities:
@@ -182,6 +272,8 @@ def _sweep(args: argparse.Namespace) -> int:
             deltas.append(fluctuation(results[-2], results[-1]))
         delta_text = "" if len(results) == 1 else f"{deltas[-1]:.6f}"
         print(f"{density:>8g} {rays:>12,} {results[-1].seconds:>9.3f} {delta_text:>15}", flush=True)
+    print(f"(seconds after a warm-up sweep at log10 N = {min(args.densities):g}, {warm_up.seconds:.3f} s, "
+          "which compiled the kernel)")
     if args.plot:
         plot_densities(results, args.densities, deltas, args.plot)
     return 0
@@ -205,8 +297,81 @@ def _colour(args: argparse.Namespace) -> int:
         sd = read_result(path).to_sd(args.quantity, args.theta_i)
         heading = f"{args.quantity} of {path} ({sd.name})"
     colour = colorimetry(sd, args.illuminant, args.observer)
+    if args.json:
+        print(json.dumps({"file": str(path), "quantity": args.quantity, "spectrum": heading, **colour.as_dict()}))
+        return 0
     print(heading)
     print(colour.summary())
+    return 0
+
+
+def _comparison_options(parser: argparse.ArgumentParser) -> None:
+    """The flags of ``virtspec compare``: quantity, theta_i, uncertainty, illuminant, observer."""
+
+    from virtspec_mi.counts import QUANTITIES
+
+    parser.add_argument("--quantity", choices=list(QUANTITIES), default="reflectance",
+                        help="quantity compared: the result's and the measured column of that name "
+                             "(default reflectance)")
+    parser.add_argument("--theta-i", type=float, help="angle of the result to use (needed if it has several)")
+    parser.add_argument("--uncertainty", type=float,
+                        help="measurement uncertainty, added to the certified tolerance (overrides the file's "
+                             "uncertainty column)")
+    parser.add_argument("--illuminant", default="D65", help="colour.SDS_ILLUMINANTS name for Delta E 2000 "
+                                                            "(default D65)")
+    parser.add_argument("--observer", default="CIE 1931 2 Degree Standard Observer",
+                        help="colour.MSDS_CMFS name (default CIE 1931 2 degree)")
+
+
+def _compare(args: argparse.Namespace) -> int:
+    from virtspec_mi.compare import compare
+    from virtspec_mi.plot import check_figure_path
+
+    check_figure_path(args.plot)  # a bad suffix fails before any work
+    comparison = compare(args.result, args.measured, quantity=args.quantity, theta_i=args.theta_i,
+                         measurement_uncertainty=args.uncertainty, illuminant=args.illuminant,
+                         observer=args.observer)
+    if args.plot:
+        comparison.plot(args.plot)
+    if args.json:
+        print(json.dumps(comparison.as_dict()))
+        return 0
+    print(comparison.summary())
+    if args.plot:
+        print(f"plot: {args.plot}")
+    return 0
+
+
+def _plot(args: argparse.Namespace) -> int:
+    from dataclasses import replace
+    from pathlib import Path
+
+    from virtspec_mi.api import read_result
+    from virtspec_mi.checks import parse_theta_i, parse_wavelengths
+    from virtspec_mi.compare import compare
+    from virtspec_mi.plot import check_figure_path, plot_sweep, select
+
+    path = Path(args.file)
+    against = Path(args.against) if args.against else None
+    default = f"{path.stem}_vs_{against.stem}.png" if against is not None else f"{path.stem}.png"
+    out = check_figure_path(args.out or path.with_name(default))
+    theta_i = parse_theta_i(" ".join(args.theta_i)) if args.theta_i else None
+    wavelengths = parse_wavelengths(" ".join(args.wavelengths)) if args.wavelengths else None
+    result = read_result(path)
+    if against is None:
+        plot_sweep(result, out, quantity=args.quantity, name=path.name, wavelengths=wavelengths, theta_i=theta_i)
+        print(f"plot: {out}")
+        return 0
+    if theta_i is not None and len(theta_i) != 1:
+        raise ValueError(f"--theta-i must be one angle with --against (got {len(theta_i)})")
+    if wavelengths is not None:
+        result = select(result, wavelengths=wavelengths)
+    comparison = compare(result, against, quantity=args.quantity, theta_i=theta_i[0] if theta_i else None,
+                         measurement_uncertainty=args.uncertainty)
+    comparison = replace(comparison, result_name=path.name)
+    comparison.plot(out)
+    print(comparison.summary())
+    print(f"plot: {out}")
     return 0
 
 

@@ -38,7 +38,18 @@ __all__ = [
     "spectral_distribution",
     "multi_spectral_distributions",
     "colorimetry",
+    "MIN_COVERAGE",
+    "coverage",
 ]
+
+MIN_COVERAGE: float = 0.95
+"""
+Least share of the colour-matching weight a spectrum must cover for its colour to be
+reported: the weight is (x̄ + ȳ + z̄)·S(λ) of the observer and illuminant, and a spectrum
+covers the part between its first and last wavelength inside the observer's range
+(400–700 nm covers 99.8 % under D65 and CIE 1931 2°, 420–680 nm 98.0 %, 465–800 nm only
+70.5 %). Below it the colour would rest on colour-science extending the end values.
+"""
 
 DEFAULT_ILLUMINANT: str = "D65"
 DEFAULT_OBSERVER: str = "CIE 1931 2 Degree Standard Observer"
@@ -63,6 +74,9 @@ class Colour:
         Names in ``colour.SDS_ILLUMINANTS`` and ``colour.MSDS_CMFS``.
     wavelengths : ndarray
         The wavelengths used (inside the colour-matching range).
+    coverage : float
+        Share of the colour-matching weight between the first and last wavelength used
+        (see :data:`MIN_COVERAGE`).
     note : str
         Empty, or which wavelengths were left out.
     """
@@ -73,12 +87,14 @@ class Colour:
     illuminant: str
     observer: str
     wavelengths: np.ndarray
+    coverage: float = 1.0
     note: str = ""
 
     def summary(self) -> str:
         lines = [
             f"illuminant {self.illuminant}, observer {self.observer}, "
-            f"{len(self.wavelengths)} wavelengths {self.wavelengths.min():g}-{self.wavelengths.max():g} nm",
+            f"{len(self.wavelengths)} wavelengths {self.wavelengths.min():g}-{self.wavelengths.max():g} nm, "
+            f"covering {self.coverage:.1%} of the colour-matching weight",
             "XYZ  = " + " ".join(f"{v:9.4f}" for v in self.XYZ),
             "Lab  = " + " ".join(f"{v:9.4f}" for v in self.Lab),
             "sRGB = " + " ".join(f"{v:9.4f}" for v in self.sRGB)
@@ -87,6 +103,22 @@ class Colour:
         if self.note:
             lines.append(f"note: {self.note}")
         return "\n".join(lines)
+
+    def as_dict(self) -> dict[str, Any]:
+        """Plain data (JSON-ready): XYZ, Lab, sRGB and its hex, illuminant, observer, wavelengths, coverage, note."""
+
+        clipped = np.clip(self.sRGB, 0, 1)
+        return {
+            "XYZ": self.XYZ.tolist(),
+            "Lab": self.Lab.tolist(),
+            "sRGB": self.sRGB.tolist(),
+            "hex": "#" + "".join(f"{int(round(255 * c)):02x}" for c in clipped),
+            "illuminant": self.illuminant,
+            "observer": self.observer,
+            "wavelengths": self.wavelengths.tolist(),
+            "coverage": float(self.coverage),
+            "note": self.note,
+        }
 
 
 def _theta_column(result: Any, theta_i: float | None) -> int:
@@ -168,6 +200,12 @@ def colorimetry(sd: Any, illuminant: str = DEFAULT_ILLUMINANT, observer: str = D
         raise ValueError(f"colorimetry needs at least two wavelengths within {low:g}-{high:g} nm "
                          f"(got {int(inside.sum())})")
     light = colour.SDS_ILLUMINANTS[illuminant]
+    covered = coverage(wavelengths[inside].min(), wavelengths[inside].max(), cmfs, light)
+    if covered < MIN_COVERAGE:
+        raise ValueError(
+            f"the spectrum covers {wavelengths[inside].min():g}-{wavelengths[inside].max():g} nm, only "
+            f"{covered:.1%} of the colour-matching weight of {observer} under {illuminant} (at least "
+            f"{MIN_COVERAGE:.0%} is needed, e.g. 400-700 nm): measure more wavelengths")
     # colour-science reports every re-sampling it does (ASTM E308 aligns shapes): expected here
     with colour.utilities.suppress_warnings(colour_runtime_warnings=True):
         used = colour.SpectralDistribution(values[inside], wavelengths[inside])
@@ -184,4 +222,14 @@ def colorimetry(sd: Any, illuminant: str = DEFAULT_ILLUMINANT, observer: str = D
         white = colour.XYZ_to_xy(np.asarray(colour.sd_to_XYZ(perfect, cmfs, light)) / 100.0)
     Lab = np.asarray(colour.XYZ_to_Lab(XYZ / 100.0, white), dtype=np.float64)
     sRGB = np.asarray(colour.XYZ_to_sRGB(XYZ / 100.0, illuminant=white), dtype=np.float64)
-    return Colour(XYZ, Lab, sRGB, illuminant, observer, wavelengths[inside], note)
+    return Colour(XYZ, Lab, sRGB, illuminant, observer, wavelengths[inside], covered, note)
+
+
+def coverage(low: float, high: float, cmfs: Any, illuminant: Any) -> float:
+    """Share of the weight (x̄ + ȳ + z̄)·S(λ) of ``cmfs`` under ``illuminant`` within [low, high] nm."""
+
+    wavelengths = np.asarray(cmfs.wavelengths, dtype=np.float64)
+    light = np.interp(wavelengths, np.asarray(illuminant.wavelengths), np.asarray(illuminant.values))
+    weight = np.asarray(cmfs.values, dtype=np.float64).sum(axis=1) * light
+    within = (wavelengths >= low) & (wavelengths <= high)
+    return float(weight[within].sum() / weight.sum())

@@ -51,6 +51,7 @@ def take_readings(
     readings: Sequence[tuple[float, float, float]],
     settings: Settings,
     offsets: Sequence[int] | np.ndarray | None = None,
+    progress: bool | None = False,
 ) -> tuple[Counts, Counts | None]:
     """
     Trace every (wavelength nm, θi, φi) of ``readings``, each with its own independent
@@ -71,7 +72,9 @@ def take_readings(
     method parameters out of range at them (``ValueError``). Before anything is traced,
     the call is held to :data:`~virtspec_mi.checks.MAX_READINGS` readings and
     :data:`~virtspec_mi.checks.MAX_TOTAL_RAYS` rays, and every reading's N (the
-    two-stage N₂ included) to :data:`~virtspec_mi.checks.MAX_RAYS`.
+    two-stage N₂ included) to :data:`~virtspec_mi.checks.MAX_RAYS`. ``progress`` shows
+    the readings traced (per chunk; both stages of ``two-stage``) by the rule of
+    :mod:`virtspec_mi.progress`.
     """
 
     check_readings(len(readings), 0)
@@ -89,11 +92,15 @@ def take_readings(
     traced_readings = [readings[k] for k in traced]
     traced_offsets = None if offsets is None else np.asarray(offsets)[traced]
     pilot = None
-    if settings.adaptive:
-        counts, pilot = _two_stage(instrument, traced_readings, settings, traced_offsets)
-    else:
-        rays = np.full(len(traced), settings.rays_per_reading)
-        counts = _fixed(instrument, traced_readings, settings, rays, traced_offsets)
+    bar = Progress(progress, total=len(traced) * (2 if settings.adaptive else 1), desc="readings")
+    try:
+        if settings.adaptive:
+            counts, pilot = _two_stage(instrument, traced_readings, settings, traced_offsets, bar)
+        else:
+            rays = np.full(len(traced), settings.rays_per_reading)
+            counts = _fixed(instrument, traced_readings, settings, rays, traced_offsets, bar.reach)
+    finally:
+        bar.close()
     back = np.searchsorted(traced, source)
     return counts.map(lambda v: v[back]), None if pilot is None else pilot.map(lambda v: v[back])
 
@@ -141,12 +148,16 @@ def run(
     as one :class:`~virtspec_mi.result.Result` with dims ``("wavelength", "theta_i")``.
 
     ``keyed=False``: one :func:`take_readings` call with consecutive ray ranges (how
-    ``measure`` has always numbered its rays). ``keyed=True``: reading k
+    ``measure`` has always numbered its rays), its bar updated per chunk. ``keyed=True``: reading k
     (k = i_θ·n_λ + i_λ) owns the global ray indices [k·stride, k·stride + rays_k), with
     stride = ``settings.most_rays_per_reading``, so its counts depend on (seed, k) only;
     readings run in batches of about ``chunk_size`` rays, each recorded in
     ``checkpoint`` (a path; see :mod:`virtspec_mi.checkpoint`) and shown by
-    ``progress`` (see :mod:`virtspec_mi.progress`).
+    ``progress`` (see :mod:`virtspec_mi.progress`). A run that resumes from
+    ``checkpoint`` says so on stderr (unless ``progress`` is ``False``). The checkpoint
+    is left in place when the run completes: the caller removes it once the result is
+    safe (:func:`virtspec_mi.checkpoint.remove`), and holds it meanwhile
+    (:func:`virtspec_mi.checkpoint.claim`).
     """
 
     angles = np.asarray(theta_i, dtype=np.float64)
@@ -158,7 +169,7 @@ def run(
     if not keyed:
         start = time.perf_counter()
         counts, pilot = take_readings(
-            instrument, [(w, t, settings.phi_i) for w, t in zip(flat_lam, flat_theta)], settings)
+            instrument, [(w, t, settings.phi_i) for w, t in zip(flat_lam, flat_theta)], settings, progress=progress)
         seconds = time.perf_counter() - start
     else:
         counts, pilot, seconds = _run_keyed(instrument, settings, flat_lam, flat_theta, shared, scene,
@@ -191,10 +202,17 @@ def _run_keyed(instrument: Any, settings: Settings, flat_lam: np.ndarray, flat_t
     per_batch = max(1, settings.chunk_size // stride)
     batches = [np.concatenate(units[i:i + per_batch]) for i in range(0, len(units), per_batch)]
     angles = flat_theta[::n_lam]
-    state = Checkpoint.open(checkpoint, _identity(settings, angles, instrument, scene, shared), size)
+    if settings.adaptive:  # a pilot of n1 rays, then a second batch of at most the stride
+        rays, pilot_rays = (0, stride), (settings.pilot_rays_per_reading,) * 2
+    else:
+        rays, pilot_rays = (settings.rays_per_reading,) * 2, (0, 0)
+    state = Checkpoint.open(checkpoint, _identity(settings, angles, instrument, scene, shared), size,
+                            rays=rays, pilot_rays=pilot_rays, group=n_lam if shared else 1)
     todo = [b for b in (b[~state.done[b]] for b in batches) if len(b)]
     per_unit = n_lam if shared else 1
     bar = Progress(progress, total=sum(len(b) for b in todo) // per_unit)
+    if state.reused:
+        bar.note(f"resumed from {checkpoint}: {state.reused} of {size} readings reused")
     try:
         for batch in todo:
             start = time.perf_counter()
@@ -205,18 +223,19 @@ def _run_keyed(instrument: Any, settings: Settings, flat_lam: np.ndarray, flat_t
             bar.update(len(batch) // per_unit, time.perf_counter() - start)
     finally:
         bar.close()
-    state.finish()
+        state.flush()  # every finished reading is on disk, interrupted or not (saving may be spaced out)
     return state.counts, state.pilot if settings.adaptive else None, state.seconds
 
 
-def measure_reading(instrument: Any, settings: Settings) -> Result:
+def measure_reading(instrument: Any, settings: Settings, progress: bool | None = False) -> Result:
     """
     One reading per wavelength of ``settings`` at its θi on an instrument read from a
     loaded scene: a :class:`~virtspec_mi.result.Result` with the dim ``wavelength``
     (what :func:`virtspec_mi.measure` and the ``spectrophotometer`` integrator return).
+    ``progress``: a bar of the readings traced (see :mod:`virtspec_mi.progress`).
     """
 
-    return run(instrument, settings, [settings.theta_i], keyed=False).squeeze()
+    return run(instrument, settings, [settings.theta_i], keyed=False, progress=progress).squeeze()
 
 
 def _identity(settings: Settings, angles: np.ndarray, instrument: Any, scene: str, shared: bool) -> dict[str, Any]:
@@ -233,7 +252,7 @@ def _identity(settings: Settings, angles: np.ndarray, instrument: Any, scene: st
 
 
 def _fixed(instrument: Any, readings: Sequence[tuple[float, float, float]], settings: Settings,
-           rays: np.ndarray, offsets: np.ndarray | None) -> Counts:
+           rays: np.ndarray, offsets: np.ndarray | None, on_chunk: Any = None) -> Counts:
     """One batched kernel call: reading i gets ``rays[i]`` rays from global index ``offsets[i]``."""
 
     # Dr.Jit loads libLLVM on import: the kernel is imported once Mitsuba is set up
@@ -241,15 +260,15 @@ def _fixed(instrument: Any, readings: Sequence[tuple[float, float, float]], sett
     from virtspec_mi.kernel.tracer import ReadingPlan, tally_readings
 
     plans = [ReadingPlan(w, t, p, int(n)) for (w, t, p), n in zip(readings, rays)]
-    return tally_readings(instrument, plans, settings, offsets)
+    return tally_readings(instrument, plans, settings, offsets, on_chunk)
 
 
 def _two_stage(instrument: Any, readings: Sequence[tuple[float, float, float]], settings: Settings,
-               offsets: np.ndarray | None) -> tuple[Counts, Counts]:
+               offsets: np.ndarray | None, bar: Progress) -> tuple[Counts, Counts]:
     """Pilot batch, N₂ per reading from its counts, fresh second batch (two calls in all)."""
 
     pilot_rays = np.full(len(readings), settings.pilot_rays_per_reading)
-    pilot = _fixed(instrument, readings, settings, pilot_rays, offsets)
+    pilot = _fixed(instrument, readings, settings, pilot_rays, offsets, bar.reach)
     columns = [pilot.reflected, pilot.transmitted] + ([] if settings.joint else [pilot.absorbed])
     second = twostage.stage_two_rays(
         np.stack(columns, axis=1), settings.pilot_rays_per_reading, settings.mu, settings.delta,
@@ -258,4 +277,5 @@ def _two_stage(instrument: Any, readings: Sequence[tuple[float, float, float]], 
     check_rays_needed(int(second.max(initial=1)), f"the two-stage second batch for mu = {shown_value(settings.mu)}, "
                                          f"delta = {shown_value(settings.delta)}")
     stage_two = settings.updated(seed=twostage.stage_two_seed(settings.seed))
-    return _fixed(instrument, readings, stage_two, second, offsets), pilot
+    done = len(readings)  # the second stage's readings follow the pilots' on the bar
+    return _fixed(instrument, readings, stage_two, second, offsets, lambda n: bar.reach(done + n)), pilot

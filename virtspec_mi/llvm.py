@@ -31,6 +31,7 @@ __all__ = [
     "find_libllvm",
     "select_libllvm",
     "check_loaded_llvm",
+    "main",
 ]
 
 MINIMUM_LLVM_MAJOR: int = 17
@@ -143,7 +144,9 @@ def check_loaded_llvm() -> tuple[int, int, int]:
     return version  # type: ignore[return-value]
 
 
-def _main(argv: list[str]) -> int:
+def main(argv: list[str]) -> int:
+    """``find`` or ``check`` (``virtspec llvm …`` and ``make setup`` call it); returns the exit status."""
+
     command = argv[0] if argv else "check"
     if command == "find":
         path = find_libllvm()
@@ -161,9 +164,9 @@ def _main(argv: list[str]) -> int:
             return 1
         print(f"libLLVM {'.'.join(map(str, version))} at {os.environ['DRJIT_LIBLLVM_PATH']}")
         return 0
-    print("usage: python -m virtspec_mi.llvm [find|check]", file=sys.stderr)
+    print("usage: virtspec llvm {find,check}", file=sys.stderr)
     return 2
 
 
 if __name__ == "__main__":
-    sys.exit(_main(sys.argv[1:]))
+    sys.exit(main(sys.argv[1:]))

@@ -1,16 +1,23 @@
 """
-Plots of sweeps with matplotlib (PNG and SVG)
-=============================================
+Plots of results with matplotlib (PNG and SVG)
+==============================================
 
 - :func:`plot_sweep`: a reading against θi (the paper's Fig. 5) or against
   wavelength (a spectrum), one curve per wavelength (resp. per θi) and per sweep,
-  each with the band of its certified tolerance (the μ its rays guarantee; none
-  where a reading is not certified).
+  each with the band of its certified tolerance (the μ' its rays guarantee; none
+  where a reading is not certified). ``wavelengths=`` / ``theta_i=`` pick readings.
 - :func:`plot_densities`: sweeps at successive ray densities N = 10^d side by side
   (Fig. 5), their fluctuation Δ of eq. (24) (Fig. 6a) and their seconds (Fig. 6b).
+- :func:`plot_comparison`: a result over a measured spectrum (a
+  :class:`virtspec_mi.compare.Comparison`) with a panel of the residuals and their
+  combined tolerance.
 
-The figures are built without ``pyplot`` (no display needed); the file suffix picks
-the format (``.png`` or ``.svg``).
+Every figure names what was measured in its title (a name when given, the quantity,
+the beam, θi, the rays and the scene's fingerprint), gives the certified band a
+legend entry, draws markers on sparse grids (≤ :data:`SPARSE` points) and tells every
+curve apart by colour and line style (both cycle; 40 curves are distinct). The
+figures are built without ``pyplot`` (no display needed); the file suffix picks the
+format (``.png`` or ``.svg``).
 
 References
 ----------
@@ -20,14 +27,33 @@ Baranoski et al. (2001), Figs. 5 and 6, eq. (24).
 from __future__ import annotations
 
 import os
+from dataclasses import replace
 from pathlib import Path
 from typing import Any, Sequence
 
 import numpy as np
 
-__all__ = ["FIGURE_SUFFIXES", "check_figure_path", "plot_sweep", "plot_densities"]
+__all__ = [
+    "FIGURE_SUFFIXES",
+    "SPARSE",
+    "check_figure_path",
+    "describe",
+    "select",
+    "curve_style",
+    "plot_sweep",
+    "plot_densities",
+    "plot_comparison",
+]
 
 FIGURE_SUFFIXES: tuple[str, ...] = (".png", ".svg")
+
+SPARSE: int = 20
+"""Curves with at most this many points are drawn with markers."""
+
+_COLOURS = 10  # matplotlib's default "tab10" cycle: C0 … C9
+_LINE_STYLES = ("-", "--", "-.", ":")
+_MARKERS = ("o", "s", "^", "D", "v", "P", "X", "*")
+_BAND = "certified ±μ'"
 
 
 def check_figure_path(path: str | os.PathLike | None) -> Path | None:
@@ -41,7 +67,75 @@ def check_figure_path(path: str | os.PathLike | None) -> Path | None:
     return path
 
 
-def _draw(axes: Any, result: Any, quantity: str, label: str | None) -> None:
+def curve_style(index: int, points: int) -> dict[str, Any]:
+    """
+    Colour, line style and marker of curve ``index`` (0, 1, …) of ``points`` points:
+    colour ``C{index % 10}``, line style cycling so that curves 10 apart differ
+    (``(index + index // 10) % 4``), a marker only on sparse curves.
+    """
+
+    style: dict[str, Any] = {"color": f"C{index % _COLOURS}",
+                             "linestyle": _LINE_STYLES[(index + index // _COLOURS) % len(_LINE_STYLES)]}
+    if points <= SPARSE:
+        style.update(marker=_MARKERS[index % len(_MARKERS)], markersize=4)
+    return style
+
+
+def describe(result: Any, quantity: str = "reflectance", name: str | None = None) -> str:
+    """
+    A two-line title naming what was measured: ``name`` (e.g. a file name) and the
+    scene's fingerprint, then the quantity, beam, θi and rays per reading.
+    """
+
+    s = result.settings
+    angles = np.atleast_1d(result.coords["theta_i"])
+    if s.beam == "diffuse":
+        incidence = "diffuse illumination"
+    else:
+        theta = f"θi = {angles[0]:g}°" if len(angles) == 1 else f"θi = {angles.min():g}–{angles.max():g}°"
+        incidence = f"{s.beam} beam, {theta}" + (f", φi = {s.phi_i:g}°" if s.phi_i else "")
+    low, high = int(np.min(result.rays)), int(np.max(result.rays))
+    rays = f"N = {low:,}" if low == high else f"N = {low:,}–{high:,}"
+    scene = f"scene {result.scene[:19]}…" if result.scene else ""
+    head = " — ".join(filter(None, (name, scene))) or "virtspec-mi result"
+    return f"{head}\n{quantity}, {incidence}, {rays} rays per reading"
+
+
+def select(result: Any, wavelengths: Sequence[float] | None = None, theta_i: Sequence[float] | None = None) -> Any:
+    """
+    The readings of ``result`` at the given wavelengths and/or θi (each must be one of
+    the result's; ``None`` keeps all), as a result with a θi dimension.
+    """
+
+    result = result.as_grid()
+    rows = _indices("wavelengths", result.wavelengths, wavelengths)
+    columns = _indices("theta_i", result.theta_i, theta_i)
+
+    def take(values: np.ndarray) -> np.ndarray:
+        return values[rows][:, columns]
+
+    coords = {**result.coords, "wavelength": result.wavelengths[rows], "theta_i": result.theta_i[columns]}
+    return replace(result, coords=coords, counts=result.counts.map(take),
+                   pilot=None if result.pilot is None else result.pilot.map(take))
+
+
+def _indices(name: str, have: np.ndarray, wanted: Sequence[float] | None) -> np.ndarray:
+    if wanted is None:
+        return np.arange(len(have))
+    indices = []
+    for value in np.atleast_1d(np.asarray(wanted, dtype=np.float64)):
+        match = np.flatnonzero(np.isclose(have, value, rtol=0, atol=1e-6))
+        if not len(match):
+            raise ValueError(f"{name} must be among the result's {name} "
+                             f"({', '.join(f'{v:g}' for v in have[:12])}{' ...' if len(have) > 12 else ''}; "
+                             f"got {value:g})")
+        indices.append(int(match[0]))
+    return np.array(indices)
+
+
+def _draw(axes: Any, result: Any, quantity: str, label: str | None) -> int:
+    """Draw the curves of one result (continuing the axes' style cycle); returns how many."""
+
     result = result.as_grid()
     values = result.quantity(quantity)
     mu = result.certified_mu
@@ -50,41 +144,62 @@ def _draw(axes: Any, result: Any, quantity: str, label: str | None) -> None:
     order = np.argsort(x)
     curves, bands = (values, mu) if by_angle else (values.T, mu.T)  # one row per curve
     names = result.wavelengths if by_angle else result.theta_i
-    unit = "nm" if by_angle else "deg"
-    for name, curve, band in zip(names, curves, bands):
-        text = f"{label + ', ' if label else ''}{'λ' if by_angle else 'θi'} = {name:g} {unit}"
-        line, = axes.plot(x[order], curve[order], lw=1.2, label=text)
+    unit = "nm" if by_angle else "°"
+    first = len(axes.lines)
+    for k, (name, curve, band) in enumerate(zip(names, curves, bands)):
+        text = f"{label + ', ' if label else ''}{'λ' if by_angle else 'θi'} = {name:g}{' ' if by_angle else ''}{unit}"
+        line, = axes.plot(x[order], curve[order], lw=1.2, label=text, **curve_style(first + k, len(x)))
         axes.fill_between(x[order], (curve - band)[order], (curve + band)[order], color=line.get_color(),
                           alpha=0.2, lw=0)
     axes.set_xlabel("θi (degrees)" if by_angle else "wavelength (nm)")
-    axes.set_ylabel(f"{quantity} (band: ± the certified tolerance at δ = {result.interval_delta:g})")
+    axes.set_ylabel(quantity)
+    return len(names)
+
+
+def _legend(axes: Any, delta: float, curves: int, note: str = "", **options: Any) -> None:
+    """All curves when they are few (≤ 12), else a line saying how many; always the certified band."""
+
+    from matplotlib.lines import Line2D
+    from matplotlib.patches import Patch
+
+    handles, labels = axes.get_legend_handles_labels()
+    if curves > 12:
+        handles = [Line2D([], [], color="none")]
+        labels = [f"{curves} curves{note} (colours and line styles cycle)"]
+    handles.append(Patch(facecolor="grey", alpha=0.35, lw=0))
+    labels.append(f"{_BAND} (δ = {delta:g} per reading)")
+    axes.legend(handles, labels, fontsize="small", **options)
 
 
 def plot_sweep(results: Any, path: str | os.PathLike | None = None, *, quantity: str = "reflectance",
-               labels: Sequence[str] | None = None, title: str | None = None) -> Any:
+               labels: Sequence[str] | None = None, title: str | None = None, name: str | None = None,
+               wavelengths: Sequence[float] | None = None, theta_i: Sequence[float] | None = None) -> Any:
     """
-    Plot one or several sweeps and save to ``path`` (``.png``/``.svg``) when given.
+    Plot one or several results and save to ``path`` (``.png``/``.svg``) when given.
 
-    A sweep over several θi is drawn against θi (one curve per wavelength), a sweep at
-    one θi against wavelength. Returns the ``matplotlib.figure.Figure``.
+    A sweep over several θi is drawn against θi (one curve per wavelength), a result
+    at one θi against wavelength. ``wavelengths`` / ``theta_i`` keep only those
+    readings; ``name`` goes into the title (:func:`describe`), ``title`` replaces it.
+    Returns the ``matplotlib.figure.Figure``.
     """
 
     from matplotlib.figure import Figure
 
     path = check_figure_path(path)
     results = [results] if not isinstance(results, (list, tuple)) else list(results)
+    if wavelengths is not None or theta_i is not None:
+        results = [select(r, wavelengths, theta_i) for r in results]
     labels = list(labels) if labels is not None else [None] * len(results)
-    figure = Figure(figsize=(6.4, 4.2), layout="constrained")
+    figure = Figure(figsize=(6.4, 4.4), layout="constrained")
     axes = figure.add_subplot()
-    for result, label in zip(results, labels):
-        _draw(axes, result, quantity, label)
-    results = [r.as_grid() for r in results]
-    if sum(len(r.theta_i if len(r.theta_i) == 1 else r.wavelengths) for r in results) <= 12:
-        axes.legend(fontsize="small")
+    curves = sum(_draw(axes, result, quantity, label) for result, label in zip(results, labels))
+    first = results[0].as_grid()
+    by_angle = len(first.theta_i) > 1 or len(first.wavelengths) == 1
+    names = first.wavelengths if by_angle else first.theta_i
+    note = f", {'λ' if by_angle else 'θi'} = {np.min(names):g}…{np.max(names):g}{' nm' if by_angle else '°'}"
+    _legend(axes, first.interval_delta, curves, note)
     axes.grid(alpha=0.3)
-    s = results[0].settings
-    axes.set_title(title or f"{s.beam} {quantity}, N = {int(results[0].rays.max()):,} rays per reading",
-                   fontsize="medium")
+    axes.set_title(title or describe(first, quantity, name), fontsize="medium")
     if path is not None:
         figure.savefig(path, dpi=110)
     return figure
@@ -103,9 +218,8 @@ def plot_densities(results: Sequence[Any], densities: Sequence[float], deltas: S
     path = check_figure_path(path)
     figure = Figure(figsize=(12, 3.8), layout="constrained")
     curves, fluct, cost = figure.subplots(1, 3)
-    for result, d in zip(results, densities):
-        _draw(curves, result, quantity, f"log N = {d:g}")
-    curves.legend(fontsize="x-small")
+    drawn = sum(_draw(curves, result, quantity, f"log N = {d:g}") for result, d in zip(results, densities))
+    _legend(curves, results[0].interval_delta, drawn)
     curves.set_title("Fig. 5: readings at each ray density", fontsize="medium")
     fluct.plot(list(densities)[1:], list(deltas)[1:], "o-")
     fluct.set_xlabel("log10 N")
@@ -121,3 +235,74 @@ def plot_densities(results: Sequence[Any], densities: Sequence[float], deltas: S
     if path is not None:
         figure.savefig(path, dpi=110)
     return figure
+
+
+def plot_comparison(comparison: Any, path: str | os.PathLike | None = None, *, title: str | None = None,
+                    name: str | None = None) -> Any:
+    """
+    A result over a measured spectrum (``comparison``: a :class:`virtspec_mi.compare.Comparison`):
+    above, the simulated spectrum with its certified band and the measured one (with
+    its uncertainty when known; wavelengths outside the measured range shaded: not
+    compared); below, the residuals simulated − measured with the combined tolerance
+    ±(μ' + u). Saved to ``path`` when given; returns the figure.
+    """
+
+    from matplotlib.figure import Figure
+
+    path = check_figure_path(path)
+    c = comparison
+    figure = Figure(figsize=(6.4, 5.6), layout="constrained")
+    top, bottom = figure.subplots(2, 1, sharex=True, height_ratios=(2.2, 1))
+    x, y, mu = c.simulated_spectrum()
+    line, = top.plot(x, y, lw=1.3, label=f"simulated: {c.result_name}", **curve_style(0, len(x)))
+    top.fill_between(x, y - mu, y + mu, color=line.get_color(), alpha=0.25, lw=0,
+                     label=f"{_BAND} (δ = {c.interval_delta:g} per point)")
+    m = c.spectrum
+    sparse = len(m.wavelengths) <= SPARSE
+    if m.uncertainty is not None and sparse:
+        top.errorbar(m.wavelengths, m.values, yerr=m.uncertainty, capsize=3, lw=1.3,
+                     label=f"measured: {m.source} (± its uncertainty)", **curve_style(1, len(m.wavelengths)))
+    else:
+        measured, = top.plot(m.wavelengths, m.values, lw=1.3, label=f"measured: {m.source}",
+                             **curve_style(1, len(m.wavelengths)))
+        if m.uncertainty is not None:
+            top.fill_between(m.wavelengths, m.values - m.uncertainty, m.values + m.uncertainty, facecolor="none",
+                             edgecolor=measured.get_color(), hatch="///", lw=0, label="measurement uncertainty")
+    for axes in (top, bottom):
+        for k, (low, high) in enumerate(_outside(x, m.wavelengths)):
+            axes.axvspan(low, high, color="0.85", lw=0, zorder=0,
+                         label="not compared (outside the measured range)" if axes is top and k == 0 else None)
+    top.set_ylabel(c.quantity)
+    top.legend(fontsize="small")
+    bottom.axhline(0.0, color="0.3", lw=0.8)
+    tolerance = c.tolerance
+    bottom.fill_between(c.wavelengths, -tolerance, tolerance, color="C0", alpha=0.2, lw=0,
+                        label="combined tolerance ±(μ' + u)" if np.any(c.measurement_uncertainty) else _BAND)
+    bottom.plot(c.wavelengths, c.residuals, lw=1.2, color="C3",
+                **({"marker": "o", "markersize": 4} if len(c.wavelengths) <= SPARSE else {}),
+                label=f"simulated − measured: {c.points_within} of {int(c.certified.sum())} within")
+    bottom.set_xlabel("wavelength (nm)")
+    bottom.set_ylabel("residual")
+    reach = float(np.nanmax(np.concatenate([np.abs(c.residuals), tolerance, [1e-6]])))
+    bottom.set_ylim(-1.15 * reach, 2.0 * reach)  # room above the data for the legend
+    bottom.legend(fontsize="small", loc="upper center", ncols=2)
+    for axes in (top, bottom):
+        axes.grid(alpha=0.3)
+    delta_e = f"ΔE2000 = {c.delta_E:.2f} ({c.illuminant})" if not c.delta_E_note else "ΔE2000 not computed"
+    top.text(0.01, 0.98, f"RMSE = {c.rmse:.4f}, {delta_e}", transform=top.transAxes, va="top", fontsize="small")
+    shown = select(c.result, theta_i=[c.theta_i])  # the angle compared
+    top.set_title(title or describe(shown, c.quantity, name or c.result_name), fontsize="medium")
+    if path is not None:
+        figure.savefig(path, dpi=110)
+    return figure
+
+
+def _outside(x: np.ndarray, measured: np.ndarray) -> list[tuple[float, float]]:
+    """The spans of ``x`` beyond the measured range (at most one on each side)."""
+
+    spans = []
+    if x.min() < measured.min():
+        spans.append((float(x.min()), float(measured.min())))
+    if x.max() > measured.max():
+        spans.append((float(measured.max()), float(x.max())))
+    return spans

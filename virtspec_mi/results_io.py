@@ -18,6 +18,12 @@ Each round-trips exactly (the counts are the data; everything else is derived).
 :func:`write_spectra_csv` / :func:`read_spectra_csv` write and read R, T and A at one θi
 in colour-science's CSV spectral format.
 
+Every file is written atomically: into a temporary file beside it (``.NAME.*.tmp``),
+flushed to disk, then renamed onto the name. A failed or interrupted write (a full
+disk, a directory of that name, Ctrl-C) leaves the old file — or none — and no
+temporary; readers and concurrent writers never see a partial file.
+:func:`check_output` refuses, before any work, a path that cannot become a file.
+
 References
 ----------
 colour-science ``colour.io`` CSV spectral files; xarray / NetCDF conventions.
@@ -25,16 +31,19 @@ colour-science ``colour.io`` CSV spectral files; xarray / NetCDF conventions.
 
 from __future__ import annotations
 
-import io
 import json
 import os
+import uuid
+from contextlib import contextmanager
 from pathlib import Path
-from typing import Any
+from typing import Any, Iterator
 
+import numpy as np
 
 __all__ = [
     "SUFFIXES",
     "result_format",
+    "check_output",
     "csv_text",
     "write",
     "read",
@@ -49,28 +58,52 @@ SUFFIXES: tuple[str, ...] = (".nc", ".csv", ".json")
 _CSV_HEADER = "# virtspec-mi result "
 
 
-def write(dataset: Any, plain: dict[str, Any], path: str | os.PathLike) -> Path:
-    """Write a result (its ``dataset`` and its ``plain`` data) to ``path``; the suffix picks the format."""
+def write(result: Any, path: str | os.PathLike) -> Path:
+    """
+    Write ``result`` to ``path``; the suffix picks the format, and only what it needs is
+    built: ``result.to_dataset()`` for ``.nc`` and ``.csv``, ``result.as_dict()`` for ``.json``.
+    """
 
     path = Path(path)
     suffix = result_format(path)
-    if suffix == ".nc":
-        dataset.to_netcdf(path, engine="netcdf4")
-    elif suffix == ".json":
-        path.write_text(json.dumps(plain, indent=1))
-    else:
-        path.write_text(csv_text(dataset))
+    with _atomic(path) as temporary:
+        if suffix == ".nc":
+            result.to_dataset().to_netcdf(temporary, engine="netcdf4")
+        elif suffix == ".json":
+            temporary.write_text(json.dumps(result.as_dict(), indent=1))
+        else:
+            temporary.write_text(csv_text(result.to_dataset()))
+    return path
+
+
+def check_output(path: str | os.PathLike, name: str = "out") -> Path:
+    """
+    ``path`` as a ``Path`` when a result file can be written there (a known suffix, an
+    existing directory, not itself a directory), else ``ValueError`` naming ``name``.
+    """
+
+    path = Path(path)
+    result_format(path)
+    if path.is_dir():
+        raise ValueError(f"{name} {path} is a directory; give a file path")
+    if not path.parent.exists():
+        raise ValueError(f"{name} {path} cannot be written: directory {path.parent} does not exist")
+    if not path.parent.is_dir():
+        raise ValueError(f"{name} {path} cannot be written: {path.parent} is not a directory")
     return path
 
 
 def csv_text(dataset: Any) -> str:
-    """The CSV form of a result's dataset: the attribute header line, then one row per reading."""
+    """
+    The CSV form of a result's dataset: the attribute header line, then one row per
+    reading (floats in their shortest exact form, NaN as an empty field). Linear in the
+    cells, and column by column (no Python call per cell but the float's ``repr``).
+    """
 
-    buffer = io.StringIO()
-    buffer.write(_CSV_HEADER + json.dumps(dataset.attrs) + "\n")
     frame = dataset.to_dataframe().reset_index()
-    frame.to_csv(buffer, index=False, lineterminator="\n", float_format=repr)
-    return buffer.getvalue()
+    columns = [_csv_fields(frame[name].to_numpy()) for name in frame.columns]
+    lines = [_CSV_HEADER + json.dumps(dataset.attrs), ",".join(map(str, frame.columns)), *map(",".join, zip(*columns))]
+    return "\n".join(lines) + "\n"
 
 
 def read(path: str | os.PathLike) -> tuple[str, Any]:
@@ -131,7 +164,8 @@ def write_spectra_csv(result: Any, path: str | os.PathLike, theta_i: float | Non
     msds = result.to_msds(theta_i)
     sds = {label: colour.SpectralDistribution(msds.values[:, k], msds.wavelengths, name=label)
            for k, label in enumerate(msds.labels)}
-    colour.write_sds_to_csv_file(sds, str(path))
+    with _atomic(Path(path)) as temporary:
+        colour.write_sds_to_csv_file(sds, str(temporary))
     return Path(path)
 
 
@@ -157,3 +191,56 @@ def result_format(path: str | os.PathLike) -> str:
     if suffix not in SUFFIXES:
         raise ValueError(f"out must end in one of {', '.join(SUFFIXES)} (got {path.name!r})")
     return suffix
+
+
+def _csv_fields(values: np.ndarray) -> list[str]:
+    """
+    One CSV column: floats as Python's shortest exact ``repr`` (NaN: empty), other values
+    as ``str``. Not numpy's or pandas' formatting: it follows numpy's print options, and
+    colour-science sets the legacy ones (12 significant digits) when it is imported.
+    """
+
+    if values.dtype.kind != "f":
+        return list(map(str, values.tolist()))
+    fields = list(map(repr, values.astype(np.float64).tolist()))
+    for k in np.flatnonzero(np.isnan(values)).tolist():
+        fields[k] = ""
+    return fields
+
+
+@contextmanager
+def _atomic(path: Path) -> Iterator[Path]:
+    """
+    A fresh temporary path beside ``path`` to write; when the block ends the file is
+    flushed to disk and renamed onto ``path`` (one step), or, if the block fails, removed.
+    """
+
+    temporary = path.with_name(f".{path.name}.{uuid.uuid4().hex[:12]}.tmp")
+    os.close(os.open(temporary, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666))  # the umask's permissions
+    try:
+        yield temporary
+        _flush(temporary)
+        os.replace(temporary, path)
+    except BaseException:
+        temporary.unlink(missing_ok=True)
+        raise
+    _flush_directory(path.parent)
+
+
+def _flush(path: Path) -> None:
+    """Flush a written file to disk (a failure, e.g. a full disk, raises ``OSError``)."""
+
+    handle = os.open(path, os.O_RDONLY)
+    try:
+        os.fsync(handle)
+    finally:
+        os.close(handle)
+
+
+def _flush_directory(path: Path) -> None:
+    """Flush a directory's entries (a rename in it) to disk, where the system allows it."""
+
+    try:
+        _flush(path)
+    except OSError:  # not every system opens or syncs directories
+        pass

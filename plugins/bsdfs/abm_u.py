@@ -28,42 +28,7 @@ k   interface                       e_DA   e_DB   e_UB   e_UA   absorbing slab
 
 Parameters
 ----------
-thickness : float, default 2.04e-4
-    Whole-leaf thickness h in m (> 0).
-mesophyll_fraction : float, default 0.8
-    Fraction f_m of the leaf thickness that is mesophyll, 0 < f_m ≤ 1; d_m = f_m · h.
-chlorophyll_a, chlorophyll_b : float, default 2.895146, 0.79866
-    Chlorophyll a and b per unit mesophyll volume, kg m⁻³ (= 1000 × the NPSG form's
-    g cm⁻³), ≥ 0. They share one specific absorption coefficient.
-carotenoids : float, default 0.658895
-    Carotenoids, kg m⁻³, ≥ 0.
-protein : float, default 53.08714
-    Protein, kg m⁻³, ≥ 0.
-cellulose, lignin : float, default 53.18709, 6.05853
-    Cellulose and lignin, kg m⁻³, ≥ 0 (the NPSG online form's split; the sample file
-    has 0 + 59.245619, the same sum; lignin uses the cellulose coefficient).
-cuticle_aspect_ratio : float, default 10
-    σ_cu, cuticle undulations (lobe exponent; lower = more diffuse), > 0 (NPSG: 1–50).
-epidermis_aspect_ratio : float, default 5
-    σ_ep, epidermal cell caps, > 0.
-spongy_aspect_ratio : float, default 5
-    σ_sp, mesophyll cell caps, > 0.
-sieve_detour : boolean, default true
-    Sieve and detour effects (Baranoski & Eng 2007; the NPSG default): the absorption
-    test uses the path t / cos(cos θ); false = plain Beer–Lambert, t / cos θ.
-side : string, default "adaxial"
-    Leaf surface facing the specimen's upper side (+z), where the instrument's light
-    arrives: ``adaxial`` or ``abaxial`` (the leaf turned over). Reflectance is always
-    the light leaving on the lit side.
-lookup : string, default "step"
-    Spectral lookup on the 5 nm data grid: ``step`` = ⌊(λ − 400)/5⌋ as the NPSG C++
-    reference, ``linear`` = interpolation (NPSG MATLAB).
-data_dir : string, default ""
-    Directory of the NPSG data files; empty = the environment variable
-    ``VIRTSPEC_LEAF_DATA`` (see :mod:`virtspec_mi.leaf_data`).
-max_steps : integer, default 100000
-    Cap on interface events per walk; a walk reaching it is counted in
-    ``Result.capped`` (never in R, T or A).
+{parameters}
 
 Defaults: corn, LOPEX 0141/0142 (NPSG online ABM-U model, abm.md §2).
 
@@ -76,24 +41,14 @@ Baranoski & Eng (2007), IEEE TGRS 45(8):2593–2599; NPSG reference C++
 
 from __future__ import annotations
 
-from virtspec_mi.plugins.bsdfs.abm_walk import AIR, CUTICLE, MESOPHYLL, ABMLeaf, Interface
+from virtspec_mi.plugins.bsdfs.abm_walk import AIR, CUTICLE, MESOPHYLL, ABMLeaf, Interface, leaf_defaults, parameter_docs
 
 __all__ = ["ABMU", "CORN"]
 
-CORN: dict[str, float] = {
-    "thickness": 2.04e-4,
-    "mesophyll_fraction": 0.8,
-    "chlorophyll_a": 2.895146,
-    "chlorophyll_b": 0.79866,
-    "carotenoids": 0.658895,
-    "protein": 53.08714,
-    "cellulose": 53.18709,
-    "lignin": 6.05853,
-    "cuticle_aspect_ratio": 10.0,
-    "epidermis_aspect_ratio": 5.0,
-    "spongy_aspect_ratio": 5.0,
-}
+CORN: dict[str, float] = leaf_defaults(1)
 """Corn (LOPEX 0141/0142) parameters in SI units (abm.md §2)."""
+
+__doc__ = __doc__.replace("{parameters}", parameter_docs(CORN))  # the rows are written once, in abm_walk
 
 _CU, _EP, _SP = "cuticle_aspect_ratio", "epidermis_aspect_ratio", "spongy_aspect_ratio"
 

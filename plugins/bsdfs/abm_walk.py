@@ -52,6 +52,7 @@ Baranoski & Rokne (1997), CGF 16(3); Baranoski (2006), RSE 100:335–347; Barano
 from __future__ import annotations
 
 import math
+import textwrap
 from typing import Any, NamedTuple
 
 import drjit as dr
@@ -91,6 +92,81 @@ AIR, CUTICLE, MESOPHYLL, ANTIDERMAL = 0, 1, 2, 3
 WALKING, EXIT_TOP, EXIT_BOTTOM, ABSORBED, CAPPED = 0, 1, 2, 3, 4
 MAX_LOBE_TRIES: int = 1000
 """Rejected Warn-lobe samples after which a walk is reported capped (P ≈ 2⁻¹⁰⁰⁰ for a valid ray)."""
+
+
+PARAMETER_DOCS: tuple[tuple[str, str, Any, str], ...] = (
+    # name, type, default (None: the leaf's, from LEAF_DEFAULTS), meaning
+    ("thickness", "float", None, "Whole-leaf thickness h in m (> 0)."),
+    ("mesophyll_fraction", "float", None,
+     "Fraction f_m of the leaf thickness that is mesophyll, 0 < f_m ≤ 1; d_m = f_m · h."),
+    ("chlorophyll_a", "float", None, "Chlorophyll a per unit mesophyll volume, kg m⁻³ (= 1000 × the NPSG "
+                                     "form's g cm⁻³), ≥ 0."),
+    ("chlorophyll_b", "float", None, "Chlorophyll b, kg m⁻³, ≥ 0 (it shares chlorophyll a's coefficient)."),
+    ("carotenoids", "float", None, "Carotenoids, kg m⁻³, ≥ 0."),
+    ("protein", "float", None, "Protein, kg m⁻³, ≥ 0 (the NPSG online form's 0.078059 g cm⁻³ for soybean "
+                               "is a typo, abm.md §1.10)."),
+    ("cellulose", "float", None, "Cellulose, kg m⁻³, ≥ 0 (corn: the NPSG online form's split of the sample "
+                                 "file's 0 + 59.245619, the same sum)."),
+    ("lignin", "float", None, "Lignin, kg m⁻³, ≥ 0 (it uses the cellulose coefficient)."),
+    ("cuticle_aspect_ratio", "float", None,
+     "σ_cu, cuticle undulations (lobe exponent; lower = more diffuse), > 0 (NPSG: 1–50)."),
+    ("epidermis_aspect_ratio", "float", None, "σ_ep, epidermal cell caps, > 0."),
+    ("palisade_aspect_ratio", "float", None, "σ_pa, palisade cell caps, > 0."),
+    ("spongy_aspect_ratio", "float", None, "σ_sp, spongy mesophyll cell caps (ABM-U: all mesophyll), > 0."),
+    ("sieve_detour", "boolean", "true", "Sieve and detour effects (Baranoski & Eng 2007; the NPSG default): "
+                                         "the absorption test uses the path t / cos(cos θ); false = plain "
+                                         "Beer–Lambert, t / cos θ."),
+    ("side", "string", '"adaxial"', "Leaf surface facing the specimen's upper side (+z), where the "
+                                     "instrument's light arrives: ``adaxial`` or ``abaxial`` (the leaf turned "
+                                     "over). Reflectance is always the light leaving on the lit side."),
+    ("lookup", "string", '"step"', "Spectral lookup on the 5 nm data grid: ``step`` = ⌊(λ − 400)/5⌋ as the "
+                                    "NPSG C++ reference (551 nm reads the 550 nm data), ``linear`` = "
+                                    "interpolation (NPSG MATLAB)."),
+    ("data_dir", "string", '""', "Directory of the NPSG data files; empty = the environment variable "
+                                  "``VIRTSPEC_LEAF_DATA`` (see :mod:`virtspec_mi.leaf_data`)."),
+    ("max_steps", "integer", "100000", "Cap on interface events per walk; a walk reaching it is counted in "
+                                        "``Result.capped`` (never in R, T or A). The longest soybean walks "
+                                        "are ≈ 200 events."),
+)
+"""Every parameter of the ABM leaf plugins: name, type, default and meaning, written once."""
+
+
+def parameter_docs(defaults: dict[str, float]) -> str:
+    """The Parameters section of an ABM plugin's docstring, with that leaf's ``defaults``."""
+
+    lines = []
+    for name, kind, default, meaning in PARAMETER_DOCS:
+        if default is None and name not in defaults:
+            continue
+        shown = f"{defaults[name]:.10g}" if default is None else default
+        lines.append(f"{name} : {kind}, default {shown}")
+        lines.extend("    " + line for line in textwrap.wrap(meaning, 84))
+    return "\n".join(lines)
+
+
+LEAF_DEFAULTS: tuple[tuple[str, float, float | None], ...] = (
+    # parameter               soybean (ABM-B)  corn (ABM-U)   SI units, abm.md §2
+    ("thickness",              1.66e-4,         2.04e-4),
+    ("mesophyll_fraction",     0.5,             0.8),
+    ("chlorophyll_a",          3.9775,          2.895146),
+    ("chlorophyll_b",          1.1613,          0.79866),
+    ("carotenoids",            1.1323,          0.658895),
+    ("protein",                78.7059,         53.08714),
+    ("cellulose",              37.7565,         53.18709),
+    ("lignin",                 10.7441,         6.05853),
+    ("cuticle_aspect_ratio",   5.0,             10.0),
+    ("epidermis_aspect_ratio", 5.0,             5.0),
+    ("palisade_aspect_ratio",  1.0,             None),
+    ("spongy_aspect_ratio",    5.0,             5.0),
+)
+"""Default parameters of the two leaves: soybean (LOPEX 0219/0220, ``abm_b``) and corn
+(LOPEX 0141/0142, ``abm_u``; no palisade layer), one row per parameter."""
+
+
+def leaf_defaults(column: int) -> dict[str, float]:
+    """The defaults of one leaf of :data:`LEAF_DEFAULTS` (0: soybean, 1: corn), in table order."""
+
+    return {name: values[column] for name, *values in LEAF_DEFAULTS if values[column] is not None}
 
 
 class Interface(NamedTuple):

@@ -47,7 +47,7 @@ Baranoski et al. (2001), eqs. (2)–(4), Sect. 3.2.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, Callable
 
 import drjit as dr
 import mitsuba as mi
@@ -89,7 +89,8 @@ class ReadingPlan:
 
 
 def tally_readings(
-    instrument: Any, plans: list[ReadingPlan], settings: Settings, offsets: Any = None
+    instrument: Any, plans: list[ReadingPlan], settings: Settings, offsets: Any = None,
+    on_chunk: Callable[[int], None] | None = None,
 ) -> Counts:
     """
     Trace every reading of ``plans`` and return their exact :class:`~virtspec_mi.counts.Counts`
@@ -102,7 +103,8 @@ def tally_readings(
     overlap. The readings' rays are packed into lanes in list order and cut into chunks
     of at most ``settings.chunk_size`` rays (never straddling a 2³² boundary of the
     global index); each chunk runs as one kernel, so memory stays bounded and counts do
-    not depend on chunking.
+    not depend on chunking. ``on_chunk`` (optional) is called after every chunk with the
+    number of readings completed so far.
     """
 
     for plan in plans:
@@ -123,6 +125,8 @@ def tally_readings(
         )
         kernel.run(first, size, slots, starts, offsets, counts)
         first += size
+        if on_chunk is not None:  # how many readings are complete (for a progress bar)
+            on_chunk(int(np.searchsorted(starts[1:], first, side="right")))
     return counts
 
 

@@ -50,7 +50,7 @@ except ImportError:  # not a POSIX system: checkpoints are not locked
 
 __all__ = ["CheckpointError", "Checkpoint", "checkpoint_for", "claim", "remove"]
 
-_FORMAT = "virtspec-mi sweep checkpoint 2"
+_FORMAT = "virtspec-mi sweep checkpoint 3"  # 3: invalid_directions counted
 _SAVE_EVERY = 10.0  # save again once the time since the last save is this many times what it took
 _SUFFIX = ".partial.json"
 _LOCK_SUFFIX = ".lock"

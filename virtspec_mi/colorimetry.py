@@ -121,25 +121,13 @@ class Colour:
         }
 
 
-def _theta_column(result: Any, theta_i: float | None) -> int:
-    angles = np.asarray(result.theta_i, dtype=np.float64)
-    if theta_i is None:
-        if len(angles) != 1:
-            raise ValueError(f"theta_i must be given for a sweep over several angles (one of {angles.tolist()})")
-        return 0
-    matches = np.flatnonzero(np.isclose(angles, float(theta_i), rtol=0, atol=1e-9))
-    if not len(matches):
-        raise ValueError(f"theta_i must be one of the sweep's angles {angles.tolist()} (got {theta_i:g})")
-    return int(matches[0])
-
-
 def spectral_distribution(result: Any, quantity: str = "reflectance", theta_i: float | None = None) -> Any:
     """One quantity of a sweep at one θi (optional for a one-angle sweep) as a ``colour.SpectralDistribution``."""
 
     import colour
 
     result = result.as_grid()
-    column = _theta_column(result, theta_i)
+    column = result.angle_index(theta_i)
     if len(result.wavelengths) < 2:
         raise ValueError(f"a spectrum needs at least two wavelengths (the sweep has {len(result.wavelengths)})")
     values = result.quantity(quantity)[:, column]
@@ -155,7 +143,7 @@ def multi_spectral_distributions(result: Any, theta_i: float | None = None) -> A
     import colour
 
     result = result.as_grid()
-    column = _theta_column(result, theta_i)
+    column = result.angle_index(theta_i)
     order = np.argsort(result.wavelengths)
     values = np.stack([result.quantity(q)[:, column][order] for q in QUANTITIES], axis=1)
     return colour.MultiSpectralDistributions(values, np.asarray(result.wavelengths)[order], labels=QUANTITIES,

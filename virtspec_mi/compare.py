@@ -54,7 +54,7 @@ import numpy as np
 
 from virtspec_mi.colorimetry import DEFAULT_ILLUMINANT, DEFAULT_OBSERVER, Colour, colorimetry
 from virtspec_mi.counts import QUANTITIES
-from virtspec_mi.result import Result
+from virtspec_mi.result import Result, plain_data
 
 __all__ = ["MeasuredSpectrum", "Comparison", "read_measured", "compare", "MEASURED_SUFFIXES"]
 
@@ -192,7 +192,7 @@ def _is_result_csv(path: Path) -> bool:
 
 def _from_result(result: Result, quantity: str, theta_i: float | None, source: str) -> MeasuredSpectrum:
     grid = result.as_grid()
-    column = _column(grid, theta_i)
+    column = grid.angle_index(theta_i)
     mu = grid.certified_mu[:, column]
     if np.any(np.isnan(mu)):
         raise ValueError(f"measured result {source} is not certified (NaN certified_mu): no uncertainty to use")
@@ -423,7 +423,7 @@ class Comparison:
         """The result's whole spectrum at θi, sorted: (wavelengths, values, certified_mu), left-out points included."""
 
         grid = self.result.as_grid()
-        column = _column(grid, self.theta_i)
+        column = grid.angle_index(self.theta_i)
         order = np.argsort(grid.wavelengths, kind="stable")
         return (np.asarray(grid.wavelengths, dtype=np.float64)[order], grid.quantity(self.quantity)[order, column],
                 grid.certified_mu[order, column])
@@ -481,11 +481,7 @@ class Comparison:
     def as_dict(self) -> dict[str, Any]:
         """Every figure by name as plain data (JSON-ready; NaN as ``None``)."""
 
-        def plain(values: Any) -> Any:
-            values = np.asarray(values)
-            if values.dtype.kind == "f":
-                return np.where(np.isnan(values), None, values).tolist()
-            return values.tolist()
+        plain = plain_data
 
         return {
             "quantity": self.quantity,
@@ -577,7 +573,7 @@ def compare(
     if measurement_uncertainty is not None:
         spectrum = spectrum.with_uncertainty(measurement_uncertainty)
     grid = result.as_grid()
-    column = _column(grid, theta_i)
+    column = grid.angle_index(theta_i)
     order = np.argsort(grid.wavelengths, kind="stable")
     wavelengths = np.asarray(grid.wavelengths, dtype=np.float64)[order]
     low, high = spectrum.wavelengths[0], spectrum.wavelengths[-1]
@@ -647,20 +643,6 @@ def _result_of(result: Any) -> tuple[Result, str]:
 
         return read_result(result), Path(result).name
     raise ValueError(f"result must be a virtspec_mi.Result or a result file (got {type(result).__name__})")
-
-
-def _column(grid: Result, theta_i: float | None) -> int:
-    """The θi column of a grid result (``theta_i`` may be left out for one angle)."""
-
-    angles = np.asarray(grid.theta_i, dtype=np.float64)
-    if theta_i is None:
-        if len(angles) != 1:
-            raise ValueError(f"theta_i must be given for a result over several angles (one of {angles.tolist()})")
-        return 0
-    matches = np.flatnonzero(np.isclose(angles, float(theta_i), rtol=0, atol=1e-9))
-    if not len(matches):
-        raise ValueError(f"theta_i must be one of the result's angles {angles.tolist()} (got {theta_i:g})")
-    return int(matches[0])
 
 
 def _round_up(value: float, digits: int = 3) -> float:

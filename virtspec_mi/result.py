@@ -41,13 +41,22 @@ from virtspec_mi.geometry import InstrumentGeometry, backlit_fraction
 from virtspec_mi.intervals import clopper_pearson
 from virtspec_mi.settings import Settings
 
-__all__ = ["Result"]
+__all__ = ["Result", "plain_data"]
 
 _PARTS = ("specular_reflectance", "diffuse_reflectance", "regular_transmittance", "diffuse_transmittance")
 
 
 def _counts(name: str, doc: str) -> property:
     return property(lambda self: getattr(self.counts, name), doc=doc)
+
+
+def plain_data(values: Any) -> Any:
+    """An array as JSON-ready nested lists, NaN as ``None`` (JSON has no NaN)."""
+
+    values = np.asarray(values)
+    if values.dtype.kind == "f":
+        return np.where(np.isnan(values), None, values).tolist()
+    return values.tolist()
 
 
 def _round_up(value: float, digits: int = 3) -> float:
@@ -332,6 +341,22 @@ class Result:
 
     # -- views -------------------------------------------------------------------------
 
+    def angle_index(self, theta_i: float | None = None) -> int:
+        """
+        The index of ``theta_i`` among the result's angles (``None``: the only one);
+        ``ValueError`` naming the angles otherwise.
+        """
+
+        angles = np.atleast_1d(np.asarray(self.coords["theta_i"], dtype=np.float64))
+        if theta_i is None:
+            if len(angles) != 1:
+                raise ValueError(f"theta_i must be given for a result over several angles (one of {angles.tolist()})")
+            return 0
+        matches = np.flatnonzero(np.isclose(angles, float(theta_i), rtol=0, atol=1e-9))
+        if not len(matches):
+            raise ValueError(f"theta_i must be one of the result's angles {angles.tolist()} (got {theta_i:g})")
+        return int(matches[0])
+
     def as_grid(self) -> "Result":
         """The same result with θi as a dimension (a single reading becomes a one-angle grid)."""
 
@@ -450,12 +475,7 @@ class Result:
         Arrays are nested lists over :attr:`dims`. :meth:`from_dict` reads it back.
         """
 
-        def plain(values: Any) -> Any:
-            values = np.asarray(values)
-            if values.dtype.kind == "f":
-                return np.where(np.isnan(values), None, values).tolist()
-            return values.tolist()
-
+        plain = plain_data
         return {
             "format": "virtspec-mi result 1",
             "dims": list(self.dims),

@@ -186,3 +186,22 @@ def test_every_subcommand_has_a_description_and_an_example(command):
         assert "hemispherical-hemispherical" in text and "default: the scene's" in text
     if command == "colour":
         assert "absorptance" in text
+
+
+@pytest.mark.parametrize("args, message", [
+    (["sweep", "SCENE", "--theta-i", "0", "--densities", "inf"], "densities must satisfy 0 <= log10 N <= 9.63"),
+    (["sweep", "SCENE", "--theta-i", "0", "--densities", "nan"], "densities must satisfy"),
+    (["sweep", "SCENE", "--theta-i", "0", "--densities", "1e300"], "densities must satisfy"),
+    (["colour", "SCENE"], "file must end in one of .nc, .csv, .json (a virtspec-mi result file"),
+    (["measure", "DIRECTORY"], "is a directory; give a Mitsuba XML scene file"),
+    (["measure", "MISSPELT"], "'thetai' is not a setting: did you mean 'theta_i'?"),
+])
+def test_bad_input_gets_one_line_that_names_it(scenes_dir, tmp_path, args, message):
+    misspelt = tmp_path / "misspelt.xml"
+    misspelt.write_text((scenes_dir / "diamond_conical.xml").read_text().replace(
+        '<float name="theta_i"', '<float name="thetai"'))
+    where = {"SCENE": str(scenes_dir / "diamond_collimated.xml"), "DIRECTORY": str(tmp_path),
+             "MISSPELT": str(misspelt)}
+    result = virtspec(*[where.get(a, a) for a in args])
+    assert result.returncode == 1 and result.stderr.startswith("virtspec: error: "), result.stderr
+    assert message in result.stderr and "Traceback" not in result.stderr

@@ -259,6 +259,7 @@ def _sweep(args: argparse.Namespace) -> int:
 
     if given_rays is not None:
         raise ValueError("--rays and --densities exclude each other (densities set N = 10^d)")
+    _check_densities(args.densities)
     # Fig. 6b: time linear in N. The first sweep compiles the kernel (Dr.Jit caches it for every
     # N): run it once at the smallest density first, so no density's seconds include compilation.
     warm_up = sweep(args.scene, rays=int(round(10.0 ** min(args.densities))), **{**kwargs, "progress": False})
@@ -277,6 +278,20 @@ def _sweep(args: argparse.Namespace) -> int:
     if args.plot:
         plot_densities(results, args.densities, deltas, args.plot)
     return 0
+
+
+def _check_densities(densities: Sequence[float]) -> None:
+    """Each log10 N of ``--densities`` must give 1 <= N = 10^d <= 2**32 - 1 rays per reading."""
+
+    import math
+
+    from virtspec_mi.checks import MAX_RAYS
+
+    highest = math.log10(MAX_RAYS)
+    for density in densities:
+        if not 0.0 <= density <= highest:
+            raise ValueError(f"densities must satisfy 0 <= log10 N <= {highest:.2f} (N = 10^d rays per reading, "
+                             f"at most 2**32 - 1; got {density:g})")
 
 
 def _colour(args: argparse.Namespace) -> int:

@@ -114,7 +114,7 @@ def read(path: str | os.PathLike) -> tuple[str, Any]:
     """
 
     path = Path(path)
-    suffix = result_format(path)
+    suffix = result_format(path, "file")
     if not path.is_file():
         raise ValueError(f"result file not found: {path}")
     if suffix == ".nc":
@@ -183,13 +183,17 @@ def read_spectra_csv(path: str | os.PathLike) -> dict[str, Any]:
         raise ValueError(f"could not read colour-science CSV spectra {path}: {error}") from None
 
 
-def result_format(path: str | os.PathLike) -> str:
-    """The result format of ``path`` by its suffix (``.nc``, ``.csv``, ``.json``), else ``ValueError``."""
+def result_format(path: str | os.PathLike, name: str = "out") -> str:
+    """
+    The result format of ``path`` by its suffix (``.nc``, ``.csv``, ``.json``), else
+    ``ValueError`` naming ``name`` (``out`` for a file to write, ``file`` for one to read).
+    """
 
     path = Path(path)
     suffix = path.suffix.lower()
     if suffix not in SUFFIXES:
-        raise ValueError(f"out must end in one of {', '.join(SUFFIXES)} (got {path.name!r})")
+        what = "" if name == "out" else " (a virtspec-mi result file: a sweep, a reading or `measure --json` output)"
+        raise ValueError(f"{name} must end in one of {', '.join(SUFFIXES)}{what} (got {path.name!r})")
     return suffix
 
 

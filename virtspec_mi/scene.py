@@ -17,8 +17,10 @@ Baranoski et al. (2001), Sect. 5.1 (the instrument's dimensions).
 
 from __future__ import annotations
 
+import difflib
 import hashlib
 import os
+import re
 from dataclasses import asdict
 from pathlib import Path
 from typing import Any
@@ -33,6 +35,7 @@ from virtspec_mi.geometry import (
 )
 from virtspec_mi.instrument import EMITTER_ID, SPECIMEN_ID, Instrument, SceneError, read_instrument
 from virtspec_mi.runtime import mitsuba
+from virtspec_mi.settings import SETTING_NAMES
 
 __all__ = ["load_scene", "find_instrument", "instrument_scene", "placeholder_sensor", "scene_fingerprint"]
 
@@ -46,6 +49,8 @@ def load_scene(scene: Any) -> Any:
     try:
         if isinstance(scene, (str, os.PathLike)):
             path = Path(scene)
+            if path.is_dir():
+                raise SceneError(f"scene {path} is a directory; give a Mitsuba XML scene file")
             if not path.is_file():
                 raise SceneError(f"scene file not found: {path}")
             return mi.load_file(str(path))
@@ -55,7 +60,7 @@ def load_scene(scene: Any) -> Any:
     except SceneError:
         raise
     except Exception as error:  # Mitsuba raises RuntimeError/ValueError with its parser text
-        raise SceneError(f"could not load scene {_describe(scene)}: {_clean(error)}") from error
+        raise SceneError(f"could not load scene {_describe(scene)}: {_clean(error)}{_suggestion(error)}") from error
     raise SceneError(f"scene must be an XML path, a dict or a mitsuba Scene (got {type(scene).__name__})")
 
 
@@ -145,3 +150,17 @@ def _describe(scene: Any) -> str:
 def _clean(error: Exception) -> str:
     text = str(error).strip()
     return text.splitlines()[-1] if text else type(error).__name__
+
+
+def _suggestion(error: Exception) -> str:
+    """
+    "; did you mean 'theta_i'?" when Mitsuba's message quotes a parameter name that is a
+    near miss of a setting (Mitsuba reports an unused ``<float name="thetai" …>`` as
+    ``float "thetai": 45``).
+    """
+
+    names = re.findall(r'"(\w+)"', str(error))
+    close = {name: difflib.get_close_matches(name, SETTING_NAMES, n=1, cutoff=0.75) for name in names}
+    hints = [f"'{name}' is not a setting: did you mean '{match[0]}'?" for name, match in close.items()
+             if match and match[0] != name]
+    return f" ({'; '.join(hints)})" if hints else ""

@@ -18,6 +18,8 @@ from virtspec_mi.kernel.tracer import ReadingPlan, tally_readings, trace_rays
 from virtspec_mi.scene import find_instrument
 from virtspec_mi.settings import Settings
 
+from mirror_specimen import register_mirror
+
 # sample1 bands of the invalid-direction test specimen and what each gives.
 NAN, ZERO, INFINITE, LONG, ABSORBED_NAN = (0.0, 0.2), (0.2, 0.3), (0.3, 0.35), (0.35, 0.4), (0.9, 1.0)
 
@@ -29,70 +31,28 @@ def invalid_bsdf(mi):
 
     import drjit as dr
 
-    class InvalidDirections(mi.BSDF):
-        def __init__(self, props):
-            super().__init__(props)
-            self.m_flags = mi.BSDFFlags.DeltaReflection | mi.BSDFFlags.FrontSide | mi.BSDFFlags.BackSide
+    def change(bs, weight, sample1, si, props):
+        def band(span):
+            return (sample1 >= span[0]) & (sample1 < span[1])
 
-        def sample(self, ctx, si, sample1, sample2, active=True):
-            def band(span):
-                return (sample1 >= span[0]) & (sample1 < span[1])
+        nan = dr.nan
+        wo = bs.wo
+        wo = dr.select(band(NAN) | band(ABSORBED_NAN), mi.Vector3f(nan, nan, nan), wo)
+        wo = dr.select(band(ZERO), mi.Vector3f(0.0, 0.0, 0.0), wo)
+        wo = dr.select(band(INFINITE), mi.Vector3f(dr.inf, 0.0, 1.0), wo)
+        wo = dr.select(band(LONG), 2.0 * mi.reflect(si.wi), wo)
+        bs.wo = wo
+        return bs, dr.select(band(ABSORBED_NAN), mi.Spectrum(0.0), weight)
 
-            nan = dr.nan
-            wo = mi.reflect(si.wi)
-            wo = dr.select(band(NAN) | band(ABSORBED_NAN), mi.Vector3f(nan, nan, nan), wo)
-            wo = dr.select(band(ZERO), mi.Vector3f(0.0, 0.0, 0.0), wo)
-            wo = dr.select(band(INFINITE), mi.Vector3f(dr.inf, 0.0, 1.0), wo)
-            wo = dr.select(band(LONG), 2.0 * mi.reflect(si.wi), wo)
-            bs = dr.zeros(mi.BSDFSample3f)
-            bs.wo = wo
-            bs.pdf = 1.0
-            bs.sampled_type = mi.UInt32(+mi.BSDFFlags.DeltaReflection)
-            return bs, dr.select(band(ABSORBED_NAN), mi.Spectrum(0.0), mi.Spectrum(1.0))
-
-        def eval(self, ctx, si, wo, active=True):
-            return mi.Spectrum(0.0)
-
-        def pdf(self, ctx, si, wo, active=True):
-            return mi.Float(0.0)
-
-        def traverse(self, callback):
-            pass
-
-    mi.register_bsdf("invalid_directions_test", lambda props: InvalidDirections(props))
-    return "invalid_directions_test"
+    return register_mirror(mi, "invalid_directions_test", change)
 
 
 @pytest.fixture(scope="module")
 def constant_weight_bsdf(mi):
     """Mirror reflection with a width-1 weight given by the ``weight`` parameter (e.g. inf)."""
 
-    import drjit as dr
-
-    class ConstantWeight(mi.BSDF):
-        def __init__(self, props):
-            super().__init__(props)
-            self.weight = props.get("weight", 1.0)
-            self.m_flags = mi.BSDFFlags.DeltaReflection | mi.BSDFFlags.FrontSide | mi.BSDFFlags.BackSide
-
-        def sample(self, ctx, si, sample1, sample2, active=True):
-            bs = dr.zeros(mi.BSDFSample3f)
-            bs.wo = mi.reflect(si.wi)
-            bs.pdf = 1.0
-            bs.sampled_type = mi.UInt32(+mi.BSDFFlags.DeltaReflection)
-            return bs, mi.Spectrum(self.weight)  # a literal: width 1
-
-        def eval(self, ctx, si, wo, active=True):
-            return mi.Spectrum(0.0)
-
-        def pdf(self, ctx, si, wo, active=True):
-            return mi.Float(0.0)
-
-        def traverse(self, callback):
-            pass
-
-    mi.register_bsdf("constant_weight_test", lambda props: ConstantWeight(props))
-    return "constant_weight_test"
+    return register_mirror(mi, "constant_weight_test",
+                           lambda bs, weight, sample1, si, props: (bs, mi.Spectrum(props.get("weight", 1.0))))
 
 
 def _share(span):

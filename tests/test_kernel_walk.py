@@ -8,6 +8,8 @@ import pytest
 import virtspec_mi as vm
 from virtspec_mi.kernel.walk import CAPPED_COMPONENT, walk_rng
 
+from mirror_specimen import register_mirror
+
 
 @pytest.fixture(scope="module")
 def capping_bsdf(mi):
@@ -15,31 +17,12 @@ def capping_bsdf(mi):
 
     import drjit as dr
 
-    class Capping(mi.BSDF):
-        def __init__(self, props):
-            super().__init__(props)
-            self.m_flags = mi.BSDFFlags.DeltaReflection | mi.BSDFFlags.FrontSide | mi.BSDFFlags.BackSide
+    def change(bs, weight, sample1, si, props):
+        capped = sample1 < 0.25
+        bs.sampled_component = dr.select(capped, mi.UInt32(CAPPED_COMPONENT), mi.UInt32(0))
+        return bs, dr.select(capped, mi.Spectrum(0.0), weight)
 
-        def sample(self, ctx, si, sample1, sample2, active=True):
-            capped = sample1 < 0.25
-            bs = dr.zeros(mi.BSDFSample3f)
-            bs.wo = mi.reflect(si.wi)
-            bs.pdf = 1.0
-            bs.sampled_type = mi.UInt32(+mi.BSDFFlags.DeltaReflection)
-            bs.sampled_component = dr.select(capped, mi.UInt32(CAPPED_COMPONENT), mi.UInt32(0))
-            return bs, dr.select(capped, mi.Spectrum(0.0), mi.Spectrum(1.0))
-
-        def eval(self, ctx, si, wo, active=True):
-            return mi.Spectrum(0.0)
-
-        def pdf(self, ctx, si, wo, active=True):
-            return mi.Float(0.0)
-
-        def traverse(self, callback):
-            pass
-
-    mi.register_bsdf("capping_test", lambda props: Capping(props))
-    return "capping_test"
+    return register_mirror(mi, "capping_test", change)
 
 
 def test_capped_walks_are_counted_in_no_tally(mi, capping_bsdf):

@@ -107,6 +107,9 @@ def _whole(name: str, low: int, high: int, shown: str) -> Callable[[Any], int]:
     return check
 
 
+_CHUNK_LOG2 = MAX_CHUNK_SIZE.bit_length() - 1  # MAX_CHUNK_SIZE is a power of two
+
+
 def _setting(default: Any, check: Callable[[Any], Any], help: str, choices: dict | None = None) -> Any:
     """A :class:`Settings` field: default, check and help text (the one definition)."""
 
@@ -141,8 +144,8 @@ class Settings:
     sampling: str = _setting("jittered", _choice("sampling", SAMPLINGS), "disk sampling", SAMPLINGS)
     seed: int = _setting(0, _whole("seed", 0, 2**32 - 1, "0 <= seed < 2**32"), "seed of the random numbers")
     chunk_size: int = _setting(
-        1 << 22, _whole("chunk_size", 1024, MAX_CHUNK_SIZE, "1024 <= chunk_size <= 2**25"),
-        "rays per kernel launch, 1024 ... 2**25 (bounds memory; results do not depend on it)")
+        1 << 22, _whole("chunk_size", 1024, MAX_CHUNK_SIZE, f"1024 <= chunk_size <= 2**{_CHUNK_LOG2}"),
+        f"rays per kernel launch, 1024 ... 2**{_CHUNK_LOG2} (bounds memory; results do not depend on it)")
 
     def __post_init__(self) -> None:
         for item in fields(self):

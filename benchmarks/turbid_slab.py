@@ -33,7 +33,6 @@ import os
 import platform
 import time
 
-import numpy as np
 
 SLAB = {"type": "turbid_slab", "mu_a": 10.0, "mu_s": 90.0, "g": 0.75, "thickness": 0.02}
 RD, TT = 0.09739, 0.66096

@@ -9,7 +9,6 @@ at most δ (exactly, at most ``miss_probability(N, ρ, μ)`` ≈ 0.001 at the de
 from __future__ import annotations
 
 import json
-import os
 import subprocess
 import sys
 import warnings

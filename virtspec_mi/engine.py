@@ -88,7 +88,7 @@ def take_readings(
         traced = np.unique(source)
     else:
         source = traced = np.arange(len(readings))
-    check_readings(len(readings), len(traced) * _most_rays_spent(settings))
+    check_readings(len(readings), len(traced) * settings.most_rays_spent_per_reading)
     traced_readings = [readings[k] for k in traced]
     traced_offsets = None if offsets is None else np.asarray(offsets)[traced]
     pilot = None
@@ -117,14 +117,6 @@ def _check_specimen(bsdf: Any, wavelengths: list[float]) -> None:
     check = getattr(bsdf, "check_wavelengths", None)
     if check is not None:
         check(wavelengths)
-
-
-def _most_rays_spent(settings: Settings) -> int:
-    """The most rays one reading of ``settings`` traces, pilot included (≤ 2³² − 1 each)."""
-
-    if not settings.adaptive:
-        return settings.rays_per_reading
-    return settings.pilot_rays_per_reading + settings.most_rays_per_reading
 
 
 def shares_wavelengths(instrument: Any) -> bool:
@@ -164,7 +156,8 @@ def run(
     lams = np.asarray(settings.wavelengths, dtype=np.float64)
     n_lam, n_theta = len(lams), len(angles)
     shared = shares_wavelengths(instrument)
-    check_readings(n_lam * n_theta, (n_theta if shared else n_lam * n_theta) * _most_rays_spent(settings))
+    traced = n_theta if shared else n_lam * n_theta
+    check_readings(n_lam * n_theta, traced * settings.most_rays_spent_per_reading)
     flat_lam, flat_theta = np.tile(lams, n_theta), np.repeat(angles, n_lam)
     if not keyed:
         start = time.perf_counter()

@@ -216,6 +216,14 @@ class Settings:
         return check_rays_needed(self.budget.most_rays(self), self._rule())
 
     @property
+    def most_rays_spent_per_reading(self) -> int:
+        """The most rays one reading traces in all, the two-stage pilot included (the per-call budget)."""
+
+        if not self.adaptive:
+            return self.rays_per_reading
+        return self.pilot_rays_per_reading + self.most_rays_per_reading
+
+    @property
     def pilot_rays_per_reading(self) -> int:
         """Two-stage pilot size n₁: ``pilot_rays`` or the rule's default ⌈10/μ⌉ (≤ 2³² − 1)."""
 

@@ -37,7 +37,7 @@ from virtspec_mi.instrument import EMITTER_ID, SPECIMEN_ID, Instrument, SceneErr
 from virtspec_mi.runtime import mitsuba
 from virtspec_mi.settings import SETTING_NAMES
 
-__all__ = ["load_scene", "find_instrument", "instrument_scene", "placeholder_sensor", "scene_fingerprint"]
+__all__ = ["load_scene", "find_instrument", "instrument_scene", "placeholder_sensor", "scene_fingerprint", "tabulated_bsdf"]
 
 
 def load_scene(scene: Any) -> Any:
@@ -164,3 +164,25 @@ def _suggestion(error: Exception) -> str:
     hints = [f"'{name}' is not a setting: did you mean '{match[0]}'?" for name, match in close.items()
              if match and match[0] != name]
     return f" ({'; '.join(hints)})" if hints else ""
+
+
+def tabulated_bsdf(source: Any) -> dict:
+    """
+    The dict-scene entry of a ``tabulated`` BSDF holding ``source`` — a goniophotometer
+    dataset (``xarray.Dataset``), an object with ``to_dataset()``, a NetCDF path or a
+    :class:`virtspec_mi.bsdf_table.BSDFTable`. Mitsuba properties hold Dr.Jit arrays but
+    no Python objects, so the table travels as ``Float64`` arrays and a ``TensorXf64``
+    (``fraction``); ``vm.instrument_scene(vm.tabulated_bsdf(dataset))`` measures it.
+    """
+
+    from virtspec_mi.bsdf_table import BSDFTable, read_table
+
+    mi = mitsuba()
+    table = source if isinstance(source, BSDFTable) else read_table(source)
+    entry: dict[str, Any] = {"type": "tabulated"}
+    for name, value in table.properties().items():
+        if isinstance(value, np.ndarray):
+            entry[name] = mi.TensorXf64(np.ascontiguousarray(value)) if value.ndim > 1 else mi.Float64(value)
+        else:
+            entry[name] = value
+    return entry

@@ -96,8 +96,8 @@ def _f32(values: np.ndarray) -> mi.Float:
 def _table_from_props(props: mi.Properties) -> BSDFTable:
     """The table named by ``filename`` or carried by the array parameters."""
 
-    has_file = props.has_property("filename")
-    has_arrays = props.has_property("fraction")
+    has_file = "filename" in props
+    has_arrays = "fraction" in props
     if has_file == has_arrays:
         raise ValueError("tabulated: give exactly one of 'filename' (a NetCDF goniophotometer table) "
                          "and the table arrays ('fraction', 'wavelength', 'theta_i', bin edges; "
@@ -108,7 +108,7 @@ def _table_from_props(props: mi.Properties) -> BSDFTable:
     for name in TABLE_PROPERTIES:
         if name in ("phi_i", "phi_folded"):
             continue
-        if not props.has_property(name):
+        if name not in props:
             raise ValueError(f"tabulated: parameter {name!r} is missing (the table arrays come together)")
         values[name] = np.array(props.get(name), dtype=np.float64)
     return BSDFTable(**values, phi_i=float(props.get("phi_i", 0.0)), phi_folded=bool(props.get("phi_folded", False)))

@@ -308,3 +308,33 @@ def test_mi_render_of_a_quad_with_the_tabulated_bsdf(mi, phong):
     assert image_table[~quad].mean() == pytest.approx(1.0, abs=0.02)  # the sky (spectral noise per channel)
     lobe = np.array(mi.render(mi.load_dict(_camera_scene(mi, vm.tabulated_bsdf(phong))), seed=1))
     assert np.all(np.isfinite(lobe)) and 0.05 < lobe[quad].mean() < 1.0
+
+
+def test_xml_filename_and_a_black_row(mi, tmp_path):
+    """An XML scene names the file; a row with no escaping ray samples weight 0 and evaluates to 0."""
+
+    table = lambertian_table([0.0, 0.5], [0.0, 0.25], wavelength=[500.0, 600.0])
+    path = tmp_path / "black.nc"
+    table_dataset(table, 10**6).to_netcdf(path)
+    bsdf = mi.load_string(f'<bsdf version="3.0.0" type="tabulated"><string name="filename" value="{path}"/></bsdf>')
+    n = 1000
+    si = _interaction(mi, n, 20.0, 0.0, (500.0,))
+    bs, weight = _sample(mi, bsdf, si, n)
+    assert np.all(np.array(weight) == 0) and np.all(np.array(bs.pdf) == 0)
+    assert np.all(np.isfinite(np.array(bs.wo)))
+    value, pdf = bsdf.eval_pdf(mi.BSDFContext(), si, mi.Vector3f(0.0, 0.6, 0.8))
+    assert np.all(np.array(value) == 0) and np.all(np.array(pdf) == 0)
+    bright = _interaction(mi, n, 20.0, 0.0, (600.0,))
+    _, weight = _sample(mi, bsdf, bright, n)
+    np.testing.assert_allclose(np.array(weight)[0], 0.75, rtol=1e-6)
+
+
+def test_mitsuba_chi2_test_of_a_folded_table_and_light_from_below(mi, folded):
+    from mitsuba.chi2 import BSDFAdapter, ChiSquareTest, SphericalDomain
+
+    for wi in ([math.sin(0.6), 0.3, math.cos(0.6)], [0.5, 0.0, -math.sqrt(0.75)]):
+        norm = math.sqrt(sum(c * c for c in wi))
+        sample_func, pdf_func = BSDFAdapter("tabulated", vm.tabulated_bsdf(folded), wi=[c / norm for c in wi])
+        test = ChiSquareTest(domain=SphericalDomain(), sample_func=sample_func, pdf_func=pdf_func,
+                             sample_dim=3, sample_count=200_000, res=31, ires=16, seed=5)
+        assert test.run(significance_level=0.01, test_count=2, quiet=True), test.messages

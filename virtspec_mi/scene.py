@@ -171,8 +171,9 @@ def tabulated_bsdf(source: Any) -> dict:
     The dict-scene entry of a ``tabulated`` BSDF holding ``source`` — a goniophotometer
     dataset (``xarray.Dataset``), an object with ``to_dataset()``, a NetCDF path or a
     :class:`virtspec_mi.bsdf_table.BSDFTable`. Mitsuba properties hold Dr.Jit arrays but
-    no Python objects, so the table travels as ``Float64`` arrays and a ``TensorXf64``
-    (``fraction``); ``vm.instrument_scene(vm.tabulated_bsdf(dataset))`` measures it.
+    no Python objects, so the table travels as flat ``Float64`` arrays (``fraction`` in C
+    order over wavelength, theta_i, theta_o, phi_o);
+    ``vm.instrument_scene(vm.tabulated_bsdf(dataset))`` measures it.
     """
 
     from virtspec_mi.bsdf_table import BSDFTable, read_table
@@ -182,7 +183,7 @@ def tabulated_bsdf(source: Any) -> dict:
     entry: dict[str, Any] = {"type": "tabulated"}
     for name, value in table.properties().items():
         if isinstance(value, np.ndarray):
-            entry[name] = mi.TensorXf64(np.ascontiguousarray(value)) if value.ndim > 1 else mi.Float64(value)
+            entry[name] = mi.Float64(np.ascontiguousarray(value, dtype=np.float64).ravel())
         else:
             entry[name] = value
     return entry

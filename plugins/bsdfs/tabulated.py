@@ -54,8 +54,10 @@ filename : string, default none
 wavelength, theta_i, theta_o_lower, theta_o_upper, phi_o_lower, phi_o_upper : Float64, default none
     Instead of ``filename`` (dict scenes): the table's coordinates (nm, degrees), as
     :func:`virtspec_mi.scene.tabulated_bsdf` builds them from a dataset.
-fraction : TensorXf64, default none
-    With the arrays above: p_k = m_k/N, shape (wavelength, theta_i, theta_o, phi_o).
+fraction : Float64 or TensorXf64, default none
+    With the arrays above: p_k = m_k/N over (wavelength, theta_i, theta_o, phi_o), C
+    order (a flat ``Float64``: Mitsuba's dict parser takes a tensor whose first axis
+    has 3 entries for a colour first and prints conversion warnings).
 phi_i : float, default 0
     With the arrays above: the table's φi in degrees.
 phi_folded : boolean, default false
@@ -110,7 +112,10 @@ def _table_from_props(props: mi.Properties) -> BSDFTable:
             continue
         if name not in props:
             raise ValueError(f"tabulated: parameter {name!r} is missing (the table arrays come together)")
-        values[name] = np.array(props.get(name), dtype=np.float64)
+        values[name] = np.array(props.get(name), dtype=np.float64).ravel()
+    shape = (len(values["wavelength"]), len(values["theta_i"]), len(values["theta_o_lower"]), len(values["phi_o_lower"]))
+    if values["fraction"].size == math.prod(shape):
+        values["fraction"] = values["fraction"].reshape(shape)  # else BSDFTable names the shape
     return BSDFTable(**values, phi_i=float(props.get("phi_i", 0.0)), phi_folded=bool(props.get("phi_folded", False)))
 
 

@@ -147,3 +147,22 @@ def test_not_a_dataset_and_missing_file():
         read_table(42)
     with pytest.raises(ValueError, match="not a file"):
         read_table("/nonexistent/table.nc")
+
+
+def test_gonio_variants_scalar_labels_phi_i_coordinate_and_to_dataset():
+    """One reading's scalar θi label, φi as a coordinate of one value, an object with to_dataset()."""
+
+    table = lambertian_table(0.5, 0.2, theta_i=[30.0], phi_i=0.0)
+    dataset = table_dataset(table, 10**6)
+    single = dataset.squeeze("theta_i")  # theta_i a scalar label, as in a single reading
+    single.attrs.pop("phi_i")
+    single = single.expand_dims(phi_i=[15.0])  # a dim of one value
+    read = read_table(single)
+    assert read.theta_i.tolist() == [30.0] and read.phi_i == 15.0
+    np.testing.assert_array_equal(read.fraction, read_table(dataset).fraction)
+
+    class Reading:
+        def to_dataset(self):
+            return dataset
+
+    assert read_table(Reading()).digest == read_table(dataset).digest

@@ -242,6 +242,9 @@ def read_table(source: Any) -> BSDFTable:
     A :class:`BSDFTable` from a goniophotometer dataset (``xarray.Dataset``), an object
     with ``to_dataset()``, or the path of its NetCDF file. Fractions are
     ``bin_counts / rays``; ``brdf`` must agree with them (relative :data:`BRDF_RTOL`).
+    A scalar ``wavelength`` or ``theta_i`` label (one reading) becomes a dim of one, other
+    dims of one value (e.g. ``phi_i``) are dropped; ``phi_i`` is read from the attributes
+    or a one-value coordinate (default 0).
     """
 
     import xarray as xr
@@ -258,6 +261,12 @@ def read_table(source: Any) -> BSDFTable:
         dataset = source
     if not isinstance(dataset, xr.Dataset):
         raise ValueError(f"BSDF table: expected an xarray.Dataset or a NetCDF path (got {type(source).__name__})")
+    for name in ("wavelength", "theta_i"):  # a single reading may carry them as scalar labels
+        if name in dataset.coords and name not in dataset.dims and dataset[name].ndim == 0:
+            dataset = dataset.expand_dims(name)
+    extra = [dim for dim in dataset.dims if dim not in _DIMS and dataset.sizes[dim] == 1]
+    if extra:  # e.g. a phi_i dim of one value
+        dataset = dataset.squeeze(extra)
     for name in _REQUIRED_COORDS:
         _variable(dataset, name)
     counts = _variable(dataset, "bin_counts")
@@ -283,7 +292,12 @@ def read_table(source: Any) -> BSDFTable:
     folded = int(folded) if np.ndim(folded) == 0 and folded in (0, 1) else folded
     if folded not in (0, 1):
         raise ValueError(f"BSDF table: attribute phi_folded must be 0 or 1 (got {folded!r})")
-    phi_i = dataset.attrs.get("phi_i", dataset["phi_i"].item() if "phi_i" in dataset.variables else 0.0)
+    if "phi_i" in dataset.attrs:
+        phi_i = dataset.attrs["phi_i"]
+    elif "phi_i" in dataset.variables and dataset["phi_i"].size == 1:
+        phi_i = dataset["phi_i"].values.item()
+    else:
+        phi_i = 0.0
     table = BSDFTable(
         wavelength=dataset["wavelength"].values,
         theta_i=dataset["theta_i"].values,

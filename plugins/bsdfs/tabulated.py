@@ -16,7 +16,10 @@ fractions exactly:
   φo), and returns the **weight P** = f·|cos θo|/pdf — the same for every direction.
   Weights lie in [0, 1], so the spectrophotometer's Russian roulette (survive with
   probability P) counts a ray into bin k with probability exactly p_k: its R and T
-  are the table's Σ p_k over the reflected and the transmitted bins;
+  are the table's Σ p_k over the reflected and the transmitted bins. The bin is found
+  by a binary search of the row's cumulative sums (computed in float64, stored in
+  float32: each bin's probability is exact to float32 rounding, ~10⁻⁷ of P); P is
+  clipped into [0, 1] against float32 rounding of the mixture;
 - ``pdf``: (p_k/P)/Ω_k·|cos θo| (solid-angle measure), i.e. piecewise constant in the
   projected-solid-angle measure, exactly the density ``sample`` draws from.
 

@@ -67,6 +67,7 @@ LAYERS: list[tuple[str, tuple[str, ...]]] = [
         "virtspec_mi.budgets",
         "virtspec_mi.checks",
         "virtspec_mi.leaf_data",
+        "virtspec_mi.sphere_theory",
     )),
 ]
 

@@ -218,7 +218,8 @@ def test_convention_table_in_readme_is_the_tool_output():
     tool = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(tool)
     table = tool.markdown_table()
-    assert table in (ROOT / "README.md").read_text()
+    readme = (ROOT / "README.md").read_text()
+    assert table in readme and tool.error_table() in readme
     assert len(table.splitlines()) == 2 + len(WALLS) * len(FRACTIONS)
     # the convention shift is negative (projected ports are smaller) and shrinks with ρw → 1 at fixed f
     shifts = [float(line.split("|")[6].strip().rstrip("%")) for line in table.splitlines()[2:]]
@@ -245,8 +246,8 @@ def test_substitution_error_sign_and_jacques_kuppenheim(sphere, surface):
     assert st.substitution_reading(std, standard_reflectance=std, port_surface=surface, **sphere) == pytest.approx(std)
     assert st.substitution_reading(1.0, standard_reflectance=0.5, port_surface=surface, **sphere) > 1.0
     a_s, rho_w = sphere["sample_fraction"], sphere["wall_reflectance"]
-    a_w = 1 - a_s - sphere["detector_fraction"] - sphere["open_fraction"] - sphere["trap_fraction"] \
-        - sphere["reference_fraction"]
+    # SCE: the specular port is open; substitution: the reference port is plugged (wall)
+    a_w = 1 - a_s - sphere["detector_fraction"] - sphere["open_fraction"] - sphere["trap_fraction"]
     if surface == "cap":  # M = ρ (1 − ρw a_w − a_s ρ_std) / (1 − ρw a_w − a_s ρ)
         expected = GREYS * (1 - rho_w * a_w - a_s * std) / (1 - rho_w * a_w - a_s * GREYS)
     else:  # flat: M = ρ ((1 − a_s) − ρw a_w L(ρ_std)) / ((1 − a_s) − ρw a_w L(ρ))
@@ -349,3 +350,16 @@ def test_transmittance_round_trip_and_unscattered_light():
     assert st.transmittance_reading(0.0, collimated_transmittance=0.9, **kw) == pytest.approx(0.9, rel=1e-14)
     with pytest.raises(ValueError, match="reading"):
         st.correct_transmittance(1.5, **kw)
+
+
+def test_readme_block_prints_what_the_readme_shows():
+    import contextlib
+    import io
+
+    readme = (ROOT / "README.md").read_text()
+    section = readme[readme.index("### Sphere theory and correction"):readme.index("## Conventions for hard cases")]
+    code, shown = re.findall(r"^```python\n(.*?)^```\n\nprints\n\n```\n(.*?)^```", section, re.M | re.S)[0]
+    out = io.StringIO()
+    with contextlib.redirect_stdout(out):
+        exec(compile(code, "README sphere_theory block", "exec"), {"__name__": "__readme__"})
+    assert out.getvalue() == shown

@@ -496,6 +496,12 @@ def fresnel_reflectance(theta_i: Any, refractive_index: Any) -> Any:
 
 
 # --------------------------------------------------------------------------- readouts
+def _wall(method, mode, a_s, a_d, a_o, a_t, a_r):
+    """The wall's fraction: the specular port is wall in SCI, the reference port is wall in substitution."""
+
+    return 1.0 - a_s - a_d - a_o - (a_r if method == "comparison" else 0.0) - (a_t if mode == "SCE" else 0.0)
+
+
 def _coefficients(method, mode, surface, rho_w, a_s, a_d, a_o, a_t, a_r, rho_std, r):
     """
     ``(Q, n1, n0, d0, d1)`` of the reading ``M(x) = Q (n1 x + n0) / (d0 − d1 x)`` as a
@@ -503,7 +509,7 @@ def _coefficients(method, mode, surface, rho_w, a_s, a_d, a_o, a_t, a_r, rho_std
     """
 
     sci = 1.0 if mode == "SCI" else 0.0
-    a_w = 1.0 - a_s - a_d - a_o - a_r - (a_t if mode == "SCE" else 0.0)
+    a_w = _wall(method, mode, a_s, a_d, a_o, a_t, a_r)
     if surface == "cap":
         if method == "comparison":
             one = np.ones_like(a_w)
@@ -562,8 +568,9 @@ def instrument_reading(diffuse_reflectance: Any, *, wall_reflectance: Any, sampl
         a_t, the specular port: open to a light trap in SCE (lost), plugged with wall
         material in SCI (part of the wall).
     reference_fraction
-        a_r, the comparison port holding the standard (comparison method; 0 for
-        substitution, where the standard replaces the specimen in the sample port).
+        a_r, the comparison port: it holds the standard in the comparison method and is
+        plugged with wall material in substitution (where the standard replaces the
+        specimen in the sample port), so one sphere description serves both methods.
     standard_reflectance
         ρ_std in (0, 1], the Lambertian reference standard's reflectance.
     specular_reflectance
@@ -591,7 +598,7 @@ def instrument_reading(diffuse_reflectance: Any, *, wall_reflectance: Any, sampl
         raise ValueError(f"diffuse_reflectance must satisfy 0 <= diffuse_reflectance <= 1 - specular_reflectance "
                          f"(got diffuse_reflectance + specular_reflectance = {_shown(x + r, x + r > 1.0 + 1e-15)})")
     sci = 1.0 if mode == "SCI" else 0.0
-    a_w = 1.0 - a_s - a_d - a_o - a_r - (a_t if mode == "SCE" else 0.0)
+    a_w = _wall(method, mode, a_s, a_d, a_o, a_t, a_r)
     if method == "substitution":
         t_s, _, t_w = _throughputs(rho_w, a_w, a_d, a_s, x + r, 0.0, 0.0, surface)
         t_std, _, _ = _throughputs(rho_w, a_w, a_d, a_s, rho_std, 0.0, 0.0, surface)

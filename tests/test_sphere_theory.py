@@ -250,6 +250,10 @@ def test_substitution_error_sign_and_jacques_kuppenheim(sphere, surface):
     a_w = 1 - a_s - sphere["detector_fraction"] - sphere["open_fraction"] - sphere["trap_fraction"]
     if surface == "cap":  # M = ρ (1 − ρw a_w − a_s ρ_std) / (1 − ρw a_w − a_s ρ)
         expected = GREYS * (1 - rho_w * a_w - a_s * std) / (1 - rho_w * a_w - a_s * GREYS)
+        # relative error = −G(ρ) a_s (ρ_std − ρ), G the sphere gain with the specimen in place
+        gain = st.sphere_gain(rho_w, GREYS, sample_fraction=a_s, detector_fraction=sphere["detector_fraction"],
+                              open_fraction=1 - a_w - a_s - sphere["detector_fraction"])
+        assert error / GREYS == pytest.approx(-gain * a_s * (std - GREYS), rel=1e-10)
     else:  # flat: M = ρ ((1 − a_s) − ρw a_w L(ρ_std)) / ((1 − a_s) − ρw a_w L(ρ))
         L = lambda u: 1 - a_s * (1 - u)  # noqa: E731
         expected = GREYS * ((1 - a_s) - rho_w * a_w * L(std)) / ((1 - a_s) - rho_w * a_w * L(GREYS))

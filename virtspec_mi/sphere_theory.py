@@ -78,10 +78,12 @@ port — plugged with wall material in SCI (it then leaves the wall: ``r ρw T_w
 open to a light trap in SCE (lost) (CIE 15:2004, geometries di:8° and de:8°).
 
 - **Substitution** (single beam; the standard of reflectance ρ_std replaces the
-  specimen): ``M = ρ_std P(specimen) / P(standard)``; the sphere's throughput changes
-  with what sits in the port, so for a Lambertian specimen (cap model)
-  ``M = ρ (1 − ρw a_w − a_s ρ_std) / (1 − ρw a_w − a_s ρ)``: the *substitution error*,
-  negative for specimens darker than the standard (Jacques & Kuppenheim 1955;
+  specimen; a reference port, if any, is plugged with wall material):
+  ``M = ρ_std P(specimen) / P(standard)``; the sphere's throughput changes with what
+  sits in the port, so for a Lambertian specimen (cap model)
+  ``M = ρ (1 − ρw a_w − a_s ρ_std) / (1 − ρw a_w − a_s ρ)``, i.e. the relative
+  *substitution error* is ``M/ρ − 1 = −G(ρ) a_s (ρ_std − ρ)``: negative for specimens
+  darker than the standard, larger on whiter walls (Jacques & Kuppenheim 1955;
   Goebel 1967; Prahl's IAD manual, the ``M_R`` formula).
 - **Comparison** (specimen and standard in two ports at once; the beam goes to one,
   then the other): the sphere is the same in both readings, the throughput cancels,
@@ -283,9 +285,11 @@ def port_radius_for_fraction(fraction: Any, sphere_radius: Any) -> Any:
 def _port_ratio(port_radius: Any, sphere_radius: Any) -> np.ndarray:
     radius = _within("sphere_radius", sphere_radius, 0.0, math.inf, low_open=True, high_open=True)
     port = _within("port_radius", port_radius, 0.0, math.inf, high_open=True)
+    port, radius = np.broadcast_arrays(port, radius)
     if np.any(port > radius):
         raise ValueError(f"port_radius must satisfy 0 <= port_radius <= sphere_radius "
-                         f"(got {_shown(np.broadcast_to(port, np.broadcast(port, radius).shape), np.broadcast_to(port > radius, np.broadcast(port, radius).shape))})")
+                         f"(got port_radius {_shown(port, port > radius)} with sphere_radius "
+                         f"{_shown(radius, port > radius)})")
     return port / radius
 
 
@@ -331,10 +335,11 @@ def spot_landing_density(angle_from_port: Any, port_radius: Any, sphere_radius: 
     ratio = _port_ratio(port_radius, sphere_radius)
     psi = _within("angle_from_port", angle_from_port, 0.0, 180.0)
     rim = np.degrees(np.arcsin(ratio))
+    psi, rim = np.broadcast_arrays(psi, rim)
     if np.any(psi < rim - 1e-9):
+        bad = psi < rim - 1e-9
         raise ValueError(f"angle_from_port must satisfy asin(port_radius/sphere_radius) <= angle_from_port "
-                         f"<= 180 degrees, i.e. {float(np.max(rim)):g} <= angle_from_port (got "
-                         f"{_shown(np.broadcast_to(psi, np.broadcast(psi, rim).shape), np.broadcast_to(psi < rim, np.broadcast(psi, rim).shape))})")
+                         f"<= 180 degrees, i.e. {_shown(rim, bad)} <= angle_from_port here (got {_shown(psi, bad)})")
     c = np.sqrt(1.0 - ratio**2)  # in units of R
     cos_alpha = -np.cos(np.radians(psi))
     d2 = 1.0 + c**2 + 2.0 * c * cos_alpha
@@ -381,7 +386,10 @@ def sphere_gain(wall_reflectance: Any, sample_reflectance: Any = 0.0, *, sample_
     a_s, a_d, a_e = (_within(n, v, 0.0, 1.0) for n, v in (("sample_fraction", sample_fraction),
                                                            ("detector_fraction", detector_fraction),
                                                            ("open_fraction", open_fraction)))
-    a_w = np.asarray(wall_fraction(a_s, a_d, a_e))
+    a_w = 1.0 - a_s - a_d - a_e
+    if np.any(a_w < 0.0):
+        raise ValueError(f"port fractions must satisfy sample_fraction + detector_fraction + open_fraction <= 1 "
+                         f"(got {_shown(1.0 - a_w, a_w < 0.0)})")
     if baffle:
         denominator = 1.0 - rho_w * (a_w + (1.0 - a_e) * (a_d * r_d + a_s * rho_s))
     else:

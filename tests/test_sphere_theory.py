@@ -381,34 +381,57 @@ def _lambertian(normals: np.ndarray, rng: np.random.Generator) -> np.ndarray:
     return (s * np.cos(phi))[:, None] * t + (s * np.sin(phi))[:, None] * b + np.sqrt(1 - u1)[:, None] * normals
 
 
-def _sphere_walk(rho_w, u, ratio_s, ratio_d, ratio_o, n, rng):
+def _sphere_walk(rho_w, disks, detector, lost, start, n, rng):
     """
-    Share of n rays, leaving a flat specimen disk (uniformly, Lambertian) in the port around
-    -z of a unit sphere, that reach the detector port (around +x); the open port sits around
-    (0, 0.6, 0.8); the wall is Lambertian with reflectance rho_w, the disk with u.
+    Share of n rays leaving disk ``start`` (uniformly over it, Lambertian) that reach the
+    detector port of a unit sphere with a Lambertian wall of reflectance ``rho_w``.
+
+    ``disks``: [(axis, r/R, reflectance)] flat disks in their port planes (Lambertian);
+    ``detector``, ``lost``: (axis, r/R) ports that count / lose every arrival.
     """
 
-    c, cos_d, cos_o = (math.sqrt(1 - ratio**2) for ratio in (ratio_s, ratio_d, ratio_o))
-    rr, phi = ratio_s * np.sqrt(rng.random(n)), 2 * np.pi * rng.random(n)
-    p = np.stack([rr * np.cos(phi), rr * np.sin(phi), np.full(n, -c)], axis=1)
-    up = np.array([[0.0, 0.0, 1.0]])
-    d = _lambertian(np.repeat(up, n, axis=0), rng)
+    def unit(axis):
+        axis = np.asarray(axis, float)
+        return axis / np.linalg.norm(axis)
+
+    planes = [(unit(axis), math.sqrt(1 - ratio**2), ratio, refl) for axis, ratio, refl in disks]
+    (det_axis, det_ratio), (lost_axis, lost_ratio) = detector, lost
+    det_axis, lost_axis = unit(det_axis), unit(lost_axis)
+    cos_d, cos_o = math.sqrt(1 - det_ratio**2), math.sqrt(1 - lost_ratio**2)
+    e, c, ratio, _ = planes[start]
+    helper = np.array([1.0, 0.0, 0.0]) if abs(e[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
+    t = np.cross(helper, e)
+    t /= np.linalg.norm(t)
+    b = np.cross(e, t)
+    rr, phi = ratio * np.sqrt(rng.random(n)), 2 * np.pi * rng.random(n)
+    p = c * e + (rr * np.cos(phi))[:, None] * t + (rr * np.sin(phi))[:, None] * b
+    d = _lambertian(np.repeat(-e[None, :], n, axis=0), rng)
     detected = 0
     while len(p):
         pd = np.sum(p * d, axis=1)
         x = p + (-pd + np.sqrt(np.maximum(pd * pd - (np.sum(p * p, axis=1) - 1), 0)))[:, None] * d
-        on_disk = x[:, 2] < -c  # aimed at the specimen's cap: the disk in the port plane is met first
-        x_disk = p + ((-c - p[:, 2]) / np.where(on_disk, d[:, 2], -1.0))[:, None] * d
-        on_detector = ~on_disk & (x[:, 0] > cos_d)
-        lost = ~on_disk & ~on_detector & (x @ np.array([0.0, 0.6, 0.8]) > cos_o)
-        on_wall = ~(on_disk | on_detector | lost)
-        detected += int(on_detector.sum())
         r = rng.random(len(p))
-        again_disk, again_wall = on_disk & (r < u), on_wall & (r < rho_w)
-        p = np.concatenate([x_disk[again_disk], x[again_wall]])
-        normals = np.concatenate([np.repeat(up, int(again_disk.sum()), axis=0), -x[again_wall]])
+        free = np.ones(len(p), bool)
+        next_p, next_n = [], []
+        for e, c, _, refl in planes:  # aimed at a disk's cap: the disk in the port plane is met first
+            hit = free & (x @ e > c)
+            free &= ~hit
+            speed = np.where(hit, d @ e, 1.0)
+            x_disk = p + ((c - p @ e) / speed)[:, None] * d
+            again = hit & (r < refl)
+            next_p.append(x_disk[again])
+            next_n.append(np.repeat(-e[None, :], int(again.sum()), axis=0))
+        on_detector = free & (x @ det_axis > cos_d)
+        on_wall = free & ~on_detector & ~(x @ lost_axis > cos_o)
+        detected += int(on_detector.sum())
+        again = on_wall & (r < rho_w)
+        p = np.concatenate(next_p + [x[again]])
+        normals = np.concatenate(next_n + [-x[again]])
         d = _lambertian(normals, rng) if len(p) else p
     return detected / n
+
+
+DETECTOR, LOST = ((1, 0, 0), 0.2), ((0, -0.6, 0.8), 0.25)
 
 
 @pytest.mark.parametrize("rho_w, u, ratio_s", [(0.90, 0.5, 1 / 3), (0.95, 0.05, 0.4)])
@@ -416,7 +439,7 @@ def test_flat_model_matches_a_walk_of_the_exact_geometry(rho_w, u, ratio_s):
     """The flat closed form holds for the real geometry; the cap model is off by many sigma for large ports."""
 
     n = 300_000
-    got = _sphere_walk(rho_w, u, ratio_s, 0.2, 0.25, n, np.random.default_rng(16))
+    got = _sphere_walk(rho_w, [((0, 0, -1), ratio_s, u)], DETECTOR, LOST, 0, n, np.random.default_rng(16))
     kw = dict(sample_fraction=st.cap_fraction(ratio_s, 1.0), detector_fraction=st.cap_fraction(0.2, 1.0),
               open_fraction=st.cap_fraction(0.25, 1.0))
     flat = st.detected_fraction(rho_w, u, **kw)
@@ -429,7 +452,37 @@ def test_flat_model_matches_a_walk_of_the_exact_geometry(rho_w, u, ratio_s):
 @pytest.mark.slow
 def test_flat_model_matches_the_walk_at_a_white_wall():
     n = 400_000
-    got = _sphere_walk(0.98, 0.5, 0.2, 0.1, 0.2, n, np.random.default_rng(98))
+    got = _sphere_walk(0.98, [((0, 0, -1), 0.2, 0.5)], ((1, 0, 0), 0.1), ((0, -0.6, 0.8), 0.2), 0, n,
+                       np.random.default_rng(98))
     flat = st.detected_fraction(0.98, 0.5, sample_fraction=st.cap_fraction(0.2, 1.0),
                                 detector_fraction=st.cap_fraction(0.1, 1.0), open_fraction=st.cap_fraction(0.2, 1.0))
     assert abs(got - flat) < 5 * math.sqrt(flat * (1 - flat) / n)
+
+
+def test_comparison_residual_of_the_flat_geometry_is_real():
+    """
+    Specimen (0.05) and standard (0.99) in two large ports at once: light leaving the
+    specimen is detected more often than light leaving the standard, by L_B / L_A = 1.104
+    (the specimen sees the white standard, the standard sees the dark specimen). The walk
+    shows it, so the comparison method is exact only in the cap model.
+    """
+
+    n, ratio, rho_w, dark, white = 300_000, 0.6, 0.95, 0.05, 0.99
+    disks = [((0, 0, -1), ratio, dark), ((0, 1, 0), ratio, white)]
+    rng = np.random.default_rng(2014)
+    t_a, t_b = (_sphere_walk(rho_w, disks, DETECTOR, LOST, start, n, rng) for start in (0, 1))
+    a = st.cap_fraction(ratio, 1.0)
+    kw = dict(sample_fraction=a, detector_fraction=st.cap_fraction(0.2, 1.0), open_fraction=st.cap_fraction(0.25, 1.0),
+              second_fraction=a, second_reflectance=white)
+    flat_a, flat_b = (st.detected_fraction(rho_w, dark, start=start, **kw) for start in ("sample", "second"))
+    for got, want in ((t_a, flat_a), (t_b, flat_b)):
+        assert abs(got - want) < 5 * math.sqrt(want * (1 - want) / n)
+    expected_ratio = (1 - a * (1 - white)) / (1 - a * (1 - dark))
+    assert flat_a / flat_b == pytest.approx(expected_ratio, rel=1e-12)
+    sigma_ratio = expected_ratio * math.sqrt((1 - flat_a) / (n * flat_a) + (1 - flat_b) / (n * flat_b))
+    assert abs(t_a / t_b - expected_ratio) < 5 * sigma_ratio
+    assert t_a / t_b - 1 > 5 * sigma_ratio  # far from the cap model's 1 (expected 9.7 sigma away)
+    reading = st.comparison_reading(dark, wall_reflectance=rho_w, sample_fraction=a, reference_fraction=a,
+                                    detector_fraction=kw["detector_fraction"], open_fraction=kw["open_fraction"],
+                                    standard_reflectance=white)
+    assert reading == pytest.approx(dark * expected_ratio, rel=1e-12)

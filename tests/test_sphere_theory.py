@@ -238,7 +238,7 @@ SPHERES = [
 
 @pytest.mark.parametrize("sphere", SPHERES)
 @pytest.mark.parametrize("surface", st.PORT_SURFACES)
-def test_substitution_error_sign_and_jacques_kuppenheim(sphere, surface):
+def test_substitution_error_sign_and_jacquez_kuppenheim(sphere, surface):
     std = 0.99
     m = st.substitution_reading(GREYS, standard_reflectance=std, port_surface=surface, mode="SCE", **sphere)
     error = m - GREYS

@@ -17,7 +17,7 @@ so the diffuse view factor ``cos θ₁ cos θ₂ dA₂ / (π d²) = dA₂ / 4πR
 on where the two elements are. Lambertian light leaving any point *of the sphere's
 surface* therefore lands uniformly over the sphere's area: it reaches a region with
 probability equal to the region's share of the area, its **fraction** a (Goebel 1967,
-eq. 2; Jacques & Kuppenheim 1955). A circular port of radius r is a spherical cap of
+eq. 2; Jacquez & Kuppenheim 1955). A circular port of radius r is a spherical cap of
 height ``h = R − √(R² − r²)``, fraction :func:`cap_fraction` ``= h / 2R`` exactly;
 :func:`projected_fraction` ``= r² / 4R²`` (the disk's area over the sphere's) is the
 small-port approximation of Prahl's IAD program. The two obey
@@ -87,12 +87,13 @@ open to a light trap in SCE (lost) (CIE 15:2004, geometries di:8° and de:8°).
   sits in the port, so for a Lambertian specimen (cap model)
   ``M = ρ (1 − ρw a_w − a_s ρ_std) / (1 − ρw a_w − a_s ρ)``, i.e. the relative
   *substitution error* is ``M/ρ − 1 = −G(ρ) a_s (ρ_std − ρ)``: negative for specimens
-  darker than the standard, larger on whiter walls (Jacques & Kuppenheim 1955;
+  darker than the standard, larger on whiter walls (Jacquez & Kuppenheim 1955;
   Goebel 1967; Prahl's IAD manual, the ``M_R`` formula).
 - **Comparison** (specimen and standard in two ports at once; the beam goes to one,
   then the other): the sphere is the same in both readings, the throughput cancels,
   and the cap model reads ``M = x + r ρw`` (SCI), ``x`` (SCE), i.e. exactly ρ for a
-  Lambertian specimen (Kessel 1986; Vidovič & Majaron 2014). With flat disks the first
+  Lambertian specimen (Kessel 1986: no correction with a two-port comparative sphere).
+  With flat disks the first
   landing differs (the specimen cannot see itself but sees the standard) and
   ``M = (1 − a_r(1 − ρ_std)) [x / L(u) + r ρw]``: a residual of order
   ``a (ρ_std − ρ)`` instead of ``G a (ρ_std − ρ)``.
@@ -108,18 +109,20 @@ References
 ----------
 - D.G. Goebel (1967), *Generalized integrating-sphere theory*, Appl. Opt. 6(1),
   125–128 (eqs. 2–9: the sphere property, the multiplier, port losses).
-- J.A. Jacques, H.F. Kuppenheim (1955), *Theory of the integrating sphere*, J. Opt.
+- J.A. Jacquez, H.F. Kuppenheim (1955), *Theory of the integrating sphere*, J. Opt.
   Soc. Am. 45(6), 460–470 (the substitution error).
 - S.A. Prahl, *Inverse Adding-Doubling* manual and iadpython ``sphere.py``: gain
   ``G = 1/(1 − a_w r_w − a_d r_d − a_s r_s)`` (no baffle) and
   ``1/(1 − r_w (a_w + (1 − a_e)(a_d r_d + a_s r_s)))`` (baffle); ``Sphere.multiplier``.
-- J.F. Kessel (1986), *Transmittance measurements in the integrating sphere*, Appl.
-  Opt. 25(16), 2752–2756 (the comparison method).
-- L. Vidovič, B. Majaron (2014), *Elimination of single-beam substitution error in
-  diffuse reflectance measurements using an integrating sphere*, J. Biomed. Opt.
-  19(2), 027006.
-- CIE 15:2004 *Colorimetry*, Sect. 4.2 (d:8°, di/de: specular component included or
-  excluded).
+- J. Kessel (1986), *Transmittance measurements in the integrating sphere*, Appl.
+  Opt. 25(16), 2752–2756 (the substitution correction of a one-port sphere; none
+  needed with a two-port comparative sphere).
+- L. Vidovič, B. Majaron (2013), *Elimination of single-beam substitution error in
+  diffuse reflectance measurements using an integrating sphere*, Proc. SPIE 8565,
+  85650I (another route: the throughput change measured through an extra reference
+  port; not modelled here).
+- CIE 15:2004 *Colorimetry*, the illuminating and viewing geometries di:8° and de:8°
+  (specular component included or excluded).
 - Labsphere, *A guide to integrating sphere theory and applications* (eq. 14).
 """
 

@@ -68,6 +68,8 @@ LAYERS: list[tuple[str, tuple[str, ...]]] = [
         "virtspec_mi.checks",
         "virtspec_mi.leaf_data",
         "virtspec_mi.bsdf_table",
+
+        "virtspec_mi.sphere_theory",
     )),
 ]
 

@@ -35,6 +35,7 @@ import numpy as np
 __all__ = [
     "MAX_RAYS",
     "MAX_VALUES",
+    "parse_values",
     "MAX_READINGS",
     "MAX_TOTAL_RAYS",
     "MAX_CHUNK_SIZE",
@@ -318,6 +319,23 @@ def parse_theta_i(theta_i: Any) -> tuple[float, ...]:
     if not values:
         raise ValueError("theta_i must hold at least one angle (got none)")
     return tuple(check_theta_i(value) for value in values)
+
+
+def parse_values(name: str, values: Any) -> tuple[float, ...]:
+    """
+    Values of a swept specimen parameter ``name``: the forms of :func:`parse_wavelengths`
+    (a number, a sequence, or a string of numbers and ``start:stop:step`` ranges, stop
+    included when it lies on the grid within rounding), each finite, at least one and at
+    most :data:`MAX_VALUES`. Their range is the specimen's to check.
+    """
+
+    numbers = _parse_numbers(name, values, "the parameter's unit")
+    if not numbers:
+        raise ValueError(f"parameter {name!r} must hold at least one value (got none)")
+    for value in numbers:
+        if not math.isfinite(value):
+            raise ValueError(f"parameter {name!r} must hold finite numbers (got {value!r})")
+    return tuple(numbers)
 
 
 def _parse_numbers(name: str, value: Any, unit: str) -> list[float]:

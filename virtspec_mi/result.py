@@ -466,6 +466,10 @@ class Result:
                                for d, n in reversed(list(zip(self.dims, self.shape))))
             head = f"{s.beam} sweep: {sizes} (phi_i = {s.phi_i:g} deg, sampling = {s.sampling}, seed = {s.seed})"
         lines = [head, self._certificate() + f"; {self.seconds * 1e3:.1f} ms"]
+        fixed = [f"{name} = {float(self.coords[name]):g}" for name in self.parameter_names
+                 if not self.coord_dims(name)]
+        if fixed:
+            lines.insert(1, "specimen parameters: " + ", ".join(fixed))
         if self.dims == ("wavelength",):
             lines += self._table()
         if self.wavelength_independent and len(self.wavelengths) > 1:

@@ -60,6 +60,7 @@ def load_scene(scene: Any, defines: dict[str, Any] | None = None) -> Any:
                 raise SceneError(f"scene {path} is a directory; give a Mitsuba XML scene file")
             if not path.is_file():
                 raise SceneError(f"scene file not found: {path}")
+            _check_defined(path, defines)
             return mi.load_file(str(path), **defines)
         if isinstance(scene, dict):
             _check_dict(scene)
@@ -94,6 +95,21 @@ def check_defines(defines: dict[str, Any] | None, scene: Any = None) -> dict[str
             raise ValueError(f"scene parameter {name!r} must be a number or a string (got {value!r})")
         checked[name] = value if isinstance(value, str) else repr(value)
     return checked
+
+
+def _check_defined(path: Path, defines: dict[str, str]) -> None:
+    """Each name of ``defines`` must be a ``$name`` the XML file uses (``ValueError`` with its names)."""
+
+    if not defines:
+        return
+    used = sorted(set(re.findall(r"\$([A-Za-z_]\w*)", re.sub(r"<!--.*?-->", "", path.read_text(errors="replace"),
+                                                             flags=re.S))))
+    for name in defines:
+        if name not in used:
+            close = difflib.get_close_matches(name, used, n=1, cutoff=0.6)
+            hint = f"; did you mean {close[0]!r}?" if close else ""
+            raise SceneError(f"scene parameter {name!r} (-D) is not used by {path} (its parameters: "
+                             f"{', '.join(used) or 'none'}){hint}")
 
 
 _LOAD_FILE_ARGUMENTS = ("path", "update_scene", "parallel")  # mi.load_file's own keywords

@@ -1,5 +1,5 @@
 """
-Tests of parameter sweeps (virtspec_mi.parameters, engine.trace_batch, sweep(parameters=)):
+Tests of parameter sweeps (virtspec_mi.parameters, engine.take_keyed_readings, sweep(parameters=)):
 names through mi.traverse, grids and points as result dims, the key rule (a reading's
 counts depend on (seed, its flat index) only), resume, files, the CLI and recompilation.
 
@@ -17,7 +17,7 @@ import virtspec_mi as vm
 from virtspec_mi.checkpoint import CheckpointError
 from virtspec_mi.cli import main
 from virtspec_mi.counts import Counts
-from virtspec_mi.engine import ReadingGrid, trace_batch
+from virtspec_mi.engine import take_keyed_readings
 
 THICKNESS, CHLOROPHYLL = "specimen.thickness", "specimen.chlorophyll_a"
 SWEEP = dict(theta_i=8, wavelengths=[550, 800], rays=1500, seed=4, beam="collimated")
@@ -121,8 +121,7 @@ def test_a_reading_equals_the_scene_loaded_with_that_value_under_the_same_key(mi
                                                          "chlorophyll_a": 2.0 + 2 * i_c}))
         point = i_t * 3 + i_c
         keys = np.arange(point * n_lam, (point + 1) * n_lam)
-        grid = ReadingGrid(np.array([550.0, 800.0]), np.array([8.0]), 0.0, None)
-        counts, _ = trace_batch(loaded, settings, grid, keys)
+        counts, _ = take_keyed_readings(loaded, settings, [8.0], keys)
         _same_counts(counts, leaf_grid.counts.map(lambda v: v[:, 0, i_t, i_c]))
 
 
@@ -145,14 +144,13 @@ def test_counts_do_not_depend_on_how_the_sweep_is_split(soybean, leaf_grid):
 
     space = parameter_space(instrument, GRID)
     settings = vm.Settings(**{k: v for k, v in SWEEP.items() if k != "theta_i"}, theta_i=8)
-    grid = ReadingGrid(np.array([550.0, 800.0]), np.array([8.0]), 0.0, space)
     block = np.array([11, 3, 4, 0])
     from virtspec_mi.parameters import apply_point, current_values
 
     original = current_values(instrument, space.keys)
     try:
-        counts, pilot = trace_batch(instrument, settings, grid, block)
-    finally:  # trace_batch leaves the last point's values: the caller restores them
+        counts, pilot = take_keyed_readings(instrument, settings, [8.0], block, space)
+    finally:  # take_keyed_readings leaves the last point's values: the caller restores them
         apply_point(instrument, space.keys, original)
     assert pilot is None
     flat = leaf_grid.counts.map(lambda v: np.moveaxis(v, (0, 1), (-1, -2)).reshape(-1))
@@ -356,3 +354,14 @@ def test_cli_points_and_measure_param(scenes_dir, capsys):
 def test_cli_bad_param_or_define_is_one_error_line(scenes_dir, capsys, argv, message):
     assert main(["sweep", str(scenes_dir / "soybean_abmb.xml"), "--rays", "10", *argv]) == 1
     assert message in capsys.readouterr().err
+
+
+def test_a_two_stage_parameter_sweep_keeps_each_readings_pilot_and_is_split_independent(diamond):
+    kwargs = dict(theta_i=[0, 45], wavelengths=[550], bound="two-stage", mu=0.02, delta=0.01,
+                  parameters={"specimen.eta": [1.5, 2.419]})
+    whole = vm.sweep(diamond, **kwargs)
+    split = vm.sweep(diamond, chunk_size=1024, **kwargs)
+    _same_counts(whole.counts, split.counts)
+    _same_counts(whole.pilot, split.pilot)
+    assert np.all(whole.certified_mu == 0.02) and whole.pilot.rays.shape == whole.shape
+    assert len(np.unique(whole.rays)) > 1  # each reading sized by its own pilot

@@ -16,7 +16,7 @@ explicit points: the dim ``point``; :mod:`virtspec_mi.parameters`). Its reading
 k (k = (i_p·n_θ + i_θ)·n_λ + i_λ, i_p the parameter point) owns the global ray indices
 [k·stride, k·stride + N): its counts depend on (seed, k) only, which makes a sweep
 resumable from a checkpoint and its readings independent of how they are batched
-(:func:`virtspec_mi.engine.trace_batch`).
+(:func:`virtspec_mi.engine.take_keyed_readings`).
 
 Both take every setting of :class:`~virtspec_mi.settings.Settings` as a keyword (their
 signatures are derived from it); a bad value raises ``ValueError`` naming the setting

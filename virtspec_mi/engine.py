@@ -30,7 +30,7 @@ Baranoski et al. (2001), eqs. (2) and (23).
 from __future__ import annotations
 
 import time
-from dataclasses import asdict, dataclass
+from dataclasses import asdict
 from typing import Any, Sequence
 
 import numpy as np
@@ -44,7 +44,7 @@ from virtspec_mi.progress import Progress
 from virtspec_mi.result import Result
 from virtspec_mi.settings import Settings
 
-__all__ = ["take_readings", "shares_wavelengths", "ReadingGrid", "trace_batch", "run", "measure_reading"]
+__all__ = ["take_readings", "shares_wavelengths", "take_keyed_readings", "run", "measure_reading"]
 
 
 def take_readings(
@@ -126,68 +126,41 @@ def shares_wavelengths(instrument: Any) -> bool:
     return bool(getattr(instrument.bsdf, "wavelength_independent", False))
 
 
-@dataclass(frozen=True)
-class ReadingGrid:
+def take_keyed_readings(instrument: Any, settings: Settings, theta_i: Sequence[float], batch: np.ndarray,
+                        parameters: ParameterSpace | None = None) -> tuple[Counts, Counts | None]:
     """
-    The flat layout of a keyed run: reading k is (wavelength, θi, parameter point) with
-    k = (i_p·n_θ + i_θ)·n_λ + i_λ — the wavelength fastest, the parameter point slowest
-    (point p: the flat C-order index of a parameter grid, or the index of an explicit
-    point). Without parameters (``space`` ``None``) there is one point, and k is the
-    (wavelength × θi) index every sweep has always used.
-    """
-
-    wavelengths: np.ndarray
-    theta_i: np.ndarray
-    phi_i: float
-    space: ParameterSpace | None = None
-
-    @property
-    def per_point(self) -> int:
-        """Readings per parameter point: n_λ·n_θ."""
-
-        return len(self.wavelengths) * len(self.theta_i)
-
-    @property
-    def points(self) -> int:
-        return 1 if self.space is None else self.space.size
-
-    @property
-    def size(self) -> int:
-        return self.per_point * self.points
-
-    def reading(self, k: int) -> tuple[float, float, float]:
-        """(wavelength nm, θi, φi) of reading ``k`` (its parameter point is ``k // per_point``)."""
-
-        n_lam = len(self.wavelengths)
-        inner = int(k) % self.per_point
-        return float(self.wavelengths[inner % n_lam]), float(self.theta_i[inner // n_lam]), self.phi_i
-
-
-def trace_batch(instrument: Any, settings: Settings, grid: ReadingGrid, batch: np.ndarray,
-                ) -> tuple[Counts, Counts | None]:
-    """
-    The exact counts (and two-stage pilot counts, else ``None``) of readings ``batch``
-    (flat indices of ``grid``, any subset in any order) of a keyed run: reading k owns
-    the global ray indices [k·stride, k·stride + N_k) with stride =
-    ``settings.most_rays_per_reading``, so its counts depend on (seed, k) only — never on
-    which other readings share the batch. Readings of one parameter point are traced in
-    one :func:`take_readings` call after the point's values are set on the scene
+    The exact counts (and two-stage pilot counts, else ``None``, as :func:`take_readings`
+    returns them) of readings ``batch`` — flat indices, any subset in any order — of the
+    keyed grid ``settings.wavelengths`` × ``theta_i`` × parameter points: reading
+    k = (i_p·n_θ + i_θ)·n_λ + i_λ is wavelength i_λ at angle i_θ for parameter point i_p
+    (the wavelength fastest; without ``parameters`` one point, k = i_θ·n_λ + i_λ as every
+    sweep has always numbered them). It is traced from global ray index
+    k·``settings.most_rays_per_reading``, so its counts depend on (seed, k) only — never on
+    which other readings share the batch. The readings of one parameter point are traced
+    in one :func:`take_readings` call after the point's values are set on the scene
     (:func:`virtspec_mi.parameters.apply_point`); the scene keeps the last point's values
-    (the caller restores them). This is the one function every driver of a keyed run
-    calls, for any block of readings.
+    (the caller restores them). The one function that traces a batch of a keyed run, for
+    any driver.
     """
 
+    lams = np.asarray(settings.wavelengths, dtype=np.float64)
+    angles = np.asarray(theta_i, dtype=np.float64)
     batch = np.asarray(batch, dtype=np.int64)
+    n_lam, per_point = len(lams), len(lams) * len(angles)
     stride = settings.most_rays_per_reading
-    point_of = batch // grid.per_point
+
+    def readings(indices: np.ndarray) -> list[tuple[float, float, float]]:
+        inner = indices % per_point
+        return [(lams[k % n_lam], angles[k // n_lam], settings.phi_i) for k in inner]
+
+    if parameters is None:
+        return take_readings(instrument, readings(batch), settings, offsets=batch * stride)
+    point_of = batch // per_point
     parts, order = [], []
     for point in np.unique(point_of):
         members = np.flatnonzero(point_of == point)
-        if grid.space is not None:
-            apply_point(instrument, grid.space.keys, grid.space.point(int(point)))
-        indices = batch[members]
-        parts.append(take_readings(instrument, [grid.reading(k) for k in indices], settings,
-                                   offsets=indices * stride))
+        apply_point(instrument, parameters.keys, parameters.point(int(point)))
+        parts.append(take_readings(instrument, readings(batch[members]), settings, offsets=batch[members] * stride))
         order.append(members)
     back = np.argsort(np.concatenate(order), kind="stable")
     counts = Counts.concatenate([c for c, _ in parts]).map(lambda v: v[back])
@@ -229,10 +202,10 @@ def run(
     n_lam, n_theta = len(lams), len(angles)
     if parameters is not None and not keyed:
         raise ValueError("a run over parameters must be keyed on reading indices (keyed=True)")
-    grid = ReadingGrid(lams, angles, settings.phi_i, parameters)
+    size = n_lam * n_theta * (1 if parameters is None else parameters.size)
     shared = shares_wavelengths(instrument)
-    traced = grid.size // n_lam if shared else grid.size
-    check_readings(grid.size, traced * settings.most_rays_spent_per_reading)
+    traced = size // n_lam if shared else size
+    check_readings(size, traced * settings.most_rays_spent_per_reading)
     if not keyed:
         flat_lam, flat_theta = np.tile(lams, n_theta), np.repeat(angles, n_lam)
         start = time.perf_counter()
@@ -240,7 +213,8 @@ def run(
             instrument, [(w, t, settings.phi_i) for w, t in zip(flat_lam, flat_theta)], settings, progress=progress)
         seconds = time.perf_counter() - start
     else:
-        counts, pilot, seconds = _run_keyed(instrument, settings, grid, shared, scene, checkpoint, progress)
+        counts, pilot, seconds = _run_keyed(instrument, settings, angles, parameters, shared, scene, checkpoint,
+                                            progress)
     extra = () if parameters is None else parameters.shape
     axes = tuple(range(len(extra) + 2))
 
@@ -261,15 +235,16 @@ def run(
     )
 
 
-def _run_keyed(instrument: Any, settings: Settings, grid: ReadingGrid, shared: bool, scene: str, checkpoint: Any,
-               progress: bool | None) -> tuple[Counts, Counts | None, float]:
+def _run_keyed(instrument: Any, settings: Settings, angles: np.ndarray, parameters: ParameterSpace | None,
+               shared: bool, scene: str, checkpoint: Any, progress: bool | None) -> tuple[Counts, Counts | None, float]:
     """
     The readings of :func:`run` keyed on their index, in checkpointed batches of about
-    ``chunk_size`` rays, each traced by :func:`trace_batch`; the scene's parameters are
+    ``chunk_size`` rays, each traced by :func:`take_keyed_readings`; the scene's parameters are
     restored when the run ends.
     """
 
-    n_lam, size = len(grid.wavelengths), grid.size
+    n_lam = len(settings.wavelengths)
+    size = n_lam * len(angles) * (1 if parameters is None else parameters.size)
     stride = settings.most_rays_per_reading
     units = ([np.arange(i, i + n_lam) for i in range(0, size, n_lam)] if shared
              else [np.array([k]) for k in range(size)])
@@ -279,25 +254,25 @@ def _run_keyed(instrument: Any, settings: Settings, grid: ReadingGrid, shared: b
         rays, pilot_rays = (0, stride), (settings.pilot_rays_per_reading,) * 2
     else:
         rays, pilot_rays = (settings.rays_per_reading,) * 2, (0, 0)
-    state = Checkpoint.open(checkpoint, _identity(settings, grid, instrument, scene, shared), size,
+    state = Checkpoint.open(checkpoint, _identity(settings, angles, parameters, instrument, scene, shared), size,
                             rays=rays, pilot_rays=pilot_rays, group=n_lam if shared else 1)
     todo = [b for b in (b[~state.done[b]] for b in batches) if len(b)]
     per_unit = n_lam if shared else 1
     bar = Progress(progress, total=sum(len(b) for b in todo) // per_unit)
     if state.reused:
         bar.note(f"resumed from {checkpoint}: {state.reused} of {size} readings reused")
-    original = None if grid.space is None else current_values(instrument, grid.space.keys)
+    original = None if parameters is None else current_values(instrument, parameters.keys)
     try:
         for batch in todo:
             start = time.perf_counter()
-            counts, pilot = trace_batch(instrument, settings, grid, batch)
+            counts, pilot = take_keyed_readings(instrument, settings, angles, batch, parameters)
             state.record(batch, counts, pilot, time.perf_counter() - start)
             bar.update(len(batch) // per_unit, time.perf_counter() - start)
     finally:
         bar.close()
         state.flush()  # every finished reading is on disk, interrupted or not (saving may be spaced out)
         if original is not None:
-            apply_point(instrument, grid.space.keys, original)
+            apply_point(instrument, parameters.keys, original)
     return state.counts, state.pilot if settings.adaptive else None, state.seconds
 
 
@@ -312,19 +287,20 @@ def measure_reading(instrument: Any, settings: Settings, progress: bool | None =
     return run(instrument, settings, [settings.theta_i], keyed=False, progress=progress).squeeze()
 
 
-def _identity(settings: Settings, grid: ReadingGrid, instrument: Any, scene: str, shared: bool) -> dict[str, Any]:
+def _identity(settings: Settings, angles: np.ndarray, parameters: ParameterSpace | None, instrument: Any, scene: str,
+              shared: bool) -> dict[str, Any]:
     """Everything that decides a keyed run's counts (chunk size and version do not); the parameters when swept."""
 
     common = {k: v for k, v in settings.as_dict().items() if k != "theta_i"}
     identity = {
         **common,
-        "theta_i": [float(t) for t in grid.theta_i],
+        "theta_i": [float(t) for t in angles],
         "geometry": asdict(instrument.geometry),
         "scene": scene,
         "wavelength_independent": shared,
     }
-    if grid.space is not None:
-        identity["parameters"] = grid.space.as_dict()
+    if parameters is not None:
+        identity["parameters"] = parameters.as_dict()
     return identity
 
 

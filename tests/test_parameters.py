@@ -365,3 +365,12 @@ def test_a_two_stage_parameter_sweep_keeps_each_readings_pilot_and_is_split_inde
     _same_counts(whole.pilot, split.pilot)
     assert np.all(whole.certified_mu == 0.02) and whole.pilot.rays.shape == whole.shape
     assert len(np.unique(whole.rays)) > 1  # each reading sized by its own pilot
+
+
+def test_spectra_colours_and_plots_need_one_parameter_point(leaf_grid, tmp_path):
+    with pytest.raises(ValueError, match=r"select one parameter point first, e.g. result.sel\(\*\*\{'specimen"):
+        leaf_grid.to_sd()
+    with pytest.raises(ValueError, match="select one parameter point first"):
+        leaf_grid.plot()
+    figure = leaf_grid.sel(**{THICKNESS: 1.2e-4, CHLOROPHYLL: 2}).plot(tmp_path / "one.png")
+    assert (tmp_path / "one.png").stat().st_size > 0 and figure is not None

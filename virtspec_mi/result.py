@@ -415,8 +415,19 @@ class Result:
         return self.isel(**indices)
 
     def as_grid(self) -> "Result":
-        """The same result with θi as a dimension (a single reading becomes a one-angle grid)."""
+        """
+        The same result with θi as a dimension (a single reading becomes a one-angle grid):
+        what spectra, colours, comparisons and plots read. A result with parameter dims
+        raises ``ValueError``: select one parameter point first (:meth:`sel`, :meth:`isel`).
+        """
 
+        extra = [d for d in self.dims if d not in ("wavelength", "theta_i")]
+        if extra:
+            name = extra[0]
+            example = "isel(point=0)" if name == "point" else \
+                f"sel(**{{{name!r}: {float(np.asarray(self.coords[name])[0]):g}}})"
+            raise ValueError(f"this result also has the dims {', '.join(extra)} (a parameter sweep): select one "
+                             f"parameter point first, e.g. result.{example}")
         if "theta_i" in self.dims:
             return self
         coords = {**self.coords, "theta_i": np.atleast_1d(self.coords["theta_i"])}

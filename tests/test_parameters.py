@@ -339,6 +339,7 @@ def test_cli_points_and_measure_param(scenes_dir, capsys):
                  "--param", "specimen.thickness=1e-4,2e-4", "--param", "specimen.chlorophyll_a=2,3", "--quiet"]) == 0
     rows = capsys.readouterr().out.strip().splitlines()
     assert rows[1].startswith("wavelength,theta_i,point,") and len(rows) == 4
+    assert rows[1].endswith(",specimen.thickness,specimen.chlorophyll_a") and rows[3].endswith(",0.0002,3.0")
     assert main(["measure", scene, "--wavelengths", "550", "--rays", "100", "--param", "specimen.thickness=2e-4",
                  "--json"]) == 0
     reading = json.loads(capsys.readouterr().out)

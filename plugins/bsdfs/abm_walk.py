@@ -40,6 +40,13 @@ Conventions
 - No ``eval``/``pdf``: a sample-only BSDF (both return 0).
 - ``wavelength_range = (400, 2500)`` nm: the instrument refuses other wavelengths
   with a ``ValueError`` before tracing.
+- **Parameters through ``mi.traverse``.** Every numeric parameter of
+  :data:`LEAF_DEFAULTS` (``thickness`` … the aspect ratios) shows as
+  ``specimen.bsdf.NAME`` (an opaque ``Float64``); setting it and calling ``update()``
+  checks it as at load time (``ValueError``; the leaf is left as it was) and rebuilds the
+  α·d_m table (an evaluated array) and the lobe exponents (opaque): one compiled walk
+  serves every value. ``sieve_detour``, ``side``, ``lookup`` and ``max_steps`` are code
+  (a new value compiles a new kernel) and are not exposed.
 
 References
 ----------

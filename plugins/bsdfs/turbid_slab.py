@@ -71,6 +71,12 @@ spectra are checked at the wavelengths of a measurement before it is traced
 (:meth:`TurbidSlab.check_wavelengths`). When every parameter is a number the slab
 declares :attr:`TurbidSlab.wavelength_independent` ``True``.
 
+``mi.traverse`` shows every parameter given as a number and ``thickness`` as
+``specimen.bsdf.NAME`` (opaque ``Float64``): setting one and calling ``update()`` checks
+it as above and rebuilds the walk's opaque scalars, so a parameter sweep
+(:mod:`virtspec_mi.parameters`) reuses the compiled kernel. A parameter given as a
+spectrum is not exposed.
+
 References
 ----------
 L. Wang, S.L. Jacques, L. Zheng (1995), *MCML — Monte Carlo modeling of light

@@ -7,9 +7,12 @@ The engine: from planned readings to exact counts and results
 the settings' ray budget (:mod:`virtspec_mi.budgets`) and traces all of them through
 the ray kernel (:mod:`virtspec_mi.kernel.tracer`) in as few launches as memory allows
 (chunks of ``settings.chunk_size`` rays that may span many readings).
-:func:`run` lays a grid of readings (wavelength × θi) out for it — in one call, or in
-batches keyed on each reading's index so that a run can be checkpointed, resumed and
-shown with a progress bar — and returns one :class:`~virtspec_mi.result.Result`.
+:func:`run` lays a grid of readings (wavelength × θi, and specimen parameter points
+when given: :mod:`virtspec_mi.parameters`) out for it — in one call, or in batches keyed
+on each reading's index so that a run can be checkpointed, resumed and shown with a
+progress bar — and returns one :class:`~virtspec_mi.result.Result`.
+:func:`take_keyed_readings` traces one batch of a keyed run (any block of reading
+indices): it sets each parameter point on the scene, then traces that point's readings.
 
 Model only what is needed: a specimen whose BSDF declares
 ``wavelength_independent = True`` (e.g. ``simple_dielectric``) is traced once per

@@ -377,3 +377,32 @@ def test_spectra_colours_and_plots_need_one_parameter_point(leaf_grid, tmp_path)
         leaf_grid.plot()
     figure = leaf_grid.sel(**{THICKNESS: 1.2e-4, CHLOROPHYLL: 2}).plot(tmp_path / "one.png")
     assert (tmp_path / "one.png").stat().st_size > 0 and figure is not None
+
+
+def test_range_values_are_the_decimal_grid_and_include_the_stop():
+    from virtspec_mi.checks import parse_values
+
+    assert parse_values("p", "0.1:0.3:0.1") == (0.1, 0.2, 0.3)
+    assert parse_values("p", "1e-4:2e-4:5e-5") == (1e-4, 1.5e-4, 2e-4)
+    assert parse_values("p", "1e-4:2.2e-4:5e-5, 7e-4") == (1e-4, 1.5e-4, 2e-4, 7e-4)  # 2.2e-4 is off the grid
+    assert parse_values("p", [1 / 3]) == (1 / 3,)  # explicit numbers are kept as given
+    with pytest.raises(ValueError, match="must hold finite numbers"):
+        parse_values("p", [float("inf")])
+
+
+def test_a_parameter_space_survives_pickling_as_a_worker_receives_it(mi, leaf_data_dir):
+    """What a process that loads its own scene does with a block: the same counts."""
+
+    import pickle
+
+    from virtspec_mi.parameters import parameter_space
+
+    scene = vm.instrument_scene({"type": "abm_b"})
+    here = vm.find_instrument(scene)
+    space = pickle.loads(pickle.dumps(parameter_space(here, GRID)))
+    settings = vm.Settings(**{k: v for k, v in SWEEP.items() if k != "theta_i"}, theta_i=8)
+    block = np.array([5, 6, 7])
+    counts, _ = take_keyed_readings(vm.find_instrument(scene), settings, [8.0], block, space)
+    whole = vm.sweep(scene, parameters=GRID, **SWEEP)
+    flat = whole.counts.map(lambda v: np.moveaxis(v, (0, 1), (-1, -2)).reshape(-1))
+    _same_counts(counts, flat.map(lambda v: v[block]))

@@ -326,10 +326,19 @@ def parse_values(name: str, values: Any) -> tuple[float, ...]:
     Values of a swept specimen parameter ``name``: the forms of :func:`parse_wavelengths`
     (a number, a sequence, or a string of numbers and ``start:stop:step`` ranges, stop
     included when it lies on the grid within rounding), each finite, at least one and at
-    most :data:`MAX_VALUES`. Their range is the specimen's to check.
+    most :data:`MAX_VALUES`. A range's values are rounded to 15 significant digits, so
+    ``"0.1:0.3:0.1"`` gives 0.1, 0.2, 0.3 rather than 0.30000000000000004 (labels that
+    ``Result.sel`` and files show as typed). Their range is the specimen's to check.
     """
 
-    numbers = _parse_numbers(name, values, "the parameter's unit")
+    if isinstance(values, str) and ":" in values:
+        numbers: list[float] = []
+        for token in values.replace(",", " ").split():
+            numbers.extend([float(f"{v:.15g}") for v in _parse_range(token, name, MAX_VALUES - len(numbers))]
+                           if ":" in token else [number(name, token)])
+            _check_count(name, len(numbers))
+    else:
+        numbers = _parse_numbers(name, values, "the parameter's unit")
     if not numbers:
         raise ValueError(f"parameter {name!r} must hold at least one value (got none)")
     for value in numbers:

@@ -10,10 +10,13 @@ reflectance ρ = m/N (eq. 2), transmittance τ and absorptance α = 1 − ρ −
 wavelength, with the exact counts behind them and the certificate they give.
 
 :func:`sweep` measures a grid (wavelength × θi) at one φi — the paper's Fig. 5 or a
-spectrum — and returns the same type with dims ``(wavelength, theta_i)``. Its reading
-k (k = i_θ·n_λ + i_λ) owns the global ray indices [k·stride, k·stride + N): its counts
-depend on (seed, k) only, which makes a sweep resumable from a checkpoint and its
-readings independent of how they are batched (:func:`virtspec_mi.engine.run`).
+spectrum — and returns the same type with dims ``(wavelength, theta_i)``; with
+``parameters`` also over specimen parameters (a grid: one dim per parameter; or
+explicit points: the dim ``point``; :mod:`virtspec_mi.parameters`). Its reading
+k (k = (i_p·n_θ + i_θ)·n_λ + i_λ, i_p the parameter point) owns the global ray indices
+[k·stride, k·stride + N): its counts depend on (seed, k) only, which makes a sweep
+resumable from a checkpoint and its readings independent of how they are batched
+(:func:`virtspec_mi.engine.take_keyed_readings`).
 
 Both take every setting of :class:`~virtspec_mi.settings.Settings` as a keyword (their
 signatures are derived from it); a bad value raises ``ValueError`` naming the setting
@@ -27,6 +30,7 @@ Baranoski et al. (2001), eqs. (2), (23), (24); Figs. 5 and 6.
 from __future__ import annotations
 
 import os
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
@@ -36,6 +40,7 @@ from virtspec_mi.checkpoint import checkpoint_for, claim, remove
 from virtspec_mi.checks import parse_theta_i
 from virtspec_mi.engine import measure_reading, run
 from virtspec_mi.instrument import Instrument
+from virtspec_mi.parameters import apply_point, current_values, parameter_space
 from virtspec_mi.result import Result
 from virtspec_mi.results_io import check_output
 from virtspec_mi.scene import find_instrument, scene_fingerprint
@@ -44,7 +49,8 @@ from virtspec_mi.settings import Settings, settings_keywords, with_settings
 __all__ = ["measure", "sweep", "read_result", "fluctuation"]
 
 
-def measure(scene: Any, *, progress: bool | None = None, **settings: Any) -> Result:
+def measure(scene: Any, *, parameters: dict[str, Any] | None = None, defines: dict[str, Any] | None = None,
+            progress: bool | None = None, **settings: Any) -> Result:
     """
     Measure the specimen of ``scene`` and return a certified :class:`~virtspec_mi.result.Result`
     over wavelength (θi a scalar label).
@@ -53,6 +59,11 @@ def measure(scene: Any, *, progress: bool | None = None, **settings: Any) -> Res
     ----------
     scene
         XML path, scene dict or loaded ``mi.Scene`` with ``emitter`` and ``specimen`` disks.
+    parameters
+        Specimen parameters to set for this reading, name → one number (names as for
+        :func:`sweep`); the scene gets its own values back afterwards.
+    defines
+        Values of an XML scene's ``$name`` parameters, name → value (``mitsuba -D``).
     **settings
         Any setting of :class:`~virtspec_mi.settings.Settings` (``theta_i``, ``phi_i``,
         ``wavelengths``, ``mu``, ``delta``, ``rays``, ``bound``, ``joint``,
@@ -69,9 +80,22 @@ def measure(scene: Any, *, progress: bool | None = None, **settings: Any) -> Res
     Baranoski et al. (2001), eqs. (2), (23).
     """
 
-    instrument = find_instrument(scene)
+    instrument = find_instrument(scene, defines)
     settings = with_settings(_scene_settings(instrument), settings, "measure")
-    result = measure_reading(instrument, settings, progress=progress)
+    space = parameter_space(instrument, parameters or {})
+    if space is not None and space.size != 1:
+        raise ValueError("measure takes one value per parameter (a sweep takes several: use sweep)")
+    if space is None:
+        result = measure_reading(instrument, settings, progress=progress)
+    else:
+        original = current_values(instrument, space.keys)
+        try:
+            apply_point(instrument, space.keys, space.point(0))
+            result = measure_reading(instrument, settings, progress=progress)
+        finally:
+            apply_point(instrument, space.keys, original)
+        result = replace(result, parameters=space.as_dict(),
+                         coords={**result.coords, **{n: np.asarray(v[0]) for n, v in space.coords().items()}})
     result.warn_if_uncertified(stacklevel=3)
     return result
 
@@ -80,6 +104,9 @@ def sweep(
     scene: Any,
     *,
     theta_i: Any = None,
+    parameters: dict[str, Any] | None = None,
+    points: bool = False,
+    defines: dict[str, Any] | None = None,
     checkpoint: str | os.PathLike | None = None,
     out: str | os.PathLike | None = None,
     progress: bool | None = None,
@@ -96,6 +123,18 @@ def sweep(
         Incidence angles in degrees: a number, a sequence or a string such as
         ``"0:90:1"`` (stop included), each in [0, 90], all distinct; default: the
         scene's θi (or 0).
+    parameters
+        Specimen parameters to sweep, name → values (a number, a sequence, or a string
+        such as ``"1e-4:2e-4:5e-5"``, stop included within rounding). Names are the
+        ``mi.traverse`` keys of the specimen's BSDF (``specimen.bsdf.thickness``,
+        ``specimen.bsdf.alpha.value``) or their short form (``specimen.thickness``,
+        ``specimen.alpha``): see :mod:`virtspec_mi.parameters`. A grid (the outer
+        product) adds one result dim per parameter, named as given.
+    points
+        ``True``: ``parameters`` holds explicit points (equal-length lists, e.g. Latin
+        hypercube samples): one dim ``point``, each parameter a coordinate along it.
+    defines
+        Values of an XML scene's ``$name`` parameters, name → value (``mitsuba -D``).
     checkpoint
         Path of a JSON file recording finished readings as the sweep goes; an existing
         file of the same sweep is resumed (:mod:`virtspec_mi.checkpoint`; a note on
@@ -127,20 +166,22 @@ def sweep(
     if out is not None:
         check_output(out)
         checkpoint = checkpoint if checkpoint is not None else checkpoint_for(out)
-    instrument = find_instrument(scene)
+    instrument = find_instrument(scene, defines)
     base = with_settings(_scene_settings(instrument), settings, "sweep")
+    space = parameter_space(instrument, parameters or {}, points=points)
     angles = np.array(parse_theta_i(base.theta_i if theta_i is None else theta_i))
     resolved = base.updated(theta_i=float(angles[0]))
     for name, values in (("theta_i", angles), ("wavelengths", np.array(resolved.wavelengths))):
         if len(np.unique(values)) != len(values):
             raise ValueError(f"{name} of a sweep must be distinct (got repeated values)")
-    fingerprint = scene_fingerprint(scene, instrument)
+    fingerprint = scene_fingerprint(scene, instrument, defines)
     if checkpoint is None:
-        result = run(instrument, resolved, angles, keyed=True, scene=fingerprint, progress=progress)
+        result = run(instrument, resolved, angles, keyed=True, scene=fingerprint, progress=progress,
+                     parameters=space)
     else:
         with claim(checkpoint):  # one run per checkpoint, writable: checked before any tracing
             result = run(instrument, resolved, angles, keyed=True, scene=fingerprint, checkpoint=checkpoint,
-                         progress=progress)
+                         progress=progress, parameters=space)
             if out is not None:
                 _write(result, out, checkpoint)
             remove(checkpoint)  # the readings are safe: returned, and written to out when given

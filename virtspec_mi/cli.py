@@ -8,7 +8,13 @@ Command line: ``virtspec``
   [--seed] [--json]``: one certified reading.
 - ``virtspec sweep SCENE --theta-i 0:90:1 [--wavelengths 400:700:10] [--out FILE(.nc|.csv|.json)]
   [--plot FIG(.png|.svg)] [--densities 3 4 5 6] [--quiet] [measure options]``: a sweep
-  (resumable when ``--out`` is given: see :mod:`virtspec_mi.checkpoint`).
+  (resumable when ``--out`` is given: see :mod:`virtspec_mi.checkpoint`); ``--param
+  NAME=VALUES`` (repeatable; VALUES ``v1,v2,v3`` or ``start:stop:step``, stop included
+  within rounding) sweeps a specimen parameter too (a grid; ``--points``: explicit
+  points, equal-length lists; :mod:`virtspec_mi.parameters`).
+- ``measure`` and ``sweep`` take ``-D NAME=VALUE`` (repeatable): the XML scene's ``$NAME``
+  parameter, as Mitsuba's own ``mitsuba -D`` (``mi.load_file(path, NAME=VALUE)``);
+  ``measure --param NAME=VALUE`` sets one specimen parameter for the reading.
 - ``virtspec colour FILE [--theta-i] [--quantity] [--illuminant] [--observer] [--json]``: CIE
   XYZ, L*a*b* and sRGB of a saved spectrum (a result file or a colour-science CSV).
 - ``virtspec compare RESULT MEASURED [...]``: a result against a measured spectrum
@@ -35,7 +41,10 @@ _EXAMPLES = {
     "measure": "examples:\n  virtspec measure scenes/diamond_conical.xml --theta-i 70\n"
                "  virtspec measure scenes/soybean_abmb.xml --wavelengths 400:2500:5 --bound two-stage --json",
     "sweep": "examples:\n  virtspec sweep scenes/diamond_collimated.xml --theta-i 0:90:1 --out fig5.nc --plot fig5.png\n"
-             "  virtspec sweep scenes/diamond_collimated.xml --theta-i 0:90:1 --densities 3 4 5 6",
+             "  virtspec sweep scenes/diamond_collimated.xml --theta-i 0:90:1 --densities 3 4 5 6\n"
+             "  virtspec sweep scenes/soybean_abmb.xml --theta-i 8 --wavelengths 450,550,650 "
+             "--param specimen.thickness=1.2e-4:2e-4:4e-5 --param specimen.chlorophyll_a=2,4 --out lut.nc\n"
+             "  virtspec sweep scenes/soybean_abmb.xml -D side=abaxial --theta-i 8",
     "colour": "examples:\n  virtspec colour spectrum.csv\n"
               "  virtspec colour fig5.nc --theta-i 30 --illuminant A --quantity transmittance",
     "llvm": "example: virtspec llvm check",
@@ -70,6 +79,7 @@ def build_parser() -> argparse.ArgumentParser:
                       "wavelength, with the tolerance the rays spent guarantee. Every setting defaults to "
                       "the scene's spectrophotometer integrator, else to the paper's defaults.")
     measure.add_argument("scene", help="Mitsuba XML scene with 'emitter' and 'specimen' disks")
+    _scene_options(measure, sweep=False)
     _measurement_options(measure, sweep=False)
     measure.add_argument("--json", action="store_true",
                          help="print the reading as one JSON object (a result file: `virtspec colour` reads it)")
@@ -78,6 +88,7 @@ def build_parser() -> argparse.ArgumentParser:
                     "Measure a grid of readings (wavelengths x theta_i) at one phi_i, each with its own rays "
                     "and certificate; resumable when --out is given.")
     sweep.add_argument("scene", help="Mitsuba XML scene with 'emitter' and 'specimen' disks")
+    _scene_options(sweep, sweep=True)
     _measurement_options(sweep, sweep=True)
     sweep.add_argument("--out", help="result file .nc, .csv or .json (finished readings are kept in "
                                      "FILE.partial.json until the result file is written: re-run to resume)")
@@ -138,6 +149,38 @@ def build_parser() -> argparse.ArgumentParser:
                       help="measurement uncertainty of MEASURED (overrides its uncertainty column)")
     plot.add_argument("--out", help="figure .png or .svg (default: FILE with the suffix .png)")
     return parser
+
+
+def _scene_options(parser: argparse.ArgumentParser, sweep: bool) -> None:
+    """``-D NAME=VALUE`` (XML scene parameters) and ``--param NAME=VALUES`` (specimen parameters)."""
+
+    parser.add_argument("-D", dest="defines", action="append", default=[], metavar="NAME=VALUE",
+                        help="set the XML scene parameter $NAME (as `mitsuba -D`); repeatable")
+    if sweep:
+        parser.add_argument("--param", dest="params", action="append", default=[], metavar="NAME=VALUES",
+                            help="sweep a specimen parameter, e.g. specimen.thickness=1e-4:2e-4:5e-5 (start:stop:step, "
+                                 "stop included) or specimen.alpha=0.1,0.2,0.4; names: mi.traverse keys of the "
+                                 "specimen's BSDF or their short form specimen.NAME; repeatable (a grid: one dim each)")
+        parser.add_argument("--points", action="store_true",
+                            help="the --param lists are explicit points (equal lengths; one dim 'point'), not a grid")
+    else:
+        parser.add_argument("--param", dest="params", action="append", default=[], metavar="NAME=VALUE",
+                            help="set a specimen parameter for this reading, e.g. specimen.thickness=2e-4; repeatable")
+
+
+def _pairs(items: Sequence[str], flag: str) -> dict[str, str]:
+    """``NAME=VALUE`` strings of a repeatable flag as a dict (``ValueError`` naming the flag)."""
+
+    pairs: dict[str, str] = {}
+    for item in items:
+        name, equals, value = item.partition("=")
+        name, value = name.strip(), value.strip()
+        if not equals or not name or not value:
+            raise ValueError(f"{flag} takes NAME=VALUE (got {item!r})")
+        if name in pairs:
+            raise ValueError(f"{flag} {name} is given twice")
+        pairs[name] = value
+    return pairs
 
 
 def _measurement_options(parser: argparse.ArgumentParser, sweep: bool) -> None:
@@ -219,7 +262,8 @@ def main(argv: Sequence[str] | None = None) -> int:
 def _measure(args: argparse.Namespace) -> int:
     from virtspec_mi.api import measure
 
-    reading = measure(args.scene, **_settings(args))
+    reading = measure(args.scene, parameters=_pairs(args.params, "--param"), defines=_pairs(args.defines, "-D"),
+                      **_settings(args))
     print(json.dumps(reading.as_dict()) if args.json else reading.summary())
     return 0
 
@@ -234,7 +278,12 @@ def _sweep(args: argparse.Namespace) -> int:
 
     out = check_output(args.out) if args.out else None  # a bad suffix or directory fails before any tracing
     check_figure_path(args.plot)
-    kwargs = {**_settings(args), "progress": False if args.quiet else None}
+    parameters = _pairs(args.params, "--param")
+    if parameters and args.plot:
+        raise ValueError("--plot draws a sweep over wavelength x theta_i; a parameter sweep is plotted by selecting "
+                         "one parameter point first (Result.sel in Python)")
+    kwargs = {**_settings(args), "progress": False if args.quiet else None, "parameters": parameters,
+              "points": args.points, "defines": _pairs(args.defines, "-D")}
     given_rays = kwargs.pop("rays")
 
     def run(rays: int | None, path: Path | None) -> object:

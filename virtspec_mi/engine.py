@@ -7,9 +7,12 @@ The engine: from planned readings to exact counts and results
 the settings' ray budget (:mod:`virtspec_mi.budgets`) and traces all of them through
 the ray kernel (:mod:`virtspec_mi.kernel.tracer`) in as few launches as memory allows
 (chunks of ``settings.chunk_size`` rays that may span many readings).
-:func:`run` lays a grid of readings (wavelength × θi) out for it — in one call, or in
-batches keyed on each reading's index so that a run can be checkpointed, resumed and
-shown with a progress bar — and returns one :class:`~virtspec_mi.result.Result`.
+:func:`run` lays a grid of readings (wavelength × θi, and specimen parameter points
+when given: :mod:`virtspec_mi.parameters`) out for it — in one call, or in batches keyed
+on each reading's index so that a run can be checkpointed, resumed and shown with a
+progress bar — and returns one :class:`~virtspec_mi.result.Result`.
+:func:`take_keyed_readings` traces one batch of a keyed run (any block of reading
+indices): it sets each parameter point on the scene, then traces that point's readings.
 
 Model only what is needed: a specimen whose BSDF declares
 ``wavelength_independent = True`` (e.g. ``simple_dielectric``) is traced once per
@@ -39,11 +42,12 @@ from virtspec_mi import twostage
 from virtspec_mi.checkpoint import Checkpoint
 from virtspec_mi.checks import check_readings, check_rays_needed, check_wavelength_range, shown_value
 from virtspec_mi.counts import Counts
+from virtspec_mi.parameters import ParameterSpace, apply_point, current_values
 from virtspec_mi.progress import Progress
 from virtspec_mi.result import Result
 from virtspec_mi.settings import Settings
 
-__all__ = ["take_readings", "shares_wavelengths", "run", "measure_reading"]
+__all__ = ["take_readings", "shares_wavelengths", "take_keyed_readings", "run", "measure_reading"]
 
 
 def take_readings(
@@ -125,6 +129,49 @@ def shares_wavelengths(instrument: Any) -> bool:
     return bool(getattr(instrument.bsdf, "wavelength_independent", False))
 
 
+def take_keyed_readings(instrument: Any, settings: Settings, theta_i: Sequence[float], batch: np.ndarray,
+                        parameters: ParameterSpace | None = None) -> tuple[Counts, Counts | None]:
+    """
+    The exact counts (and two-stage pilot counts, else ``None``, as :func:`take_readings`
+    returns them) of readings ``batch`` — flat indices, any subset in any order — of the
+    keyed grid ``settings.wavelengths`` × ``theta_i`` × parameter points: reading
+    k = (i_p·n_θ + i_θ)·n_λ + i_λ is wavelength i_λ at angle i_θ for parameter point i_p
+    (the wavelength fastest; without ``parameters`` one point, k = i_θ·n_λ + i_λ as every
+    sweep has always numbered them). It is traced from global ray index
+    k·``settings.most_rays_per_reading``, so its counts depend on (seed, k) only — never on
+    which other readings share the batch. The readings of one parameter point are traced
+    in one :func:`take_readings` call after the point's values are set on the scene
+    (:func:`virtspec_mi.parameters.apply_point`); the scene keeps the last point's values
+    (the caller restores them). The one function that traces a batch of a keyed run, for
+    any driver.
+    """
+
+    lams = np.asarray(settings.wavelengths, dtype=np.float64)
+    angles = np.asarray(theta_i, dtype=np.float64)
+    batch = np.asarray(batch, dtype=np.int64)
+    n_lam, per_point = len(lams), len(lams) * len(angles)
+    stride = settings.most_rays_per_reading
+
+    def readings(indices: np.ndarray) -> list[tuple[float, float, float]]:
+        inner = indices % per_point
+        return [(lams[k % n_lam], angles[k // n_lam], settings.phi_i) for k in inner]
+
+    if parameters is None:
+        return take_readings(instrument, readings(batch), settings, offsets=batch * stride)
+    point_of = batch // per_point
+    parts, order = [], []
+    for point in np.unique(point_of):
+        members = np.flatnonzero(point_of == point)
+        apply_point(instrument, parameters.keys, parameters.point(int(point)))
+        parts.append(take_readings(instrument, readings(batch[members]), settings, offsets=batch[members] * stride))
+        order.append(members)
+    back = np.argsort(np.concatenate(order), kind="stable")
+    counts = Counts.concatenate([c for c, _ in parts]).map(lambda v: v[back])
+    if not settings.adaptive:
+        return counts, None
+    return counts, Counts.concatenate([p for _, p in parts]).map(lambda v: v[back])
+
+
 def run(
     instrument: Any,
     settings: Settings,
@@ -134,6 +181,7 @@ def run(
     scene: str = "",
     checkpoint: Any = None,
     progress: bool | None = False,
+    parameters: ParameterSpace | None = None,
 ) -> Result:
     """
     Every reading of the grid ``settings.wavelengths`` × ``theta_i`` at ``settings.phi_i``,
@@ -155,68 +203,79 @@ def run(
     angles = np.asarray(theta_i, dtype=np.float64)
     lams = np.asarray(settings.wavelengths, dtype=np.float64)
     n_lam, n_theta = len(lams), len(angles)
+    if parameters is not None and not keyed:
+        raise ValueError("a run over parameters must be keyed on reading indices (keyed=True)")
+    size = n_lam * n_theta * (1 if parameters is None else parameters.size)
     shared = shares_wavelengths(instrument)
-    traced = n_theta if shared else n_lam * n_theta
-    check_readings(n_lam * n_theta, traced * settings.most_rays_spent_per_reading)
-    flat_lam, flat_theta = np.tile(lams, n_theta), np.repeat(angles, n_lam)
+    traced = size // n_lam if shared else size
+    check_readings(size, traced * settings.most_rays_spent_per_reading)
     if not keyed:
+        flat_lam, flat_theta = np.tile(lams, n_theta), np.repeat(angles, n_lam)
         start = time.perf_counter()
         counts, pilot = take_readings(
             instrument, [(w, t, settings.phi_i) for w, t in zip(flat_lam, flat_theta)], settings, progress=progress)
         seconds = time.perf_counter() - start
     else:
-        counts, pilot, seconds = _run_keyed(instrument, settings, flat_lam, flat_theta, shared, scene,
-                                            checkpoint, progress)
+        counts, pilot, seconds = _run_keyed(instrument, settings, angles, parameters, shared, scene, checkpoint,
+                                            progress)
+    extra = () if parameters is None else parameters.shape
+    axes = tuple(range(len(extra) + 2))
 
-    def grid(values: np.ndarray) -> np.ndarray:
-        return values.reshape(n_theta, n_lam).T.copy()
+    def layout(values: np.ndarray) -> np.ndarray:  # flat k -> (wavelength, theta_i, *parameter dims)
+        return np.transpose(values.reshape(*extra, n_theta, n_lam), (axes[-1], axes[-2], *axes[:-2])).copy()
 
     return Result(
-        dims=("wavelength", "theta_i"),
-        coords={"wavelength": lams, "theta_i": angles},
-        counts=counts.map(grid),
-        pilot=None if pilot is None else pilot.map(grid),
+        dims=("wavelength", "theta_i", *(() if parameters is None else parameters.dims)),
+        coords={"wavelength": lams, "theta_i": angles, **({} if parameters is None else parameters.coords())},
+        counts=counts.map(layout),
+        pilot=None if pilot is None else pilot.map(layout),
         settings=settings.updated(theta_i=float(angles[0])),
         geometry=instrument.geometry,
         seconds=seconds,
         scene=scene,
         wavelength_independent=shared,
+        parameters=None if parameters is None else parameters.as_dict(),
     )
 
 
-def _run_keyed(instrument: Any, settings: Settings, flat_lam: np.ndarray, flat_theta: np.ndarray, shared: bool,
-               scene: str, checkpoint: Any, progress: bool | None) -> tuple[Counts, Counts | None, float]:
-    """The readings of :func:`run` keyed on their index, in checkpointed batches of about ``chunk_size`` rays."""
+def _run_keyed(instrument: Any, settings: Settings, angles: np.ndarray, parameters: ParameterSpace | None,
+               shared: bool, scene: str, checkpoint: Any, progress: bool | None) -> tuple[Counts, Counts | None, float]:
+    """
+    The readings of :func:`run` keyed on their index, in checkpointed batches of about
+    ``chunk_size`` rays, each traced by :func:`take_keyed_readings`; the scene's parameters are
+    restored when the run ends.
+    """
 
-    n_lam, size = len(settings.wavelengths), len(flat_lam)
+    n_lam = len(settings.wavelengths)
+    size = n_lam * len(angles) * (1 if parameters is None else parameters.size)
     stride = settings.most_rays_per_reading
     units = ([np.arange(i, i + n_lam) for i in range(0, size, n_lam)] if shared
              else [np.array([k]) for k in range(size)])
     per_batch = max(1, settings.chunk_size // stride)
     batches = [np.concatenate(units[i:i + per_batch]) for i in range(0, len(units), per_batch)]
-    angles = flat_theta[::n_lam]
     if settings.adaptive:  # a pilot of n1 rays, then a second batch of at most the stride
         rays, pilot_rays = (0, stride), (settings.pilot_rays_per_reading,) * 2
     else:
         rays, pilot_rays = (settings.rays_per_reading,) * 2, (0, 0)
-    state = Checkpoint.open(checkpoint, _identity(settings, angles, instrument, scene, shared), size,
+    state = Checkpoint.open(checkpoint, _identity(settings, angles, parameters, instrument, scene, shared), size,
                             rays=rays, pilot_rays=pilot_rays, group=n_lam if shared else 1)
     todo = [b for b in (b[~state.done[b]] for b in batches) if len(b)]
     per_unit = n_lam if shared else 1
     bar = Progress(progress, total=sum(len(b) for b in todo) // per_unit)
     if state.reused:
         bar.note(f"resumed from {checkpoint}: {state.reused} of {size} readings reused")
+    original = None if parameters is None else current_values(instrument, parameters.keys)
     try:
         for batch in todo:
             start = time.perf_counter()
-            counts, pilot = take_readings(
-                instrument, [(flat_lam[k], flat_theta[k], settings.phi_i) for k in batch], settings,
-                offsets=batch.astype(np.int64) * stride)
+            counts, pilot = take_keyed_readings(instrument, settings, angles, batch, parameters)
             state.record(batch, counts, pilot, time.perf_counter() - start)
             bar.update(len(batch) // per_unit, time.perf_counter() - start)
     finally:
         bar.close()
         state.flush()  # every finished reading is on disk, interrupted or not (saving may be spaced out)
+        if original is not None:
+            apply_point(instrument, parameters.keys, original)
     return state.counts, state.pilot if settings.adaptive else None, state.seconds
 
 
@@ -231,17 +290,21 @@ def measure_reading(instrument: Any, settings: Settings, progress: bool | None =
     return run(instrument, settings, [settings.theta_i], keyed=False, progress=progress).squeeze()
 
 
-def _identity(settings: Settings, angles: np.ndarray, instrument: Any, scene: str, shared: bool) -> dict[str, Any]:
-    """Everything that decides a keyed run's counts (chunk size and version do not)."""
+def _identity(settings: Settings, angles: np.ndarray, parameters: ParameterSpace | None, instrument: Any, scene: str,
+              shared: bool) -> dict[str, Any]:
+    """Everything that decides a keyed run's counts (chunk size and version do not); the parameters when swept."""
 
     common = {k: v for k, v in settings.as_dict().items() if k != "theta_i"}
-    return {
+    identity = {
         **common,
         "theta_i": [float(t) for t in angles],
         "geometry": asdict(instrument.geometry),
         "scene": scene,
         "wavelength_independent": shared,
     }
+    if parameters is not None:
+        identity["parameters"] = parameters.as_dict()
+    return identity
 
 
 def _fixed(instrument: Any, readings: Sequence[tuple[float, float, float]], settings: Settings,

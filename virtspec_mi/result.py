@@ -98,6 +98,12 @@ class Result:
         in wavelength were traced once and share their counts.
     version : str
         virtspec-mi version that made the result.
+    parameters : dict or None
+        The swept specimen parameters (:meth:`virtspec_mi.parameters.ParameterSpace.as_dict`:
+        names, ``mi.traverse`` keys, values, grid or points), ``None`` for none. A grid adds
+        one dim per parameter (named as given) after ``theta_i``; points add the dim
+        ``point`` with each parameter as a coordinate along it. A parameter selected with
+        :meth:`sel` stays as a scalar coordinate.
     """
 
     dims: tuple[str, ...]
@@ -110,6 +116,7 @@ class Result:
     scene: str = ""
     wavelength_independent: bool = False
     version: str = field(default=__version__)
+    parameters: dict | None = None
 
     # -- labels ------------------------------------------------------------------------
 
@@ -357,9 +364,70 @@ class Result:
             raise ValueError(f"theta_i must be one of the result's angles {angles.tolist()} (got {theta_i:g})")
         return int(matches[0])
 
-    def as_grid(self) -> "Result":
-        """The same result with θi as a dimension (a single reading becomes a one-angle grid)."""
+    @property
+    def parameter_names(self) -> tuple[str, ...]:
+        """Names of the swept specimen parameters (empty without parameters)."""
 
+        return () if self.parameters is None else tuple(self.parameters["names"])
+
+    def coord_dims(self, name: str) -> tuple[str, ...]:
+        """The dims a coordinate lies along: its own, ``("point",)`` for a parameter of points, ``()`` if scalar."""
+
+        if name in self.dims:
+            return (name,)
+        return ("point",) if np.ndim(self.coords[name]) == 1 and "point" in self.dims else ()
+
+    def isel(self, **indices: int) -> "Result":
+        """The readings at one index of each given dim (``point=3``); the dim becomes a scalar coordinate."""
+
+        result = self
+        for dim, index in indices.items():
+            if dim not in result.dims:
+                raise ValueError(f"{dim!r} is not a dim of this result (dims: {', '.join(result.dims)})")
+            size = len(result.coords[dim])
+            if isinstance(index, bool) or not isinstance(index, (int, np.integer)) or not -size <= index < size:
+                raise ValueError(f"the index of {dim!r} must be an integer in [{-size}, {size}) (got {index!r})")
+            axis = result.dims.index(dim)
+            coords = {name: (np.asarray(value[index]) if result.coord_dims(name) == (dim,) else value)
+                      for name, value in result.coords.items()}
+            take = lambda v: np.take(v, int(index), axis=axis)  # noqa: E731
+            result = replace(result, dims=tuple(d for d in result.dims if d != dim), coords=coords,
+                             counts=result.counts.map(take), pilot=None if result.pilot is None else result.pilot.map(take))
+        return result
+
+    def sel(self, **labels: Any) -> "Result":
+        """
+        The readings at one label of each given dim, e.g. ``sel(**{"specimen.thickness": 2e-4})``,
+        ``sel(theta_i=8)`` or ``sel(wavelength=550)``; the dim becomes a scalar coordinate
+        (a result with dims ``(wavelength, theta_i)`` is a sweep again). ``ValueError``
+        naming the labels when none matches (to within 1e-9 relative).
+        """
+
+        indices = {}
+        for dim, label in labels.items():
+            if dim not in self.dims:
+                raise ValueError(f"{dim!r} is not a dim of this result (dims: {', '.join(self.dims)})")
+            values = np.asarray(self.coords[dim], dtype=np.float64)
+            matches = np.flatnonzero(np.isclose(values, float(label), rtol=1e-9, atol=1e-12))
+            if not len(matches):
+                raise ValueError(f"{dim} must be one of the result's labels {values.tolist()} (got {label!r})")
+            indices[dim] = int(matches[0])
+        return self.isel(**indices)
+
+    def as_grid(self) -> "Result":
+        """
+        The same result with θi as a dimension (a single reading becomes a one-angle grid):
+        what spectra, colours, comparisons and plots read. A result with parameter dims
+        raises ``ValueError``: select one parameter point first (:meth:`sel`, :meth:`isel`).
+        """
+
+        extra = [d for d in self.dims if d not in ("wavelength", "theta_i")]
+        if extra:
+            name = extra[0]
+            example = "isel(point=0)" if name == "point" else \
+                f"sel(**{{{name!r}: {float(np.asarray(self.coords[name])[0]):g}}})"
+            raise ValueError(f"this result also has the dims {', '.join(extra)} (a parameter sweep): select one "
+                             f"parameter point first, e.g. result.{example}")
         if "theta_i" in self.dims:
             return self
         coords = {**self.coords, "theta_i": np.atleast_1d(self.coords["theta_i"])}
@@ -409,6 +477,10 @@ class Result:
                                for d, n in reversed(list(zip(self.dims, self.shape))))
             head = f"{s.beam} sweep: {sizes} (phi_i = {s.phi_i:g} deg, sampling = {s.sampling}, seed = {s.seed})"
         lines = [head, self._certificate() + f"; {self.seconds * 1e3:.1f} ms"]
+        fixed = [f"{name} = {float(self.coords[name]):g}" for name in self.parameter_names
+                 if not self.coord_dims(name)]
+        if fixed:
+            lines.insert(1, "specimen parameters: " + ", ".join(fixed))
         if self.dims == ("wavelength",):
             lines += self._table()
         if self.wavelength_independent and len(self.wavelengths) > 1:
@@ -499,6 +571,10 @@ class Result:
             "scene": self.scene,
             "wavelength_independent": self.wavelength_independent,
             "version": self.version,
+            **({} if self.parameters is None else {
+                "parameters": self.parameters,
+                "parameter_coords": {name: plain(self.coords[name]) for name in (*self.parameter_names, "point")
+                                     if name in self.coords}}),
         }
 
     @classmethod
@@ -516,10 +592,14 @@ class Result:
                 return Counts(**{name: np.array(source[name], dtype=np.float64 if name == "largest_weight"
                                                 else np.int64) for name in Counts.names()})
 
+            parameters = data.get("parameters")
+            extra = {name: np.asarray(value, dtype=np.int64 if name == "point" else np.float64)
+                     for name, value in (data.get("parameter_coords") or {}).items()}
             return cls(
                 dims=dims,
                 coords={"wavelength": np.asarray(data["wavelengths"], dtype=np.float64),
-                        "theta_i": np.asarray(data["theta_i"], dtype=np.float64)},
+                        "theta_i": np.asarray(data["theta_i"], dtype=np.float64), **extra},
+                parameters=None if parameters is None else dict(parameters),
                 counts=counts(data),
                 pilot=None if data["pilot"] is None else counts(data["pilot"]),
                 settings=Settings(**data["settings"]),
@@ -555,11 +635,15 @@ class Result:
             variables[f"{name}_upper"] = (self.dims, upper, bound)
         coords = {"wavelength": ("wavelength", self.wavelengths),
                   "theta_i": ("theta_i", self.coords["theta_i"]) if "theta_i" in self.dims else self.theta_i}
+        for name in (*self.parameter_names, "point"):
+            if name in self.coords:
+                coords[name] = (self.coord_dims(name), self.coords[name])
         s = self.settings
         attrs = {"mu": s.mu, "delta": s.delta, "bound": s.bound, "joint": int(s.joint), "beam": s.beam,
                  "sampling": s.sampling, "seed": s.seed, "phi_i": s.phi_i, "interval_delta": self.interval_delta,
                  **asdict(self.geometry), "seconds": self.seconds, "scene": self.scene,
                  "wavelength_independent": int(self.wavelength_independent), "version": self.version,
+                 **({} if self.parameters is None else {"parameters": json.dumps(self.parameters)}),
                  "result_json": json.dumps(data)}
         dataset = xr.Dataset(variables, coords=coords, attrs=attrs)
         dataset["wavelength"].attrs["units"] = "nm"

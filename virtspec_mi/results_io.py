@@ -6,7 +6,8 @@ The file formats of a :class:`~virtspec_mi.result.Result` (which builds the data
 and the plain data; this module only writes and reads them, by suffix):
 
 - ``.nc`` — NetCDF-4 of ``result.to_dataset()``: an ``xarray.Dataset`` over the
-  result's dims (``wavelength`` in nm, ``theta_i`` in degrees, …) with the estimates,
+  result's dims (``wavelength`` in nm, ``theta_i`` in degrees, a parameter sweep's
+  parameters or ``point``, …) with the estimates,
   parts, every count, the Clopper–Pearson bounds and ``certified_mu`` as variables and
   the settings, geometry and provenance as attributes;
 - ``.csv`` — one row per reading with the same variables as columns, after one

@@ -31,7 +31,7 @@ from __future__ import annotations
 
 import time
 from dataclasses import asdict
-from typing import Any, Sequence
+from typing import Any, Callable, Iterable, Iterator, Sequence
 
 import numpy as np
 
@@ -43,7 +43,15 @@ from virtspec_mi.progress import Progress
 from virtspec_mi.result import Result
 from virtspec_mi.settings import Settings
 
-__all__ = ["take_readings", "shares_wavelengths", "run", "measure_reading"]
+__all__ = ["take_readings", "take_keyed_readings", "shares_wavelengths", "run", "measure_reading", "BatchRunner"]
+
+BatchRunner = Callable[[list[np.ndarray]], Iterable[tuple[np.ndarray, Counts, "Counts | None", float]]]
+"""
+What runs the batches of a keyed :func:`run`: given the batches left to do (arrays of
+reading indices), yield ``(batch, counts, pilot, seconds)`` for each as it finishes, in
+any order, every count from :func:`take_keyed_readings`. The default runs them here, one
+after the other; :mod:`virtspec_mi.scaleout` runs them on Dask workers.
+"""
 
 
 def take_readings(
@@ -134,6 +142,7 @@ def run(
     scene: str = "",
     checkpoint: Any = None,
     progress: bool | None = False,
+    runner: BatchRunner | None = None,
 ) -> Result:
     """
     Every reading of the grid ``settings.wavelengths`` × ``theta_i`` at ``settings.phi_i``,
@@ -149,7 +158,9 @@ def run(
     ``checkpoint`` says so on stderr (unless ``progress`` is ``False``). The checkpoint
     is left in place when the run completes: the caller removes it once the result is
     safe (:func:`virtspec_mi.checkpoint.remove`), and holds it meanwhile
-    (:func:`virtspec_mi.checkpoint.claim`).
+    (:func:`virtspec_mi.checkpoint.claim`). ``runner`` (keyed only; a :data:`BatchRunner`)
+    runs the batches left to do elsewhere (Dask workers); the default runs them here. The
+    batches, the checkpoint and the counts are the same either way.
     """
 
     angles = np.asarray(theta_i, dtype=np.float64)
@@ -165,8 +176,8 @@ def run(
             instrument, [(w, t, settings.phi_i) for w, t in zip(flat_lam, flat_theta)], settings, progress=progress)
         seconds = time.perf_counter() - start
     else:
-        counts, pilot, seconds = _run_keyed(instrument, settings, flat_lam, flat_theta, shared, scene,
-                                            checkpoint, progress)
+        counts, pilot, seconds = _run_keyed(instrument, settings, angles, shared, scene, checkpoint, progress,
+                                            runner or _in_process(instrument, settings, angles))
 
     def grid(values: np.ndarray) -> np.ndarray:
         return values.reshape(n_theta, n_lam).T.copy()
@@ -184,17 +195,17 @@ def run(
     )
 
 
-def _run_keyed(instrument: Any, settings: Settings, flat_lam: np.ndarray, flat_theta: np.ndarray, shared: bool,
-               scene: str, checkpoint: Any, progress: bool | None) -> tuple[Counts, Counts | None, float]:
+def _run_keyed(instrument: Any, settings: Settings, angles: np.ndarray, shared: bool, scene: str, checkpoint: Any,
+               progress: bool | None, runner: BatchRunner) -> tuple[Counts, Counts | None, float]:
     """The readings of :func:`run` keyed on their index, in checkpointed batches of about ``chunk_size`` rays."""
 
-    n_lam, size = len(settings.wavelengths), len(flat_lam)
+    n_lam = len(settings.wavelengths)
+    size = n_lam * len(angles)
     stride = settings.most_rays_per_reading
     units = ([np.arange(i, i + n_lam) for i in range(0, size, n_lam)] if shared
              else [np.array([k]) for k in range(size)])
     per_batch = max(1, settings.chunk_size // stride)
     batches = [np.concatenate(units[i:i + per_batch]) for i in range(0, len(units), per_batch)]
-    angles = flat_theta[::n_lam]
     if settings.adaptive:  # a pilot of n1 rays, then a second batch of at most the stride
         rays, pilot_rays = (0, stride), (settings.pilot_rays_per_reading,) * 2
     else:
@@ -206,18 +217,48 @@ def _run_keyed(instrument: Any, settings: Settings, flat_lam: np.ndarray, flat_t
     bar = Progress(progress, total=sum(len(b) for b in todo) // per_unit)
     if state.reused:
         bar.note(f"resumed from {checkpoint}: {state.reused} of {size} readings reused")
+    finished = runner(todo) if todo else iter(())
     try:
-        for batch in todo:
-            start = time.perf_counter()
-            counts, pilot = take_readings(
-                instrument, [(flat_lam[k], flat_theta[k], settings.phi_i) for k in batch], settings,
-                offsets=batch.astype(np.int64) * stride)
-            state.record(batch, counts, pilot, time.perf_counter() - start)
-            bar.update(len(batch) // per_unit, time.perf_counter() - start)
+        for batch, counts, pilot, seconds in finished:
+            state.record(batch, counts, pilot, seconds)
+            bar.update(len(batch) // per_unit, seconds)
     finally:
+        close = getattr(finished, "close", None)
+        if close is not None:
+            close()  # a runner elsewhere stops its outstanding work
         bar.close()
         state.flush()  # every finished reading is on disk, interrupted or not (saving may be spaced out)
     return state.counts, state.pilot if settings.adaptive else None, state.seconds
+
+
+def take_keyed_readings(instrument: Any, settings: Settings, theta_i: Sequence[float],
+                        batch: np.ndarray) -> tuple[Counts, Counts | None]:
+    """
+    The counts of readings ``batch`` of the keyed grid ``settings.wavelengths`` × ``theta_i``
+    (as :func:`take_readings` returns them): reading k = i_θ·n_λ + i_λ is the wavelength
+    i_λ at the angle i_θ, traced from global ray index k·``settings.most_rays_per_reading``,
+    so its counts depend on (seed, k) only. The one function that traces a batch of a
+    keyed run, here or on a Dask worker (:mod:`virtspec_mi.scaleout`).
+    """
+
+    lams = np.asarray(settings.wavelengths, dtype=np.float64)
+    angles = np.asarray(theta_i, dtype=np.float64)
+    batch = np.asarray(batch, dtype=np.int64)
+    n_lam = len(lams)
+    readings = [(lams[k % n_lam], angles[k // n_lam], settings.phi_i) for k in batch]
+    return take_readings(instrument, readings, settings, offsets=batch * settings.most_rays_per_reading)
+
+
+def _in_process(instrument: Any, settings: Settings, angles: np.ndarray) -> BatchRunner:
+    """The default :data:`BatchRunner`: every batch here, one after the other."""
+
+    def runner(batches: list[np.ndarray]) -> Iterator[tuple[np.ndarray, Counts, Counts | None, float]]:
+        for batch in batches:
+            start = time.perf_counter()
+            counts, pilot = take_keyed_readings(instrument, settings, angles, batch)
+            yield batch, counts, pilot, time.perf_counter() - start
+
+    return runner
 
 
 def measure_reading(instrument: Any, settings: Settings, progress: bool | None = False) -> Result:

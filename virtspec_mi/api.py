@@ -27,8 +27,9 @@ Baranoski et al. (2001), eqs. (2), (23), (24); Figs. 5 and 6.
 from __future__ import annotations
 
 import os
+from contextlib import contextmanager
 from pathlib import Path
-from typing import Any
+from typing import Any, Iterator
 
 import numpy as np
 
@@ -83,6 +84,8 @@ def sweep(
     checkpoint: str | os.PathLike | None = None,
     out: str | os.PathLike | None = None,
     progress: bool | None = None,
+    workers: Any = None,
+    task_readings: int | None = None,
     **settings: Any,
 ) -> Result:
     """
@@ -113,6 +116,15 @@ def sweep(
         ``True``: always a tqdm bar on stderr; ``False``: never (and no note on
         stderr); ``None`` (default): only when stderr is a terminal and the sweep is
         expected to last more than ~2 s.
+    workers
+        Where the readings are traced (:mod:`virtspec_mi.scaleout`): ``None`` (default)
+        in this process; an int N on a local Dask cluster of N worker processes started
+        for the sweep; a scheduler address (``"tcp://host:8786"``) or a
+        ``distributed.Client`` on that cluster. The counts are the same in every case;
+        ``scene`` must then be an XML path (readable by every worker) or a dict.
+    task_readings
+        With ``workers``: readings per Dask task; default (``None``) from the measured
+        ray rate (:func:`virtspec_mi.scaleout.task_size`).
     **settings
         As for :func:`measure` (one value for the whole sweep); ``wavelengths`` must be
         distinct. With ``bound="two-stage"`` each reading is sized by its own pilot, all
@@ -135,17 +147,38 @@ def sweep(
         if len(np.unique(values)) != len(values):
             raise ValueError(f"{name} of a sweep must be distinct (got repeated values)")
     fingerprint = scene_fingerprint(scene, instrument)
-    if checkpoint is None:
-        result = run(instrument, resolved, angles, keyed=True, scene=fingerprint, progress=progress)
-    else:
-        with claim(checkpoint):  # one run per checkpoint, writable: checked before any tracing
-            result = run(instrument, resolved, angles, keyed=True, scene=fingerprint, checkpoint=checkpoint,
-                         progress=progress)
-            if out is not None:
-                _write(result, out, checkpoint)
-            remove(checkpoint)  # the readings are safe: returned, and written to out when given
+    with _runner(scene, workers, task_readings, fingerprint, resolved, angles) as runner:
+        if checkpoint is None:
+            result = run(instrument, resolved, angles, keyed=True, scene=fingerprint, progress=progress,
+                         runner=runner)
+        else:
+            with claim(checkpoint):  # one run per checkpoint, writable: checked before any tracing
+                result = run(instrument, resolved, angles, keyed=True, scene=fingerprint, checkpoint=checkpoint,
+                             progress=progress, runner=runner)
+                if out is not None:
+                    _write(result, out, checkpoint)
+                remove(checkpoint)  # the readings are safe: returned, and written to out when given
     result.warn_if_uncertified(stacklevel=3)
     return result
+
+
+@contextmanager
+def _runner(scene: Any, workers: Any, task_readings: int | None, fingerprint: str, settings: Settings,
+            angles: np.ndarray) -> Iterator[Any]:
+    """``None`` (the engine's in-process default) or a Dask runner on ``workers``, held for the sweep."""
+
+    if workers is None:
+        if task_readings is not None:
+            raise ValueError(f"task_readings needs workers (got task_readings={task_readings!r}, workers=None)")
+        yield None
+        return
+    from virtspec_mi import scaleout  # imports dask.distributed: only when it is used
+
+    scaleout.check_workers(workers)
+    scaleout.check_task_readings(task_readings)
+    scaleout.portable_scene(scene)  # refused before any cluster starts
+    with scaleout.connect(workers) as client:
+        yield scaleout.dask_runner(client, scene, fingerprint, settings, angles, task_readings)
 
 
 def _file_path(value: Any, name: str) -> Path | None:

@@ -7,8 +7,10 @@ Command line: ``virtspec``
   [--rays] [--bound] [--joint] [--pilot-rays] [--pilot-delta] [--beam] [--sampling]
   [--seed] [--json]``: one certified reading.
 - ``virtspec sweep SCENE --theta-i 0:90:1 [--wavelengths 400:700:10] [--out FILE(.nc|.csv|.json)]
-  [--plot FIG(.png|.svg)] [--densities 3 4 5 6] [--quiet] [measure options]``: a sweep
-  (resumable when ``--out`` is given: see :mod:`virtspec_mi.checkpoint`).
+  [--plot FIG(.png|.svg)] [--densities 3 4 5 6] [--quiet] [--workers N | --scheduler ADDRESS]
+  [--task-readings K] [measure options]``: a sweep (resumable when ``--out`` is given: see
+  :mod:`virtspec_mi.checkpoint`), on Dask workers with ``--workers``/``--scheduler``
+  (:mod:`virtspec_mi.scaleout`).
 - ``virtspec colour FILE [--theta-i] [--quantity] [--illuminant] [--observer] [--json]``: CIE
   XYZ, L*a*b* and sRGB of a saved spectrum (a result file or a colour-science CSV).
 - ``virtspec compare RESULT MEASURED [...]``: a result against a measured spectrum
@@ -35,7 +37,8 @@ _EXAMPLES = {
     "measure": "examples:\n  virtspec measure scenes/diamond_conical.xml --theta-i 70\n"
                "  virtspec measure scenes/soybean_abmb.xml --wavelengths 400:2500:5 --bound two-stage --json",
     "sweep": "examples:\n  virtspec sweep scenes/diamond_collimated.xml --theta-i 0:90:1 --out fig5.nc --plot fig5.png\n"
-             "  virtspec sweep scenes/diamond_collimated.xml --theta-i 0:90:1 --densities 3 4 5 6",
+             "  virtspec sweep scenes/diamond_collimated.xml --theta-i 0:90:1 --densities 3 4 5 6\n"
+             "  virtspec sweep scenes/soybean_abmb.xml --theta-i 8 --wavelengths 400:2500:5 --workers 2 --out leaf.nc",
     "colour": "examples:\n  virtspec colour spectrum.csv\n"
               "  virtspec colour fig5.nc --theta-i 30 --illuminant A --quantity transmittance",
     "llvm": "example: virtspec llvm check",
@@ -85,6 +88,14 @@ def build_parser() -> argparse.ArgumentParser:
     sweep.add_argument("--densities", type=float, nargs="+", metavar="LOG10N",
                        help="sweep at N = 10^d rays for each d; print seconds and the fluctuation of eq. (24)")
     sweep.add_argument("--quiet", action="store_true", help="no progress bar and no summary")
+    where = sweep.add_mutually_exclusive_group()
+    where.add_argument("--workers", type=int, metavar="N",
+                       help="trace on a local Dask cluster of N worker processes (default: in this process)")
+    where.add_argument("--scheduler", metavar="ADDRESS",
+                       help="trace on the Dask cluster of this scheduler, e.g. tcp://host:8786 (every worker needs "
+                            "virtspec-mi installed and the scene file at the same path)")
+    sweep.add_argument("--task-readings", type=int, metavar="K",
+                       help="readings per Dask task (default: about 5 s of tracing, from the measured ray rate)")
 
     colour = command("colour", "CIE XYZ, L*a*b*, sRGB of a saved spectrum",
                      "Colorimetry (colour-science, ASTM E308) of one quantity of a result file at one theta_i, "
@@ -234,7 +245,9 @@ def _sweep(args: argparse.Namespace) -> int:
 
     out = check_output(args.out) if args.out else None  # a bad suffix or directory fails before any tracing
     check_figure_path(args.plot)
-    kwargs = {**_settings(args), "progress": False if args.quiet else None}
+    kwargs = {**_settings(args), "progress": False if args.quiet else None,
+              "workers": args.scheduler if args.scheduler is not None else args.workers,
+              "task_readings": args.task_readings}
     given_rays = kwargs.pop("rays")
 
     def run(rays: int | None, path: Path | None) -> object:

@@ -67,7 +67,8 @@ def test_workers_are_separate_processes_set_up_where_their_tasks_run(client):
     ("dict", {"bound": "hoeffding", "mu": 0.05}),
     ("dict", {"bound": "two-stage", "mu": 0.02, "rays": None}),
     ("scenes/diamond_collimated.xml", {}),  # wavelength-independent: traced once per angle
-], ids=["dict", "two-stage", "xml-shared"])
+    ("scenes/soybean_abmb.xml", {"theta_i": [8, 60]}),  # an ABM leaf: every reading traced on its own
+], ids=["dict", "two-stage", "xml-shared", "leaf"])
 def test_a_sweep_on_two_worker_processes_is_bit_identical_to_the_in_process_one(client, dielectric_dict, scene,
                                                                                 extra):
     scene = dielectric_dict if scene == "dict" else scene

@@ -35,12 +35,14 @@ import numpy as np
 
 from virtspec_mi.checkpoint import checkpoint_for, claim, remove
 from virtspec_mi.checks import parse_theta_i
-from virtspec_mi.engine import measure_reading, run
+from virtspec_mi.engine import in_process_runner, measure_reading, run
 from virtspec_mi.instrument import Instrument
 from virtspec_mi.result import Result
 from virtspec_mi.results_io import check_output
 from virtspec_mi.scene import find_instrument, scene_fingerprint
 from virtspec_mi.settings import Settings, settings_keywords, with_settings
+from virtspec_mi.zarr_table import SUFFIX as ZARR_SUFFIX
+from virtspec_mi.zarr_table import ZarrTable
 
 __all__ = ["measure", "sweep", "read_result", "fluctuation"]
 
@@ -109,7 +111,8 @@ def sweep(
         :class:`~virtspec_mi.checkpoint.CheckpointError` and is left as it is.
     out
         Result file (``.nc``, ``.csv`` or ``.json``, :meth:`Result.write`) to write,
-        atomically, when the sweep completes; checked before any tracing. The
+        atomically, when the sweep completes — or a Zarr store (``.zarr``) that receives
+        each batch's counts as it finishes, region by region (:mod:`virtspec_mi.zarr_table`); checked before any tracing. The
         checkpoint defaults to ``OUT.partial.json``: if the write fails (a full disk …)
         every finished reading stays there and the same call, re-run, only writes.
     progress
@@ -148,6 +151,11 @@ def sweep(
             raise ValueError(f"{name} of a sweep must be distinct (got repeated values)")
     fingerprint = scene_fingerprint(scene, instrument)
     with _runner(scene, workers, task_readings, fingerprint, resolved, angles) as runner:
+        if out is not None and out.suffix.lower() == ZARR_SUFFIX:  # the store fills as the batches finish
+            table = ZarrTable(out, resolved.wavelengths, angles, {"scene": fingerprint, **resolved.as_dict(),
+                                                                  "theta_i": [float(t) for t in angles]},
+                              pilot=resolved.adaptive)
+            runner = table.stream(runner or in_process_runner(instrument, resolved, angles))
         if checkpoint is None:
             result = run(instrument, resolved, angles, keyed=True, scene=fingerprint, progress=progress,
                          runner=runner)

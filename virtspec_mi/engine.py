@@ -43,7 +43,8 @@ from virtspec_mi.progress import Progress
 from virtspec_mi.result import Result
 from virtspec_mi.settings import Settings
 
-__all__ = ["take_readings", "take_keyed_readings", "shares_wavelengths", "run", "measure_reading", "BatchRunner"]
+__all__ = ["take_readings", "take_keyed_readings", "in_process_runner", "shares_wavelengths", "run", "measure_reading",
+           "BatchRunner"]
 
 BatchRunner = Callable[[list[np.ndarray]], Iterable[tuple[np.ndarray, Counts, "Counts | None", float]]]
 """
@@ -177,7 +178,7 @@ def run(
         seconds = time.perf_counter() - start
     else:
         counts, pilot, seconds = _run_keyed(instrument, settings, angles, shared, scene, checkpoint, progress,
-                                            runner or _in_process(instrument, settings, angles))
+                                            runner or in_process_runner(instrument, settings, angles))
 
     def grid(values: np.ndarray) -> np.ndarray:
         return values.reshape(n_theta, n_lam).T.copy()
@@ -249,7 +250,7 @@ def take_keyed_readings(instrument: Any, settings: Settings, theta_i: Sequence[f
     return take_readings(instrument, readings, settings, offsets=batch * settings.most_rays_per_reading)
 
 
-def _in_process(instrument: Any, settings: Settings, angles: np.ndarray) -> BatchRunner:
+def in_process_runner(instrument: Any, settings: Settings, angles: np.ndarray) -> BatchRunner:
     """The default :data:`BatchRunner`: every batch here, one after the other."""
 
     def runner(batches: list[np.ndarray]) -> Iterator[tuple[np.ndarray, Counts, Counts | None, float]]:

@@ -116,6 +116,13 @@ def test_an_interrupted_distributed_sweep_resumes_without_tracing_a_finished_rea
     same_counts(resumed, vm.sweep(dielectric_dict, **SMALL))
 
 
+def test_an_error_on_a_worker_reaches_the_caller_as_itself(client):
+    # the ABM leaf refuses wavelengths outside its data, in take_readings: on the worker here
+    with pytest.raises(ValueError, match="wavelength"):
+        vm.sweep("scenes/soybean_abmb.xml", theta_i=[8], wavelengths="300 500", rays=1000, progress=False,
+                 workers=client)
+
+
 def test_the_cli_runs_a_sweep_on_a_scheduler_address(client, tmp_path):
     address = client.scheduler.address
     out = tmp_path / "sweep.nc"

@@ -27,7 +27,7 @@ Baranoski et al. (2001), eqs. (2), (23), (24); Figs. 5 and 6.
 from __future__ import annotations
 
 import os
-from contextlib import contextmanager
+from contextlib import ExitStack, contextmanager
 from pathlib import Path
 from typing import Any, Iterator
 
@@ -150,22 +150,21 @@ def sweep(
         if len(np.unique(values)) != len(values):
             raise ValueError(f"{name} of a sweep must be distinct (got repeated values)")
     fingerprint = scene_fingerprint(scene, instrument)
-    with _runner(scene, workers, task_readings, fingerprint, resolved, angles) as runner:
+    with ExitStack() as held:
+        if checkpoint is not None:  # one run per checkpoint, writable: checked before any cluster or tracing
+            held.enter_context(claim(checkpoint))
+        runner = held.enter_context(_runner(scene, workers, task_readings, fingerprint, resolved, angles))
         if out is not None and out.suffix.lower() == ZARR_SUFFIX:  # the store fills as the batches finish
             table = ZarrTable(out, resolved.wavelengths, angles, {"scene": fingerprint, **resolved.as_dict(),
                                                                   "theta_i": [float(t) for t in angles]},
                               pilot=resolved.adaptive)
             runner = table.stream(runner or in_process_runner(instrument, resolved, angles))
-        if checkpoint is None:
-            result = run(instrument, resolved, angles, keyed=True, scene=fingerprint, progress=progress,
-                         runner=runner)
-        else:
-            with claim(checkpoint):  # one run per checkpoint, writable: checked before any tracing
-                result = run(instrument, resolved, angles, keyed=True, scene=fingerprint, checkpoint=checkpoint,
-                             progress=progress, runner=runner)
-                if out is not None:
-                    _write(result, out, checkpoint)
-                remove(checkpoint)  # the readings are safe: returned, and written to out when given
+        result = run(instrument, resolved, angles, keyed=True, scene=fingerprint, checkpoint=checkpoint,
+                     progress=progress, runner=runner)
+        if checkpoint is not None:
+            if out is not None:
+                _write(result, out, checkpoint)
+            remove(checkpoint)  # the readings are safe: returned, and written to out when given
     result.warn_if_uncertified(stacklevel=3)
     return result
 

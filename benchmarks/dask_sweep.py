@@ -13,7 +13,7 @@ Prints, in one run, side by side:
     on every worker too). Wall time, rays/s, the ratio, tasks, and that the counts are
     identical. (The issue asks for 2 specimen parameters × 5 values × 421 wavelengths;
     parameter sweeps are another branch, so the table here is wavelength × θi, 4,210
-    readings, four times as many as the issue's 2,105.)
+    readings: as many as 10 parameter points × 421 wavelengths.)
 (b) **Per-task overhead** — 400 empty tasks (``client.submit`` of a no-op, then gather):
     wall ms per task; 20 sequential round trips; and 200 tiny sweep tasks (one reading
     of 1,024 rays each, ``task_readings=1``) against the same sweep in process: wall ms per

@@ -95,7 +95,7 @@ def build_parser() -> argparse.ArgumentParser:
                        help="trace on the Dask cluster of this scheduler, e.g. tcp://host:8786 (every worker needs "
                             "virtspec-mi installed and the scene file at the same path)")
     sweep.add_argument("--task-readings", type=int, metavar="K",
-                       help="readings per Dask task (default: about 5 s of tracing, from the measured ray rate)")
+                       help="readings per Dask task (default: scaleout.TASK_SECONDS of tracing, from the measured ray rate)")
 
     colour = command("colour", "CIE XYZ, L*a*b*, sRGB of a saved spectrum",
                      "Colorimetry (colour-science, ASTM E308) of one quantity of a result file at one theta_i, "

@@ -73,6 +73,7 @@ __all__ = [
     "connect",
     "local_cluster",
     "portable_scene",
+    "task_size",
     "dask_runner",
     "worker_state",
 ]

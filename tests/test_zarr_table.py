@@ -76,3 +76,22 @@ def test_a_zarr_out_that_is_a_file_is_refused(dielectric, tmp_path):
     (tmp_path / "table.zarr").write_text("")
     with pytest.raises(ValueError, match="is a file; a Zarr store is a directory"):
         vm.sweep(dielectric, out=tmp_path / "table.zarr", **SMALL)
+
+
+def test_batches_in_any_order_land_in_their_cells_and_whole_rows_merge(tmp_path):
+    from virtspec_mi.zarr_table import ZarrTable
+
+    n_lam, n_theta = 7, 4
+    table = ZarrTable(tmp_path / "t.zarr", np.arange(n_lam) * 5 + 400.0, np.arange(n_theta) * 10.0, {"test": 1},
+                      pilot=False)
+    for part in np.array_split(np.random.default_rng(1).permutation(n_lam * n_theta), 5):
+        counts = Counts(**{name: (part + 1).astype(np.float64 if name == "largest_weight" else np.int64)
+                           for name in Counts.names()})
+        table.write(part, counts, None)
+    table.flush()
+    with xr.open_zarr(tmp_path / "t.zarr", consolidated=False) as store:
+        assert np.array_equal(store["rays"].values, (np.arange(n_lam * n_theta) + 1).reshape(n_theta, n_lam).T)
+        assert store["done"].values.all()
+    regions = [(len(rows), lam, theta, rows_of_theta) for rows, lam, theta, rows_of_theta
+               in table._regions(np.arange(3, 3 * n_lam + 2))]
+    assert regions == [(4, 3, 0, 1), (14, 0, 1, 2), (2, 0, 3, 1)]  # a tail, two whole rows as one, a head

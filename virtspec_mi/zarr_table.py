@@ -8,7 +8,8 @@ variable per count (``rays``, ``reflected`` …; the two-stage pilot's as ``pilo
 plus ``done`` (bool), chunked :data:`CHUNK_WAVELENGTHS` wavelengths × one θi, its
 metadata only (xarray ``to_zarr(compute=False)`` of a Dask template) — and writes the
 counts of each finished batch into it as the batch finishes, as rectangular regions
-(``to_zarr(region=...)``, xarray's convention; one writer: the sweep's driver). A
+(``to_zarr(region=...)``, xarray's convention; one writer: the sweep's driver; writes
+spaced out as the checkpoint's are, whole θi rows merged into one region). A
 partial table is readable with ``xarray.open_zarr`` meanwhile (``done`` marks the
 finished readings). When the sweep completes, :func:`write_result` writes the derived
 variables (estimates, parts, Clopper–Pearson bounds, ``certified_mu``) and the
@@ -28,6 +29,7 @@ from __future__ import annotations
 
 import json
 import os
+import time
 from pathlib import Path
 from typing import Any, Iterator, Sequence
 
@@ -35,13 +37,16 @@ import numpy as np
 
 from virtspec_mi.counts import Counts
 
-__all__ = ["SUFFIX", "CHUNK_WAVELENGTHS", "ZarrTable", "write_result", "read"]
+__all__ = ["SUFFIX", "CHUNK_WAVELENGTHS", "WRITE_EVERY", "ZarrTable", "write_result", "read", "as_plain"]
 
 SUFFIX: str = ".zarr"
 """The suffix of a Zarr result store."""
 
 CHUNK_WAVELENGTHS: int = 4096
 """Wavelengths per Zarr chunk (by one θi)."""
+
+WRITE_EVERY: float = 10.0
+"""Write kept batches again once the time since the last write is this many times what it took."""
 
 _DIMS = ("wavelength", "theta_i")
 _META = "virtspec_table"
@@ -63,6 +68,8 @@ class ZarrTable:
         self.path = Path(path)
         self.n_lam = len(wavelengths)
         self.pilot = pilot
+        self._kept: list[tuple[np.ndarray, Counts, Counts | None]] = []
+        self._written_at, self._write_seconds = time.perf_counter(), 0.0
         identity_text = json.dumps(identity, sort_keys=True)
         if self._identity() != identity_text:
             self._create(np.asarray(wavelengths, np.float64), np.asarray(theta_i, np.float64), identity_text)
@@ -92,25 +99,60 @@ class ZarrTable:
         template.to_zarr(self.path, mode="w", compute=False, consolidated=False)
 
     def write(self, batch: np.ndarray, counts: Counts, pilot: Counts | None) -> None:
-        """Write the counts of readings ``batch`` (indices k = i_θ·n_λ + i_λ) as rectangular regions."""
+        """
+        Keep the counts of readings ``batch`` (indices k = i_θ·n_λ + i_λ) and write what is
+        kept — unless writing is slow next to the batches: it is then written once the time
+        since the last write is :data:`WRITE_EVERY` times what that write took (the
+        checkpoint's rule), so the store costs the driver at most about a tenth of the run.
+        :meth:`flush` writes what is left.
+        """
 
+        self._kept.append((np.asarray(batch, dtype=np.int64), counts, pilot))
+        if time.perf_counter() - self._written_at >= WRITE_EVERY * self._write_seconds:
+            self.flush()
+
+    def flush(self) -> None:
+        """Write every kept batch: one region per run of consecutive readings (whole θi rows merged)."""
+
+        if not self._kept:
+            return
         import xarray as xr
 
-        batch = np.asarray(batch, dtype=np.int64)
-        order = np.lexsort((batch % self.n_lam, batch // self.n_lam))
+        start = time.perf_counter()
+        batch = np.concatenate([b for b, _, _ in self._kept])
+        counts = _joined([c for _, c, _ in self._kept])
+        pilot = (_joined([p for _, _, p in self._kept])
+                 if self.pilot and all(p is not None for _, _, p in self._kept) else None)
+        self._kept = []
+        sources = [("", counts)] + ([("pilot_", pilot)] if pilot is not None else [])
+        for rows, lam, theta, n_theta in self._regions(batch):
+            variables = {f"{prefix}{name}": (_DIMS, getattr(values, name)[rows].reshape(n_theta, -1).T)
+                         for prefix, values in sources for name in Counts.names()}
+            variables["done"] = (_DIMS, np.ones((len(rows) // n_theta, n_theta), dtype=bool))
+            xr.Dataset(variables).to_zarr(
+                self.path, region={"wavelength": slice(lam, lam + len(rows) // n_theta),
+                                   "theta_i": slice(theta, theta + n_theta)}, consolidated=False)
+        self._written_at = time.perf_counter()
+        self._write_seconds = self._written_at - start
+
+    def _regions(self, batch: np.ndarray) -> Iterator[tuple[np.ndarray, int, int, int]]:
+        """(positions in ``batch`` in k order, first i_λ, first i_θ, rows of θi) of each rectangle."""
+
+        order = np.argsort(batch, kind="stable")
         keys = batch[order]
         breaks = np.flatnonzero((np.diff(keys) != 1) | (np.diff(keys // self.n_lam) != 0)) + 1
-        sources = [("", counts)] + ([("pilot_", pilot)] if self.pilot and pilot is not None else [])
-        for run in np.split(np.arange(len(keys)), breaks):
-            rows = order[run]
-            first = int(keys[run[0]])
+        runs = np.split(np.arange(len(keys)), breaks)
+        i = 0
+        while i < len(runs):
+            first = int(keys[runs[i][0]])
             lam, theta = first % self.n_lam, first // self.n_lam
-            variables = {f"{prefix}{name}": (_DIMS, getattr(values, name)[rows].reshape(-1, 1))
-                         for prefix, values in sources for name in Counts.names()}
-            variables["done"] = (_DIMS, np.ones((len(rows), 1), dtype=bool))
-            xr.Dataset(variables).to_zarr(self.path, region={"wavelength": slice(lam, lam + len(rows)),
-                                                             "theta_i": slice(theta, theta + 1)},
-                                          consolidated=False)
+            j = i + 1
+            if lam == 0 and len(runs[i]) == self.n_lam:  # whole rows in a row: one region
+                while (j < len(runs) and len(runs[j]) == self.n_lam
+                       and int(keys[runs[j][0]]) == (theta + j - i) * self.n_lam):
+                    j += 1
+            yield order[np.concatenate(runs[i:j])], lam, theta, j - i
+            i = j
 
     def stream(self, runner: Any) -> Any:
         """A batch runner (:data:`virtspec_mi.engine.BatchRunner`) that writes each batch here as it finishes."""
@@ -125,8 +167,15 @@ class ZarrTable:
                 close = getattr(finished, "close", None)
                 if close is not None:
                     close()
+                self.flush()
 
         return streaming
+
+
+def _joined(parts: list[Counts]) -> Counts:
+    """The counts of several batches, one after the other."""
+
+    return Counts(**{name: np.concatenate([getattr(part, name) for part in parts]) for name in Counts.names()})
 
 
 def write_result(result: Any, path: str | os.PathLike) -> Path:

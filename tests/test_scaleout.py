@@ -100,15 +100,24 @@ def test_an_interrupted_distributed_sweep_resumes_without_tracing_a_finished_rea
     assert done == {int(k) for batch in first for k in batch} and 0 < len(done) < 15
 
     second: list[np.ndarray] = []
+    sent: list[int] = []
 
     def spying(self, batch, *args):
         second.append(batch.copy())
         record(self, batch, *args)
 
+    def submitting(function, *args, **kwargs):  # what the workers are asked to trace
+        if function is scaleout._run_block:
+            sent.extend(int(k) for batch in args[-1] for k in batch)
+        return submit(function, *args, **kwargs)
+
+    submit = client.submit
     monkeypatch.setattr(Checkpoint, "record", spying)
+    monkeypatch.setattr(client, "submit", submitting)
     resumed = vm.sweep(dielectric_dict, workers=client, chunk_size=1024, task_readings=1, checkpoint=checkpoint,
                        **SMALL)
     again = [int(k) for batch in second for k in batch]
+    assert sorted(sent) == sorted(again)  # every block sent to a worker was recorded once
     assert not done & set(again)  # no finished reading traced again
     assert sorted(done | set(again)) == list(range(15)) and len(again) == len(set(again))
     assert not checkpoint.exists()

@@ -158,7 +158,7 @@ def sweep(
             table = ZarrTable(out, resolved.wavelengths, angles, {"scene": fingerprint, **resolved.as_dict(),
                                                                   "theta_i": [float(t) for t in angles]},
                               pilot=resolved.adaptive)
-            runner = table.stream(runner or in_process_runner(instrument, resolved, angles))
+            runner = table.stream(runner or in_process_runner(instrument, resolved, theta_i=angles))
         result = run(instrument, resolved, angles, keyed=True, scene=fingerprint, checkpoint=checkpoint,
                      progress=progress, runner=runner)
         if checkpoint is not None:
@@ -185,7 +185,7 @@ def _runner(scene: Any, workers: Any, task_readings: int | None, fingerprint: st
     scaleout.check_task_readings(task_readings)
     scaleout.portable_scene(scene)  # refused before any cluster starts
     with scaleout.connect(workers) as client:
-        yield scaleout.dask_runner(client, scene, fingerprint, settings, angles, task_readings)
+        yield scaleout.dask_runner(client, scene, fingerprint, settings, task_readings, theta_i=angles)
 
 
 def _file_path(value: Any, name: str) -> Path | None:

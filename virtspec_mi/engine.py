@@ -178,7 +178,7 @@ def run(
         seconds = time.perf_counter() - start
     else:
         counts, pilot, seconds = _run_keyed(instrument, settings, angles, shared, scene, checkpoint, progress,
-                                            runner or in_process_runner(instrument, settings, angles))
+                                            runner or in_process_runner(instrument, settings, theta_i=angles))
 
     def grid(values: np.ndarray) -> np.ndarray:
         return values.reshape(n_theta, n_lam).T.copy()
@@ -250,13 +250,17 @@ def take_keyed_readings(instrument: Any, settings: Settings, theta_i: Sequence[f
     return take_readings(instrument, readings, settings, offsets=batch * settings.most_rays_per_reading)
 
 
-def in_process_runner(instrument: Any, settings: Settings, angles: np.ndarray) -> BatchRunner:
-    """The default :data:`BatchRunner`: every batch here, one after the other."""
+def in_process_runner(instrument: Any, settings: Settings, **grid: Any) -> BatchRunner:
+    """
+    The default :data:`BatchRunner`: every batch here, one after the other, traced by
+    ``take_keyed_readings(instrument, settings, batch=batch, **grid)`` (``grid``: the
+    keyed grid's other arguments, e.g. ``theta_i``).
+    """
 
     def runner(batches: list[np.ndarray]) -> Iterator[tuple[np.ndarray, Counts, Counts | None, float]]:
         for batch in batches:
             start = time.perf_counter()
-            counts, pilot = take_keyed_readings(instrument, settings, angles, batch)
+            counts, pilot = take_keyed_readings(instrument, settings, batch=batch, **grid)
             yield batch, counts, pilot, time.perf_counter() - start
 
     return runner

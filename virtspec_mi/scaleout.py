@@ -52,7 +52,7 @@ import os
 import threading
 import time
 from contextlib import contextmanager
-from typing import Any, Iterator, Sequence
+from typing import Any, Iterator
 
 import numpy as np
 from distributed import WorkerPlugin
@@ -207,7 +207,7 @@ def portable_scene(scene: Any) -> Any:
     """
 
     if isinstance(scene, (str, os.PathLike)):
-        return os.fspath(scene)
+        return os.path.abspath(os.fspath(scene))  # the same path on every worker, whatever its directory
     if isinstance(scene, dict):
         return {key: _portable_value(value) for key, value in scene.items()}
     raise ValueError(f"scene must be an XML path or a scene dict to run on workers (got {type(scene).__name__}): "
@@ -232,9 +232,12 @@ def _restored(scene: Any) -> Any:
     return {key: _restored(value) for key, value in scene.items()}
 
 
-def _run_block(scene: Any, fingerprint: str, settings: Settings, theta_i: Sequence[float],
+def _run_block(scene: Any, fingerprint: str, settings: Settings, grid: dict[str, Any],
                batches: list[np.ndarray]) -> list[tuple[np.ndarray, Counts, Counts | None, float]]:
-    """The task: each batch of the block traced by :func:`take_keyed_readings`, with its seconds."""
+    """
+    The task: each batch of the block traced by ``take_keyed_readings(instrument, settings,
+    batch=batch, **grid)`` — exactly the in-process runner's call — with its seconds.
+    """
 
     _initialise()  # in the thread this task runs in (idempotent)
     instrument = _instruments.get(fingerprint)
@@ -243,7 +246,7 @@ def _run_block(scene: Any, fingerprint: str, settings: Settings, theta_i: Sequen
     done = []
     for batch in batches:
         start = time.perf_counter()
-        counts, pilot = take_keyed_readings(instrument, settings, theta_i, batch)
+        counts, pilot = take_keyed_readings(instrument, settings, batch=batch, **grid)
         done.append((batch, counts, pilot, time.perf_counter() - start))
     return done
 
@@ -272,17 +275,19 @@ def task_size(rate: float, remaining: int, n_workers: int, seconds: float = TASK
     return max(1, min(wanted, math.ceil(remaining / (2 * max(1, n_workers)))))
 
 
-def dask_runner(client: Any, scene: Any, fingerprint: str, settings: Settings, theta_i: Sequence[float],
-                task_readings: int | None = None) -> BatchRunner:
+def dask_runner(client: Any, scene: Any, fingerprint: str, settings: Settings, task_readings: int | None = None,
+                **grid: Any) -> BatchRunner:
     """
     A :data:`~virtspec_mi.engine.BatchRunner` that runs the batches on ``client``'s
     workers in tasks sized by :func:`task_size` (or of ``task_readings`` readings), yields
     each task's batches as it finishes and cancels what is left when it is closed.
+    ``grid``: the keyed grid's arguments of :func:`~virtspec_mi.engine.take_keyed_readings`
+    besides the batch (``theta_i`` …), sent with every task as the in-process runner
+    passes them.
     """
 
     check_task_readings(task_readings)
     portable = portable_scene(scene)
-    angles = [float(t) for t in theta_i]
 
     def runner(batches: list[np.ndarray]) -> Iterator[tuple[np.ndarray, Counts, Counts | None, float]]:
         from distributed import as_completed
@@ -290,7 +295,7 @@ def dask_runner(client: Any, scene: Any, fingerprint: str, settings: Settings, t
         n_workers = max(1, len(client.scheduler_info().get("workers", {})))
 
         def submit(tasks: list[list[np.ndarray]]) -> list[Any]:
-            return [client.submit(_run_block, portable, fingerprint, settings, angles, task, pure=False,
+            return [client.submit(_run_block, portable, fingerprint, settings, grid, task, pure=False,
                                   retries=RETRIES) for task in tasks]
 
         left = list(batches)

@@ -28,9 +28,11 @@ matrices: they do not pickle). A loaded ``mi.Scene`` cannot be sent (``ValueErro
 
 Tasks (blocks) are runs of consecutive engine batches. Their size follows one rule:
 ``readings per task = TASK_SECONDS × readings per second``, where the rate (the ray rate
-divided by the rays per reading) is measured on the first task of each worker (two
-batches; the faster one counts, so the kernel's compilation does not), and capped so
-that at least two tasks per worker remain (no idle worker at the end). ``task_readings``
+divided by the rays per reading) is measured on the first task to come back (one probe
+task of two batches is sent per worker; the faster batch counts, so the kernel's
+compilation does not), and capped so that at least two tasks per worker remain (no idle
+worker at the end). A task holds whole batches (``chunk_size`` rays each), so it is never
+smaller than one. ``task_readings``
 sets it instead. A task's batches come back together and are recorded in the
 checkpoint as the tasks finish (``as_completed``); an interrupted sweep resumes without
 tracing a recorded reading again. A worker that dies loses only its task: Dask
@@ -309,14 +311,14 @@ def dask_runner(client: Any, scene: Any, fingerprint: str, settings: Settings, t
         try:
             for future in finished:
                 results = future.result()
-                yield from results
-                if left:
+                if left:  # sized from the first probe back, submitted before its results are recorded
                     rate = max(len(b) / max(s, 1e-9) for b, _, _, s in results)
                     remaining = sum(len(b) for b in left)
                     more = submit(_tasks(left, task_size(rate, remaining, n_workers)))
                     futures += more
                     finished.update(more)
                     left = []
+                yield from results
         finally:
             client.cancel([f for f in futures if not f.done()])
 

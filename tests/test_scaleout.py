@@ -68,15 +68,17 @@ def test_workers_are_separate_processes_set_up_where_their_tasks_run(client):
     ("dict", {"bound": "two-stage", "mu": 0.02, "rays": None}),
     ("scenes/diamond_collimated.xml", {}),  # wavelength-independent: traced once per angle
     ("scenes/soybean_abmb.xml", {"theta_i": [8, 60]}),  # an ABM leaf: every reading traced on its own
-], ids=["dict", "two-stage", "xml-shared", "leaf"])
+    ("scenes/soybean_abmb.xml", {"task_readings": None}),  # tasks sized from the probes' measured rate
+], ids=["dict", "two-stage", "xml-shared", "leaf", "leaf-sized-by-rate"])
 def test_a_sweep_on_two_worker_processes_is_bit_identical_to_the_in_process_one(client, dielectric_dict, scene,
                                                                                 extra):
     scene = dielectric_dict if scene == "dict" else scene
-    settings = {**SMALL, **extra}
+    settings = {**SMALL, "task_readings": 2, **extra}
     if settings["rays"] is None:
         del settings["rays"]
+    task_readings = settings.pop("task_readings")
     here = vm.sweep(scene, **settings)
-    there = vm.sweep(scene, workers=client, chunk_size=1024, task_readings=2, **settings)
+    there = vm.sweep(scene, workers=client, chunk_size=1024, task_readings=task_readings, **settings)
     same_counts(here, there)
     assert there.scene == here.scene  # the same fingerprint: the same scene
 

@@ -186,6 +186,9 @@ def test_bad_workers_name_the_parameter(dielectric_dict, workers, message):
 def test_a_loaded_scene_or_task_readings_without_workers_is_refused_before_any_cluster(diamond, dielectric_dict):
     with pytest.raises(ValueError, match="XML path or a scene dict"):
         vm.sweep(diamond, workers=2, **SMALL)
+    unsendable = {**dielectric_dict, "note": {"type": "scene", "hook": lambda: None}}
+    with pytest.raises(ValueError, match="cannot be sent to the workers"):
+        scaleout.portable_scene(unsendable)
     with pytest.raises(ValueError, match="task_readings needs workers"):
         vm.sweep(dielectric_dict, task_readings=3, **SMALL)
     with pytest.raises(ValueError, match="task_readings must be an int >= 1"):

@@ -51,6 +51,7 @@ import asyncio
 import logging
 import math
 import os
+import pickle
 import threading
 import time
 from contextlib import contextmanager
@@ -211,7 +212,13 @@ def portable_scene(scene: Any) -> Any:
     if isinstance(scene, (str, os.PathLike)):
         return os.path.abspath(os.fspath(scene))  # the same path on every worker, whatever its directory
     if isinstance(scene, dict):
-        return {key: _portable_value(value) for key, value in scene.items()}
+        portable = {key: _portable_value(value) for key, value in scene.items()}
+        try:
+            pickle.dumps(portable)
+        except Exception as error:  # a Mitsuba object other than a transform, a lambda …
+            raise ValueError(f"scene dict holds a value that cannot be sent to the workers ({error}); give an XML "
+                             "path, or plain values and transforms") from None
+        return portable
     raise ValueError(f"scene must be an XML path or a scene dict to run on workers (got {type(scene).__name__}): "
                      "each worker loads it itself")
 

@@ -113,8 +113,9 @@ def sweep(
         Result file (``.nc``, ``.csv`` or ``.json``, :meth:`Result.write`) to write,
         atomically, when the sweep completes — or a Zarr store (``.zarr``) that receives
         each batch's counts as it finishes, region by region (:mod:`virtspec_mi.zarr_table`);
-        checked before any tracing. The checkpoint defaults to ``OUT.partial.json``: if the write fails (a full disk …)
-        every finished reading stays there and the same call, re-run, only writes.
+        checked before any tracing. The checkpoint defaults to ``OUT.partial.json``: if
+        the write fails (a full disk …) every finished reading stays there and the same
+        call, re-run, only writes.
     progress
         ``True``: always a tqdm bar on stderr; ``False``: never (and no note on
         stderr); ``None`` (default): only when stderr is a terminal and the sweep is

@@ -30,21 +30,24 @@ Baranoski et al. (2001), eqs. (2), (23), (24); Figs. 5 and 6.
 from __future__ import annotations
 
 import os
+from contextlib import ExitStack, contextmanager
 from dataclasses import replace
 from pathlib import Path
-from typing import Any
+from typing import Any, Iterator
 
 import numpy as np
 
 from virtspec_mi.checkpoint import checkpoint_for, claim, remove
 from virtspec_mi.checks import parse_theta_i
-from virtspec_mi.engine import measure_reading, run
+from virtspec_mi.engine import in_process_runner, measure_reading, run
 from virtspec_mi.instrument import Instrument
 from virtspec_mi.parameters import apply_point, current_values, parameter_space
 from virtspec_mi.result import Result
 from virtspec_mi.results_io import check_output
 from virtspec_mi.scene import find_instrument, scene_fingerprint
 from virtspec_mi.settings import Settings, settings_keywords, with_settings
+from virtspec_mi.zarr_table import SUFFIX as ZARR_SUFFIX
+from virtspec_mi.zarr_table import ZarrTable
 
 __all__ = ["measure", "sweep", "read_result", "fluctuation"]
 
@@ -110,6 +113,8 @@ def sweep(
     checkpoint: str | os.PathLike | None = None,
     out: str | os.PathLike | None = None,
     progress: bool | None = None,
+    workers: Any = None,
+    task_readings: int | None = None,
     **settings: Any,
 ) -> Result:
     """
@@ -145,13 +150,25 @@ def sweep(
         :class:`~virtspec_mi.checkpoint.CheckpointError` and is left as it is.
     out
         Result file (``.nc``, ``.csv`` or ``.json``, :meth:`Result.write`) to write,
-        atomically, when the sweep completes; checked before any tracing. The
-        checkpoint defaults to ``OUT.partial.json``: if the write fails (a full disk …)
-        every finished reading stays there and the same call, re-run, only writes.
+        atomically, when the sweep completes — or, for a sweep without ``parameters``, a
+        Zarr store (``.zarr``) that receives each batch's counts as it finishes, region by
+        region (:mod:`virtspec_mi.zarr_table`);
+        checked before any tracing. The checkpoint defaults to ``OUT.partial.json``: if
+        the write fails (a full disk …) every finished reading stays there and the same
+        call, re-run, only writes.
     progress
         ``True``: always a tqdm bar on stderr; ``False``: never (and no note on
         stderr); ``None`` (default): only when stderr is a terminal and the sweep is
         expected to last more than ~2 s.
+    workers
+        Where the readings are traced (:mod:`virtspec_mi.scaleout`): ``None`` (default)
+        in this process; an int N on a local Dask cluster of N worker processes started
+        for the sweep; a scheduler address (``"tcp://host:8786"``) or a
+        ``distributed.Client`` on that cluster. The counts are the same in every case;
+        ``scene`` must then be an XML path (readable by every worker) or a dict.
+    task_readings
+        With ``workers``: readings per Dask task; default (``None``) from the measured
+        ray rate (:func:`virtspec_mi.scaleout.task_size`).
     **settings
         As for :func:`measure` (one value for the whole sweep); ``wavelengths`` must be
         distinct. With ``bound="two-stage"`` each reading is sized by its own pilot, all
@@ -174,19 +191,48 @@ def sweep(
     for name, values in (("theta_i", angles), ("wavelengths", np.array(resolved.wavelengths))):
         if len(np.unique(values)) != len(values):
             raise ValueError(f"{name} of a sweep must be distinct (got repeated values)")
+    if space is not None and out is not None and out.suffix.lower() == ZARR_SUFFIX:
+        raise ValueError("out: a Zarr store (.zarr) holds a wavelength x theta_i sweep; write a parameter sweep "
+                         "to .nc, .csv or .json")
     fingerprint = scene_fingerprint(scene, instrument, defines)
-    if checkpoint is None:
-        result = run(instrument, resolved, angles, keyed=True, scene=fingerprint, progress=progress,
-                     parameters=space)
-    else:
-        with claim(checkpoint):  # one run per checkpoint, writable: checked before any tracing
-            result = run(instrument, resolved, angles, keyed=True, scene=fingerprint, checkpoint=checkpoint,
-                         progress=progress, parameters=space)
+    with ExitStack() as held:
+        if checkpoint is not None:  # one run per checkpoint, writable: checked before any cluster or tracing
+            held.enter_context(claim(checkpoint))
+        runner = held.enter_context(_runner(scene, defines, workers, task_readings, fingerprint, resolved, angles,
+                                            space))
+        if out is not None and out.suffix.lower() == ZARR_SUFFIX:  # the store fills as the batches finish
+            table = ZarrTable(out, resolved.wavelengths, angles, {"scene": fingerprint, **resolved.as_dict(),
+                                                                  "theta_i": [float(t) for t in angles]},
+                              pilot=resolved.adaptive)
+            runner = table.stream(runner or in_process_runner(instrument, resolved, theta_i=angles))
+        result = run(instrument, resolved, angles, keyed=True, scene=fingerprint, checkpoint=checkpoint,
+                     progress=progress, parameters=space, runner=runner)
+        if checkpoint is not None:
             if out is not None:
                 _write(result, out, checkpoint)
             remove(checkpoint)  # the readings are safe: returned, and written to out when given
     result.warn_if_uncertified(stacklevel=3)
     return result
+
+
+@contextmanager
+def _runner(scene: Any, defines: dict[str, Any] | None, workers: Any, task_readings: int | None, fingerprint: str,
+            settings: Settings, angles: np.ndarray, space: Any) -> Iterator[Any]:
+    """``None`` (the engine's in-process default) or a Dask runner on ``workers``, held for the sweep."""
+
+    if workers is None:
+        if task_readings is not None:
+            raise ValueError(f"task_readings needs workers (got task_readings={task_readings!r}, workers=None)")
+        yield None
+        return
+    from virtspec_mi import scaleout  # imports dask.distributed: only when it is used
+
+    scaleout.check_workers(workers)
+    scaleout.check_task_readings(task_readings)
+    scaleout.portable_scene(scene)  # refused before any cluster starts
+    with scaleout.connect(workers) as client:
+        yield scaleout.dask_runner(client, scene, fingerprint, settings, task_readings, defines=defines,
+                                   theta_i=angles, parameters=space)
 
 
 def _file_path(value: Any, name: str) -> Path | None:

@@ -7,11 +7,12 @@ Command line: ``virtspec``
   [--rays] [--bound] [--joint] [--pilot-rays] [--pilot-delta] [--beam] [--sampling]
   [--seed] [--json]``: one certified reading.
 - ``virtspec sweep SCENE --theta-i 0:90:1 [--wavelengths 400:700:10] [--out FILE(.nc|.csv|.json)]
-  [--plot FIG(.png|.svg)] [--densities 3 4 5 6] [--quiet] [measure options]``: a sweep
-  (resumable when ``--out`` is given: see :mod:`virtspec_mi.checkpoint`); ``--param
-  NAME=VALUES`` (repeatable; VALUES ``v1,v2,v3`` or ``start:stop:step``, stop included
-  within rounding) sweeps a specimen parameter too (a grid; ``--points``: explicit
-  points, equal-length lists; :mod:`virtspec_mi.parameters`).
+  [--plot FIG(.png|.svg)] [--densities 3 4 5 6] [--quiet] [--workers N | --scheduler ADDRESS]
+  [--task-readings K] [measure options]``: a sweep (resumable when ``--out`` is given: see
+  :mod:`virtspec_mi.checkpoint`), on Dask workers with ``--workers``/``--scheduler``
+  (:mod:`virtspec_mi.scaleout`); ``--param NAME=VALUES`` (repeatable; VALUES ``v1,v2,v3``
+  or ``start:stop:step``, stop included within rounding) sweeps a specimen parameter too
+  (a grid; ``--points``: explicit points, equal-length lists; :mod:`virtspec_mi.parameters`).
 - ``measure`` and ``sweep`` take ``-D NAME=VALUE`` (repeatable): the XML scene's ``$NAME``
   parameter, as Mitsuba's own ``mitsuba -D`` (``mi.load_file(path, NAME=VALUE)``);
   ``measure --param NAME=VALUE`` sets one specimen parameter for the reading.
@@ -44,7 +45,8 @@ _EXAMPLES = {
              "  virtspec sweep scenes/diamond_collimated.xml --theta-i 0:90:1 --densities 3 4 5 6\n"
              "  virtspec sweep scenes/soybean_abmb.xml --theta-i 8 --wavelengths 450,550,650 "
              "--param specimen.thickness=1.2e-4:2e-4:4e-5 --param specimen.chlorophyll_a=2,4 --out lut.nc\n"
-             "  virtspec sweep scenes/soybean_abmb.xml -D side=abaxial --theta-i 8",
+             "  virtspec sweep scenes/soybean_abmb.xml -D side=abaxial --theta-i 8\n"
+             "  virtspec sweep scenes/soybean_abmb.xml --theta-i 8 --wavelengths 400:2500:5 --workers 2 --out leaf.nc",
     "colour": "examples:\n  virtspec colour spectrum.csv\n"
               "  virtspec colour fig5.nc --theta-i 30 --illuminant A --quantity transmittance",
     "llvm": "example: virtspec llvm check",
@@ -96,6 +98,14 @@ def build_parser() -> argparse.ArgumentParser:
     sweep.add_argument("--densities", type=float, nargs="+", metavar="LOG10N",
                        help="sweep at N = 10^d rays for each d; print seconds and the fluctuation of eq. (24)")
     sweep.add_argument("--quiet", action="store_true", help="no progress bar and no summary")
+    where = sweep.add_mutually_exclusive_group()
+    where.add_argument("--workers", type=int, metavar="N",
+                       help="trace on a local Dask cluster of N worker processes (default: in this process)")
+    where.add_argument("--scheduler", metavar="ADDRESS",
+                       help="trace on the Dask cluster of this scheduler, e.g. tcp://host:8786 (every worker needs "
+                            "virtspec-mi installed and the scene file at the same path)")
+    sweep.add_argument("--task-readings", type=int, metavar="K",
+                       help="readings per Dask task (default: scaleout.TASK_SECONDS of tracing, from the measured ray rate)")
 
     colour = command("colour", "CIE XYZ, L*a*b*, sRGB of a saved spectrum",
                      "Colorimetry (colour-science, ASTM E308) of one quantity of a result file at one theta_i, "
@@ -283,7 +293,9 @@ def _sweep(args: argparse.Namespace) -> int:
         raise ValueError("--plot draws a sweep over wavelength x theta_i; a parameter sweep is plotted by selecting "
                          "one parameter point first (Result.sel in Python)")
     kwargs = {**_settings(args), "progress": False if args.quiet else None, "parameters": parameters,
-              "points": args.points, "defines": _pairs(args.defines, "-D")}
+              "points": args.points, "defines": _pairs(args.defines, "-D"),
+              "workers": args.scheduler if args.scheduler is not None else args.workers,
+              "task_readings": args.task_readings}
     given_rays = kwargs.pop("rays")
 
     def run(rays: int | None, path: Path | None) -> object:

@@ -34,7 +34,7 @@ from __future__ import annotations
 
 import time
 from dataclasses import asdict
-from typing import Any, Sequence
+from typing import Any, Callable, Iterable, Iterator, Sequence
 
 import numpy as np
 
@@ -47,7 +47,16 @@ from virtspec_mi.progress import Progress
 from virtspec_mi.result import Result
 from virtspec_mi.settings import Settings
 
-__all__ = ["take_readings", "shares_wavelengths", "take_keyed_readings", "run", "measure_reading"]
+__all__ = ["take_readings", "take_keyed_readings", "in_process_runner", "shares_wavelengths", "run", "measure_reading",
+           "BatchRunner"]
+
+BatchRunner = Callable[[list[np.ndarray]], Iterable[tuple[np.ndarray, Counts, "Counts | None", float]]]
+"""
+What runs the batches of a keyed :func:`run`: given the batches left to do (arrays of
+reading indices), yield ``(batch, counts, pilot, seconds)`` for each as it finishes, in
+any order, every count from :func:`take_keyed_readings`. The default runs them here, one
+after the other; :mod:`virtspec_mi.scaleout` runs them on Dask workers.
+"""
 
 
 def take_readings(
@@ -141,9 +150,9 @@ def take_keyed_readings(instrument: Any, settings: Settings, theta_i: Sequence[f
     k·``settings.most_rays_per_reading``, so its counts depend on (seed, k) only — never on
     which other readings share the batch. The readings of one parameter point are traced
     in one :func:`take_readings` call after the point's values are set on the scene
-    (:func:`virtspec_mi.parameters.apply_point`); the scene keeps the last point's values
-    (the caller restores them). The one function that traces a batch of a keyed run, for
-    any driver.
+    (:func:`virtspec_mi.parameters.apply_point`); the scene's own values are restored
+    before it returns (or raises). The one function that traces a batch of a keyed run, here
+    or on a Dask worker (:mod:`virtspec_mi.scaleout`).
     """
 
     lams = np.asarray(settings.wavelengths, dtype=np.float64)
@@ -160,11 +169,16 @@ def take_keyed_readings(instrument: Any, settings: Settings, theta_i: Sequence[f
         return take_readings(instrument, readings(batch), settings, offsets=batch * stride)
     point_of = batch // per_point
     parts, order = [], []
-    for point in np.unique(point_of):
-        members = np.flatnonzero(point_of == point)
-        apply_point(instrument, parameters.keys, parameters.point(int(point)))
-        parts.append(take_readings(instrument, readings(batch[members]), settings, offsets=batch[members] * stride))
-        order.append(members)
+    original = current_values(instrument, parameters.keys)
+    try:
+        for point in np.unique(point_of):
+            members = np.flatnonzero(point_of == point)
+            apply_point(instrument, parameters.keys, parameters.point(int(point)))
+            parts.append(take_readings(instrument, readings(batch[members]), settings,
+                                       offsets=batch[members] * stride))
+            order.append(members)
+    finally:
+        apply_point(instrument, parameters.keys, original)  # the scene as it was, whatever the driver
     back = np.argsort(np.concatenate(order), kind="stable")
     counts = Counts.concatenate([c for c, _ in parts]).map(lambda v: v[back])
     if not settings.adaptive:
@@ -182,14 +196,16 @@ def run(
     checkpoint: Any = None,
     progress: bool | None = False,
     parameters: ParameterSpace | None = None,
+    runner: BatchRunner | None = None,
 ) -> Result:
     """
-    Every reading of the grid ``settings.wavelengths`` × ``theta_i`` at ``settings.phi_i``,
-    as one :class:`~virtspec_mi.result.Result` with dims ``("wavelength", "theta_i")``.
+    Every reading of the grid ``settings.wavelengths`` × ``theta_i`` (× the points of
+    ``parameters``, keyed only) at ``settings.phi_i``, as one
+    :class:`~virtspec_mi.result.Result` with dims ``("wavelength", "theta_i", *parameter dims)``.
 
     ``keyed=False``: one :func:`take_readings` call with consecutive ray ranges (how
     ``measure`` has always numbered its rays), its bar updated per chunk. ``keyed=True``: reading k
-    (k = i_θ·n_λ + i_λ) owns the global ray indices [k·stride, k·stride + rays_k), with
+    (k = (i_p·n_θ + i_θ)·n_λ + i_λ, see :func:`take_keyed_readings`) owns the global ray indices [k·stride, k·stride + rays_k), with
     stride = ``settings.most_rays_per_reading``, so its counts depend on (seed, k) only;
     readings run in batches of about ``chunk_size`` rays, each recorded in
     ``checkpoint`` (a path; see :mod:`virtspec_mi.checkpoint`) and shown by
@@ -197,7 +213,9 @@ def run(
     ``checkpoint`` says so on stderr (unless ``progress`` is ``False``). The checkpoint
     is left in place when the run completes: the caller removes it once the result is
     safe (:func:`virtspec_mi.checkpoint.remove`), and holds it meanwhile
-    (:func:`virtspec_mi.checkpoint.claim`).
+    (:func:`virtspec_mi.checkpoint.claim`). ``runner`` (keyed only; a :data:`BatchRunner`)
+    runs the batches left to do elsewhere (Dask workers); the default runs them here. The
+    batches, the checkpoint and the counts are the same either way.
     """
 
     angles = np.asarray(theta_i, dtype=np.float64)
@@ -216,8 +234,9 @@ def run(
             instrument, [(w, t, settings.phi_i) for w, t in zip(flat_lam, flat_theta)], settings, progress=progress)
         seconds = time.perf_counter() - start
     else:
-        counts, pilot, seconds = _run_keyed(instrument, settings, angles, parameters, shared, scene, checkpoint,
-                                            progress)
+        counts, pilot, seconds = _run_keyed(
+            instrument, settings, angles, parameters, shared, scene, checkpoint, progress,
+            runner or in_process_runner(instrument, settings, theta_i=angles, parameters=parameters))
     extra = () if parameters is None else parameters.shape
     axes = tuple(range(len(extra) + 2))
 
@@ -239,11 +258,11 @@ def run(
 
 
 def _run_keyed(instrument: Any, settings: Settings, angles: np.ndarray, parameters: ParameterSpace | None,
-               shared: bool, scene: str, checkpoint: Any, progress: bool | None) -> tuple[Counts, Counts | None, float]:
+               shared: bool, scene: str, checkpoint: Any, progress: bool | None,
+               runner: BatchRunner) -> tuple[Counts, Counts | None, float]:
     """
     The readings of :func:`run` keyed on their index, in checkpointed batches of about
-    ``chunk_size`` rays, each traced by :func:`take_keyed_readings`; the scene's parameters are
-    restored when the run ends.
+    ``chunk_size`` rays, each traced by :func:`take_keyed_readings` through ``runner``.
     """
 
     n_lam = len(settings.wavelengths)
@@ -264,19 +283,34 @@ def _run_keyed(instrument: Any, settings: Settings, angles: np.ndarray, paramete
     bar = Progress(progress, total=sum(len(b) for b in todo) // per_unit)
     if state.reused:
         bar.note(f"resumed from {checkpoint}: {state.reused} of {size} readings reused")
-    original = None if parameters is None else current_values(instrument, parameters.keys)
+    finished = runner(todo) if todo else iter(())
     try:
-        for batch in todo:
-            start = time.perf_counter()
-            counts, pilot = take_keyed_readings(instrument, settings, angles, batch, parameters)
-            state.record(batch, counts, pilot, time.perf_counter() - start)
-            bar.update(len(batch) // per_unit, time.perf_counter() - start)
+        for batch, counts, pilot, seconds in finished:
+            state.record(batch, counts, pilot, seconds)
+            bar.update(len(batch) // per_unit, seconds)
     finally:
+        close = getattr(finished, "close", None)
+        if close is not None:
+            close()  # a runner elsewhere stops its outstanding work
         bar.close()
         state.flush()  # every finished reading is on disk, interrupted or not (saving may be spaced out)
-        if original is not None:
-            apply_point(instrument, parameters.keys, original)
     return state.counts, state.pilot if settings.adaptive else None, state.seconds
+
+
+def in_process_runner(instrument: Any, settings: Settings, **grid: Any) -> BatchRunner:
+    """
+    The default :data:`BatchRunner`: every batch here, one after the other, traced by
+    ``take_keyed_readings(instrument, settings, batch=batch, **grid)`` (``grid``: the
+    keyed grid's other arguments, e.g. ``theta_i``).
+    """
+
+    def runner(batches: list[np.ndarray]) -> Iterator[tuple[np.ndarray, Counts, Counts | None, float]]:
+        for batch in batches:
+            start = time.perf_counter()
+            counts, pilot = take_keyed_readings(instrument, settings, batch=batch, **grid)
+            yield batch, counts, pilot, time.perf_counter() - start
+
+    return runner
 
 
 def measure_reading(instrument: Any, settings: Settings, progress: bool | None = False) -> Result:

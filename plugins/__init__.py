@@ -14,6 +14,7 @@ name                   kind         module
 ``abm_b``              BSDF         :mod:`.bsdfs.abm_b` (walk: :mod:`.bsdfs.abm_walk`)
 ``abm_u``              BSDF         :mod:`.bsdfs.abm_u` (walk: :mod:`.bsdfs.abm_walk`)
 ``spectrophotometer``  integrator   :mod:`.integrators.spectrophotometer`
+``integrating_sphere`` integrator   :mod:`.integrators.integrating_sphere`
 =====================  ===========  ==========================================
 """
 
@@ -27,6 +28,7 @@ PLUGINS: dict[str, tuple[str, str, str]] = {
     "abm_b": ("bsdf", ".bsdfs.abm_b", "ABMB"),
     "abm_u": ("bsdf", ".bsdfs.abm_u", "ABMU"),
     "spectrophotometer": ("integrator", ".integrators.spectrophotometer", "Spectrophotometer"),
+    "integrating_sphere": ("integrator", ".integrators.integrating_sphere", "IntegratingSphere"),
 }
 
 

@@ -157,14 +157,14 @@ class SphereWalk:
             inside = dr.dot(x, _vec(axis)) >= threshold
             fate = dr.select(on_wall & inside & (fate == _ACTIVE), mi.UInt32(action), fate)
         diffuse = (on_wall & (fate == _ACTIVE)) | (active & (surface == 3))
-        inward = -x / self.radius
+        inward = -dr.normalize(x)
         if baffle is not None:
             facing = dr.select(dr.dot(d, _vec(baffle.normal)) > 0.0, -_vec(baffle.normal), _vec(baffle.normal))
             inward = dr.select(surface == 3, facing, inward)
         survives = u[0] < rho_w
         fate = dr.select(diffuse & ~survives, mi.UInt32(_WALL), fate)
         local = mi.warp.square_to_cosine_hemisphere(mi.Point2f(u[1], u[2]))
-        new_d = mi.Frame3f(inward).to_world(local)
+        new_d = dr.normalize(mi.Frame3f(inward).to_world(local))
         on_sphere = x * (self.radius / dr.norm(x))
         new_p = dr.select(surface == 0, on_sphere, x)
         walls = state["walls"] + dr.select(diffuse & survives, mi.UInt32(1), mi.UInt32(0))

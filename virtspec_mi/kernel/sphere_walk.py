@@ -180,7 +180,12 @@ class SphereWalk:
             fate = dr.select(on_holder & ~in_disk, lost, fate)
             lit = on_holder & in_disk
             frame = mi.Frame3f(_vec(holder.frame[:, 0]), _vec(holder.frame[:, 1]), _vec(holder.frame[:, 2]))
-            wo, w, component = self._sample(holder.bsdf, frame, q, -d, wavelength, u, lit)
+            wo, w, component = dr.if_stmt(  # packets without a hit on this disk skip its BSDF
+                (q, d, lit, *u, wavelength), lit,
+                lambda q_, d_, lit_, u0, u1, u2, u3, lam, bsdf=holder.bsdf, frame=frame: self._sample(
+                    bsdf, frame, q_, -d_, lam, [u0, u1, u2, u3], lit_),
+                lambda *_: (mi.Vector3f(0.0, 0.0, 1.0), mi.Float(0.0), mi.UInt32(0)),
+                label="sphere_holder")
             wo_world = frame.to_world(wo)
             length2 = dr.squared_norm(wo)
             invalid = ~((length2 >= _LENGTH2[0]) & (length2 <= _LENGTH2[1])) & (w > 0.0)

@@ -134,3 +134,29 @@ def test_cli_sphere(capsys):
     assert data["options"]["specular"] == "SCE" and data["rays"] == 2000
     assert main(["sphere", SCENE, "--theta-i", "40", "--rays", "100"]) == 1
     assert "entrance port" in capsys.readouterr().err
+
+
+def test_the_standard_read_as_a_sample_reads_its_own_value_exactly():
+    """Sample = the standard itself: both configurations trace identical rays, so the reading is ρ_std exactly."""
+
+    scene = vm.mitsuba().load_file(SCENE, reflectance="0.99")
+    result = vm.sphere_measure(scene, rays=3000)
+    assert result.counts["sample"]["detected"][0] == result.counts["standard"]["detected"][0] > 0
+    assert result.reading[0] == 0.99
+
+
+def test_transmittance_of_an_open_port_is_one_and_keeps_the_same_rays():
+    leaf = "scenes/sphere_leaf_60mm.xml"
+    mi = vm.mitsuba()
+    text = open(leaf).read().replace('<bsdf type="abm_b"><string name="data_dir" value="$data_dir"/></bsdf>',
+                                     '<bsdf type="null"/>').replace(
+        '<default name="data_dir" value=""/>', '')
+    result = vm.sphere_measure(mi.load_string(text), measurement="transmittance", theta_i=0, rays=3000)
+    assert result.reading[0] == 1.0 and result.hemispherical[0] == 1.0
+    grey = text.replace('<bsdf type="null"/>', '<bsdf type="roughdielectric"/>')
+    scene = mi.load_string(grey)
+    result = vm.sphere_measure(scene, measurement="transmittance", theta_i=0, rays=3000, wavelengths="500, 700")
+    reading = vm.measure(scene, theta_i=0, rays=3000, wavelengths="500, 700")
+    assert np.array_equal(result.counts["sample"]["hemispherical_transmitted"], reading.transmitted)
+    assert np.array_equal(result.wall_reflectance, [0.9766666666666667, 0.99])
+    assert result.counts["sample"]["lost_entrance"][0] > 0  # reflected by the specimen, out of the sphere

@@ -24,10 +24,15 @@ in → one flight and one surface event → state out; no host work per ray or b
   the port (behind a reflectance specimen, out of a transmittance one);
 - **cap:** a ray still walking after ``max_bounces`` steps is capped (counted apart).
 
+The rays that enter the sphere are walked by fewer lanes than rays (at least 2¹⁴, about
+8 rays each): a lane whose ray ends takes the next one at once, so a packet of lanes
+never idles behind its longest walk (walk lengths are geometric, and the longest of 16
+is about three times the mean). Each ray's fate is written back at its own index.
+
 Random numbers are counter-based, keyed on (seed, global ray index, dimension)
 (:mod:`virtspec_mi.kernel.rng`): step b draws dimensions ``WALK_BASE + 4b + j``
 (j = 0…3), far above the first interaction's, so counts are exact integers,
-bit-reproducible and independent of chunking. Every ray is one Bernoulli trial for
+bit-reproducible and independent of chunking and of the lane layout. Every ray is one Bernoulli trial for
 "detected".
 
 Fate codes (:data:`FATES`): 0 detected, 1 absorbed by the wall or baffle, 2 absorbed
@@ -69,6 +74,8 @@ _DETECTED, _WALL, _HOLDER0, _HOLDER1, _CAPPED, _INVALID, _LOST = 0, 1, 2, 3, 4, 
 _VIOLATION, _ROUNDED = 1, 4
 _LENGTH2 = ((1.0 - DIRECTION_TOLERANCE) ** 2, (1.0 + DIRECTION_TOLERANCE) ** 2)
 _WORD = 1 << 32
+_MIN_LANES = 1 << 14  # at least this many lanes (or one per ray): enough packets for every core
+_RAYS_PER_LANE = 8  # otherwise each lane walks about this many rays in turn
 
 
 @dataclass(frozen=True)
@@ -241,7 +248,7 @@ class SphereWalk:
         if (global_first + size - 1) // _WORD != block:
             raise ValueError("a sphere chunk must not cross a 2**32 boundary of the global ray index")
         lanes = first_interactions(instrument, plan, settings, first, size, offset)
-        ray_index = dr.arange(mi.UInt32, size) + dr.opaque(mi.UInt32, global_first % _WORD)
+        base = dr.opaque(mi.UInt32, global_first % _WORD)  # global ray index (low word) of lane 0
         root = dr.opaque(mi.UInt32, chunk_root(settings.seed, block))
         holder = self.holders[0]
         axis, _, centre = self.planes[0]
@@ -260,37 +267,70 @@ class SphereWalk:
         first_rare = lanes["rare"]
         rare = dr.select((first_rare & 1) != 0, mi.UInt32(_VIOLATION), 0) | dr.select(
             (first_rare & 4) != 0, mi.UInt32(_ROUNDED), 0)
-        state = {"p": start, "d": wo_world, "last": mi.UInt32(1) + dr.zeros(mi.UInt32, size), "fate": fate,
-                 "bounces": dr.zeros(mi.UInt32, size), "walls": dr.zeros(mi.UInt32, size), "rare": rare}
         rho = dr.opaque(mi.Float, rho_w)
         wavelength = dr.opaque(mi.Float, plan.wavelength)
-        state = self._loop(state, ray_index, root, rho, wavelength)
-
-        codes = _LOST + len(self.sphere.ports)
         hemisphere = dr.select(first_fate == int(Fate.REFLECTED), mi.UInt32(1),
                                dr.select(first_fate == int(Fate.TRANSMITTED), mi.UInt32(2), mi.UInt32(0)))
+        dr.eval(start, wo_world, fate, rare, hemisphere)  # the first interactions: one kernel
+        walking = dr.compress(fate == _ACTIVE)  # the rays that entered the sphere
+        walls = mi.UInt64(0)
+        if dr.width(walking):
+            fate, rare, walls = self._loop(walking, start, wo_world, fate, rare, base, root, rho, wavelength)
+
+        codes = _LOST + len(self.sphere.ports)
         histogram = dr.zeros(mi.UInt32, 3 * codes)
-        dr.scatter_reduce(dr.ReduceOp.Add, histogram, mi.UInt32(1), hemisphere * codes + state["fate"])
-        walls = dr.sum(mi.UInt64(state["walls"]))
-        violations = dr.count((state["rare"] & _VIOLATION) != 0)
-        rounded = dr.count((state["rare"] & _ROUNDED) != 0)
+        dr.scatter_reduce(dr.ReduceOp.Add, histogram, mi.UInt32(1), hemisphere * codes + fate)
+        violations = dr.count((rare & _VIOLATION) != 0)
+        rounded = dr.count((rare & _ROUNDED) != 0)
         dr.eval(histogram, walls, violations, rounded)
         return {"cross": np.array(histogram, dtype=np.int64).reshape(3, codes),
                 "wall_reflections": int(np.array(walls)[0]), "weight_violations": int(np.array(violations)[0]),
                 "rounded_weights": int(np.array(rounded)[0])}
 
     @dr.syntax
-    def _loop(self, state: dict, ray_index: Any, root: Any, rho: Any, wavelength: Any) -> dict:
-        """The one symbolic loop: :meth:`step` until every lane has a fate."""
+    def _loop(self, walking: Any, start: Any, direction: Any, fate: Any, rare: Any, base: Any, root: Any,
+              rho: Any, wavelength: Any) -> tuple[Any, Any, Any]:
+        """
+        The one symbolic loop over the rays that entered the sphere (indices ``walking``):
+        each of L lanes walks its rays one after the other (rays j, j + L, j + 2L … of
+        ``walking``), :meth:`step` by step, and takes the next ray as soon as one ends — so
+        a lane never idles behind a long walk of its packet. Per-ray fates and rare bits
+        are written back at the rays' indices (the random numbers depend on the ray, not
+        on the lane, so the counts do not depend on L). Returns the final per-ray fate and
+        rare arrays and the wall reflections summed.
+        """
 
-        p, d, last, fate = state["p"], state["d"], state["last"], state["fate"]
-        bounces, walls, rare = state["bounces"], state["walls"], state["rare"]
-        while dr.hint(fate == _ACTIVE, label="sphere_walk"):
-            out = self.step({"p": p, "d": d, "last": last, "fate": fate, "bounces": bounces, "walls": walls,
-                             "rare": rare}, ray_index, root, rho, wavelength)
-            p, d, last, fate = out["p"], out["d"], out["last"], out["fate"]
-            bounces, walls, rare = out["bounces"], out["walls"], out["rare"]
-        return {"p": p, "d": d, "last": last, "fate": fate, "bounces": bounces, "walls": walls, "rare": rare}
+        count = dr.width(walking)
+        lanes = count if count <= _MIN_LANES else max(_MIN_LANES, -(-count // _RAYS_PER_LANE))
+        n = dr.opaque(mi.UInt32, count)
+        stride = dr.opaque(mi.UInt32, lanes)
+        fate_out, rare_out = dr.copy(fate), dr.copy(rare)  # written per ray below; fate, rare only read
+        slot = dr.arange(mi.UInt32, lanes)
+        ray = dr.gather(mi.UInt32, walking, slot)
+        p = dr.gather(mi.Point3f, start, ray)
+        d = dr.gather(mi.Vector3f, direction, ray)
+        state_rare = dr.gather(mi.UInt32, rare, ray)
+        state_fate = dr.full(mi.UInt32, _ACTIVE, lanes)
+        last = dr.full(mi.UInt32, 1, lanes)
+        bounces = dr.zeros(mi.UInt32, lanes)
+        walls = dr.zeros(mi.UInt32, lanes)
+        while dr.hint(slot < n, label="sphere_walk"):
+            out = self.step({"p": p, "d": d, "last": last, "fate": state_fate, "bounces": bounces, "walls": walls,
+                             "rare": state_rare}, base + ray, root, rho, wavelength)
+            done = out["fate"] != _ACTIVE
+            dr.scatter(fate_out, out["fate"], ray, done)
+            dr.scatter(rare_out, out["rare"], ray, done)
+            slot = dr.select(done, slot + stride, slot)
+            more = done & (slot < n)
+            ray = dr.select(more, dr.gather(mi.UInt32, walking, slot, more), ray)
+            p = dr.select(more, dr.gather(mi.Point3f, start, ray, more), out["p"])
+            d = dr.select(more, dr.gather(mi.Vector3f, direction, ray, more), out["d"])
+            state_rare = dr.select(more, dr.gather(mi.UInt32, rare, ray, more), out["rare"])
+            state_fate = dr.select(more, mi.UInt32(_ACTIVE), out["fate"])
+            last = dr.select(more, mi.UInt32(1), out["last"])
+            bounces = dr.select(more, mi.UInt32(0), out["bounces"])
+            walls = out["walls"]
+        return fate_out, rare_out, dr.sum(mi.UInt64(walls))
 
 
 def tally_sphere(walk: SphereWalk, instrument: Any, wavelengths: Sequence[float], rho_w: Sequence[float],

@@ -258,9 +258,16 @@ class SphereResult:
 
     @property
     def fraction_mu(self) -> np.ndarray:
-        """Tolerance each detector fraction's N guarantees at δ/2 (eq. 19); NaN where not certified."""
+        """
+        Tolerance each detector fraction is certified to at δ/2: μ when its N was sized by
+        the rule at (μ, δ/2), else what the N spent guarantee under eq. (19) (Hoeffding's μ,
+        which holds for every N); NaN where not certified.
+        """
 
-        mu = hoeffding_mu(self.rays, self.fraction_delta)
+        if self.settings.get("rays") is None:
+            mu = float(self.settings["mu"])
+        else:
+            mu = hoeffding_mu(self.rays, self.fraction_delta)
         return np.where(self.certified, mu, np.nan)
 
     # -- the readout ------------------------------------------------------------------

@@ -131,12 +131,15 @@ def closed_form(sphere, rho_s, rho_w):
     return rho_s * (g["detector"] + gw * rho_w * q)
 
 
-CASES = [(0.98, 0.01, 0.5), (0.90, 0.05, 0.8), (0.95, 0.10, 0.3), (0.99, 0.01, 0.9)]
+# the grid: rho_w in {0.90, 0.95, 0.98, 0.99} x detector port fraction in {1 %, 5 %, 10 %}
+# (exact caps, h/2R), each with its own sample reflectance; the first case runs by default
+GRID = [(rho_w, f_d, rho_s) for (rho_w, f_d), rho_s in zip(
+    [(w, f) for w in (0.98, 0.90, 0.95, 0.99) for f in (0.01, 0.05, 0.10)],
+    (0.5, 0.8, 0.3, 0.9, 0.2, 0.6, 0.95, 0.4, 0.7, 0.1, 0.5, 0.99))]
 
 
-@pytest.mark.parametrize("rho_w, f_d, rho_s", [CASES[0], pytest.param(*CASES[1], marks=pytest.mark.slow),
-                                               pytest.param(*CASES[2], marks=pytest.mark.slow),
-                                               pytest.param(*CASES[3], marks=pytest.mark.slow)])
+@pytest.mark.parametrize("rho_w, f_d, rho_s", [GRID[0], *(pytest.param(*case, marks=pytest.mark.slow)
+                                                          for case in GRID[1:])])
 def test_lambertian_sample_in_an_ideal_sphere_matches_the_closed_form(rho_w, f_d, rho_s):
     sphere = ideal(f_d)
     rays, delta = 105_967, 1e-3

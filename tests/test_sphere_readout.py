@@ -71,7 +71,7 @@ def test_readout_interval_and_result_files(tmp_path):
         back = SphereResult.read(result.write(tmp_path / f"r{suffix}"))
         assert np.array_equal(back.counts["standard"]["detected"], result.counts["standard"]["detected"])
         assert back.reading == pytest.approx(result.reading)
-    assert json.loads(json.dumps(result.as_dict()))["kind"] == "sphere_result"
+    assert json.loads(json.dumps(result.as_dict(), allow_nan=False))["kind"] == "sphere_result"
 
 
 def test_default_rays_certify_each_fraction_at_half_delta():
@@ -101,6 +101,8 @@ def test_bad_sphere_readings_name_the_problem():
         vm.sphere_measure(SCENE, theta_i=30, rays=100)
     with pytest.raises(ValueError, match="two-stage"):
         vm.sphere_measure(SCENE, bound="two-stage")
+    with pytest.raises(ValueError, match="role 'detector'"):
+        vm.sphere_measure(SCENE, sphere=vm.Sphere(150, 0.98, _sphere().ports[:2]), rays=100)
     with pytest.raises(ValueError, match="needs a sphere"):
         vm.sphere_measure(vm.instrument_scene({"type": "diffuse"}), rays=100)
     from virtspec_mi.instrument import SceneError
@@ -160,3 +162,13 @@ def test_transmittance_of_an_open_port_is_one_and_keeps_the_same_rays():
     assert np.array_equal(result.counts["sample"]["hemispherical_transmitted"], reading.transmitted)
     assert np.array_equal(result.wall_reflectance, [0.9766666666666667, 0.99])
     assert result.counts["sample"]["lost_entrance"][0] > 0  # reflected by the specimen, out of the sphere
+
+
+def test_capped_walks_are_counted_apart_and_not_certified():
+    result = vm.sphere_measure(SCENE, rays=2000, max_bounces=2)
+    capped = result.counts["sample"]["capped"][0]
+    assert capped > 0 and not result.certified[0]
+    assert np.isnan(result.reading_interval[0]).all() and np.isnan(result.fraction_mu[0])
+    assert "NOT CERTIFIED" in result.summary()
+    data = json.loads(json.dumps(result.as_dict(), allow_nan=False))
+    assert data["fraction_mu"] == [None] and data["counts"]["sample"]["capped"] == [int(capped)]

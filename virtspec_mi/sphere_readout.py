@@ -82,6 +82,8 @@ def configurations(sphere: Sphere, options: SphereSettings, specimen_bsdf: Any, 
     if specimen_radius > beam_port.radius * (1 + 1e-9):
         raise ValueError(f"specimen radius {specimen_radius:g} mm is larger than its port {beam_port.name!r} "
                          f"(radius {beam_port.radius:g} mm): the specimen must fit in its port")
+    if sphere.port("detector") is None:
+        raise ValueError(f"sphere: a reading needs a port with role 'detector' (ports: {[p.name for p in sphere.ports]})")
     other_role = "sample" if transmittance else ("reference" if options.method == "comparison" else None)
     if options.method == "comparison" and not transmittance and "reference" not in index:
         raise ValueError("method='comparison' needs a port with role 'reference' (for the standard)")
@@ -357,18 +359,20 @@ class SphereResult:
 
         def plain(value: Any) -> Any:
             if isinstance(value, np.ndarray):
-                return [None if isinstance(v, float) and math.isnan(v) else v for v in value.tolist()]
+                return plain(value.tolist())
             if isinstance(value, dict):
                 return {k: plain(v) for k, v in value.items()}
-            if isinstance(value, tuple):
-                return list(value)
+            if isinstance(value, (list, tuple)):
+                return [plain(v) for v in value]
+            if isinstance(value, float) and not math.isfinite(value):
+                return None  # NaN (not certified, 0/0): null in JSON
             return value
 
         return plain({
             "kind": "sphere_result", "wavelengths": self.wavelengths, "rays": self.rays, "counts": self.counts,
             "sphere": self.sphere, "cap_fractions": self.cap_fractions, "wall_reflectance": self.wall_reflectance,
             "options": self.options, "settings": self.settings, "seconds": self.seconds, "scene": self.scene,
-            "reading": self.reading, "reading_interval": self.reading_interval.T.tolist(),
+            "reading": self.reading, "reading_interval": self.reading_interval.T,
             "hemispherical": self.hemispherical, "instrument_error": self.instrument_error,
             "fraction_mu": self.fraction_mu,
         })

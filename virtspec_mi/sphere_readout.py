@@ -337,10 +337,12 @@ class SphereResult:
         mu = self.fraction_mu
         lines = [f"integrating sphere {kind}, method = {options['method']}, standard = {self.standard_value:g}; "
                  f"{self.sphere}",
-                 f"N = {self.rays:,} rays per configuration and wavelength; each detector fraction certified to "
-                 f"{_up(np.nanmax(mu)) if np.any(self.certified) else 'NOT CERTIFIED'} at delta/2 = "
-                 f"{self.fraction_delta:g} (reading interval: both at once, probability >= "
-                 f"{1 - float(self.settings['delta']):g}); {self.seconds * 1e3:.1f} ms",
+                 f"N = {self.rays:,} rays per configuration and wavelength; "
+                 + (f"each detector fraction certified to {_up(float(np.nanmax(mu)))} at delta/2 = "
+                    f"{self.fraction_delta:g} (reading interval: both at once, probability >= "
+                    f"{1 - float(self.settings['delta']):g})" if np.any(self.certified) else
+                    "NOT CERTIFIED (capped walks, invalid directions or weight violations)")
+                 + f"; {self.seconds * 1e3:.1f} ms",
                  " lambda/nm  rho_w   p_sample  p_standard   reading  [interval]            hemispherical    error"]
         interval = self.reading_interval
         for k, lam in enumerate(self.wavelengths):

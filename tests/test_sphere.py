@@ -96,3 +96,9 @@ def test_sphere_settings_are_validated():
         SphereSettings(standard=1.5)
     with pytest.raises(ValueError, match="max_bounces must be a whole number"):
         SphereSettings(max_bounces=0)
+
+
+def test_parameters_round_trip():
+    sphere = small_sphere(wall_reflectance=([400.0, 700.0], [0.97, 0.99]),
+                          baffle=Baffle((0.0, 10.0, -10.0), (0.0, 1.0, 1.0), 5.0))
+    assert sphere_from_parameters(sphere.parameters()) == sphere

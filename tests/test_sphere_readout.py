@@ -172,3 +172,16 @@ def test_capped_walks_are_counted_apart_and_not_certified():
     assert "NOT CERTIFIED" in result.summary()
     data = json.loads(json.dumps(result.as_dict(), allow_nan=False))
     assert data["fraction_mu"] == [None] and data["counts"]["sample"]["capped"] == [int(capped)]
+
+
+def test_a_scene_dict_gives_the_counts_of_the_xml_scene():
+    mi = vm.mitsuba()
+    xml = mi.load_file(SCENE)
+    integrator = xml.integrator()
+    scene = vm.instrument_scene({"type": "diffuse", "reflectance": 0.5}, specimen_radius=12.7)
+    scene["integrator"] = {"type": "integrating_sphere", "theta_i": 8.0, "beam": "collimated",
+                           **integrator.sphere.parameters()}
+    from_dict = vm.sphere_measure(scene, rays=3000)
+    from_xml = vm.sphere_measure(xml, rays=3000)
+    assert from_dict.counts["sample"]["detected"] == from_xml.counts["sample"]["detected"]
+    assert from_dict.counts["standard"]["wall_reflections"] == from_xml.counts["standard"]["wall_reflections"]

@@ -141,7 +141,8 @@ class Baffle:
         if not radius > 0.0:
             raise ValueError(f"baffle radius must be > 0 mm (got {radius:g})")
         object.__setattr__(self, "centre", centre)
-        object.__setattr__(self, "normal", tuple(float(v) for v in normal / length))
+        unit = normal if abs(length - 1.0) < 1e-12 else normal / length  # a unit normal is kept bit for bit
+        object.__setattr__(self, "normal", tuple(float(v) for v in unit))
         object.__setattr__(self, "radius", radius)
 
     def farthest_rim_distance(self) -> float:
@@ -275,6 +276,28 @@ class Sphere:
             if point @ port.axis >= self.radius * port.cos_half_angle(self.radius):
                 return port
         return None
+
+    def parameters(self) -> dict[str, Any]:
+        """
+        The flat parameters of the ``integrating_sphere`` integrator that describe this
+        sphere (for a scene dict: ``{"type": "integrating_sphere", **sphere.parameters()}``);
+        :func:`sphere_from_parameters` reads them back.
+        """
+
+        rho = self.wall_reflectance
+        out: dict[str, Any] = {
+            "diameter": self.diameter,
+            "wall_reflectance": rho if isinstance(rho, float) else ", ".join(
+                f"{w!r}:{v!r}" for w, v in zip(*rho)),
+        }
+        for port in self.ports:
+            out[f"port_{port.name}"] = (f"role={port.role} polar={port.polar!r} azimuth={port.azimuth!r} "
+                                        f"radius={port.radius!r}")
+        if self.baffle is not None:
+            b = self.baffle
+            out["baffle"] = (f"centre={','.join(repr(v) for v in b.centre)} normal={','.join(repr(v) for v in b.normal)} "
+                             f"radius={b.radius!r}")
+        return out
 
     def describe(self) -> str:
         """A short description: diameter, ρw, ports with their cap fractions, baffle."""

@@ -121,7 +121,6 @@ class SphereWalk:
         self.max_bounces = int(max_bounces)
         radius = sphere.radius
         self.radius = radius
-        self.eps = 1e-6 * radius
         self.caps = [(p.axis, radius * p.cos_half_angle(radius), action)
                      for p, action in zip(sphere.ports, self.actions) if action is not None]
         self.planes = [(sphere.ports[h.port].axis, radius * sphere.ports[h.port].cos_half_angle(radius),

@@ -72,7 +72,7 @@ def main() -> None:
     print(f"  ratio sphere/hemispherical time:  {t_walk / t_hemi:8.1f}")
     print(f"  certified 8/d SCI readout (sample + standard, {args.rays:,} rays each): {t_readout * 1e3:.1f} ms")
     print(f"  detector fraction {counts['cross'][:, 0].sum() / args.rays:.5f}; "
-          f"hemispherical {counts['cross'][1].sum() / args.rays:.5f}")
+          f"hemispherical {(counts['cross'][1].sum() + counts['cross'][3].sum()) / args.rays:.5f}")
 
 
 if __name__ == "__main__":

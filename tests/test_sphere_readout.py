@@ -53,6 +53,7 @@ def test_sce_excludes_the_fresnel_specular_reflectance():
     sce = vm.sphere_measure(scene, specular="SCE", rays=rays)
     trapped = sce.counts["sample"]["lost_specular"][0]
     assert trapped == sce.counts["sample"]["hemispherical_reflected"][0]  # every specular ray, exactly
+    assert sce.counts["sample"]["hemispherical_specular"][0] == trapped and sce.hemispherical_diffuse[0] == 0
     assert sce.counts["sample"]["detected"][0] == 0
     assert abs(trapped / rays - fresnel(8.0, 2.419)) < hoeffding_mu(rays, delta)
     sci = vm.sphere_measure(scene, specular="SCI", rays=rays)

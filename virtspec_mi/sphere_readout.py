@@ -192,9 +192,10 @@ def _named_counts(sphere: Sphere, tallies: list[dict[str, Any]]) -> dict[str, np
     out = {name: by_code[:, k] for k, name in enumerate(_FATES)}
     for j, port in enumerate(sphere.ports):
         out[f"lost_{port.name}"] = by_code[:, 6 + j]
-    out["hemispherical_reflected"] = cross[:, 1, :].sum(axis=1)
+    out["hemispherical_reflected"] = cross[:, 1, :].sum(axis=1) + cross[:, 3, :].sum(axis=1)
+    out["hemispherical_specular"] = cross[:, 3, :].sum(axis=1)  # reflected by a delta event (part of the above)
     out["hemispherical_transmitted"] = cross[:, 2, :].sum(axis=1)
-    out["detected_from_upper"] = cross[:, 1, 0]
+    out["detected_from_upper"] = cross[:, 1, 0] + cross[:, 3, 0]
     for name in ("wall_reflections", "weight_violations", "rounded_weights"):
         out[name] = np.array([t[name] for t in tallies], dtype=np.int64)
     return {k: np.asarray(v, dtype=np.int64) for k, v in out.items()}
@@ -314,6 +315,18 @@ class SphereResult:
             else "hemispherical_reflected"
         lower, upper = clopper_pearson(self.counts["sample"][name], self.rays, float(self.settings["delta"]))
         return np.stack([lower, upper], axis=-1)
+
+    @property
+    def hemispherical_diffuse(self) -> np.ndarray:
+        """
+        The hemispherical reflectance without its specular part (rays reflected by a delta
+        event, e.g. a smooth surface): what an SCE reading aims at. Equal to
+        :attr:`hemispherical` for transmittance and for specimens without delta lobes.
+        """
+
+        if self.options["measurement"] == "transmittance":
+            return self.hemispherical
+        return self.hemispherical - self.fraction("hemispherical_specular", "sample")
 
     @property
     def instrument_error(self) -> np.ndarray:

@@ -239,7 +239,8 @@ class SphereWalk:
         """
         Walk rays [first, first + size) of one reading (global index from ``offset``);
         return its histogram ``cross[h, code]`` (h: the first interaction's hemisphere, 0
-        none, 1 upper, 2 lower; code: the sphere fate), wall reflections and rare counts.
+        none, 1 upper by a non-delta event, 2 lower, 3 upper by a delta event — specular
+        reflection; code: the sphere fate), wall reflections and rare counts.
         """
 
         global_first = offset + first
@@ -268,7 +269,8 @@ class SphereWalk:
             (first_rare & 4) != 0, mi.UInt32(_ROUNDED), 0)
         rho = dr.opaque(mi.Float, rho_w)
         wavelength = dr.opaque(mi.Float, plan.wavelength)
-        hemisphere = dr.select(first_fate == int(Fate.REFLECTED), mi.UInt32(1),
+        hemisphere = dr.select(first_fate == int(Fate.REFLECTED),
+                               dr.select(lanes["specular"], mi.UInt32(3), mi.UInt32(1)),
                                dr.select(first_fate == int(Fate.TRANSMITTED), mi.UInt32(2), mi.UInt32(0)))
         dr.eval(start, wo_world, fate, rare, hemisphere)  # the first interactions: one kernel
         walking = dr.compress(fate == _ACTIVE)  # the rays that entered the sphere
@@ -277,12 +279,12 @@ class SphereWalk:
             fate, rare, walls = self._loop(walking, start, wo_world, fate, rare, base, root, rho, wavelength)
 
         codes = _LOST + len(self.sphere.ports)
-        histogram = dr.zeros(mi.UInt32, 3 * codes)
+        histogram = dr.zeros(mi.UInt32, 4 * codes)
         dr.scatter_reduce(dr.ReduceOp.Add, histogram, mi.UInt32(1), hemisphere * codes + fate)
         violations = dr.count((rare & _VIOLATION) != 0)
         rounded = dr.count((rare & _ROUNDED) != 0)
         dr.eval(histogram, walls, violations, rounded)
-        return {"cross": np.array(histogram, dtype=np.int64).reshape(3, codes),
+        return {"cross": np.array(histogram, dtype=np.int64).reshape(4, codes),
                 "wall_reflections": int(np.array(walls)[0]), "weight_violations": int(np.array(violations)[0]),
                 "rounded_weights": int(np.array(rounded)[0])}
 

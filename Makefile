@@ -48,6 +48,7 @@ bench: setup
 	$(PY) benchmarks/turbid_slab.py
 	$(PY) benchmarks/speed_vs_error.py
 	$(PY) benchmarks/tabulated.py
+	$(PY) benchmarks/sphere.py
 
 clean:
 	rm -rf $(VENV) build *.egg-info .pytest_cache

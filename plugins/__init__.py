@@ -15,6 +15,7 @@ name                   kind         module
 ``abm_u``              BSDF         :mod:`.bsdfs.abm_u` (walk: :mod:`.bsdfs.abm_walk`)
 ``tabulated``          BSDF         :mod:`.bsdfs.tabulated` (a goniophotometer table)
 ``spectrophotometer``  integrator   :mod:`.integrators.spectrophotometer`
+``integrating_sphere`` integrator   :mod:`.integrators.integrating_sphere`
 =====================  ===========  ==========================================
 """
 
@@ -29,6 +30,7 @@ PLUGINS: dict[str, tuple[str, str, str]] = {
     "abm_u": ("bsdf", ".bsdfs.abm_u", "ABMU"),
     "tabulated": ("bsdf", ".bsdfs.tabulated", "Tabulated"),
     "spectrophotometer": ("integrator", ".integrators.spectrophotometer", "Spectrophotometer"),
+    "integrating_sphere": ("integrator", ".integrators.integrating_sphere", "IntegratingSphere"),
 }
 
 

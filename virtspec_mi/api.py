@@ -46,10 +46,12 @@ from virtspec_mi.result import Result
 from virtspec_mi.results_io import check_output
 from virtspec_mi.scene import find_instrument, scene_fingerprint
 from virtspec_mi.settings import Settings, settings_keywords, with_settings
+from virtspec_mi.sphere import SPHERE_SETTING_NAMES, Sphere, SphereSettings
+from virtspec_mi.sphere_readout import SphereResult, measure_sphere
 from virtspec_mi.zarr_table import SUFFIX as ZARR_SUFFIX
 from virtspec_mi.zarr_table import ZarrTable
 
-__all__ = ["measure", "sweep", "read_result", "fluctuation"]
+__all__ = ["measure", "sweep", "read_result", "fluctuation", "sphere_measure"]
 
 
 def measure(scene: Any, *, parameters: dict[str, Any] | None = None, defines: dict[str, Any] | None = None,
@@ -292,6 +294,57 @@ def fluctuation(a: Result | np.ndarray, b: Result | np.ndarray, quantity: str = 
     if a.shape != b.shape or a.size == 0:
         raise ValueError(f"fluctuation needs two non-empty arrays of one shape (got {a.shape} and {b.shape})")
     return float(np.mean(np.abs(a - b)))
+
+
+def sphere_measure(scene: Any, *, sphere: Sphere | None = None, **settings: Any) -> SphereResult:
+    """
+    Read the specimen of ``scene`` as a physical integrating sphere would: a
+    :class:`~virtspec_mi.sphere_readout.SphereResult` over wavelength (the reading
+    ρ_std·p_sample/p_standard with its certified interval, the hemispherical reading of
+    the same rays, the instrument error, every count of both configurations).
+
+    Parameters
+    ----------
+    scene
+        XML path, scene dict or ``mi.Scene`` with ``emitter`` and ``specimen`` disks; its
+        ``integrating_sphere`` integrator (if any) gives the sphere and the settings.
+    sphere
+        A :class:`~virtspec_mi.sphere.Sphere` (overrides the scene's).
+    **settings
+        Any setting of :class:`~virtspec_mi.settings.Settings` and of
+        :class:`~virtspec_mi.sphere.SphereSettings` (``measurement``, ``specular``,
+        ``method``, ``standard``, ``max_bounces``); ``None`` keeps the scene's value.
+
+    References
+    ----------
+    Baranoski et al. (2001), eqs. (2), (23); Goebel (1967).
+    """
+
+    instrument = find_instrument(scene)
+    integrator = instrument.integrator
+    own = {k: settings.pop(k) for k in list(settings) if k in SPHERE_SETTING_NAMES}
+    base = with_settings(_scene_settings(instrument), settings, "sphere_measure")
+    options = getattr(integrator, "sphere_settings", None) or SphereSettings()
+    options = options.updated(**own)
+    sphere = sphere if sphere is not None else getattr(integrator, "sphere", None)
+    if not isinstance(sphere, Sphere):
+        raise ValueError("sphere_measure needs a sphere: an 'integrating_sphere' integrator in the scene or "
+                         "sphere=Sphere(...)")
+    fingerprint = scene_fingerprint(scene, instrument)
+    return measure_sphere(instrument, sphere, base, options, scene=fingerprint)
+
+
+def _sphere_signature() -> Any:
+    """``sphere_measure``'s signature: the settings, then the sphere settings, as keywords."""
+
+    import inspect
+
+    signature = settings_keywords(sphere_measure)
+    extra = [inspect.Parameter(name, inspect.Parameter.KEYWORD_ONLY, default=None) for name in SPHERE_SETTING_NAMES]
+    return signature.replace(parameters=[*signature.parameters.values(), *extra])
+
+
+sphere_measure.__signature__ = _sphere_signature()  # type: ignore[attr-defined]
 
 
 def _scene_settings(instrument: Instrument) -> Settings:

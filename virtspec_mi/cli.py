@@ -20,6 +20,9 @@ Command line: ``virtspec``
   XYZ, L*a*b* and sRGB of a saved spectrum (a result file or a colour-science CSV).
 - ``virtspec compare RESULT MEASURED [...]``: a result against a measured spectrum
   (:mod:`virtspec_mi.compare`); ``virtspec plot FILE [...]``: a figure of a result file.
+- ``virtspec sphere SCENE [--measurement] [--specular SCI|SCE] [--method] [--standard]
+  [--max-bounces] [--out FILE(.json|.nc)] [--json] [measure options]``: the readout of a
+  physical integrating sphere (:mod:`virtspec_mi.sphere_readout`).
 - ``virtspec llvm {find,check}``: the libLLVM Dr.Jit uses (``make setup`` calls it).
 
 Errors in the input (bad ranges, unreadable scenes, a bad libLLVM) print one line
@@ -50,6 +53,8 @@ _EXAMPLES = {
     "colour": "examples:\n  virtspec colour spectrum.csv\n"
               "  virtspec colour fig5.nc --theta-i 30 --illuminant A --quantity transmittance",
     "llvm": "example: virtspec llvm check",
+    "sphere": "examples:\n  virtspec sphere scenes/sphere_150mm_8d.xml --specular SCE\n"
+              "  virtspec sphere scenes/sphere_150mm_8d.xml --method comparison --wavelengths 400:700:100 --out r.json",
 }
 
 
@@ -158,6 +163,17 @@ def build_parser() -> argparse.ArgumentParser:
     plot.add_argument("--uncertainty", type=float,
                       help="measurement uncertainty of MEASURED (overrides its uncertainty column)")
     plot.add_argument("--out", help="figure .png or .svg (default: FILE with the suffix .png)")
+    sphere = command("sphere", "the readout of a physical integrating sphere (sample over standard)",
+                     "Simulate an integrating-sphere instrument reading the scene's specimen: the detector "
+                     "fractions with the sample and with the reference standard, their certified ratio, the "
+                     "hemispherical reading of the same rays and the instrument error. The sphere comes from "
+                     "the scene's integrating_sphere integrator.")
+    sphere.add_argument("scene", help="Mitsuba XML scene with an integrating_sphere integrator and "
+                                      "'emitter' and 'specimen' disks")
+    _measurement_options(sphere, sweep=False)
+    _sphere_options(sphere)
+    sphere.add_argument("--out", help="result file .json or .nc")
+    sphere.add_argument("--json", action="store_true", help="print the result as one JSON object")
     return parser
 
 
@@ -191,6 +207,21 @@ def _pairs(items: Sequence[str], flag: str) -> dict[str, str]:
             raise ValueError(f"{flag} {name} is given twice")
         pairs[name] = value
     return pairs
+
+
+def _sphere_options(parser: argparse.ArgumentParser) -> None:
+    """One flag per field of :class:`~virtspec_mi.sphere.SphereSettings` (default: the scene's)."""
+
+    from dataclasses import fields
+
+    from virtspec_mi.sphere import SphereSettings
+
+    kinds = {"standard": float, "max_bounces": int}
+    for item in fields(SphereSettings):
+        choices = item.metadata["choices"]
+        parser.add_argument("--" + item.name.replace("_", "-"), type=kinds.get(item.name, str),
+                            choices=list(choices) if choices else None,
+                            help=f"{item.metadata['help']} (default: the scene's, else {item.default})")
 
 
 def _measurement_options(parser: argparse.ArgumentParser, sweep: bool) -> None:
@@ -256,6 +287,8 @@ def main(argv: Sequence[str] | None = None) -> int:
             return _compare(args)
         if args.command == "plot":
             return _plot(args)
+        if args.command == "sphere":
+            return _sphere(args)
         return _measure(args)
     except (ValueError, RuntimeError, OSError) as error:
         print(f"virtspec: error: {error}", file=sys.stderr)
@@ -275,6 +308,18 @@ def _measure(args: argparse.Namespace) -> int:
     reading = measure(args.scene, parameters=_pairs(args.params, "--param"), defines=_pairs(args.defines, "-D"),
                       **_settings(args))
     print(json.dumps(reading.as_dict()) if args.json else reading.summary())
+    return 0
+
+
+def _sphere(args: argparse.Namespace) -> int:
+    from virtspec_mi.api import sphere_measure
+    from virtspec_mi.sphere import SPHERE_SETTING_NAMES
+
+    own = {name: getattr(args, name) for name in SPHERE_SETTING_NAMES}
+    result = sphere_measure(args.scene, **_settings(args), **own)
+    if args.out:
+        result.write(args.out)
+    print(json.dumps(result.as_dict()) if args.json else result.summary())
     return 0
 
 

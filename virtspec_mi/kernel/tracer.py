@@ -61,7 +61,7 @@ from virtspec_mi.kernel.rng import chunk_root, dimension_key, dimension_keys, ha
 from virtspec_mi.kernel.walk import CAPPED_COMPONENT
 from virtspec_mi.settings import Settings
 
-__all__ = ["ReadingPlan", "tally_readings", "trace_rays"]
+__all__ = ["ReadingPlan", "tally_readings", "trace_rays", "first_interactions"]
 
 _WORD = 1 << 32
 # Dimensions of the random numbers: 0–1 emitter, 2–3 specimen, 4–6 BSDF, 7 survival;
@@ -173,6 +173,21 @@ def trace_rays(instrument: Any, plan: ReadingPlan, settings: Settings, count: in
     dr.eval(lanes)
     return {name: np.array(value).T if np.ndim(value) > 1 else np.array(value)
             for name, value in lanes.items()}
+
+
+def first_interactions(instrument: Any, plan: ReadingPlan, settings: Settings, first: int, size: int,
+                       offset: int) -> dict:
+    """
+    Symbolic per-lane first interactions (nothing evaluated) of rays [first, first + size) of
+    one reading whose rays start at global index ``offset``: the same random numbers, beam
+    and specimen ``sample`` as :func:`tally_readings` gives that reading, so a walk that
+    continues them (:mod:`virtspec_mi.kernel.sphere_walk`) keeps the hemispherical fates of
+    the very same rays. The chunk must not cross a 2³² boundary of the global index.
+    Returns the lanes of :meth:`_Kernel.trace` (``wo``, ``target``, ``fate``, ``rare`` …).
+    """
+
+    kernel = _Kernel(instrument, [plan], settings)
+    return kernel.trace(first, size, np.array([0]), np.array([0, plan.rays]), np.array([offset], dtype=np.int64))
 
 
 class _Kernel:

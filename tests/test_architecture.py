@@ -57,7 +57,8 @@ LAYERS: list[tuple[str, tuple[str, ...]]] = [
     ("api", ("virtspec_mi.api", "virtspec_mi.compare")),
     # the spectrophotometer integrator: Mitsuba's entry (mi.render), a thin adapter over the engine
     ("adapter", ("virtspec_mi.plugins.integrators",)),
-    ("engine", ("virtspec_mi.engine", "virtspec_mi.checkpoint", "virtspec_mi.progress", "virtspec_mi.result")),
+    ("engine", ("virtspec_mi.engine", "virtspec_mi.checkpoint", "virtspec_mi.progress", "virtspec_mi.result",
+                "virtspec_mi.gonio_result")),
     ("plugins", ("virtspec_mi.plugins.bsdfs",)),
     ("kernel", (
         "virtspec_mi.kernel",
@@ -67,6 +68,8 @@ LAYERS: list[tuple[str, tuple[str, ...]]] = [
         "virtspec_mi.budgets",
         "virtspec_mi.checks",
         "virtspec_mi.leaf_data",
+        "virtspec_mi.gonio_bins",
+        "virtspec_mi.gonio_bounds",
     )),
 ]
 

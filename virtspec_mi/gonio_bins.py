@@ -132,6 +132,27 @@ class GonioBins:
     phi_edges: np.ndarray
     fold_phi: bool = False
     binning: str = "uniform"
+    hemispheres: str = "both"
+
+    @property
+    def regular_theta(self) -> tuple[int, bool, bool] | None:
+        """
+        (bins per hemisphere, reflection binned, transmission binned) for θo bins made by
+        a binning (the kernel then finds the bin arithmetically); ``None`` for given edges.
+        """
+
+        if self.binning not in BINNINGS:
+            return None
+        covered = {"both": (True, True), "reflection": (True, False), "transmission": (False, True)}[self.hemispheres]
+        return self.shape[0] // sum(covered), *covered
+
+    @property
+    def regular_phi(self) -> bool:
+        """True for equal φo bins over the whole range (the kernel finds the bin arithmetically)."""
+
+        top = 180.0 if self.fold_phi else 360.0
+        return bool(self.phi_edges[0] == 0.0 and self.phi_edges[-1] == top
+                    and np.allclose(np.diff(self.phi_edges), top / (len(self.phi_edges) - 1), rtol=1e-12, atol=0))
 
     @property
     def shape(self) -> tuple[int, int]:
@@ -174,12 +195,19 @@ class GonioBins:
 
     def as_dict(self) -> dict[str, Any]:
         return {"theta_edges": self.theta_edges.tolist(), "phi_edges": self.phi_edges.tolist(),
-                "fold_phi": self.fold_phi, "binning": self.binning}
+                "fold_phi": self.fold_phi, "binning": self.binning, "hemispheres": self.hemispheres}
 
     @classmethod
     def from_dict(cls, data: dict[str, Any]) -> "GonioBins":
-        return make_bins(data["theta_edges"], data["phi_edges"], fold_phi=bool(data["fold_phi"]),
-                         binning=str(data.get("binning", "edges")))
+        binning = str(data.get("binning", "edges"))
+        theta = np.asarray(data["theta_edges"], dtype=np.float64)
+        phi = np.asarray(data["phi_edges"], dtype=np.float64)
+        fold = bool(data["fold_phi"])
+        if binning not in BINNINGS:  # given edges: checked as when they were given
+            return make_bins(theta, phi, fold_phi=fold)
+        _check_edges("theta_o_bins", theta, 0.0, 180.0)
+        _check_edges("phi_o_bins", phi, 0.0, 180.0 if fold else 360.0)
+        return GonioBins(theta, phi, fold, binning, str(data.get("hemispheres", "both")))
 
 
 def _theta_keys(edges: np.ndarray) -> np.ndarray:
@@ -249,7 +277,7 @@ def _check_edges(name: str, edges: np.ndarray, low: float, high: float) -> np.nd
         raise ValueError(f"{name} edges must be degrees in [{low:g}, {high:g}] (got "
                          f"{shown_value(float(np.nanmin(edges)))} ... {shown_value(float(np.nanmax(edges)))})")
     if np.any(np.diff(edges) <= 0):
-        raise ValueError(f"{name} edges must be strictly increasing (got {edges.tolist()})")
+        raise ValueError(f"{name} edges must be strictly increasing (got {_shown(edges)})")
     return edges
 
 
@@ -303,21 +331,27 @@ def make_bins(theta_o_bins: Any = 18, phi_o_bins: Any = 36, binning: str = "unif
         theta = _check_edges("theta_o_bins", theta, 0.0, 180.0)
         if theta[0] < 90.0 < theta[-1] and 90.0 not in theta:
             raise ValueError("theta_o_bins edges that cross 90 degrees must have 90 as an edge (no bin may "
-                             f"straddle the reflection and transmission hemispheres; got {theta.tolist()})")
+                             f"straddle the reflection and transmission hemispheres; got {_shown(theta)})")
         binning = "edges"
     top = 180.0 if fold_phi else 360.0
     if isinstance(phi, int):
         phi = np.linspace(0.0, top, _count("phi_o_bins", phi, _MAX_PER_AXIS) + 1)
     else:
         phi = _check_edges("phi_o_bins", phi, 0.0, top)
-    keys = _theta_keys(theta)
-    if np.any(np.diff(keys) <= 0):
-        raise ValueError("theta_o_bins edges must differ in float32 sin^2 theta_o (edges too close together, or "
-                         f"within ~0.02 degrees of 90; got {theta.tolist()})")
-    if np.any(np.diff(phi.astype(np.float32)) <= 0):
-        raise ValueError(f"phi_o_bins edges must differ in float32 (got {phi.tolist()})")
-    bins = GonioBins(theta_edges=theta, phi_edges=phi, fold_phi=fold_phi, binning=binning)
-    if bins.size > MAX_BINS:
+    if (len(theta) - 1) * (len(phi) - 1) > MAX_BINS:
         raise ValueError(f"theta_o_bins x phi_o_bins must be at most {MAX_BINS} bins (got "
-                         f"{bins.shape[0]} x {bins.shape[1]} = {bins.size})")
-    return bins
+                         f"{len(theta) - 1} x {len(phi) - 1} = {(len(theta) - 1) * (len(phi) - 1)})")
+    if binning == "edges" and np.any(np.diff(_theta_keys(theta)) <= 0):  # the kernel searches their keys
+        raise ValueError("theta_o_bins edges must differ in float32 sin^2 theta_o (edges too close together, or "
+                         f"within ~0.02 degrees of 90; got {_shown(theta)})")
+    if np.any(np.diff(phi.astype(np.float32)) <= 0):
+        raise ValueError(f"phi_o_bins edges must differ in float32 (got {_shown(phi)})")
+    return GonioBins(theta_edges=theta, phi_edges=phi, fold_phi=fold_phi, binning=binning,
+                     hemispheres=hemispheres if binning in BINNINGS else "both")
+
+
+def _shown(edges: np.ndarray) -> str:
+    """Edges for a message: all of a short list, else the first and last few."""
+
+    values = [f"{v:g}" for v in edges]
+    return ", ".join(values) if len(values) <= 8 else ", ".join(values[:4] + ["..."] + values[-3:])

@@ -416,16 +416,33 @@ class _Kernel:
         r2 = wo.x * wo.x + wo.y * wo.y
         sin2 = r2 / (r2 + wo.z * wo.z)
         reflected = fate == int(Fate.REFLECTED)
-        key = dr.select(reflected, dr.minimum(sin2, _BELOW_ONE), 2.0 - sin2)
-        theta_bin = _search(bins.theta_keys(), key)
+        transmitted = fate == int(Fate.TRANSMITTED)
+        regular = bins.regular_theta
+        if regular is None:  # given edges: search the keys
+            key = dr.select(reflected, dr.minimum(sin2, _BELOW_ONE), 2.0 - sin2)
+            theta_bin = _search(bins.theta_keys(), key)
+        else:  # n bins per hemisphere, uniform in sin²θo or in θo: arithmetic, mirrored below
+            per, reflection, transmission = regular
+            if bins.binning == "projected":
+                position = sin2 * float(per)
+            else:
+                position = dr.atan2(dr.sqrt(r2), dr.abs(wo.z)) * (2.0 * per / dr.pi)
+            j = mi.UInt32(dr.clip(mi.Int32(dr.floor(position)), 0, per - 1))
+            outside = mi.UInt32(n_theta)
+            theta_bin = dr.select(reflected, j if reflection else outside,
+                                  (mi.UInt32(per * reflection + per - 1) - j) if transmission else outside)
         phi = dr.atan2(wo.y, wo.x) * (180.0 / dr.pi)
         phi = dr.select(phi < 0.0, phi + 360.0, phi)
         if bins.fold_phi:
             relative = phi - phi_i
             relative = relative - 360.0 * dr.floor(relative / 360.0)
             phi = dr.minimum(relative, 360.0 - relative)
-        phi_bin = _search(bins.phi_edges.astype(np.float32), phi)
-        binned = (reflected | (fate == int(Fate.TRANSMITTED))) & (theta_bin < n_theta) & (phi_bin < n_phi)
+        if bins.regular_phi:
+            top = 180.0 if bins.fold_phi else 360.0
+            phi_bin = mi.UInt32(dr.clip(mi.Int32(dr.floor(phi * (n_phi / top))), 0, n_phi - 1))
+        else:
+            phi_bin = _search(bins.phi_edges.astype(np.float32), phi)
+        binned = (reflected | transmitted) & (theta_bin < n_theta) & (phi_bin < n_phi)
         return dr.select(binned, theta_bin * n_phi + phi_bin, mi.UInt32(bins.size))
 
     def _sample(self, context: Any, si: Any, sample1: Any, sample2: Any) -> tuple[Any, Any]:

@@ -63,3 +63,59 @@ def test_brdf_intervals_cover_the_estimate_and_scale_with_solid_angle():
 def test_bad_inputs_name_the_parameter(call, name):
     with pytest.raises(ValueError, match=name):
         call()
+
+
+# --- empirical check: miss rates of real readings against the bounds --------------------
+
+
+def _miss_rates(mi, readings: int, rays: int | None, seed: int) -> dict[str, float]:
+    """
+    ``readings`` independent goniophotometer readings (one per wavelength: each has its own
+    rays) of a Lambertian of ρ = 0.5 under a collimated beam, whose truth is known exactly:
+    F(θ) = ρ sin²θ for the CDF of θo (absorbed rays at +∞), p_k = ρ Ω_k/π per bin. Returns
+    the share of readings whose CDF misses by ≥ the DKW μ of N, whose bins miss by ≥ the
+    union μ of N, and whose simultaneous Clopper–Pearson band misses a bin (N: the DKW
+    budget at μ = 0.05, δ = 0.2; ``rays`` overrides the rays traced, not the μ claimed).
+    """
+
+    import virtspec_mi as vm
+
+    rho, mu, delta = 0.5, 0.05, 0.2
+    n = gb.dkw_rays(mu, delta)
+    scene = vm.instrument_scene({"type": "diffuse", "reflectance": {"type": "spectrum", "value": rho}})
+    wavelengths = 400.0 + 0.25 * np.arange(readings)
+    reading = vm.gonio(scene, wavelengths=wavelengths, beam="collimated", rays=rays or n, delta=delta, seed=seed,
+                       theta_o_bins=60, phi_o_bins=4, binning="projected", hemispheres="reflection")
+    k = reading.size
+    cdf = reading.cdf_theta_o[:, 0]
+    truth = rho * np.sin(np.radians(reading.bins.theta_edges)) ** 2
+    cdf_miss = np.max(np.abs(cdf - truth), axis=-1) >= gb.dkw_mu(n, delta)
+    p = rho * reading.solid_angles / np.pi
+    bins_miss = np.max(np.abs(reading.fraction[:, 0] - p), axis=(-2, -1)) >= gb.union_mu(n, delta, k)
+    lower, upper = reading.brdf_lower[:, 0], reading.brdf_upper[:, 0]
+    band_miss = np.any((rho / np.pi < lower) | (rho / np.pi > upper), axis=(-2, -1))
+    return {"cdf": cdf_miss.mean(), "bins": bins_miss.mean(), "band": band_miss.mean(), "readings": readings}
+
+
+def _check_miss_rates(mi, readings: int) -> None:
+    from scipy import stats
+
+    delta = 0.2
+    rates = _miss_rates(mi, readings, None, seed=101)
+    for name in ("cdf", "bins", "band"):  # never significantly above delta
+        misses = int(round(rates[name] * readings))
+        assert stats.binomtest(misses, readings, delta, alternative="greater").pvalue > 1e-4, (name, rates)
+    assert rates["cdf"] > 0.05  # DKW-Massart is nearly tight: the check sees misses
+    # power: half the rays, the same claimed mu: the CDF misses far more often than delta
+    half = _miss_rates(mi, readings, gb.dkw_rays(0.05, delta) // 2, seed=202)
+    misses = int(round(half["cdf"] * readings))
+    assert stats.binomtest(misses, readings, delta, alternative="greater").pvalue < 1e-4, half
+
+
+def test_miss_rates_respect_the_bounds_and_halving_n_breaks_them(mi):
+    _check_miss_rates(mi, 400)
+
+
+@pytest.mark.slow
+def test_miss_rates_respect_the_bounds_and_halving_n_breaks_them_full(mi):
+    _check_miss_rates(mi, 4000)

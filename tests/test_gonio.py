@@ -174,3 +174,45 @@ def test_integrator_parameters_make_render_a_goniophotometer_reading(mi):
     scene["integrator"]["theta_o_bins"] = -2
     with pytest.raises((ValueError, RuntimeError), match="theta_o_bins"):  # Mitsuba's loader wraps it
         mi.load_dict(scene)
+
+
+def test_every_gonio_parameter_is_a_keyword_a_flag_and_an_integrator_parameter(capsys):
+    import inspect
+
+    from virtspec_mi.cli import build_parser
+    from virtspec_mi.gonio_bins import GONIO_PARAMETERS
+    from virtspec_mi.plugins.integrators import spectrophotometer
+    from virtspec_mi.settings import SETTING_NAMES
+
+    keywords = inspect.signature(vm.gonio).parameters
+    assert set(GONIO_PARAMETERS) | set(SETTING_NAMES) - {"theta_i"} <= set(keywords)
+    parser = build_parser()
+    with pytest.raises(SystemExit):
+        parser.parse_args(["gonio", "--help"])
+    text = capsys.readouterr().out
+    for name in (*GONIO_PARAMETERS, *SETTING_NAMES):
+        assert "--" + name.replace("_", "-") in text, name
+        if name in GONIO_PARAMETERS:
+            assert f"``{name}``" in spectrophotometer.__doc__, name
+
+
+def test_cli_gonio_prints_the_certificate_and_writes_the_file(rough, tmp_path, capsys):
+    from virtspec_mi.cli import main
+
+    scene = tmp_path / "rough.xml"
+    scene.write_text(f"""<scene version="3.0.0">
+    <shape type="disk" id="emitter"><transform name="to_world"><rotate x="1" angle="180"/><scale value="8"/>
+        <translate z="100"/></transform></shape>
+    <shape type="disk" id="specimen"><transform name="to_world"><scale value="12.5"/></transform>
+        <bsdf type="roughdielectric"><float name="alpha" value="0.3"/><float name="int_ior" value="1.5"/></bsdf></shape>
+</scene>""")
+    out, plot = tmp_path / "g.nc", tmp_path / "g.png"
+    status = main(["gonio", str(scene), "--theta-i", "0", "45", "--theta-o-bins", "0", "30", "90", "180",
+                   "--phi-o-bins", "4", "--fold-phi", "--beam", "collimated", "--mu", "0.05", "--out", str(out),
+                   "--plot", str(plot)])
+    text = capsys.readouterr().out
+    assert status == 0 and "DKW" in text and "union bound" in text and out.is_file() and plot.is_file()
+    reading = vm.read_gonio(out)
+    assert reading.bins.fold_phi and reading.bins.shape == (3, 4) and list(reading.theta_i) == [0, 45]
+    assert main(["gonio", str(scene), "--theta-o-bins", "0", "100", "180"]) == 1
+    assert "90 as an edge" in capsys.readouterr().err

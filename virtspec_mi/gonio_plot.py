@@ -101,7 +101,7 @@ def plot_polar(reading: Any, path: str | os.PathLike | None = None, wavelength: 
                     f"N = {int(reading.rays.max()):,} rays, K = {reading.size} bins "
                     f"(band: all bins at {1 - reading.delta:g})", fontsize=10)
     if path is not None:
-        figure.savefig(path, dpi=90)
+        figure.savefig(path, dpi=72)
     return figure
 
 

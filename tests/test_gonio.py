@@ -216,3 +216,20 @@ def test_cli_gonio_prints_the_certificate_and_writes_the_file(rough, tmp_path, c
     assert reading.bins.fold_phi and reading.bins.shape == (3, 4) and list(reading.theta_i) == [0, 45]
     assert main(["gonio", str(scene), "--theta-o-bins", "0", "100", "180"]) == 1
     assert "90 as an edge" in capsys.readouterr().err
+
+
+def test_plots_and_spectra_per_bin(rough, tmp_path):
+    from virtspec_mi.gonio_plot import plane_bins, plot_hemisphere, plot_polar
+
+    reading = vm.gonio(rough, theta_i=[0, 50], wavelengths=[500, 600], theta_o_bins=6, phi_o_bins=8, rays=4000)
+    assert plane_bins(reading) == (4, 0) and plane_bins(reading, across=True) == (2, 6)  # 180 / 0; 90 / 270
+    figure = plot_polar(reading, tmp_path / "polar.png", log=True)
+    assert (tmp_path / "polar.png").stat().st_size > 1000 and len(figure.axes) == 2
+    plot_hemisphere(reading, tmp_path / "map.svg", transmission=True, theta_i=50)
+    assert (tmp_path / "map.svg").is_file()
+    with pytest.raises(ValueError, match="plot"):
+        reading.plot(tmp_path / "x.pdf")
+    sd = reading.to_sd(theta_o=40, phi_o=190)
+    assert list(sd.wavelengths) == [500, 600] and np.allclose(sd.values, reading.brdf[:, 0, 2, 4])
+    with pytest.raises(ValueError, match="read_gonio"):
+        vm.read_result(reading.write(tmp_path / "g.nc"))

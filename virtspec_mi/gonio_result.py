@@ -160,7 +160,11 @@ class GonioResult:
 
     @property
     def cdf_theta_o(self) -> np.ndarray:
-        """F̂(θ) = #(escaped with θo < θ)/N at the θo edges, shape (…, θo bins + 1)."""
+        """
+        F̂(θ) = #(escaped with θo < θ)/N at the θo edges, shape (…, θo bins + 1): the
+        empirical CDF of X = θo for a ray that escaped into a bin, +∞ otherwise (absorbed,
+        or outside the bins), certified by DKW (:attr:`cdf_mu`).
+        """
 
         per_theta = self.bin_counts.sum(axis=-1)
         zero = np.zeros(per_theta.shape[:-1] + (1,), dtype=np.int64)
@@ -168,7 +172,7 @@ class GonioResult:
 
     @property
     def cdf_phi_o(self) -> np.ndarray:
-        """F̂(φ) = #(escaped with φo < φ)/N at the φo edges, shape (…, φo bins + 1)."""
+        """F̂(φ) = #(escaped with φo < φ)/N at the φo edges, shape (…, φo bins + 1) (as :attr:`cdf_theta_o`)."""
 
         per_phi = self.bin_counts.sum(axis=-2)
         zero = np.zeros(per_phi.shape[:-1] + (1,), dtype=np.int64)
@@ -364,7 +368,24 @@ class GonioResult:
         kind, content = results_io.read(path)
         return cls.from_dataset(content) if kind == "dataset" else cls.from_dict(content)
 
-    # -- plots -------------------------------------------------------------------------
+    # -- colour and plots --------------------------------------------------------------
+
+    def to_sd(self, theta_o: float, phi_o: float, theta_i: float | None = None) -> Any:
+        """
+        f over wavelength in the bin holding (θo, φo) at one θi (default: the first) as a
+        ``colour.SpectralDistribution`` (1/sr; needs several wavelengths).
+        """
+
+        import colour
+
+        i = 0 if theta_i is None else int(np.argmin(np.abs(self.theta_i - theta_i)))
+        t = int(np.clip(np.searchsorted(self.bins.theta_edges, theta_o, side="right") - 1, 0, self.bins.shape[0] - 1))
+        p = int(np.clip(np.searchsorted(self.bins.phi_edges, phi_o, side="right") - 1, 0, self.bins.shape[1] - 1))
+        if len(self.wavelengths) < 2:
+            raise ValueError("to_sd needs a reading over several wavelengths (got 1)")
+        order = np.argsort(self.wavelengths)
+        name = f"f at theta_o {self.theta_o[t]:g}, phi_o {self.phi_o[p]:g} deg (theta_i {self.theta_i[i]:g})"
+        return colour.SpectralDistribution(dict(zip(self.wavelengths[order], self.brdf[order, i, t, p])), name=name)
 
     def plot(self, path: str | os.PathLike | None = None, **options: Any) -> Any:
         """Polar plot of f in the plane of incidence and across it, with the certified band (:mod:`virtspec_mi.gonio_plot`)."""

@@ -27,8 +27,12 @@ def test_union_grows_with_log_k_only():
     assert gb.union_rays(0.01, 0.01, 1000) < 2.5 * gb.union_rays(0.01, 0.01, 1)
 
 
-def test_exact_union_needs_fewer_rays():
+def test_exact_union_needs_fewer_rays_and_certifies_its_mu():
     assert gb.union_exact_rays(0.02, 0.01, 100) < gb.union_rays(0.02, 0.01, 100)
+    n = gb.union_exact_rays(0.005, 0.01, 1296)  # beyond the exact inverse's range: certified by the rule's N
+    assert n < gb.union_rays(0.005, 0.01, 1296)
+    assert gb.union_exact_mu(n, 0.01, 1296, mu=0.005) == 0.005
+    assert gb.union_exact_mu(n - 1000, 0.01, 1296, mu=0.005) > 0.005
 
 
 def test_bins_mu_is_the_smaller_certificate():

@@ -147,11 +147,20 @@ def union_exact_rays(mu: float, delta: float, bins: int) -> int:
     return exact_rays(mu, _split(delta, bins))
 
 
-def union_exact_mu(rays: Any, delta: float, bins: int) -> Any:
-    """The exact-binomial μ of N rays at δ/K (:func:`virtspec_mi.bounds.exact_mu`)."""
+def union_exact_mu(rays: Any, delta: float, bins: int, mu: float | None = None) -> Any:
+    """
+    The exact-binomial μ of N rays at δ/K (:func:`virtspec_mi.bounds.exact_mu`); with the
+    μ asked for, μ itself where N is at least the exact rule's N for (μ, δ/K) (as
+    :meth:`virtspec_mi.budgets.RayBudget.certified`: the exact inverse is only computed up
+    to :data:`~virtspec_mi.bounds.EXACT_MU_MAX_RAYS` rays, Hoeffding's μ beyond).
+    """
+
+    from virtspec_mi.budgets import BUDGETS
 
     share = _split(delta, bins)
-    return _per_rays(lambda n: exact_mu(n, share), rays)
+    if mu is None:
+        return _per_rays(lambda n: exact_mu(n, share), rays)
+    return _per_rays(lambda n: BUDGETS["exact"].certified(n, share, mu), rays)
 
 
 def bins_mu(rays: Any, delta: float, bins: int) -> Any:

@@ -189,7 +189,7 @@ class GonioResult:
         """μ with |m_k/N − p_k| < μ for every bin at once at δ (per reading; NaN: not certified)."""
 
         if self.guarantee == "union-exact":
-            mu = np.minimum(gonio_bounds.union_exact_mu(self.rays, self.delta, self.size),
+            mu = np.minimum(gonio_bounds.union_exact_mu(self.rays, self.delta, self.size, self.result.mu),
                             gonio_bounds.bins_mu(self.rays, self.delta, self.size))
         else:
             mu = gonio_bounds.bins_mu(self.rays, self.delta, self.size)

@@ -35,6 +35,11 @@ Conventions
   0 by construction); weights beyond, or NaN, are ``weight_violations`` and the largest
   is kept.
 - Rays are traced in ``TransportMode.Importance`` (light travels from the emitter).
+- A goniophotometer reading (:func:`tally_gonio_readings`) also bins every reflected
+  or transmitted ray by its outgoing direction in the specimen frame
+  (:mod:`virtspec_mi.gonio_bins`), in the same fused kernel; the fate decides the
+  hemisphere (grazing exits included). Without bins none of this is compiled: the
+  plain kernel and its counts are unchanged.
 - The emitter disk neither occludes nor self-intersects its rays, and no general
   intersection is needed: each conical ray is aimed at a sampled specimen point and hits
   it by construction; a collimated ray hits the specimen centre.

@@ -49,6 +49,7 @@ bench: setup
 	$(PY) benchmarks/speed_vs_error.py
 	$(PY) benchmarks/tabulated.py
 	$(PY) benchmarks/sphere.py
+	$(PY) benchmarks/gonio.py
 
 clean:
 	rm -rf $(VENV) build *.egg-info .pytest_cache

@@ -58,7 +58,7 @@ LAYERS: list[tuple[str, tuple[str, ...]]] = [
     # the spectrophotometer integrator: Mitsuba's entry (mi.render), a thin adapter over the engine
     ("adapter", ("virtspec_mi.plugins.integrators",)),
     ("engine", ("virtspec_mi.engine", "virtspec_mi.parameters", "virtspec_mi.checkpoint", "virtspec_mi.progress",
-                "virtspec_mi.result", "virtspec_mi.zarr_table", "virtspec_mi.sphere_readout")),
+                "virtspec_mi.result", "virtspec_mi.zarr_table", "virtspec_mi.sphere_readout", "virtspec_mi.gonio_result")),
     ("plugins", ("virtspec_mi.plugins.bsdfs",)),
     ("kernel", (
         "virtspec_mi.kernel",
@@ -71,6 +71,8 @@ LAYERS: list[tuple[str, tuple[str, ...]]] = [
         "virtspec_mi.bsdf_table",
         "virtspec_mi.sphere_theory",
         "virtspec_mi.sphere",
+        "virtspec_mi.gonio_bins",
+        "virtspec_mi.gonio_bounds",
     )),
 ]
 

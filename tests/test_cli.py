@@ -177,11 +177,11 @@ def test_bounds_shows_every_budget():
     assert "66,501" in result.stdout and "2,000 + at most" in result.stdout
 
 
-@pytest.mark.parametrize("command", ["bounds", "measure", "sweep", "colour", "llvm"])
+@pytest.mark.parametrize("command", ["bounds", "measure", "sweep", "gonio", "colour", "llvm"])
 def test_every_subcommand_has_a_description_and_an_example(command):
     text = re.sub(r"-\s+", "-", virtspec(command, "--help").stdout)  # argparse wraps at hyphens
     assert "example" in text and f"virtspec {command}" in text.split("example", 1)[1]
-    if command in ("measure", "sweep"):
+    if command in ("measure", "sweep", "gonio"):
         assert "conical-hemispherical" in text and "directional-hemispherical" in text
         assert "hemispherical-hemispherical" in text and "default: the scene's" in text
     if command == "colour":

@@ -29,6 +29,7 @@ Baranoski et al. (2001), eqs. (2), (23), (24); Figs. 5 and 6.
 
 from __future__ import annotations
 
+import inspect
 import os
 from contextlib import ExitStack, contextmanager
 from dataclasses import replace
@@ -39,7 +40,9 @@ import numpy as np
 
 from virtspec_mi.checkpoint import checkpoint_for, claim, remove
 from virtspec_mi.checks import parse_theta_i
-from virtspec_mi.engine import in_process_runner, measure_reading, run
+from virtspec_mi.engine import gonio_reading, in_process_runner, measure_reading, run
+from virtspec_mi.gonio_bins import GONIO_PARAMETERS
+from virtspec_mi.gonio_result import GonioResult
 from virtspec_mi.instrument import Instrument
 from virtspec_mi.parameters import apply_point, current_values, parameter_space
 from virtspec_mi.result import Result
@@ -51,7 +54,7 @@ from virtspec_mi.sphere_readout import SphereResult, measure_sphere
 from virtspec_mi.zarr_table import SUFFIX as ZARR_SUFFIX
 from virtspec_mi.zarr_table import ZarrTable
 
-__all__ = ["measure", "sweep", "read_result", "fluctuation", "sphere_measure"]
+__all__ = ["measure", "sweep", "gonio", "read_result", "read_gonio", "fluctuation", "sphere_measure"]
 
 
 def measure(scene: Any, *, parameters: dict[str, Any] | None = None, defines: dict[str, Any] | None = None,
@@ -262,6 +265,71 @@ def _write(result: Result, out: Path, checkpoint: Path) -> None:
 
 measure.__signature__ = settings_keywords(measure)  # type: ignore[attr-defined]
 sweep.__signature__ = settings_keywords(sweep)  # type: ignore[attr-defined]
+
+
+def gonio(scene: Any, *, theta_i: Any = None, out: str | os.PathLike | None = None, **options: Any) -> GonioResult:
+    """
+    A certified goniophotometer reading of ``scene``: the spectrophotometer's readings
+    over every (wavelength, θi), with every escaping ray also binned by its outgoing
+    direction (θo, φo) in the specimen frame (:class:`~virtspec_mi.gonio_result.GonioResult`).
+
+    Parameters
+    ----------
+    scene
+        XML path, scene dict or loaded ``mi.Scene`` (as for :func:`measure`).
+    theta_i
+        Incidence angles in degrees (as for :func:`sweep`); default: the scene's θi (or 0).
+    out
+        File to write (``.nc``, ``.csv`` or ``.json``), checked before any tracing.
+    **options
+        The goniophotometer parameters (:data:`~virtspec_mi.gonio_bins.GONIO_PARAMETERS`:
+        ``theta_o_bins``, ``phi_o_bins``, ``binning``, ``fold_phi``, ``hemispheres``,
+        ``guarantee``, ``relative_tolerance``, ``brdf_floor``) and every setting of
+        :class:`~virtspec_mi.settings.Settings` (a fixed budget); one left ``None`` comes
+        from the scene's ``spectrophotometer`` integrator, else from its default. Without
+        ``rays``, N is sized by ``guarantee`` at ``mu`` and ``delta`` over the K bins
+        (:func:`virtspec_mi.gonio_bounds.gonio_rays`).
+
+    References
+    ----------
+    Baranoski et al. (2001), eq. (23), Sect. 6; :mod:`virtspec_mi.gonio_bounds`.
+    """
+
+    out = check_output(_file_path(out, "out")) if out is not None else None
+    instrument = find_instrument(scene)
+    given = {name: options.pop(name) for name in list(options) if name in GONIO_PARAMETERS}
+    scene_gonio = instrument.integrator.gonio if instrument.integrator is not None else {}
+    spec = {**scene_gonio, **{name: value for name, value in given.items() if value is not None}}
+    base = with_settings(_scene_settings(instrument), options, "gonio")
+    angles = np.array(parse_theta_i(base.theta_i if theta_i is None else theta_i))
+    if len(np.unique(angles)) != len(angles):
+        raise ValueError("theta_i of a goniophotometer reading must be distinct (got repeated values)")
+    if base.adaptive:
+        raise ValueError("bound must be a fixed budget for a goniophotometer reading (hoeffding, chebyshev, "
+                         "exact, or rays given); N is sized by guarantee= over the bins")
+    result = gonio_reading(instrument, base, spec, angles, scene=scene_fingerprint(scene, instrument))
+    result.result.warn_if_uncertified(stacklevel=3)
+    if out is not None:
+        result.write(out)
+    return result
+
+
+def _gonio_signature() -> inspect.Signature:
+    """:func:`gonio`'s signature: its own parameters, the goniophotometer parameters, then the settings."""
+
+    own = settings_keywords(gonio)
+    parameters = list(own.parameters.values())
+    extra = [inspect.Parameter(name, inspect.Parameter.KEYWORD_ONLY, default=None) for name in GONIO_PARAMETERS]
+    return own.replace(parameters=[*parameters[:3], *extra, *parameters[3:]])
+
+
+gonio.__signature__ = _gonio_signature()  # type: ignore[attr-defined]
+
+
+def read_gonio(path: str | os.PathLike) -> GonioResult:
+    """A goniophotometer reading from a file written by :meth:`GonioResult.write`."""
+
+    return GonioResult.read(path)
 
 
 def read_result(path: str | os.PathLike) -> Result:

@@ -16,6 +16,9 @@ Command line: ``virtspec``
 - ``measure`` and ``sweep`` take ``-D NAME=VALUE`` (repeatable): the XML scene's ``$NAME``
   parameter, as Mitsuba's own ``mitsuba -D`` (``mi.load_file(path, NAME=VALUE)``);
   ``measure --param NAME=VALUE`` sets one specimen parameter for the reading.
+- ``virtspec gonio SCENE [--theta-o-bins 18] [--phi-o-bins 36] [--binning] [--fold-phi]
+  [--hemispheres] [--guarantee] [--relative-tolerance] [--brdf-floor] [--out FILE] [--plot FIG]
+  [--json] [measure options]``: a goniophotometer reading (BRDF/BTDF per direction bin).
 - ``virtspec colour FILE [--theta-i] [--quantity] [--illuminant] [--observer] [--json]``: CIE
   XYZ, L*a*b* and sRGB of a saved spectrum (a result file or a colour-science CSV).
 - ``virtspec compare RESULT MEASURED [...]``: a result against a measured spectrum
@@ -50,6 +53,8 @@ _EXAMPLES = {
              "--param specimen.thickness=1.2e-4:2e-4:4e-5 --param specimen.chlorophyll_a=2,4 --out lut.nc\n"
              "  virtspec sweep scenes/soybean_abmb.xml -D side=abaxial --theta-i 8\n"
              "  virtspec sweep scenes/soybean_abmb.xml --theta-i 8 --wavelengths 400:2500:5 --workers 2 --out leaf.nc",
+    "gonio": "examples:\n  virtspec gonio scenes/diamond_collimated.xml --theta-i 30 --theta-o-bins 9 --phi-o-bins 12\n"
+             "  virtspec gonio scene.xml --binning projected --fold-phi --out brdf.nc --plot brdf.png",
     "colour": "examples:\n  virtspec colour spectrum.csv\n"
               "  virtspec colour fig5.nc --theta-i 30 --illuminant A --quantity transmittance",
     "llvm": "example: virtspec llvm check",
@@ -111,6 +116,18 @@ def build_parser() -> argparse.ArgumentParser:
                             "virtspec-mi installed and the scene file at the same path)")
     sweep.add_argument("--task-readings", type=int, metavar="K",
                        help="readings per Dask task (default: scaleout.TASK_SECONDS of tracing, from the measured ray rate)")
+
+    gonio = command("gonio", "goniophotometer: certified BRDF/BTDF per outgoing-direction bin",
+                    "Measure the specimen of a scene as the spectrophotometer does, and bin every escaping ray by "
+                    "its outgoing direction (theta_o, phi_o) in the specimen frame: exact counts, fractions and "
+                    "BRDF/BTDF per bin with their certificate (DKW for the CDFs, union bound for the bins, "
+                    "Clopper-Pearson intervals for f).")
+    gonio.add_argument("scene", help="Mitsuba XML scene with 'emitter' and 'specimen' disks")
+    _measurement_options(gonio, sweep=True)
+    _gonio_options(gonio)
+    gonio.add_argument("--out", help="result file .nc, .csv or .json (the tabulated BSDF reads the .nc)")
+    gonio.add_argument("--plot", help="figure .png or .svg: polar plot of f in and across the plane of incidence")
+    gonio.add_argument("--json", action="store_true", help="print the reading as one JSON object")
 
     colour = command("colour", "CIE XYZ, L*a*b*, sRGB of a saved spectrum",
                      "Colorimetry (colour-science, ASTM E308) of one quantity of a result file at one theta_i, "
@@ -251,6 +268,21 @@ def _measurement_options(parser: argparse.ArgumentParser, sweep: bool) -> None:
                             choices=list(choices) if choices else None, help=f"{help_text(item)} ({default})")
 
 
+def _gonio_options(parser: argparse.ArgumentParser) -> None:
+    """One flag per goniophotometer parameter (:data:`~virtspec_mi.gonio_bins.GONIO_PARAMETERS`)."""
+
+    from virtspec_mi.gonio_bins import GONIO_PARAMETERS
+    from virtspec_mi.settings import shown
+
+    for name, (default, meaning) in GONIO_PARAMETERS.items():
+        flag = "--" + name.replace("_", "-")
+        text = f"{meaning} (default: the scene's, else {shown(default)})"
+        if isinstance(default, bool):
+            parser.add_argument(flag, action="store_true", default=None, help=text)
+        else:
+            parser.add_argument(flag, nargs="+" if name.endswith("_bins") else None, help=text)
+
+
 def _settings(args: argparse.Namespace) -> dict:
     """The settings given on the command line (lists joined into one string)."""
 
@@ -283,6 +315,8 @@ def main(argv: Sequence[str] | None = None) -> int:
             return _sweep(args)
         if args.command == "colour":
             return _colour(args)
+        if args.command == "gonio":
+            return _gonio(args)
         if args.command == "compare":
             return _compare(args)
         if args.command == "plot":
@@ -383,6 +417,29 @@ def _sweep(args: argparse.Namespace) -> int:
           "which compiled the kernel)")
     if args.plot:
         plot_densities(results, args.densities, deltas, args.plot)
+    return 0
+
+
+def _gonio(args: argparse.Namespace) -> int:
+    from virtspec_mi.api import gonio
+    from virtspec_mi.gonio_bins import GONIO_PARAMETERS
+    from virtspec_mi.plot import check_figure_path
+
+    check_figure_path(args.plot)  # a bad suffix fails before any tracing
+    options = {name: getattr(args, name) for name in GONIO_PARAMETERS}
+    options = {name: " ".join(v) if isinstance(v, list) else v for name, v in options.items()}
+    settings = _settings(args)
+    theta_i = settings.pop("theta_i")
+    reading = gonio(args.scene, theta_i=theta_i, out=args.out, **options, **settings)
+    if args.plot:
+        reading.plot(args.plot)
+    if args.json:
+        print(json.dumps(reading.as_dict()))
+        return 0
+    print(reading.summary())
+    for label, path in (("written", args.out), ("plot", args.plot)):
+        if path:
+            print(f"{label}: {path}")
     return 0
 
 

@@ -48,7 +48,7 @@ from virtspec_mi.result import Result
 from virtspec_mi.settings import Settings
 
 __all__ = ["take_readings", "take_keyed_readings", "in_process_runner", "shares_wavelengths", "run", "measure_reading",
-           "BatchRunner"]
+           "take_gonio_readings", "run_gonio", "gonio_reading", "BatchRunner"]
 
 BatchRunner = Callable[[list[np.ndarray]], Iterable[tuple[np.ndarray, Counts, "Counts | None", float]]]
 """
@@ -369,3 +369,100 @@ def _two_stage(instrument: Any, readings: Sequence[tuple[float, float, float]], 
     stage_two = settings.updated(seed=twostage.stage_two_seed(settings.seed))
     done = len(readings)  # the second stage's readings follow the pilots' on the bar
     return _fixed(instrument, readings, stage_two, second, offsets, lambda n: bar.reach(done + n)), pilot
+
+
+def take_gonio_readings(instrument: Any, readings: Sequence[tuple[float, float, float]], settings: Settings,
+                        bins: Any) -> tuple[Counts, np.ndarray]:
+    """
+    :func:`take_readings` for a goniophotometer reading: the same rays and counts (a
+    fixed budget: ``rays`` or the rule's N; two-stage is refused), plus the exact
+    per-bin tallies of the escaping rays, shape (readings, θo bins, φo bins)
+    (:func:`virtspec_mi.kernel.tracer.tally_gonio_readings`). Readings of a
+    wavelength-independent specimen that differ only in wavelength share rays, counts
+    and tallies, as in :func:`take_readings`.
+    """
+
+    from virtspec_mi.kernel.tracer import ReadingPlan, tally_gonio_readings
+
+    if settings.adaptive:
+        raise ValueError("bound must be a fixed budget for a goniophotometer reading (hoeffding, chebyshev, "
+                         "exact or rays given; two-stage sizes each reading for R and T, not for its bins)")
+    check_readings(len(readings), 0)
+    _check_specimen(instrument.bsdf, sorted({float(r[0]) for r in readings}))
+    readings = [(float(w), float(t), float(p)) for w, t, p in readings]
+    if shares_wavelengths(instrument):
+        first: dict[tuple[float, float], int] = {}
+        source = np.array([first.setdefault((t, p), k) for k, (_, t, p) in enumerate(readings)], dtype=np.int64)
+        traced = np.unique(source)
+    else:
+        source = traced = np.arange(len(readings))
+    check_readings(len(readings), len(traced) * settings.rays_per_reading)
+    plans = [ReadingPlan(*readings[k], settings.rays_per_reading) for k in traced]
+    counts, tallies = tally_gonio_readings(instrument, plans, settings, bins)
+    back = np.searchsorted(traced, source)
+    return counts.map(lambda v: v[back]), tallies[back]
+
+
+def run_gonio(instrument: Any, settings: Settings, theta_i: Sequence[float], bins: Any, *, scene: str = "",
+              guarantee: str = "rays", relative_tolerance: float | None = None,
+              brdf_floor: float | None = None) -> Any:
+    """
+    Goniophotometer readings over the grid ``settings.wavelengths`` × ``theta_i`` at
+    ``settings.phi_i``, binned by ``bins``, as one
+    :class:`~virtspec_mi.gonio_result.GonioResult` (one kernel call, consecutive ray
+    ranges as :func:`run` with ``keyed=False``: the counts equal that reading's).
+    """
+
+    from virtspec_mi.gonio_result import GonioResult
+
+    angles = np.asarray(theta_i, dtype=np.float64)
+    lams = np.asarray(settings.wavelengths, dtype=np.float64)
+    n_lam, n_theta = len(lams), len(angles)
+    flat_lam, flat_theta = np.tile(lams, n_theta), np.repeat(angles, n_lam)
+    start = time.perf_counter()
+    counts, tallies = take_gonio_readings(
+        instrument, [(w, t, settings.phi_i) for w, t in zip(flat_lam, flat_theta)], settings, bins)
+    seconds = time.perf_counter() - start
+
+    def grid(values: np.ndarray) -> np.ndarray:
+        return np.moveaxis(values.reshape(n_theta, n_lam, *values.shape[1:]), 0, 1).copy()
+
+    result = Result(dims=("wavelength", "theta_i"), coords={"wavelength": lams, "theta_i": angles},
+                    counts=counts.map(grid), pilot=None, settings=settings.updated(theta_i=float(angles[0])),
+                    geometry=instrument.geometry, seconds=seconds, scene=scene,
+                    wavelength_independent=shares_wavelengths(instrument))
+    return GonioResult(result=result, bin_counts=grid(tallies), bins=bins, guarantee=guarantee,
+                       relative_tolerance=relative_tolerance, brdf_floor=brdf_floor)
+
+
+def gonio_reading(instrument: Any, settings: Settings, options: dict[str, Any],
+                  theta_i: Sequence[float] | None = None, scene: str = "") -> Any:
+    """
+    A goniophotometer reading of an instrument at ``theta_i`` (default: ``settings.theta_i``)
+    with the goniophotometer parameters ``options``
+    (:data:`~virtspec_mi.gonio_bins.GONIO_PARAMETERS`; absent ones take their default):
+    the bins are built (a bad specification is a ``ValueError`` naming the parameter),
+    N is ``settings.rays`` or sized by ``guarantee`` over the K bins
+    (:func:`virtspec_mi.gonio_bounds.gonio_rays`), then :func:`run_gonio`.
+    """
+
+    from virtspec_mi.gonio_bins import gonio_options, make_bins
+    from virtspec_mi.gonio_bounds import gonio_rays
+
+    spec = gonio_options(options, "gonio")
+    angles = np.atleast_1d(np.asarray(settings.theta_i if theta_i is None else theta_i, dtype=np.float64))
+    bins = make_bins(spec["theta_o_bins"], spec["phi_o_bins"], spec["binning"], spec["fold_phi"], spec["hemispheres"])
+    relative, floor = spec["relative_tolerance"], spec["brdf_floor"]
+    if settings.rays is None:
+        rays = gonio_rays(spec["guarantee"], settings.mu, settings.delta, bins.size, relative, floor,
+                          float(bins.projected_solid_angles().min()))
+        guarantee = spec["guarantee"]
+    else:
+        rays, guarantee = settings.rays, "rays"
+        if spec["guarantee"] == "relative" or floor is not None:
+            gonio_rays("relative", settings.mu, settings.delta, bins.size, relative, floor,
+                       float(bins.projected_solid_angles().min()))  # checks relative_tolerance and brdf_floor
+    resolved = settings.updated(theta_i=float(angles[0]), rays=rays)
+    return run_gonio(instrument, resolved, angles, bins, scene=scene, guarantee=guarantee,
+                     relative_tolerance=None if relative is None else float(relative),
+                     brdf_floor=None if floor is None else float(floor))

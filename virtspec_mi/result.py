@@ -657,6 +657,9 @@ class Result:
         """The result of a dataset made by :meth:`to_dataset`."""
 
         if "result_json" not in dataset.attrs:
+            if "gonio_json" in dataset.attrs:
+                raise ValueError("this is a goniophotometer reading: read it with virtspec_mi.read_gonio "
+                                 "(GonioResult.read); its .result is the spectrophotometer reading")
             raise ValueError("not a virtspec-mi result (no result_json attribute)")
         return cls.from_dict(json.loads(dataset.attrs["result_json"]))
 

@@ -35,6 +35,11 @@ Conventions
   0 by construction); weights beyond, or NaN, are ``weight_violations`` and the largest
   is kept.
 - Rays are traced in ``TransportMode.Importance`` (light travels from the emitter).
+- A goniophotometer reading (:func:`tally_gonio_readings`) also bins every reflected
+  or transmitted ray by its outgoing direction in the specimen frame
+  (:mod:`virtspec_mi.gonio_bins`), in the same fused kernel; the fate decides the
+  hemisphere (grazing exits included). Without bins none of this is compiled: the
+  plain kernel and its counts are unchanged.
 - The emitter disk neither occludes nor self-intersects its rays, and no general
   intersection is needed: each conical ray is aimed at a sampled specimen point and hits
   it by construction; a collimated ray hits the specimen centre.
@@ -56,12 +61,13 @@ import numpy as np
 from virtspec_mi.checks import check_rays
 from virtspec_mi.counts import DIRECTION_TOLERANCE, WEIGHT_ROUNDING, Counts, Fate
 from virtspec_mi.geometry import incidence_frame
+from virtspec_mi.gonio_bins import GonioBins
 from virtspec_mi.kernel.disk import jittered_cell, sample_disk
 from virtspec_mi.kernel.rng import chunk_root, dimension_key, dimension_keys, hash32, to_unit
 from virtspec_mi.kernel.walk import CAPPED_COMPONENT
 from virtspec_mi.settings import Settings
 
-__all__ = ["ReadingPlan", "tally_readings", "trace_rays", "first_interactions"]
+__all__ = ["ReadingPlan", "tally_readings", "tally_gonio_readings", "trace_rays", "first_interactions"]
 
 _WORD = 1 << 32
 # Dimensions of the random numbers: 0–1 emitter, 2–3 specimen, 4–6 BSDF, 7 survival;
@@ -76,6 +82,8 @@ _RARE_COUNTS = (("weight_violations", _VIOLATION), ("capped", _CAPPED), ("rounde
                 ("invalid_directions", _INVALID))
 # Squared lengths of a valid outgoing direction.
 _LENGTH2 = ((1.0 - DIRECTION_TOLERANCE) ** 2, (1.0 + DIRECTION_TOLERANCE) ** 2)
+# The largest float32 below 1: the key sin²θo of a reflected ray stays below the 90° edge.
+_BELOW_ONE = float(np.nextafter(np.float32(1.0), np.float32(0.0)))
 
 
 @dataclass(frozen=True)
@@ -107,6 +115,34 @@ def tally_readings(
     number of readings completed so far.
     """
 
+    return _tally(instrument, plans, settings, offsets, on_chunk, None)[0]
+
+
+def tally_gonio_readings(
+    instrument: Any, plans: list[ReadingPlan], settings: Settings, bins: GonioBins, offsets: Any = None,
+    on_chunk: Callable[[int], None] | None = None,
+) -> tuple[Counts, np.ndarray]:
+    """
+    :func:`tally_readings` that also bins every escaping ray by its outgoing direction
+    (θo, φo) in the specimen frame (:class:`~virtspec_mi.gonio_bins.GonioBins`): the
+    same rays and the same counts, plus exact per-bin tallies, an ``int64`` array of
+    shape (readings, θo bins, φo bins). A reflected ray is binned among the bins with
+    θo ≤ 90°, a transmitted one among those with θo ≥ 90° (its fate decides the
+    hemisphere, grazing exits included), so the bins covering a hemisphere add up to
+    its count exactly. Each chunk adds its rays to per-bin 32-bit tallies (two to a
+    64-bit word; a chunk holds < 2³² rays) in the same fused kernel, without atomics
+    (one copy of the table per CPU thread, Dr.Jit's ``ReduceMode.Expand``), summed
+    into ``int64`` on the host: memory is readings × bins (× threads during a chunk),
+    whatever the number of rays.
+    """
+
+    return _tally(instrument, plans, settings, offsets, on_chunk, bins)
+
+
+def _tally(instrument: Any, plans: list[ReadingPlan], settings: Settings, offsets: Any,
+           on_chunk: Callable[[int], None] | None, bins: GonioBins | None) -> tuple[Counts, np.ndarray | None]:
+    """The chunk loop of :func:`tally_readings` and :func:`tally_gonio_readings`."""
+
     for plan in plans:
         check_rays(plan.rays)  # 1 ... 2³² − 1: a reading crosses at most one 2³² boundary below
     rays = np.array([plan.rays for plan in plans], dtype=np.int64)
@@ -115,7 +151,8 @@ def tally_readings(
     cuts = _cuts(starts, offsets, rays)
     counts = Counts.zeros(len(plans))
     counts.rays[:] = rays
-    kernel = _Kernel(instrument, plans, settings)
+    kernel = _Kernel(instrument, plans, settings, bins)
+    bin_counts = None if bins is None else np.zeros((len(plans), bins.size), dtype=np.int64)
     first = 0
     while first < starts[-1]:
         size = int(min(settings.chunk_size, cuts[np.searchsorted(cuts, first, side="right")] - first))
@@ -123,11 +160,11 @@ def tally_readings(
             np.searchsorted(starts, first, side="right") - 1,
             np.searchsorted(starts, first + size, side="left"),
         )
-        kernel.run(first, size, slots, starts, offsets, counts)
+        kernel.run(first, size, slots, starts, offsets, counts, bin_counts)
         first += size
         if on_chunk is not None:  # how many readings are complete (for a progress bar)
             on_chunk(int(np.searchsorted(starts[1:], first, side="right")))
-    return counts
+    return counts, None if bins is None else bin_counts.reshape(len(plans), *bins.shape)
 
 
 def _cuts(starts: np.ndarray, offsets: np.ndarray, rays: np.ndarray) -> np.ndarray:
@@ -159,20 +196,22 @@ def _check_offsets(offsets: Any, rays: np.ndarray) -> np.ndarray:
     return offsets
 
 
-def trace_rays(instrument: Any, plan: ReadingPlan, settings: Settings, count: int) -> dict:
+def trace_rays(instrument: Any, plan: ReadingPlan, settings: Settings, count: int,
+               bins: GonioBins | None = None) -> dict:
     """
     The first ``count`` rays of one reading, ray by ray, through the same kernel code
     as :func:`tally_readings` (for tests and diagnostics): NumPy arrays of emitter
     points ``origin`` (specimen frame), specimen points ``target``, incident
     directions ``wi`` (towards the emitter), outgoing ``wo``, ``fate`` (a
-    :class:`~virtspec_mi.counts.Fate` code) and the BSDF ``weight``.
+    :class:`~virtspec_mi.counts.Fate` code) and the BSDF ``weight``; with ``bins``, also
+    each ray's flat ``bin`` (θo bin × φo bins + φo bin; the number of bins: not binned).
     """
 
-    kernel = _Kernel(instrument, [plan], settings)
+    kernel = _Kernel(instrument, [plan], settings, bins)
     lanes = kernel.trace(0, count, np.array([0]), np.array([0, plan.rays]), np.array([0]))
     dr.eval(lanes)
     return {name: np.array(value).T if np.ndim(value) > 1 else np.array(value)
-            for name, value in lanes.items()}
+            for name, value in lanes.items() if value is not None}
 
 
 def first_interactions(instrument: Any, plan: ReadingPlan, settings: Settings, first: int, size: int,
@@ -193,8 +232,12 @@ def first_interactions(instrument: Any, plan: ReadingPlan, settings: Settings, f
 class _Kernel:
     """The per-chunk ray kernel of one :func:`tally_readings` call."""
 
-    def __init__(self, instrument: Any, plans: list[ReadingPlan], settings: Settings) -> None:
+    def __init__(self, instrument: Any, plans: list[ReadingPlan], settings: Settings,
+                 bins: GonioBins | None = None) -> None:
         self.bsdf = instrument.bsdf
+        self.bins = bins
+        if bins is not None:
+            self.phi_i = np.array([plan.phi_i for plan in plans], dtype=np.float64)
         self.settings = settings
         # Specular/regular counts: per ray only for a BSDF with both delta and other lobes.
         flags = self.bsdf.flags()
@@ -219,8 +262,11 @@ class _Kernel:
     # -- one chunk ---------------------------------------------------------------------
 
     def run(self, first: int, size: int, slots: np.ndarray, starts: np.ndarray,
-            offsets: np.ndarray, counts: Counts) -> None:
-        """Add the counts of the packed lanes [first, first + size) to readings ``slots`` of ``counts``."""
+            offsets: np.ndarray, counts: Counts, bin_counts: np.ndarray | None = None) -> None:
+        """
+        Add the counts of the packed lanes [first, first + size) to readings ``slots`` of
+        ``counts`` (and, with bins, their per-bin tallies to rows ``slots`` of ``bin_counts``).
+        """
 
         lanes = self.trace(first, size, slots, starts, offsets)
         fate = lanes["fate"]
@@ -233,7 +279,25 @@ class _Kernel:
         if self.delta_lobes == "mixed":
             packed_codes[("specular_reflected", "regular_transmitted")] = dr.select(
                 lanes["specular"], mi.UInt64(1), mi.UInt64(0)) | dr.select(lanes["regular"], mi.UInt64(_WORD), mi.UInt64(0))
-        dr.eval(*packed_codes.values(), rare)  # the one fused ray kernel
+        if self.bins is None:
+            dr.eval(*packed_codes.values(), rare)  # the one fused ray kernel
+        else:
+            # The same kernel also adds each escaping ray to its reading's bin: two bins per UInt64 word
+            # (32-bit fields: a chunk holds < 2^32 rays, so no field overflows), scatter-added into
+            # per-thread copies of the table (ReduceMode.Expand: no atomics; Dr.Jit sums the copies).
+            # Neighbouring bins (φo neighbours) share a word, so fewer distinct words per SIMD packet:
+            # measured the fastest of 32-bit/64-bit tallies × Local/Expand/Direct (benchmarks/gonio.py).
+            size_k = self.bins.size
+            flat = len(slots) * size_k
+            tally = dr.zeros(mi.UInt64, (flat + 1) // 2)
+            where = lanes["bin"] if len(slots) == 1 else lanes["slot"] * size_k + lanes["bin"]
+            value = dr.select((where & 1) != 0, mi.UInt64(_WORD), mi.UInt64(1))
+            dr.scatter_reduce(dr.ReduceOp.Add, tally, value, where >> 1, lanes["bin"] < size_k,
+                              mode=dr.ReduceMode.Expand)
+            dr.eval(*packed_codes.values(), rare, tally)
+            words = np.array(tally, dtype=np.uint64)
+            pairs = np.stack([words & np.uint64(_WORD - 1), words >> np.uint64(32)], axis=1).reshape(-1)[:flat]
+            bin_counts[slots] += pairs.astype(np.int64).reshape(len(slots), size_k)
         bounds, _ = _lane_ranges(first, size, slots, starts)
         ends = np.append(bounds[1:], size)
         for (low, high), packed_code in packed_codes.items():
@@ -278,6 +342,7 @@ class _Kernel:
         # Per-reading parameters: width-1 opaque values for a single reading, else gathered.
         bounds, j0 = _lane_ranges(first, size, slots, starts)
         rows = self.readings[slots]
+        slot = None
         if len(slots) == 1:
             def column(values: np.ndarray, kind: Any) -> Any:
                 return dr.opaque(kind, values[0].item())
@@ -361,8 +426,55 @@ class _Kernel:
                 | dr.select(rounded, mi.UInt32(_ROUNDED), 0) | dr.select(invalid, mi.UInt32(_INVALID), 0))
         delta = mi.has_flag(sampled_type, mi.BSDFFlags.Delta)
         specular, regular = (fate == int(Fate.REFLECTED)) & delta, (fate == int(Fate.TRANSMITTED)) & delta
-        return {"origin": origin, "target": target, "wi": wi, "wo": wo, "fate": fate, "weight": w,
-                "rare": rare, "specular": specular, "regular": regular}
+        lanes = {"origin": origin, "target": target, "wi": wi, "wo": wo, "fate": fate, "weight": w,
+                 "rare": rare, "specular": specular, "regular": regular}
+        if self.bins is not None:
+            lanes["bin"] = self._bin(wo, fate, column(self.phi_i[slots].astype(np.float32), mi.Float))
+            lanes["slot"] = slot
+        return lanes
+
+    def _bin(self, wo: Any, fate: Any, phi_i: Any) -> Any:
+        """
+        Flat bin (θo bin · φo bins + φo bin) of each ray; the number of bins K for a ray
+        that is not binned (absorbed, no fate, or outside the bins' range). The hemisphere
+        is the fate's; θo is searched by its key sin²θo (reflected, below 1) or 2 − sin²θo
+        (transmitted) among the edges' keys (:meth:`GonioBins.theta_keys`), φo ∈ [0, 360)
+        (folded: |φo − φi| wrapped into [0, 180]) among the φo edges.
+        """
+
+        bins = self.bins
+        n_theta, n_phi = bins.shape
+        r2 = wo.x * wo.x + wo.y * wo.y
+        sin2 = r2 / (r2 + wo.z * wo.z)
+        reflected = fate == int(Fate.REFLECTED)
+        transmitted = fate == int(Fate.TRANSMITTED)
+        regular = bins.regular_theta
+        if regular is None:  # given edges: search the keys
+            key = dr.select(reflected, dr.minimum(sin2, _BELOW_ONE), 2.0 - sin2)
+            theta_bin = _search(bins.theta_keys(), key)
+        else:  # n bins per hemisphere, uniform in sin²θo or in θo: arithmetic, mirrored below
+            per, reflection, transmission = regular
+            if bins.binning == "projected":
+                position = sin2 * float(per)
+            else:
+                position = dr.atan2(dr.sqrt(r2), dr.abs(wo.z)) * (2.0 * per / dr.pi)
+            j = mi.UInt32(dr.clip(mi.Int32(dr.floor(position)), 0, per - 1))
+            outside = mi.UInt32(n_theta)
+            theta_bin = dr.select(reflected, j if reflection else outside,
+                                  (mi.UInt32(per * reflection + per - 1) - j) if transmission else outside)
+        phi = dr.atan2(wo.y, wo.x) * (180.0 / dr.pi)
+        phi = dr.select(phi < 0.0, phi + 360.0, phi)
+        if bins.fold_phi:
+            relative = phi - phi_i
+            relative = relative - 360.0 * dr.floor(relative / 360.0)
+            phi = dr.minimum(relative, 360.0 - relative)
+        if bins.regular_phi:
+            top = 180.0 if bins.fold_phi else 360.0
+            phi_bin = mi.UInt32(dr.clip(mi.Int32(dr.floor(phi * (n_phi / top))), 0, n_phi - 1))
+        else:
+            phi_bin = _search(bins.phi_edges.astype(np.float32), phi)
+        binned = (reflected | transmitted) & (theta_bin < n_theta) & (phi_bin < n_phi)
+        return dr.select(binned, theta_bin * n_phi + phi_bin, mi.UInt32(bins.size))
 
     def _sample(self, context: Any, si: Any, sample1: Any, sample2: Any) -> tuple[Any, Any]:
         """The specimen BSDF's ``sample``; a feature it needs that the instrument lacks is a ``ValueError``."""
@@ -395,6 +507,26 @@ def _rejection(ray_index: mi.UInt32, root: int, radius: mi.Float, disk: int) -> 
         y = dr.fma(2.0, to_unit(hash32(ray_index ^ ky), mi.Float), -1.0)
         dimension += 4
     return mi.Point2f(x * radius, y * radius)
+
+
+def _search(edges: np.ndarray, key: Any) -> Any:
+    """
+    Bin of ``key`` among increasing float32 ``edges``: i with edges[i] <= key < edges[i + 1],
+    the last bin closed (key == edges[-1] is in it); ≥ the number of bins when outside
+    (binary lifting over a table padded with +inf to 2^k entries).
+    """
+
+    steps = max(1, int(np.ceil(np.log2(len(edges) + 1))))
+    padded = np.full(1 << steps, np.inf, dtype=np.float32)
+    padded[: len(edges)] = edges
+    table = mi.Float(padded)
+    below = mi.UInt32(0)  # how many edges are <= key
+    for step in reversed(range(steps)):
+        probe = below + (1 << step)
+        below = dr.select(dr.gather(mi.Float, table, probe - 1) <= key, probe, below)
+    last = len(edges) - 1
+    below = dr.select(key == float(edges[-1]), mi.UInt32(last), below)
+    return below - 1  # no edge <= key: wraps to 2^32 - 1, outside
 
 
 def _full(value: Any, size: int) -> Any:

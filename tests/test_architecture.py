@@ -70,6 +70,7 @@ LAYERS: list[tuple[str, tuple[str, ...]]] = [
         "virtspec_mi.leaf_data",
         "virtspec_mi.bsdf_table",
         "virtspec_mi.sphere_theory",
+        "virtspec_mi.sphere_model",
         "virtspec_mi.sphere",
         "virtspec_mi.gonio_bins",
         "virtspec_mi.gonio_bounds",

@@ -3,25 +3,15 @@
 from __future__ import annotations
 
 import json
-import math
-
 import numpy as np
 import pytest
 
 import virtspec_mi as vm
+from virtspec_mi import sphere_theory as st
 from virtspec_mi.bounds import hoeffding_mu
 from virtspec_mi.sphere_readout import SphereResult
 
 SCENE = "scenes/sphere_150mm_8d.xml"
-
-
-def fresnel(theta_deg: float, eta: float) -> float:
-    c = math.cos(math.radians(theta_deg))
-    s = math.sin(math.radians(theta_deg)) / eta
-    ct = math.sqrt(1 - s * s)
-    rs = (c - eta * ct) / (c + eta * ct)
-    rp = (eta * c - ct) / (eta * c + ct)
-    return (rs * rs + rp * rp) / 2
 
 
 def test_hemispherical_reading_is_the_measure_of_the_same_rays():
@@ -55,7 +45,7 @@ def test_sce_excludes_the_fresnel_specular_reflectance():
     assert trapped == sce.counts["sample"]["hemispherical_reflected"][0]  # every specular ray, exactly
     assert sce.counts["sample"]["hemispherical_specular"][0] == trapped and sce.hemispherical_diffuse[0] == 0
     assert sce.counts["sample"]["detected"][0] == 0
-    assert abs(trapped / rays - fresnel(8.0, 2.419)) < hoeffding_mu(rays, delta)
+    assert abs(trapped / rays - st.fresnel_reflectance(8.0, 2.419)) < hoeffding_mu(rays, delta)
     sci = vm.sphere_measure(scene, specular="SCI", rays=rays)
     assert sci.counts["sample"]["detected"][0] > 0 and sci.counts["sample"]["lost_specular"][0] == 0
 

@@ -52,7 +52,8 @@ import numpy as np
 from virtspec_mi.bounds import hoeffding_mu
 from virtspec_mi.intervals import clopper_pearson
 from virtspec_mi.settings import Settings
-from virtspec_mi.sphere import Sphere, SphereSettings
+from virtspec_mi.sphere import SPHERE_SETTING_NAMES, Sphere, SphereSettings, sphere_from_parameters
+from virtspec_mi.sphere_model import correct_readings, theory_inputs
 
 __all__ = ["CONFIGURATIONS", "SphereResult", "measure_sphere", "configurations"]
 
@@ -181,7 +182,8 @@ def measure_sphere(instrument: Any, sphere: Sphere, settings: Settings, options:
     seconds = time.perf_counter() - start
     return SphereResult(wavelengths=wavelengths, rays=int(rays), counts=counts, sphere=sphere.describe(),
                         cap_fractions=sphere.cap_fractions, wall_reflectance=rho_w, options=options.as_dict(),
-                        settings=settings.as_dict(), seconds=seconds, scene=scene)
+                        settings=settings.as_dict(), seconds=seconds, scene=scene,
+                        sphere_parameters=sphere.parameters(), specimen_radius=float(radius))
 
 
 def _named_counts(sphere: Sphere, tallies: list[dict[str, Any]]) -> dict[str, np.ndarray]:
@@ -218,6 +220,8 @@ class SphereResult:
     settings: dict[str, Any]
     seconds: float = 0.0
     scene: str = ""
+    sphere_parameters: dict[str, Any] = field(default_factory=dict)
+    specimen_radius: float | None = None
     _cache: dict = field(default_factory=dict, repr=False, compare=False)
 
     # -- counts and fractions ---------------------------------------------------------
@@ -334,6 +338,50 @@ class SphereResult:
 
         return self.reading - self.hemispherical
 
+    # -- the correction (the theory's inverse of the readout) --------------------------
+
+    @property
+    def sphere_description(self) -> Sphere:
+        """The :class:`~virtspec_mi.sphere.Sphere` this result was read with."""
+
+        if not self.sphere_parameters:
+            raise ValueError("this sphere result carries no sphere description (sphere_parameters is empty: "
+                             "written by an older version); read the specimen again")
+        return sphere_from_parameters(self.sphere_parameters)
+
+    def theory_inputs(self) -> dict[str, Any]:
+        """The :mod:`virtspec_mi.sphere_theory` keywords of this reading (:func:`virtspec_mi.sphere_model.theory_inputs`)."""
+
+        options = {k: v for k, v in self.options.items() if k in SPHERE_SETTING_NAMES}
+        return theory_inputs(self.sphere_description, SphereSettings(**options), self.wavelengths,
+                             self.specimen_radius)
+
+    def corrected(self, *, specular_reflectance: Any = 0.0, sample_reflectance: Any = None,
+                  collimated_transmittance: Any = 0.0) -> np.ndarray:
+        """
+        The hemispherical value recovered from :attr:`reading` by the sphere theory's
+        inverse (:func:`virtspec_mi.sphere_model.correct_readings`; keywords there): what
+        a user computes from an instrument's reading and its sphere's description. It
+        assumes the theory's sphere (Lambertian specimen, flat disks, no baffle); the
+        difference from :attr:`hemispherical` is the model's residual for this specimen.
+        """
+
+        return correct_readings(self.reading, self.theory_inputs(), specular_reflectance=specular_reflectance,
+                                sample_reflectance=sample_reflectance,
+                                collimated_transmittance=collimated_transmittance)
+
+    def corrected_interval(self, *, specular_reflectance: Any = 0.0, sample_reflectance: Any = None,
+                           collimated_transmittance: Any = 0.0) -> np.ndarray:
+        """
+        :attr:`reading_interval` through the (increasing) correction, (n, 2): holds the
+        corrected value of the expected reading with probability ≥ 1 − δ (NaN where not
+        certified).
+        """
+
+        return correct_readings(self.reading_interval, self.theory_inputs(),
+                                specular_reflectance=specular_reflectance, sample_reflectance=sample_reflectance,
+                                collimated_transmittance=collimated_transmittance)
+
     @property
     def wall_reflections_per_ray(self) -> np.ndarray:
         """Mean wall (and baffle) reflections per ray, sample configuration."""
@@ -387,6 +435,7 @@ class SphereResult:
             "kind": "sphere_result", "wavelengths": self.wavelengths, "rays": self.rays, "counts": self.counts,
             "sphere": self.sphere, "cap_fractions": self.cap_fractions, "wall_reflectance": self.wall_reflectance,
             "options": self.options, "settings": self.settings, "seconds": self.seconds, "scene": self.scene,
+            "sphere_parameters": self.sphere_parameters, "specimen_radius": self.specimen_radius,
             "reading": self.reading, "reading_interval": self.reading_interval.T,
             "hemispherical": self.hemispherical, "instrument_error": self.instrument_error,
             "fraction_mu": self.fraction_mu,
@@ -400,7 +449,8 @@ class SphereResult:
         settings = dict(data["settings"])
         return cls(np.asarray(data["wavelengths"], float), int(data["rays"]), counts, data["sphere"],
                    dict(data["cap_fractions"]), np.asarray(data["wall_reflectance"], float), dict(data["options"]),
-                   settings, float(data["seconds"]), data.get("scene", ""))
+                   settings, float(data["seconds"]), data.get("scene", ""), dict(data.get("sphere_parameters") or {}),
+                   data.get("specimen_radius"))
 
     def to_dataset(self) -> Any:
         """An ``xarray.Dataset`` over ``wavelength``: every count (``<configuration>_<name>``) and derived value."""
@@ -420,7 +470,7 @@ class SphereResult:
         })
         attrs = {"rays": self.rays, "sphere": self.sphere, "scene": self.scene, "seconds": self.seconds,
                  "json": json.dumps({k: v for k, v in self.as_dict().items() if k in (
-                     "cap_fractions", "options", "settings")})}
+                     "cap_fractions", "options", "settings", "sphere_parameters", "specimen_radius")})}
         return xr.Dataset(data, coords=coords, attrs=attrs)
 
     def write(self, path: str | os.PathLike) -> Path:
@@ -454,7 +504,8 @@ class SphereResult:
                         counts[config][key] = ds[name].values.astype(np.int64)
                 return cls(ds["wavelength"].values, int(ds.attrs["rays"]), counts, ds.attrs["sphere"],
                            extra["cap_fractions"], ds["wall_reflectance"].values, extra["options"],
-                           extra["settings"], float(ds.attrs["seconds"]), ds.attrs["scene"])
+                           extra["settings"], float(ds.attrs["seconds"]), ds.attrs["scene"],
+                           dict(extra.get("sphere_parameters") or {}), extra.get("specimen_radius"))
         raise ValueError(f"path must end in .json or .nc (got {path.name!r})")
 
 

@@ -173,12 +173,38 @@ def _assumptions(inputs: dict[str, Any], specular_reflectance: Any, sample_refle
             raise ValueError("specular_reflectance is for reflectance readings (give collimated_transmittance "
                              "for a transmittance reading)")
         return dict(inputs, sample_reflectance=sample_reflectance, collimated_transmittance=collimated_transmittance)
-    if sample_reflectance is not None:
-        raise ValueError("sample_reflectance is for transmittance readings: in reflectance the theory takes the "
-                         "specimen's reflectance for diffuse light to be the corrected value itself")
     if np.any(np.asarray(collimated_transmittance) != 0.0):
         raise ValueError("collimated_transmittance is for transmittance readings")
     return dict(inputs, specular_reflectance=specular_reflectance)
+
+
+def _linear_reflectance(inputs: dict[str, Any], specular_reflectance: Any,
+                        sample_reflectance: Any) -> tuple[np.ndarray, np.ndarray]:
+    """
+    ``(slope, offset)`` of a reflectance reading ``M = slope · x + offset`` when the
+    specimen returns the sphere's diffuse light with a *given* reflectance u (not x + r):
+    the throughputs of :func:`~virtspec_mi.sphere_theory.detected_fraction` (flat model)
+    with u fixed, ``M = (x T_A(u) + [SCI] r ρw T_wall(u)) / T_std``, T_std the standard's
+    (in the sample port for substitution, in the reference port for comparison).
+    """
+
+    r = np.asarray(specular_reflectance, dtype=float)
+    u = np.asarray(sample_reflectance, dtype=float)
+    if np.any((u < 0.0) | (u > 1.0)) or np.isnan(u).any():
+        raise ValueError(f"sample_reflectance must satisfy 0 <= sample_reflectance <= 1 (got {sample_reflectance!r})")
+    rho_w, rho_std = inputs["wall_reflectance"], inputs["standard_reflectance"]
+    open_fraction = inputs["open_fraction"] + (inputs["trap_fraction"] if inputs["mode"] == "SCE" else 0.0)
+    kw = dict(sample_fraction=inputs["sample_fraction"], detector_fraction=inputs["detector_fraction"],
+              open_fraction=open_fraction, port_surface=inputs["port_surface"])
+    if inputs["method"] == "comparison":
+        kw.update(second_fraction=inputs["reference_fraction"], second_reflectance=rho_std)
+        t_std = st.detected_fraction(rho_w, u, start="second", **kw)
+    else:  # the reference port (a plug) and, in SCI, the specular plug are wall: not in kw
+        t_std = st.detected_fraction(rho_w, rho_std, start="sample", **kw)
+    t_a = st.detected_fraction(rho_w, u, start="sample", **kw)
+    t_wall = st.detected_fraction(rho_w, u, start="wall", **kw)
+    sci = 1.0 if inputs["mode"] == "SCI" else 0.0
+    return np.asarray(t_a / t_std), np.asarray(sci * r * rho_w * t_wall / t_std)
 
 
 def invertible_range(inputs: dict[str, Any], *, specular_reflectance: Any = 0.0, sample_reflectance: Any = None,
@@ -195,6 +221,9 @@ def invertible_range(inputs: dict[str, Any], *, specular_reflectance: Any = 0.0,
         return (np.asarray(st.transmittance_reading(0.0, **kw), dtype=float),
                 np.asarray(st.transmittance_reading(1.0 - t_c, **kw), dtype=float))
     r = np.asarray(specular_reflectance, dtype=float)
+    if sample_reflectance is not None:
+        slope, offset = _linear_reflectance(inputs, specular_reflectance, sample_reflectance)
+        return offset, slope * (1.0 - r) + offset
     return (np.asarray(st.instrument_reading(0.0, **kw), dtype=float),
             np.asarray(st.instrument_reading(1.0 - r, **kw), dtype=float))
 
@@ -221,8 +250,12 @@ def correct_readings(readings: Any, inputs: dict[str, Any], *, specular_reflecta
         Reflectance: r, the specimen's specular (mirror) reflectance at the beam's angle
         (e.g. :func:`~virtspec_mi.sphere_theory.fresnel_reflectance`); 0 for a matte one.
     sample_reflectance
-        Transmittance (required): the specimen's reflectance for diffuse light reaching
-        it from inside the sphere.
+        The specimen's reflectance for diffuse light reaching it from inside the sphere
+        (0 … 1, per wavelength). Transmittance: required. Reflectance: optional — by
+        default the theory takes it to be the corrected value x + r itself (a Lambertian
+        specimen); given (e.g. a diffuse-beam reading, ``beam="diffuse"``), the reading
+        is linear in x, ``M = (x T_A(u) + [SCI] r ρw T_wall(u)) / T_std``, and is
+        inverted as such.
     collimated_transmittance
         Transmittance: the unscattered part t_c.
 
@@ -244,6 +277,11 @@ def correct_readings(readings: Any, inputs: dict[str, Any], *, specular_reflecta
     clipped = np.where(bad, low, np.clip(values, low, high))
     if _transmittance(inputs):
         out = st.correct_transmittance(clipped, **kw)
+    elif sample_reflectance is not None:
+        slope, offset = _linear_reflectance(inputs, specular_reflectance, sample_reflectance)
+        if values.ndim == 2:
+            slope, offset = slope[..., None], offset[..., None]
+        out = (clipped - offset) / slope + np.asarray(specular_reflectance, dtype=float)
     else:
         out = st.correct_reading(clipped, **kw)
     return np.where(bad, np.nan, np.asarray(out, dtype=float))

@@ -362,8 +362,10 @@ class SphereResult:
         The hemispherical value recovered from :attr:`reading` by the sphere theory's
         inverse (:func:`virtspec_mi.sphere_model.correct_readings`; keywords there): what
         a user computes from an instrument's reading and its sphere's description. It
-        assumes the theory's sphere (Lambertian specimen, flat disks, no baffle); the
-        difference from :attr:`hemispherical` is the model's residual for this specimen.
+        assumes the theory's sphere (flat disks, no baffle) and a Lambertian specimen
+        (unless ``sample_reflectance``, its reflectance for diffuse light, is given; required
+        for transmittance); the difference from :attr:`hemispherical` is the model's
+        residual for this specimen.
         """
 
         return correct_readings(self.reading, self.theory_inputs(), specular_reflectance=specular_reflectance,

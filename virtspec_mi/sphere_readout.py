@@ -17,8 +17,9 @@ a :class:`SphereResult`:
   throughput is the same (exactly, for ports placed symmetrically about the detector);
 - **transmittance** (``measurement="transmittance"``): the specimen at the entrance
   port, lit from outside; the reference is the open port (τ_std = 1); the sample port,
-  if any, holds the reference standard in both configurations (as in LI-COR LI-1800-12
-  and ASD RTS-3ZC practice);
+  if any, holds the reference standard in both configurations: the single-beam
+  ("one-port") arrangement whose substitution error Kessel (1986) corrects (the specimen
+  returns into the sphere light the open port lost; :meth:`SphereResult.corrected`);
 - **SCI / SCE**: the ``specular`` port plugged with wall material or open to a trap.
 
 The reading is R = ρ_std · p_sample / p_standard (p: detector fractions, each m/N of
@@ -31,10 +32,16 @@ with probability ≥ 1 − δ/2. The hemispherical reading (the first specimen i
 hemisphere, :mod:`virtspec_mi.kernel.tracer`) comes from the sample configuration's very
 rays; the instrument error is reading − hemispherical.
 
+**Correction:** :meth:`SphereResult.corrected` / :meth:`SphereResult.corrected_interval`
+invert the sphere theory's readout model (:mod:`virtspec_mi.sphere_theory` with the inputs
+of :func:`virtspec_mi.sphere_model.theory_inputs`, from the sphere description the result
+keeps) to recover the hemispherical value from the reading.
+
 References
 ----------
 Baranoski et al. (2001), eqs. (2), (19), (23); Clopper & Pearson (1934); Labsphere,
-*Integrating sphere theory and applications* (substitution and comparison methods).
+*Integrating sphere theory and applications* (substitution and comparison methods);
+J. Kessel (1986), Appl. Opt. 25, 2752–2756 (transmittance in a one-port sphere).
 """
 
 from __future__ import annotations

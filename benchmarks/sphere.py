@@ -7,7 +7,9 @@ the same specimen, in one run.
   beside the rays/s of ``vm.measure`` of the same specimen and beam;
 - the warm time of a certified 8°/d SCI reading of that sample at ρw = 0.98 with 105,967 rays
   per configuration: one configuration (the sample's detector fraction) and the whole
-  readout (sample and standard).
+  readout (sample and standard);
+- the cost of correcting that reading by the sphere theory (``SphereResult.corrected`` and
+  ``corrected_interval``: closed-form NumPy, no rays).
 
 Run: python benchmarks/sphere.py [--repeat K]
 """
@@ -62,8 +64,14 @@ def main() -> None:
         return vm.sphere_measure(scene, rays=args.rays)
 
     counts = one_configuration()[0]
-    hemispherical(), readout()  # warm-up: compile every kernel
-    t_walk, t_hemi, t_readout = (best(f, args.repeat) for f in (one_configuration, hemispherical, readout))
+    hemispherical()
+    result = readout()  # warm-up: compile every kernel
+
+    def correction():
+        return result.corrected(), result.corrected_interval()
+
+    t_walk, t_hemi, t_readout, t_correct = (best(f, args.repeat) for f in (one_configuration, hemispherical, readout,
+                                                                            correction))
     reflections = counts["wall_reflections"]
     print(f"sphere walk vs hemispherical reading, {args.rays:,} rays, best of {args.repeat} (warm)")
     print(f"  sphere walk (one configuration): {t_walk * 1e3:8.1f} ms  {args.rays / t_walk / 1e6:6.2f} Mray/s  "
@@ -71,6 +79,8 @@ def main() -> None:
     print(f"  hemispherical reading (measure):  {t_hemi * 1e3:8.1f} ms  {args.rays / t_hemi / 1e6:6.2f} Mray/s")
     print(f"  ratio sphere/hemispherical time:  {t_walk / t_hemi:8.1f}")
     print(f"  certified 8/d SCI readout (sample + standard, {args.rays:,} rays each): {t_readout * 1e3:.1f} ms")
+    print(f"  its correction by the sphere theory (corrected + corrected_interval): {t_correct * 1e3:.2f} ms "
+          f"(reading {result.reading[0]:.4f} -> {result.corrected()[0]:.4f}; hemispherical {result.hemispherical[0]:.4f})")
     print(f"  detector fraction {counts['cross'][:, 0].sum() / args.rays:.5f}; "
           f"hemispherical {(counts['cross'][1].sum() + counts['cross'][3].sum()) / args.rays:.5f}")
 

@@ -80,7 +80,8 @@ def main() -> None:
     print(f"  ratio sphere/hemispherical time:  {t_walk / t_hemi:8.1f}")
     print(f"  certified 8/d SCI readout (sample + standard, {args.rays:,} rays each): {t_readout * 1e3:.1f} ms")
     print(f"  its correction by the sphere theory (corrected + corrected_interval): {t_correct * 1e3:.2f} ms "
-          f"(reading {result.reading[0]:.4f} -> {result.corrected()[0]:.4f}; hemispherical {result.hemispherical[0]:.4f})")
+          f"(reading {result.reading[0]:.4f} -> {result.corrected()[0]:.4f}; "
+          f"hemispherical {result.hemispherical[0]:.4f})")
     print(f"  detector fraction {counts['cross'][:, 0].sum() / args.rays:.5f}; "
           f"hemispherical {(counts['cross'][1].sum() + counts['cross'][3].sum()) / args.rays:.5f}")
 

@@ -357,7 +357,10 @@ class SphereResult:
         return sphere_from_parameters(self.sphere_parameters)
 
     def theory_inputs(self) -> dict[str, Any]:
-        """The :mod:`virtspec_mi.sphere_theory` keywords of this reading (:func:`virtspec_mi.sphere_model.theory_inputs`)."""
+        """
+        The :mod:`virtspec_mi.sphere_theory` keywords of this reading
+        (:func:`virtspec_mi.sphere_model.theory_inputs` of its sphere, mode and specimen radius).
+        """
 
         options = {k: v for k, v in self.options.items() if k in SPHERE_SETTING_NAMES}
         return theory_inputs(self.sphere_description, SphereSettings(**options), self.wavelengths,

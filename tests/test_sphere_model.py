@@ -106,6 +106,14 @@ def test_correct_readings_inverts_and_clips_to_the_invertible_range():
         m = st.instrument_reading(x, specular_reflectance=r, **lab)
         assert correct_readings(m, lab, specular_reflectance=r, sample_reflectance=x + r) == \
             pytest.approx(x + r, abs=1e-12)
+    # per-wavelength specular parts with an interval (n, 2): each row brackets its corrected point
+    lab = theory_inputs(loaded(LAB)[1], SphereSettings(), [550.0, 850.0])
+    r = np.array([0.04, 0.05])
+    m = st.instrument_reading(x, specular_reflectance=r, **lab)
+    for u in (None, x + r):
+        rows = correct_readings(np.stack([m - 0.01, m + 0.01], axis=-1), lab, specular_reflectance=r,
+                                sample_reflectance=u)
+        assert np.all(rows[:, 0] < x + r) and np.all(x + r < rows[:, 1])
     with pytest.raises(ValueError, match="sample_reflectance must satisfy"):
         correct_readings(readings, kw, sample_reflectance=1.5)
     kt = theory_inputs(sphere, options.updated(measurement="transmittance"), [550.0])

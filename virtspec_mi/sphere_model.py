@@ -279,9 +279,11 @@ def correct_readings(readings: Any, inputs: dict[str, Any], *, specular_reflecta
         out = st.correct_transmittance(clipped, **kw)
     elif sample_reflectance is not None:
         slope, offset = _linear_reflectance(inputs, specular_reflectance, sample_reflectance)
+        r = np.asarray(specular_reflectance, dtype=float)
         if values.ndim == 2:
             slope, offset = slope[..., None], offset[..., None]
-        out = (clipped - offset) / slope + np.asarray(specular_reflectance, dtype=float)
+            r = r[..., None] if r.ndim else r
+        out = (clipped - offset) / slope + r
     else:
         out = st.correct_reading(clipped, **kw)
     return np.where(bad, np.nan, np.asarray(out, dtype=float))

@@ -679,15 +679,8 @@ def correct_reading(reading: Any, *, wall_reflectance: Any, sample_fraction: Any
     q, n1, n0, d0, d1 = _coefficients(method, mode, surface, rho_w, a_s, a_d, a_o, a_t, a_r, rho_std, r)
     low = q * n0 / d0
     high = q * (n1 * (1.0 - r) + n0) / (d0 - d1 * (1.0 - r))
-    slack = _READING_SLACK * np.maximum(np.abs(high), 1.0)
-    bad = (m < low - slack) | (m > high + slack)
-    if np.any(bad):
-        shape = np.broadcast(m, low, high).shape
-        bad = np.broadcast_to(bad, shape)
-        lo, hi, got = (np.broadcast_to(v, shape)[bad].flat[0] for v in (low, high, m))
-        raise ValueError(f"reading must satisfy M(0) <= reading <= M(1 - specular_reflectance) for this sphere, "
-                         f"i.e. {lo:.6g} <= reading <= {hi:.6g} (got {shown_value(float(got))}); it is no "
-                         f"reading of a specimen with 0 <= reflectance <= 1")
+    _check_reading(m, low, high, "M(0) <= reading <= M(1 - specular_reflectance)",
+                   "; it is no reading of a specimen with 0 <= reflectance <= 1")
     x = (m * d0 - q * n0) / (q * n1 + m * d1)
     return _out(np.clip(x, 0.0, 1.0 - r) + r)
 
@@ -775,12 +768,18 @@ def correct_transmittance(reading: Any, *, wall_reflectance: Any, entrance_fract
     m = _array("reading", reading)
     t_c = _within("collimated_transmittance", collimated_transmittance, 0.0, 1.0)
     low, high = t_c * h, (1.0 - t_c) * g + t_c * h
+    _check_reading(m, low, high, "M_T(0) <= reading <= M_T(1 - collimated_transmittance)")
+    return _out(np.clip((m - t_c * h) / g, 0.0, 1.0 - t_c) + t_c)
+
+
+def _check_reading(m: np.ndarray, low: np.ndarray, high: np.ndarray, rule: str, note: str = "") -> None:
+    """``ValueError`` naming ``reading`` when a reading lies outside [low, high] (beyond rounding)."""
+
     slack = _READING_SLACK * np.maximum(np.abs(high), 1.0)
     bad = (m < low - slack) | (m > high + slack)
     if np.any(bad):
         shape = np.broadcast(m, low, high).shape
         bad = np.broadcast_to(bad, shape)
         lo, hi, got = (np.broadcast_to(v, shape)[bad].flat[0] for v in (low, high, m))
-        raise ValueError(f"reading must satisfy M_T(0) <= reading <= M_T(1 - collimated_transmittance) for this "
-                         f"sphere, i.e. {lo:.6g} <= reading <= {hi:.6g} (got {shown_value(float(got))})")
-    return _out(np.clip((m - t_c * h) / g, 0.0, 1.0 - t_c) + t_c)
+        raise ValueError(f"reading must satisfy {rule} for this sphere, i.e. {lo:.6g} <= reading <= {hi:.6g} "
+                         f"(got {shown_value(float(got))}){note}")

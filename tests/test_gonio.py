@@ -131,6 +131,23 @@ def test_certificate_is_the_union_bound_of_the_spent_rays(rough):
     assert "union bound" in text and "DKW" in text and "Clopper-Pearson" in text
 
 
+@pytest.mark.parametrize("kwargs, says", [
+    (dict(mu=0.02), "sized by guarantee=union for every bin fraction within mu = 0.02 at once"),
+    (dict(mu=0.02, guarantee="union-exact"), "sized by guarantee=union-exact for every bin fraction within mu = 0.02"),
+    (dict(mu=0.02, guarantee="dkw"), "sized by guarantee=dkw for the CDFs of theta_o and phi_o within mu = 0.02"),
+    (dict(guarantee="relative", relative_tolerance=0.5, brdf_floor=0.05),
+     "sized by guarantee=relative for f_k within relative 0.5 for every bin with f_k >= 0.05/sr"),
+    (dict(rays=2000), "rays given; hoeffding bound"),
+])
+def test_summary_states_the_guarantee_that_sized_the_reading(rough, kwargs, says):
+    reading = vm.gonio(rough, theta_i=30, theta_o_bins=2, phi_o_bins=2, delta=0.05, **kwargs)
+    head = reading.summary().splitlines()[1]  # the first block's certificate line: how N was sized
+    assert says in head and ("delta = 0.05" in head) == ("rays" not in kwargs)
+    assert ("rays given" in head) == ("rays" in kwargs)
+    # round trip through the file formats keeps it
+    assert reading.from_dict(reading.as_dict()).summary().splitlines()[1].startswith(head[:60])
+
+
 def test_a_reading_with_too_few_rays_says_not_certified(rough):
     reading = vm.gonio(rough, theta_o_bins=4, phi_o_bins=5, rays=3)
     assert np.all(np.isnan(reading.bins_mu))

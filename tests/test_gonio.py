@@ -236,7 +236,7 @@ def test_cli_gonio_prints_the_certificate_and_writes_the_file(rough, tmp_path, c
 
 
 def test_plots_and_spectra_per_bin(rough, tmp_path):
-    from virtspec_mi.gonio_plot import plane_bins, plot_hemisphere, plot_polar
+    from virtspec_mi.gonio_plot import plane_bins, plot_hemisphere, plot_polar, plot_series
 
     reading = vm.gonio(rough, theta_i=[0, 50], wavelengths=[500, 600], theta_o_bins=6, phi_o_bins=8, rays=4000)
     assert plane_bins(reading) == (4, 0) and plane_bins(reading, across=True) == (2, 6)  # 180 / 0; 90 / 270
@@ -244,6 +244,13 @@ def test_plots_and_spectra_per_bin(rough, tmp_path):
     assert (tmp_path / "polar.png").stat().st_size > 1000 and len(figure.axes) == 2
     plot_hemisphere(reading, tmp_path / "map.svg", transmission=True, theta_i=50)
     assert (tmp_path / "map.svg").is_file()
+    series = plot_series(reading, tmp_path / "series.png", wavelength=600)  # one column per theta_i
+    assert (tmp_path / "series.png").stat().st_size > 1000 and len(series.axes) == 3 * 2
+    lines = series.axes[0].get_lines()  # the first column's BRDF steps: the reading's f in the plane
+    assert any(np.allclose(np.sort(np.unique(line.get_ydata())), np.sort(np.unique(reading.brdf[1, 0, :6, 4])))
+               for line in lines)
+    cdf = series.axes[4].get_lines()[0].get_ydata()  # bottom row, first column: the CDF of theta_o
+    assert np.allclose(cdf, reading.cdf_theta_o[1, 0])
     with pytest.raises(ValueError, match="plot"):
         reading.plot(tmp_path / "x.pdf")
     sd = reading.to_sd(theta_o=40, phi_o=190)

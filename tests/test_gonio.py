@@ -223,12 +223,13 @@ def test_cli_gonio_prints_the_certificate_and_writes_the_file(rough, tmp_path, c
     <shape type="disk" id="specimen"><transform name="to_world"><scale value="12.5"/></transform>
         <bsdf type="roughdielectric"><float name="alpha" value="0.3"/><float name="int_ior" value="1.5"/></bsdf></shape>
 </scene>""")
-    out, plot = tmp_path / "g.nc", tmp_path / "g.png"
+    out, plot, series = tmp_path / "g.nc", tmp_path / "g.png", tmp_path / "series.svg"
     status = main(["gonio", str(scene), "--theta-i", "0", "45", "--theta-o-bins", "0", "30", "90", "180",
                    "--phi-o-bins", "4", "--fold-phi", "--beam", "collimated", "--mu", "0.05", "--out", str(out),
-                   "--plot", str(plot)])
+                   "--plot", str(plot), "--plot-series", str(series)])
     text = capsys.readouterr().out
     assert status == 0 and "DKW" in text and "union bound" in text and out.is_file() and plot.is_file()
+    assert series.is_file() and "sized by guarantee=union for every bin fraction within mu = 0.05" in text
     reading = vm.read_gonio(out)
     assert reading.bins.fold_phi and reading.bins.shape == (3, 4) and list(reading.theta_i) == [0, 45]
     assert main(["gonio", str(scene), "--theta-o-bins", "0", "100", "180"]) == 1

@@ -415,6 +415,13 @@ class GonioResult:
 
         return plot_polar(self, path, **options)
 
+    def plot_series(self, path: str | os.PathLike | None = None, **options: Any) -> Any:
+        """The angular distribution over θi as a series, with the certified bands (:func:`~virtspec_mi.gonio_plot.plot_series`)."""
+
+        from virtspec_mi.gonio_plot import plot_series
+
+        return plot_series(self, path, **options)
+
 
 @dataclass(frozen=True)
 class _CsvView:

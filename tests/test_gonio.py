@@ -131,6 +131,23 @@ def test_certificate_is_the_union_bound_of_the_spent_rays(rough):
     assert "union bound" in text and "DKW" in text and "Clopper-Pearson" in text
 
 
+@pytest.mark.parametrize("kwargs, says", [
+    (dict(mu=0.02), "sized by guarantee=union for every bin fraction within mu = 0.02 at once"),
+    (dict(mu=0.02, guarantee="union-exact"), "sized by guarantee=union-exact for every bin fraction within mu = 0.02"),
+    (dict(mu=0.02, guarantee="dkw"), "sized by guarantee=dkw for the CDFs of theta_o and phi_o within mu = 0.02"),
+    (dict(guarantee="relative", relative_tolerance=0.5, brdf_floor=0.05),
+     "sized by guarantee=relative for f_k within relative 0.5 for every bin with f_k >= 0.05/sr"),
+    (dict(rays=2000), "rays given; hoeffding bound"),
+])
+def test_summary_states_the_guarantee_that_sized_the_reading(rough, kwargs, says):
+    reading = vm.gonio(rough, theta_i=30, theta_o_bins=2, phi_o_bins=2, delta=0.05, **kwargs)
+    head = reading.summary().splitlines()[1]  # the first block's certificate line: how N was sized
+    assert says in head and ("delta = 0.05" in head) == ("rays" not in kwargs)
+    assert ("rays given" in head) == ("rays" in kwargs)
+    # round trip through the file formats keeps it
+    assert reading.from_dict(reading.as_dict()).summary().splitlines()[1].startswith(head[:60])
+
+
 def test_a_reading_with_too_few_rays_says_not_certified(rough):
     reading = vm.gonio(rough, theta_o_bins=4, phi_o_bins=5, rays=3)
     assert np.all(np.isnan(reading.bins_mu))
@@ -206,12 +223,13 @@ def test_cli_gonio_prints_the_certificate_and_writes_the_file(rough, tmp_path, c
     <shape type="disk" id="specimen"><transform name="to_world"><scale value="12.5"/></transform>
         <bsdf type="roughdielectric"><float name="alpha" value="0.3"/><float name="int_ior" value="1.5"/></bsdf></shape>
 </scene>""")
-    out, plot = tmp_path / "g.nc", tmp_path / "g.png"
+    out, plot, series = tmp_path / "g.nc", tmp_path / "g.png", tmp_path / "series.svg"
     status = main(["gonio", str(scene), "--theta-i", "0", "45", "--theta-o-bins", "0", "30", "90", "180",
                    "--phi-o-bins", "4", "--fold-phi", "--beam", "collimated", "--mu", "0.05", "--out", str(out),
-                   "--plot", str(plot)])
+                   "--plot", str(plot), "--plot-series", str(series)])
     text = capsys.readouterr().out
     assert status == 0 and "DKW" in text and "union bound" in text and out.is_file() and plot.is_file()
+    assert series.is_file() and "sized by guarantee=union for every bin fraction within mu = 0.05" in text
     reading = vm.read_gonio(out)
     assert reading.bins.fold_phi and reading.bins.shape == (3, 4) and list(reading.theta_i) == [0, 45]
     assert main(["gonio", str(scene), "--theta-o-bins", "0", "100", "180"]) == 1
@@ -219,7 +237,7 @@ def test_cli_gonio_prints_the_certificate_and_writes_the_file(rough, tmp_path, c
 
 
 def test_plots_and_spectra_per_bin(rough, tmp_path):
-    from virtspec_mi.gonio_plot import plane_bins, plot_hemisphere, plot_polar
+    from virtspec_mi.gonio_plot import plane_bins, plot_hemisphere, plot_polar, plot_series
 
     reading = vm.gonio(rough, theta_i=[0, 50], wavelengths=[500, 600], theta_o_bins=6, phi_o_bins=8, rays=4000)
     assert plane_bins(reading) == (4, 0) and plane_bins(reading, across=True) == (2, 6)  # 180 / 0; 90 / 270
@@ -227,6 +245,13 @@ def test_plots_and_spectra_per_bin(rough, tmp_path):
     assert (tmp_path / "polar.png").stat().st_size > 1000 and len(figure.axes) == 2
     plot_hemisphere(reading, tmp_path / "map.svg", transmission=True, theta_i=50)
     assert (tmp_path / "map.svg").is_file()
+    series = plot_series(reading, tmp_path / "series.png", wavelength=600)  # one column per theta_i
+    assert (tmp_path / "series.png").stat().st_size > 1000 and len(series.axes) == 3 * 2
+    lines = series.axes[0].get_lines()  # the first column's BRDF steps: the reading's f in the plane
+    assert any(np.allclose(np.sort(np.unique(line.get_ydata())), np.sort(np.unique(reading.brdf[1, 0, :6, 4])))
+               for line in lines)
+    cdf = series.axes[4].get_lines()[0].get_ydata()  # bottom row, first column: the CDF of theta_o
+    assert np.allclose(cdf, reading.cdf_theta_o[1, 0])
     with pytest.raises(ValueError, match="plot"):
         reading.plot(tmp_path / "x.pdf")
     sd = reading.to_sd(theta_o=40, phi_o=190)

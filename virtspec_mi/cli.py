@@ -127,6 +127,8 @@ def build_parser() -> argparse.ArgumentParser:
     _gonio_options(gonio)
     gonio.add_argument("--out", help="result file .nc, .csv or .json (the tabulated BSDF reads the .nc)")
     gonio.add_argument("--plot", help="figure .png or .svg: polar plot of f in and across the plane of incidence")
+    gonio.add_argument("--plot-series", help="figure .png or .svg: the distribution over theta_i as a series (f in "
+                                             "the plane of incidence and the CDF of theta_o, certified bands)")
     gonio.add_argument("--json", action="store_true", help="print the reading as one JSON object")
 
     colour = command("colour", "CIE XYZ, L*a*b*, sRGB of a saved spectrum",
@@ -426,6 +428,7 @@ def _gonio(args: argparse.Namespace) -> int:
     from virtspec_mi.plot import check_figure_path
 
     check_figure_path(args.plot)  # a bad suffix fails before any tracing
+    check_figure_path(args.plot_series)
     options = {name: getattr(args, name) for name in GONIO_PARAMETERS}
     options = {name: " ".join(v) if isinstance(v, list) else v for name, v in options.items()}
     settings = _settings(args)
@@ -433,11 +436,13 @@ def _gonio(args: argparse.Namespace) -> int:
     reading = gonio(args.scene, theta_i=theta_i, out=args.out, **options, **settings)
     if args.plot:
         reading.plot(args.plot)
+    if args.plot_series:
+        reading.plot_series(args.plot_series)
     if args.json:
         print(json.dumps(reading.as_dict()))
         return 0
     print(reading.summary())
-    for label, path in (("written", args.out), ("plot", args.plot)):
+    for label, path in (("written", args.out), ("plot", args.plot), ("plot", args.plot_series)):
         if path:
             print(f"{label}: {path}")
     return 0

@@ -8,6 +8,9 @@ Plots of goniophotometer readings (PNG and SVG)
   distribution over θi as a series), each with its simultaneous Clopper–Pearson band
   (the certified band: all K bins at once at 1 − δ).
 - :func:`plot_hemisphere`: a 2-D map of f over one hemisphere (θo radial, φo around).
+- :func:`plot_series`: the angular distribution over θi as a series — one column per
+  θi: f in the plane of incidence against θo (reflected, then transmitted) with the
+  certified band, and the empirical CDF of θo with its DKW band (± ``cdf_mu``).
 
 The plane of incidence is drawn through the φo bins that hold φi + 180° (the mirror
 side, drawn at +θo) and φi (the back side, drawn at −θo); the perpendicular plane
@@ -29,7 +32,7 @@ import numpy as np
 
 from virtspec_mi.plot import check_figure_path, curve_style
 
-__all__ = ["plot_polar", "plot_hemisphere", "plane_bins"]
+__all__ = ["plot_polar", "plot_hemisphere", "plot_series", "plane_bins"]
 
 
 def plane_bins(reading: Any, across: bool = False) -> tuple[int, int]:
@@ -132,4 +135,78 @@ def plot_hemisphere(reading: Any, path: str | os.PathLike | None = None, transmi
                    f"{'lower' if transmission else 'upper'} normal)", fontsize=9)
     if path is not None:
         figure.savefig(Path(path), dpi=90)
+    return figure
+
+
+def plot_series(reading: Any, path: str | os.PathLike | None = None, wavelength: float | None = None,
+                log: bool = False) -> Any:
+    """
+    The angular distribution over θi as a series: one column per θi, rows f in the plane
+    of incidence (BRDF against the signed θo, + on the mirror side; BTDF against the angle
+    from the lower normal), each bin a step with its simultaneous Clopper–Pearson band,
+    and the empirical CDF of θo with its DKW band (± ``cdf_mu``; none where not
+    certified), at ``wavelength`` (default: the first). Returns the ``Figure``.
+    """
+
+    from matplotlib.figure import Figure
+
+    path = check_figure_path(path)
+    w = 0 if wavelength is None else int(np.argmin(np.abs(reading.wavelengths - wavelength)))
+    b = reading.bins
+    lower_t, upper_t, theta = b.theta_edges[:-1], b.theta_edges[1:], b.theta_centres
+    sides = [(name, rows) for name, rows in (("BRDF, reflected", theta < 90.0), ("BTDF, transmitted", theta > 90.0))
+             if np.any(rows)]
+    columns = len(reading.theta_i)
+    figure = Figure(figsize=(2.6 * columns + 1.2, 2.2 * (len(sides) + 1) + 0.6), layout="constrained")
+    grid = figure.subplots(len(sides) + 1, columns, squeeze=False, sharex="row", sharey="row")
+    front, back = plane_bins(reading)
+    for i, angle in enumerate(reading.theta_i):
+        style = curve_style(0, 2 * len(theta))
+        for row, (name, rows) in enumerate(sides):
+            axes = grid[row, i]
+            for sign, column in ((1.0, front), (-1.0, back)):
+                if name.startswith("BRDF"):
+                    polar, outer = lower_t[rows], upper_t[rows]
+                else:  # the angle from the lower normal
+                    polar, outer = 180.0 - upper_t[rows], 180.0 - lower_t[rows]
+                start, stop = np.minimum(sign * polar, sign * outer), np.maximum(sign * polar, sign * outer)
+                order = np.argsort(start)
+                x = np.column_stack([start[order], stop[order]]).ravel()  # each bin a step, left to right
+
+                def steps(values: np.ndarray) -> np.ndarray:
+                    return np.repeat(values[w, i, rows, column][order], 2)
+
+                axes.plot(x, steps(reading.brdf), color=style["color"], linestyle=style["linestyle"],
+                          label="f" if sign > 0 else None)
+                axes.fill_between(x, steps(reading.brdf_lower), steps(reading.brdf_upper), color=style["color"],
+                                  alpha=0.25, linewidth=0, label="certified band" if sign > 0 else None)
+            if log:
+                axes.set_yscale("symlog", linthresh=1e-2)
+            axes.axvline(0.0, color="0.7", linewidth=0.5)
+            if name.startswith("BRDF") and reading.result.settings.beam != "diffuse":
+                axes.axvline(float(angle), color="0.4", linewidth=0.8, linestyle=":")  # the mirror direction
+            axes.set_title(f"θi = {angle:g}°" if row == 0 else "", fontsize=9)
+            axes.set_xlabel("θo from its normal, in the plane (deg; + forward)"
+                            if row == len(sides) - 1 else "", fontsize=7)
+            if i == 0:
+                axes.set_ylabel(f"{name} (1/sr)", fontsize=8)
+                if row == 0:
+                    axes.legend(fontsize=7)
+        axes = grid[-1, i]
+        cdf, mu = reading.cdf_theta_o[w, i], float(reading.cdf_mu[w, i])
+        axes.step(b.theta_edges, cdf, where="post", color=style["color"], label="empirical CDF of θo")
+        if np.isfinite(mu):
+            axes.fill_between(b.theta_edges, np.clip(cdf - mu, 0, 1), np.clip(cdf + mu, 0, 1), step="post",
+                              color=style["color"], alpha=0.25, linewidth=0, label=f"DKW band ± {mu:.3g}")
+        axes.axvline(90.0, color="0.7", linewidth=0.5)
+        axes.set_xlabel("θo (deg; > 90 transmitted)", fontsize=7)
+        if i == 0:
+            axes.set_ylabel("F(θo)", fontsize=8)
+        axes.legend(fontsize=6, loc="lower right")
+    s = reading.result.settings
+    figure.suptitle(f"goniophotometer over θi, {s.beam} beam, λ = {reading.wavelengths[w]:g} nm, "
+                    f"N = {int(reading.rays.max()):,} rays, K = {reading.size} bins (bands: all at once at "
+                    f"{1 - reading.delta:g})", fontsize=9)
+    if path is not None:
+        figure.savefig(path, dpi=72)
     return figure

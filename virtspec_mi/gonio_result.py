@@ -211,6 +211,27 @@ class GonioResult:
                                               float(self.solid_angles.min()))
         return np.where(self.result.certified, eps, np.nan)
 
+    @property
+    def sized_by(self) -> str | None:
+        """
+        The guarantee N was sized for, in words (``None`` when ``rays`` was given): the
+        rule, its μ (or relative ε above the floor), δ and K. Whether these rays deliver
+        it is :meth:`certificate`'s to say.
+        """
+
+        s, k = self.result.settings, self.size
+        if self.guarantee == "rays":
+            return None
+        if self.guarantee == "relative":
+            target = (f"f_k within relative {self.relative_tolerance:g} for every bin with f_k >= "
+                      f"{self.brdf_floor:g}/sr (Chernoff + union over K = {k})")
+        elif self.guarantee == "dkw":
+            target = f"the CDFs of theta_o and phi_o within mu = {s.mu:g} (DKW-Massart)"
+        else:
+            rule = "exact binomial at delta/K" if self.guarantee == "union-exact" else "Hoeffding + union"
+            target = f"every bin fraction within mu = {s.mu:g} at once ({rule} over K = {k})"
+        return f"sized by guarantee={self.guarantee} for {target}, delta = {s.delta:g}"
+
     def certificate(self) -> str:
         """What the reading's rays guarantee, in words (worst reading), or "not certified"."""
 
@@ -244,7 +265,7 @@ class GonioResult:
 
         b = self.bins
         folded = ", phi_o folded to |phi_o - phi_i|" if b.fold_phi else ""
-        lines = [self.result.summary(), "",
+        lines = [self.result.summary(sized_by=self.sized_by), "",
                  f"Goniophotometer: {b.shape[0]} theta_o x {b.shape[1]} phi_o bins ({b.binning}{folded}), "
                  f"theta_o {b.theta_edges[0]:g}..{b.theta_edges[-1]:g}, phi_o {b.phi_edges[0]:g}..{b.phi_edges[-1]:g} "
                  "degrees",
@@ -393,6 +414,13 @@ class GonioResult:
         from virtspec_mi.gonio_plot import plot_polar
 
         return plot_polar(self, path, **options)
+
+    def plot_series(self, path: str | os.PathLike | None = None, **options: Any) -> Any:
+        """The angular distribution over θi as a series, with the certified bands (:func:`~virtspec_mi.gonio_plot.plot_series`)."""
+
+        from virtspec_mi.gonio_plot import plot_series
+
+        return plot_series(self, path, **options)
 
 
 @dataclass(frozen=True)

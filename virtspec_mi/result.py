@@ -464,8 +464,12 @@ class Result:
 
     # -- text --------------------------------------------------------------------------
 
-    def summary(self) -> str:
-        """Human-readable summary: settings, the certificate, and a table for a single reading."""
+    def summary(self, sized_by: str | None = None) -> str:
+        """
+        Human-readable summary: settings, the certificate, and a table for a single reading.
+        ``sized_by`` names the rule that sized N when it was not this result's own bound
+        (a goniophotometer's guarantee over its bins): it replaces "rays given".
+        """
 
         s = self.settings
         incidence = ("cosine-weighted over the hemisphere" if s.beam == "diffuse"
@@ -476,7 +480,7 @@ class Result:
             sizes = " x ".join(f"{n} {'wavelengths' if d == 'wavelength' else d}"
                                for d, n in reversed(list(zip(self.dims, self.shape))))
             head = f"{s.beam} sweep: {sizes} (phi_i = {s.phi_i:g} deg, sampling = {s.sampling}, seed = {s.seed})"
-        lines = [head, self._certificate() + f"; {self.seconds * 1e3:.1f} ms"]
+        lines = [head, self._certificate(sized_by) + f"; {self.seconds * 1e3:.1f} ms"]
         fixed = [f"{name} = {float(self.coords[name]):g}" for name in self.parameter_names
                  if not self.coord_dims(name)]
         if fixed:
@@ -500,19 +504,22 @@ class Result:
         angles = np.atleast_1d(self.coords["theta_i"])
         return f"{angles[0]:g}" if len(angles) == 1 else f"{angles.min():g}..{angles.max():g}"
 
-    def _certificate(self) -> str:
+    def _certificate(self, sized_by: str | None = None) -> str:
         s = self.settings
         unit = "wavelength" if self.dims == ("wavelength",) else "reading"
         pilot = "" if self.pilot is None else f" + {int(self.pilot.rays.max()):,} pilot"
         counted = f"N = {_span(self.rays)}{pilot} rays per {unit}"
         mu = self.certified_mu
         if np.all(np.isnan(mu)):
-            return f"{counted} (NOT CERTIFIED: see the warnings below)"
+            return f"{counted} ({'' if sized_by is None else sized_by + '; '}NOT CERTIFIED: see the warnings below)"
         worst = _round_up(float(np.nanmax(mu)))
         together = "R and T together" if s.joint else "|rho - m/N|"
-        rule = f"{s.bound} bound" if s.rays is None else f"rays given; {s.bound} bound"
+        if sized_by is not None:
+            rule = f"{sized_by}; at these N the {s.bound} bound gives"
+        else:
+            rule = f"{s.bound} bound" if s.rays is None else f"rays given; {s.bound} bound"
         text = f"{counted} ({rule}: {together} < {worst:g} with probability >= {1 - s.delta:g}"
-        if worst > s.mu * (1 + 1e-9):
+        if sized_by is None and worst > s.mu * (1 + 1e-9):
             text += f"; mu = {s.mu:g} was asked: these rays guarantee only {worst:g}"
         if np.any(np.isnan(mu)):
             text += "; some readings NOT CERTIFIED"

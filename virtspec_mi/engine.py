@@ -90,17 +90,9 @@ def take_readings(
     :mod:`virtspec_mi.progress`.
     """
 
-    check_readings(len(readings), 0)
-    _check_specimen(instrument.bsdf, sorted({float(r[0]) for r in readings}))
-    readings = [(float(w), float(t), float(p)) for w, t, p in readings]
+    readings, source, traced = _traced_readings(instrument, readings)
     if offsets is not None and len(offsets) != len(readings):
         raise ValueError(f"offsets must hold one start per reading ({len(readings)}), got {len(offsets)}")
-    if shares_wavelengths(instrument):
-        first: dict[tuple[float, float], int] = {}
-        source = np.array([first.setdefault((t, p), k) for k, (_, t, p) in enumerate(readings)], dtype=np.int64)
-        traced = np.unique(source)
-    else:
-        source = traced = np.arange(len(readings))
     check_readings(len(readings), len(traced) * settings.most_rays_spent_per_reading)
     traced_readings = [readings[k] for k in traced]
     traced_offsets = None if offsets is None else np.asarray(offsets)[traced]
@@ -116,6 +108,26 @@ def take_readings(
         bar.close()
     back = np.searchsorted(traced, source)
     return counts.map(lambda v: v[back]), None if pilot is None else pilot.map(lambda v: v[back])
+
+
+def _traced_readings(instrument: Any, readings: Sequence[tuple[float, float, float]]
+                     ) -> tuple[list[tuple[float, float, float]], np.ndarray, np.ndarray]:
+    """
+    The checked readings as floats, each reading's source (the reading whose rays it
+    reports) and the readings to trace: for a wavelength-independent specimen the first
+    reading of every (θi, φi), else every reading (model only what is needed).
+    """
+
+    check_readings(len(readings), 0)
+    _check_specimen(instrument.bsdf, sorted({float(r[0]) for r in readings}))
+    readings = [(float(w), float(t), float(p)) for w, t, p in readings]
+    if shares_wavelengths(instrument):
+        first: dict[tuple[float, float], int] = {}
+        source = np.array([first.setdefault((t, p), k) for k, (_, t, p) in enumerate(readings)], dtype=np.int64)
+        traced = np.unique(source)
+    else:
+        source = traced = np.arange(len(readings))
+    return readings, source, traced
 
 
 def _check_specimen(bsdf: Any, wavelengths: list[float]) -> None:
@@ -387,15 +399,7 @@ def take_gonio_readings(instrument: Any, readings: Sequence[tuple[float, float, 
     if settings.adaptive:
         raise ValueError("bound must be a fixed budget for a goniophotometer reading (hoeffding, chebyshev, "
                          "exact or rays given; two-stage sizes each reading for R and T, not for its bins)")
-    check_readings(len(readings), 0)
-    _check_specimen(instrument.bsdf, sorted({float(r[0]) for r in readings}))
-    readings = [(float(w), float(t), float(p)) for w, t, p in readings]
-    if shares_wavelengths(instrument):
-        first: dict[tuple[float, float], int] = {}
-        source = np.array([first.setdefault((t, p), k) for k, (_, t, p) in enumerate(readings)], dtype=np.int64)
-        traced = np.unique(source)
-    else:
-        source = traced = np.arange(len(readings))
+    readings, source, traced = _traced_readings(instrument, readings)
     check_readings(len(readings), len(traced) * settings.rays_per_reading)
     plans = [ReadingPlan(*readings[k], settings.rays_per_reading) for k in traced]
     counts, tallies = tally_gonio_readings(instrument, plans, settings, bins)

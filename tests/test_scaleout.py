@@ -206,6 +206,44 @@ def test_a_scheduler_without_workers_raises_after_the_worker_timeout(dielectric_
         assert time.perf_counter() - start < 30  # not forever
 
 
+def test_tasks_left_without_any_worker_mid_sweep_raise_after_the_worker_timeout(monkeypatch):
+    """``_as_finished``: quiet for WORKER_TIMEOUT s -> a worker must still be there; long tasks on live ones wait."""
+
+    class Pending:  # an as_completed whose futures finish after `after` polls (never: None)
+        def __init__(self, after):
+            self.after, self.polls, self.left = after, 0, 1
+
+        def is_empty(self):
+            return not self.left
+
+        def next_batch(self, block):
+            self.polls += 1
+            if self.after is not None and self.polls > self.after:
+                self.left = 0
+                return ["future"]
+            return []
+
+    class Cluster:
+        def __init__(self, workers):
+            self.workers, self.asked = workers, 0
+            self.scheduler = type("Scheduler", (), {"address": "tcp://10.0.0.1:8786"})()
+
+        def wait_for_workers(self, n, timeout):
+            self.asked += 1
+            if not self.workers:
+                raise TimeoutError
+
+        def scheduler_info(self):
+            return {"workers": dict.fromkeys(range(self.workers))}
+
+    monkeypatch.setattr(scaleout, "WORKER_TIMEOUT", 0.15)
+    with pytest.raises(TimeoutError, match="no Dask worker is connected to the scheduler tcp://10.0.0.1:8786"):
+        list(scaleout._as_finished(Cluster(0), Pending(None)))
+    alive = Cluster(2)
+    assert list(scaleout._as_finished(alive, Pending(5))) == ["future"]  # 0.5 s of a long task: still waited for
+    assert alive.asked >= 1
+
+
 def test_densities_on_workers_hold_one_cluster_for_every_density(client, monkeypatch, capsys):
     connected = []
     connect = scaleout.connect

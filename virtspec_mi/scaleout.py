@@ -104,6 +104,7 @@ RETRIES: int = 2
 WORKER_TIMEOUT: float = 60.0
 """Seconds a sweep waits for a first worker (or, once none finishes a task, for any worker) before ``TimeoutError``."""
 
+_POLL_SECONDS = 0.1  # as distributed.as_completed's own wait
 _TRANSFORM = "__virtspec_transform4f__"
 _setup_threads: set[int] = set()
 _instruments: dict[str, Any] = {}
@@ -271,6 +272,28 @@ def wait_for_a_worker(client: Any) -> int:
     return max(1, len(client.scheduler_info().get("workers", {})))
 
 
+def _as_finished(client: Any, finished: Any) -> Iterator[Any]:
+    """
+    The futures of ``finished`` (a ``distributed.as_completed``, which may grow) as they
+    finish; once none has finished for :data:`WORKER_TIMEOUT` seconds, the cluster must
+    still have a worker (:func:`wait_for_a_worker`: ``TimeoutError`` otherwise) — tasks
+    longer than that on live workers are waited for. ``as_completed`` itself checks every
+    0.1 s; so does this.
+    """
+
+    quiet_since = time.monotonic()
+    while not finished.is_empty():
+        ready = finished.next_batch(block=False)
+        if ready:
+            yield from ready
+            quiet_since = time.monotonic()
+        elif time.monotonic() - quiet_since > WORKER_TIMEOUT:
+            wait_for_a_worker(client)
+            quiet_since = time.monotonic()
+        else:
+            time.sleep(_POLL_SECONDS)
+
+
 def _run_block(scene: Any, defines: dict[str, Any] | None, fingerprint: str, settings: Settings,
                grid: dict[str, Any], batches: list[np.ndarray]) -> list[tuple[np.ndarray, Counts, Counts | None, float]]:
     """
@@ -331,7 +354,7 @@ def dask_runner(client: Any, scene: Any, fingerprint: str, settings: Settings, t
     portable = portable_scene(scene)
 
     def runner(batches: list[np.ndarray]) -> Iterator[tuple[np.ndarray, Counts, Counts | None, float]]:
-        from distributed import wait
+        from distributed import as_completed
 
         n_workers = wait_for_a_worker(client)
 
@@ -346,24 +369,18 @@ def dask_runner(client: Any, scene: Any, fingerprint: str, settings: Settings, t
             probes = min(len(left), 2 * n_workers)
             first, left = [left[i:i + 2] for i in range(0, probes, 2)], left[probes:]
         futures = submit(first)
-        pending = set(futures)
+        finished = as_completed(futures)
         try:
-            while pending:
-                try:  # as they finish; Dask's own wait, bounded so that a cluster left without workers is seen
-                    done, pending = wait(pending, timeout=WORKER_TIMEOUT, return_when="FIRST_COMPLETED")
-                except TimeoutError:
-                    wait_for_a_worker(client)  # tasks longer than the timeout: keep waiting while workers live
-                    continue
-                for future in done:
-                    results = future.result()
-                    if left:  # sized from the first probe back, submitted before its results are recorded
-                        rate = max(len(b) / max(s, 1e-9) for b, _, _, s in results)
-                        remaining = sum(len(b) for b in left)
-                        more = submit(_tasks(left, task_size(rate, remaining, n_workers)))
-                        futures += more
-                        pending.update(more)
-                        left = []
-                    yield from results
+            for future in _as_finished(client, finished):
+                results = future.result()
+                if left:  # sized from the first probe back, submitted before its results are recorded
+                    rate = max(len(b) / max(s, 1e-9) for b, _, _, s in results)
+                    remaining = sum(len(b) for b in left)
+                    more = submit(_tasks(left, task_size(rate, remaining, n_workers)))
+                    futures += more
+                    finished.update(more)
+                    left = []
+                yield from results
         finally:
             client.cancel([f for f in futures if not f.done()])
 

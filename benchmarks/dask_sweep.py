@@ -92,7 +92,8 @@ def table(client, parameters: dict) -> dict:
     finally:
         client.submit = submit
     rays = int(here.rays.sum())
-    return {"readings": here.rays.size, "dims": " x ".join(f"{n} {d}" for d, n in zip(here.dims, here.shape)), "rays": rays, "rays_per_reading": int(here.rays.flat[0]),
+    return {"readings": here.rays.size, "dims": " x ".join(f"{n} {d}" for d, n in zip(here.dims, here.shape)),
+            "rays": rays, "rays_per_reading": int(here.rays.flat[0]),
             "here_s": here_s, "there_s": there_s, "here_traced_s": here.seconds, "worker_s": there.seconds,
             "tasks": len(tasks), "identical": identical(here, there)}
 

@@ -268,7 +268,8 @@ def wait_for_a_worker(client: Any) -> int:
         address = getattr(getattr(client, "scheduler", None), "address", "?")
         raise TimeoutError(f"no Dask worker is connected to the scheduler {address} (waited WORKER_TIMEOUT = "
                            f"{WORKER_TIMEOUT:g} s): start workers for it (`dask worker {address}`), or check the "
-                           "address; readings already finished are kept in the sweep's checkpoint, if it has one") from None
+                           "address; readings already finished are kept in the sweep's checkpoint, if it has one"
+                           ) from None
     return max(1, len(client.scheduler_info().get("workers", {})))
 
 

@@ -49,7 +49,7 @@ SUFFIX: str = ".zarr"
 """The suffix of a Zarr result store."""
 
 CHUNK_READINGS: int = 4096
-"""Readings per Zarr chunk at most: wavelengths first, by one θi (and, filling up, points of the last parameter dim)."""
+"""Readings per Zarr chunk at most: wavelengths first, by one θi (filled up with points of the last parameter dim)."""
 
 WRITE_EVERY: float = 10.0
 """Write kept batches again once the time since the last write is this many times what it took."""

@@ -4,16 +4,16 @@ A soybean leaf table in one process and on a 2-worker Dask cluster (issue 17)
 
 Prints, in one run, side by side:
 
-(a) **The table** — the soybean leaf (``scenes/soybean_abmb.xml``, ``abm_b``), 421
-    wavelengths (400:2500:5 nm) × θi (10 angles, 0:81:9°; ``--quick``: 2), certified at
-    μ = 0.01, δ = 0.01 (Hoeffding N = 26,492 rays per reading), seed 0: one in-process
-    ``sweep`` and the same ``sweep(..., workers=client)`` on a ``LocalCluster`` of 2
-    worker processes (one thread and one Dr.Jit thread each, tasks sized by the rule of
-    :mod:`virtspec_mi.scaleout`). Both warm (one small sweep first compiles the kernel,
-    on every worker too). Wall time, rays/s, the ratio, tasks, and that the counts are
-    identical. (The issue asks for 2 specimen parameters × 5 values × 421 wavelengths;
-    parameter sweeps are another branch, so the table here is wavelength × θi, 4,210
-    readings: as many as 10 parameter points × 421 wavelengths.)
+(a) **The table** — the soybean leaf (``scenes/soybean_abmb.xml``, ``abm_b``) at θi = 8°,
+    421 wavelengths (400:2500:5 nm) × a grid of two specimen parameters, 5 values each
+    (``specimen.thickness`` 1.2e-4:2.0e-4:2e-5 m × ``specimen.chlorophyll_a``
+    2:6:1 kg m⁻³; ``--quick``: 2 values each), certified at μ = 0.01, δ = 0.01
+    (Hoeffding N = 26,492 rays per reading), seed 0: 10,525 readings (``--quick``:
+    1,684). One in-process ``sweep(..., parameters=...)`` and the same sweep with
+    ``workers=client`` on a ``LocalCluster`` of 2 worker processes (one thread and one
+    Dr.Jit thread each, tasks sized by the rule of :mod:`virtspec_mi.scaleout`). Both
+    warm (one small parameter sweep first compiles the kernel, on every worker too).
+    Wall time, rays/s, the ratio, tasks, and that the counts are identical.
 (b) **Per-task overhead** — 400 empty tasks (``client.submit`` of a no-op, then gather):
     wall ms per task; 20 sequential round trips; and 200 tiny sweep tasks (one reading
     of 1,024 rays each, ``task_readings=1``) against the same sweep in process: wall ms per
@@ -26,12 +26,13 @@ Prints, in one run, side by side:
 
 Run::
 
-    .venv/bin/python benchmarks/dask_sweep.py            # the full table (≈ 2–4 min on 2 cores)
-    .venv/bin/python benchmarks/dask_sweep.py --quick    # 421 × 2 readings
+    .venv/bin/python benchmarks/dask_sweep.py            # the 5 x 5 x 421 table (≈ 6–10 min on 2 busy cores)
+    .venv/bin/python benchmarks/dask_sweep.py --quick    # 2 x 2 x 421
 
 2 workers on a 2-core machine share the cores the in-process sweep already uses (Dr.Jit
 runs 2 threads there): the ratio shows the cost of the scale-out, not a gain. Other work
-on the machine slows every figure: the 1-minute load average is printed.
+on the machine slows every figure: the 1-minute load average is printed (before and
+after).
 """
 
 from __future__ import annotations
@@ -53,7 +54,9 @@ from virtspec_mi.counts import Counts  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 LEAF = str(ROOT / "scenes" / "soybean_abmb.xml")
-TABLE = {"wavelengths": "400:2500:5", "mu": 0.01, "delta": 0.01, "seed": 0, "progress": False}
+TABLE = {"theta_i": 8, "wavelengths": "400:2500:5", "mu": 0.01, "delta": 0.01, "seed": 0, "progress": False}
+PARAMETERS = {"specimen.thickness": "1.2e-4:2.0e-4:2e-5", "specimen.chlorophyll_a": "2:6:1"}  # 5 x 5
+QUICK = {"specimen.thickness": [1.2e-4, 2.0e-4], "specimen.chlorophyll_a": [2, 6]}  # 2 x 2
 TARGET_READINGS, TARGET_WORKERS = 1_000_000, 100
 
 
@@ -65,13 +68,14 @@ def identical(a: vm.Result, b: vm.Result) -> bool:
     return all(np.array_equal(getattr(a, n), getattr(b, n), equal_nan=True) for n in Counts.names())
 
 
-def table(client, angles: str) -> dict:
-    vm.sweep(LEAF, theta_i=[8], wavelengths="500 600", rays=1000, progress=False)  # compiles the kernel here
+def table(client, parameters: dict) -> dict:
+    warm = {"theta_i": [8], "wavelengths": "500:600:20", "rays": 1000, "progress": False,
+            "parameters": {"specimen.thickness": [1.5e-4, 1.6e-4]}}
+    vm.sweep(LEAF, **warm)  # compiles the kernel here
     start = time.perf_counter()
-    here = vm.sweep(LEAF, theta_i=angles, **TABLE)
+    here = vm.sweep(LEAF, parameters=parameters, **TABLE)
     here_s = time.perf_counter() - start
-    vm.sweep(LEAF, theta_i=[8], wavelengths="500:600:20", rays=1000, progress=False, workers=client,
-             task_readings=1)  # every worker compiles (or loads) the kernel
+    vm.sweep(LEAF, workers=client, task_readings=1, **warm)  # every worker compiles (or loads) the kernel
     tasks = []
     submit = client.submit
 
@@ -83,12 +87,13 @@ def table(client, angles: str) -> dict:
     client.submit = counting
     try:
         start = time.perf_counter()
-        there = vm.sweep(LEAF, theta_i=angles, workers=client, **TABLE)
+        there = vm.sweep(LEAF, parameters=parameters, workers=client, **TABLE)
         there_s = time.perf_counter() - start
     finally:
         client.submit = submit
     rays = int(here.rays.sum())
-    return {"readings": here.rays.size, "rays": rays, "rays_per_reading": int(here.rays.flat[0]),
+    return {"readings": here.rays.size, "dims": " x ".join(f"{n} {d}" for d, n in zip(here.dims, here.shape)),
+            "rays": rays, "rays_per_reading": int(here.rays.flat[0]),
             "here_s": here_s, "there_s": there_s, "here_traced_s": here.seconds, "worker_s": there.seconds,
             "tasks": len(tasks), "identical": identical(here, there)}
 
@@ -129,18 +134,20 @@ def projection(t: dict, o: dict, n_workers: int = 2) -> dict:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[1])
-    parser.add_argument("--quick", action="store_true", help="421 wavelengths x 2 angles")
+    parser.add_argument("--quick", action="store_true", help="2 x 2 parameter values x 421 wavelengths")
     args = parser.parse_args()
-    angles = "8 45" if args.quick else "0:81:9"
     info = machine()
+    load_before = load_average()
     start = time.perf_counter()
     with scaleout.connect(2) as client:
         startup = time.perf_counter() - start
-        t = table(client, angles)
+        t = table(client, QUICK if args.quick else PARAMETERS)
         o = overhead(client)
     info["load"] = round(load_average(), 2)
     p = projection(t, o)
     n = t["rays_per_reading"]
+    print(f"table: {t['dims']} (theta_i = 8 deg, mu = delta = 0.01)")
+    print()
     print("| case | readings | rays | wall s | Mray/s | tasks |")
     print("|---|---|---|---|---|---|")
     print(f"| in process (Dr.Jit 2 threads) | {t['readings']:,} | {n:,} x {t['readings']:,} | {t['here_s']:.2f} | "
@@ -162,6 +169,12 @@ def main() -> None:
           f"{p['task_cost_s'] * 1e3:.1f} ms per task ({p['task_cost_s'] / scaleout.TASK_SECONDS:.2%}), "
           f"scheduler floor {p['floor_s']:.1f} s -> about {p['projected_s']:.0f} s "
           f"({p['projected_s'] / 60:.1f} min)")
+    per_task = t["there_s"] * 2 / max(1, t["tasks"]) * 1e3  # worker ms per table task: wall x 2 workers / tasks
+    tracing = t["worker_s"] / max(1, t["tasks"]) * 1e3
+    print(f"- per table task: {per_task:,.0f} ms of worker time (wall x 2 workers / tasks), {tracing:,.0f} ms of it "
+          f"tracing -> {per_task - tracing:,.0f} ms ({(per_task - tracing) / per_task:.1%}) not tracing (Dask, "
+          "transfers, the driver's checkpoint, a worker idle at the end)")
+    print(f"- load average (1 min) before the run: {load_before:.2f}")
     for line in machine_lines(info):
         print(f"- {line}")
 

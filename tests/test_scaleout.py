@@ -11,6 +11,7 @@ from __future__ import annotations
 import json
 import os
 import signal
+import time
 
 import numpy as np
 import pytest
@@ -83,14 +84,18 @@ def test_a_sweep_on_two_worker_processes_is_bit_identical_to_the_in_process_one(
     assert there.scene == here.scene  # the same fingerprint: the same scene
 
 
-def test_a_parameter_sweep_with_defines_on_workers_is_bit_identical_and_leaves_the_workers_scene_as_loaded(client):
+def test_a_parameter_sweep_with_defines_on_workers_is_bit_identical_and_leaves_the_workers_scene_as_loaded(
+        client, tmp_path):
     """Specimen parameters and XML ``$name`` defines travel with the tasks (engine.take_keyed_readings)."""
 
     settings = {"theta_i": 8, "wavelengths": [550, 800], "rays": 5_000, "progress": False,
                 "defines": {"side": "abaxial"}, "parameters": {"specimen.thickness": [1.2e-4, 2e-4]}}
     here = vm.sweep("scenes/soybean_abmb.xml", **settings)
-    there = vm.sweep("scenes/soybean_abmb.xml", workers=client, task_readings=1, **settings)
+    there = vm.sweep("scenes/soybean_abmb.xml", workers=client, task_readings=1, out=tmp_path / "lut.zarr",
+                     **settings)
     same_counts(here, there)
+    same_counts(here, vm.read_result(tmp_path / "lut.zarr"))  # streamed into Zarr as the tasks finished
+    assert "on Dask workers: worker time, not wall time" in there.summary()  # Result.seconds: summed worker time
     assert there.dims == ("wavelength", "theta_i", "specimen.thickness")
     plain = {k: v for k, v in settings.items() if k != "parameters"}
     # each worker's cached scene got its own thickness back after every task
@@ -159,8 +164,10 @@ def test_the_cli_runs_a_sweep_on_a_scheduler_address(client, tmp_path):
                                               wavelengths="500 600", rays=5000, progress=False))
 
 
-def test_killing_a_worker_mid_sweep_gives_the_identical_result(client, dielectric_dict, monkeypatch):
-    settings = {**SMALL, "wavelengths": "400:700:20", "rays": 100_000}  # 48 readings
+@pytest.mark.parametrize("parameters", [None, {"specimen.eta": [1.3, 1.6]}], ids=["grid", "parameter-sweep"])
+def test_killing_a_worker_mid_sweep_gives_the_identical_result(client, dielectric_dict, monkeypatch, parameters):
+    # 48 readings (3 traced rows of the wavelength-independent dielectric), x 2 parameter points
+    settings = {**SMALL, "wavelengths": "400:700:20", "rays": 100_000, "parameters": parameters}
     record = Checkpoint.record
     killed: list[int] = []
     recorded_after: list[int] = []
@@ -186,6 +193,72 @@ def test_killing_a_worker_mid_sweep_gives_the_identical_result(client, dielectri
                             for w in client.scheduler_info()["workers"]])
     assert killed[0] not in {s["pid"] for s in states}
     assert all(s["set_up_here"] and s["drjit_threads"] == scaleout.DRJIT_THREADS for s in states)
+
+
+def test_a_scheduler_without_workers_raises_after_the_worker_timeout(dielectric_dict, monkeypatch):
+    from distributed import LocalCluster
+
+    monkeypatch.setattr(scaleout, "WORKER_TIMEOUT", 0.5)
+    with LocalCluster(n_workers=0, processes=False, dashboard_address=":0") as empty:
+        start = time.perf_counter()
+        with pytest.raises(TimeoutError, match="no Dask worker is connected to the scheduler .*WORKER_TIMEOUT = 0.5 s"):
+            vm.sweep(dielectric_dict, workers=empty.scheduler_address, **SMALL)
+        assert time.perf_counter() - start < 30  # not forever
+
+
+def test_tasks_left_without_any_worker_mid_sweep_raise_after_the_worker_timeout(monkeypatch):
+    """``_as_finished``: quiet for WORKER_TIMEOUT s -> a worker must still be there; long tasks on live ones wait."""
+
+    class Pending:  # an as_completed whose futures finish after `after` polls (never: None)
+        def __init__(self, after):
+            self.after, self.polls, self.left = after, 0, 1
+
+        def is_empty(self):
+            return not self.left
+
+        def next_batch(self, block):
+            self.polls += 1
+            if self.after is not None and self.polls > self.after:
+                self.left = 0
+                return ["future"]
+            return []
+
+    class Cluster:
+        def __init__(self, workers):
+            self.workers, self.asked = workers, 0
+            self.scheduler = type("Scheduler", (), {"address": "tcp://10.0.0.1:8786"})()
+
+        def wait_for_workers(self, n, timeout):
+            self.asked += 1
+            if not self.workers:
+                raise TimeoutError
+
+        def scheduler_info(self):
+            return {"workers": dict.fromkeys(range(self.workers))}
+
+    monkeypatch.setattr(scaleout, "WORKER_TIMEOUT", 0.15)
+    with pytest.raises(TimeoutError, match="no Dask worker is connected to the scheduler tcp://10.0.0.1:8786"):
+        list(scaleout._as_finished(Cluster(0), Pending(None)))
+    alive = Cluster(2)
+    assert list(scaleout._as_finished(alive, Pending(5))) == ["future"]  # 0.5 s of a long task: still waited for
+    assert alive.asked >= 1
+
+
+def test_densities_on_workers_hold_one_cluster_for_every_density(client, monkeypatch, capsys):
+    connected = []
+    connect = scaleout.connect
+
+    def counting(workers):
+        connected.append(workers)
+        return connect(workers)
+
+    monkeypatch.setattr(scaleout, "connect", counting)
+    address = client.scheduler.address
+    assert main(["sweep", "scenes/diamond_collimated.xml", "--theta-i", "0", "45", "--wavelengths", "500",
+                 "--densities", "2", "3", "--scheduler", address, "--quiet"]) == 0
+    assert connected[0] == address and len(connected) == 4  # the CLI's, then the warm-up and 2 sweeps through it
+    assert all(type(w).__name__ == "Client" for w in connected[1:])
+    assert "summed over the workers" in capsys.readouterr().out
 
 
 @pytest.mark.parametrize("workers, message", [

@@ -92,6 +92,81 @@ def test_batches_in_any_order_land_in_their_cells_and_whole_rows_merge(tmp_path)
     with xr.open_zarr(tmp_path / "t.zarr", consolidated=False) as store:
         assert np.array_equal(store["rays"].values, (np.arange(n_lam * n_theta) + 1).reshape(n_theta, n_lam).T)
         assert store["done"].values.all()
-    regions = [(len(rows), lam, theta, rows_of_theta) for rows, lam, theta, rows_of_theta
-               in table._regions(np.arange(3, 3 * n_lam + 2))]
-    assert regions == [(4, 3, 0, 1), (14, 0, 1, 2), (2, 0, 3, 1)]  # a tail, two whole rows as one, a head
+    regions = [(len(rows), at, size) for rows, at, size in table._regions(np.arange(3, 3 * n_lam + 2))]
+    # a tail of row 0, two whole rows as one region, a head of row 3 (keyed order: theta_i, wavelength)
+    assert regions == [(4, (0, 3), (1, 4)), (14, (1, 0), (2, 7)), (2, (3, 0), (1, 2))]
+
+
+def test_a_run_of_readings_is_a_few_hyper_rectangles_covering_it_exactly():
+    from virtspec_mi.zarr_table import regions
+
+    shape = (3, 2, 4, 5)  # two parameter dims, theta_i, wavelength: k in C order
+    rng = np.random.default_rng(3)
+    for start, stop in [(0, 120), (7, 8), (7, 63), (20, 100), *map(sorted, rng.integers(0, 121, (20, 2)))]:
+        covered = []
+        blocks = list(regions(int(start), int(stop), shape))
+        assert len(blocks) <= 2 * len(shape) - 1
+        for at, size in blocks:
+            index = np.indices(size).reshape(len(shape), -1).T + np.asarray(at)
+            assert (index < np.asarray(shape)).all()
+            covered.extend(np.ravel_multi_index(index.T, shape).tolist())
+        assert covered == list(range(start, stop))  # every reading once, in order
+
+
+PARAMETRIC = {"theta_i": [8, 40], "wavelengths": "450:650:100", "rays": 5000, "progress": False}
+"""6 readings per parameter point."""
+
+
+@pytest.mark.parametrize("scene, parameters, points", [
+    ("dict", {"specimen.eta": [1.3, 1.5, 1.7]}, False),
+    ("scenes/soybean_abmb.xml", {"specimen.thickness": [1.2e-4, 2e-4], "specimen.chlorophyll_a": [2, 4, 6]},
+     False),
+    ("scenes/soybean_abmb.xml", {"specimen.thickness": [1.2e-4, 2e-4, 1.6e-4, 1.3e-4],
+                                 "specimen.chlorophyll_a": [2, 6, 4, 5]}, True),
+], ids=["dielectric-rows", "leaf-grid", "leaf-points"])
+def test_an_interrupted_parameter_sweep_into_zarr_resumes_and_equals_the_nc_result(dielectric, monkeypatch,
+                                                                                    tmp_path, scene, parameters,
+                                                                                    points):
+    scene = dielectric if scene == "dict" else scene
+    settings = {**PARAMETRIC, "parameters": parameters, "points": points}
+    vm.sweep(scene, out=tmp_path / "whole.nc", **settings)
+    whole = vm.read_result(tmp_path / "whole.nc")
+    out = tmp_path / "table.zarr"
+    record = Checkpoint.record
+    calls = []
+
+    def interrupting(self, batch, *args):
+        calls.append(batch)
+        if len(calls) == 4:
+            raise KeyboardInterrupt
+        record(self, batch, *args)
+
+    monkeypatch.setattr(Checkpoint, "record", interrupting)
+    with pytest.raises(KeyboardInterrupt):
+        vm.sweep(scene, out=out, chunk_size=1024, **settings)  # one reading (or one theta_i row) per batch
+    monkeypatch.undo()
+    with xr.open_zarr(out, consolidated=False) as partial:
+        assert tuple(partial["done"].dims) == whole.dims
+        done = partial["done"].values
+        assert done.sum() == sum(len(b) for b in calls) and 0 < done.sum() < done.size
+        for name in Counts.names():  # the finished readings in their cells, nothing elsewhere
+            assert np.array_equal(partial[name].values[done], getattr(whole, name)[done], equal_nan=True)
+        assert not np.any(partial["rays"].values[~done])
+        for name in (*parameters, "point"):
+            if name in whole.coords:
+                assert np.array_equal(partial[name].values, whole.coords[name])
+    with pytest.raises(ValueError, match="not a complete virtspec-mi Zarr result"):
+        vm.read_result(out)
+    resumed = vm.sweep(scene, out=out, chunk_size=1024, **settings)
+    back = vm.read_result(out)
+    for result in (resumed, back):
+        same_counts(result, whole)
+        assert result.dims == whole.dims and result.parameters == whole.parameters
+        assert all(np.array_equal(result.coords[name], whole.coords[name]) for name in whole.coords)
+    assert back.settings == resumed.settings and back.scene == whole.scene
+    fresh = vm.read_result(whole.write(tmp_path / "fresh.zarr"))  # Result.write of a parameter sweep, no sweep
+    same_counts(fresh, whole)
+    assert fresh.dims == whole.dims and fresh.parameters == whole.parameters
+    assert back.sel(theta_i=40).isel(**{whole.dims[2]: 1}).reflectance.shape == (3,) + whole.shape[3:]
+    with xr.open_zarr(out, consolidated=False) as table:
+        assert np.allclose(table["reflectance"].transpose(*whole.dims).values, whole.reflectance)

@@ -155,9 +155,9 @@ def sweep(
         :class:`~virtspec_mi.checkpoint.CheckpointError` and is left as it is.
     out
         Result file (``.nc``, ``.csv`` or ``.json``, :meth:`Result.write`) to write,
-        atomically, when the sweep completes — or, for a sweep without ``parameters``, a
-        Zarr store (``.zarr``) that receives each batch's counts as it finishes, region by
-        region (:mod:`virtspec_mi.zarr_table`);
+        atomically, when the sweep completes — or a Zarr store (``.zarr``, for tables too
+        large for one file; parameter sweeps too) that receives each batch's counts as it
+        finishes, region by region (:mod:`virtspec_mi.zarr_table`);
         checked before any tracing. The checkpoint defaults to ``OUT.partial.json``: if
         the write fails (a full disk …) every finished reading stays there and the same
         call, re-run, only writes.
@@ -170,7 +170,10 @@ def sweep(
         in this process; an int N on a local Dask cluster of N worker processes started
         for the sweep; a scheduler address (``"tcp://host:8786"``) or a
         ``distributed.Client`` on that cluster. The counts are the same in every case;
-        ``scene`` must then be an XML path (readable by every worker) or a dict.
+        ``scene`` must then be an XML path (readable by every worker) or a dict. A
+        cluster without workers raises ``TimeoutError`` after
+        :data:`~virtspec_mi.scaleout.WORKER_TIMEOUT` seconds; ``Result.seconds`` is then
+        the tracing time summed over the workers (worker-seconds, not wall time).
     task_readings
         With ``workers``: readings per Dask task; default (``None``) from the measured
         ray rate (:func:`virtspec_mi.scaleout.task_size`).
@@ -196,9 +199,6 @@ def sweep(
     for name, values in (("theta_i", angles), ("wavelengths", np.array(resolved.wavelengths))):
         if len(np.unique(values)) != len(values):
             raise ValueError(f"{name} of a sweep must be distinct (got repeated values)")
-    if space is not None and out is not None and out.suffix.lower() == ZARR_SUFFIX:
-        raise ValueError("out: a Zarr store (.zarr) holds a wavelength x theta_i sweep; write a parameter sweep "
-                         "to .nc, .csv or .json")
     fingerprint = scene_fingerprint(scene, instrument, defines)
     with ExitStack() as held:
         if checkpoint is not None:  # one run per checkpoint, writable: checked before any cluster or tracing
@@ -206,10 +206,10 @@ def sweep(
         runner = held.enter_context(_runner(scene, defines, workers, task_readings, fingerprint, resolved, angles,
                                             space))
         if out is not None and out.suffix.lower() == ZARR_SUFFIX:  # the store fills as the batches finish
-            table = ZarrTable(out, resolved.wavelengths, angles, {"scene": fingerprint, **resolved.as_dict(),
-                                                                  "theta_i": [float(t) for t in angles]},
-                              pilot=resolved.adaptive)
-            runner = table.stream(runner or in_process_runner(instrument, resolved, theta_i=angles))
+            identity = {"scene": fingerprint, **resolved.as_dict(), "theta_i": [float(t) for t in angles],
+                        **({} if space is None else {"parameters": space.as_dict()})}
+            table = ZarrTable(out, resolved.wavelengths, angles, identity, pilot=resolved.adaptive, parameters=space)
+            runner = table.stream(runner or in_process_runner(instrument, resolved, theta_i=angles, parameters=space))
         result = run(instrument, resolved, angles, keyed=True, scene=fingerprint, checkpoint=checkpoint,
                      progress=progress, parameters=space, runner=runner)
         if checkpoint is not None:

@@ -38,7 +38,7 @@ import argparse
 import json
 import signal
 import sys
-from typing import Sequence
+from typing import Any, Sequence
 
 __all__ = ["main", "build_parser"]
 
@@ -362,9 +362,9 @@ def _sphere(args: argparse.Namespace) -> int:
 def _sweep(args: argparse.Namespace) -> int:
     from pathlib import Path
 
-    from virtspec_mi.api import fluctuation, sweep
+    from virtspec_mi.api import sweep
     from virtspec_mi.checkpoint import checkpoint_for
-    from virtspec_mi.plot import check_figure_path, plot_densities, plot_sweep
+    from virtspec_mi.plot import check_figure_path, plot_sweep
     from virtspec_mi.results_io import check_output, csv_text
 
     out = check_output(args.out) if args.out else None  # a bad suffix or directory fails before any tracing
@@ -379,10 +379,10 @@ def _sweep(args: argparse.Namespace) -> int:
               "task_readings": args.task_readings}
     given_rays = kwargs.pop("rays")
 
-    def run(rays: int | None, path: Path | None) -> object:
+    def run(rays: int | None, path: Path | None, options: dict = kwargs) -> object:
         # the sweep writes `path` atomically, and only then removes its checkpoint PATH.partial.json
         args.checkpoint = checkpoint_for(path) if path is not None else None  # named if interrupted
-        return sweep(args.scene, rays=rays, out=path, **kwargs)
+        return sweep(args.scene, rays=rays, out=path, **options)
 
     if not args.densities:
         result = run(given_rays, out)
@@ -402,6 +402,20 @@ def _sweep(args: argparse.Namespace) -> int:
     if given_rays is not None:
         raise ValueError("--rays and --densities exclude each other (densities set N = 10^d)")
     _check_densities(args.densities)
+    if kwargs["workers"] is None:
+        return _densities(args, kwargs, run, out)
+    from virtspec_mi.scaleout import connect
+
+    with connect(kwargs["workers"]) as client:  # one cluster (or connection) for every density
+        return _densities(args, {**kwargs, "workers": client}, run, out)
+
+
+def _densities(args: argparse.Namespace, kwargs: dict, run: Any, out: Any) -> int:
+    """``--densities``: a sweep per ray density, its seconds and the fluctuation Δ against the previous one."""
+
+    from virtspec_mi.api import fluctuation, sweep
+    from virtspec_mi.plot import plot_densities
+
     # Fig. 6b: time linear in N. The first sweep compiles the kernel (Dr.Jit caches it for every
     # N): run it once at the smallest density first, so no density's seconds include compilation.
     warm_up = sweep(args.scene, rays=int(round(10.0 ** min(args.densities))), **{**kwargs, "progress": False})
@@ -410,13 +424,14 @@ def _sweep(args: argparse.Namespace) -> int:
     for density in args.densities:
         rays = int(round(10.0 ** density))
         path = out.with_name(f"{out.stem}_logN{density:g}{out.suffix}") if out is not None else None
-        results.append(run(rays, path))
+        results.append(run(rays, path, kwargs))
         if len(results) > 1:
             deltas.append(fluctuation(results[-2], results[-1]))
         delta_text = "" if len(results) == 1 else f"{deltas[-1]:.6f}"
         print(f"{density:>8g} {rays:>12,} {results[-1].seconds:>9.3f} {delta_text:>15}", flush=True)
     print(f"(seconds after a warm-up sweep at log10 N = {min(args.densities):g}, {warm_up.seconds:.3f} s, "
-          "which compiled the kernel)")
+          "which compiled the kernel" + ("; on workers: tracing seconds summed over the workers, not wall time)"
+                                         if kwargs["workers"] is not None else ")"))
     if args.plot:
         plot_densities(results, args.densities, deltas, args.plot)
     return 0

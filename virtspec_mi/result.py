@@ -90,7 +90,9 @@ class Result:
     geometry : InstrumentGeometry
         r₁, r₂ and D of the scene.
     seconds : float
-        Wall time spent tracing (summed over interrupted and resumed runs).
+        Time spent tracing, summed over the batches (and over interrupted and resumed
+        runs): the wall time of a sweep in this process; for a sweep on Dask workers the
+        workers' tracing time added up (worker-seconds), not the wall time.
     scene : str
         Fingerprint of the scene (``sha256:…``), or "".
     wavelength_independent : bool
@@ -480,7 +482,10 @@ class Result:
             sizes = " x ".join(f"{n} {'wavelengths' if d == 'wavelength' else d}"
                                for d, n in reversed(list(zip(self.dims, self.shape))))
             head = f"{s.beam} sweep: {sizes} (phi_i = {s.phi_i:g} deg, sampling = {s.sampling}, seed = {s.seed})"
-        lines = [head, self._certificate(sized_by) + f"; {self.seconds * 1e3:.1f} ms"]
+        spent = f"; {self.seconds * 1e3:.1f} ms"
+        if self.dims != ("wavelength",):
+            spent += " of tracing summed over the batches (on Dask workers: worker time, not wall time)"
+        lines = [head, self._certificate(sized_by) + spent]
         fixed = [f"{name} = {float(self.coords[name]):g}" for name in self.parameter_names
                  if not self.coord_dims(name)]
         if fixed:

@@ -37,7 +37,16 @@ sets it instead. A task's batches come back together and are recorded in the
 checkpoint as the tasks finish (``as_completed``); an interrupted sweep resumes without
 tracing a recorded reading again. A worker that dies loses only its task: Dask
 reschedules it on another worker (``distributed.scheduler.allowed-failures``), and a task
-that raises is retried :data:`RETRIES` times.
+that raises is retried :data:`RETRIES` times before its error reaches the caller (an
+error that is deterministic — a bad wavelength for the specimen — is thus raised after
+three tries of its task; the other tasks go on meanwhile and are cancelled then).
+
+A cluster with no worker (a scheduler whose workers have not started, or all of them
+gone) cannot run a task: the sweep waits for one at most :data:`WORKER_TIMEOUT` seconds,
+when it starts and whenever no task has finished for that long, then raises
+``TimeoutError`` naming the scheduler. ``Result.seconds`` of a distributed sweep is the
+tracing time summed over the tasks (worker-seconds, several per wall second), not the
+wall time.
 
 References
 ----------
@@ -70,7 +79,9 @@ __all__ = [
     "TASK_SECONDS",
     "DRJIT_THREADS",
     "RETRIES",
+    "WORKER_TIMEOUT",
     "WorkerSetup",
+    "wait_for_a_worker",
     "check_workers",
     "check_task_readings",
     "connect",
@@ -90,6 +101,10 @@ DRJIT_THREADS: int = 1
 RETRIES: int = 2
 """Times Dask retries a task that raised (a worker that died is handled by the scheduler)."""
 
+WORKER_TIMEOUT: float = 60.0
+"""Seconds a sweep waits for a first worker (or, once none finishes a task, for any worker) before ``TimeoutError``."""
+
+_POLL_SECONDS = 0.1  # as distributed.as_completed's own wait
 _TRANSFORM = "__virtspec_transform4f__"
 _setup_threads: set[int] = set()
 _instruments: dict[str, Any] = {}
@@ -241,6 +256,45 @@ def _restored(scene: Any) -> Any:
     return {key: _restored(value) for key, value in scene.items()}
 
 
+def wait_for_a_worker(client: Any) -> int:
+    """
+    The number of workers of ``client``'s cluster once it has one, waiting at most
+    :data:`WORKER_TIMEOUT` seconds; ``TimeoutError`` naming the scheduler otherwise.
+    """
+
+    try:
+        client.wait_for_workers(1, timeout=WORKER_TIMEOUT)
+    except TimeoutError:  # distributed's WorkerStartTimeoutError is one
+        address = getattr(getattr(client, "scheduler", None), "address", "?")
+        raise TimeoutError(f"no Dask worker is connected to the scheduler {address} (waited WORKER_TIMEOUT = "
+                           f"{WORKER_TIMEOUT:g} s): start workers for it (`dask worker {address}`), or check the "
+                           "address; readings already finished are kept in the sweep's checkpoint, if it has one"
+                           ) from None
+    return max(1, len(client.scheduler_info().get("workers", {})))
+
+
+def _as_finished(client: Any, finished: Any) -> Iterator[Any]:
+    """
+    The futures of ``finished`` (a ``distributed.as_completed``, which may grow) as they
+    finish; once none has finished for :data:`WORKER_TIMEOUT` seconds, the cluster must
+    still have a worker (:func:`wait_for_a_worker`: ``TimeoutError`` otherwise) — tasks
+    longer than that on live workers are waited for. ``as_completed`` itself checks every
+    0.1 s; so does this.
+    """
+
+    quiet_since = time.monotonic()
+    while not finished.is_empty():
+        ready = finished.next_batch(block=False)
+        if ready:
+            yield from ready
+            quiet_since = time.monotonic()
+        elif time.monotonic() - quiet_since > WORKER_TIMEOUT:
+            wait_for_a_worker(client)
+            quiet_since = time.monotonic()
+        else:
+            time.sleep(_POLL_SECONDS)
+
+
 def _run_block(scene: Any, defines: dict[str, Any] | None, fingerprint: str, settings: Settings,
                grid: dict[str, Any], batches: list[np.ndarray]) -> list[tuple[np.ndarray, Counts, Counts | None, float]]:
     """
@@ -303,7 +357,7 @@ def dask_runner(client: Any, scene: Any, fingerprint: str, settings: Settings, t
     def runner(batches: list[np.ndarray]) -> Iterator[tuple[np.ndarray, Counts, Counts | None, float]]:
         from distributed import as_completed
 
-        n_workers = max(1, len(client.scheduler_info().get("workers", {})))
+        n_workers = wait_for_a_worker(client)
 
         def submit(tasks: list[list[np.ndarray]]) -> list[Any]:
             return [client.submit(_run_block, portable, defines, fingerprint, settings, grid, task, pure=False,
@@ -318,7 +372,7 @@ def dask_runner(client: Any, scene: Any, fingerprint: str, settings: Settings, t
         futures = submit(first)
         finished = as_completed(futures)
         try:
-            for future in finished:
+            for future in _as_finished(client, finished):
                 results = future.result()
                 if left:  # sized from the first probe back, submitted before its results are recorded
                     rate = max(len(b) / max(s, 1e-9) for b, _, _, s in results)

@@ -99,13 +99,7 @@ def plot_polar(reading: Any, path: str | os.PathLike | None = None, wavelength: 
                             fontsize=7)
         if panel == 0:
             axes.legend(loc="lower left", fontsize=7, bbox_to_anchor=(-0.15, -0.12))
-    s = reading.result.settings
-    figure.suptitle(f"goniophotometer, {s.beam} beam, λ = {reading.wavelengths[w]:g} nm, "
-                    f"N = {int(reading.rays.max()):,} rays, K = {reading.size} bins "
-                    f"(band: all bins at {1 - reading.delta:g})", fontsize=10)
-    if path is not None:
-        figure.savefig(path, dpi=72)
-    return figure
+    return _finish(figure, reading, w, "goniophotometer", "band: all bins", 10, path)
 
 
 def plot_hemisphere(reading: Any, path: str | os.PathLike | None = None, transmission: bool = False,
@@ -203,10 +197,16 @@ def plot_series(reading: Any, path: str | os.PathLike | None = None, wavelength:
         if i == 0:
             axes.set_ylabel("F(θo)", fontsize=8)
         axes.legend(fontsize=6, loc="lower right")
-    s = reading.result.settings
-    figure.suptitle(f"goniophotometer over θi, {s.beam} beam, λ = {reading.wavelengths[w]:g} nm, "
-                    f"N = {int(reading.rays.max()):,} rays, K = {reading.size} bins (bands: all at once at "
-                    f"{1 - reading.delta:g})", fontsize=9)
+    return _finish(figure, reading, w, "goniophotometer over θi", "bands: all at once", 9, path)
+
+
+def _finish(figure: Any, reading: Any, w: int, what: str, band: str, size: int,
+            path: str | os.PathLike | None) -> Any:
+    """The figure's title (beam, λ, N, K and the band's level), saved to ``path`` when given."""
+
+    figure.suptitle(f"{what}, {reading.result.settings.beam} beam, λ = {reading.wavelengths[w]:g} nm, "
+                    f"N = {int(reading.rays.max()):,} rays, K = {reading.size} bins ({band} at "
+                    f"{1 - reading.delta:g})", fontsize=size)
     if path is not None:
         figure.savefig(path, dpi=72)
     return figure

@@ -58,10 +58,10 @@ from virtspec_mi.counts import DIRECTION_TOLERANCE, WEIGHT_ROUNDING, Counts, Fat
 from virtspec_mi.geometry import incidence_frame
 from virtspec_mi.kernel.disk import jittered_cell, sample_disk
 from virtspec_mi.kernel.rng import chunk_root, dimension_key, dimension_keys, hash32, to_unit
-from virtspec_mi.kernel.walk import CAPPED_COMPONENT
+from virtspec_mi.kernel.walk import CAPPED_COMPONENT, is_random_walk
 from virtspec_mi.settings import Settings
 
-__all__ = ["ReadingPlan", "tally_readings", "trace_rays"]
+__all__ = ["ReadingPlan", "WALK_LANES", "WALK_QUEUES", "tally_readings", "trace_rays"]
 
 _WORD = 1 << 32
 # Dimensions of the random numbers: 0–1 emitter, 2–3 specimen, 4–6 BSDF, 7 survival;
@@ -78,6 +78,19 @@ _RARE_COUNTS = (("weight_violations", _VIOLATION), ("capped", _CAPPED), ("rounde
 _LENGTH2 = ((1.0 - DIRECTION_TOLERANCE) ** 2, (1.0 + DIRECTION_TOLERANCE) ** 2)
 
 
+WALK_LANES: int = 1 << 14
+"""SIMD lanes that work through a chunk's rays of a random-walk specimen (each lane a queue
+of about chunk_size / WALK_LANES rays; see :meth:`_Kernel.walk`). Chosen by measurement
+(benchmarks/RESULTS.md, issue 14); counts do not depend on it."""
+
+WALK_REFILL: int = 2
+"""Iterations between refills (a power of two)."""
+
+WALK_QUEUES: tuple[str, ...] = ("stride", "counter")
+"""How a lane picks its next ray: a static stride (lane l runs rays l, l + L, …; the default,
+chosen by measurement) or a shared atomic counter."""
+
+
 @dataclass(frozen=True)
 class ReadingPlan:
     """One reading for the kernel: wavelength (nm), incidence (degrees) and its rays."""
@@ -90,7 +103,7 @@ class ReadingPlan:
 
 def tally_readings(
     instrument: Any, plans: list[ReadingPlan], settings: Settings, offsets: Any = None,
-    on_chunk: Callable[[int], None] | None = None,
+    on_chunk: Callable[[int], None] | None = None, walk_lanes: int = WALK_LANES, walk_queue: str = WALK_QUEUES[0],
 ) -> Counts:
     """
     Trace every reading of ``plans`` and return their exact :class:`~virtspec_mi.counts.Counts`
@@ -105,8 +118,16 @@ def tally_readings(
     global index); each chunk runs as one kernel, so memory stays bounded and counts do
     not depend on chunking. ``on_chunk`` (optional) is called after every chunk with the
     number of readings completed so far.
+
+    A specimen that declares its random walk as steps
+    (:class:`~virtspec_mi.kernel.walk.RandomWalk`) runs on ``walk_lanes`` queued lanes per
+    chunk (0: one ``sample()`` per ray, the walk as one loop), each lane taking its next
+    ray by ``walk_queue`` (:data:`WALK_QUEUES`); neither changes any count.
     """
 
+    if walk_queue not in WALK_QUEUES or walk_lanes < 0:
+        raise ValueError(f"walk_lanes must be >= 0 (got {walk_lanes}) and walk_queue one of {', '.join(WALK_QUEUES)} "
+                         f"(got {walk_queue!r})")
     for plan in plans:
         check_rays(plan.rays)  # 1 ... 2³² − 1: a reading crosses at most one 2³² boundary below
     rays = np.array([plan.rays for plan in plans], dtype=np.int64)
@@ -115,7 +136,7 @@ def tally_readings(
     cuts = _cuts(starts, offsets, rays)
     counts = Counts.zeros(len(plans))
     counts.rays[:] = rays
-    kernel = _Kernel(instrument, plans, settings)
+    kernel = _Kernel(instrument, plans, settings, walk_lanes, walk_queue)
     first = 0
     while first < starts[-1]:
         size = int(min(settings.chunk_size, cuts[np.searchsorted(cuts, first, side="right")] - first))
@@ -178,9 +199,14 @@ def trace_rays(instrument: Any, plan: ReadingPlan, settings: Settings, count: in
 class _Kernel:
     """The per-chunk ray kernel of one :func:`tally_readings` call."""
 
-    def __init__(self, instrument: Any, plans: list[ReadingPlan], settings: Settings) -> None:
+    def __init__(self, instrument: Any, plans: list[ReadingPlan], settings: Settings,
+                 walk_lanes: int = 0, walk_queue: str = "stride") -> None:
         self.bsdf = instrument.bsdf
         self.settings = settings
+        # A random-walk specimen's steps run on queued lanes (walk_lanes = 0: sample() per ray).
+        self.queued = walk_lanes > 0 and is_random_walk(self.bsdf)
+        self.walk_lanes, self.walk_queue = walk_lanes, walk_queue
+        self.walk_refill = WALK_REFILL
         # Specular/regular counts: per ray only for a BSDF with both delta and other lobes.
         flags = self.bsdf.flags()
         delta = mi.has_flag(flags, mi.BSDFFlags.Delta)
@@ -207,7 +233,7 @@ class _Kernel:
             offsets: np.ndarray, counts: Counts) -> None:
         """Add the counts of the packed lanes [first, first + size) to readings ``slots`` of ``counts``."""
 
-        lanes = self.trace(first, size, slots, starts, offsets)
+        lanes = (self.walk if self.queued else self.trace)(first, size, slots, starts, offsets)
         fate = lanes["fate"]
         # Two 32-bit counts per UInt64 lane: (reflected, transmitted), (specular, regular).
         code = dr.select(fate == int(Fate.REFLECTED), mi.UInt64(1), mi.UInt64(0)) | dr.select(
@@ -253,82 +279,97 @@ class _Kernel:
               offsets: np.ndarray) -> dict:
         """Symbolic per-lane quantities of the packed lanes [first, first + size) (nothing evaluated)."""
 
-        settings = self.settings
+        source = _RaySource(self, first, size, slots, starts, offsets)
         lane = dr.arange(mi.UInt32, size)
-        # Lane l of reading k has global ray index g = offsets[k] + (first + l − starts[k]); the
-        # chunk never crosses a 2³² boundary of g, so one root and a per-reading low-word shift.
-        shift = (offsets[slots] - starts[slots] + first) % _WORD
-        root = chunk_root(settings.seed, int(offsets[slots[0]] + first - starts[slots[0]]) // _WORD)
+        ray = source.incident(lane)
+        bs, weight = self._sample(ray["si"], ray["sample1"], ray["sample2"])
+        wi = ray["si"].wi
+        judged = self._judge(wi.z >= 0.0, bs, weight, ray["survival"], size)
+        return {"origin": ray["origin"], "target": ray["target"], "wi": wi, **judged}
 
-        # Per-reading parameters: width-1 opaque values for a single reading, else gathered.
-        bounds, j0 = _lane_ranges(first, size, slots, starts)
-        rows = self.readings[slots]
-        if len(slots) == 1:
-            def column(values: np.ndarray, kind: Any) -> Any:
-                return dr.opaque(kind, values[0].item())
-            ray = lane + column(j0, mi.UInt32)
-        else:
-            slot = _find_slot(bounds, lane)
+    def walk(self, first: int, size: int, slots: np.ndarray, starts: np.ndarray,
+             offsets: np.ndarray) -> dict:
+        """
+        The packed lanes [first, first + size) of a :class:`~virtspec_mi.kernel.walk.RandomWalk`
+        specimen, with rays queued on ``walk_lanes`` SIMD lanes (see :data:`WALK_LANES`).
 
-            def column(values: np.ndarray, kind: Any) -> Any:
-                return dr.gather(kind, kind(values), slot)
-            ray = lane - column(bounds, mi.UInt32) + column(j0, mi.UInt32)
-        if np.all(shift == shift[0]):  # consecutive readings (the default layout): one scalar
-            ray_index = lane + dr.opaque(mi.UInt32, int(shift[0]))
-        else:
-            ray_index = lane + column(shift.astype(np.uint32), mi.UInt32)
-        keys = [dr.opaque(mi.UInt32, k) for k in dimension_keys(root)]
+        One symbolic loop drives the walk one event per iteration; a lane whose walk
+        ended writes that ray's fate to the ray's slot and starts the next ray of its queue
+        (static stride: lane l runs rays l, l + L, l + 2L, …; or, with ``walk_queue =
+        "counter"``, the next ray of a shared atomic counter). Every ray's random numbers
+        are keyed on its global index, so the fates — and the counts — are those of
+        :meth:`trace`, whichever lane ran the ray. Returns the per-ray ``fate``, ``rare``,
+        ``weight`` (of violating rays), ``specular`` and ``regular`` (evaluated).
+        """
 
-        def uniform(dimension: int) -> mi.Float:
-            return to_unit(hash32(ray_index ^ keys[dimension]), mi.Float)
+        source = _RaySource(self, first, size, slots, starts, offsets)
+        bsdf = self.bsdf
+        width = min(size, self.walk_lanes)
+        codes = dr.zeros(mi.UInt32, size)  # fate | rare << 4 | delta << 8, per ray
+        weights = dr.zeros(mi.Float, size)
+        counter = dr.zeros(mi.UInt32, 1) if self.walk_queue == "counter" else None
 
-        def vector(index: int) -> mi.Vector3f:
-            return mi.Vector3f(*(column(rows[:, index + k], mi.Float) for k in range(3)))
+        def start(position: Any) -> tuple[Any, Any, Any]:
+            ray = source.incident(position)
+            state = self._walk_start(ray["si"], ray["sample1"], ray["sample2"])
+            return state, ray["si"].wi.z >= 0.0, ray["survival"]
 
-        wavelength = column(rows[:, _WAVELENGTH], mi.Float)
+        def next_ray(position: Any) -> Any:
+            if counter is None:
+                return position + width
+            return dr.scatter_inc(counter, mi.UInt32(0)) + width
 
-        if settings.beam == "diffuse":
-            u0, u1 = uniform(0), uniform(1)
-            if settings.sampling == "jittered":
-                u0, u1 = jittered_cell(mi, u0, u1, ray, column(rows[:, _STRATA].astype(np.uint32), mi.UInt32))
-            wi = mi.warp.square_to_cosine_hemisphere(mi.Point2f(u0, u1))
-            target = sample_disk(mi, settings.sampling, uniform(2), uniform(3), self.specimen_radius,
-                                 lambda r: _rejection(ray_index, root, r, 1))
-            origin = mi.Point3f(target.x, target.y, 0.0) + wi * self.distance
-        elif settings.beam == "collimated":
-            wi = vector(_OMEGA)
-            target = mi.Point2f(0.0, 0.0)
-            origin = mi.Point3f(wi)
-        else:
-            u0, u1 = uniform(0), uniform(1)
-            if settings.sampling == "jittered":
-                u0, u1 = jittered_cell(mi, u0, u1, ray, column(rows[:, _STRATA].astype(np.uint32), mi.UInt32))
-            emitter = sample_disk(mi, settings.sampling, u0, u1, self.emitter_radius,
-                                  lambda r: _rejection(ray_index, root, r, 0))
-            target = sample_disk(mi, settings.sampling, uniform(2), uniform(3), self.specimen_radius,
-                                 lambda r: _rejection(ray_index, root, r, 1))
-            origin = mi.Point3f(vector(_CENTRE) + emitter.x * vector(_E_U) + emitter.y * vector(_E_V))
-            wi = dr.normalize(origin - mi.Point3f(target.x, target.y, 0.0))
+        def finish(position: Any, state: Any, lit_above: Any, survival: Any) -> tuple:
+            bs, weight = bsdf.walk_sample(state)
+            judged = self._judge(lit_above, bs, weight, survival, width)
+            delta = mi.has_flag(judged["sampled_type"], mi.BSDFFlags.Delta)
+            code = judged["fate"] | (judged["rare"] << 4) | dr.select(delta, mi.UInt32(256), mi.UInt32(0))
+            dr.scatter(codes, code, position)
+            dr.scatter(weights, judged["weight"], position, (judged["rare"] & _VIOLATION) != 0)
+            position = next_ray(position)
+            return dr.if_stmt((position, state, lit_above, survival), position < size,
+                              lambda p, *_: (p, *start(p)), lambda *args: args, label="walk_restart")
 
-        si = dr.zeros(mi.SurfaceInteraction3f)
-        si.wi = wi
-        si.wavelengths = mi.Spectrum(wavelength)
-        si.sh_frame = self.frame
-        si.n = self.frame.n
-        si.p = self.centre + self.frame.s * target.x + self.frame.t * target.y
-        radius = dr.norm(target)
-        azimuth = dr.atan2(target.y, target.x) * dr.inv_two_pi
-        si.uv = mi.Point2f(radius / self.specimen_radius, dr.select(azimuth < 0, azimuth + 1.0, azimuth))
-        context = mi.BSDFContext(mi.TransportMode.Importance)
-        bs, weight = self._sample(context, si, uniform(4), mi.Point2f(uniform(5), uniform(6)))
+        refill = self.walk_refill
+
+        def body(position: Any, state: Any, lit_above: Any, survival: Any, iteration: Any) -> tuple:
+            state = dr.if_stmt((state,), ~bsdf.walk_done(state), lambda s: (bsdf.walk_step(s),),
+                               lambda s: (s,), label="walk_step")[0]
+            due = bsdf.walk_done(state)
+            if refill > 1:
+                due &= (iteration & (refill - 1)) == 0
+            return (*dr.if_stmt((position, state, lit_above, survival), due, finish,
+                                lambda *args: args, label="walk_finish"), iteration + 1)
+
+        position = dr.arange(mi.UInt32, width)
+        dr.while_loop((position, *start(position), mi.UInt32(0)), lambda p, *_: p < size, body, label="walk_queue")
+        dr.eval(codes, weights)
+        fate = codes & 15
+        rare = (codes >> 4) & 15
+        delta = (codes & 256) != 0
+        return {"fate": fate, "rare": rare, "weight": weights,
+                "specular": (fate == int(Fate.REFLECTED)) & delta, "regular": (fate == int(Fate.TRANSMITTED)) & delta}
+
+    def _walk_start(self, si: Any, sample1: Any, sample2: Any) -> Any:
+        """The specimen's ``walk_start``; a feature it needs that the instrument lacks is a ``ValueError``."""
+
+        return self._unsupported(lambda: self.bsdf.walk_start(si, sample1, sample2, True))
+
+    def _judge(self, lit_above: Any, bs: Any, weight: Any, survival: Any, size: int) -> dict:
+        """
+        The fate of each ray from its BSDF sample (see the module's conventions): ``fate``,
+        ``rare`` bits, the broadcast ``weight``, ``wo``, ``sampled_type``, ``specular`` and
+        ``regular``. ``lit_above``: wi·n ≥ 0; ``survival``: the ray's roulette uniform.
+        """
+
         # Per ray, at the chunk's width (a BSDF may return width-1 literals).
         w = _full(mi.Spectrum(weight)[0], size)
         wo = mi.Vector3f(*(_full(c, size) for c in (bs.wo.x, bs.wo.y, bs.wo.z)))
         sampled_type, component = _full(bs.sampled_type, size), _full(bs.sampled_component, size)
-        survives = uniform(7) < w
+        survives = survival < w
         # wo·n = 0 exactly (grazing exit): the sampled event decides — transmission crosses.
         crossed = mi.has_flag(sampled_type, mi.BSDFFlags.Transmission)
-        upper = dr.select(wo.z != 0.0, wo.z > 0.0, crossed ^ (wi.z >= 0.0))
+        upper = dr.select(wo.z != 0.0, wo.z > 0.0, crossed ^ lit_above)
         fate = dr.select(survives, dr.select(upper, mi.UInt32(int(Fate.REFLECTED)), mi.UInt32(int(Fate.TRANSMITTED))),
                          mi.UInt32(int(Fate.ABSORBED)))
         # NaN, infinite or not unit length (NaN fails both comparisons): no hemisphere to judge.
@@ -346,14 +387,20 @@ class _Kernel:
                 | dr.select(rounded, mi.UInt32(_ROUNDED), 0) | dr.select(invalid, mi.UInt32(_INVALID), 0))
         delta = mi.has_flag(sampled_type, mi.BSDFFlags.Delta)
         specular, regular = (fate == int(Fate.REFLECTED)) & delta, (fate == int(Fate.TRANSMITTED)) & delta
-        return {"origin": origin, "target": target, "wi": wi, "wo": wo, "fate": fate, "weight": w,
-                "rare": rare, "specular": specular, "regular": regular}
+        return {"wo": wo, "fate": fate, "weight": w, "rare": rare, "sampled_type": sampled_type,
+                "specular": specular, "regular": regular}
 
-    def _sample(self, context: Any, si: Any, sample1: Any, sample2: Any) -> tuple[Any, Any]:
-        """The specimen BSDF's ``sample``; a feature it needs that the instrument lacks is a ``ValueError``."""
+    def _sample(self, si: Any, sample1: Any, sample2: Any) -> tuple[Any, Any]:
+        """The specimen BSDF's ``sample`` (importance transport)."""
+
+        context = mi.BSDFContext(mi.TransportMode.Importance)
+        return self._unsupported(lambda: self.bsdf.sample(context, si, sample1, sample2, True))
+
+    def _unsupported(self, call: Callable[[], Any]) -> Any:
+        """``call()``; a feature the specimen needs that the instrument lacks is a ``ValueError``."""
 
         try:
-            return self.bsdf.sample(context, si, sample1, sample2, True)
+            return call()
         except RuntimeError as error:
             if "not implemented" not in str(error):
                 raise
@@ -363,6 +410,101 @@ class _Kernel:
                 "normal, shading frame, uv and wavelength, but no uv partials (dp_du, dp_dv) and no ray "
                 "differentials, so features that differentiate a texture over the surface — bumpmap, or "
                 "normalmap and textures that need gradients or footprints — are not supported") from None
+
+
+class _RaySource:
+    """
+    The incident rays of one chunk, the packed lanes [first, first + size): host-side
+    keys and per-reading rows once per chunk, then any ray's quantities from its
+    position p in the chunk (:meth:`incident`, :meth:`uniform`) — the same whether all
+    positions run at once (:meth:`_Kernel.trace`) or a lane works through a queue of them
+    (:meth:`_Kernel.walk`).
+    """
+
+    def __init__(self, kernel: _Kernel, first: int, size: int, slots: np.ndarray, starts: np.ndarray,
+                 offsets: np.ndarray) -> None:
+        self.kernel = kernel
+        # Position p of reading k has global ray index g = offsets[k] + (first + p − starts[k]); the
+        # chunk never crosses a 2³² boundary of g, so one root and a per-reading low-word shift.
+        self.shift = (offsets[slots] - starts[slots] + first) % _WORD
+        self.root = chunk_root(kernel.settings.seed, int(offsets[slots[0]] + first - starts[slots[0]]) // _WORD)
+        # Per-reading parameters: width-1 opaque values for a single reading, else gathered.
+        self.bounds, self.j0 = _lane_ranges(first, size, slots, starts)
+        self.rows = kernel.readings[slots]
+        self.single = len(slots) == 1
+        self.keys = [dr.opaque(mi.UInt32, k) for k in dimension_keys(self.root)]
+
+    def _slot(self, lane: Any) -> Any:
+        return None if self.single else _find_slot(self.bounds, lane)
+
+    def _column(self, values: np.ndarray, kind: Any, slot: Any) -> Any:
+        if slot is None:
+            return dr.opaque(kind, values[0].item())
+        return dr.gather(kind, kind(values), slot)
+
+    def _ray_index(self, lane: Any, slot: Any) -> Any:
+        """Low word of the global ray index of each position."""
+
+        if np.all(self.shift == self.shift[0]):  # consecutive readings (the default layout): one scalar
+            return lane + dr.opaque(mi.UInt32, int(self.shift[0]))
+        return lane + self._column(self.shift.astype(np.uint32), mi.UInt32, slot)
+
+    def incident(self, lane: Any) -> dict:
+        """Emitter point ``origin``, specimen point ``target``, the surface interaction ``si``
+        and the BSDF's ``sample1``/``sample2`` of the rays at positions ``lane``."""
+
+        kernel, settings, rows, root = self.kernel, self.kernel.settings, self.rows, self.root
+        slot = self._slot(lane)
+
+        def column(values: np.ndarray, kind: Any) -> Any:
+            return self._column(values, kind, slot)
+
+        ray = lane + column(self.j0, mi.UInt32) if slot is None else (
+            lane - column(self.bounds, mi.UInt32) + column(self.j0, mi.UInt32))
+        ray_index = self._ray_index(lane, slot)
+
+        def uniform(dimension: int) -> mi.Float:
+            return to_unit(hash32(ray_index ^ self.keys[dimension]), mi.Float)
+
+        def vector(index: int) -> mi.Vector3f:
+            return mi.Vector3f(*(column(rows[:, index + k], mi.Float) for k in range(3)))
+
+        wavelength = column(rows[:, _WAVELENGTH], mi.Float)
+
+        if settings.beam == "diffuse":
+            u0, u1 = uniform(0), uniform(1)
+            if settings.sampling == "jittered":
+                u0, u1 = jittered_cell(mi, u0, u1, ray, column(rows[:, _STRATA].astype(np.uint32), mi.UInt32))
+            wi = mi.warp.square_to_cosine_hemisphere(mi.Point2f(u0, u1))
+            target = sample_disk(mi, settings.sampling, uniform(2), uniform(3), kernel.specimen_radius,
+                                 lambda r: _rejection(ray_index, root, r, 1))
+            origin = mi.Point3f(target.x, target.y, 0.0) + wi * kernel.distance
+        elif settings.beam == "collimated":
+            wi = vector(_OMEGA)
+            target = mi.Point2f(0.0, 0.0)
+            origin = mi.Point3f(wi)
+        else:
+            u0, u1 = uniform(0), uniform(1)
+            if settings.sampling == "jittered":
+                u0, u1 = jittered_cell(mi, u0, u1, ray, column(rows[:, _STRATA].astype(np.uint32), mi.UInt32))
+            emitter = sample_disk(mi, settings.sampling, u0, u1, kernel.emitter_radius,
+                                  lambda r: _rejection(ray_index, root, r, 0))
+            target = sample_disk(mi, settings.sampling, uniform(2), uniform(3), kernel.specimen_radius,
+                                 lambda r: _rejection(ray_index, root, r, 1))
+            origin = mi.Point3f(vector(_CENTRE) + emitter.x * vector(_E_U) + emitter.y * vector(_E_V))
+            wi = dr.normalize(origin - mi.Point3f(target.x, target.y, 0.0))
+
+        si = dr.zeros(mi.SurfaceInteraction3f)
+        si.wi = wi
+        si.wavelengths = mi.Spectrum(wavelength)
+        si.sh_frame = kernel.frame
+        si.n = kernel.frame.n
+        si.p = kernel.centre + kernel.frame.s * target.x + kernel.frame.t * target.y
+        radius = dr.norm(target)
+        azimuth = dr.atan2(target.y, target.x) * dr.inv_two_pi
+        si.uv = mi.Point2f(radius / kernel.specimen_radius, dr.select(azimuth < 0, azimuth + 1.0, azimuth))
+        return {"origin": origin, "target": target, "si": si, "sample1": uniform(4),
+                "sample2": mi.Point2f(uniform(5), uniform(6)), "survival": uniform(7)}
 
 
 @dr.syntax

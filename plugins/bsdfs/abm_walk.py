@@ -367,7 +367,8 @@ class ABMLeaf(SampledOnlyBSDF):
         u = rng.next_float32()  # ABM-U's mesophyll split (unused by ABM-B's table)
         alive = mi.Bool(active) & dr.full(mi.Bool, True, dr.width(sample1))
         status = dr.select(alive, mi.UInt32(WALKING), mi.UInt32(ABSORBED))
-        return (rng, status, w, k, mi.UInt32(0), tau * u, tau, n_c, n_m, n_a, from_top)
+        return (rng, status, w, k, mi.UInt32(0), tau * u, tau, n_c, n_m, n_a, from_top, mi.Bool(False), mi.Bool(False),
+                mi.UInt32(0))
 
     def walk_done(self, state):
         """True where the walk has ended (exit, absorption or cap)."""
@@ -393,12 +394,18 @@ class ABMLeaf(SampledOnlyBSDF):
         )
         return bs, dr.select(exits, mi.Spectrum(1.0), mi.Spectrum(0.0))
 
-    @dr.syntax
     def walk_step(self, state):
-        """One interface event (abm.md §1.5, §1.7) of the lanes the caller runs."""
+        """
+        One step (abm.md §1.5, §1.7) of the lanes the caller runs: an interface event —
+        absorption test, Fresnel choice and one Warn-lobe sample — or, for a lane whose
+        lobe sample fell on the wrong side, the next lobe sample of that event. The lobe's
+        retries are steps of their own (no loop inside a step), so a packet of lanes never
+        waits for one lane's retries; each ray draws the same numbers in the same order.
+        """
 
-        rng, status, w, k, steps, tau_u, tau, n_c, n_m, n_a, from_top = state
+        rng, status, w, k, steps, tau_u, tau, n_c, n_m, n_a, from_top, retry, reflect_before, tries = state
         last = len(self.INTERFACES) - 1
+        fresh = ~retry
         down = w.z < 0.0
         row = mi.UInt32(dr.clip(k, 0, last)) * 2 + dr.select(down, mi.UInt32(0), mi.UInt32(1))
         code = _pick(self._row_code, row)
@@ -408,12 +415,12 @@ class ABMLeaf(SampledOnlyBSDF):
         cos_i = dr.abs(w.z)
         # 1. absorption in the slab just crossed: p = -ln ξ / α · g(cos θ) < t, ξ ∈ (0, 1]
         g = _cos_unit(cos_i) if self.sieve_detour else cos_i
-        absorbed = -dr.log(1.0 - rng.next_float32()) * g < slab
-        # 2. Fresnel choice
+        absorbed = fresh & (-dr.log(1.0 - rng.next_float32(fresh)) * g < slab)
+        # 2. Fresnel choice (a retry keeps its event's choice)
         n1 = dr.select(m1 == CUTICLE, n_c, dr.select(m1 == MESOPHYLL, n_m, dr.select(m1 == ANTIDERMAL, n_a, 1.0)))
         n2 = dr.select(m2 == CUTICLE, n_c, dr.select(m2 == MESOPHYLL, n_m, dr.select(m2 == ANTIDERMAL, n_a, 1.0)))
         fresnel, cos_t, _, eta_ti = mi.fresnel(cos_i, n2 / n1)
-        reflect = rng.next_float32() < fresnel
+        reflect = dr.select(fresh, rng.next_float32(fresh) < fresnel, reflect_before)
         # 3. new direction: mirror, or refraction (tangential part scaled by n1/n2)
         specular = dr.select(
             reflect,
@@ -422,36 +429,36 @@ class ABMLeaf(SampledOnlyBSDF):
         )
         exponent = _pick(self._row_exponent, row * 2 + dr.select(reflect, mi.UInt32(0), mi.UInt32(1)))
         go_down = down ^ reflect
-        # 4. Warn lobe about the specular direction, resampled until it stays on its side
+        # 4. one Warn-lobe sample about the specular direction; wrong side: retried next step
         frame = mi.Frame3f(specular)
         perturb = ~absorbed & (exponent < math.inf)
-        pending = mi.Bool(perturb)
-        tries = mi.UInt32(0)
-        local = mi.Vector3f(0.0, 0.0, 1.0)  # loop state kept small: the local sample and its world z
-        z = mi.Float(specular.z)
-        sz, tz, nz = frame.s.z, frame.t.z, frame.n.z
-        while dr.hint(pending, label="abm_lobe"):
-            cos_p = dr.exp2(dr.log2(rng.next_float32()) / (exponent + 1.0))
-            sin_p = dr.safe_sqrt(1.0 - cos_p * cos_p)
-            sin_phi, cos_phi = dr.sincos(dr.two_pi * rng.next_float32())
-            local = mi.Vector3f(sin_p * cos_phi, sin_p * sin_phi, cos_p)
-            z = dr.fma(nz, local.z, dr.fma(tz, local.y, sz * local.x))  # as Frame3f.to_world
-            tries += 1
-            pending = (((z < 0.0) != go_down) | (z == 0.0)) & (tries < MAX_LOBE_TRIES)
+        cos_p = dr.exp2(dr.log2(rng.next_float32(perturb)) / (exponent + 1.0))
+        sin_p = dr.safe_sqrt(1.0 - cos_p * cos_p)
+        sin_phi, cos_phi = dr.sincos(dr.two_pi * rng.next_float32(perturb))
+        local = mi.Vector3f(sin_p * cos_phi, sin_p * sin_phi, cos_p)
+        z = dr.fma(frame.n.z, local.z, dr.fma(frame.t.z, local.y, frame.s.z * local.x))  # as Frame3f.to_world
+        tries = dr.select(fresh, mi.UInt32(0), tries) + dr.select(perturb, mi.UInt32(1), mi.UInt32(0))
+        wrong_side = perturb & (((z < 0.0) != go_down) | (z == 0.0))
+        retry = wrong_side & (tries < MAX_LOBE_TRIES)
+        lobe_failed = wrong_side & ~retry
         turned = frame.to_world(local)
         new_w = dr.select(perturb, mi.Vector3f(turned.x, turned.y, z), specular)
-        lobe_failed = perturb & (((z < 0.0) != go_down) | (z == 0.0))
-        # 5. next state
-        w = dr.select(absorbed, w, new_w)
-        k = dr.select(absorbed, k, k + dr.select(go_down, mi.Int32(1), mi.Int32(-1)))
-        steps = steps + 1
-        status = dr.select(
+        # 5. next state (a lane that retries keeps its state)
+        stay = absorbed | retry
+        k_new = dr.select(stay, k, k + dr.select(go_down, mi.Int32(1), mi.Int32(-1)))
+        w = dr.select(stay, w, new_w)
+        steps_new = steps + 1
+        status_new = dr.select(
             absorbed,
             mi.UInt32(ABSORBED),
-            dr.select(k < 0, mi.UInt32(EXIT_TOP), dr.select(k > last, mi.UInt32(EXIT_BOTTOM), mi.UInt32(WALKING))),
+            dr.select(k_new < 0, mi.UInt32(EXIT_TOP),
+                      dr.select(k_new > last, mi.UInt32(EXIT_BOTTOM), mi.UInt32(WALKING))),
         )
-        status = dr.select(lobe_failed | ((status == WALKING) & (steps >= self.max_steps)), mi.UInt32(CAPPED), status)
-        return (rng, status, w, k, steps, tau_u, tau, n_c, n_m, n_a, from_top)
+        status_new = dr.select(lobe_failed | ((status_new == WALKING) & (steps_new >= self.max_steps)),
+                               mi.UInt32(CAPPED), status_new)
+        status = dr.select(retry, status, status_new)
+        steps = dr.select(retry, steps, steps_new)
+        return (rng, status, w, k_new, steps, tau_u, tau, n_c, n_m, n_a, from_top, retry, reflect, tries)
 
     # -- the rest of the BSDF interface ------------------------------------------------
 

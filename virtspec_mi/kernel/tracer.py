@@ -78,7 +78,7 @@ _RARE_COUNTS = (("weight_violations", _VIOLATION), ("capped", _CAPPED), ("rounde
 _LENGTH2 = ((1.0 - DIRECTION_TOLERANCE) ** 2, (1.0 + DIRECTION_TOLERANCE) ** 2)
 
 
-WALK_LANES: int = 1 << 14
+WALK_LANES: int = 1 << 13
 """SIMD lanes that work through a chunk's rays of a random-walk specimen (each lane a queue
 of about chunk_size / WALK_LANES rays; see :meth:`_Kernel.walk`). Chosen by measurement
 (benchmarks/RESULTS.md, issue 14); counts do not depend on it."""
@@ -207,6 +207,7 @@ class _Kernel:
         self.queued = walk_lanes > 0 and is_random_walk(self.bsdf)
         self.walk_lanes, self.walk_queue = walk_lanes, walk_queue
         self.walk_refill = WALK_REFILL
+        self.walk_stats: dict | None = None  # diagnostics (benchmarks): per-lane iterations of each chunk
         # Specular/regular counts: per ray only for a BSDF with both delta and other lobes.
         flags = self.bsdf.flags()
         delta = mi.has_flag(flags, mi.BSDFFlags.Delta)
@@ -309,8 +310,21 @@ class _Kernel:
         weights = dr.zeros(mi.Float, size)
         counter = dr.zeros(mi.UInt32, 1) if self.walk_queue == "counter" else None
 
-        def start(position: Any) -> tuple[Any, Any, Any]:
-            ray = source.incident(position)
+        # A lane's cursor: its ray's position in the chunk and, for several readings, that
+        # reading's slot and end. Positions only grow along a queue, so the slot moves forward.
+        def cursor_at(position: Any, before: Any = None) -> tuple:
+            if source.single:
+                return (position,)
+            if before is None:
+                slot = source.slot(position)
+                return (position, slot, dr.gather(mi.UInt32, source.ends, slot))
+            slot, end = dr.while_loop(before[1:], lambda s, e: e <= position,
+                                      lambda s, e: (s + 1, dr.gather(mi.UInt32, source.ends, s + 1)),
+                                      label="walk_reading")
+            return (position, slot, end)
+
+        def start(cursor: tuple) -> tuple[Any, Any, Any]:
+            ray = source.incident(cursor[0], None if source.single else cursor[1])
             state = self._walk_start(ray["si"], ray["sample1"], ray["sample2"])
             return state, ray["si"].wi.z >= 0.0, ray["survival"]
 
@@ -319,7 +333,8 @@ class _Kernel:
                 return position + width
             return dr.scatter_inc(counter, mi.UInt32(0)) + width
 
-        def finish(position: Any, state: Any, lit_above: Any, survival: Any) -> tuple:
+        def finish(cursor: tuple, state: Any, lit_above: Any, survival: Any) -> tuple:
+            position = cursor[0]
             bs, weight = bsdf.walk_sample(state)
             judged = self._judge(lit_above, bs, weight, survival, width)
             delta = mi.has_flag(judged["sampled_type"], mi.BSDFFlags.Delta)
@@ -327,22 +342,37 @@ class _Kernel:
             dr.scatter(codes, code, position)
             dr.scatter(weights, judged["weight"], position, (judged["rare"] & _VIOLATION) != 0)
             position = next_ray(position)
-            return dr.if_stmt((position, state, lit_above, survival), position < size,
-                              lambda p, *_: (p, *start(p)), lambda *args: args, label="walk_restart")
+
+            def restart(cursor: tuple, *_: Any) -> tuple:
+                cursor = cursor_at(position, cursor)
+                return (cursor, *start(cursor))
+
+            return dr.if_stmt(((position, *cursor[1:]), state, lit_above, survival), position < size,
+                              restart, lambda *args: args, label="walk_restart")
 
         refill = self.walk_refill
+        stats = self.walk_stats
 
-        def body(position: Any, state: Any, lit_above: Any, survival: Any, iteration: Any) -> tuple:
-            state = dr.if_stmt((state,), ~bsdf.walk_done(state), lambda s: (bsdf.walk_step(s),),
-                               lambda s: (s,), label="walk_step")[0]
+        def body(cursor: tuple, state: Any, lit_above: Any, survival: Any, iteration: Any, busy: Any) -> tuple:
+            walking = ~bsdf.walk_done(state)
+            state = dr.if_stmt((state,), walking, lambda s: (bsdf.walk_step(s),), lambda s: (s,),
+                               label="walk_step")[0]
             due = bsdf.walk_done(state)
             if refill > 1:
                 due &= (iteration & (refill - 1)) == 0
-            return (*dr.if_stmt((position, state, lit_above, survival), due, finish,
-                                lambda *args: args, label="walk_finish"), iteration + 1)
+            if stats is not None:
+                busy = busy + dr.select(walking, mi.UInt32(1), mi.UInt32(0))
+            return (*dr.if_stmt((cursor, state, lit_above, survival), due, finish,
+                                lambda *args: args, label="walk_finish"), iteration + 1, busy)
 
-        position = dr.arange(mi.UInt32, width)
-        dr.while_loop((position, *start(position), mi.UInt32(0)), lambda p, *_: p < size, body, label="walk_queue")
+        cursor = cursor_at(dr.arange(mi.UInt32, width))
+        loop = dr.while_loop((cursor, *start(cursor), mi.UInt32(0), mi.UInt32(0)), lambda c, *_: c[0] < size,
+                             body, label="walk_queue")
+        if stats is not None:  # diagnostics: per lane, loop iterations and iterations that stepped a walk
+            iterations, busy = loop[-2:]
+            dr.eval(iterations, busy)
+            stats.setdefault("iterations", []).append(np.array(iterations))
+            stats.setdefault("busy", []).append(np.array(busy))
         dr.eval(codes, weights)
         fate = codes & 15
         rare = (codes >> 4) & 15
@@ -433,12 +463,18 @@ class _RaySource:
         self.rows = kernel.readings[slots]
         self.single = len(slots) == 1
         self.keys = [dr.opaque(mi.UInt32, k) for k in dimension_keys(self.root)]
+        # Queued walks: a column equal for every reading of the chunk is one opaque value.
+        self.fold_constant = kernel.queued
+        # End (chunk position) of each reading's lanes, for a lane that moves along its queue.
+        self.ends = mi.UInt32(np.append(self.bounds[1:], size).astype(np.uint32))
 
-    def _slot(self, lane: Any) -> Any:
+    def slot(self, lane: Any) -> Any:
+        """Index of each position's reading in the chunk (``None`` for a single reading)."""
+
         return None if self.single else _find_slot(self.bounds, lane)
 
     def _column(self, values: np.ndarray, kind: Any, slot: Any) -> Any:
-        if slot is None:
+        if slot is None or (self.fold_constant and np.all(values == values[0])):
             return dr.opaque(kind, values[0].item())
         return dr.gather(kind, kind(values), slot)
 
@@ -449,12 +485,13 @@ class _RaySource:
             return lane + dr.opaque(mi.UInt32, int(self.shift[0]))
         return lane + self._column(self.shift.astype(np.uint32), mi.UInt32, slot)
 
-    def incident(self, lane: Any) -> dict:
-        """Emitter point ``origin``, specimen point ``target``, the surface interaction ``si``
-        and the BSDF's ``sample1``/``sample2`` of the rays at positions ``lane``."""
+    def incident(self, lane: Any, slot: Any = False) -> dict:
+        """Emitter point ``origin``, specimen point ``target``, the surface interaction ``si``,
+        the BSDF's ``sample1``/``sample2`` and the roulette's ``survival`` uniform of the rays at
+        positions ``lane`` (their readings ``slot``: found by a binary search when not given)."""
 
         kernel, settings, rows, root = self.kernel, self.kernel.settings, self.rows, self.root
-        slot = self._slot(lane)
+        slot = self.slot(lane) if slot is False else slot
 
         def column(values: np.ndarray, kind: Any) -> Any:
             return self._column(values, kind, slot)

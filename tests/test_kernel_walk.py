@@ -95,7 +95,7 @@ def test_queued_walks_count_as_one_loop_per_ray(mi, case):
     rays = 3000
     one_loop = _tally(instrument, readings, Settings(**options), rays, walk_lanes=0)
     assert one_loop[0].sum() > 0 and one_loop[1].sum() > 0  # both fates occur: the comparison can fail
-    for lanes, queue, chunk in ((WALK_LANES, "stride", 1 << 22), (1000, "stride", 1024), (37, "counter", 4096),
+    for lanes, queue, chunk in ((WALK_LANES, "stride", 1 << 22), (1000, "stride", 1024), (37, "counter", 4096), (40, "group", 1024), (8192, "group", 1 << 22),
                                 (4096, "counter", 1 << 22), (1, "stride", 1024)):
         queued = _tally(instrument, readings, Settings(chunk_size=chunk, **options), rays,
                         walk_lanes=lanes, walk_queue=queue)

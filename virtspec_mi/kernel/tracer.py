@@ -86,7 +86,10 @@ of about chunk_size / WALK_LANES rays; see :meth:`_Kernel.walk`). Chosen by meas
 WALK_REFILL: int = 2
 """Iterations between refills (a power of two)."""
 
-WALK_QUEUES: tuple[str, ...] = ("stride", "counter")
+WALK_GROUP: int = 16
+"""Lanes that share one queue under ``walk_queue = "group"`` (the widest SIMD packet, AVX-512)."""
+
+WALK_QUEUES: tuple[str, ...] = ("stride", "counter", "group")
 """How a lane picks its next ray: a static stride (lane l runs rays l, l + L, …; the default,
 chosen by measurement) or a shared atomic counter."""
 
@@ -308,30 +311,39 @@ class _Kernel:
         width = min(size, self.walk_lanes)
         codes = dr.zeros(mi.UInt32, size)  # fate | rare << 4 | delta << 8, per ray
         weights = dr.zeros(mi.Float, size)
-        counter = dr.zeros(mi.UInt32, 1) if self.walk_queue == "counter" else None
+        # Queues: "stride" — lane l runs positions l, l + L, …; "counter" — one shared counter
+        # hands out the next position; "group" — each group of WALK_GROUP lanes (a SIMD packet,
+        # run by one thread) shares a counter over its own contiguous range of positions.
+        groups = -(-width // WALK_GROUP) if self.walk_queue == "group" else 1
+        share = -(-size // groups)  # positions per queue
+        counter = dr.zeros(mi.UInt32, groups) if self.walk_queue != "stride" else None
+        step = WALK_GROUP if self.walk_queue == "group" else width
 
         # A lane's cursor: its ray's position in the chunk and, for several readings, that
         # reading's slot and end. Positions only grow along a queue, so the slot moves forward.
-        def cursor_at(position: Any, before: Any = None) -> tuple:
+        def cursor_at(position: Any, group: Any, before: Any = None) -> tuple:
             if source.single:
-                return (position,)
+                return (position, group)
             if before is None:
                 slot = source.slot(position)
-                return (position, slot, dr.gather(mi.UInt32, source.ends, slot))
-            slot, end = dr.while_loop(before[1:], lambda s, e: e <= position,
+                return (position, group, slot, dr.gather(mi.UInt32, source.ends, slot))
+            slot, end = dr.while_loop(before[2:], lambda s, e: e <= position,
                                       lambda s, e: (s + 1, dr.gather(mi.UInt32, source.ends, s + 1)),
                                       label="walk_reading")
-            return (position, slot, end)
+            return (position, group, slot, end)
+
+        def queue_end(group: Any) -> Any:
+            return dr.minimum(group * share + share, size) if groups > 1 else mi.UInt32(size)
 
         def start(cursor: tuple) -> tuple[Any, Any, Any]:
-            ray = source.incident(cursor[0], None if source.single else cursor[1])
+            ray = source.incident(cursor[0], None if source.single else cursor[2])
             state = self._walk_start(ray["si"], ray["sample1"], ray["sample2"])
             return state, ray["si"].wi.z >= 0.0, ray["survival"]
 
-        def next_ray(position: Any) -> Any:
+        def next_ray(position: Any, group: Any) -> Any:
             if counter is None:
                 return position + width
-            return dr.scatter_inc(counter, mi.UInt32(0)) + width
+            return group * share + dr.scatter_inc(counter, group) + step
 
         def finish(cursor: tuple, state: Any, lit_above: Any, survival: Any) -> tuple:
             position = cursor[0]
@@ -341,13 +353,14 @@ class _Kernel:
             code = judged["fate"] | (judged["rare"] << 4) | dr.select(delta, mi.UInt32(256), mi.UInt32(0))
             dr.scatter(codes, code, position)
             dr.scatter(weights, judged["weight"], position, (judged["rare"] & _VIOLATION) != 0)
-            position = next_ray(position)
+            group = cursor[1]
+            position = next_ray(position, group)
 
             def restart(cursor: tuple, *_: Any) -> tuple:
-                cursor = cursor_at(position, cursor)
+                cursor = cursor_at(position, group, cursor)
                 return (cursor, *start(cursor))
 
-            return dr.if_stmt(((position, *cursor[1:]), state, lit_above, survival), position < size,
+            return dr.if_stmt(((position, *cursor[1:]), state, lit_above, survival), position < queue_end(group),
                               restart, lambda *args: args, label="walk_restart")
 
         refill = self.walk_refill
@@ -365,9 +378,12 @@ class _Kernel:
             return (*dr.if_stmt((cursor, state, lit_above, survival), due, finish,
                                 lambda *args: args, label="walk_finish"), iteration + 1, busy)
 
-        cursor = cursor_at(dr.arange(mi.UInt32, width))
-        loop = dr.while_loop((cursor, *start(cursor), mi.UInt32(0), mi.UInt32(0)), lambda c, *_: c[0] < size,
-                             body, label="walk_queue")
+        lane = dr.arange(mi.UInt32, width)
+        group = lane // WALK_GROUP if groups > 1 else dr.zeros(mi.UInt32, width)
+        position = group * share + lane % WALK_GROUP if groups > 1 else lane
+        cursor = cursor_at(position, group)
+        loop = dr.while_loop((cursor, *start(cursor), mi.UInt32(0), mi.UInt32(0)),
+                             lambda c, *_: c[0] < queue_end(c[1]), body, label="walk_queue")
         if stats is not None:  # diagnostics: per lane, loop iterations and iterations that stepped a walk
             iterations, busy = loop[-2:]
             dr.eval(iterations, busy)

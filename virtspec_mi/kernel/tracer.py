@@ -314,10 +314,12 @@ class _Kernel:
         # Queues: "stride" — lane l runs positions l, l + L, …; "counter" — one shared counter
         # hands out the next position; "group" — each group of WALK_GROUP lanes (a SIMD packet,
         # run by one thread) shares a counter over its own contiguous range of positions.
-        groups = -(-width // WALK_GROUP) if self.walk_queue == "group" else 1
+        if self.walk_queue == "group" and width >= WALK_GROUP:
+            width -= width % WALK_GROUP  # whole groups
+        groups = width // WALK_GROUP if self.walk_queue == "group" and width >= WALK_GROUP else 1
         share = -(-size // groups)  # positions per queue
         counter = dr.zeros(mi.UInt32, groups) if self.walk_queue != "stride" else None
-        step = WALK_GROUP if self.walk_queue == "group" else width
+        step = width // groups  # lanes per queue
 
         # A lane's cursor: its ray's position in the chunk and, for several readings, that
         # reading's slot and end. Positions only grow along a queue, so the slot moves forward.

@@ -72,12 +72,12 @@ _QUEUE_CASES = {
 }
 
 
-def _tally(instrument, readings, settings, rays, **kernel):
-    from virtspec_mi.kernel.tracer import ReadingPlan, tally_readings
+def _tally(instrument, readings, settings, rays, **queue):
+    from virtspec_mi.kernel.tracer import ReadingPlan, WalkQueue, tally_readings
 
     plans = [ReadingPlan(w, t, 0.0, rays) for w, t in readings]
     offsets = [k * 3 * rays + 17 for k in range(len(plans))]  # gaps: readings keyed apart
-    counts = tally_readings(instrument, plans, settings, offsets, **kernel)
+    counts = tally_readings(instrument, plans, settings, offsets, walk=WalkQueue(**queue))
     return np.stack([counts.reflected, counts.transmitted, counts.capped, counts.specular_reflected,
                      counts.regular_transmitted, counts.rounded_weights, counts.weight_violations])
 
@@ -86,20 +86,23 @@ def _tally(instrument, readings, settings, rays, **kernel):
 def test_queued_walks_count_as_one_loop_per_ray(mi, case):
     """Bit-identical counts: sample() per ray (one loop) vs queued lanes of any count, queue and chunk size."""
 
-    from virtspec_mi.kernel.tracer import WALK_LANES
+    from virtspec_mi.kernel.tracer import WalkQueue
     from virtspec_mi.scene import find_instrument
     from virtspec_mi.settings import Settings
 
     specimen, options, readings = _QUEUE_CASES[case]
     instrument = find_instrument(vm.instrument_scene(specimen))
     rays = 3000
-    one_loop = _tally(instrument, readings, Settings(**options), rays, walk_lanes=0)
+    one_loop = _tally(instrument, readings, Settings(**options), rays, lanes=0)
     assert one_loop[0].sum() > 0 and one_loop[1].sum() > 0  # both fates occur: the comparison can fail
-    for lanes, queue, chunk in ((WALK_LANES, "stride", 1 << 22), (1000, "stride", 1024), (37, "counter", 4096), (40, "group", 1024), (8192, "group", 1 << 22),
-                                (4096, "counter", 1 << 22), (1, "stride", 1024)):
+    default = WalkQueue()
+    for lanes, queue, refill, chunk in ((default.lanes, default.queue, default.refill, 1 << 22),
+                                        (1000, "stride", 1, 1024), (37, "counter", 4, 4096), (40, "group", 2, 1024),
+                                        (8192, "group", 1, 1 << 22), (4096, "counter", 2, 1 << 22),
+                                        (1, "stride", 2, 1024)):
         queued = _tally(instrument, readings, Settings(chunk_size=chunk, **options), rays,
-                        walk_lanes=lanes, walk_queue=queue)
-        assert np.array_equal(queued, one_loop), (lanes, queue, chunk)
+                        lanes=lanes, queue=queue, refill=refill)
+        assert np.array_equal(queued, one_loop), (lanes, queue, refill, chunk)
 
 
 def test_walk_specimens_declare_their_steps(mi, diamond):
@@ -164,9 +167,18 @@ def test_any_specimen_declaring_the_steps_runs_queued(mi, coin_walk):
     instrument = find_instrument(vm.instrument_scene({"type": coin_walk}))
     assert is_random_walk(instrument.bsdf)
     n = 20_000
-    one_loop = _tally(instrument, [(551.0, 10.0)], Settings(), n, walk_lanes=0)
-    queued = _tally(instrument, [(551.0, 10.0)], Settings(chunk_size=4096), n, walk_lanes=333)
+    one_loop = _tally(instrument, [(551.0, 10.0)], Settings(), n, lanes=0)
+    queued = _tally(instrument, [(551.0, 10.0)], Settings(chunk_size=4096), n, lanes=333)
     assert np.array_equal(queued, one_loop)
     # Exits up with probability 2/3, down 1/3 (each step: 0.2 vs 0.1): 6 sigma.
     assert abs(one_loop[0][0] / n - 2 / 3) < 6 * np.sqrt(2 / 9 / n)
     assert one_loop[0][0] + one_loop[1][0] == n
+
+
+def test_the_walk_queue_refuses_bad_values():
+    from virtspec_mi.kernel.tracer import WalkQueue
+
+    for bad, match in (({"lanes": -1}, "lanes"), ({"queue": "lifo"}, "queue"), ({"refill": 3}, "refill"),
+                       ({"refill": 0}, "refill")):
+        with pytest.raises(ValueError, match=match):
+            WalkQueue(**bad)

@@ -61,7 +61,7 @@ from virtspec_mi.kernel.rng import chunk_root, dimension_key, dimension_keys, ha
 from virtspec_mi.kernel.walk import CAPPED_COMPONENT, is_random_walk
 from virtspec_mi.settings import Settings
 
-__all__ = ["ReadingPlan", "WALK_LANES", "WALK_QUEUES", "tally_readings", "trace_rays"]
+__all__ = ["ReadingPlan", "WALK_GROUP", "WALK_QUEUES", "WalkQueue", "tally_readings", "trace_rays"]
 
 _WORD = 1 << 32
 # Dimensions of the random numbers: 0–1 emitter, 2–3 specimen, 4–6 BSDF, 7 survival;
@@ -78,20 +78,45 @@ _RARE_COUNTS = (("weight_violations", _VIOLATION), ("capped", _CAPPED), ("rounde
 _LENGTH2 = ((1.0 - DIRECTION_TOLERANCE) ** 2, (1.0 + DIRECTION_TOLERANCE) ** 2)
 
 
-WALK_LANES: int = 1 << 13
-"""SIMD lanes that work through a chunk's rays of a random-walk specimen (each lane a queue
-of about chunk_size / WALK_LANES rays; see :meth:`_Kernel.walk`). Chosen by measurement
-(benchmarks/RESULTS.md, issue 14); counts do not depend on it."""
-
-WALK_REFILL: int = 2
-"""Iterations between refills (a power of two)."""
-
 WALK_GROUP: int = 16
-"""Lanes that share one queue under ``walk_queue = "group"`` (the widest SIMD packet, AVX-512)."""
+"""Lanes that share one queue under ``queue = "group"`` (the widest SIMD packet, AVX-512)."""
 
-WALK_QUEUES: tuple[str, ...] = ("stride", "counter", "group")
-"""How a lane picks its next ray: a static stride (lane l runs rays l, l + L, …; the default,
-chosen by measurement) or a shared atomic counter."""
+WALK_QUEUES: tuple[str, ...] = ("group", "stride", "counter")
+"""How a lane picks its next ray: ``group`` — each group of :data:`WALK_GROUP` lanes shares
+an atomic counter over its own contiguous range of the chunk's rays; ``stride`` — lane l
+runs rays l, l + L, l + 2L, … (no atomics, but a packet waits for its lane with the longest
+queue); ``counter`` — one counter for all lanes (contended between threads)."""
+
+
+@dataclass(frozen=True)
+class WalkQueue:
+    """
+    How the kernel runs a random-walk specimen's steps (see :meth:`_Kernel.walk`); counts
+    never depend on it. The defaults were chosen by measurement (benchmarks/RESULTS.md,
+    issue 14).
+
+    - ``lanes``: SIMD lanes working through a chunk's rays (0: one ``sample()`` per ray,
+      the walk as one loop). 2¹⁶ lanes are four Dr.Jit work blocks of 2¹⁴ lanes, which the
+      thread pool balances between threads; each group of 16 lanes then queues
+      chunk_size / 4096 rays.
+    - ``queue``: how a lane picks its next ray (:data:`WALK_QUEUES`).
+    - ``refill``: loop iterations between two refills of a lane whose walk ended (a power
+      of two). A refill (the finished ray's tally, the next ray's start) runs for a whole
+      SIMD packet when any of its lanes needs it; every other iteration halves that cost
+      for about half an iteration of idling per ray.
+    """
+
+    lanes: int = 1 << 16
+    queue: str = "group"
+    refill: int = 2
+
+    def __post_init__(self) -> None:
+        if not (isinstance(self.lanes, int) and 0 <= self.lanes < 2**31):
+            raise ValueError(f"lanes must be a whole number, 0 <= lanes < 2**31 (got {self.lanes!r})")
+        if self.queue not in WALK_QUEUES:
+            raise ValueError(f"queue must be one of {', '.join(WALK_QUEUES)} (got {self.queue!r})")
+        if not (isinstance(self.refill, int) and 1 <= self.refill <= 1024 and self.refill & (self.refill - 1) == 0):
+            raise ValueError(f"refill must be a power of two, 1 <= refill <= 1024 (got {self.refill!r})")
 
 
 @dataclass(frozen=True)
@@ -106,7 +131,7 @@ class ReadingPlan:
 
 def tally_readings(
     instrument: Any, plans: list[ReadingPlan], settings: Settings, offsets: Any = None,
-    on_chunk: Callable[[int], None] | None = None, walk_lanes: int = WALK_LANES, walk_queue: str = WALK_QUEUES[0],
+    on_chunk: Callable[[int], None] | None = None, walk: WalkQueue = WalkQueue(), walk_stats: dict | None = None,
 ) -> Counts:
     """
     Trace every reading of ``plans`` and return their exact :class:`~virtspec_mi.counts.Counts`
@@ -123,14 +148,13 @@ def tally_readings(
     number of readings completed so far.
 
     A specimen that declares its random walk as steps
-    (:class:`~virtspec_mi.kernel.walk.RandomWalk`) runs on ``walk_lanes`` queued lanes per
-    chunk (0: one ``sample()`` per ray, the walk as one loop), each lane taking its next
-    ray by ``walk_queue`` (:data:`WALK_QUEUES`); neither changes any count.
+    (:class:`~virtspec_mi.kernel.walk.RandomWalk`) runs on queued lanes as ``walk`` says
+    (:class:`WalkQueue`; ``lanes = 0``: one ``sample()`` per ray, the walk as one loop); no
+    count depends on it. ``walk_stats`` (diagnostics, optional): a dict that receives, per
+    chunk, each lane's loop iterations (``iterations``) and those that stepped a walk
+    (``busy``).
     """
 
-    if walk_queue not in WALK_QUEUES or walk_lanes < 0:
-        raise ValueError(f"walk_lanes must be >= 0 (got {walk_lanes}) and walk_queue one of {', '.join(WALK_QUEUES)} "
-                         f"(got {walk_queue!r})")
     for plan in plans:
         check_rays(plan.rays)  # 1 ... 2³² − 1: a reading crosses at most one 2³² boundary below
     rays = np.array([plan.rays for plan in plans], dtype=np.int64)
@@ -139,7 +163,7 @@ def tally_readings(
     cuts = _cuts(starts, offsets, rays)
     counts = Counts.zeros(len(plans))
     counts.rays[:] = rays
-    kernel = _Kernel(instrument, plans, settings, walk_lanes, walk_queue)
+    kernel = _Kernel(instrument, plans, settings, walk, walk_stats)
     first = 0
     while first < starts[-1]:
         size = int(min(settings.chunk_size, cuts[np.searchsorted(cuts, first, side="right")] - first))
@@ -203,14 +227,12 @@ class _Kernel:
     """The per-chunk ray kernel of one :func:`tally_readings` call."""
 
     def __init__(self, instrument: Any, plans: list[ReadingPlan], settings: Settings,
-                 walk_lanes: int = 0, walk_queue: str = "stride") -> None:
+                 walk: WalkQueue = WalkQueue(lanes=0), walk_stats: dict | None = None) -> None:
         self.bsdf = instrument.bsdf
         self.settings = settings
-        # A random-walk specimen's steps run on queued lanes (walk_lanes = 0: sample() per ray).
-        self.queued = walk_lanes > 0 and is_random_walk(self.bsdf)
-        self.walk_lanes, self.walk_queue = walk_lanes, walk_queue
-        self.walk_refill = WALK_REFILL
-        self.walk_stats: dict | None = None  # diagnostics (benchmarks): per-lane iterations of each chunk
+        # A random-walk specimen's steps run on queued lanes (walk.lanes = 0: sample() per ray).
+        self.queued = walk.lanes > 0 and is_random_walk(self.bsdf)
+        self.walk_queue, self.walk_stats = walk, walk_stats
         # Specular/regular counts: per ray only for a BSDF with both delta and other lobes.
         flags = self.bsdf.flags()
         delta = mi.has_flag(flags, mi.BSDFFlags.Delta)
@@ -295,12 +317,12 @@ class _Kernel:
              offsets: np.ndarray) -> dict:
         """
         The packed lanes [first, first + size) of a :class:`~virtspec_mi.kernel.walk.RandomWalk`
-        specimen, with rays queued on ``walk_lanes`` SIMD lanes (see :data:`WALK_LANES`).
+        specimen, with rays queued on SIMD lanes (see :class:`WalkQueue`).
 
         One symbolic loop drives the walk one event per iteration; a lane whose walk
         ended writes that ray's fate to the ray's slot and starts the next ray of its queue
-        (static stride: lane l runs rays l, l + L, l + 2L, …; or, with ``walk_queue =
-        "counter"``, the next ray of a shared atomic counter). Every ray's random numbers
+        (by default the next ray of its group's range, from the group's atomic counter; see
+        :class:`WalkQueue`). Every ray's random numbers
         are keyed on its global index, so the fates — and the counts — are those of
         :meth:`trace`, whichever lane ran the ray. Returns the per-ray ``fate``, ``rare``,
         ``weight`` (of violating rays), ``specular`` and ``regular`` (evaluated).
@@ -308,17 +330,17 @@ class _Kernel:
 
         source = _RaySource(self, first, size, slots, starts, offsets)
         bsdf = self.bsdf
-        width = min(size, self.walk_lanes)
+        width, queue = min(size, self.walk_queue.lanes), self.walk_queue.queue
         codes = dr.zeros(mi.UInt32, size)  # fate | rare << 4 | delta << 8, per ray
         weights = dr.zeros(mi.Float, size)
         # Queues: "stride" — lane l runs positions l, l + L, …; "counter" — one shared counter
         # hands out the next position; "group" — each group of WALK_GROUP lanes (a SIMD packet,
         # run by one thread) shares a counter over its own contiguous range of positions.
-        if self.walk_queue == "group" and width >= WALK_GROUP:
+        if queue == "group" and width >= WALK_GROUP:
             width -= width % WALK_GROUP  # whole groups
-        groups = width // WALK_GROUP if self.walk_queue == "group" and width >= WALK_GROUP else 1
+        groups = width // WALK_GROUP if queue == "group" and width >= WALK_GROUP else 1
         share = -(-size // groups)  # positions per queue
-        counter = dr.zeros(mi.UInt32, groups) if self.walk_queue != "stride" else None
+        counter = dr.zeros(mi.UInt32, groups) if queue != "stride" else None
         step = width // groups  # lanes per queue
 
         # A lane's cursor: its ray's position in the chunk and, for several readings, that
@@ -365,7 +387,7 @@ class _Kernel:
             return dr.if_stmt(((position, *cursor[1:]), state, lit_above, survival), position < queue_end(group),
                               restart, lambda *args: args, label="walk_restart")
 
-        refill = self.walk_refill
+        refill = self.walk_queue.refill
         stats = self.walk_stats
 
         def body(cursor: tuple, state: Any, lit_above: Any, survival: Any, iteration: Any, busy: Any) -> tuple:

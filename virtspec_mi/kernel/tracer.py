@@ -81,33 +81,35 @@ _LENGTH2 = ((1.0 - DIRECTION_TOLERANCE) ** 2, (1.0 + DIRECTION_TOLERANCE) ** 2)
 WALK_GROUP: int = 16
 """Lanes that share one queue under ``queue = "group"`` (the widest SIMD packet, AVX-512)."""
 
-WALK_QUEUES: tuple[str, ...] = ("group", "stride", "counter")
-"""How a lane picks its next ray: ``group`` — each group of :data:`WALK_GROUP` lanes shares
-an atomic counter over its own contiguous range of the chunk's rays; ``stride`` — lane l
-runs rays l, l + L, l + 2L, … (no atomics, but a packet waits for its lane with the longest
-queue); ``counter`` — one counter for all lanes (contended between threads)."""
+WALK_QUEUES: tuple[str, ...] = ("counter", "group", "stride")
+"""How a lane picks its next ray: ``counter`` — one atomic counter for all lanes hands out
+the next ray of the chunk; ``group`` — each group of :data:`WALK_GROUP` lanes shares a
+counter over its own contiguous range of the chunk's rays; ``stride`` — lane l runs rays
+l, l + L, l + 2L, … (no atomics, but a packet waits for its lane with the longest queue)."""
 
 
 @dataclass(frozen=True)
 class WalkQueue:
     """
     How the kernel runs a random-walk specimen's steps (see :meth:`_Kernel.walk`); counts
-    never depend on it. The defaults were chosen by measurement (benchmarks/RESULTS.md,
-    issue 14).
+    never depend on it. The defaults were chosen by measurement (``benchmarks/walk_queue.py``,
+    benchmarks/RESULTS.md, issue 14).
 
     - ``lanes``: SIMD lanes working through a chunk's rays (0: one ``sample()`` per ray,
-      the walk as one loop). 2¹⁶ lanes are four Dr.Jit work blocks of 2¹⁴ lanes, which the
-      thread pool balances between threads; each group of 16 lanes then queues
-      chunk_size / 4096 rays.
-    - ``queue``: how a lane picks its next ray (:data:`WALK_QUEUES`).
+      the walk as one loop). Dr.Jit's LLVM backend runs a kernel's packets of lanes one
+      after another on each thread, so under the shared ``counter`` the first packet of
+      each thread walks almost every ray and the others only their first one: a few
+      packets per thread are enough (1024 lanes: 64 packets of 16, up to 64 threads).
+    - ``queue``: how a lane picks its next ray (:data:`WALK_QUEUES`). The shared counter
+      also balances the threads: all of them draw from one queue until it is empty.
     - ``refill``: loop iterations between two refills of a lane whose walk ended (a power
       of two). A refill (the finished ray's tally, the next ray's start) runs for a whole
       SIMD packet when any of its lanes needs it; every other iteration halves that cost
       for about half an iteration of idling per ray.
     """
 
-    lanes: int = 1 << 16
-    queue: str = "group"
+    lanes: int = 1024
+    queue: str = "counter"
     refill: int = 2
 
     def __post_init__(self) -> None:

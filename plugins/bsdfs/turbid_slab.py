@@ -238,11 +238,32 @@ class TurbidSlab(SampledOnlyBSDF):
         return self.walk_sample(walk_to_end(self, self.walk_start(si, sample1, sample2, active)))
 
     # -- the walk as resumable steps (virtspec_mi.kernel.walk.RandomWalk) -------------------
-    # State: (rng, status, direction, depth, scattered, steps, mu_t, albedo, g, eta_top,
-    # eta_bottom, front, eta_out_in) per lane — the PCG32, walk status, propagation
-    # direction and depth (−z) in the mirrored slab, whether it scattered, free flights so
-    # far, the slab's optics, the faces' relative indices, whether light came from the
-    # front and the outer media's index ratio (``bs.eta`` of a transmission).
+    # State: (rng, status, direction, depth, scattered, steps, front, optics) per lane — the
+    # PCG32, walk status, propagation direction and depth (−z) in the mirrored slab, whether
+    # it scattered, free flights so far, whether light came from the front, and the optics
+    # (μt, albedo, g, the faces' relative indices η_top and η_bottom, and the outer media's
+    # index ratio, ``bs.eta`` of a transmission): per lane for a spectral slab, () for a slab
+    # of numbers (then computed from the numbers and ``front``: a smaller state).
+
+    def _optics(self, si: Any, front: Any) -> tuple:
+        """(μt, albedo, g, η_top, η_bottom, η_out/η_in) of each lane."""
+
+        mu_a, mu_s, g, eta = (self._value(name, si) for name in ("mu_a", "mu_s", "g", "eta"))
+        above, below = self._value("eta_above", si), self._value("eta_below", si)
+        # Back-lit rays: mirror the slab so that light always enters through the top face.
+        if self.wavelength_independent:  # numbers: each quotient once, then a select per lane
+            eta_top = dr.select(front, eta / above, eta / below)
+            eta_bottom = dr.select(front, below / eta, above / eta)
+            ratio = dr.select(front, below / above, above / below)
+        else:
+            outer_in = dr.select(front, above, below)
+            outer_out = dr.select(front, below, above)
+            eta_top, eta_bottom, ratio = eta / outer_in, outer_out / eta, outer_out / outer_in
+        mu_t = mu_a + mu_s
+        return mu_t, mu_s / mu_t, g, eta_top, eta_bottom, ratio
+
+    def _state_optics(self, state: tuple) -> tuple:
+        return state[7] if state[7] else self._optics(None, state[6])
 
     def walk_start(self, si, sample1, sample2, active=True):
         """
@@ -250,24 +271,17 @@ class TurbidSlab(SampledOnlyBSDF):
         face (specular reflection leaves at once), see :class:`RandomWalk`.
         """
 
-        mu_a, mu_s, g, eta = (self._value(name, si) for name in ("mu_a", "mu_s", "g", "eta"))
-        above, below = self._value("eta_above", si), self._value("eta_below", si)
-        # Back-lit rays: mirror the slab so that light always enters through the top face.
         front = si.wi.z >= 0.0
-        outer_in = dr.select(front, above, below)
-        outer_out = dr.select(front, below, above)
+        optics = self._optics(si, front)
         wi = mi.Vector3f(si.wi.x, si.wi.y, dr.abs(si.wi.z))
         rng = walk_rng(sample1, sample2)
-        eta_top, eta_bottom = eta / outer_in, outer_out / eta
-        mu_t = mu_a + mu_s
-        albedo = mu_s / mu_t
         # Entry: Fresnel at the top face (specular reflection leaves at once).
-        direction, reflected = cross_interface(-wi, eta_top, rng.next_float32())
+        direction, reflected = cross_interface(-wi, optics[3], rng.next_float32())
         status = dr.select(reflected, mi.UInt32(_TOP), mi.UInt32(_INSIDE))
         status = dr.select(mi.Bool(active), status, mi.UInt32(_ABSORBED))
         status = status + dr.zeros(mi.UInt32, dr.width(sample1))
-        return (rng, status, direction, mi.Float(0.0), mi.Bool(False), mi.UInt32(0), mu_t, albedo, g,
-                eta_top, eta_bottom, front, outer_out / outer_in)
+        return (rng, status, direction, mi.Float(0.0), mi.Bool(False), mi.UInt32(0), front,
+                () if self.wavelength_independent else optics)
 
     def walk_done(self, state):
         """True where the walk has ended (exit, absorption or cap)."""
@@ -277,7 +291,8 @@ class TurbidSlab(SampledOnlyBSDF):
     def walk_sample(self, state):
         """The ``(BSDFSample3f, weight)`` of finished walks."""
 
-        status, direction, scattered, front, eta_out_in = state[1], state[2], state[4], state[11], state[12]
+        status, direction, scattered, front = state[1], state[2], state[4], state[6]
+        eta_out_in = self._state_optics(state)[5]
         top = status == _TOP
         exited = top | (status == _BOTTOM)
         capped = status == _CAPPED
@@ -308,7 +323,8 @@ class TurbidSlab(SampledOnlyBSDF):
         still inside is capped.
         """
 
-        rng, status, direction, depth, scattered, steps, mu_t, albedo, g, eta_top, eta_bottom, front, ratio = state
+        rng, status, direction, depth, scattered, steps, front, optics = state
+        mu_t, albedo, g, eta_top, eta_bottom, _ = self._state_optics(state)
         thickness = self._thickness
         path = free_path(rng.next_float32(), mu_t)
         down = direction.z < 0.0
@@ -330,7 +346,7 @@ class TurbidSlab(SampledOnlyBSDF):
         steps = steps + 1
         if (status == _INSIDE) & (steps >= self._max_steps):
             status = mi.UInt32(_CAPPED)
-        return (rng, status, direction, depth, scattered, steps, mu_t, albedo, g, eta_top, eta_bottom, front, ratio)
+        return (rng, status, direction, depth, scattered, steps, front, optics)
 
     def to_string(self) -> str:
         parts = [f"{k}={v:g}" for k, v in self.constants.items()]

@@ -347,52 +347,58 @@ class _Kernel:
 
         # A lane's cursor: its ray's position in the chunk and, for several readings, that
         # reading's slot and end. Positions only grow along a queue, so the slot moves forward.
-        def cursor_at(position: Any, group: Any, before: Any = None) -> tuple:
+        def cursor_at(position: Any, group: Any, before: dict | None = None) -> dict:
+            cursor = {"position": position}
+            if groups > 1:
+                cursor["group"] = group
             if source.single:
-                return (position, group)
+                return cursor
             if before is None:
                 slot = source.slot(position)
-                return (position, group, slot, dr.gather(mi.UInt32, source.ends, slot))
-            slot, end = dr.while_loop(before[2:], lambda s, e: e <= position,
-                                      lambda s, e: (s + 1, dr.gather(mi.UInt32, source.ends, s + 1)),
-                                      label="walk_reading")
-            return (position, group, slot, end)
+                end = dr.gather(mi.UInt32, source.ends, slot)
+            else:
+                slot, end = dr.while_loop((before["slot"], before["end"]), lambda s, e: e <= position,
+                                          lambda s, e: (s + 1, dr.gather(mi.UInt32, source.ends, s + 1)),
+                                          label="walk_reading")
+            return {**cursor, "slot": slot, "end": end}
 
         def queue_end(group: Any) -> Any:
             return dr.minimum(group * share + share, size) if groups > 1 else mi.UInt32(size)
 
-        def start(cursor: tuple) -> tuple[Any, Any, Any]:
-            ray = source.incident(cursor[0], None if source.single else cursor[2])
+        def start(cursor: dict) -> tuple[Any, Any, Any]:
+            ray = source.incident(cursor["position"], None if source.single else cursor["slot"])
             state = self._walk_start(ray["si"], ray["sample1"], ray["sample2"])
             return state, ray["si"].wi.z >= 0.0, ray["survival"]
 
         def next_ray(position: Any, group: Any) -> Any:
             if counter is None:
                 return position + width
+            if groups == 1:
+                return dr.scatter_inc(counter, mi.UInt32(0)) + step
             return group * share + dr.scatter_inc(counter, group) + step
 
-        def finish(cursor: tuple, state: Any, lit_above: Any, survival: Any) -> tuple:
-            position = cursor[0]
+        def finish(cursor: dict, state: Any, lit_above: Any, survival: Any) -> tuple:
+            position = cursor["position"]
             bs, weight = bsdf.walk_sample(state)
             judged = self._judge(lit_above, bs, weight, survival, width)
             delta = mi.has_flag(judged["sampled_type"], mi.BSDFFlags.Delta)
             code = judged["fate"] | (judged["rare"] << 4) | dr.select(delta, mi.UInt32(256), mi.UInt32(0))
             dr.scatter(codes, code, position)
             dr.scatter(weights, judged["weight"], position, (judged["rare"] & _VIOLATION) != 0)
-            group = cursor[1]
+            group = cursor.get("group")
             position = next_ray(position, group)
 
-            def restart(cursor: tuple, *_: Any) -> tuple:
+            def restart(cursor: dict, *_: Any) -> tuple:
                 cursor = cursor_at(position, group, cursor)
                 return (cursor, *start(cursor))
 
-            return dr.if_stmt(((position, *cursor[1:]), state, lit_above, survival), position < queue_end(group),
-                              restart, lambda *args: args, label="walk_restart")
+            return dr.if_stmt(({**cursor, "position": position}, state, lit_above, survival),
+                              position < queue_end(group), restart, lambda *args: args, label="walk_restart")
 
         refill = self.walk_queue.refill
         stats = self.walk_stats
 
-        def body(cursor: tuple, state: Any, lit_above: Any, survival: Any, iteration: Any, busy: Any) -> tuple:
+        def body(cursor: dict, state: Any, lit_above: Any, survival: Any, iteration: Any, busy: Any) -> tuple:
             walking = ~bsdf.walk_done(state)
             state = dr.if_stmt((state,), walking, lambda s: (bsdf.walk_step(s),), lambda s: (s,),
                                label="walk_step")[0]
@@ -405,11 +411,11 @@ class _Kernel:
                                 lambda *args: args, label="walk_finish"), iteration + 1, busy)
 
         lane = dr.arange(mi.UInt32, width)
-        group = lane // WALK_GROUP if groups > 1 else dr.zeros(mi.UInt32, width)
+        group = lane // WALK_GROUP if groups > 1 else None
         position = group * share + lane % WALK_GROUP if groups > 1 else lane
         cursor = cursor_at(position, group)
         loop = dr.while_loop((cursor, *start(cursor), mi.UInt32(0), mi.UInt32(0)),
-                             lambda c, *_: c[0] < queue_end(c[1]), body, label="walk_queue")
+                             lambda c, *_: c["position"] < queue_end(c.get("group")), body, label="walk_queue")
         if stats is not None:  # diagnostics: per lane, loop iterations and iterations that stepped a walk
             iterations, busy = loop[-2:]
             dr.eval(iterations, busy)

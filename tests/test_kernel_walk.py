@@ -182,3 +182,24 @@ def test_the_walk_queue_refuses_bad_values():
                        ({"refill": 0}, "refill")):
         with pytest.raises(ValueError, match=match):
             WalkQueue(**bad)
+
+
+def test_queued_walks_do_not_depend_on_the_thread_count(mi):
+    """The shared counter hands rays to lanes in a timing-dependent order: counts must not care."""
+
+    import drjit as dr
+
+    from virtspec_mi.scene import find_instrument
+    from virtspec_mi.settings import Settings
+
+    specimen, options, readings = _QUEUE_CASES["abm_b_conical"]
+    instrument = find_instrument(vm.instrument_scene(specimen))
+    threads = dr.thread_count()
+    several = _tally(instrument, readings, Settings(chunk_size=4096, **options), 3000, lanes=64)
+    try:
+        dr.set_thread_count(1)
+        one = _tally(instrument, readings, Settings(chunk_size=4096, **options), 3000, lanes=64)
+    finally:
+        dr.set_thread_count(threads)
+    assert np.array_equal(one, several)
+    assert np.array_equal(one, _tally(instrument, readings, Settings(**options), 3000, lanes=0))

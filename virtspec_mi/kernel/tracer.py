@@ -10,6 +10,13 @@ of a call run in chunks of one fused Dr.Jit kernel each: counter-based random nu
 → exact integer tallies by name (:class:`~virtspec_mi.counts.Counts`).
 :func:`virtspec_mi.engine.take_readings` drives it.
 
+A specimen whose random walk is declared as steps
+(:class:`~virtspec_mi.kernel.walk.RandomWalk`: ``abm_b``, ``abm_u``, ``turbid_slab``) is
+not sampled one ``sample()`` per lane: the kernel drives its steps in one symbolic loop
+on queued SIMD lanes (:class:`WalkQueue`), a lane whose walk ends tallying that ray's fate
+and starting the next ray, so a packet no longer waits for its longest walk. The fate of
+every ray is the one ``sample()`` gives it (same random numbers, same rules below).
+
 Conventions
 -----------
 - Fates are judged in the specimen frame: a ray leaving with wo·n > 0 is reflected
@@ -212,7 +219,8 @@ def _check_offsets(offsets: Any, rays: np.ndarray) -> np.ndarray:
 def trace_rays(instrument: Any, plan: ReadingPlan, settings: Settings, count: int) -> dict:
     """
     The first ``count`` rays of one reading, ray by ray, through the same kernel code
-    as :func:`tally_readings` (for tests and diagnostics): NumPy arrays of emitter
+    as :func:`tally_readings` (for tests and diagnostics; a random walk runs as one
+    ``sample()`` per ray, whose fates the queued lanes reproduce): NumPy arrays of emitter
     points ``origin`` (specimen frame), specimen points ``target``, incident
     directions ``wi`` (towards the emitter), outgoing ``wo``, ``fate`` (a
     :class:`~virtspec_mi.counts.Fate` code) and the BSDF ``weight``.

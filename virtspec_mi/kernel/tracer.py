@@ -331,9 +331,9 @@ class _Kernel:
 
         One symbolic loop drives the walk one event per iteration; a lane whose walk
         ended writes that ray's fate to the ray's slot and starts the next ray of its queue
-        (by default the next ray of its group's range, from the group's atomic counter; see
-        :class:`WalkQueue`). Every ray's random numbers
-        are keyed on its global index, so the fates — and the counts — are those of
+        (by default the next ray handed out by one atomic counter; see :class:`WalkQueue`).
+        Every ray's random numbers are keyed on its global index, so the fates — and the
+        counts — are those of
         :meth:`trace`, whichever lane ran the ray. Returns the per-ray ``fate``, ``rare``,
         ``weight`` (of violating rays), ``specular`` and ``regular`` (evaluated).
         """

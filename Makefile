@@ -47,6 +47,9 @@ bench: setup
 	$(PY) benchmarks/abm_spectrum.py
 	$(PY) benchmarks/turbid_slab.py
 	$(PY) benchmarks/speed_vs_error.py
+	$(PY) benchmarks/tabulated.py
+	$(PY) benchmarks/sphere.py
+	$(PY) benchmarks/gonio.py
 
 clean:
 	rm -rf $(VENV) build *.egg-info .pytest_cache

@@ -13,7 +13,9 @@ name                   kind         module
 ``turbid_slab``        BSDF         :mod:`.bsdfs.turbid_slab`
 ``abm_b``              BSDF         :mod:`.bsdfs.abm_b` (walk: :mod:`.bsdfs.abm_walk`)
 ``abm_u``              BSDF         :mod:`.bsdfs.abm_u` (walk: :mod:`.bsdfs.abm_walk`)
+``tabulated``          BSDF         :mod:`.bsdfs.tabulated` (a goniophotometer table)
 ``spectrophotometer``  integrator   :mod:`.integrators.spectrophotometer`
+``integrating_sphere`` integrator   :mod:`.integrators.integrating_sphere`
 =====================  ===========  ==========================================
 """
 
@@ -26,7 +28,9 @@ PLUGINS: dict[str, tuple[str, str, str]] = {
     "turbid_slab": ("bsdf", ".bsdfs.turbid_slab", "TurbidSlab"),
     "abm_b": ("bsdf", ".bsdfs.abm_b", "ABMB"),
     "abm_u": ("bsdf", ".bsdfs.abm_u", "ABMU"),
+    "tabulated": ("bsdf", ".bsdfs.tabulated", "Tabulated"),
     "spectrophotometer": ("integrator", ".integrators.spectrophotometer", "Spectrophotometer"),
+    "integrating_sphere": ("integrator", ".integrators.integrating_sphere", "IntegratingSphere"),
 }
 
 

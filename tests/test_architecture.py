@@ -54,10 +54,11 @@ ROOT = Path(__file__).resolve().parents[1]
 # ---------------------------------------------------------------------------------------
 LAYERS: list[tuple[str, tuple[str, ...]]] = [
     ("cli", ("virtspec_mi.cli", "virtspec_mi.__main__")),
-    ("api", ("virtspec_mi.api", "virtspec_mi.compare")),
+    ("api", ("virtspec_mi.api", "virtspec_mi.compare", "virtspec_mi.scaleout")),
     # the spectrophotometer integrator: Mitsuba's entry (mi.render), a thin adapter over the engine
     ("adapter", ("virtspec_mi.plugins.integrators",)),
-    ("engine", ("virtspec_mi.engine", "virtspec_mi.checkpoint", "virtspec_mi.progress", "virtspec_mi.result")),
+    ("engine", ("virtspec_mi.engine", "virtspec_mi.parameters", "virtspec_mi.checkpoint", "virtspec_mi.progress",
+                "virtspec_mi.result", "virtspec_mi.zarr_table", "virtspec_mi.sphere_readout", "virtspec_mi.gonio_result")),
     ("plugins", ("virtspec_mi.plugins.bsdfs",)),
     ("kernel", (
         "virtspec_mi.kernel",
@@ -67,6 +68,12 @@ LAYERS: list[tuple[str, tuple[str, ...]]] = [
         "virtspec_mi.budgets",
         "virtspec_mi.checks",
         "virtspec_mi.leaf_data",
+        "virtspec_mi.bsdf_table",
+        "virtspec_mi.sphere_theory",
+        "virtspec_mi.sphere_model",
+        "virtspec_mi.sphere",
+        "virtspec_mi.gonio_bins",
+        "virtspec_mi.gonio_bounds",
     )),
 ]
 

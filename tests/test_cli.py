@@ -105,7 +105,7 @@ def test_sweep_densities_print_seconds_and_delta(scenes_dir):
 
 @pytest.mark.parametrize("args, message", [
     (["--theta-i", "0:100:10"], "theta_i must satisfy 0 <= theta_i <= 90"),
-    (["--theta-i", "10", "--out", "x.txt"], "out must end in one of .nc, .csv, .json"),
+    (["--theta-i", "10", "--out", "x.txt"], "out must end in one of .nc, .csv, .json, .zarr"),
     (["--theta-i", "10", "--plot", "x.pdf"], "plot must end in one of .png, .svg"),
 ])
 def test_sweep_bad_input_is_one_line_error(scenes_dir, args, message):
@@ -177,11 +177,11 @@ def test_bounds_shows_every_budget():
     assert "66,501" in result.stdout and "2,000 + at most" in result.stdout
 
 
-@pytest.mark.parametrize("command", ["bounds", "measure", "sweep", "colour", "llvm"])
+@pytest.mark.parametrize("command", ["bounds", "measure", "sweep", "gonio", "colour", "llvm"])
 def test_every_subcommand_has_a_description_and_an_example(command):
     text = re.sub(r"-\s+", "-", virtspec(command, "--help").stdout)  # argparse wraps at hyphens
     assert "example" in text and f"virtspec {command}" in text.split("example", 1)[1]
-    if command in ("measure", "sweep"):
+    if command in ("measure", "sweep", "gonio"):
         assert "conical-hemispherical" in text and "directional-hemispherical" in text
         assert "hemispherical-hemispherical" in text and "default: the scene's" in text
     if command == "colour":
@@ -192,7 +192,7 @@ def test_every_subcommand_has_a_description_and_an_example(command):
     (["sweep", "SCENE", "--theta-i", "0", "--densities", "inf"], "densities must satisfy 0 <= log10 N <= 9.63"),
     (["sweep", "SCENE", "--theta-i", "0", "--densities", "nan"], "densities must satisfy"),
     (["sweep", "SCENE", "--theta-i", "0", "--densities", "1e300"], "densities must satisfy"),
-    (["colour", "SCENE"], "file must end in one of .nc, .csv, .json (a virtspec-mi result file"),
+    (["colour", "SCENE"], "file must end in one of .nc, .csv, .json, .zarr (a virtspec-mi result file"),
     (["measure", "DIRECTORY"], "is a directory; give a Mitsuba XML scene file"),
     (["measure", "MISSPELT"], "'thetai' is not a setting: did you mean 'theta_i'?"),
 ])

@@ -85,16 +85,25 @@ def test_wavelength_independent_specimen_is_traced_once_per_incidence(diamond_in
 # --- issue 12: nothing hangs; every N is range-checked before tracing ---------------------------
 
 
-def _refused_fast(call, message: str) -> None:
-    import time
+@pytest.fixture
+def _refused_fast(monkeypatch):
+    """Refused before any ray is traced: the engine's one kernel call (``_fixed``) must not run."""
 
-    start = time.perf_counter()
-    with pytest.raises(ValueError, match=message):
-        call()
-    assert time.perf_counter() - start < 0.5
+    from virtspec_mi import engine
+
+    def untraced(*args, **kwargs):
+        raise AssertionError("rays were traced before the budget was refused")
+
+    monkeypatch.setattr(engine, "_fixed", untraced)
+
+    def check(call, message: str) -> None:
+        with pytest.raises(ValueError, match=message):
+            call()
+
+    return check
 
 
-def test_huge_budgets_are_refused_in_milliseconds(diamond):
+def test_huge_budgets_are_refused_before_any_ray_is_traced(diamond, _refused_fast):
     white = vm.instrument_scene({"type": "diffuse", "reflectance": {"type": "uniform", "value": 1.0}})
     _refused_fast(lambda: vm.measure(white, theta_i=88, mu=2.4e-5), "needs N = 4,599,233,825 rays per reading")
     _refused_fast(lambda: vm.measure(diamond, mu=1e-9), "hoeffding bound for mu = 1e-09")  # N = 2.6e18
@@ -105,7 +114,7 @@ def test_huge_budgets_are_refused_in_milliseconds(diamond):
     _refused_fast(lambda: vm.sweep(diamond, theta_i="0:90:1e-7"), "holds 900,000,001 values")
 
 
-def test_readings_and_rays_per_call_are_capped(diamond):
+def test_readings_and_rays_per_call_are_capped(diamond, _refused_fast):
     _refused_fast(lambda: vm.sweep(diamond, wavelengths="400:1399:1", theta_i="0:90:0.09", rays=1),
                   r"at most 1,000,000 readings .*got 1,001,000")
     dielectric = vm.instrument_scene({"type": "dielectric"})

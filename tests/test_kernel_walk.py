@@ -105,6 +105,43 @@ def test_queued_walks_count_as_one_loop_per_ray(mi, case):
         assert np.array_equal(queued, one_loop), (lanes, queue, refill, chunk)
 
 
+_GONIO_CASES = {
+    # specimen, settings, readings (wavelength, theta_i, phi_i), bins
+    "abm_b": ({"type": "abm_b"}, {}, [(465.0, 8.0, 0.0), (800.0, 40.0, 30.0), (1450.0, 8.0, 200.0)],
+              dict(theta_o_bins=9, phi_o_bins=12)),
+    "abm_b_folded_projected": ({"type": "abm_b"}, {"seed": 5}, [(551.0, 60.0, 120.0), (800.0, 8.0, 300.0)],
+                               dict(theta_o_bins=5, phi_o_bins=7, binning="projected", fold_phi=True)),
+    "slab_edges": ({"type": "turbid_slab", "mu_a": 1.0, "mu_s": 9.0, "g": 0.75, "thickness": 0.2, "eta": 1.4},
+                   {"seed": 7}, [(551.0, 0.0, 0.0), (600.0, 50.0, 90.0)],
+                   dict(theta_o_bins=[0, 10, 30, 90, 120, 180], phi_o_bins=[0, 45, 200, 360])),
+}
+
+
+@pytest.mark.parametrize("case", sorted(_GONIO_CASES))
+def test_queued_walks_bin_as_one_loop_per_ray(mi, case):
+    """Goniophotometer bins bit-identical: sample() per ray (one loop) vs queued lanes, any chunk size."""
+
+    from virtspec_mi.gonio_bins import make_bins
+    from virtspec_mi.kernel.tracer import ReadingPlan, WalkQueue, tally_gonio_readings
+    from virtspec_mi.scene import find_instrument
+    from virtspec_mi.settings import Settings
+
+    specimen, options, readings, spec = _GONIO_CASES[case]
+    instrument = find_instrument(vm.instrument_scene(specimen))
+    bins = make_bins(**spec)
+    plans = [ReadingPlan(w, t, p, 3000) for w, t, p in readings]
+    counts, one_loop = tally_gonio_readings(instrument, plans, Settings(**options), bins, walk=WalkQueue(lanes=0))
+    assert np.count_nonzero(one_loop) > 4  # rays spread over bins: the comparison can fail
+    assert np.array_equal(one_loop.sum(axis=(1, 2)), counts.reflected + counts.transmitted)
+    for queue, chunk in ((WalkQueue(), 1 << 22), (WalkQueue(lanes=40, queue="group"), 1024),
+                         (WalkQueue(lanes=1000, queue="stride", refill=1), 4096)):
+        queued_counts, queued = tally_gonio_readings(instrument, plans, Settings(chunk_size=chunk, **options), bins,
+                                                     walk=queue)
+        assert np.array_equal(queued, one_loop), (queue, chunk)
+        assert np.array_equal(queued_counts.reflected, counts.reflected)
+        assert np.array_equal(queued_counts.transmitted, counts.transmitted)
+
+
 def test_walk_specimens_declare_their_steps(mi, diamond):
     from virtspec_mi.kernel.walk import is_random_walk
     from virtspec_mi.scene import find_instrument

@@ -52,7 +52,7 @@ def test_every_format_round_trips_exactly(result, tmp_path, suffix):
 
 
 def test_bad_files_give_clear_errors(result, tmp_path):
-    with pytest.raises(ValueError, match=r"out must end in one of \.nc, \.csv, \.json"):
+    with pytest.raises(ValueError, match=r"out must end in one of \.nc, \.csv, \.json, \.zarr"):
         write_sweep(result, tmp_path / "sweep.txt")
     (tmp_path / "other.csv").write_text("a,b\n1,2\n")
     with pytest.raises(ValueError, match="not a virtspec-mi result CSV"):

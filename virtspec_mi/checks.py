@@ -35,6 +35,7 @@ import numpy as np
 __all__ = [
     "MAX_RAYS",
     "MAX_VALUES",
+    "parse_values",
     "MAX_READINGS",
     "MAX_TOTAL_RAYS",
     "MAX_CHUNK_SIZE",
@@ -318,6 +319,32 @@ def parse_theta_i(theta_i: Any) -> tuple[float, ...]:
     if not values:
         raise ValueError("theta_i must hold at least one angle (got none)")
     return tuple(check_theta_i(value) for value in values)
+
+
+def parse_values(name: str, values: Any) -> tuple[float, ...]:
+    """
+    Values of a swept specimen parameter ``name``: the forms of :func:`parse_wavelengths`
+    (a number, a sequence, or a string of numbers and ``start:stop:step`` ranges, stop
+    included when it lies on the grid within rounding), each finite, at least one and at
+    most :data:`MAX_VALUES`. A range's values are rounded to 15 significant digits, so
+    ``"0.1:0.3:0.1"`` gives 0.1, 0.2, 0.3 rather than 0.30000000000000004 (labels that
+    ``Result.sel`` and files show as typed). Their range is the specimen's to check.
+    """
+
+    if isinstance(values, str) and ":" in values:
+        numbers: list[float] = []
+        for token in values.replace(",", " ").split():
+            numbers.extend([float(f"{v:.15g}") for v in _parse_range(token, name, MAX_VALUES - len(numbers))]
+                           if ":" in token else [number(name, token)])
+            _check_count(name, len(numbers))
+    else:
+        numbers = _parse_numbers(name, values, "the parameter's unit")
+    if not numbers:
+        raise ValueError(f"parameter {name!r} must hold at least one value (got none)")
+    for value in numbers:
+        if not math.isfinite(value):
+            raise ValueError(f"parameter {name!r} must hold finite numbers (got {value!r})")
+    return tuple(numbers)
 
 
 def _parse_numbers(name: str, value: Any, unit: str) -> list[float]:

@@ -7,12 +7,25 @@ Command line: ``virtspec``
   [--rays] [--bound] [--joint] [--pilot-rays] [--pilot-delta] [--beam] [--sampling]
   [--seed] [--json]``: one certified reading.
 - ``virtspec sweep SCENE --theta-i 0:90:1 [--wavelengths 400:700:10] [--out FILE(.nc|.csv|.json)]
-  [--plot FIG(.png|.svg)] [--densities 3 4 5 6] [--quiet] [measure options]``: a sweep
-  (resumable when ``--out`` is given: see :mod:`virtspec_mi.checkpoint`).
+  [--plot FIG(.png|.svg)] [--densities 3 4 5 6] [--quiet] [--workers N | --scheduler ADDRESS]
+  [--task-readings K] [measure options]``: a sweep (resumable when ``--out`` is given: see
+  :mod:`virtspec_mi.checkpoint`), on Dask workers with ``--workers``/``--scheduler``
+  (:mod:`virtspec_mi.scaleout`); ``--param NAME=VALUES`` (repeatable; VALUES ``v1,v2,v3``
+  or ``start:stop:step``, stop included within rounding) sweeps a specimen parameter too
+  (a grid; ``--points``: explicit points, equal-length lists; :mod:`virtspec_mi.parameters`).
+- ``measure`` and ``sweep`` take ``-D NAME=VALUE`` (repeatable): the XML scene's ``$NAME``
+  parameter, as Mitsuba's own ``mitsuba -D`` (``mi.load_file(path, NAME=VALUE)``);
+  ``measure --param NAME=VALUE`` sets one specimen parameter for the reading.
+- ``virtspec gonio SCENE [--theta-o-bins 18] [--phi-o-bins 36] [--binning] [--fold-phi]
+  [--hemispheres] [--guarantee] [--relative-tolerance] [--brdf-floor] [--out FILE] [--plot FIG]
+  [--json] [measure options]``: a goniophotometer reading (BRDF/BTDF per direction bin).
 - ``virtspec colour FILE [--theta-i] [--quantity] [--illuminant] [--observer] [--json]``: CIE
   XYZ, L*a*b* and sRGB of a saved spectrum (a result file or a colour-science CSV).
 - ``virtspec compare RESULT MEASURED [...]``: a result against a measured spectrum
   (:mod:`virtspec_mi.compare`); ``virtspec plot FILE [...]``: a figure of a result file.
+- ``virtspec sphere SCENE [--measurement] [--specular SCI|SCE] [--method] [--standard]
+  [--max-bounces] [--out FILE(.json|.nc)] [--json] [measure options]``: the readout of a
+  physical integrating sphere (:mod:`virtspec_mi.sphere_readout`).
 - ``virtspec llvm {find,check}``: the libLLVM Dr.Jit uses (``make setup`` calls it).
 
 Errors in the input (bad ranges, unreadable scenes, a bad libLLVM) print one line
@@ -25,7 +38,7 @@ import argparse
 import json
 import signal
 import sys
-from typing import Sequence
+from typing import Any, Sequence
 
 __all__ = ["main", "build_parser"]
 
@@ -35,10 +48,18 @@ _EXAMPLES = {
     "measure": "examples:\n  virtspec measure scenes/diamond_conical.xml --theta-i 70\n"
                "  virtspec measure scenes/soybean_abmb.xml --wavelengths 400:2500:5 --bound two-stage --json",
     "sweep": "examples:\n  virtspec sweep scenes/diamond_collimated.xml --theta-i 0:90:1 --out fig5.nc --plot fig5.png\n"
-             "  virtspec sweep scenes/diamond_collimated.xml --theta-i 0:90:1 --densities 3 4 5 6",
+             "  virtspec sweep scenes/diamond_collimated.xml --theta-i 0:90:1 --densities 3 4 5 6\n"
+             "  virtspec sweep scenes/soybean_abmb.xml --theta-i 8 --wavelengths 450,550,650 "
+             "--param specimen.thickness=1.2e-4:2e-4:4e-5 --param specimen.chlorophyll_a=2,4 --out lut.nc\n"
+             "  virtspec sweep scenes/soybean_abmb.xml -D side=abaxial --theta-i 8\n"
+             "  virtspec sweep scenes/soybean_abmb.xml --theta-i 8 --wavelengths 400:2500:5 --workers 2 --out leaf.nc",
+    "gonio": "examples:\n  virtspec gonio scenes/diamond_collimated.xml --theta-i 30 --theta-o-bins 9 --phi-o-bins 12\n"
+             "  virtspec gonio scene.xml --binning projected --fold-phi --out brdf.nc --plot brdf.png",
     "colour": "examples:\n  virtspec colour spectrum.csv\n"
               "  virtspec colour fig5.nc --theta-i 30 --illuminant A --quantity transmittance",
     "llvm": "example: virtspec llvm check",
+    "sphere": "examples:\n  virtspec sphere scenes/sphere_150mm_8d.xml --specular SCE\n"
+              "  virtspec sphere scenes/sphere_150mm_8d.xml --method comparison --wavelengths 400:700:100 --out r.json",
 }
 
 
@@ -70,6 +91,7 @@ def build_parser() -> argparse.ArgumentParser:
                       "wavelength, with the tolerance the rays spent guarantee. Every setting defaults to "
                       "the scene's spectrophotometer integrator, else to the paper's defaults.")
     measure.add_argument("scene", help="Mitsuba XML scene with 'emitter' and 'specimen' disks")
+    _scene_options(measure, sweep=False)
     _measurement_options(measure, sweep=False)
     measure.add_argument("--json", action="store_true",
                          help="print the reading as one JSON object (a result file: `virtspec colour` reads it)")
@@ -78,6 +100,7 @@ def build_parser() -> argparse.ArgumentParser:
                     "Measure a grid of readings (wavelengths x theta_i) at one phi_i, each with its own rays "
                     "and certificate; resumable when --out is given.")
     sweep.add_argument("scene", help="Mitsuba XML scene with 'emitter' and 'specimen' disks")
+    _scene_options(sweep, sweep=True)
     _measurement_options(sweep, sweep=True)
     sweep.add_argument("--out", help="result file .nc, .csv or .json (finished readings are kept in "
                                      "FILE.partial.json until the result file is written: re-run to resume)")
@@ -85,6 +108,28 @@ def build_parser() -> argparse.ArgumentParser:
     sweep.add_argument("--densities", type=float, nargs="+", metavar="LOG10N",
                        help="sweep at N = 10^d rays for each d; print seconds and the fluctuation of eq. (24)")
     sweep.add_argument("--quiet", action="store_true", help="no progress bar and no summary")
+    where = sweep.add_mutually_exclusive_group()
+    where.add_argument("--workers", type=int, metavar="N",
+                       help="trace on a local Dask cluster of N worker processes (default: in this process)")
+    where.add_argument("--scheduler", metavar="ADDRESS",
+                       help="trace on the Dask cluster of this scheduler, e.g. tcp://host:8786 (every worker needs "
+                            "virtspec-mi installed and the scene file at the same path)")
+    sweep.add_argument("--task-readings", type=int, metavar="K",
+                       help="readings per Dask task (default: scaleout.TASK_SECONDS of tracing, from the measured ray rate)")
+
+    gonio = command("gonio", "goniophotometer: certified BRDF/BTDF per outgoing-direction bin",
+                    "Measure the specimen of a scene as the spectrophotometer does, and bin every escaping ray by "
+                    "its outgoing direction (theta_o, phi_o) in the specimen frame: exact counts, fractions and "
+                    "BRDF/BTDF per bin with their certificate (DKW for the CDFs, union bound for the bins, "
+                    "Clopper-Pearson intervals for f).")
+    gonio.add_argument("scene", help="Mitsuba XML scene with 'emitter' and 'specimen' disks")
+    _measurement_options(gonio, sweep=True)
+    _gonio_options(gonio)
+    gonio.add_argument("--out", help="result file .nc, .csv or .json (the tabulated BSDF reads the .nc)")
+    gonio.add_argument("--plot", help="figure .png or .svg: polar plot of f in and across the plane of incidence")
+    gonio.add_argument("--plot-series", help="figure .png or .svg: the distribution over theta_i as a series (f in "
+                                             "the plane of incidence and the CDF of theta_o, certified bands)")
+    gonio.add_argument("--json", action="store_true", help="print the reading as one JSON object")
 
     colour = command("colour", "CIE XYZ, L*a*b*, sRGB of a saved spectrum",
                      "Colorimetry (colour-science, ASTM E308) of one quantity of a result file at one theta_i, "
@@ -137,7 +182,65 @@ def build_parser() -> argparse.ArgumentParser:
     plot.add_argument("--uncertainty", type=float,
                       help="measurement uncertainty of MEASURED (overrides its uncertainty column)")
     plot.add_argument("--out", help="figure .png or .svg (default: FILE with the suffix .png)")
+    sphere = command("sphere", "the readout of a physical integrating sphere (sample over standard)",
+                     "Simulate an integrating-sphere instrument reading the scene's specimen: the detector "
+                     "fractions with the sample and with the reference standard, their certified ratio, the "
+                     "hemispherical reading of the same rays and the instrument error. The sphere comes from "
+                     "the scene's integrating_sphere integrator.")
+    sphere.add_argument("scene", help="Mitsuba XML scene with an integrating_sphere integrator and "
+                                      "'emitter' and 'specimen' disks")
+    _measurement_options(sphere, sweep=False)
+    _sphere_options(sphere)
+    sphere.add_argument("--out", help="result file .json or .nc")
+    sphere.add_argument("--json", action="store_true", help="print the result as one JSON object")
     return parser
+
+
+def _scene_options(parser: argparse.ArgumentParser, sweep: bool) -> None:
+    """``-D NAME=VALUE`` (XML scene parameters) and ``--param NAME=VALUES`` (specimen parameters)."""
+
+    parser.add_argument("-D", dest="defines", action="append", default=[], metavar="NAME=VALUE",
+                        help="set the XML scene parameter $NAME (as `mitsuba -D`); repeatable")
+    if sweep:
+        parser.add_argument("--param", dest="params", action="append", default=[], metavar="NAME=VALUES",
+                            help="sweep a specimen parameter, e.g. specimen.thickness=1e-4:2e-4:5e-5 (start:stop:step, "
+                                 "stop included) or specimen.alpha=0.1,0.2,0.4; names: mi.traverse keys of the "
+                                 "specimen's BSDF or their short form specimen.NAME; repeatable (a grid: one dim each)")
+        parser.add_argument("--points", action="store_true",
+                            help="the --param lists are explicit points (equal lengths; one dim 'point'), not a grid")
+    else:
+        parser.add_argument("--param", dest="params", action="append", default=[], metavar="NAME=VALUE",
+                            help="set a specimen parameter for this reading, e.g. specimen.thickness=2e-4; repeatable")
+
+
+def _pairs(items: Sequence[str], flag: str) -> dict[str, str]:
+    """``NAME=VALUE`` strings of a repeatable flag as a dict (``ValueError`` naming the flag)."""
+
+    pairs: dict[str, str] = {}
+    for item in items:
+        name, equals, value = item.partition("=")
+        name, value = name.strip(), value.strip()
+        if not equals or not name or not value:
+            raise ValueError(f"{flag} takes NAME=VALUE (got {item!r})")
+        if name in pairs:
+            raise ValueError(f"{flag} {name} is given twice")
+        pairs[name] = value
+    return pairs
+
+
+def _sphere_options(parser: argparse.ArgumentParser) -> None:
+    """One flag per field of :class:`~virtspec_mi.sphere.SphereSettings` (default: the scene's)."""
+
+    from dataclasses import fields
+
+    from virtspec_mi.sphere import SphereSettings
+
+    kinds = {"standard": float, "max_bounces": int}
+    for item in fields(SphereSettings):
+        choices = item.metadata["choices"]
+        parser.add_argument("--" + item.name.replace("_", "-"), type=kinds.get(item.name, str),
+                            choices=list(choices) if choices else None,
+                            help=f"{item.metadata['help']} (default: the scene's, else {item.default})")
 
 
 def _measurement_options(parser: argparse.ArgumentParser, sweep: bool) -> None:
@@ -165,6 +268,21 @@ def _measurement_options(parser: argparse.ArgumentParser, sweep: bool) -> None:
             continue
         parser.add_argument(flag, nargs="+" if item.name == "wavelengths" else None,
                             choices=list(choices) if choices else None, help=f"{help_text(item)} ({default})")
+
+
+def _gonio_options(parser: argparse.ArgumentParser) -> None:
+    """One flag per goniophotometer parameter (:data:`~virtspec_mi.gonio_bins.GONIO_PARAMETERS`)."""
+
+    from virtspec_mi.gonio_bins import GONIO_PARAMETERS
+    from virtspec_mi.settings import shown
+
+    for name, (default, meaning) in GONIO_PARAMETERS.items():
+        flag = "--" + name.replace("_", "-")
+        text = f"{meaning} (default: the scene's, else {shown(default)})"
+        if isinstance(default, bool):
+            parser.add_argument(flag, action="store_true", default=None, help=text)
+        else:
+            parser.add_argument(flag, nargs="+" if name.endswith("_bins") else None, help=text)
 
 
 def _settings(args: argparse.Namespace) -> dict:
@@ -199,10 +317,14 @@ def main(argv: Sequence[str] | None = None) -> int:
             return _sweep(args)
         if args.command == "colour":
             return _colour(args)
+        if args.command == "gonio":
+            return _gonio(args)
         if args.command == "compare":
             return _compare(args)
         if args.command == "plot":
             return _plot(args)
+        if args.command == "sphere":
+            return _sphere(args)
         return _measure(args)
     except (ValueError, RuntimeError, OSError) as error:
         print(f"virtspec: error: {error}", file=sys.stderr)
@@ -219,28 +341,48 @@ def main(argv: Sequence[str] | None = None) -> int:
 def _measure(args: argparse.Namespace) -> int:
     from virtspec_mi.api import measure
 
-    reading = measure(args.scene, **_settings(args))
+    reading = measure(args.scene, parameters=_pairs(args.params, "--param"), defines=_pairs(args.defines, "-D"),
+                      **_settings(args))
     print(json.dumps(reading.as_dict()) if args.json else reading.summary())
+    return 0
+
+
+def _sphere(args: argparse.Namespace) -> int:
+    from virtspec_mi.api import sphere_measure
+    from virtspec_mi.sphere import SPHERE_SETTING_NAMES
+
+    own = {name: getattr(args, name) for name in SPHERE_SETTING_NAMES}
+    result = sphere_measure(args.scene, **_settings(args), **own)
+    if args.out:
+        result.write(args.out)
+    print(json.dumps(result.as_dict()) if args.json else result.summary())
     return 0
 
 
 def _sweep(args: argparse.Namespace) -> int:
     from pathlib import Path
 
-    from virtspec_mi.api import fluctuation, sweep
+    from virtspec_mi.api import sweep
     from virtspec_mi.checkpoint import checkpoint_for
-    from virtspec_mi.plot import check_figure_path, plot_densities, plot_sweep
+    from virtspec_mi.plot import check_figure_path, plot_sweep
     from virtspec_mi.results_io import check_output, csv_text
 
     out = check_output(args.out) if args.out else None  # a bad suffix or directory fails before any tracing
     check_figure_path(args.plot)
-    kwargs = {**_settings(args), "progress": False if args.quiet else None}
+    parameters = _pairs(args.params, "--param")
+    if parameters and args.plot:
+        raise ValueError("--plot draws a sweep over wavelength x theta_i; a parameter sweep is plotted by selecting "
+                         "one parameter point first (Result.sel in Python)")
+    kwargs = {**_settings(args), "progress": False if args.quiet else None, "parameters": parameters,
+              "points": args.points, "defines": _pairs(args.defines, "-D"),
+              "workers": args.scheduler if args.scheduler is not None else args.workers,
+              "task_readings": args.task_readings}
     given_rays = kwargs.pop("rays")
 
-    def run(rays: int | None, path: Path | None) -> object:
+    def run(rays: int | None, path: Path | None, options: dict = kwargs) -> object:
         # the sweep writes `path` atomically, and only then removes its checkpoint PATH.partial.json
         args.checkpoint = checkpoint_for(path) if path is not None else None  # named if interrupted
-        return sweep(args.scene, rays=rays, out=path, **kwargs)
+        return sweep(args.scene, rays=rays, out=path, **options)
 
     if not args.densities:
         result = run(given_rays, out)
@@ -260,6 +402,20 @@ def _sweep(args: argparse.Namespace) -> int:
     if given_rays is not None:
         raise ValueError("--rays and --densities exclude each other (densities set N = 10^d)")
     _check_densities(args.densities)
+    if kwargs["workers"] is None:
+        return _densities(args, kwargs, run, out)
+    from virtspec_mi.scaleout import connect
+
+    with connect(kwargs["workers"]) as client:  # one cluster (or connection) for every density
+        return _densities(args, {**kwargs, "workers": client}, run, out)
+
+
+def _densities(args: argparse.Namespace, kwargs: dict, run: Any, out: Any) -> int:
+    """``--densities``: a sweep per ray density, its seconds and the fluctuation Δ against the previous one."""
+
+    from virtspec_mi.api import fluctuation, sweep
+    from virtspec_mi.plot import plot_densities
+
     # Fig. 6b: time linear in N. The first sweep compiles the kernel (Dr.Jit caches it for every
     # N): run it once at the smallest density first, so no density's seconds include compilation.
     warm_up = sweep(args.scene, rays=int(round(10.0 ** min(args.densities))), **{**kwargs, "progress": False})
@@ -268,15 +424,42 @@ def _sweep(args: argparse.Namespace) -> int:
     for density in args.densities:
         rays = int(round(10.0 ** density))
         path = out.with_name(f"{out.stem}_logN{density:g}{out.suffix}") if out is not None else None
-        results.append(run(rays, path))
+        results.append(run(rays, path, kwargs))
         if len(results) > 1:
             deltas.append(fluctuation(results[-2], results[-1]))
         delta_text = "" if len(results) == 1 else f"{deltas[-1]:.6f}"
         print(f"{density:>8g} {rays:>12,} {results[-1].seconds:>9.3f} {delta_text:>15}", flush=True)
     print(f"(seconds after a warm-up sweep at log10 N = {min(args.densities):g}, {warm_up.seconds:.3f} s, "
-          "which compiled the kernel)")
+          "which compiled the kernel" + ("; on workers: tracing seconds summed over the workers, not wall time)"
+                                         if kwargs["workers"] is not None else ")"))
     if args.plot:
         plot_densities(results, args.densities, deltas, args.plot)
+    return 0
+
+
+def _gonio(args: argparse.Namespace) -> int:
+    from virtspec_mi.api import gonio
+    from virtspec_mi.gonio_bins import GONIO_PARAMETERS
+    from virtspec_mi.plot import check_figure_path
+
+    check_figure_path(args.plot)  # a bad suffix fails before any tracing
+    check_figure_path(args.plot_series)
+    options = {name: getattr(args, name) for name in GONIO_PARAMETERS}
+    options = {name: " ".join(v) if isinstance(v, list) else v for name, v in options.items()}
+    settings = _settings(args)
+    theta_i = settings.pop("theta_i")
+    reading = gonio(args.scene, theta_i=theta_i, out=args.out, **options, **settings)
+    if args.plot:
+        reading.plot(args.plot)
+    if args.plot_series:
+        reading.plot_series(args.plot_series)
+    if args.json:
+        print(json.dumps(reading.as_dict()))
+        return 0
+    print(reading.summary())
+    for label, path in (("written", args.out), ("plot", args.plot), ("plot", args.plot_series)):
+        if path:
+            print(f"{label}: {path}")
     return 0
 
 

@@ -114,6 +114,14 @@ class Counts:
 
         return replace(self, **{f.name: function(getattr(self, f.name)) for f in fields(self)})
 
+    @classmethod
+    def concatenate(cls, parts: "list[Counts]") -> "Counts":
+        """The readings of ``parts`` one after the other (1-d counts)."""
+
+        if len(parts) == 1:
+            return parts[0]
+        return cls(**{f.name: np.concatenate([getattr(p, f.name) for p in parts]) for f in fields(cls)})
+
     def put(self, index: Any, other: "Counts") -> None:
         """Write ``other``'s counts into readings ``index`` of these (in place)."""
 

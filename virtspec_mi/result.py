@@ -90,7 +90,9 @@ class Result:
     geometry : InstrumentGeometry
         r₁, r₂ and D of the scene.
     seconds : float
-        Wall time spent tracing (summed over interrupted and resumed runs).
+        Time spent tracing, summed over the batches (and over interrupted and resumed
+        runs): the wall time of a sweep in this process; for a sweep on Dask workers the
+        workers' tracing time added up (worker-seconds), not the wall time.
     scene : str
         Fingerprint of the scene (``sha256:…``), or "".
     wavelength_independent : bool
@@ -98,6 +100,12 @@ class Result:
         in wavelength were traced once and share their counts.
     version : str
         virtspec-mi version that made the result.
+    parameters : dict or None
+        The swept specimen parameters (:meth:`virtspec_mi.parameters.ParameterSpace.as_dict`:
+        names, ``mi.traverse`` keys, values, grid or points), ``None`` for none. A grid adds
+        one dim per parameter (named as given) after ``theta_i``; points add the dim
+        ``point`` with each parameter as a coordinate along it. A parameter selected with
+        :meth:`sel` stays as a scalar coordinate.
     """
 
     dims: tuple[str, ...]
@@ -110,6 +118,7 @@ class Result:
     scene: str = ""
     wavelength_independent: bool = False
     version: str = field(default=__version__)
+    parameters: dict | None = None
 
     # -- labels ------------------------------------------------------------------------
 
@@ -357,9 +366,70 @@ class Result:
             raise ValueError(f"theta_i must be one of the result's angles {angles.tolist()} (got {theta_i:g})")
         return int(matches[0])
 
-    def as_grid(self) -> "Result":
-        """The same result with θi as a dimension (a single reading becomes a one-angle grid)."""
+    @property
+    def parameter_names(self) -> tuple[str, ...]:
+        """Names of the swept specimen parameters (empty without parameters)."""
 
+        return () if self.parameters is None else tuple(self.parameters["names"])
+
+    def coord_dims(self, name: str) -> tuple[str, ...]:
+        """The dims a coordinate lies along: its own, ``("point",)`` for a parameter of points, ``()`` if scalar."""
+
+        if name in self.dims:
+            return (name,)
+        return ("point",) if np.ndim(self.coords[name]) == 1 and "point" in self.dims else ()
+
+    def isel(self, **indices: int) -> "Result":
+        """The readings at one index of each given dim (``point=3``); the dim becomes a scalar coordinate."""
+
+        result = self
+        for dim, index in indices.items():
+            if dim not in result.dims:
+                raise ValueError(f"{dim!r} is not a dim of this result (dims: {', '.join(result.dims)})")
+            size = len(result.coords[dim])
+            if isinstance(index, bool) or not isinstance(index, (int, np.integer)) or not -size <= index < size:
+                raise ValueError(f"the index of {dim!r} must be an integer in [{-size}, {size}) (got {index!r})")
+            axis = result.dims.index(dim)
+            coords = {name: (np.asarray(value[index]) if result.coord_dims(name) == (dim,) else value)
+                      for name, value in result.coords.items()}
+            take = lambda v: np.take(v, int(index), axis=axis)  # noqa: E731
+            result = replace(result, dims=tuple(d for d in result.dims if d != dim), coords=coords,
+                             counts=result.counts.map(take), pilot=None if result.pilot is None else result.pilot.map(take))
+        return result
+
+    def sel(self, **labels: Any) -> "Result":
+        """
+        The readings at one label of each given dim, e.g. ``sel(**{"specimen.thickness": 2e-4})``,
+        ``sel(theta_i=8)`` or ``sel(wavelength=550)``; the dim becomes a scalar coordinate
+        (a result with dims ``(wavelength, theta_i)`` is a sweep again). ``ValueError``
+        naming the labels when none matches (to within 1e-9 relative).
+        """
+
+        indices = {}
+        for dim, label in labels.items():
+            if dim not in self.dims:
+                raise ValueError(f"{dim!r} is not a dim of this result (dims: {', '.join(self.dims)})")
+            values = np.asarray(self.coords[dim], dtype=np.float64)
+            matches = np.flatnonzero(np.isclose(values, float(label), rtol=1e-9, atol=1e-12))
+            if not len(matches):
+                raise ValueError(f"{dim} must be one of the result's labels {values.tolist()} (got {label!r})")
+            indices[dim] = int(matches[0])
+        return self.isel(**indices)
+
+    def as_grid(self) -> "Result":
+        """
+        The same result with θi as a dimension (a single reading becomes a one-angle grid):
+        what spectra, colours, comparisons and plots read. A result with parameter dims
+        raises ``ValueError``: select one parameter point first (:meth:`sel`, :meth:`isel`).
+        """
+
+        extra = [d for d in self.dims if d not in ("wavelength", "theta_i")]
+        if extra:
+            name = extra[0]
+            example = "isel(point=0)" if name == "point" else \
+                f"sel(**{{{name!r}: {float(np.asarray(self.coords[name])[0]):g}}})"
+            raise ValueError(f"this result also has the dims {', '.join(extra)} (a parameter sweep): select one "
+                             f"parameter point first, e.g. result.{example}")
         if "theta_i" in self.dims:
             return self
         coords = {**self.coords, "theta_i": np.atleast_1d(self.coords["theta_i"])}
@@ -396,8 +466,12 @@ class Result:
 
     # -- text --------------------------------------------------------------------------
 
-    def summary(self) -> str:
-        """Human-readable summary: settings, the certificate, and a table for a single reading."""
+    def summary(self, sized_by: str | None = None) -> str:
+        """
+        Human-readable summary: settings, the certificate, and a table for a single reading.
+        ``sized_by`` names the rule that sized N when it was not this result's own bound
+        (a goniophotometer's guarantee over its bins): it replaces "rays given".
+        """
 
         s = self.settings
         incidence = ("cosine-weighted over the hemisphere" if s.beam == "diffuse"
@@ -408,7 +482,14 @@ class Result:
             sizes = " x ".join(f"{n} {'wavelengths' if d == 'wavelength' else d}"
                                for d, n in reversed(list(zip(self.dims, self.shape))))
             head = f"{s.beam} sweep: {sizes} (phi_i = {s.phi_i:g} deg, sampling = {s.sampling}, seed = {s.seed})"
-        lines = [head, self._certificate() + f"; {self.seconds * 1e3:.1f} ms"]
+        spent = f"; {self.seconds * 1e3:.1f} ms"
+        if self.dims != ("wavelength",):
+            spent += " of tracing summed over the batches (on Dask workers: worker time, not wall time)"
+        lines = [head, self._certificate(sized_by) + spent]
+        fixed = [f"{name} = {float(self.coords[name]):g}" for name in self.parameter_names
+                 if not self.coord_dims(name)]
+        if fixed:
+            lines.insert(1, "specimen parameters: " + ", ".join(fixed))
         if self.dims == ("wavelength",):
             lines += self._table()
         if self.wavelength_independent and len(self.wavelengths) > 1:
@@ -428,19 +509,22 @@ class Result:
         angles = np.atleast_1d(self.coords["theta_i"])
         return f"{angles[0]:g}" if len(angles) == 1 else f"{angles.min():g}..{angles.max():g}"
 
-    def _certificate(self) -> str:
+    def _certificate(self, sized_by: str | None = None) -> str:
         s = self.settings
         unit = "wavelength" if self.dims == ("wavelength",) else "reading"
         pilot = "" if self.pilot is None else f" + {int(self.pilot.rays.max()):,} pilot"
         counted = f"N = {_span(self.rays)}{pilot} rays per {unit}"
         mu = self.certified_mu
         if np.all(np.isnan(mu)):
-            return f"{counted} (NOT CERTIFIED: see the warnings below)"
+            return f"{counted} ({'' if sized_by is None else sized_by + '; '}NOT CERTIFIED: see the warnings below)"
         worst = _round_up(float(np.nanmax(mu)))
         together = "R and T together" if s.joint else "|rho - m/N|"
-        rule = f"{s.bound} bound" if s.rays is None else f"rays given; {s.bound} bound"
+        if sized_by is not None:
+            rule = f"{sized_by}; at these N the {s.bound} bound gives"
+        else:
+            rule = f"{s.bound} bound" if s.rays is None else f"rays given; {s.bound} bound"
         text = f"{counted} ({rule}: {together} < {worst:g} with probability >= {1 - s.delta:g}"
-        if worst > s.mu * (1 + 1e-9):
+        if sized_by is None and worst > s.mu * (1 + 1e-9):
             text += f"; mu = {s.mu:g} was asked: these rays guarantee only {worst:g}"
         if np.any(np.isnan(mu)):
             text += "; some readings NOT CERTIFIED"
@@ -499,6 +583,10 @@ class Result:
             "scene": self.scene,
             "wavelength_independent": self.wavelength_independent,
             "version": self.version,
+            **({} if self.parameters is None else {
+                "parameters": self.parameters,
+                "parameter_coords": {name: plain(self.coords[name]) for name in (*self.parameter_names, "point")
+                                     if name in self.coords}}),
         }
 
     @classmethod
@@ -516,10 +604,14 @@ class Result:
                 return Counts(**{name: np.array(source[name], dtype=np.float64 if name == "largest_weight"
                                                 else np.int64) for name in Counts.names()})
 
+            parameters = data.get("parameters")
+            extra = {name: np.asarray(value, dtype=np.int64 if name == "point" else np.float64)
+                     for name, value in (data.get("parameter_coords") or {}).items()}
             return cls(
                 dims=dims,
                 coords={"wavelength": np.asarray(data["wavelengths"], dtype=np.float64),
-                        "theta_i": np.asarray(data["theta_i"], dtype=np.float64)},
+                        "theta_i": np.asarray(data["theta_i"], dtype=np.float64), **extra},
+                parameters=None if parameters is None else dict(parameters),
                 counts=counts(data),
                 pilot=None if data["pilot"] is None else counts(data["pilot"]),
                 settings=Settings(**data["settings"]),
@@ -555,11 +647,15 @@ class Result:
             variables[f"{name}_upper"] = (self.dims, upper, bound)
         coords = {"wavelength": ("wavelength", self.wavelengths),
                   "theta_i": ("theta_i", self.coords["theta_i"]) if "theta_i" in self.dims else self.theta_i}
+        for name in (*self.parameter_names, "point"):
+            if name in self.coords:
+                coords[name] = (self.coord_dims(name), self.coords[name])
         s = self.settings
         attrs = {"mu": s.mu, "delta": s.delta, "bound": s.bound, "joint": int(s.joint), "beam": s.beam,
                  "sampling": s.sampling, "seed": s.seed, "phi_i": s.phi_i, "interval_delta": self.interval_delta,
                  **asdict(self.geometry), "seconds": self.seconds, "scene": self.scene,
                  "wavelength_independent": int(self.wavelength_independent), "version": self.version,
+                 **({} if self.parameters is None else {"parameters": json.dumps(self.parameters)}),
                  "result_json": json.dumps(data)}
         dataset = xr.Dataset(variables, coords=coords, attrs=attrs)
         dataset["wavelength"].attrs["units"] = "nm"
@@ -573,6 +669,9 @@ class Result:
         """The result of a dataset made by :meth:`to_dataset`."""
 
         if "result_json" not in dataset.attrs:
+            if "gonio_json" in dataset.attrs:
+                raise ValueError("this is a goniophotometer reading: read it with virtspec_mi.read_gonio "
+                                 "(GonioResult.read); its .result is the spectrophotometer reading")
             raise ValueError("not a virtspec-mi result (no result_json attribute)")
         return cls.from_dict(json.loads(dataset.attrs["result_json"]))
 

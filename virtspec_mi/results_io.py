@@ -6,19 +6,22 @@ The file formats of a :class:`~virtspec_mi.result.Result` (which builds the data
 and the plain data; this module only writes and reads them, by suffix):
 
 - ``.nc`` — NetCDF-4 of ``result.to_dataset()``: an ``xarray.Dataset`` over the
-  result's dims (``wavelength`` in nm, ``theta_i`` in degrees, …) with the estimates,
+  result's dims (``wavelength`` in nm, ``theta_i`` in degrees, a parameter sweep's
+  parameters or ``point``, …) with the estimates,
   parts, every count, the Clopper–Pearson bounds and ``certified_mu`` as variables and
   the settings, geometry and provenance as attributes;
 - ``.csv`` — one row per reading with the same variables as columns, after one
   ``# virtspec-mi result {…}`` line holding the attributes as JSON;
 - ``.json`` — ``result.as_dict()``: one object (what ``virtspec measure --json``
-  prints), arrays as nested lists over the dims.
+  prints), arrays as nested lists over the dims;
+- ``.zarr`` — a Zarr store (a directory) of the same dataset, which a sweep fills region
+  by region as its batches finish (:mod:`virtspec_mi.zarr_table`).
 
 Each round-trips exactly (the counts are the data; everything else is derived).
 :func:`write_spectra_csv` / :func:`read_spectra_csv` write and read R, T and A at one θi
 in colour-science's CSV spectral format.
 
-Every file is written atomically: into a temporary file beside it (``.NAME.*.tmp``),
+Every file (not a Zarr store) is written atomically: into a temporary file beside it (``.NAME.*.tmp``),
 flushed to disk, then renamed onto the name. A failed or interrupted write (a full
 disk, a directory of that name, Ctrl-C) leaves the old file — or none — and no
 temporary; readers and concurrent writers never see a partial file.
@@ -52,7 +55,7 @@ __all__ = [
     "is_result_csv",
 ]
 
-SUFFIXES: tuple[str, ...] = (".nc", ".csv", ".json")
+SUFFIXES: tuple[str, ...] = (".nc", ".csv", ".json", ".zarr")
 """Result file formats understood by :func:`write` and :func:`read`."""
 
 _CSV_HEADER = "# virtspec-mi result "
@@ -66,6 +69,10 @@ def write(result: Any, path: str | os.PathLike) -> Path:
 
     path = Path(path)
     suffix = result_format(path)
+    if suffix == ".zarr":
+        from virtspec_mi.zarr_table import write_result
+
+        return write_result(result, path)
     with _atomic(path) as temporary:
         if suffix == ".nc":
             result.to_dataset().to_netcdf(temporary, engine="netcdf4")
@@ -83,9 +90,11 @@ def check_output(path: str | os.PathLike, name: str = "out") -> Path:
     """
 
     path = Path(path)
-    result_format(path)
-    if path.is_dir():
+    zarr = result_format(path) == ".zarr"
+    if path.is_dir() and not zarr:
         raise ValueError(f"{name} {path} is a directory; give a file path")
+    if zarr and path.exists() and not path.is_dir():
+        raise ValueError(f"{name} {path} is a file; a Zarr store is a directory")
     if not path.parent.exists():
         raise ValueError(f"{name} {path} cannot be written: directory {path.parent} does not exist")
     if not path.parent.is_dir():
@@ -115,6 +124,12 @@ def read(path: str | os.PathLike) -> tuple[str, Any]:
 
     path = Path(path)
     suffix = result_format(path, "file")
+    if suffix == ".zarr":
+        if not path.is_dir():
+            raise ValueError(f"Zarr result not found: {path}")
+        from virtspec_mi.zarr_table import as_plain, read as read_zarr
+
+        return "plain", as_plain(read_zarr(path))
     if not path.is_file():
         raise ValueError(f"result file not found: {path}")
     if suffix == ".nc":

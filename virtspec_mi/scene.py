@@ -3,7 +3,10 @@ Scenes: loading, building and fingerprinting instrument scenes
 ==============================================================
 
 - :func:`load_scene` accepts an XML path, a scene dict or a loaded ``mi.Scene`` and
-  turns Mitsuba's loader errors into messages that name the problem;
+  turns Mitsuba's loader errors into messages that name the problem; an XML scene's
+  parameters (``$name`` with a ``<default name="name" value="…"/>``) are set by
+  ``defines`` (name → value), as Mitsuba's ``mitsuba -D name=value`` and
+  ``mi.load_file(path, name=value)`` do;
 - :func:`find_instrument` loads a scene and reads its instrument
   (:func:`virtspec_mi.instrument.read_instrument`);
 - :func:`instrument_scene` builds the paper's instrument (r₁ = 8, r₂ = 12.5, D = 100, in
@@ -37,13 +40,20 @@ from virtspec_mi.instrument import EMITTER_ID, SPECIMEN_ID, Instrument, SceneErr
 from virtspec_mi.runtime import mitsuba
 from virtspec_mi.settings import SETTING_NAMES
 
-__all__ = ["load_scene", "find_instrument", "instrument_scene", "placeholder_sensor", "scene_fingerprint"]
+__all__ = [
+    "load_scene", "check_defines", "find_instrument", "instrument_scene", "placeholder_sensor", "scene_fingerprint",
+    "tabulated_bsdf",
+]
 
 
-def load_scene(scene: Any) -> Any:
-    """A loaded ``mi.Scene`` from an XML path, a scene dict or an ``mi.Scene``."""
+def load_scene(scene: Any, defines: dict[str, Any] | None = None) -> Any:
+    """
+    A loaded ``mi.Scene`` from an XML path, a scene dict or an ``mi.Scene``; ``defines``
+    (name → value) sets the XML file's ``$name`` parameters (only for an XML path).
+    """
 
     mi = mitsuba()
+    defines = check_defines(defines, scene)
     if isinstance(scene, mi.Scene):
         return scene
     try:
@@ -53,7 +63,8 @@ def load_scene(scene: Any) -> Any:
                 raise SceneError(f"scene {path} is a directory; give a Mitsuba XML scene file")
             if not path.is_file():
                 raise SceneError(f"scene file not found: {path}")
-            return mi.load_file(str(path))
+            _check_defined(path, defines)
+            return mi.load_file(str(path), **defines)
         if isinstance(scene, dict):
             _check_dict(scene)
             return mi.load_dict(scene)
@@ -62,6 +73,49 @@ def load_scene(scene: Any) -> Any:
     except Exception as error:  # Mitsuba raises RuntimeError/ValueError with its parser text
         raise SceneError(f"could not load scene {_describe(scene)}: {_clean(error)}{_suggestion(error)}") from error
     raise SceneError(f"scene must be an XML path, a dict or a mitsuba Scene (got {type(scene).__name__})")
+
+
+def check_defines(defines: dict[str, Any] | None, scene: Any = None) -> dict[str, str]:
+    """
+    ``defines`` as XML parameter strings: names are identifiers, values numbers or
+    strings; ``ValueError`` naming the problem, also when given for a scene that is not
+    an XML path (a dict or a loaded scene has no ``$name`` to set).
+    """
+
+    if not defines:
+        return {}
+    if not isinstance(defines, dict):
+        raise ValueError(f"defines must be a dict of name -> value (got {type(defines).__name__})")
+    if scene is not None and not isinstance(scene, (str, os.PathLike)):
+        raise ValueError("defines (-D name=value) set the $name parameters of an XML scene file; the scene given "
+                         f"is a {type(scene).__name__}")
+    checked = {}
+    for name, value in defines.items():
+        if not isinstance(name, str) or not name.isidentifier() or name in _LOAD_FILE_ARGUMENTS:
+            raise ValueError(f"a scene parameter name (-D NAME=value) must be an identifier other than "
+                             f"{', '.join(_LOAD_FILE_ARGUMENTS)} (got {name!r})")
+        if isinstance(value, bool) or not isinstance(value, (str, int, float)):
+            raise ValueError(f"scene parameter {name!r} must be a number or a string (got {value!r})")
+        checked[name] = value if isinstance(value, str) else repr(value)
+    return checked
+
+
+def _check_defined(path: Path, defines: dict[str, str]) -> None:
+    """Each name of ``defines`` must be a ``$name`` the XML file uses (``ValueError`` with its names)."""
+
+    if not defines:
+        return
+    used = sorted(set(re.findall(r"\$([A-Za-z_]\w*)", re.sub(r"<!--.*?-->", "", path.read_text(errors="replace"),
+                                                             flags=re.S))))
+    for name in defines:
+        if name not in used:
+            close = difflib.get_close_matches(name, used, n=1, cutoff=0.6)
+            hint = f"; did you mean {close[0]!r}?" if close else ""
+            raise SceneError(f"scene parameter {name!r} (-D) is not used by {path} (its parameters: "
+                             f"{', '.join(used) or 'none'}){hint}")
+
+
+_LOAD_FILE_ARGUMENTS = ("path", "update_scene", "parallel")  # mi.load_file's own keywords
 
 
 def _check_dict(scene: dict, path: str = "") -> None:
@@ -75,10 +129,10 @@ def _check_dict(scene: dict, path: str = "") -> None:
             _check_dict(value, where)
 
 
-def find_instrument(scene: Any) -> Instrument:
-    """Load ``scene`` (XML path, dict or ``mi.Scene``) and read its instrument."""
+def find_instrument(scene: Any, defines: dict[str, Any] | None = None) -> Instrument:
+    """Load ``scene`` (XML path, dict or ``mi.Scene``; ``defines`` for an XML file) and read its instrument."""
 
-    return read_instrument(load_scene(scene))
+    return read_instrument(load_scene(scene, defines))
 
 
 def instrument_scene(
@@ -125,16 +179,18 @@ def placeholder_sensor() -> dict:
     return {"type": "perspective", "film": {"type": "hdrfilm", "width": 1, "height": 1}}
 
 
-def scene_fingerprint(scene: Any, instrument: Instrument) -> str:
+def scene_fingerprint(scene: Any, instrument: Instrument, defines: dict[str, Any] | None = None) -> str:
     """
     A short fingerprint of a scene for result files and checkpoints: SHA-256 over the
-    XML file's bytes (or the dict's ``repr``), the specimen BSDF's description, the
-    specimen frame and the geometry.
+    XML file's bytes (or the dict's ``repr``), the XML parameters set (``defines``, when
+    any), the specimen BSDF's description, the specimen frame and the geometry.
     """
 
     digest = hashlib.sha256()
     if isinstance(scene, (str, os.PathLike)):
         digest.update(Path(scene).read_bytes())
+        if defines:
+            digest.update(repr(sorted(check_defines(defines).items())).encode())
     elif isinstance(scene, dict):
         digest.update(repr(sorted(scene.items(), key=lambda item: str(item[0]))).encode())
     digest.update(str(instrument.bsdf).encode())
@@ -164,3 +220,26 @@ def _suggestion(error: Exception) -> str:
     hints = [f"'{name}' is not a setting: did you mean '{match[0]}'?" for name, match in close.items()
              if match and match[0] != name]
     return f" ({'; '.join(hints)})" if hints else ""
+
+
+def tabulated_bsdf(source: Any) -> dict:
+    """
+    The dict-scene entry of a ``tabulated`` BSDF holding ``source`` — a goniophotometer
+    dataset (``xarray.Dataset``), an object with ``to_dataset()``, a NetCDF path or a
+    :class:`virtspec_mi.bsdf_table.BSDFTable`. Mitsuba properties hold Dr.Jit arrays but
+    no Python objects, so the table travels as flat ``Float64`` arrays (``fraction`` in C
+    order over wavelength, theta_i, theta_o, phi_o);
+    ``vm.instrument_scene(vm.tabulated_bsdf(dataset))`` measures it.
+    """
+
+    from virtspec_mi.bsdf_table import BSDFTable, read_table
+
+    mi = mitsuba()
+    table = source if isinstance(source, BSDFTable) else read_table(source)
+    entry: dict[str, Any] = {"type": "tabulated"}
+    for name, value in table.properties().items():
+        if isinstance(value, np.ndarray):
+            entry[name] = mi.Float64(np.ascontiguousarray(value, dtype=np.float64).ravel())
+        else:
+            entry[name] = value
+    return entry

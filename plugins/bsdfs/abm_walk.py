@@ -43,6 +43,13 @@ Conventions
 - No ``eval``/``pdf``: a sample-only BSDF (both return 0).
 - ``wavelength_range = (400, 2500)`` nm: the instrument refuses other wavelengths
   with a ``ValueError`` before tracing.
+- **Parameters through ``mi.traverse``.** Every numeric parameter of
+  :data:`LEAF_DEFAULTS` (``thickness`` … the aspect ratios) shows as
+  ``specimen.bsdf.NAME`` (an opaque ``Float64``); setting it and calling ``update()``
+  checks it as at load time (``ValueError``; the leaf is left as it was) and rebuilds the
+  α·d_m table (an evaluated array) and the lobe exponents (opaque): one compiled walk
+  serves every value. ``sieve_detour``, ``side``, ``lookup`` and ``max_steps`` are code
+  (a new value compiles a new kernel) and are not exposed.
 
 References
 ----------
@@ -282,8 +289,31 @@ class ABMLeaf(SampledOnlyBSDF):
     # -- parameters -------------------------------------------------------------------
 
     def _number(self, props: mi.Properties, name: str, default: float) -> float:
+        return self._checked(name, props.get(name, default))
+
+    def _checked(self, name: str, value: Any) -> float:
         check, allowed = _CHECKS[name]
-        return check_float32(f"{self.PLUGIN}: '{name}'", props.get(name, default), f"be {allowed}", check)
+        return check_float32(f"{self.PLUGIN}: '{name}'", value, f"be {allowed}", check)
+
+    def exposed_parameters(self) -> dict[str, float]:
+        """Every numeric parameter (``thickness``, ``chlorophyll_a`` …, the aspect ratios) for ``mi.traverse``."""
+
+        return dict(self.params)
+
+    def set_parameters(self, values: dict[str, float]) -> None:
+        """
+        New numeric parameters (each checked as at load time; ``ValueError`` leaves the leaf
+        as it was), then the spectral table α·d_m and the lobe exponents rebuilt as data:
+        evaluated arrays and opaque scalars, so the walk's kernel is not recompiled.
+        """
+
+        unknown = sorted(set(values) - set(self.params))
+        if unknown:
+            raise ValueError(f"{self.PLUGIN}: no parameter {unknown[0]!r} (known: {', '.join(self.params)})")
+        checked = {name: self._checked(name, value) for name, value in values.items()}
+        if any(checked[name] != self.params[name] for name in checked):
+            self.params = {**self.params, **checked}
+            self._derived_tables()
 
     def _choice(self, props: mi.Properties, name: str, default: Any, allowed: tuple) -> Any:
         value = props.get(name, default)
@@ -311,13 +341,18 @@ class ABMLeaf(SampledOnlyBSDF):
         """Spectral tables (per grid wavelength) and per-(interface, direction) rows as Dr.Jit arrays."""
 
         self.data = load_leaf_data(self.data_dir)
+        self._n_c = mi.Float(self.data.n_cuticle)
+        self._n_m = mi.Float(self.data.n_mesophyll)
+        self._n_a = mi.Float(self.data.n_antidermal)
+        self._derived_tables()
+
+    def _derived_tables(self) -> None:
+        """α·d_m per grid wavelength and the per-(interface, direction) rows, from :attr:`params`."""
+
         # α·d_m beyond float32 (a leaf metres thick, concentrations of 1e30) absorbs every
         # ray that enters the mesophyll, as the largest float32 does: no overflow to inf.
         tau = np.minimum(self.absorption_coefficient() * self.mesophyll_thickness, FLOAT32_MAX)
         self._tau = mi.Float(tau)
-        self._n_c = mi.Float(self.data.n_cuticle)
-        self._n_m = mi.Float(self.data.n_mesophyll)
-        self._n_a = mi.Float(self.data.n_antidermal)
         exponent = {None: math.inf, **{name: self.params[name] for name in self.params if name.endswith("_aspect_ratio")}}
         codes, exponents = [], []  # row 2k: moving down at interface k; row 2k + 1: moving up
         for face in self.INTERFACES:

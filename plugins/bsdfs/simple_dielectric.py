@@ -20,7 +20,8 @@ eta : float, default 2.419
     Relative index of refraction (interior / exterior), 10⁻⁶ ≤ η ≤ 10⁶ (:data:`ETA_RANGE`;
     booleans, NaN and infinities are refused). 2.419 is diamond
     (the paper's specimen). η = 1 is no interface: R = 0 exactly, even at grazing
-    incidence.
+    incidence. Exposed to ``mi.traverse`` as ``eta`` (an opaque value: a new η reuses
+    the compiled kernel, except a change to or from η = 1, a branch of its own).
 
 References
 ----------
@@ -28,6 +29,8 @@ Baranoski, Rokne & Xu (2001), Sect. 5.1; Fresnel equations as in ``mi.fresnel``.
 """
 
 from __future__ import annotations
+
+from typing import Any
 
 import drjit as dr
 import mitsuba as mi
@@ -52,9 +55,7 @@ class SimpleDielectric(SampledOnlyBSDF):
 
     def __init__(self, props: mi.Properties) -> None:
         super().__init__(props)
-        low, high = ETA_RANGE
-        self.eta = check_float32("simple_dielectric: 'eta'", props.get("eta", 2.419),
-                                 f"be a number > 0 with {low:g} <= eta <= {high:g}", lambda value: low <= value <= high)
+        self._set_eta(props.get("eta", 2.419))
         both_sides = mi.BSDFFlags.FrontSide | mi.BSDFFlags.BackSide
         self.m_components = [
             mi.BSDFFlags.DeltaReflection | both_sides,
@@ -62,8 +63,28 @@ class SimpleDielectric(SampledOnlyBSDF):
         ]
         self.m_flags = self.m_components[0] | self.m_components[1]
 
+    def _set_eta(self, eta: Any) -> None:
+        low, high = ETA_RANGE
+        self.eta = check_float32("simple_dielectric: 'eta'", eta,
+                                 f"be a number > 0 with {low:g} <= eta <= {high:g}", lambda value: low <= value <= high)
+        self._eta = dr.opaque(mi.Float, self.eta)  # data, not code: a new eta reuses the compiled kernel
+
+    def exposed_parameters(self) -> dict[str, float]:
+        """``eta``, for ``mi.traverse``."""
+
+        return {"eta": self.eta}
+
+    def set_parameters(self, values: dict[str, float]) -> None:
+        """A new ``eta`` (checked as at load time; ``ValueError`` leaves the specimen as it was)."""
+
+        unknown = sorted(set(values) - {"eta"})
+        if unknown:
+            raise ValueError(f"simple_dielectric: no parameter {unknown[0]!r} (known: eta)")
+        if "eta" in values:
+            self._set_eta(values["eta"])
+
     def sample(self, ctx, si, sample1, sample2, active=True):
-        fresnel, cos_theta_t, eta_it, eta_ti = mi.fresnel(mi.Frame3f.cos_theta(si.wi), self.eta)
+        fresnel, cos_theta_t, eta_it, eta_ti = mi.fresnel(mi.Frame3f.cos_theta(si.wi), self._eta)
         if self.eta == 1.0:
             # No interface at all: F = 0 at every angle (float32 Fresnel would round the
             # grazing limit cos θ → 0 up to F = 1).

@@ -73,6 +73,12 @@ spectra are checked at the wavelengths of a measurement before it is traced
 (:meth:`TurbidSlab.check_wavelengths`). When every parameter is a number the slab
 declares :attr:`TurbidSlab.wavelength_independent` ``True``.
 
+``mi.traverse`` shows every parameter given as a number and ``thickness`` as
+``specimen.bsdf.NAME`` (opaque ``Float64``): setting one and calling ``update()`` checks
+it as above and rebuilds the walk's opaque scalars, so a parameter sweep
+(:mod:`virtspec_mi.parameters`) reuses the compiled kernel. A parameter given as a
+spectrum is not exposed.
+
 References
 ----------
 L. Wang, S.L. Jacques, L. Zheng (1995), *MCML — Monte Carlo modeling of light
@@ -148,6 +154,13 @@ def _check_number(name: str, value: float) -> float:
     return check_float32(f"turbid_slab: '{name}'", value, f"satisfy {words} and be finite", test)
 
 
+def _check_thickness(thickness: Any) -> float:
+    low, high = COEFFICIENT_RANGE
+    return check_float32(
+        "turbid_slab: 'thickness'", thickness, f"be a number > 0 or inf ({low:g} <= thickness <= {high:g})",
+        lambda value: value == math.inf or low <= value <= high, allow_inf=True)
+
+
 class TurbidSlab(SampledOnlyBSDF):
     """MCML-style analog random walk in a Fresnel-bounded HG slab (see the module docstring)."""
 
@@ -173,21 +186,14 @@ class TurbidSlab(SampledOnlyBSDF):
         thickness = props.get("thickness", 1.0)
         if isinstance(thickness, str):
             thickness = float(thickness) if thickness.strip().lower() in ("inf", "infinity") else math.nan
-        low, high = COEFFICIENT_RANGE
-        self.thickness = check_float32(
-            "turbid_slab: 'thickness'", thickness, f"be a number > 0 or inf ({low:g} <= thickness <= {high:g})",
-            lambda value: value == math.inf or low <= value <= high, allow_inf=True)
-        mu_t = self.constants.get("mu_a", 1.0) + self.constants.get("mu_s", 1.0)
-        if math.isinf(self.thickness) and not self.textures.keys() & {"mu_a", "mu_s"} and mu_t == 0:
-            raise ValueError("turbid_slab: a semi-infinite slab (thickness = inf) needs mu_a + mu_s > 0")
+        self.thickness = _check_thickness(thickness)
+        self._check_semi_infinite(self.constants, self.thickness)
         max_steps = props.get("max_steps", 1_000_000)
         if isinstance(max_steps, bool) or not isinstance(max_steps, int) or not 1 <= max_steps < 2**31:
             raise ValueError(f"turbid_slab: 'max_steps' must be a whole number in [1, 2**31) (got {max_steps!r})")
         self.max_steps = int(max_steps)
         self.wavelength_independent = not self.textures
-        # Opaque scalars: one compiled kernel serves every slab with the same parameter kinds.
-        self._opaque = {name: dr.opaque(mi.Float, value) for name, value in self.constants.items()}
-        self._thickness = dr.opaque(mi.Float, self.thickness)
+        self._make_opaque()
         self._max_steps = dr.opaque(mi.UInt32, self.max_steps)
         both = mi.BSDFFlags.FrontSide | mi.BSDFFlags.BackSide
         self.m_components = [
@@ -197,6 +203,42 @@ class TurbidSlab(SampledOnlyBSDF):
             mi.BSDFFlags.DiffuseTransmission | both | mi.BSDFFlags.NonSymmetric,
         ]
         self.m_flags = self.m_components[0] | self.m_components[1] | self.m_components[2] | self.m_components[3]
+
+    def _make_opaque(self) -> None:
+        # Opaque scalars: one compiled kernel serves every slab with the same parameter kinds.
+        self._opaque = {name: dr.opaque(mi.Float, value) for name, value in self.constants.items()}
+        self._thickness = dr.opaque(mi.Float, self.thickness)
+
+    def _check_semi_infinite(self, constants: dict[str, float], thickness: float) -> None:
+        mu_t = constants.get("mu_a", 1.0) + constants.get("mu_s", 1.0)
+        if math.isinf(thickness) and not self.textures.keys() & {"mu_a", "mu_s"} and mu_t == 0:
+            raise ValueError("turbid_slab: a semi-infinite slab (thickness = inf) needs mu_a + mu_s > 0")
+
+    # -- parameters through mi.traverse ---------------------------------------------------
+
+    def exposed_parameters(self) -> dict[str, float]:
+        """The parameters given as numbers (``mu_a``, ``mu_s``, ``g``, the indices) and ``thickness``."""
+
+        return {**self.constants, "thickness": self.thickness}
+
+    def set_parameters(self, values: dict[str, float]) -> None:
+        """
+        New values, each checked as at load time (``ValueError`` leaves the slab as it was),
+        then the opaque scalars rebuilt: the walk's kernel is not recompiled. A parameter
+        given as a spectrum is not exposed (give it as a number to sweep it).
+        """
+
+        known = self.exposed_parameters()
+        unknown = sorted(set(values) - set(known))
+        if unknown:
+            raise ValueError(f"turbid_slab: no numeric parameter {unknown[0]!r} (known: {', '.join(known)})")
+        constants = {**self.constants, **{name: _check_number(name, value) for name, value in values.items()
+                                          if name != "thickness"}}
+        thickness = _check_thickness(values["thickness"]) if "thickness" in values else self.thickness
+        self._check_semi_infinite(constants, thickness)
+        if constants != self.constants or thickness != self.thickness:
+            self.constants, self.thickness = constants, thickness
+            self._make_opaque()
 
     # -- parameters per lane -------------------------------------------------------------
 

@@ -47,7 +47,18 @@ chunk_size : integer, default 4194304
     depend on it).
 
 These are the fields of :class:`virtspec_mi.settings.Settings` (the one definition;
-this list is checked against it by the tests). ``mi.render(scene, seed=s, spp=n)``
+this list is checked against it by the tests).
+
+Goniophotometer parameters (:data:`virtspec_mi.gonio_bins.GONIO_PARAMETERS`, the one
+definition; any of them makes ``mi.render`` take a goniophotometer reading, kept in
+``integrator.last_reading`` as a :class:`~virtspec_mi.gonio_result.GonioResult`;
+:func:`virtspec_mi.gonio` on the scene uses them as its defaults):
+``theta_o_bins`` (integer or string of edges, default 18 per hemisphere),
+``phi_o_bins`` (integer or string of edges, default 36), ``binning`` (``uniform`` or
+``projected``), ``fold_phi`` (boolean), ``hemispheres`` (``both``, ``reflection``,
+``transmission``), ``guarantee`` (``union``, ``union-exact``, ``dkw``, ``relative``),
+``relative_tolerance`` and ``brdf_floor`` (floats). A bad bin specification raises
+``ValueError`` naming the parameter. ``mi.render(scene, seed=s, spp=n)``
 returns a ``TensorXf`` of shape ``(len(wavelengths), 3)``: per wavelength (rows, in the
 order given) the reflectance, transmittance and absorptance. ``spp`` > 0 sets the rays
 per reading (0 ≤ ``spp`` ≤ 2³² − 1; 0: from the settings); ``seed`` is added to the
@@ -71,7 +82,8 @@ import mitsuba as mi
 import numpy as np
 
 from virtspec_mi.checks import MAX_RAYS, shown_value
-from virtspec_mi.engine import measure_reading
+from virtspec_mi.engine import gonio_reading, measure_reading
+from virtspec_mi.gonio_bins import GONIO_PARAMETERS, gonio_options, make_bins
 from virtspec_mi.instrument import read_instrument
 from virtspec_mi.settings import SETTING_NAMES, Settings
 
@@ -86,8 +98,13 @@ class Spectrophotometer(mi.SamplingIntegrator):
     def __init__(self, props: mi.Properties) -> None:
         super().__init__(props)
         values = {name: props.get(name) for name in SETTING_NAMES if name in props}
+        self.gonio = {name: props.get(name) for name in GONIO_PARAMETERS if name in props}
         try:
             self.settings = Settings(**values)
+            if self.gonio:
+                spec = gonio_options(self.gonio, "spectrophotometer")
+                make_bins(spec["theta_o_bins"], spec["phi_o_bins"], spec["binning"], spec["fold_phi"],
+                          spec["hemispheres"])  # a bad bin specification fails at load time
         except ValueError as error:
             raise ValueError(f"spectrophotometer: {error}") from None
         self.last_reading = None
@@ -95,9 +112,14 @@ class Spectrophotometer(mi.SamplingIntegrator):
     def render(self, scene, sensor=None, seed=0, spp=0, develop=True, evaluate=True):
         rays = check_spp(spp)
         settings = self.settings.updated(seed=(self.settings.seed + int(seed)) % _WORD, rays=rays or None)
-        reading = measure_reading(read_instrument(scene), settings)
+        instrument = read_instrument(scene)
+        if self.gonio:
+            self.last_reading = gonio_reading(instrument, settings, self.gonio)
+            reading = self.last_reading.result.squeeze()
+        else:
+            reading = measure_reading(instrument, settings)
+            self.last_reading = reading
         reading.warn_if_uncertified(stacklevel=2)
-        self.last_reading = reading
         table = np.stack([reading.reflectance, reading.transmittance, reading.absorptance], axis=1)
         return mi.TensorXf(table.astype(np.float32))
 

@@ -42,6 +42,13 @@ Conventions
   0 by construction); weights beyond, or NaN, are ``weight_violations`` and the largest
   is kept.
 - Rays are traced in ``TransportMode.Importance`` (light travels from the emitter).
+- A goniophotometer reading (:func:`tally_gonio_readings`) also bins every reflected
+  or transmitted ray by its outgoing direction in the specimen frame
+  (:mod:`virtspec_mi.gonio_bins`), in the same fused kernel; the fate decides the
+  hemisphere (grazing exits included). A random walk on queued lanes keeps each ray's
+  outgoing direction in the ray's slot when its walk ends, and the chunk's rays are
+  binned after the walk loop by the same rule, fused with the tally. Without bins none
+  of this is compiled: the plain kernel and its counts are unchanged.
 - The emitter disk neither occludes nor self-intersects its rays, and no general
   intersection is needed: each conical ray is aimed at a sampled specimen point and hits
   it by construction; a collimated ray hits the specimen centre.
@@ -63,12 +70,14 @@ import numpy as np
 from virtspec_mi.checks import check_rays
 from virtspec_mi.counts import DIRECTION_TOLERANCE, WEIGHT_ROUNDING, Counts, Fate
 from virtspec_mi.geometry import incidence_frame
+from virtspec_mi.gonio_bins import GonioBins
 from virtspec_mi.kernel.disk import jittered_cell, sample_disk
 from virtspec_mi.kernel.rng import chunk_root, dimension_key, dimension_keys, hash32, to_unit
 from virtspec_mi.kernel.walk import CAPPED_COMPONENT, is_random_walk
 from virtspec_mi.settings import Settings
 
-__all__ = ["ReadingPlan", "WALK_GROUP", "WALK_QUEUES", "WalkQueue", "tally_readings", "trace_rays"]
+__all__ = ["ReadingPlan", "WALK_GROUP", "WALK_QUEUES", "WalkQueue", "first_interactions", "tally_gonio_readings",
+           "tally_readings", "trace_rays"]
 
 _WORD = 1 << 32
 # Dimensions of the random numbers: 0–1 emitter, 2–3 specimen, 4–6 BSDF, 7 survival;
@@ -83,6 +92,8 @@ _RARE_COUNTS = (("weight_violations", _VIOLATION), ("capped", _CAPPED), ("rounde
                 ("invalid_directions", _INVALID))
 # Squared lengths of a valid outgoing direction.
 _LENGTH2 = ((1.0 - DIRECTION_TOLERANCE) ** 2, (1.0 + DIRECTION_TOLERANCE) ** 2)
+# The largest float32 below 1: the key sin²θo of a reflected ray stays below the 90° edge.
+_BELOW_ONE = float(np.nextafter(np.float32(1.0), np.float32(0.0)))
 
 
 WALK_GROUP: int = 16
@@ -164,6 +175,38 @@ def tally_readings(
     (``busy``).
     """
 
+    return _tally(instrument, plans, settings, offsets, on_chunk, None, walk, walk_stats)[0]
+
+
+def tally_gonio_readings(
+    instrument: Any, plans: list[ReadingPlan], settings: Settings, bins: GonioBins, offsets: Any = None,
+    on_chunk: Callable[[int], None] | None = None, walk: WalkQueue = WalkQueue(),
+) -> tuple[Counts, np.ndarray]:
+    """
+    :func:`tally_readings` that also bins every escaping ray by its outgoing direction
+    (θo, φo) in the specimen frame (:class:`~virtspec_mi.gonio_bins.GonioBins`): the
+    same rays and the same counts, plus exact per-bin tallies, an ``int64`` array of
+    shape (readings, θo bins, φo bins). A reflected ray is binned among the bins with
+    θo ≤ 90°, a transmitted one among those with θo ≥ 90° (its fate decides the
+    hemisphere, grazing exits included), so the bins covering a hemisphere add up to
+    its count exactly. Each chunk adds its rays to per-bin 32-bit tallies (two to a
+    64-bit word; a chunk holds < 2³² rays) in the same fused kernel, without atomics
+    (one copy of the table per CPU thread, Dr.Jit's ``ReduceMode.Expand``), summed
+    into ``int64`` on the host: memory is readings × bins (× threads during a chunk),
+    whatever the number of rays. A random-walk specimen on queued lanes (``walk``, as in
+    :func:`tally_readings`) keeps each ray's outgoing direction in the ray's slot when its
+    walk ends and bins the chunk's rays after the walk loop, by the same rule
+    (:meth:`_Kernel._bin`): the bins never depend on ``walk``.
+    """
+
+    return _tally(instrument, plans, settings, offsets, on_chunk, bins, walk)
+
+
+def _tally(instrument: Any, plans: list[ReadingPlan], settings: Settings, offsets: Any,
+           on_chunk: Callable[[int], None] | None, bins: GonioBins | None, walk: WalkQueue,
+           walk_stats: dict | None = None) -> tuple[Counts, np.ndarray | None]:
+    """The chunk loop of :func:`tally_readings` and :func:`tally_gonio_readings`."""
+
     for plan in plans:
         check_rays(plan.rays)  # 1 ... 2³² − 1: a reading crosses at most one 2³² boundary below
     rays = np.array([plan.rays for plan in plans], dtype=np.int64)
@@ -172,7 +215,8 @@ def tally_readings(
     cuts = _cuts(starts, offsets, rays)
     counts = Counts.zeros(len(plans))
     counts.rays[:] = rays
-    kernel = _Kernel(instrument, plans, settings, walk, walk_stats)
+    kernel = _Kernel(instrument, plans, settings, bins, walk, walk_stats)
+    bin_counts = None if bins is None else np.zeros((len(plans), bins.size), dtype=np.int64)
     first = 0
     while first < starts[-1]:
         size = int(min(settings.chunk_size, cuts[np.searchsorted(cuts, first, side="right")] - first))
@@ -180,11 +224,11 @@ def tally_readings(
             np.searchsorted(starts, first, side="right") - 1,
             np.searchsorted(starts, first + size, side="left"),
         )
-        kernel.run(first, size, slots, starts, offsets, counts)
+        kernel.run(first, size, slots, starts, offsets, counts, bin_counts)
         first += size
         if on_chunk is not None:  # how many readings are complete (for a progress bar)
             on_chunk(int(np.searchsorted(starts[1:], first, side="right")))
-    return counts
+    return counts, None if bins is None else bin_counts.reshape(len(plans), *bins.shape)
 
 
 def _cuts(starts: np.ndarray, offsets: np.ndarray, rays: np.ndarray) -> np.ndarray:
@@ -216,29 +260,52 @@ def _check_offsets(offsets: Any, rays: np.ndarray) -> np.ndarray:
     return offsets
 
 
-def trace_rays(instrument: Any, plan: ReadingPlan, settings: Settings, count: int) -> dict:
+def trace_rays(instrument: Any, plan: ReadingPlan, settings: Settings, count: int,
+               bins: GonioBins | None = None) -> dict:
     """
     The first ``count`` rays of one reading, ray by ray, through the same kernel code
     as :func:`tally_readings` (for tests and diagnostics; a random walk runs as one
     ``sample()`` per ray, whose fates the queued lanes reproduce): NumPy arrays of emitter
     points ``origin`` (specimen frame), specimen points ``target``, incident
     directions ``wi`` (towards the emitter), outgoing ``wo``, ``fate`` (a
-    :class:`~virtspec_mi.counts.Fate` code) and the BSDF ``weight``.
+    :class:`~virtspec_mi.counts.Fate` code) and the BSDF ``weight``; with ``bins``, also
+    each ray's flat ``bin`` (θo bin × φo bins + φo bin; the number of bins: not binned).
     """
 
-    kernel = _Kernel(instrument, [plan], settings)
+    kernel = _Kernel(instrument, [plan], settings, bins)
     lanes = kernel.trace(0, count, np.array([0]), np.array([0, plan.rays]), np.array([0]))
     dr.eval(lanes)
     return {name: np.array(value).T if np.ndim(value) > 1 else np.array(value)
-            for name, value in lanes.items()}
+            for name, value in lanes.items() if value is not None}
+
+
+def first_interactions(instrument: Any, plan: ReadingPlan, settings: Settings, first: int, size: int,
+                       offset: int) -> dict:
+    """
+    Symbolic per-lane first interactions (nothing evaluated) of rays [first, first + size) of
+    one reading whose rays start at global index ``offset``: the same random numbers, beam
+    and specimen ``sample`` as :func:`tally_readings` gives that reading, so a walk that
+    continues them (:mod:`virtspec_mi.kernel.sphere_walk`) keeps the hemispherical fates of
+    the very same rays. The chunk must not cross a 2³² boundary of the global index.
+    Returns the lanes of :meth:`_Kernel.trace` (``wo``, ``target``, ``fate``, ``rare`` …):
+    a random-walk specimen runs here as one ``sample()`` per lane (its walk as one loop,
+    not on queued lanes), whose fates the queued lanes of :func:`tally_readings` reproduce.
+    """
+
+    kernel = _Kernel(instrument, [plan], settings)
+    return kernel.trace(first, size, np.array([0]), np.array([0, plan.rays]), np.array([offset], dtype=np.int64))
 
 
 class _Kernel:
     """The per-chunk ray kernel of one :func:`tally_readings` call."""
 
     def __init__(self, instrument: Any, plans: list[ReadingPlan], settings: Settings,
-                 walk: WalkQueue = WalkQueue(lanes=0), walk_stats: dict | None = None) -> None:
+                 bins: GonioBins | None = None, walk: WalkQueue = WalkQueue(lanes=0),
+                 walk_stats: dict | None = None) -> None:
         self.bsdf = instrument.bsdf
+        self.bins = bins
+        if bins is not None:
+            self.phi_i = np.array([plan.phi_i for plan in plans], dtype=np.float64)
         self.settings = settings
         # A random-walk specimen's steps run on queued lanes (walk.lanes = 0: sample() per ray).
         self.queued = walk.lanes > 0 and is_random_walk(self.bsdf)
@@ -266,8 +333,11 @@ class _Kernel:
     # -- one chunk ---------------------------------------------------------------------
 
     def run(self, first: int, size: int, slots: np.ndarray, starts: np.ndarray,
-            offsets: np.ndarray, counts: Counts) -> None:
-        """Add the counts of the packed lanes [first, first + size) to readings ``slots`` of ``counts``."""
+            offsets: np.ndarray, counts: Counts, bin_counts: np.ndarray | None = None) -> None:
+        """
+        Add the counts of the packed lanes [first, first + size) to readings ``slots`` of
+        ``counts`` (and, with bins, their per-bin tallies to rows ``slots`` of ``bin_counts``).
+        """
 
         lanes = (self.walk if self.queued else self.trace)(first, size, slots, starts, offsets)
         fate = lanes["fate"]
@@ -280,7 +350,26 @@ class _Kernel:
         if self.delta_lobes == "mixed":
             packed_codes[("specular_reflected", "regular_transmitted")] = dr.select(
                 lanes["specular"], mi.UInt64(1), mi.UInt64(0)) | dr.select(lanes["regular"], mi.UInt64(_WORD), mi.UInt64(0))
-        dr.eval(*packed_codes.values(), rare)  # the one fused ray kernel
+        if self.bins is None:
+            dr.eval(*packed_codes.values(), rare)  # the one fused ray kernel
+        else:
+            # The same kernel also adds each escaping ray to its reading's bin (a queued walk: the kernel
+            # after the walk loop, from each ray's kept wo and fate): two bins per UInt64 word
+            # (32-bit fields: a chunk holds < 2^32 rays, so no field overflows), scatter-added into
+            # per-thread copies of the table (ReduceMode.Expand: no atomics; Dr.Jit sums the copies).
+            # Neighbouring bins (φo neighbours) share a word, so fewer distinct words per SIMD packet:
+            # measured the fastest of 32-bit/64-bit tallies × Local/Expand/Direct (benchmarks/gonio.py).
+            size_k = self.bins.size
+            flat = len(slots) * size_k
+            tally = dr.zeros(mi.UInt64, (flat + 1) // 2)
+            where = lanes["bin"] if len(slots) == 1 else lanes["slot"] * size_k + lanes["bin"]
+            value = dr.select((where & 1) != 0, mi.UInt64(_WORD), mi.UInt64(1))
+            dr.scatter_reduce(dr.ReduceOp.Add, tally, value, where >> 1, lanes["bin"] < size_k,
+                              mode=dr.ReduceMode.Expand)
+            dr.eval(*packed_codes.values(), rare, tally)
+            words = np.array(tally, dtype=np.uint64)
+            pairs = np.stack([words & np.uint64(_WORD - 1), words >> np.uint64(32)], axis=1).reshape(-1)[:flat]
+            bin_counts[slots] += pairs.astype(np.int64).reshape(len(slots), size_k)
         bounds, _ = _lane_ranges(first, size, slots, starts)
         ends = np.append(bounds[1:], size)
         for (low, high), packed_code in packed_codes.items():
@@ -317,11 +406,15 @@ class _Kernel:
 
         source = _RaySource(self, first, size, slots, starts, offsets)
         lane = dr.arange(mi.UInt32, size)
-        ray = source.incident(lane)
+        slot = source.slot(lane)
+        ray = source.incident(lane, slot)
         bs, weight = self._sample(ray["si"], ray["sample1"], ray["sample2"])
         wi = ray["si"].wi
         judged = self._judge(wi.z >= 0.0, bs, weight, ray["survival"], size)
-        return {"origin": ray["origin"], "target": ray["target"], "wi": wi, **judged}
+        lanes = {"origin": ray["origin"], "target": ray["target"], "wi": wi, **judged}
+        if self.bins is not None:
+            lanes.update(self._binned(source, slot, judged["wo"], judged["fate"]))
+        return lanes
 
     def walk(self, first: int, size: int, slots: np.ndarray, starts: np.ndarray,
              offsets: np.ndarray) -> dict:
@@ -335,7 +428,10 @@ class _Kernel:
         Every ray's random numbers are keyed on its global index, so the fates — and the
         counts — are those of
         :meth:`trace`, whichever lane ran the ray. Returns the per-ray ``fate``, ``rare``,
-        ``weight`` (of violating rays), ``specular`` and ``regular`` (evaluated).
+        ``weight`` (of violating rays), ``specular`` and ``regular`` (evaluated); with bins
+        (a goniophotometer reading) also each ray's ``wo``, kept in its slot when its walk
+        ended, and its ``bin`` and ``slot`` derived from them after the loop as in
+        :meth:`trace` (symbolic: they fuse with the bins' tally).
         """
 
         source = _RaySource(self, first, size, slots, starts, offsets)
@@ -343,6 +439,8 @@ class _Kernel:
         width, queue = min(size, self.walk_queue.lanes), self.walk_queue.queue
         codes = dr.zeros(mi.UInt32, size)  # fate | rare << 4 | delta << 8, per ray
         weights = dr.zeros(mi.Float, size)
+        # A goniophotometer reading keeps each ray's outgoing direction (binned after the loop).
+        outgoing = [dr.zeros(mi.Float, size) for _ in range(3)] if self.bins is not None else None
         # Queues: "stride" — lane l runs positions l, l + L, …; "counter" — one shared counter
         # hands out the next position; "group" — each group of WALK_GROUP lanes (a SIMD packet,
         # run by one thread) shares a counter over its own contiguous range of positions.
@@ -393,6 +491,9 @@ class _Kernel:
             code = judged["fate"] | (judged["rare"] << 4) | dr.select(delta, mi.UInt32(256), mi.UInt32(0))
             dr.scatter(codes, code, position)
             dr.scatter(weights, judged["weight"], position, (judged["rare"] & _VIOLATION) != 0)
+            if outgoing is not None:
+                for target, value in zip(outgoing, (judged["wo"].x, judged["wo"].y, judged["wo"].z)):
+                    dr.scatter(target, value, position)
             group = cursor.get("group")
             position = next_ray(position, group)
 
@@ -429,12 +530,16 @@ class _Kernel:
             dr.eval(iterations, busy)
             stats.setdefault("iterations", []).append(np.array(iterations))
             stats.setdefault("busy", []).append(np.array(busy))
-        dr.eval(codes, weights)
+        dr.eval(codes, weights, *(outgoing or ()))
         fate = codes & 15
         rare = (codes >> 4) & 15
         delta = (codes & 256) != 0
-        return {"fate": fate, "rare": rare, "weight": weights,
-                "specular": (fate == int(Fate.REFLECTED)) & delta, "regular": (fate == int(Fate.TRANSMITTED)) & delta}
+        lanes = {"fate": fate, "rare": rare, "weight": weights,
+                 "specular": (fate == int(Fate.REFLECTED)) & delta, "regular": (fate == int(Fate.TRANSMITTED)) & delta}
+        if outgoing is not None:
+            lanes["wo"] = mi.Vector3f(*outgoing)
+            lanes.update(self._binned(source, source.slot(dr.arange(mi.UInt32, size)), lanes["wo"], fate))
+        return lanes
 
     def _walk_start(self, si: Any, sample1: Any, sample2: Any) -> Any:
         """The specimen's ``walk_start``; a feature it needs that the instrument lacks is a ``ValueError``."""
@@ -476,6 +581,58 @@ class _Kernel:
         return {"wo": wo, "fate": fate, "weight": w, "rare": rare, "sampled_type": sampled_type,
                 "specular": specular, "regular": regular}
 
+    def _binned(self, source: _RaySource, slot: Any, wo: Any, fate: Any) -> dict:
+        """
+        Each ray's goniophotometer ``bin`` (:meth:`_bin`, with its reading's φi) and its
+        reading's ``slot`` in the chunk (``None`` for a single reading), for the tally.
+        """
+
+        phi_i = source.column(self.phi_i[source.slots].astype(np.float32), mi.Float, slot)
+        return {"bin": self._bin(wo, fate, phi_i), "slot": slot}
+
+    def _bin(self, wo: Any, fate: Any, phi_i: Any) -> Any:
+        """
+        Flat bin (θo bin · φo bins + φo bin) of each ray; the number of bins K for a ray
+        that is not binned (absorbed, no fate, or outside the bins' range). The hemisphere
+        is the fate's; θo is searched by its key sin²θo (reflected, below 1) or 2 − sin²θo
+        (transmitted) among the edges' keys (:meth:`GonioBins.theta_keys`), φo ∈ [0, 360)
+        (folded: |φo − φi| wrapped into [0, 180]) among the φo edges.
+        """
+
+        bins = self.bins
+        n_theta, n_phi = bins.shape
+        r2 = wo.x * wo.x + wo.y * wo.y
+        sin2 = r2 / (r2 + wo.z * wo.z)
+        reflected = fate == int(Fate.REFLECTED)
+        transmitted = fate == int(Fate.TRANSMITTED)
+        regular = bins.regular_theta
+        if regular is None:  # given edges: search the keys
+            key = dr.select(reflected, dr.minimum(sin2, _BELOW_ONE), 2.0 - sin2)
+            theta_bin = _search(bins.theta_keys(), key)
+        else:  # n bins per hemisphere, uniform in sin²θo or in θo: arithmetic, mirrored below
+            per, reflection, transmission = regular
+            if bins.binning == "projected":
+                position = sin2 * float(per)
+            else:
+                position = dr.atan2(dr.sqrt(r2), dr.abs(wo.z)) * (2.0 * per / dr.pi)
+            j = mi.UInt32(dr.clip(mi.Int32(dr.floor(position)), 0, per - 1))
+            outside = mi.UInt32(n_theta)
+            theta_bin = dr.select(reflected, j if reflection else outside,
+                                  (mi.UInt32(per * reflection + per - 1) - j) if transmission else outside)
+        phi = dr.atan2(wo.y, wo.x) * (180.0 / dr.pi)
+        phi = dr.select(phi < 0.0, phi + 360.0, phi)
+        if bins.fold_phi:
+            relative = phi - phi_i
+            relative = relative - 360.0 * dr.floor(relative / 360.0)
+            phi = dr.minimum(relative, 360.0 - relative)
+        if bins.regular_phi:
+            top = 180.0 if bins.fold_phi else 360.0
+            phi_bin = mi.UInt32(dr.clip(mi.Int32(dr.floor(phi * (n_phi / top))), 0, n_phi - 1))
+        else:
+            phi_bin = _search(bins.phi_edges.astype(np.float32), phi)
+        binned = (reflected | transmitted) & (theta_bin < n_theta) & (phi_bin < n_phi)
+        return dr.select(binned, theta_bin * n_phi + phi_bin, mi.UInt32(bins.size))
+
     def _sample(self, si: Any, sample1: Any, sample2: Any) -> tuple[Any, Any]:
         """The specimen BSDF's ``sample`` (importance transport)."""
 
@@ -516,7 +673,7 @@ class _RaySource:
         self.root = chunk_root(kernel.settings.seed, int(offsets[slots[0]] + first - starts[slots[0]]) // _WORD)
         # Per-reading parameters: width-1 opaque values for a single reading, else gathered.
         self.bounds, self.j0 = _lane_ranges(first, size, slots, starts)
-        self.rows = kernel.readings[slots]
+        self.slots, self.rows = slots, kernel.readings[slots]
         self.single = len(slots) == 1
         self.keys = [dr.opaque(mi.UInt32, k) for k in dimension_keys(self.root)]
         # Queued walks: a column equal for every reading of the chunk is one opaque value.
@@ -529,7 +686,9 @@ class _RaySource:
 
         return None if self.single else _find_slot(self.bounds, lane)
 
-    def _column(self, values: np.ndarray, kind: Any, slot: Any) -> Any:
+    def column(self, values: np.ndarray, kind: Any, slot: Any) -> Any:
+        """Per-reading ``values`` (one per slot of the chunk) at positions of readings ``slot``."""
+
         if slot is None or (self.fold_constant and np.all(values == values[0])):
             return dr.opaque(kind, values[0].item())
         return dr.gather(kind, kind(values), slot)
@@ -539,7 +698,7 @@ class _RaySource:
 
         if np.all(self.shift == self.shift[0]):  # consecutive readings (the default layout): one scalar
             return lane + dr.opaque(mi.UInt32, int(self.shift[0]))
-        return lane + self._column(self.shift.astype(np.uint32), mi.UInt32, slot)
+        return lane + self.column(self.shift.astype(np.uint32), mi.UInt32, slot)
 
     def incident(self, lane: Any, slot: Any = False) -> dict:
         """Emitter point ``origin``, specimen point ``target``, the surface interaction ``si``,
@@ -550,7 +709,7 @@ class _RaySource:
         slot = self.slot(lane) if slot is False else slot
 
         def column(values: np.ndarray, kind: Any) -> Any:
-            return self._column(values, kind, slot)
+            return self.column(values, kind, slot)
 
         ray = lane + column(self.j0, mi.UInt32) if slot is None else (
             lane - column(self.bounds, mi.UInt32) + column(self.j0, mi.UInt32))
@@ -615,6 +774,26 @@ def _rejection(ray_index: mi.UInt32, root: int, radius: mi.Float, disk: int) -> 
         y = dr.fma(2.0, to_unit(hash32(ray_index ^ ky), mi.Float), -1.0)
         dimension += 4
     return mi.Point2f(x * radius, y * radius)
+
+
+def _search(edges: np.ndarray, key: Any) -> Any:
+    """
+    Bin of ``key`` among increasing float32 ``edges``: i with edges[i] <= key < edges[i + 1],
+    the last bin closed (key == edges[-1] is in it); ≥ the number of bins when outside
+    (binary lifting over a table padded with +inf to 2^k entries).
+    """
+
+    steps = max(1, int(np.ceil(np.log2(len(edges) + 1))))
+    padded = np.full(1 << steps, np.inf, dtype=np.float32)
+    padded[: len(edges)] = edges
+    table = mi.Float(padded)
+    below = mi.UInt32(0)  # how many edges are <= key
+    for step in reversed(range(steps)):
+        probe = below + (1 << step)
+        below = dr.select(dr.gather(mi.Float, table, probe - 1) <= key, probe, below)
+    last = len(edges) - 1
+    below = dr.select(key == float(edges[-1]), mi.UInt32(last), below)
+    return below - 1  # no edge <= key: wraps to 2^32 - 1, outside
 
 
 def _full(value: Any, size: int) -> Any:

@@ -1,0 +1,90 @@
+"""
+Integrating-sphere speed (issue 16): the sphere walk against the hemispherical reading of
+the same specimen, in one run.
+
+- rays/s and wall reflections/s of one sphere configuration (8°/d SCI, 150 mm sphere of
+  ``scenes/sphere_150mm_8d.xml`` with its baffle, grey Lambertian sample ρ = 0.5, ρw = 0.98)
+  beside the rays/s of ``vm.measure`` of the same specimen and beam;
+- the warm time of a certified 8°/d SCI reading of that sample at ρw = 0.98 with 105,967 rays
+  per configuration: one configuration (the sample's detector fraction) and the whole
+  readout (sample and standard);
+- the cost of correcting that reading by the sphere theory (``SphereResult.corrected`` and
+  ``corrected_interval``: closed-form NumPy, no rays).
+
+Run: python benchmarks/sphere.py [--repeat K]
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+
+import virtspec_mi as vm
+
+SCENE = "scenes/sphere_150mm_8d.xml"
+
+
+def best(function, repeat: int) -> float:
+    times = []
+    for _ in range(repeat):
+        start = time.perf_counter()
+        function()
+        times.append(time.perf_counter() - start)
+    return min(times)
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--repeat", type=int, default=5)
+    parser.add_argument("--rays", type=int, default=105_967)
+    args = parser.parse_args()
+    from virtspec_mi.kernel.sphere_walk import SphereWalk, tally_sphere
+    from virtspec_mi.scene import find_instrument
+    from virtspec_mi.sphere_readout import configurations
+
+    mi = vm.mitsuba()
+    scene = mi.load_file(SCENE)
+    integrator = scene.integrator()
+    instrument = find_instrument(scene)
+    settings = integrator.settings.updated(rays=args.rays)
+    sphere, options = integrator.sphere, integrator.sphere_settings
+    standard = mi.load_dict({"type": "diffuse", "reflectance": options.standard})
+    holders, actions = configurations(sphere, options, instrument.bsdf, instrument.geometry.specimen_radius,
+                                      standard, mi.load_dict({"type": "null"}))["sample"]
+    walk = SphereWalk(sphere, holders, actions, options.max_bounces)
+    rho_w = sphere.wall_reflectance_at(settings.wavelengths)
+
+    def one_configuration():
+        return tally_sphere(walk, instrument, settings.wavelengths, rho_w, args.rays, settings)
+
+    def hemispherical():
+        return vm.measure(scene, rays=args.rays)
+
+    def readout():
+        return vm.sphere_measure(scene, rays=args.rays)
+
+    counts = one_configuration()[0]
+    hemispherical()
+    result = readout()  # warm-up: compile every kernel
+
+    def correction():
+        return result.corrected(), result.corrected_interval()
+
+    t_walk, t_hemi, t_readout, t_correct = (best(f, args.repeat) for f in (one_configuration, hemispherical, readout,
+                                                                            correction))
+    reflections = counts["wall_reflections"]
+    print(f"sphere walk vs hemispherical reading, {args.rays:,} rays, best of {args.repeat} (warm)")
+    print(f"  sphere walk (one configuration): {t_walk * 1e3:8.1f} ms  {args.rays / t_walk / 1e6:6.2f} Mray/s  "
+          f"{reflections / t_walk / 1e6:6.1f} M wall reflections/s  ({reflections / args.rays:.1f} per ray)")
+    print(f"  hemispherical reading (measure):  {t_hemi * 1e3:8.1f} ms  {args.rays / t_hemi / 1e6:6.2f} Mray/s")
+    print(f"  ratio sphere/hemispherical time:  {t_walk / t_hemi:8.1f}")
+    print(f"  certified 8/d SCI readout (sample + standard, {args.rays:,} rays each): {t_readout * 1e3:.1f} ms")
+    print(f"  its correction by the sphere theory (corrected + corrected_interval): {t_correct * 1e3:.2f} ms "
+          f"(reading {result.reading[0]:.4f} -> {result.corrected()[0]:.4f}; "
+          f"hemispherical {result.hemispherical[0]:.4f})")
+    print(f"  detector fraction {counts['cross'][:, 0].sum() / args.rays:.5f}; "
+          f"hemispherical {(counts['cross'][1].sum() + counts['cross'][3].sum()) / args.rays:.5f}")
+
+
+if __name__ == "__main__":
+    main()

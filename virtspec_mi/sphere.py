@@ -1,0 +1,467 @@
+"""
+An integrating sphere: wall, ports, baffle (the description, validated)
+=======================================================================
+
+:class:`Sphere` describes a physical integrating sphere the way a data sheet does: an
+inner diameter, a diffuse wall of reflectance ρw (a constant or a spectrum), circular
+ports on the sphere surface each with a role, and optionally a baffle. Everything is
+exact geometry; :mod:`virtspec_mi.kernel.sphere_walk` walks rays through it.
+
+Geometry and conventions
+------------------------
+- **Sphere coordinates:** millimetres, the centre at the origin, radius R = diameter/2.
+  A port's centre is given by its polar angle (from +z) and azimuth (from +x about +z),
+  in degrees. The usual 8°/d layout puts the sample port at the bottom (polar 180°).
+- **A port** of radius r is the spherical cap of half-angle α, sin α = r/R, about its
+  centre direction c: the wall points x with x·c ≥ R cos α. Its exact share of the
+  wall is the cap fraction f = h/(2R) = (1 − cos α)/2 (:meth:`Sphere.cap_fraction`);
+  iadpython's convention is the projected disk r²/(4R²) (:meth:`Sphere.disk_fraction`),
+  smaller by the factor (1 + cos α)/2 (2.9 % smaller for a 20 mm port on a 60 mm sphere).
+- **A port plane** is the plane of the cap's rim, x·c = R cos α. A specimen (or a
+  reference standard) *sits in its port*: a flat disk in the port plane, centred on
+  the port axis, radius ≤ r. A ray crossing the port plane outside that disk leaves
+  through the port.
+- **Roles** (:data:`ROLES`): ``sample`` (the specimen for reflectance), ``entrance``
+  (the beam's way in; the specimen for transmittance), ``reference`` (the reference
+  standard in the comparison method; a wall plug in single-beam substitution),
+  ``detector`` (a ray reaching its cap is detected), ``specular`` (open to a light trap
+  in SCE, closed by a wall plug in SCI), ``open`` (any other hole: lost).
+- **The baffle** is a flat disk (centre, unit normal, radius) inside the sphere, coated
+  like the wall (reflectance ρw on both faces, Lambertian).
+- **Wall reflectance** ρw: a number in [0, 1] or a spectrum (wavelengths in nm and
+  values, linearly interpolated, held constant beyond its ends).
+
+References
+----------
+Labsphere, *A guide to integrating sphere theory and applications* (port fractions,
+sphere multiplier, substitution error). Goebel, D.G. (1967), Generalized integrating-
+sphere theory, Applied Optics 6, 125–128.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field, fields, replace
+from typing import Any, Sequence
+
+import numpy as np
+
+__all__ = ["ROLES", "HOLDER_ROLES", "MEASUREMENTS", "SPECULAR", "METHODS", "Port", "Baffle", "Sphere",
+           "SphereSettings", "SPHERE_SETTING_NAMES", "SPHERE_PARAMETERS", "sphere_from_parameters", "parse_port", "parse_baffle", "parse_wall_reflectance"]
+
+ROLES: tuple[str, ...] = ("sample", "entrance", "reference", "detector", "specular", "open")
+"""The roles a port may have (see the module docstring)."""
+
+HOLDER_ROLES: tuple[str, ...] = ("sample", "entrance", "reference")
+"""Roles of ports that may hold a flat specimen or standard in their port plane."""
+
+
+def _direction(polar: float, azimuth: float) -> np.ndarray:
+    theta, phi = math.radians(polar), math.radians(azimuth)
+    return np.array([math.sin(theta) * math.cos(phi), math.sin(theta) * math.sin(phi), math.cos(theta)])
+
+
+def _finite(name: str, value: Any) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)) \
+            or not math.isfinite(float(value)):
+        raise ValueError(f"{name} must be a finite number (got {value!r})")
+    return float(value)
+
+
+@dataclass(frozen=True)
+class Port:
+    """
+    A circular port on the sphere surface.
+
+    Parameters
+    ----------
+    name
+        Its name (unique in a sphere).
+    role
+        One of :data:`ROLES`.
+    polar, azimuth
+        Direction of the port centre from the sphere centre, degrees (polar in [0, 180]).
+    radius
+        Radius of the opening, mm (> 0, less than the sphere radius).
+    """
+
+    name: str
+    role: str
+    polar: float
+    azimuth: float
+    radius: float
+
+    def __post_init__(self) -> None:
+        if self.role not in ROLES:
+            raise ValueError(f"port {self.name!r}: role must be one of {', '.join(ROLES)} (got {self.role!r})")
+        polar = _finite(f"port {self.name!r} polar", self.polar)
+        if not 0.0 <= polar <= 180.0:
+            raise ValueError(f"port {self.name!r}: polar must satisfy 0 <= polar <= 180 degrees (got {polar:g})")
+        object.__setattr__(self, "polar", polar)
+        object.__setattr__(self, "azimuth", _finite(f"port {self.name!r} azimuth", self.azimuth))
+        radius = _finite(f"port {self.name!r} radius", self.radius)
+        if not radius > 0.0:
+            raise ValueError(f"port {self.name!r}: radius must be > 0 mm (got {radius:g})")
+        object.__setattr__(self, "radius", radius)
+
+    @property
+    def axis(self) -> np.ndarray:
+        """Unit vector from the sphere centre to the port centre."""
+
+        return _direction(self.polar, self.azimuth)
+
+    def half_angle(self, sphere_radius: float) -> float:
+        """Half-angle α of the cap, radians: sin α = r/R."""
+
+        return math.asin(self.radius / sphere_radius)
+
+    def cos_half_angle(self, sphere_radius: float) -> float:
+        """cos α = √(1 − r²/R²) (the port plane lies at R cos α from the centre)."""
+
+        return math.sqrt(max(0.0, 1.0 - (self.radius / sphere_radius) ** 2))
+
+
+@dataclass(frozen=True)
+class Baffle:
+    """A flat disk inside the sphere (mm, sphere coordinates), coated like the wall."""
+
+    centre: tuple[float, float, float]
+    normal: tuple[float, float, float]
+    radius: float
+
+    def __post_init__(self) -> None:
+        centre = tuple(_finite("baffle centre", c) for c in self.centre)
+        normal = np.array([_finite("baffle normal", c) for c in self.normal])
+        if len(centre) != 3 or normal.shape != (3,):
+            raise ValueError("baffle centre and normal must be three numbers each")
+        length = float(np.linalg.norm(normal))
+        if not length > 0.0:
+            raise ValueError("baffle normal must be a non-zero vector")
+        radius = _finite("baffle radius", self.radius)
+        if not radius > 0.0:
+            raise ValueError(f"baffle radius must be > 0 mm (got {radius:g})")
+        object.__setattr__(self, "centre", centre)
+        unit = normal if abs(length - 1.0) < 1e-12 else normal / length  # a unit normal is kept bit for bit
+        object.__setattr__(self, "normal", tuple(float(v) for v in unit))
+        object.__setattr__(self, "radius", radius)
+
+    def farthest_rim_distance(self) -> float:
+        """Largest distance of a baffle rim point from the sphere centre."""
+
+        c, n = np.array(self.centre), np.array(self.normal)
+        tangential = c - (c @ n) * n
+        return float(math.sqrt(c @ c + self.radius ** 2 + 2.0 * self.radius * np.linalg.norm(tangential)))
+
+
+@dataclass(frozen=True)
+class Sphere:
+    """
+    An integrating sphere (see the module docstring).
+
+    Parameters
+    ----------
+    diameter
+        Inner diameter, mm (> 0).
+    wall_reflectance
+        ρw: a number in [0, 1], or ``(wavelengths_nm, values)`` with values in [0, 1].
+    ports
+        The ports (:class:`Port`), names unique, caps not overlapping.
+    baffle
+        Optional :class:`Baffle`, wholly inside the sphere.
+    """
+
+    diameter: float
+    wall_reflectance: Any = 0.98
+    ports: tuple[Port, ...] = ()
+    baffle: Baffle | None = None
+    name: str = field(default="", compare=False)
+
+    def __post_init__(self) -> None:
+        diameter = _finite("diameter", self.diameter)
+        if not diameter > 0.0:
+            raise ValueError(f"diameter must be > 0 mm (got {diameter:g})")
+        object.__setattr__(self, "diameter", diameter)
+        object.__setattr__(self, "wall_reflectance", parse_wall_reflectance(self.wall_reflectance))
+        ports = tuple(self.ports)
+        object.__setattr__(self, "ports", ports)
+        radius = diameter / 2.0
+        names = [p.name for p in ports]
+        if len(set(names)) != len(names):
+            raise ValueError(f"ports must have distinct names (got {names})")
+        for port in ports:
+            if not port.radius < radius:
+                raise ValueError(f"port {port.name!r}: radius must be < the sphere radius {radius:g} mm "
+                                 f"(got {port.radius:g}): a port larger than the sphere")
+        for i, a in enumerate(ports):
+            for b in ports[i + 1:]:
+                gap = math.acos(float(np.clip(a.axis @ b.axis, -1.0, 1.0)))
+                if gap < a.half_angle(radius) + b.half_angle(radius):
+                    raise ValueError(f"ports {a.name!r} and {b.name!r} overlap: their centres are "
+                                     f"{math.degrees(gap):.3f} deg apart, their caps' half-angles add up to "
+                                     f"{math.degrees(a.half_angle(radius) + b.half_angle(radius)):.3f} deg")
+        for role in ("sample", "entrance", "reference", "specular"):
+            if sum(p.role == role for p in ports) > 1:
+                raise ValueError(f"ports: at most one port may have role {role!r}")
+        if self.baffle is not None and not self.baffle.farthest_rim_distance() < radius:
+            raise ValueError(f"baffle must lie inside the sphere: its rim reaches "
+                             f"{self.baffle.farthest_rim_distance():g} mm from the centre (radius {radius:g} mm)")
+
+    @property
+    def radius(self) -> float:
+        """R = diameter/2, mm."""
+
+        return self.diameter / 2.0
+
+    def port(self, role: str) -> Port | None:
+        """The port with ``role`` (the first, for ``detector``/``open``), or ``None``."""
+
+        return next((p for p in self.ports if p.role == role), None)
+
+    def cap_fraction(self, port: Port | str) -> float:
+        """Exact share of the sphere surface of a port's cap: h/(2R) = (1 − cos α)/2."""
+
+        port = self._named(port)
+        ratio = port.radius / self.radius
+        return ratio * ratio / (2.0 * (1.0 + port.cos_half_angle(self.radius)))  # (1 − cos α)/2, no cancellation
+
+    def disk_fraction(self, port: Port | str) -> float:
+        """iadpython's convention: the projected disk, r²/(4R²)."""
+
+        port = self._named(port)
+        return port.radius ** 2 / (4.0 * self.radius ** 2)
+
+    @property
+    def cap_fractions(self) -> dict[str, float]:
+        """Every port's exact cap fraction, by name."""
+
+        return {p.name: self.cap_fraction(p) for p in self.ports}
+
+    def _named(self, port: Port | str) -> Port:
+        if isinstance(port, Port):
+            return port
+        for item in self.ports:
+            if item.name == port:
+                return item
+        raise ValueError(f"no port named {port!r} (ports: {[p.name for p in self.ports]})")
+
+    def wall_reflectance_at(self, wavelengths: Sequence[float]) -> np.ndarray:
+        """ρw at ``wavelengths`` (nm)."""
+
+        wavelengths = np.asarray(wavelengths, dtype=np.float64)
+        value = self.wall_reflectance
+        if isinstance(value, float):
+            return np.full(wavelengths.shape, value)
+        grid, values = value
+        return np.interp(wavelengths, grid, values)
+
+    def port_plane_centre(self, port: Port | str) -> np.ndarray:
+        """Centre of a port's rim disk (where a specimen in that port sits), mm."""
+
+        port = self._named(port)
+        return port.axis * self.radius * port.cos_half_angle(self.radius)
+
+    def wall_point(self, origin: Sequence[float], direction: Sequence[float]) -> np.ndarray:
+        """Where the ray ``origin + t·direction`` (origin inside the sphere) meets the wall."""
+
+        o, d = np.asarray(origin, float), np.asarray(direction, float)
+        d = d / np.linalg.norm(d)
+        b, c = o @ d, o @ o - self.radius ** 2
+        return o + (-b + math.sqrt(b * b - c)) * d
+
+    def port_at(self, point: Sequence[float]) -> Port | None:
+        """The port whose cap holds the wall point ``point``, or ``None`` (wall)."""
+
+        point = np.asarray(point, float)
+        for port in self.ports:
+            if point @ port.axis >= self.radius * port.cos_half_angle(self.radius):
+                return port
+        return None
+
+    def parameters(self) -> dict[str, Any]:
+        """
+        The flat parameters of the ``integrating_sphere`` integrator that describe this
+        sphere (for a scene dict: ``{"type": "integrating_sphere", **sphere.parameters()}``);
+        :func:`sphere_from_parameters` reads them back.
+        """
+
+        rho = self.wall_reflectance
+        out: dict[str, Any] = {
+            "diameter": self.diameter,
+            "wall_reflectance": rho if isinstance(rho, float) else ", ".join(
+                f"{w!r}:{v!r}" for w, v in zip(*rho)),
+        }
+        for port in self.ports:
+            out[f"port_{port.name}"] = (f"role={port.role} polar={port.polar!r} azimuth={port.azimuth!r} "
+                                        f"radius={port.radius!r}")
+        if self.baffle is not None:
+            b = self.baffle
+            out["baffle"] = (f"centre={','.join(repr(v) for v in b.centre)} normal={','.join(repr(v) for v in b.normal)} "
+                             f"radius={b.radius!r}")
+        return out
+
+    def describe(self) -> str:
+        """A short description: diameter, ρw, ports with their cap fractions, baffle."""
+
+        rho = self.wall_reflectance
+        rho_text = f"{rho:g}" if isinstance(rho, float) else f"spectral ({len(rho[0])} values)"
+        ports = "; ".join(f"{p.name} ({p.role}, r = {p.radius:g} mm at {p.polar:g}/{p.azimuth:g} deg, "
+                          f"f = {self.cap_fraction(p):.5f})" for p in self.ports)
+        baffle = "" if self.baffle is None else f"; baffle r = {self.baffle.radius:g} mm"
+        return f"sphere {self.diameter:g} mm, wall reflectance {rho_text}; ports: {ports or 'none'}{baffle}"
+
+
+def parse_wall_reflectance(value: Any) -> float | tuple[tuple[float, ...], tuple[float, ...]]:
+    """
+    ρw from a number, a ``(wavelengths, values)`` pair or a string ``"0.98"`` /
+    ``"400:0.97, 700:0.99"`` (λ:value pairs); every value in [0, 1].
+    """
+
+    if isinstance(value, str):
+        text = value.replace(",", " ").split()
+        if len(text) == 1 and ":" not in text[0]:
+            value = float(text[0])
+        else:
+            try:
+                pairs = [tuple(float(v) for v in token.split(":")) for token in text]
+            except ValueError:
+                raise ValueError(f"wall_reflectance must be a number or 'nm:value' pairs (got {value!r})") from None
+            if not pairs or any(len(p) != 2 for p in pairs):
+                raise ValueError(f"wall_reflectance must be a number or 'nm:value' pairs (got {value!r})")
+            value = ([p[0] for p in pairs], [p[1] for p in pairs])
+    if isinstance(value, tuple) and len(value) == 2 and not isinstance(value[0], (int, float)) \
+            or isinstance(value, list) and len(value) == 2 and not isinstance(value[0], (int, float)):
+        grid = np.asarray(value[0], dtype=np.float64)
+        values = np.asarray(value[1], dtype=np.float64)
+        if grid.ndim != 1 or grid.shape != values.shape or grid.size == 0:
+            raise ValueError("wall_reflectance: wavelengths and values must be two 1-D sequences of one length")
+        if not np.all(np.isfinite(grid)) or np.any(np.diff(grid) <= 0):
+            raise ValueError("wall_reflectance: wavelengths must be finite and increasing")
+        if not np.all((values >= 0.0) & (values <= 1.0)):
+            raise ValueError(f"wall_reflectance must satisfy 0 <= rho_w <= 1 (got values from "
+                             f"{values.min():g} to {values.max():g})")
+        return tuple(float(v) for v in grid), tuple(float(v) for v in values)
+    rho = _finite("wall_reflectance", value)
+    if not 0.0 <= rho <= 1.0:
+        raise ValueError(f"wall_reflectance must satisfy 0 <= rho_w <= 1 (got {rho:g})")
+    return rho
+
+
+def _fields(text: str, name: str, allowed: tuple[str, ...]) -> dict[str, str]:
+    out: dict[str, str] = {}
+    for token in text.replace(";", " ").split():
+        key, sep, value = token.partition("=")
+        if not sep or key not in allowed:
+            raise ValueError(f"{name}: expected 'key=value' items with keys {', '.join(allowed)} (got {token!r})")
+        out[key] = value
+    return out
+
+
+def parse_port(name: str, text: str) -> Port:
+    """A port from its XML string, e.g. ``"role=detector polar=90 azimuth=90 radius=6.35"``."""
+
+    items = _fields(text, f"port {name!r}", ("role", "polar", "azimuth", "radius"))
+    missing = [k for k in ("role", "polar", "radius") if k not in items]
+    if missing:
+        raise ValueError(f"port {name!r}: missing {', '.join(missing)} (e.g. 'role=detector polar=90 radius=6.35')")
+    try:
+        return Port(name, items["role"], float(items["polar"]), float(items.get("azimuth", 0.0)),
+                    float(items["radius"]))
+    except ValueError as error:
+        if str(error).startswith("port"):
+            raise
+        raise ValueError(f"port {name!r}: polar, azimuth and radius must be numbers ({error})") from None
+
+
+def parse_baffle(text: str) -> Baffle:
+    """A baffle from its XML string, e.g. ``"centre=0,40,-40 normal=0,-1,1 radius=12"``."""
+
+    items = _fields(text, "baffle", ("centre", "normal", "radius"))
+    if set(items) != {"centre", "normal", "radius"}:
+        raise ValueError("baffle: give centre=x,y,z normal=x,y,z radius=r (mm)")
+    try:
+        centre = tuple(float(v) for v in items["centre"].split(","))
+        normal = tuple(float(v) for v in items["normal"].split(","))
+        return Baffle(centre, normal, float(items["radius"]))  # type: ignore[arg-type]
+    except ValueError as error:
+        raise ValueError(f"baffle: {error}") from None
+
+
+MEASUREMENTS: dict[str, str] = {
+    "reflectance": "8/d-type reflectance: the specimen in the sample port, lit through the entrance port",
+    "transmittance": "the specimen at the entrance port, light transmitted into the sphere (reference: open port)",
+}
+SPECULAR: dict[str, str] = {
+    "SCI": "specular component included: the specular port closed by a plug of wall material",
+    "SCE": "specular component excluded: the specular port open to a light trap",
+}
+METHODS: dict[str, str] = {
+    "substitution": "single beam: sample, then the standard, in the same port (the reference port plugged)",
+    "comparison": "sample and standard both mounted (sample and reference ports), then swapped",
+}
+
+
+def _sphere_setting(default: Any, help: str, choices: dict | None = None) -> Any:
+    return field(default=default, metadata={"help": help, "choices": choices})
+
+
+@dataclass(frozen=True)
+class SphereSettings:
+    """
+    How a sphere reading is taken (defined once: the API keywords, the CLI flags and the
+    ``integrating_sphere`` integrator's parameters derive from these fields).
+    """
+
+    measurement: str = _sphere_setting("reflectance", "what the sphere measures", MEASUREMENTS)
+    specular: str = _sphere_setting("SCI", "specular component included or excluded", SPECULAR)
+    method: str = _sphere_setting("substitution", "how the reference standard is measured", METHODS)
+    standard: float = _sphere_setting(0.99, "reflectance of the Lambertian reference standard, 0 < standard <= 1")
+    max_bounces: int = _sphere_setting(100_000, "step cap of a sphere walk, 1 ... 10**7 (capped walks are counted)")
+
+    def __post_init__(self) -> None:
+        for name, choices in (("measurement", MEASUREMENTS), ("specular", SPECULAR), ("method", METHODS)):
+            value = getattr(self, name)
+            if name == "specular" and isinstance(value, str):
+                value = value.upper()
+                object.__setattr__(self, name, value)
+            if value not in choices:
+                raise ValueError(f"{name} must be one of {', '.join(choices)} (got {value!r})")
+        standard = _finite("standard", self.standard)
+        if not 0.0 < standard <= 1.0:
+            raise ValueError(f"standard must satisfy 0 < standard <= 1 (got {standard:g})")
+        object.__setattr__(self, "standard", standard)
+        bounces = self.max_bounces
+        if isinstance(bounces, bool) or not isinstance(bounces, (int, np.integer)) or not 1 <= bounces <= 10**7:
+            raise ValueError(f"max_bounces must be a whole number with 1 <= max_bounces <= 10**7 (got {bounces!r})")
+        object.__setattr__(self, "max_bounces", int(bounces))
+
+    def updated(self, **changes: Any) -> "SphereSettings":
+        """A copy with ``changes`` (``None`` values ignored), validated."""
+
+        return replace(self, **{k: v for k, v in changes.items() if v is not None})
+
+    def as_dict(self) -> dict[str, Any]:
+        return {item.name: getattr(self, item.name) for item in fields(self)}
+
+
+SPHERE_SETTING_NAMES: tuple[str, ...] = tuple(item.name for item in fields(SphereSettings))
+"""The names of :class:`SphereSettings`' fields."""
+
+
+SPHERE_PARAMETERS: tuple[str, ...] = ("diameter", "wall_reflectance", "baffle")
+"""Parameters of a sphere description besides its ``port_<name>`` entries."""
+
+
+def sphere_from_parameters(values: dict[str, Any]) -> Sphere:
+    """
+    A :class:`Sphere` from flat parameters (the ``integrating_sphere`` integrator's XML or
+    dict): ``diameter`` (mm), ``wall_reflectance`` (number or ``"nm:value, …"``), one
+    ``port_<name>`` string per port (``"role=… polar=… azimuth=… radius=…"``) and an
+    optional ``baffle`` string (``"centre=x,y,z normal=x,y,z radius=r"``).
+    """
+
+    if "diameter" not in values:
+        raise ValueError("sphere: diameter (mm) is required")
+    ports = tuple(parse_port(key[len("port_"):], str(text)) for key, text in values.items()
+                  if key.startswith("port_"))
+    baffle = parse_baffle(str(values["baffle"])) if values.get("baffle") else None
+    return Sphere(float(values["diameter"]), values.get("wall_reflectance", 0.98), ports, baffle)

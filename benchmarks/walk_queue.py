@@ -24,11 +24,16 @@ Two parts, printed as one report:
    still runs), counted per SIMD packet of 16 lanes. ``lanes = 0`` is the one-loop walk
    (one ``sample()`` per ray), whose idle share is measured by queueing one ray per lane.
 
+3. **Goniophotometer on walks** (working tree only): a reading binned in 36 × 36 (θo, φo)
+   bins per hemisphere (``tally_gonio_readings``) against the plain reading, on the
+   queued lanes and as the one-loop walk (CPU time best of 3, all threads), and whether
+   the queued and one-loop bin tallies are identical.
+
 Run::
 
     .venv/bin/python benchmarks/walk_queue.py                     # both parts, ~5 min
     .venv/bin/python benchmarks/walk_queue.py --quick             # 10x fewer rays
-    .venv/bin/python benchmarks/walk_queue.py --skip-against      # occupancy grid only
+    .venv/bin/python benchmarks/walk_queue.py --skip-against      # occupancy grid and gonio only
 
 Needs the NPSG leaf data (``VIRTSPEC_LEAF_DATA``, default ../shared/data/abm-npsg beside
 the checkout). Other work on the machine slows every figure; the load average is printed.
@@ -223,6 +228,46 @@ def occupancy(scale: int) -> list[list[str]]:
     return rows
 
 
+def gonio(scale: int) -> list[list[str]]:
+    """Part 3: plain and goniophotometer readings of walk specimens, queued and one loop."""
+
+    import virtspec_mi as vm
+
+    vm.mitsuba()
+    from virtspec_mi.gonio_bins import make_bins
+    from virtspec_mi.kernel.tracer import ReadingPlan, WalkQueue, tally_gonio_readings, tally_readings
+    from virtspec_mi.scene import find_instrument
+    from virtspec_mi.settings import Settings
+
+    bins = make_bins(36, 36)
+    workloads = {
+        "abm_b 800 nm": (SOYBEAN, 800.0, 2_000_000 // scale),
+        "abm_b 551 nm": (SOYBEAN, 551.0, 2_000_000 // scale),
+        "MCML slab": (SLAB, 551.0, 4_000_000 // scale),
+    }
+    rows = []
+    for name, (specimen, wavelength, rays) in workloads.items():
+        instrument = find_instrument(vm.instrument_scene(specimen))
+        plans = [ReadingPlan(wavelength, 8.0, 0.0, rays)]
+        settings = Settings(beam="collimated")
+        walks = {"queued": WalkQueue(), "one loop": WalkQueue(lanes=0)}
+        calls = {}
+        for label, queue in walks.items():
+            calls[f"plain, {label}"] = lambda queue=queue: tally_readings(instrument, plans, settings, walk=queue)
+            calls[f"gonio, {label}"] = lambda queue=queue: tally_gonio_readings(
+                instrument, plans, settings, bins, walk=queue)[1]
+        tallies = {label: call() for label, call in calls.items()}  # compile (and the bins to compare)
+        cpu = {label: np.inf for label in calls}
+        for _ in range(3):  # interleaved
+            for label, call in calls.items():
+                cpu[label] = min(cpu[label], _cpu(call))
+        same = np.array_equal(tallies["gonio, queued"], tallies["gonio, one loop"])
+        base = cpu["plain, queued"]
+        rows += [[name, label, f"{cpu[label]:.3f}", f"{rays / cpu[label] / 1e6:.2f}", f"{base / cpu[label]:.2f}",
+                  ("identical" if same else "DIFFERENT") if label.startswith("gonio") else "-"] for label in calls]
+    return rows
+
+
 def _cpu(call) -> float:
     start = time.process_time()
     call()
@@ -251,7 +296,8 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--repeats", type=int, default=2, help="calls per tree and case (best wall time)")
     parser.add_argument("--quick", action="store_true", help="10x fewer rays")
     parser.add_argument("--skip-against", action="store_true", help="only the occupancy grid")
-    parser.add_argument("--skip-occupancy", action="store_true", help="only the side-by-side cases")
+    parser.add_argument("--skip-occupancy", action="store_true", help="no occupancy grid")
+    parser.add_argument("--skip-gonio", action="store_true", help="no goniophotometer readings")
     parser.add_argument("--worker", help=argparse.SUPPRESS)
     args = parser.parse_args(argv)
     if args.worker:
@@ -274,6 +320,12 @@ def main(argv: list[str] | None = None) -> int:
         out += ["Occupancy of the queued lanes (working tree; CPU time best of 3, all threads)", "",
                 table(["workload", "lanes", "queue", "refill", "chunk", "rays per lane", "CPU s", "Mray/s (CPU)",
                        "vs one loop", "idle"], rows), ""]
+    if not args.skip_gonio:
+        rows = gonio(scale)
+        load.append(load_average())
+        out += ["Goniophotometer on walks (working tree; 36 x 36 bins per hemisphere; CPU time best of 3, "
+                "all threads)", "", table(["workload", "reading, walk", "CPU s", "Mray/s (CPU)",
+                                           "vs plain queued", "bins queued vs one loop"], rows), ""]
     import virtspec_mi as vm
 
     vm.mitsuba()

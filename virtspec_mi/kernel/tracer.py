@@ -45,10 +45,10 @@ Conventions
 - A goniophotometer reading (:func:`tally_gonio_readings`) also bins every reflected
   or transmitted ray by its outgoing direction in the specimen frame
   (:mod:`virtspec_mi.gonio_bins`), in the same fused kernel; the fate decides the
-  hemisphere (grazing exits included). A random walk on queued lanes keeps each ray's
-  outgoing direction in the ray's slot when its walk ends, and the chunk's rays are
-  binned after the walk loop by the same rule, fused with the tally. Without bins none
-  of this is compiled: the plain kernel and its counts are unchanged.
+  hemisphere (grazing exits included). A random walk on queued lanes bins each ray by
+  the same rule when its walk ends and keeps the bin in the ray's slot; the chunk's
+  bins are tallied after the walk loop. Without bins none of this is compiled: the
+  plain kernel and its counts are unchanged.
 - The emitter disk neither occludes nor self-intersects its rays, and no general
   intersection is needed: each conical ray is aimed at a sampled specimen point and hits
   it by construction; a collimated ray hits the specimen centre.
@@ -194,9 +194,9 @@ def tally_gonio_readings(
     (one copy of the table per CPU thread, Dr.Jit's ``ReduceMode.Expand``), summed
     into ``int64`` on the host: memory is readings × bins (× threads during a chunk),
     whatever the number of rays. A random-walk specimen on queued lanes (``walk``, as in
-    :func:`tally_readings`) keeps each ray's outgoing direction in the ray's slot when its
-    walk ends and bins the chunk's rays after the walk loop, by the same rule
-    (:meth:`_Kernel._bin`): the bins never depend on ``walk``.
+    :func:`tally_readings`) bins each ray when its walk ends, by the same rule
+    (:meth:`_Kernel._bin`), keeps the bin in the ray's slot and tallies the chunk's bins
+    after the walk loop: the bins never depend on ``walk``.
     """
 
     return _tally(instrument, plans, settings, offsets, on_chunk, bins, walk)
@@ -354,7 +354,7 @@ class _Kernel:
             dr.eval(*packed_codes.values(), rare)  # the one fused ray kernel
         else:
             # The same kernel also adds each escaping ray to its reading's bin (a queued walk: the kernel
-            # after the walk loop, from each ray's kept wo and fate): two bins per UInt64 word
+            # after the walk loop, from each ray's kept bin): two bins per UInt64 word
             # (32-bit fields: a chunk holds < 2^32 rays, so no field overflows), scatter-added into
             # per-thread copies of the table (ReduceMode.Expand: no atomics; Dr.Jit sums the copies).
             # Neighbouring bins (φo neighbours) share a word, so fewer distinct words per SIMD packet:
@@ -413,7 +413,7 @@ class _Kernel:
         judged = self._judge(wi.z >= 0.0, bs, weight, ray["survival"], size)
         lanes = {"origin": ray["origin"], "target": ray["target"], "wi": wi, **judged}
         if self.bins is not None:
-            lanes.update(self._binned(source, slot, judged["wo"], judged["fate"]))
+            lanes["bin"], lanes["slot"] = self._reading_bin(source, slot, judged["wo"], judged["fate"]), slot
         return lanes
 
     def walk(self, first: int, size: int, slots: np.ndarray, starts: np.ndarray,
@@ -429,9 +429,8 @@ class _Kernel:
         counts — are those of
         :meth:`trace`, whichever lane ran the ray. Returns the per-ray ``fate``, ``rare``,
         ``weight`` (of violating rays), ``specular`` and ``regular`` (evaluated); with bins
-        (a goniophotometer reading) also each ray's ``wo``, kept in its slot when its walk
-        ended, and its ``bin`` and ``slot`` derived from them after the loop as in
-        :meth:`trace` (symbolic: they fuse with the bins' tally).
+        (a goniophotometer reading) also each ray's ``bin`` (:meth:`_bin` of its ``wo`` and
+        fate when its walk ended, kept in its slot) and its reading's ``slot`` (symbolic).
         """
 
         source = _RaySource(self, first, size, slots, starts, offsets)
@@ -439,8 +438,8 @@ class _Kernel:
         width, queue = min(size, self.walk_queue.lanes), self.walk_queue.queue
         codes = dr.zeros(mi.UInt32, size)  # fate | rare << 4 | delta << 8, per ray
         weights = dr.zeros(mi.Float, size)
-        # A goniophotometer reading keeps each ray's outgoing direction (binned after the loop).
-        outgoing = [dr.zeros(mi.Float, size) for _ in range(3)] if self.bins is not None else None
+        # A goniophotometer reading keeps each ray's bin (tallied after the loop).
+        ray_bins = dr.zeros(mi.UInt32, size) if self.bins is not None else None
         # Queues: "stride" — lane l runs positions l, l + L, …; "counter" — one shared counter
         # hands out the next position; "group" — each group of WALK_GROUP lanes (a SIMD packet,
         # run by one thread) shares a counter over its own contiguous range of positions.
@@ -491,9 +490,9 @@ class _Kernel:
             code = judged["fate"] | (judged["rare"] << 4) | dr.select(delta, mi.UInt32(256), mi.UInt32(0))
             dr.scatter(codes, code, position)
             dr.scatter(weights, judged["weight"], position, (judged["rare"] & _VIOLATION) != 0)
-            if outgoing is not None:
-                for target, value in zip(outgoing, (judged["wo"].x, judged["wo"].y, judged["wo"].z)):
-                    dr.scatter(target, value, position)
+            if ray_bins is not None:
+                slot = None if source.single else cursor["slot"]
+                dr.scatter(ray_bins, self._reading_bin(source, slot, judged["wo"], judged["fate"]), position)
             group = cursor.get("group")
             position = next_ray(position, group)
 
@@ -530,15 +529,14 @@ class _Kernel:
             dr.eval(iterations, busy)
             stats.setdefault("iterations", []).append(np.array(iterations))
             stats.setdefault("busy", []).append(np.array(busy))
-        dr.eval(codes, weights, *(outgoing or ()))
+        dr.eval(codes, weights, ray_bins)
         fate = codes & 15
         rare = (codes >> 4) & 15
         delta = (codes & 256) != 0
         lanes = {"fate": fate, "rare": rare, "weight": weights,
                  "specular": (fate == int(Fate.REFLECTED)) & delta, "regular": (fate == int(Fate.TRANSMITTED)) & delta}
-        if outgoing is not None:
-            lanes["wo"] = mi.Vector3f(*outgoing)
-            lanes.update(self._binned(source, source.slot(dr.arange(mi.UInt32, size)), lanes["wo"], fate))
+        if ray_bins is not None:
+            lanes["bin"], lanes["slot"] = ray_bins, source.slot(dr.arange(mi.UInt32, size))
         return lanes
 
     def _walk_start(self, si: Any, sample1: Any, sample2: Any) -> Any:
@@ -581,14 +579,11 @@ class _Kernel:
         return {"wo": wo, "fate": fate, "weight": w, "rare": rare, "sampled_type": sampled_type,
                 "specular": specular, "regular": regular}
 
-    def _binned(self, source: _RaySource, slot: Any, wo: Any, fate: Any) -> dict:
-        """
-        Each ray's goniophotometer ``bin`` (:meth:`_bin`, with its reading's φi) and its
-        reading's ``slot`` in the chunk (``None`` for a single reading), for the tally.
-        """
+    def _reading_bin(self, source: _RaySource, slot: Any, wo: Any, fate: Any) -> Any:
+        """:meth:`_bin` of rays of readings ``slot`` of the chunk (``None``: a single reading), with their φi."""
 
         phi_i = source.column(self.phi_i[source.slots].astype(np.float32), mi.Float, slot)
-        return {"bin": self._bin(wo, fate, phi_i), "slot": slot}
+        return self._bin(wo, fate, phi_i)
 
     def _bin(self, wo: Any, fate: Any, phi_i: Any) -> Any:
         """

@@ -2,7 +2,7 @@
 Random walks at full SIMD occupancy: queued lanes against the one-loop walk (issue 14)
 =====================================================================================
 
-Two parts, printed as one report:
+Three parts, printed as one report:
 
 1. **Side by side** (``--against REV``, default ``b0f95e7``, the commit before the queued
    walks): the working tree and a throwaway checkout of REV each run in a worker process

@@ -16,7 +16,10 @@ Measures, in one run:
 4. With ``--against REV`` (a git revision): the full spectrum with the ABM walk of that
    revision (``plugins/bsdfs/abm_walk.py`` read from git into a temporary module, never
    shipped) and with the current walk, alternately, best CPU time of 2 each: the speed-up
-   in one run, and whether the two gave identical counts.
+   in one run, and whether the two gave identical counts. A walk from before the queued
+   walks (issue 14, e.g. ``b0f95e7``) declares no walk steps, so the kernel runs it as one
+   ``sample()`` per ray: the comparison then includes the queued lanes
+   (``benchmarks/walk_queue.py`` compares whole revisions).
 
 The NPSG C++ figures quoted by the issue, on this machine class: the full spectrum at
 10⁵ rays per wavelength with 2 threads in about 58 s (0.73 Mray/s), and 10⁶ rays at

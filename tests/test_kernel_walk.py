@@ -56,3 +56,187 @@ def test_walk_rng_is_a_function_of_the_samples(mi):
     a, b = np.array(a), np.array(b)
     assert np.array_equal(a, b)
     assert a[0] == a[1] and a[0] != a[2]
+
+
+# --- the walk as resumable steps, run on queued lanes by the kernel --------------------------
+
+_QUEUE_CASES = {
+    # specimen, settings, readings (wavelength, theta_i): walks of every kind and beam
+    "abm_b_conical": ({"type": "abm_b"}, {}, [(465.0, 8.0), (800.0, 8.0), (1450.0, 40.0)]),
+    "abm_u_backlit_random": ({"type": "abm_u", "side": "abaxial"}, {"sampling": "random", "seed": 3},
+                             [(551.0, 88.0), (800.0, 0.0)]),
+    "slab_diffuse": ({"type": "turbid_slab", "mu_a": 1.0, "mu_s": 9.0, "g": 0.75, "thickness": 0.2, "eta": 1.4},
+                     {"beam": "diffuse", "seed": 7}, [(551.0, 0.0), (600.0, 0.0)]),
+    "slab_collimated_clear": ({"type": "turbid_slab", "mu_a": 0.5, "eta": 1.5, "eta_below": 1.33},
+                              {"beam": "collimated"}, [(551.0, 30.0)]),
+}
+
+
+def _tally(instrument, readings, settings, rays, **queue):
+    from virtspec_mi.kernel.tracer import ReadingPlan, WalkQueue, tally_readings
+
+    plans = [ReadingPlan(w, t, 0.0, rays) for w, t in readings]
+    offsets = [k * 3 * rays + 17 for k in range(len(plans))]  # gaps: readings keyed apart
+    counts = tally_readings(instrument, plans, settings, offsets, walk=WalkQueue(**queue))
+    return np.stack([counts.reflected, counts.transmitted, counts.capped, counts.specular_reflected,
+                     counts.regular_transmitted, counts.rounded_weights, counts.weight_violations])
+
+
+@pytest.mark.parametrize("case", sorted(_QUEUE_CASES))
+def test_queued_walks_count_as_one_loop_per_ray(mi, case):
+    """Bit-identical counts: sample() per ray (one loop) vs queued lanes of any count, queue and chunk size."""
+
+    from virtspec_mi.kernel.tracer import WalkQueue
+    from virtspec_mi.scene import find_instrument
+    from virtspec_mi.settings import Settings
+
+    specimen, options, readings = _QUEUE_CASES[case]
+    instrument = find_instrument(vm.instrument_scene(specimen))
+    rays = 3000
+    one_loop = _tally(instrument, readings, Settings(**options), rays, lanes=0)
+    assert one_loop[0].sum() > 0 and one_loop[1].sum() > 0  # both fates occur: the comparison can fail
+    default = WalkQueue()
+    for lanes, queue, refill, chunk in ((default.lanes, default.queue, default.refill, 1 << 22),
+                                        (1000, "stride", 1, 1024), (37, "counter", 4, 4096), (40, "group", 2, 1024),
+                                        (8192, "group", 1, 1 << 22), (4096, "counter", 2, 1 << 22),
+                                        (1, "stride", 2, 1024)):
+        queued = _tally(instrument, readings, Settings(chunk_size=chunk, **options), rays,
+                        lanes=lanes, queue=queue, refill=refill)
+        assert np.array_equal(queued, one_loop), (lanes, queue, refill, chunk)
+
+
+_GONIO_CASES = {
+    # specimen, settings, readings (wavelength, theta_i, phi_i), bins
+    "abm_b": ({"type": "abm_b"}, {}, [(465.0, 8.0, 0.0), (800.0, 40.0, 30.0), (1450.0, 8.0, 200.0)],
+              dict(theta_o_bins=9, phi_o_bins=12)),
+    "abm_b_folded_projected": ({"type": "abm_b"}, {"seed": 5}, [(551.0, 60.0, 120.0), (800.0, 8.0, 300.0)],
+                               dict(theta_o_bins=5, phi_o_bins=7, binning="projected", fold_phi=True)),
+    "slab_edges": ({"type": "turbid_slab", "mu_a": 1.0, "mu_s": 9.0, "g": 0.75, "thickness": 0.2, "eta": 1.4},
+                   {"seed": 7}, [(551.0, 0.0, 0.0), (600.0, 50.0, 90.0)],
+                   dict(theta_o_bins=[0, 10, 30, 90, 120, 180], phi_o_bins=[0, 45, 200, 360])),
+}
+
+
+@pytest.mark.parametrize("case", sorted(_GONIO_CASES))
+def test_queued_walks_bin_as_one_loop_per_ray(mi, case):
+    """Goniophotometer bins bit-identical: sample() per ray (one loop) vs queued lanes, any chunk size."""
+
+    from virtspec_mi.gonio_bins import make_bins
+    from virtspec_mi.kernel.tracer import ReadingPlan, WalkQueue, tally_gonio_readings
+    from virtspec_mi.scene import find_instrument
+    from virtspec_mi.settings import Settings
+
+    specimen, options, readings, spec = _GONIO_CASES[case]
+    instrument = find_instrument(vm.instrument_scene(specimen))
+    bins = make_bins(**spec)
+    plans = [ReadingPlan(w, t, p, 3000) for w, t, p in readings]
+    counts, one_loop = tally_gonio_readings(instrument, plans, Settings(**options), bins, walk=WalkQueue(lanes=0))
+    assert np.count_nonzero(one_loop) > 4  # rays spread over bins: the comparison can fail
+    assert np.array_equal(one_loop.sum(axis=(1, 2)), counts.reflected + counts.transmitted)
+    for queue, chunk in ((WalkQueue(), 1 << 22), (WalkQueue(lanes=40, queue="group"), 1024),
+                         (WalkQueue(lanes=1000, queue="stride", refill=1), 4096)):
+        queued_counts, queued = tally_gonio_readings(instrument, plans, Settings(chunk_size=chunk, **options), bins,
+                                                     walk=queue)
+        assert np.array_equal(queued, one_loop), (queue, chunk)
+        assert np.array_equal(queued_counts.reflected, counts.reflected)
+        assert np.array_equal(queued_counts.transmitted, counts.transmitted)
+
+
+def test_walk_specimens_declare_their_steps(mi, diamond):
+    from virtspec_mi.kernel.walk import is_random_walk
+    from virtspec_mi.scene import find_instrument
+
+    for specimen in ({"type": "abm_b"}, {"type": "abm_u"}, {"type": "turbid_slab"}):
+        assert is_random_walk(find_instrument(vm.instrument_scene(specimen)).bsdf)
+    assert not is_random_walk(find_instrument(diamond).bsdf)
+
+
+@pytest.fixture(scope="module")
+def coin_walk(mi):
+    """A minimal RandomWalk specimen: each step exits up (p = 0.2), down (p = 0.1) or walks on."""
+
+    import drjit as dr
+
+    from virtspec_mi.kernel.walk import walk_to_end
+    from virtspec_mi.plugins.bsdfs.sampled_only import SampledOnlyBSDF
+
+    class CoinWalk(SampledOnlyBSDF):
+        def __init__(self, props):
+            super().__init__(props)
+            self.m_flags = mi.BSDFFlags.DiffuseReflection | mi.BSDFFlags.DiffuseTransmission | \
+                mi.BSDFFlags.FrontSide | mi.BSDFFlags.BackSide
+
+        def sample(self, ctx, si, sample1, sample2, active=True):
+            return self.walk_sample(walk_to_end(self, self.walk_start(si, sample1, sample2, active)))
+
+        def walk_start(self, si, sample1, sample2, active=True):
+            status = dr.select(mi.Bool(active), mi.UInt32(0), mi.UInt32(3)) + dr.zeros(mi.UInt32, dr.width(sample1))
+            return (walk_rng(sample1, sample2), status)
+
+        def walk_step(self, state):
+            rng, status = state
+            u = rng.next_float32()
+            return (rng, dr.select(u < 0.2, mi.UInt32(1), dr.select(u < 0.3, mi.UInt32(2), status)))
+
+        def walk_done(self, state):
+            return state[1] != 0
+
+        def walk_sample(self, state):
+            status = state[1]
+            bs = dr.zeros(mi.BSDFSample3f)
+            bs.wo = mi.Vector3f(0.0, 0.0, dr.select(status == 2, -1.0, 1.0))
+            bs.pdf = 1.0
+            bs.sampled_type = dr.select(status == 2, mi.UInt32(+mi.BSDFFlags.DiffuseTransmission),
+                                        mi.UInt32(+mi.BSDFFlags.DiffuseReflection))
+            return bs, dr.select((status == 1) | (status == 2), mi.Spectrum(1.0), mi.Spectrum(0.0))
+
+    mi.register_bsdf("coin_walk_test", lambda props: CoinWalk(props))
+    return "coin_walk_test"
+
+
+def test_any_specimen_declaring_the_steps_runs_queued(mi, coin_walk):
+    """The protocol is generic: a new walk specimen gets the queued lanes, with the one-loop counts."""
+
+    from virtspec_mi.kernel.walk import is_random_walk
+    from virtspec_mi.scene import find_instrument
+    from virtspec_mi.settings import Settings
+
+    instrument = find_instrument(vm.instrument_scene({"type": coin_walk}))
+    assert is_random_walk(instrument.bsdf)
+    n = 20_000
+    one_loop = _tally(instrument, [(551.0, 10.0)], Settings(), n, lanes=0)
+    queued = _tally(instrument, [(551.0, 10.0)], Settings(chunk_size=4096), n, lanes=333)
+    assert np.array_equal(queued, one_loop)
+    # Exits up with probability 2/3, down 1/3 (each step: 0.2 vs 0.1): 6 sigma.
+    assert abs(one_loop[0][0] / n - 2 / 3) < 6 * np.sqrt(2 / 9 / n)
+    assert one_loop[0][0] + one_loop[1][0] == n
+
+
+def test_the_walk_queue_refuses_bad_values():
+    from virtspec_mi.kernel.tracer import WalkQueue
+
+    for bad, match in (({"lanes": -1}, "lanes"), ({"queue": "lifo"}, "queue"), ({"refill": 3}, "refill"),
+                       ({"refill": 0}, "refill")):
+        with pytest.raises(ValueError, match=match):
+            WalkQueue(**bad)
+
+
+def test_queued_walks_do_not_depend_on_the_thread_count(mi):
+    """The shared counter hands rays to lanes in a timing-dependent order: counts must not care."""
+
+    import drjit as dr
+
+    from virtspec_mi.scene import find_instrument
+    from virtspec_mi.settings import Settings
+
+    specimen, options, readings = _QUEUE_CASES["abm_b_conical"]
+    instrument = find_instrument(vm.instrument_scene(specimen))
+    threads = dr.thread_count()
+    several = _tally(instrument, readings, Settings(chunk_size=4096, **options), 3000, lanes=64)
+    try:
+        dr.set_thread_count(1)
+        one = _tally(instrument, readings, Settings(chunk_size=4096, **options), 3000, lanes=64)
+    finally:
+        dr.set_thread_count(threads)
+    assert np.array_equal(one, several)
+    assert np.array_equal(one, _tally(instrument, readings, Settings(**options), 3000, lanes=0))

@@ -16,8 +16,11 @@ its interface index k and its direction ω. Each interface event is, in this ord
    while the perturbed ray leaves the hemisphere the unperturbed one went to.
 
 The walk ends when the ray leaves through the top (k = −1), the bottom (k = K) or is
-absorbed. Analog Monte Carlo: unit weight for an exit, 0 for absorption. The whole
-walk runs inside ``BSDF.sample`` as one Dr.Jit symbolic loop, its random numbers from
+absorbed. Analog Monte Carlo: unit weight for an exit, 0 for absorption. The walk is
+written as resumable steps (``walk_start``/``walk_step``/``walk_done``/``walk_sample``,
+the :class:`virtspec_mi.kernel.walk.RandomWalk` protocol): ``BSDF.sample`` runs them to the
+end as one Dr.Jit symbolic loop, and the ray kernel drives them itself so that a SIMD lane
+whose walk ends starts its next ray; random numbers from
 :func:`virtspec_mi.kernel.walk.walk_rng`. Wavelength-dependent quantities (α·d_m and the three
 refractive indices) are Dr.Jit arrays on the data grid gathered per lane from
 ``si.wavelengths[0]``: many wavelengths share one compiled kernel. The per-(interface,
@@ -77,7 +80,7 @@ from virtspec_mi.leaf_data import (
 )
 from virtspec_mi.checks import FLOAT32_MAX, check_float32
 from virtspec_mi.plugins.bsdfs.sampled_only import SampledOnlyBSDF
-from virtspec_mi.kernel.walk import CAPPED_COMPONENT, walk_rng
+from virtspec_mi.kernel.walk import CAPPED_COMPONENT, walk_rng, walk_to_end
 
 __all__ = [
     "AIR",
@@ -379,6 +382,17 @@ class ABMLeaf(SampledOnlyBSDF):
         return tuple(dr.lerp(dr.gather(mi.Float, t, j), dr.gather(mi.Float, t, j + 1), f) for t in tables)
 
     def sample(self, ctx, si, sample1, sample2, active=True):
+        return self.walk_sample(walk_to_end(self, self.walk_start(si, sample1, sample2, active)))
+
+    # -- the walk as resumable steps (virtspec_mi.kernel.walk.RandomWalk) ----------------
+    # State: (rng, status, w, k, steps, tau_u, tau, n_c, n_m, n_a, from_top) per lane —
+    # the PCG32, walk status, direction of travel (leaf frame), interface index, events so
+    # far, the two slab thicknesses, the three refractive indices and whether light came in
+    # through the top.
+
+    def walk_start(self, si, sample1, sample2, active=True):
+        """The walk state of each lane entering the leaf along ``-si.wi`` (see :class:`RandomWalk`)."""
+
         rng = walk_rng(sample1, sample2)
         tau, n_c, n_m, n_a = self._spectral(si.wavelengths[0])
         flip = -1.0 if self.side == "abaxial" else 1.0  # leaf z = flip · specimen z
@@ -388,8 +402,19 @@ class ABMLeaf(SampledOnlyBSDF):
         u = rng.next_float32()  # ABM-U's mesophyll split (unused by ABM-B's table)
         alive = mi.Bool(active) & dr.full(mi.Bool, True, dr.width(sample1))
         status = dr.select(alive, mi.UInt32(WALKING), mi.UInt32(ABSORBED))
-        status, w = self._walk(rng, status, w, k, tau * u, tau, n_c, n_m, n_a)
+        return (rng, status, w, k, mi.UInt32(0), tau * u, tau, n_c, n_m, n_a, from_top, mi.Bool(False), mi.Bool(False),
+                mi.UInt32(0))
 
+    def walk_done(self, state):
+        """True where the walk has ended (exit, absorption or cap)."""
+
+        return state[1] != WALKING
+
+    def walk_sample(self, state):
+        """The ``(BSDFSample3f, weight)`` of finished walks."""
+
+        status, w, from_top = state[1], state[2], state[10]
+        flip = -1.0 if self.side == "abaxial" else 1.0
         exits = (status == EXIT_TOP) | (status == EXIT_BOTTOM)
         reflected = (status == EXIT_TOP) == from_top
         bs = dr.zeros(mi.BSDFSample3f)
@@ -404,66 +429,71 @@ class ABMLeaf(SampledOnlyBSDF):
         )
         return bs, dr.select(exits, mi.Spectrum(1.0), mi.Spectrum(0.0))
 
-    @dr.syntax
-    def _walk(self, rng, status, w, k, tau_u, tau, n_c, n_m, n_a):
-        """The symbolic walk loop (abm.md §1.5, §1.7); returns (status, direction)."""
+    def walk_step(self, state):
+        """
+        One step (abm.md §1.5, §1.7) of the lanes the caller runs: an interface event —
+        absorption test, Fresnel choice and one Warn-lobe sample — or, for a lane whose
+        lobe sample fell on the wrong side, the next lobe sample of that event. The lobe's
+        retries are steps of their own (no loop inside a step), so a packet of lanes never
+        waits for one lane's retries; each ray draws the same numbers in the same order.
+        """
 
+        rng, status, w, k, steps, tau_u, tau, n_c, n_m, n_a, from_top, retry, reflect_before, tries = state
         last = len(self.INTERFACES) - 1
-        steps = mi.UInt32(0)
-        while dr.hint(status == WALKING, label="abm_walk"):
-            down = w.z < 0.0
-            row = mi.UInt32(dr.clip(k, 0, last)) * 2 + dr.select(down, mi.UInt32(0), mi.UInt32(1))
-            code = _pick(self._row_code, row)
-            m1, m2 = code & 3, (code >> 2) & 3
-            slab = dr.select((code & 16) != 0, tau, 0.0) + dr.select(
-                (code & 32) != 0, tau_u, dr.select((code & 64) != 0, -tau_u, 0.0))
-            cos_i = dr.abs(w.z)
-            # 1. absorption in the slab just crossed: p = -ln ξ / α · g(cos θ) < t, ξ ∈ (0, 1]
-            g = _cos_unit(cos_i) if self.sieve_detour else cos_i
-            absorbed = -dr.log(1.0 - rng.next_float32()) * g < slab
-            # 2. Fresnel choice
-            n1 = dr.select(m1 == CUTICLE, n_c, dr.select(m1 == MESOPHYLL, n_m, dr.select(m1 == ANTIDERMAL, n_a, 1.0)))
-            n2 = dr.select(m2 == CUTICLE, n_c, dr.select(m2 == MESOPHYLL, n_m, dr.select(m2 == ANTIDERMAL, n_a, 1.0)))
-            fresnel, cos_t, _, eta_ti = mi.fresnel(cos_i, n2 / n1)
-            reflect = rng.next_float32() < fresnel
-            # 3. new direction: mirror, or refraction (tangential part scaled by n1/n2)
-            specular = dr.select(
-                reflect,
-                mi.Vector3f(w.x, w.y, -w.z),
-                mi.Vector3f(eta_ti * w.x, eta_ti * w.y, dr.select(down, -1.0, 1.0) * dr.abs(cos_t)),
-            )
-            exponent = _pick(self._row_exponent, row * 2 + dr.select(reflect, mi.UInt32(0), mi.UInt32(1)))
-            go_down = down ^ reflect
-            # 4. Warn lobe about the specular direction, resampled until it stays on its side
-            frame = mi.Frame3f(specular)
-            perturb = ~absorbed & (exponent < math.inf)
-            pending = mi.Bool(perturb)
-            tries = mi.UInt32(0)
-            local = mi.Vector3f(0.0, 0.0, 1.0)  # loop state kept small: the local sample and its world z
-            z = mi.Float(specular.z)
-            sz, tz, nz = frame.s.z, frame.t.z, frame.n.z
-            while dr.hint(pending, label="abm_lobe"):
-                cos_p = dr.exp2(dr.log2(rng.next_float32()) / (exponent + 1.0))
-                sin_p = dr.safe_sqrt(1.0 - cos_p * cos_p)
-                sin_phi, cos_phi = dr.sincos(dr.two_pi * rng.next_float32())
-                local = mi.Vector3f(sin_p * cos_phi, sin_p * sin_phi, cos_p)
-                z = dr.fma(nz, local.z, dr.fma(tz, local.y, sz * local.x))  # as Frame3f.to_world
-                tries += 1
-                pending = (((z < 0.0) != go_down) | (z == 0.0)) & (tries < MAX_LOBE_TRIES)
-            turned = frame.to_world(local)
-            new_w = dr.select(perturb, mi.Vector3f(turned.x, turned.y, z), specular)
-            lobe_failed = perturb & (((z < 0.0) != go_down) | (z == 0.0))
-            # 5. next state
-            w = dr.select(absorbed, w, new_w)
-            k = dr.select(absorbed, k, k + dr.select(go_down, mi.Int32(1), mi.Int32(-1)))
-            steps += 1
-            status = dr.select(
-                absorbed,
-                mi.UInt32(ABSORBED),
-                dr.select(k < 0, mi.UInt32(EXIT_TOP), dr.select(k > last, mi.UInt32(EXIT_BOTTOM), mi.UInt32(WALKING))),
-            )
-            status = dr.select(lobe_failed | ((status == WALKING) & (steps >= self.max_steps)), mi.UInt32(CAPPED), status)
-        return status, w
+        fresh = ~retry
+        down = w.z < 0.0
+        row = mi.UInt32(dr.clip(k, 0, last)) * 2 + dr.select(down, mi.UInt32(0), mi.UInt32(1))
+        code = _pick(self._row_code, row)
+        m1, m2 = code & 3, (code >> 2) & 3
+        slab = dr.select((code & 16) != 0, tau, 0.0) + dr.select(
+            (code & 32) != 0, tau_u, dr.select((code & 64) != 0, -tau_u, 0.0))
+        cos_i = dr.abs(w.z)
+        # 1. absorption in the slab just crossed: p = -ln ξ / α · g(cos θ) < t, ξ ∈ (0, 1]
+        g = _cos_unit(cos_i) if self.sieve_detour else cos_i
+        absorbed = fresh & (-dr.log(1.0 - rng.next_float32(fresh)) * g < slab)
+        # 2. Fresnel choice (a retry keeps its event's choice)
+        n1 = dr.select(m1 == CUTICLE, n_c, dr.select(m1 == MESOPHYLL, n_m, dr.select(m1 == ANTIDERMAL, n_a, 1.0)))
+        n2 = dr.select(m2 == CUTICLE, n_c, dr.select(m2 == MESOPHYLL, n_m, dr.select(m2 == ANTIDERMAL, n_a, 1.0)))
+        fresnel, cos_t, _, eta_ti = mi.fresnel(cos_i, n2 / n1)
+        reflect = dr.select(fresh, rng.next_float32(fresh) < fresnel, reflect_before)
+        # 3. new direction: mirror, or refraction (tangential part scaled by n1/n2)
+        specular = dr.select(
+            reflect,
+            mi.Vector3f(w.x, w.y, -w.z),
+            mi.Vector3f(eta_ti * w.x, eta_ti * w.y, dr.select(down, -1.0, 1.0) * dr.abs(cos_t)),
+        )
+        exponent = _pick(self._row_exponent, row * 2 + dr.select(reflect, mi.UInt32(0), mi.UInt32(1)))
+        go_down = down ^ reflect
+        # 4. one Warn-lobe sample about the specular direction; wrong side: retried next step
+        frame = mi.Frame3f(specular)
+        perturb = ~absorbed & (exponent < math.inf)
+        cos_p = dr.exp2(dr.log2(rng.next_float32(perturb)) / (exponent + 1.0))
+        sin_p = dr.safe_sqrt(1.0 - cos_p * cos_p)
+        sin_phi, cos_phi = dr.sincos(dr.two_pi * rng.next_float32(perturb))
+        local = mi.Vector3f(sin_p * cos_phi, sin_p * sin_phi, cos_p)
+        z = dr.fma(frame.n.z, local.z, dr.fma(frame.t.z, local.y, frame.s.z * local.x))  # as Frame3f.to_world
+        tries = dr.select(fresh, mi.UInt32(0), tries) + dr.select(perturb, mi.UInt32(1), mi.UInt32(0))
+        wrong_side = perturb & (((z < 0.0) != go_down) | (z == 0.0))
+        retry = wrong_side & (tries < MAX_LOBE_TRIES)
+        lobe_failed = wrong_side & ~retry
+        turned = frame.to_world(local)
+        new_w = dr.select(perturb, mi.Vector3f(turned.x, turned.y, z), specular)
+        # 5. next state (a lane that retries keeps its state)
+        stay = absorbed | retry
+        k_new = dr.select(stay, k, k + dr.select(go_down, mi.Int32(1), mi.Int32(-1)))
+        w = dr.select(stay, w, new_w)
+        steps_new = steps + 1
+        status_new = dr.select(
+            absorbed,
+            mi.UInt32(ABSORBED),
+            dr.select(k_new < 0, mi.UInt32(EXIT_TOP),
+                      dr.select(k_new > last, mi.UInt32(EXIT_BOTTOM), mi.UInt32(WALKING))),
+        )
+        status_new = dr.select(lobe_failed | ((status_new == WALKING) & (steps_new >= self.max_steps)),
+                               mi.UInt32(CAPPED), status_new)
+        status = dr.select(retry, status, status_new)
+        steps = dr.select(retry, steps, steps_new)
+        return (rng, status, w, k_new, steps, tau_u, tau, n_c, n_m, n_a, from_top, retry, reflect, tries)
 
     # -- the rest of the BSDF interface ------------------------------------------------
 

@@ -6,7 +6,9 @@ A plane-parallel layer of thickness d filled with a turbid medium (absorption
 coefficient μa, scattering coefficient μs, Henyey–Greenstein anisotropy g) of
 refractive index n, between a medium of index n_above (the side the specimen's
 normal points to) and one of index n_below. ``sample()`` runs MCML's analog photon
-walk (Wang, Jacques & Zheng 1995) as one Dr.Jit symbolic loop per ray:
+walk (Wang, Jacques & Zheng 1995) as one Dr.Jit symbolic loop per ray; the walk is
+written as resumable steps (the :class:`virtspec_mi.kernel.walk.RandomWalk` protocol),
+which the ray kernel drives itself so that a SIMD lane whose walk ends starts its next ray:
 
 1. at the top face a Fresnel coin flip reflects the ray specularly (probability F)
    or refracts it into the slab;
@@ -98,10 +100,10 @@ import numpy as np
 from virtspec_mi.checks import check_float32
 from virtspec_mi.plugins.bsdfs.sampled_only import SampledOnlyBSDF
 
-from virtspec_mi.kernel.walk import CAPPED_COMPONENT, walk_rng
+from virtspec_mi.kernel.walk import CAPPED_COMPONENT, walk_rng, walk_to_end
 from virtspec_mi.kernel.walk_optics import cross_interface, free_path, sample_hg
 
-__all__ = ["TurbidSlab", "SLAB_COMPONENTS", "COEFFICIENT_RANGE", "INDEX_RANGE", "slab_walk"]
+__all__ = ["TurbidSlab", "SLAB_COMPONENTS", "COEFFICIENT_RANGE", "INDEX_RANGE"]
 
 SLAB_COMPONENTS: dict[str, int] = {
     "specular_reflection": 0,
@@ -129,7 +131,7 @@ _SPECTRAL = {
 }
 
 # Walk states.
-_INSIDE, _TOP, _BOTTOM, _ABSORBED = 0, 1, 2, 3
+_INSIDE, _TOP, _BOTTOM, _ABSORBED, _CAPPED = 0, 1, 2, 3, 4
 
 
 def _allowed(name: str) -> tuple[str, Callable[[Any], Any]]:
@@ -275,65 +277,97 @@ class TurbidSlab(SampledOnlyBSDF):
     # -- BSDF interface ------------------------------------------------------------------
 
     def sample(self, ctx, si, sample1, sample2, active=True):
+        return self.walk_sample(walk_to_end(self, self.walk_start(si, sample1, sample2, active)))
+
+    # -- the walk as resumable steps (virtspec_mi.kernel.walk.RandomWalk) -------------------
+    # State: (rng, status, direction, depth, scattered, steps, front, optics) per lane — the
+    # PCG32, walk status, propagation direction and depth (−z) in the mirrored slab, whether
+    # it scattered, free flights so far, whether light came from the front, and the optics
+    # (μt, albedo, g, the faces' relative indices η_top and η_bottom, and the outer media's
+    # index ratio, ``bs.eta`` of a transmission): per lane for a spectral slab, () for a slab
+    # of numbers (then computed from the numbers and ``front``: a smaller state).
+
+    def _optics(self, si: Any, front: Any) -> tuple:
+        """(μt, albedo, g, η_top, η_bottom, η_out/η_in) of each lane."""
+
         mu_a, mu_s, g, eta = (self._value(name, si) for name in ("mu_a", "mu_s", "g", "eta"))
         above, below = self._value("eta_above", si), self._value("eta_below", si)
         # Back-lit rays: mirror the slab so that light always enters through the top face.
+        if self.wavelength_independent:  # numbers: each quotient once, then a select per lane
+            eta_top = dr.select(front, eta / above, eta / below)
+            eta_bottom = dr.select(front, below / eta, above / eta)
+            ratio = dr.select(front, below / above, above / below)
+        else:
+            outer_in = dr.select(front, above, below)
+            outer_out = dr.select(front, below, above)
+            eta_top, eta_bottom, ratio = eta / outer_in, outer_out / eta, outer_out / outer_in
+        mu_t = mu_a + mu_s
+        return mu_t, mu_s / mu_t, g, eta_top, eta_bottom, ratio
+
+    def _state_optics(self, state: tuple) -> tuple:
+        return state[7] if state[7] else self._optics(None, state[6])
+
+    def walk_start(self, si, sample1, sample2, active=True):
+        """
+        The walk state of each lane after the entry event: a Fresnel coin flip at the top
+        face (specular reflection leaves at once), see :class:`RandomWalk`.
+        """
+
         front = si.wi.z >= 0.0
-        outer_in = dr.select(front, above, below)
-        outer_out = dr.select(front, below, above)
+        optics = self._optics(si, front)
         wi = mi.Vector3f(si.wi.x, si.wi.y, dr.abs(si.wi.z))
-        state, direction, scattered, steps = slab_walk(
-            walk_rng(sample1, sample2), -wi, mu_a, mu_s, g, self._thickness,
-            eta / outer_in, outer_out / eta, self._max_steps, mi.Bool(active),
-        )
-        top = state == _TOP
-        exited = top | (state == _BOTTOM)
-        capped = state == _INSIDE
+        rng = walk_rng(sample1, sample2)
+        # Entry: Fresnel at the top face (specular reflection leaves at once).
+        direction, reflected = cross_interface(-wi, optics[3], rng.next_float32())
+        status = dr.select(reflected, mi.UInt32(_TOP), mi.UInt32(_INSIDE))
+        status = dr.select(mi.Bool(active), status, mi.UInt32(_ABSORBED))
+        status = status + dr.zeros(mi.UInt32, dr.width(sample1))
+        return (rng, status, direction, mi.Float(0.0), mi.Bool(False), mi.UInt32(0), front,
+                () if self.wavelength_independent else optics)
+
+    def walk_done(self, state):
+        """True where the walk has ended (exit, absorption or cap)."""
+
+        return state[1] != _INSIDE
+
+    def walk_sample(self, state):
+        """The ``(BSDFSample3f, weight)`` of finished walks."""
+
+        status, direction, scattered, front = state[1], state[2], state[4], state[6]
+        eta_out_in = self._state_optics(state)[5]
+        top = status == _TOP
+        exited = top | (status == _BOTTOM)
+        capped = status == _CAPPED
         bs = dr.zeros(mi.BSDFSample3f)
         bs.wo = mi.Vector3f(direction.x, direction.y, dr.select(front, direction.z, -direction.z))
         bs.pdf = dr.select(exited, 1.0, 0.0)
-        bs.eta = dr.select(top, 1.0, outer_out / outer_in)
+        bs.eta = dr.select(top, 1.0, eta_out_in)
         component = dr.select(top, mi.UInt32(0), mi.UInt32(2)) + dr.select(scattered, mi.UInt32(1), mi.UInt32(0))
         component = dr.select(exited, component, mi.UInt32(SLAB_COMPONENTS["diffuse_reflection"]))
-        bs.sampled_component = dr.select(capped & active, mi.UInt32(CAPPED_COMPONENT), component)
+        bs.sampled_component = dr.select(capped, mi.UInt32(CAPPED_COMPONENT), component)
         bs.sampled_type = dr.select(
             top,
             dr.select(scattered, mi.UInt32(+mi.BSDFFlags.DiffuseReflection), mi.UInt32(+mi.BSDFFlags.DeltaReflection)),
             dr.select(scattered, mi.UInt32(+mi.BSDFFlags.DiffuseTransmission),
                       mi.UInt32(+mi.BSDFFlags.DeltaTransmission)),
         )
-        weight = dr.select(exited & active, mi.Spectrum(1.0), mi.Spectrum(0.0))
+        weight = dr.select(exited, mi.Spectrum(1.0), mi.Spectrum(0.0))
         return bs, weight
 
-    def to_string(self) -> str:
-        parts = [f"{k}={v:g}" for k, v in self.constants.items()]
-        parts += [f"{k}=<spectrum>" for k in self.textures]
-        return f"TurbidSlab[{', '.join(parts)}, thickness={self.thickness:g}, max_steps={self.max_steps}]"
+    @dr.syntax
+    def walk_step(self, state):
+        """
+        One free flight of the lanes the caller runs, in the slab −d ≤ z ≤ 0 (entered
+        through its top face z = 0): it ends at a face (Fresnel coin flip: out, or reflected
+        back) or at an interaction (absorbed with probability μa/μt, else HG scattering).
+        ``eta_top`` = n_slab/n_above and ``eta_bottom`` = n_below/n_slab are the relative
+        indices (below over above) of the two faces; after ``max_steps`` flights a walk
+        still inside is capped.
+        """
 
-
-@dr.syntax
-def slab_walk(rng, direction, mu_a, mu_s, g, thickness, eta_top, eta_bottom, max_steps, active):
-    """
-    The analog walk of one photon per lane, entering through the top face (z = 0) of a
-    slab occupying −d ≤ z ≤ 0, with propagation ``direction`` (z < 0).
-
-    ``eta_top`` = n_slab/n_above and ``eta_bottom`` = n_below/n_slab are the relative
-    indices (below over above) of the two faces. Returns ``(state, direction,
-    scattered, steps)``: state 1 left through the top, 2 through the bottom,
-    3 absorbed, 0 still inside after ``max_steps`` flights (capped); ``scattered``
-    tells whether it scattered at least once.
-    """
-
-    mu_t = mu_a + mu_s
-    albedo = mu_s / mu_t
-    # Entry: Fresnel at the top face (specular reflection leaves at once).
-    direction, reflected = cross_interface(direction, eta_top, rng.next_float32())
-    state = dr.select(reflected, mi.UInt32(_TOP), mi.UInt32(_INSIDE))
-    state = dr.select(active, state, mi.UInt32(_ABSORBED))
-    depth = mi.Float(0.0)  # −z, 0 at the top face, d at the bottom
-    scattered = mi.Bool(False)
-    steps = mi.UInt32(0)
-    while dr.hint(state == _INSIDE, label="turbid_slab"):
+        rng, status, direction, depth, scattered, steps, front, optics = state
+        mu_t, albedo, g, eta_top, eta_bottom, _ = self._state_optics(state)
+        thickness = self._thickness
         path = free_path(rng.next_float32(), mu_t)
         down = direction.z < 0.0
         to_face = dr.select(down, (thickness - depth) / -direction.z, depth / direction.z)
@@ -343,16 +377,20 @@ def slab_walk(rng, direction, mu_a, mu_s, g, thickness, eta_top, eta_bottom, max
             depth = dr.select(down, thickness, 0.0)
             direction, reflected = cross_interface(direction, eta_face, rng.next_float32())
             if ~reflected:
-                state = dr.select(down, mi.UInt32(_BOTTOM), mi.UInt32(_TOP))
+                status = dr.select(down, mi.UInt32(_BOTTOM), mi.UInt32(_TOP))
         else:
             depth = dr.fma(path, -direction.z, depth)
             if rng.next_float32() < albedo:
                 direction = sample_hg(direction, g, rng.next_float32(), rng.next_float32())
                 scattered = mi.Bool(True)
             else:
-                state = mi.UInt32(_ABSORBED)
-        steps += 1
-        if (state == _INSIDE) & (steps >= max_steps):
-            state = mi.UInt32(_INSIDE + 4)  # leave the loop; mapped back to 0 below
-    state = dr.select(state == _INSIDE + 4, mi.UInt32(_INSIDE), state)
-    return state, direction, scattered, steps
+                status = mi.UInt32(_ABSORBED)
+        steps = steps + 1
+        if (status == _INSIDE) & (steps >= self._max_steps):
+            status = mi.UInt32(_CAPPED)
+        return (rng, status, direction, depth, scattered, steps, front, optics)
+
+    def to_string(self) -> str:
+        parts = [f"{k}={v:g}" for k, v in self.constants.items()]
+        parts += [f"{k}=<spectrum>" for k in self.textures]
+        return f"TurbidSlab[{', '.join(parts)}, thickness={self.thickness:g}, max_steps={self.max_steps}]"

@@ -10,6 +10,13 @@ of a call run in chunks of one fused Dr.Jit kernel each: counter-based random nu
 → exact integer tallies by name (:class:`~virtspec_mi.counts.Counts`).
 :func:`virtspec_mi.engine.take_readings` drives it.
 
+A specimen whose random walk is declared as steps
+(:class:`~virtspec_mi.kernel.walk.RandomWalk`: ``abm_b``, ``abm_u``, ``turbid_slab``) is
+not sampled one ``sample()`` per lane: the kernel drives its steps in one symbolic loop
+on queued SIMD lanes (:class:`WalkQueue`), a lane whose walk ends tallying that ray's fate
+and starting the next ray, so a packet no longer waits for its longest walk. The fate of
+every ray is the one ``sample()`` gives it (same random numbers, same rules below).
+
 Conventions
 -----------
 - Fates are judged in the specimen frame: a ray leaving with wo·n > 0 is reflected
@@ -38,7 +45,9 @@ Conventions
 - A goniophotometer reading (:func:`tally_gonio_readings`) also bins every reflected
   or transmitted ray by its outgoing direction in the specimen frame
   (:mod:`virtspec_mi.gonio_bins`), in the same fused kernel; the fate decides the
-  hemisphere (grazing exits included). Without bins none of this is compiled: the
+  hemisphere (grazing exits included). A random walk on queued lanes bins each ray by
+  the same rule when its walk ends and keeps the bin in the ray's slot; the chunk's
+  bins are tallied after the walk loop. Without bins none of this is compiled: the
   plain kernel and its counts are unchanged.
 - The emitter disk neither occludes nor self-intersects its rays, and no general
   intersection is needed: each conical ray is aimed at a sampled specimen point and hits
@@ -64,10 +73,11 @@ from virtspec_mi.geometry import incidence_frame
 from virtspec_mi.gonio_bins import GonioBins
 from virtspec_mi.kernel.disk import jittered_cell, sample_disk
 from virtspec_mi.kernel.rng import chunk_root, dimension_key, dimension_keys, hash32, to_unit
-from virtspec_mi.kernel.walk import CAPPED_COMPONENT
+from virtspec_mi.kernel.walk import CAPPED_COMPONENT, is_random_walk
 from virtspec_mi.settings import Settings
 
-__all__ = ["ReadingPlan", "tally_readings", "tally_gonio_readings", "trace_rays", "first_interactions"]
+__all__ = ["ReadingPlan", "WALK_GROUP", "WALK_QUEUES", "WalkQueue", "first_interactions", "tally_gonio_readings",
+           "tally_readings", "trace_rays"]
 
 _WORD = 1 << 32
 # Dimensions of the random numbers: 0–1 emitter, 2–3 specimen, 4–6 BSDF, 7 survival;
@@ -86,6 +96,49 @@ _LENGTH2 = ((1.0 - DIRECTION_TOLERANCE) ** 2, (1.0 + DIRECTION_TOLERANCE) ** 2)
 _BELOW_ONE = float(np.nextafter(np.float32(1.0), np.float32(0.0)))
 
 
+WALK_GROUP: int = 16
+"""Lanes that share one queue under ``queue = "group"`` (the widest SIMD packet, AVX-512)."""
+
+WALK_QUEUES: tuple[str, ...] = ("counter", "group", "stride")
+"""How a lane picks its next ray: ``counter`` — one atomic counter for all lanes hands out
+the next ray of the chunk; ``group`` — each group of :data:`WALK_GROUP` lanes shares a
+counter over its own contiguous range of the chunk's rays; ``stride`` — lane l runs rays
+l, l + L, l + 2L, … (no atomics, but a packet waits for its lane with the longest queue)."""
+
+
+@dataclass(frozen=True)
+class WalkQueue:
+    """
+    How the kernel runs a random-walk specimen's steps (see :meth:`_Kernel.walk`); counts
+    never depend on it. The defaults were chosen by measurement (``benchmarks/walk_queue.py``,
+    benchmarks/RESULTS.md, issue 14).
+
+    - ``lanes``: SIMD lanes working through a chunk's rays (0: one ``sample()`` per ray,
+      the walk as one loop). Dr.Jit's LLVM backend runs a kernel's packets of lanes one
+      after another on each thread, so under the shared ``counter`` the first packet of
+      each thread walks almost every ray and the others only their first one: a few
+      packets per thread are enough (1024 lanes: 64 packets of 16, up to 64 threads).
+    - ``queue``: how a lane picks its next ray (:data:`WALK_QUEUES`). The shared counter
+      also balances the threads: all of them draw from one queue until it is empty.
+    - ``refill``: loop iterations between two refills of a lane whose walk ended (a power
+      of two). A refill (the finished ray's tally, the next ray's start) runs for a whole
+      SIMD packet when any of its lanes needs it; every other iteration halves that cost
+      for about half an iteration of idling per ray.
+    """
+
+    lanes: int = 1024
+    queue: str = "counter"
+    refill: int = 2
+
+    def __post_init__(self) -> None:
+        if not (isinstance(self.lanes, int) and 0 <= self.lanes < 2**31):
+            raise ValueError(f"lanes must be a whole number, 0 <= lanes < 2**31 (got {self.lanes!r})")
+        if self.queue not in WALK_QUEUES:
+            raise ValueError(f"queue must be one of {', '.join(WALK_QUEUES)} (got {self.queue!r})")
+        if not (isinstance(self.refill, int) and 1 <= self.refill <= 1024 and self.refill & (self.refill - 1) == 0):
+            raise ValueError(f"refill must be a power of two, 1 <= refill <= 1024 (got {self.refill!r})")
+
+
 @dataclass(frozen=True)
 class ReadingPlan:
     """One reading for the kernel: wavelength (nm), incidence (degrees) and its rays."""
@@ -98,7 +151,7 @@ class ReadingPlan:
 
 def tally_readings(
     instrument: Any, plans: list[ReadingPlan], settings: Settings, offsets: Any = None,
-    on_chunk: Callable[[int], None] | None = None,
+    on_chunk: Callable[[int], None] | None = None, walk: WalkQueue = WalkQueue(), walk_stats: dict | None = None,
 ) -> Counts:
     """
     Trace every reading of ``plans`` and return their exact :class:`~virtspec_mi.counts.Counts`
@@ -113,14 +166,21 @@ def tally_readings(
     global index); each chunk runs as one kernel, so memory stays bounded and counts do
     not depend on chunking. ``on_chunk`` (optional) is called after every chunk with the
     number of readings completed so far.
+
+    A specimen that declares its random walk as steps
+    (:class:`~virtspec_mi.kernel.walk.RandomWalk`) runs on queued lanes as ``walk`` says
+    (:class:`WalkQueue`; ``lanes = 0``: one ``sample()`` per ray, the walk as one loop); no
+    count depends on it. ``walk_stats`` (diagnostics, optional): a dict that receives, per
+    chunk, each lane's loop iterations (``iterations``) and those that stepped a walk
+    (``busy``).
     """
 
-    return _tally(instrument, plans, settings, offsets, on_chunk, None)[0]
+    return _tally(instrument, plans, settings, offsets, on_chunk, None, walk, walk_stats)[0]
 
 
 def tally_gonio_readings(
     instrument: Any, plans: list[ReadingPlan], settings: Settings, bins: GonioBins, offsets: Any = None,
-    on_chunk: Callable[[int], None] | None = None,
+    on_chunk: Callable[[int], None] | None = None, walk: WalkQueue = WalkQueue(),
 ) -> tuple[Counts, np.ndarray]:
     """
     :func:`tally_readings` that also bins every escaping ray by its outgoing direction
@@ -133,14 +193,18 @@ def tally_gonio_readings(
     64-bit word; a chunk holds < 2³² rays) in the same fused kernel, without atomics
     (one copy of the table per CPU thread, Dr.Jit's ``ReduceMode.Expand``), summed
     into ``int64`` on the host: memory is readings × bins (× threads during a chunk),
-    whatever the number of rays.
+    whatever the number of rays. A random-walk specimen on queued lanes (``walk``, as in
+    :func:`tally_readings`) bins each ray when its walk ends, by the same rule
+    (:meth:`_Kernel._bin`), keeps the bin in the ray's slot and tallies the chunk's bins
+    after the walk loop: the bins never depend on ``walk``.
     """
 
-    return _tally(instrument, plans, settings, offsets, on_chunk, bins)
+    return _tally(instrument, plans, settings, offsets, on_chunk, bins, walk)
 
 
 def _tally(instrument: Any, plans: list[ReadingPlan], settings: Settings, offsets: Any,
-           on_chunk: Callable[[int], None] | None, bins: GonioBins | None) -> tuple[Counts, np.ndarray | None]:
+           on_chunk: Callable[[int], None] | None, bins: GonioBins | None, walk: WalkQueue,
+           walk_stats: dict | None = None) -> tuple[Counts, np.ndarray | None]:
     """The chunk loop of :func:`tally_readings` and :func:`tally_gonio_readings`."""
 
     for plan in plans:
@@ -151,7 +215,7 @@ def _tally(instrument: Any, plans: list[ReadingPlan], settings: Settings, offset
     cuts = _cuts(starts, offsets, rays)
     counts = Counts.zeros(len(plans))
     counts.rays[:] = rays
-    kernel = _Kernel(instrument, plans, settings, bins)
+    kernel = _Kernel(instrument, plans, settings, bins, walk, walk_stats)
     bin_counts = None if bins is None else np.zeros((len(plans), bins.size), dtype=np.int64)
     first = 0
     while first < starts[-1]:
@@ -200,7 +264,8 @@ def trace_rays(instrument: Any, plan: ReadingPlan, settings: Settings, count: in
                bins: GonioBins | None = None) -> dict:
     """
     The first ``count`` rays of one reading, ray by ray, through the same kernel code
-    as :func:`tally_readings` (for tests and diagnostics): NumPy arrays of emitter
+    as :func:`tally_readings` (for tests and diagnostics; a random walk runs as one
+    ``sample()`` per ray, whose fates the queued lanes reproduce): NumPy arrays of emitter
     points ``origin`` (specimen frame), specimen points ``target``, incident
     directions ``wi`` (towards the emitter), outgoing ``wo``, ``fate`` (a
     :class:`~virtspec_mi.counts.Fate` code) and the BSDF ``weight``; with ``bins``, also
@@ -222,7 +287,9 @@ def first_interactions(instrument: Any, plan: ReadingPlan, settings: Settings, f
     and specimen ``sample`` as :func:`tally_readings` gives that reading, so a walk that
     continues them (:mod:`virtspec_mi.kernel.sphere_walk`) keeps the hemispherical fates of
     the very same rays. The chunk must not cross a 2³² boundary of the global index.
-    Returns the lanes of :meth:`_Kernel.trace` (``wo``, ``target``, ``fate``, ``rare`` …).
+    Returns the lanes of :meth:`_Kernel.trace` (``wo``, ``target``, ``fate``, ``rare`` …):
+    a random-walk specimen runs here as one ``sample()`` per lane (its walk as one loop,
+    not on queued lanes), whose fates the queued lanes of :func:`tally_readings` reproduce.
     """
 
     kernel = _Kernel(instrument, [plan], settings)
@@ -233,12 +300,16 @@ class _Kernel:
     """The per-chunk ray kernel of one :func:`tally_readings` call."""
 
     def __init__(self, instrument: Any, plans: list[ReadingPlan], settings: Settings,
-                 bins: GonioBins | None = None) -> None:
+                 bins: GonioBins | None = None, walk: WalkQueue = WalkQueue(lanes=0),
+                 walk_stats: dict | None = None) -> None:
         self.bsdf = instrument.bsdf
         self.bins = bins
         if bins is not None:
             self.phi_i = np.array([plan.phi_i for plan in plans], dtype=np.float64)
         self.settings = settings
+        # A random-walk specimen's steps run on queued lanes (walk.lanes = 0: sample() per ray).
+        self.queued = walk.lanes > 0 and is_random_walk(self.bsdf)
+        self.walk_queue, self.walk_stats = walk, walk_stats
         # Specular/regular counts: per ray only for a BSDF with both delta and other lobes.
         flags = self.bsdf.flags()
         delta = mi.has_flag(flags, mi.BSDFFlags.Delta)
@@ -268,7 +339,7 @@ class _Kernel:
         ``counts`` (and, with bins, their per-bin tallies to rows ``slots`` of ``bin_counts``).
         """
 
-        lanes = self.trace(first, size, slots, starts, offsets)
+        lanes = (self.walk if self.queued else self.trace)(first, size, slots, starts, offsets)
         fate = lanes["fate"]
         # Two 32-bit counts per UInt64 lane: (reflected, transmitted), (specular, regular).
         code = dr.select(fate == int(Fate.REFLECTED), mi.UInt64(1), mi.UInt64(0)) | dr.select(
@@ -282,7 +353,8 @@ class _Kernel:
         if self.bins is None:
             dr.eval(*packed_codes.values(), rare)  # the one fused ray kernel
         else:
-            # The same kernel also adds each escaping ray to its reading's bin: two bins per UInt64 word
+            # The same kernel also adds each escaping ray to its reading's bin (a queued walk: the kernel
+            # after the walk loop, from each ray's kept bin): two bins per UInt64 word
             # (32-bit fields: a chunk holds < 2^32 rays, so no field overflows), scatter-added into
             # per-thread copies of the table (ReduceMode.Expand: no atomics; Dr.Jit sums the copies).
             # Neighbouring bins (φo neighbours) share a word, so fewer distinct words per SIMD packet:
@@ -332,83 +404,161 @@ class _Kernel:
               offsets: np.ndarray) -> dict:
         """Symbolic per-lane quantities of the packed lanes [first, first + size) (nothing evaluated)."""
 
-        settings = self.settings
+        source = _RaySource(self, first, size, slots, starts, offsets)
         lane = dr.arange(mi.UInt32, size)
-        # Lane l of reading k has global ray index g = offsets[k] + (first + l − starts[k]); the
-        # chunk never crosses a 2³² boundary of g, so one root and a per-reading low-word shift.
-        shift = (offsets[slots] - starts[slots] + first) % _WORD
-        root = chunk_root(settings.seed, int(offsets[slots[0]] + first - starts[slots[0]]) // _WORD)
+        slot = source.slot(lane)
+        ray = source.incident(lane, slot)
+        bs, weight = self._sample(ray["si"], ray["sample1"], ray["sample2"])
+        wi = ray["si"].wi
+        judged = self._judge(wi.z >= 0.0, bs, weight, ray["survival"], size)
+        lanes = {"origin": ray["origin"], "target": ray["target"], "wi": wi, **judged}
+        if self.bins is not None:
+            lanes["bin"], lanes["slot"] = self._reading_bin(source, slot, judged["wo"], judged["fate"]), slot
+        return lanes
 
-        # Per-reading parameters: width-1 opaque values for a single reading, else gathered.
-        bounds, j0 = _lane_ranges(first, size, slots, starts)
-        rows = self.readings[slots]
-        slot = None
-        if len(slots) == 1:
-            def column(values: np.ndarray, kind: Any) -> Any:
-                return dr.opaque(kind, values[0].item())
-            ray = lane + column(j0, mi.UInt32)
-        else:
-            slot = _find_slot(bounds, lane)
+    def walk(self, first: int, size: int, slots: np.ndarray, starts: np.ndarray,
+             offsets: np.ndarray) -> dict:
+        """
+        The packed lanes [first, first + size) of a :class:`~virtspec_mi.kernel.walk.RandomWalk`
+        specimen, with rays queued on SIMD lanes (see :class:`WalkQueue`).
 
-            def column(values: np.ndarray, kind: Any) -> Any:
-                return dr.gather(kind, kind(values), slot)
-            ray = lane - column(bounds, mi.UInt32) + column(j0, mi.UInt32)
-        if np.all(shift == shift[0]):  # consecutive readings (the default layout): one scalar
-            ray_index = lane + dr.opaque(mi.UInt32, int(shift[0]))
-        else:
-            ray_index = lane + column(shift.astype(np.uint32), mi.UInt32)
-        keys = [dr.opaque(mi.UInt32, k) for k in dimension_keys(root)]
+        One symbolic loop drives the walk one event per iteration; a lane whose walk
+        ended writes that ray's fate to the ray's slot and starts the next ray of its queue
+        (by default the next ray handed out by one atomic counter; see :class:`WalkQueue`).
+        Every ray's random numbers are keyed on its global index, so the fates — and the
+        counts — are those of
+        :meth:`trace`, whichever lane ran the ray. Returns the per-ray ``fate``, ``rare``,
+        ``weight`` (of violating rays), ``specular`` and ``regular`` (evaluated); with bins
+        (a goniophotometer reading) also each ray's ``bin`` (:meth:`_bin` of its ``wo`` and
+        fate when its walk ended, kept in its slot) and its reading's ``slot`` (symbolic).
+        """
 
-        def uniform(dimension: int) -> mi.Float:
-            return to_unit(hash32(ray_index ^ keys[dimension]), mi.Float)
+        source = _RaySource(self, first, size, slots, starts, offsets)
+        bsdf = self.bsdf
+        width, queue = min(size, self.walk_queue.lanes), self.walk_queue.queue
+        codes = dr.zeros(mi.UInt32, size)  # fate | rare << 4 | delta << 8, per ray
+        weights = dr.zeros(mi.Float, size)
+        # A goniophotometer reading keeps each ray's bin (tallied after the loop).
+        ray_bins = dr.zeros(mi.UInt32, size) if self.bins is not None else None
+        # Queues: "stride" — lane l runs positions l, l + L, …; "counter" — one shared counter
+        # hands out the next position; "group" — each group of WALK_GROUP lanes (a SIMD packet,
+        # run by one thread) shares a counter over its own contiguous range of positions.
+        if queue == "group" and width >= WALK_GROUP:
+            width -= width % WALK_GROUP  # whole groups
+        groups = width // WALK_GROUP if queue == "group" and width >= WALK_GROUP else 1
+        share = -(-size // groups)  # positions per queue
+        counter = dr.zeros(mi.UInt32, groups) if queue != "stride" else None
+        step = width // groups  # lanes per queue
 
-        def vector(index: int) -> mi.Vector3f:
-            return mi.Vector3f(*(column(rows[:, index + k], mi.Float) for k in range(3)))
+        # A lane's cursor: its ray's position in the chunk and, for several readings, that
+        # reading's slot and end. Positions only grow along a queue, so the slot moves forward.
+        def cursor_at(position: Any, group: Any, before: dict | None = None) -> dict:
+            cursor = {"position": position}
+            if groups > 1:
+                cursor["group"] = group
+            if source.single:
+                return cursor
+            if before is None:
+                slot = source.slot(position)
+                end = dr.gather(mi.UInt32, source.ends, slot)
+            else:
+                slot, end = dr.while_loop((before["slot"], before["end"]), lambda s, e: e <= position,
+                                          lambda s, e: (s + 1, dr.gather(mi.UInt32, source.ends, s + 1)),
+                                          label="walk_reading")
+            return {**cursor, "slot": slot, "end": end}
 
-        wavelength = column(rows[:, _WAVELENGTH], mi.Float)
+        def queue_end(group: Any) -> Any:
+            return dr.minimum(group * share + share, size) if groups > 1 else mi.UInt32(size)
 
-        if settings.beam == "diffuse":
-            u0, u1 = uniform(0), uniform(1)
-            if settings.sampling == "jittered":
-                u0, u1 = jittered_cell(mi, u0, u1, ray, column(rows[:, _STRATA].astype(np.uint32), mi.UInt32))
-            wi = mi.warp.square_to_cosine_hemisphere(mi.Point2f(u0, u1))
-            target = sample_disk(mi, settings.sampling, uniform(2), uniform(3), self.specimen_radius,
-                                 lambda r: _rejection(ray_index, root, r, 1))
-            origin = mi.Point3f(target.x, target.y, 0.0) + wi * self.distance
-        elif settings.beam == "collimated":
-            wi = vector(_OMEGA)
-            target = mi.Point2f(0.0, 0.0)
-            origin = mi.Point3f(wi)
-        else:
-            u0, u1 = uniform(0), uniform(1)
-            if settings.sampling == "jittered":
-                u0, u1 = jittered_cell(mi, u0, u1, ray, column(rows[:, _STRATA].astype(np.uint32), mi.UInt32))
-            emitter = sample_disk(mi, settings.sampling, u0, u1, self.emitter_radius,
-                                  lambda r: _rejection(ray_index, root, r, 0))
-            target = sample_disk(mi, settings.sampling, uniform(2), uniform(3), self.specimen_radius,
-                                 lambda r: _rejection(ray_index, root, r, 1))
-            origin = mi.Point3f(vector(_CENTRE) + emitter.x * vector(_E_U) + emitter.y * vector(_E_V))
-            wi = dr.normalize(origin - mi.Point3f(target.x, target.y, 0.0))
+        def start(cursor: dict) -> tuple[Any, Any, Any]:
+            ray = source.incident(cursor["position"], None if source.single else cursor["slot"])
+            state = self._walk_start(ray["si"], ray["sample1"], ray["sample2"])
+            return state, ray["si"].wi.z >= 0.0, ray["survival"]
 
-        si = dr.zeros(mi.SurfaceInteraction3f)
-        si.wi = wi
-        si.wavelengths = mi.Spectrum(wavelength)
-        si.sh_frame = self.frame
-        si.n = self.frame.n
-        si.p = self.centre + self.frame.s * target.x + self.frame.t * target.y
-        radius = dr.norm(target)
-        azimuth = dr.atan2(target.y, target.x) * dr.inv_two_pi
-        si.uv = mi.Point2f(radius / self.specimen_radius, dr.select(azimuth < 0, azimuth + 1.0, azimuth))
-        context = mi.BSDFContext(mi.TransportMode.Importance)
-        bs, weight = self._sample(context, si, uniform(4), mi.Point2f(uniform(5), uniform(6)))
+        def next_ray(position: Any, group: Any) -> Any:
+            if counter is None:
+                return position + width
+            if groups == 1:
+                return dr.scatter_inc(counter, mi.UInt32(0)) + step
+            return group * share + dr.scatter_inc(counter, group) + step
+
+        def finish(cursor: dict, state: Any, lit_above: Any, survival: Any) -> tuple:
+            position = cursor["position"]
+            bs, weight = bsdf.walk_sample(state)
+            judged = self._judge(lit_above, bs, weight, survival, width)
+            delta = mi.has_flag(judged["sampled_type"], mi.BSDFFlags.Delta)
+            code = judged["fate"] | (judged["rare"] << 4) | dr.select(delta, mi.UInt32(256), mi.UInt32(0))
+            dr.scatter(codes, code, position)
+            dr.scatter(weights, judged["weight"], position, (judged["rare"] & _VIOLATION) != 0)
+            if ray_bins is not None:
+                slot = None if source.single else cursor["slot"]
+                dr.scatter(ray_bins, self._reading_bin(source, slot, judged["wo"], judged["fate"]), position)
+            group = cursor.get("group")
+            position = next_ray(position, group)
+
+            def restart(cursor: dict, *_: Any) -> tuple:
+                cursor = cursor_at(position, group, cursor)
+                return (cursor, *start(cursor))
+
+            return dr.if_stmt(({**cursor, "position": position}, state, lit_above, survival),
+                              position < queue_end(group), restart, lambda *args: args, label="walk_restart")
+
+        refill = self.walk_queue.refill
+        stats = self.walk_stats
+
+        def body(cursor: dict, state: Any, lit_above: Any, survival: Any, iteration: Any, busy: Any) -> tuple:
+            walking = ~bsdf.walk_done(state)
+            state = dr.if_stmt((state,), walking, lambda s: (bsdf.walk_step(s),), lambda s: (s,),
+                               label="walk_step")[0]
+            due = bsdf.walk_done(state)
+            if refill > 1:
+                due &= (iteration & (refill - 1)) == 0
+            if stats is not None:
+                busy = busy + dr.select(walking, mi.UInt32(1), mi.UInt32(0))
+            return (*dr.if_stmt((cursor, state, lit_above, survival), due, finish,
+                                lambda *args: args, label="walk_finish"), iteration + 1, busy)
+
+        lane = dr.arange(mi.UInt32, width)
+        group = lane // WALK_GROUP if groups > 1 else None
+        position = group * share + lane % WALK_GROUP if groups > 1 else lane
+        cursor = cursor_at(position, group)
+        loop = dr.while_loop((cursor, *start(cursor), mi.UInt32(0), mi.UInt32(0)),
+                             lambda c, *_: c["position"] < queue_end(c.get("group")), body, label="walk_queue")
+        if stats is not None:  # diagnostics: per lane, loop iterations and iterations that stepped a walk
+            iterations, busy = loop[-2:]
+            dr.eval(iterations, busy)
+            stats.setdefault("iterations", []).append(np.array(iterations))
+            stats.setdefault("busy", []).append(np.array(busy))
+        dr.eval(codes, weights, ray_bins)
+        fate = codes & 15
+        rare = (codes >> 4) & 15
+        delta = (codes & 256) != 0
+        lanes = {"fate": fate, "rare": rare, "weight": weights,
+                 "specular": (fate == int(Fate.REFLECTED)) & delta, "regular": (fate == int(Fate.TRANSMITTED)) & delta}
+        if ray_bins is not None:
+            lanes["bin"], lanes["slot"] = ray_bins, source.slot(dr.arange(mi.UInt32, size))
+        return lanes
+
+    def _walk_start(self, si: Any, sample1: Any, sample2: Any) -> Any:
+        """The specimen's ``walk_start``; a feature it needs that the instrument lacks is a ``ValueError``."""
+
+        return self._unsupported(lambda: self.bsdf.walk_start(si, sample1, sample2, True))
+
+    def _judge(self, lit_above: Any, bs: Any, weight: Any, survival: Any, size: int) -> dict:
+        """
+        The fate of each ray from its BSDF sample (see the module's conventions): ``fate``,
+        ``rare`` bits, the broadcast ``weight``, ``wo``, ``sampled_type``, ``specular`` and
+        ``regular``. ``lit_above``: wi·n ≥ 0; ``survival``: the ray's roulette uniform.
+        """
+
         # Per ray, at the chunk's width (a BSDF may return width-1 literals).
         w = _full(mi.Spectrum(weight)[0], size)
         wo = mi.Vector3f(*(_full(c, size) for c in (bs.wo.x, bs.wo.y, bs.wo.z)))
         sampled_type, component = _full(bs.sampled_type, size), _full(bs.sampled_component, size)
-        survives = uniform(7) < w
+        survives = survival < w
         # wo·n = 0 exactly (grazing exit): the sampled event decides — transmission crosses.
         crossed = mi.has_flag(sampled_type, mi.BSDFFlags.Transmission)
-        upper = dr.select(wo.z != 0.0, wo.z > 0.0, crossed ^ (wi.z >= 0.0))
+        upper = dr.select(wo.z != 0.0, wo.z > 0.0, crossed ^ lit_above)
         fate = dr.select(survives, dr.select(upper, mi.UInt32(int(Fate.REFLECTED)), mi.UInt32(int(Fate.TRANSMITTED))),
                          mi.UInt32(int(Fate.ABSORBED)))
         # NaN, infinite or not unit length (NaN fails both comparisons): no hemisphere to judge.
@@ -426,12 +576,14 @@ class _Kernel:
                 | dr.select(rounded, mi.UInt32(_ROUNDED), 0) | dr.select(invalid, mi.UInt32(_INVALID), 0))
         delta = mi.has_flag(sampled_type, mi.BSDFFlags.Delta)
         specular, regular = (fate == int(Fate.REFLECTED)) & delta, (fate == int(Fate.TRANSMITTED)) & delta
-        lanes = {"origin": origin, "target": target, "wi": wi, "wo": wo, "fate": fate, "weight": w,
-                 "rare": rare, "specular": specular, "regular": regular}
-        if self.bins is not None:
-            lanes["bin"] = self._bin(wo, fate, column(self.phi_i[slots].astype(np.float32), mi.Float))
-            lanes["slot"] = slot
-        return lanes
+        return {"wo": wo, "fate": fate, "weight": w, "rare": rare, "sampled_type": sampled_type,
+                "specular": specular, "regular": regular}
+
+    def _reading_bin(self, source: _RaySource, slot: Any, wo: Any, fate: Any) -> Any:
+        """:meth:`_bin` of rays of readings ``slot`` of the chunk (``None``: a single reading), with their φi."""
+
+        phi_i = source.column(self.phi_i[source.slots].astype(np.float32), mi.Float, slot)
+        return self._bin(wo, fate, phi_i)
 
     def _bin(self, wo: Any, fate: Any, phi_i: Any) -> Any:
         """
@@ -476,11 +628,17 @@ class _Kernel:
         binned = (reflected | transmitted) & (theta_bin < n_theta) & (phi_bin < n_phi)
         return dr.select(binned, theta_bin * n_phi + phi_bin, mi.UInt32(bins.size))
 
-    def _sample(self, context: Any, si: Any, sample1: Any, sample2: Any) -> tuple[Any, Any]:
-        """The specimen BSDF's ``sample``; a feature it needs that the instrument lacks is a ``ValueError``."""
+    def _sample(self, si: Any, sample1: Any, sample2: Any) -> tuple[Any, Any]:
+        """The specimen BSDF's ``sample`` (importance transport)."""
+
+        context = mi.BSDFContext(mi.TransportMode.Importance)
+        return self._unsupported(lambda: self.bsdf.sample(context, si, sample1, sample2, True))
+
+    def _unsupported(self, call: Callable[[], Any]) -> Any:
+        """``call()``; a feature the specimen needs that the instrument lacks is a ``ValueError``."""
 
         try:
-            return self.bsdf.sample(context, si, sample1, sample2, True)
+            return call()
         except RuntimeError as error:
             if "not implemented" not in str(error):
                 raise
@@ -490,6 +648,110 @@ class _Kernel:
                 "normal, shading frame, uv and wavelength, but no uv partials (dp_du, dp_dv) and no ray "
                 "differentials, so features that differentiate a texture over the surface — bumpmap, or "
                 "normalmap and textures that need gradients or footprints — are not supported") from None
+
+
+class _RaySource:
+    """
+    The incident rays of one chunk, the packed lanes [first, first + size): host-side
+    keys and per-reading rows once per chunk, then any ray's quantities from its
+    position p in the chunk (:meth:`incident`, :meth:`uniform`) — the same whether all
+    positions run at once (:meth:`_Kernel.trace`) or a lane works through a queue of them
+    (:meth:`_Kernel.walk`).
+    """
+
+    def __init__(self, kernel: _Kernel, first: int, size: int, slots: np.ndarray, starts: np.ndarray,
+                 offsets: np.ndarray) -> None:
+        self.kernel = kernel
+        # Position p of reading k has global ray index g = offsets[k] + (first + p − starts[k]); the
+        # chunk never crosses a 2³² boundary of g, so one root and a per-reading low-word shift.
+        self.shift = (offsets[slots] - starts[slots] + first) % _WORD
+        self.root = chunk_root(kernel.settings.seed, int(offsets[slots[0]] + first - starts[slots[0]]) // _WORD)
+        # Per-reading parameters: width-1 opaque values for a single reading, else gathered.
+        self.bounds, self.j0 = _lane_ranges(first, size, slots, starts)
+        self.slots, self.rows = slots, kernel.readings[slots]
+        self.single = len(slots) == 1
+        self.keys = [dr.opaque(mi.UInt32, k) for k in dimension_keys(self.root)]
+        # Queued walks: a column equal for every reading of the chunk is one opaque value.
+        self.fold_constant = kernel.queued
+        # End (chunk position) of each reading's lanes, for a lane that moves along its queue.
+        self.ends = mi.UInt32(np.append(self.bounds[1:], size).astype(np.uint32))
+
+    def slot(self, lane: Any) -> Any:
+        """Index of each position's reading in the chunk (``None`` for a single reading)."""
+
+        return None if self.single else _find_slot(self.bounds, lane)
+
+    def column(self, values: np.ndarray, kind: Any, slot: Any) -> Any:
+        """Per-reading ``values`` (one per slot of the chunk) at positions of readings ``slot``."""
+
+        if slot is None or (self.fold_constant and np.all(values == values[0])):
+            return dr.opaque(kind, values[0].item())
+        return dr.gather(kind, kind(values), slot)
+
+    def _ray_index(self, lane: Any, slot: Any) -> Any:
+        """Low word of the global ray index of each position."""
+
+        if np.all(self.shift == self.shift[0]):  # consecutive readings (the default layout): one scalar
+            return lane + dr.opaque(mi.UInt32, int(self.shift[0]))
+        return lane + self.column(self.shift.astype(np.uint32), mi.UInt32, slot)
+
+    def incident(self, lane: Any, slot: Any = False) -> dict:
+        """Emitter point ``origin``, specimen point ``target``, the surface interaction ``si``,
+        the BSDF's ``sample1``/``sample2`` and the roulette's ``survival`` uniform of the rays at
+        positions ``lane`` (their readings ``slot``: found by a binary search when not given)."""
+
+        kernel, settings, rows, root = self.kernel, self.kernel.settings, self.rows, self.root
+        slot = self.slot(lane) if slot is False else slot
+
+        def column(values: np.ndarray, kind: Any) -> Any:
+            return self.column(values, kind, slot)
+
+        ray = lane + column(self.j0, mi.UInt32) if slot is None else (
+            lane - column(self.bounds, mi.UInt32) + column(self.j0, mi.UInt32))
+        ray_index = self._ray_index(lane, slot)
+
+        def uniform(dimension: int) -> mi.Float:
+            return to_unit(hash32(ray_index ^ self.keys[dimension]), mi.Float)
+
+        def vector(index: int) -> mi.Vector3f:
+            return mi.Vector3f(*(column(rows[:, index + k], mi.Float) for k in range(3)))
+
+        wavelength = column(rows[:, _WAVELENGTH], mi.Float)
+
+        if settings.beam == "diffuse":
+            u0, u1 = uniform(0), uniform(1)
+            if settings.sampling == "jittered":
+                u0, u1 = jittered_cell(mi, u0, u1, ray, column(rows[:, _STRATA].astype(np.uint32), mi.UInt32))
+            wi = mi.warp.square_to_cosine_hemisphere(mi.Point2f(u0, u1))
+            target = sample_disk(mi, settings.sampling, uniform(2), uniform(3), kernel.specimen_radius,
+                                 lambda r: _rejection(ray_index, root, r, 1))
+            origin = mi.Point3f(target.x, target.y, 0.0) + wi * kernel.distance
+        elif settings.beam == "collimated":
+            wi = vector(_OMEGA)
+            target = mi.Point2f(0.0, 0.0)
+            origin = mi.Point3f(wi)
+        else:
+            u0, u1 = uniform(0), uniform(1)
+            if settings.sampling == "jittered":
+                u0, u1 = jittered_cell(mi, u0, u1, ray, column(rows[:, _STRATA].astype(np.uint32), mi.UInt32))
+            emitter = sample_disk(mi, settings.sampling, u0, u1, kernel.emitter_radius,
+                                  lambda r: _rejection(ray_index, root, r, 0))
+            target = sample_disk(mi, settings.sampling, uniform(2), uniform(3), kernel.specimen_radius,
+                                 lambda r: _rejection(ray_index, root, r, 1))
+            origin = mi.Point3f(vector(_CENTRE) + emitter.x * vector(_E_U) + emitter.y * vector(_E_V))
+            wi = dr.normalize(origin - mi.Point3f(target.x, target.y, 0.0))
+
+        si = dr.zeros(mi.SurfaceInteraction3f)
+        si.wi = wi
+        si.wavelengths = mi.Spectrum(wavelength)
+        si.sh_frame = kernel.frame
+        si.n = kernel.frame.n
+        si.p = kernel.centre + kernel.frame.s * target.x + kernel.frame.t * target.y
+        radius = dr.norm(target)
+        azimuth = dr.atan2(target.y, target.x) * dr.inv_two_pi
+        si.uv = mi.Point2f(radius / kernel.specimen_radius, dr.select(azimuth < 0, azimuth + 1.0, azimuth))
+        return {"origin": origin, "target": target, "si": si, "sample1": uniform(4),
+                "sample2": mi.Point2f(uniform(5), uniform(6)), "survival": uniform(7)}
 
 
 @dr.syntax

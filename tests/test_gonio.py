@@ -217,7 +217,7 @@ def test_cli_gonio_prints_the_certificate_and_writes_the_file(rough, tmp_path, c
     from virtspec_mi.cli import main
 
     scene = tmp_path / "rough.xml"
-    scene.write_text(f"""<scene version="3.0.0">
+    scene.write_text("""<scene version="3.0.0">
     <shape type="disk" id="emitter"><transform name="to_world"><rotate x="1" angle="180"/><scale value="8"/>
         <translate z="100"/></transform></shape>
     <shape type="disk" id="specimen"><transform name="to_world"><scale value="12.5"/></transform>

@@ -10,7 +10,6 @@ from __future__ import annotations
 
 import json
 import os
-import signal
 import time
 
 import numpy as np
@@ -165,33 +164,53 @@ def test_the_cli_runs_a_sweep_on_a_scheduler_address(client, tmp_path):
 
 
 @pytest.mark.parametrize("parameters", [None, {"specimen.eta": [1.3, 1.6]}], ids=["grid", "parameter-sweep"])
-def test_killing_a_worker_mid_sweep_gives_the_identical_result(client, dielectric_dict, monkeypatch, parameters):
-    # 48 readings (3 traced rows of the wavelength-independent dielectric), x 2 parameter points
+def test_killing_a_worker_mid_sweep_gives_the_identical_result(client, dielectric_dict, tmp_path, parameters):
+    # 48 readings (3 traced rows of the wavelength-independent dielectric), x 2 parameter points.
+    # Every worker is armed: the first task to trace a batch SIGKILLs its own process (a flag
+    # file, created exclusively, makes it exactly one kill), so the kill is mid-sweep by
+    # construction, not by timing.
     settings = {**SMALL, "wavelengths": "400:700:20", "rays": 100_000, "parameters": parameters}
-    record = Checkpoint.record
-    killed: list[int] = []
-    recorded_after: list[int] = []
+    flag = str(tmp_path / "killed")
 
-    def killing(self, batch, *args):
-        if not killed:
-            busy = max(client.processing().items(), key=lambda item: len(item[1]))
-            assert busy[1], "no worker holds a task: the kill would not be mid-sweep"
-            pid = client.run(os.getpid, workers=[busy[0]])[busy[0]]
-            os.kill(pid, signal.SIGKILL)  # a worker process of this test's cluster
-            killed.append(pid)
-        else:
-            recorded_after.append(len(batch))
-        record(self, batch, *args)
+    def arm(flag: str) -> None:
+        import os
+        import signal
 
-    monkeypatch.setattr(Checkpoint, "record", killing)
-    there = vm.sweep(dielectric_dict, workers=client, chunk_size=1024, task_readings=2, **settings)
-    monkeypatch.undo()
-    assert killed and sum(recorded_after) > 0
+        from virtspec_mi import scaleout as worker_side
+
+        original = worker_side.take_keyed_readings
+
+        def dying(*args, **kwargs):
+            try:
+                handle = os.open(flag, os.O_CREAT | os.O_EXCL | os.O_WRONLY)
+            except FileExistsError:
+                return original(*args, **kwargs)
+            os.write(handle, str(os.getpid()).encode())
+            os.close(handle)
+            os.kill(os.getpid(), signal.SIGKILL)
+
+        worker_side.armed_original = original
+        worker_side.take_keyed_readings = dying
+
+    def disarm() -> None:
+        from virtspec_mi import scaleout as worker_side
+
+        if hasattr(worker_side, "armed_original"):
+            worker_side.take_keyed_readings = worker_side.armed_original
+            del worker_side.armed_original
+
+    client.run(arm, flag)
+    try:
+        there = vm.sweep(dielectric_dict, workers=client, chunk_size=1024, task_readings=2, **settings)
+    finally:
+        client.run(disarm)
+    with open(flag) as handle:
+        killed = int(handle.read())
     same_counts(there, vm.sweep(dielectric_dict, **settings))
     client.wait_for_workers(2, timeout=120)  # the nanny restarted it, set up by the plugin again
     states = client.gather([client.submit(scaleout.worker_state, pure=False, workers=[w])
                             for w in client.scheduler_info()["workers"]])
-    assert killed[0] not in {s["pid"] for s in states}
+    assert killed not in {s["pid"] for s in states}
     assert all(s["set_up_here"] and s["drjit_threads"] == scaleout.DRJIT_THREADS for s in states)
 
 

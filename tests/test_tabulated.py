@@ -126,8 +126,6 @@ def test_sample_weight_is_eval_over_pdf_and_the_row_total(mi, phong, theta_i, ph
 def test_eval_is_the_table_brdf_times_cos_in_each_bin(mi, phong):
     """Directions at bin centres, incidence at azimuth 75°: f = table brdf (rotated by φ − φi)."""
 
-    import drjit as dr
-
     table = phong
     centres_t = np.radians((table.theta_o_lower + table.theta_o_upper) / 2)
     centres_p = np.radians((table.phi_o_lower + table.phi_o_upper) / 2 - table.phi_i + 75.0)

@@ -319,8 +319,6 @@ class GonioResult:
         ``cdf_mu``; ``gonio_json`` rebuilds the reading (:meth:`from_dataset`).
         """
 
-        import xarray as xr
-
         base = self.result.to_dataset()
         base.attrs.pop("result_json", None)
         b = self.bins

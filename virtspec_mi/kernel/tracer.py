@@ -169,8 +169,8 @@ def walk_plan(walk_steps: float | None) -> tuple[int, bool]:
     computed before the loop; short or undeclared: every 2nd iteration, starts computed in the
     refill. Chosen by measurement (benchmarks/RESULTS.md, issue 14): on the ABM leaf (10.2
     events per ray over the soybean spectrum, 15.7 at 800 nm) precomputed starts save
-    6–12 % and refill 4 a further 2–3 %; on the MCML slab (3.2 events) gathering a start costs
-    more than computing it (+10 %) and refill 4 loses 5–7 %.
+    8–11 % of the CPU time and refill 4 up to 8 % more; on the MCML slab (3.2 events)
+    gathering a start costs more than computing it (7–10 % slower) and refill 4 loses 5–7 %.
     """
 
     if walk_steps is not None and walk_steps >= LONG_WALK_STEPS:

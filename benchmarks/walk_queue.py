@@ -20,7 +20,8 @@ Three parts, printed as one report:
 2. **Occupancy** (working tree only, ``tally_readings`` with its ``walk_stats``): for a
    grid of :class:`~virtspec_mi.kernel.tracer.WalkQueue` settings (lanes, queue, refill,
    prestart; the default's refill and prestart come from the specimen's declared mean walk
-   length, :func:`~virtspec_mi.kernel.tracer.walk_plan`) and chunk sizes, the CPU time and the share of lane-iterations that stepped no walk
+   length, :func:`~virtspec_mi.kernel.tracer.walk_plan`) and chunk sizes, the CPU time and
+   the share of lane-iterations that stepped no walk
    ("idle": a lane waiting for its refill, or past the end of its queue while its packet
    still runs), counted per SIMD packet of 16 lanes. ``lanes = 0`` is the one-loop walk
    (one ``sample()`` per ray), whose idle share is measured by queueing one ray per lane.
@@ -323,8 +324,8 @@ def main(argv: list[str] | None = None) -> int:
         rows = occupancy(scale)
         load.append(load_average())
         out += ["Occupancy of the queued lanes (working tree; CPU time best of 3, all threads)", "",
-                table(["workload", "lanes", "queue", "refill", "prestart", "chunk", "rays per lane", "CPU s", "Mray/s (CPU)",
-                       "vs one loop", "idle"], rows), ""]
+                table(["workload", "lanes", "queue", "refill", "prestart", "chunk", "rays per lane", "CPU s",
+                       "Mray/s (CPU)", "vs one loop", "idle"], rows), ""]
     if not args.skip_gonio:
         rows = gonio(scale)
         load.append(load_average())

@@ -18,8 +18,10 @@ Three parts, printed as one report:
      collimated and diffuse beams, 4·10⁶ rays.
 
 2. **Occupancy** (working tree only, ``tally_readings`` with its ``walk_stats``): for a
-   grid of :class:`~virtspec_mi.kernel.tracer.WalkQueue` settings (lanes, queue, refill)
-   and chunk sizes, the CPU time and the share of lane-iterations that stepped no walk
+   grid of :class:`~virtspec_mi.kernel.tracer.WalkQueue` settings (lanes, queue, refill,
+   prestart; the default's refill and prestart come from the specimen's declared mean walk
+   length, :func:`~virtspec_mi.kernel.tracer.walk_plan`) and chunk sizes, the CPU time and
+   the share of lane-iterations that stepped no walk
    ("idle": a lane waiting for its refill, or past the end of its queue while its packet
    still runs), counted per SIMD packet of 16 lanes. ``lanes = 0`` is the one-loop walk
    (one ``sample()`` per ray), whose idle share is measured by queueing one ray per lane.
@@ -186,6 +188,7 @@ def occupancy(scale: int) -> list[list[str]]:
 
     vm.mitsuba()
     from virtspec_mi.kernel.tracer import ReadingPlan, WalkQueue, tally_readings
+    from virtspec_mi.kernel.walk import walk_steps
     from virtspec_mi.scene import find_instrument
     from virtspec_mi.settings import Settings
 
@@ -196,7 +199,8 @@ def occupancy(scale: int) -> list[list[str]]:
     }
     default = WalkQueue()
     grid = [(WalkQueue(lanes=0), 1 << 22), (default, 1 << 22),
-            (WalkQueue(refill=1), 1 << 22), (WalkQueue(refill=4), 1 << 22),
+            (WalkQueue(refill=1), 1 << 22), (WalkQueue(refill=2), 1 << 22), (WalkQueue(refill=4), 1 << 22),
+            (WalkQueue(prestart=False), 1 << 22), (WalkQueue(prestart=True), 1 << 22),
             (WalkQueue(lanes=32), 1 << 22), (WalkQueue(lanes=1 << 15), 1 << 22),
             (WalkQueue(lanes=1 << 13, queue="group"), 1 << 22), (WalkQueue(lanes=1 << 16, queue="group"), 1 << 22),
             (WalkQueue(lanes=1 << 13, queue="stride"), 1 << 22), (WalkQueue(lanes=1 << 16, queue="stride"), 1 << 22),
@@ -220,8 +224,10 @@ def occupancy(scale: int) -> list[list[str]]:
                                walk=WalkQueue(lanes=min(chunk, 1 << 24), queue="stride", refill=1), walk_stats=stats)
             base = base or cpu
             total = rays * len(plans)
+            planned = queue.planned(walk_steps(instrument.bsdf))  # refill and prestart as the kernel ran them
             rows.append([name, "one loop" if not queue.lanes else f"{queue.lanes}", queue.queue if queue.lanes else "-",
-                         str(queue.refill) if queue.lanes else "-", f"{chunk:,}",
+                         str(planned.refill) if queue.lanes else "-",
+                         ("yes" if planned.prestart else "no") if queue.lanes else "-", f"{chunk:,}",
                          ("shared" if queue.queue == "counter" else f"{min(chunk, total) // queue.lanes:,}")
                          if queue.lanes else "1",
                          f"{cpu:.3f}", f"{total / cpu / 1e6:.2f}", f"{base / cpu:.2f}x", f"{_idle(stats):.3f}"])
@@ -318,8 +324,8 @@ def main(argv: list[str] | None = None) -> int:
         rows = occupancy(scale)
         load.append(load_average())
         out += ["Occupancy of the queued lanes (working tree; CPU time best of 3, all threads)", "",
-                table(["workload", "lanes", "queue", "refill", "chunk", "rays per lane", "CPU s", "Mray/s (CPU)",
-                       "vs one loop", "idle"], rows), ""]
+                table(["workload", "lanes", "queue", "refill", "prestart", "chunk", "rays per lane", "CPU s",
+                       "Mray/s (CPU)", "vs one loop", "idle"], rows), ""]
     if not args.skip_gonio:
         rows = gonio(scale)
         load.append(load_average())

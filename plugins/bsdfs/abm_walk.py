@@ -264,6 +264,10 @@ class ABMLeaf(SampledOnlyBSDF):
     INTERFACES: tuple[Interface, ...] = ()
     wavelength_range: tuple[float, float] = WAVELENGTH_RANGE
     """Wavelengths (nm) the specimen is defined for; the instrument checks readings against it."""
+    walk_steps: float = 10.0
+    """Mean events per walk (lobe retries included), a queueing hint for the ray kernel
+    (:func:`virtspec_mi.kernel.walk.walk_steps`): measured 10.2 over the soybean spectrum
+    (400–2500 nm, θi = 8°), 5.9 at 551 nm, 15.7 at 800 nm."""
 
     def __init__(self, props: mi.Properties) -> None:
         super().__init__(props)

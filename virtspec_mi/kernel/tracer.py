@@ -73,11 +73,11 @@ from virtspec_mi.geometry import incidence_frame
 from virtspec_mi.gonio_bins import GonioBins
 from virtspec_mi.kernel.disk import jittered_cell, sample_disk
 from virtspec_mi.kernel.rng import chunk_root, dimension_key, dimension_keys, hash32, to_unit
-from virtspec_mi.kernel.walk import CAPPED_COMPONENT, is_random_walk
+from virtspec_mi.kernel.walk import CAPPED_COMPONENT, is_random_walk, walk_steps
 from virtspec_mi.settings import Settings
 
-__all__ = ["ReadingPlan", "WALK_GROUP", "WALK_QUEUES", "WalkQueue", "first_interactions", "tally_gonio_readings",
-           "tally_readings", "trace_rays"]
+__all__ = ["LONG_WALK_STEPS", "ReadingPlan", "WALK_GROUP", "WALK_QUEUES", "WalkQueue", "first_interactions",
+           "tally_gonio_readings", "tally_readings", "trace_rays", "walk_plan"]
 
 _WORD = 1 << 32
 # Dimensions of the random numbers: 0–1 emitter, 2–3 specimen, 4–6 BSDF, 7 survival;
@@ -122,21 +122,60 @@ class WalkQueue:
       also balances the threads: all of them draw from one queue until it is empty.
     - ``refill``: loop iterations between two refills of a lane whose walk ended (a power
       of two). A refill (the finished ray's tally, the next ray's start) runs for a whole
-      SIMD packet when any of its lanes needs it; every other iteration halves that cost
-      for about half an iteration of idling per ray.
+      SIMD packet when any of its lanes needs it; refilling every P-th iteration divides
+      that cost by P for about (P − 1)/2 iterations of idling per ray.
+    - ``prestart``: every ray's start (incident ray and ``walk_start``: the PCG32 seeding,
+      spectral look-ups …) computed in one kernel over the whole chunk before the walk
+      loop, at full SIMD use; a refill then only gathers its ray's start state (a memory
+      read per state array) instead of computing it for the whole packet.
+
+    ``None`` (the default of both): from the specimen's declared mean walk length
+    (:func:`walk_plan`, one rule for every walk specimen).
     """
 
     lanes: int = 1024
     queue: str = "counter"
-    refill: int = 2
+    refill: int | None = None
+    prestart: bool | None = None
 
     def __post_init__(self) -> None:
         if not (isinstance(self.lanes, int) and 0 <= self.lanes < 2**31):
             raise ValueError(f"lanes must be a whole number, 0 <= lanes < 2**31 (got {self.lanes!r})")
         if self.queue not in WALK_QUEUES:
             raise ValueError(f"queue must be one of {', '.join(WALK_QUEUES)} (got {self.queue!r})")
-        if not (isinstance(self.refill, int) and 1 <= self.refill <= 1024 and self.refill & (self.refill - 1) == 0):
-            raise ValueError(f"refill must be a power of two, 1 <= refill <= 1024 (got {self.refill!r})")
+        if self.refill is not None and not (
+                isinstance(self.refill, int) and 1 <= self.refill <= 1024 and self.refill & (self.refill - 1) == 0):
+            raise ValueError(f"refill must be None or a power of two, 1 <= refill <= 1024 (got {self.refill!r})")
+        if self.prestart not in (None, True, False):
+            raise ValueError(f"prestart must be None, True or False (got {self.prestart!r})")
+
+    def planned(self, walk_steps: float | None) -> WalkQueue:
+        """This queue with ``refill`` and ``prestart`` that are ``None`` taken from :func:`walk_plan`."""
+
+        refill, prestart = walk_plan(walk_steps)
+        return WalkQueue(self.lanes, self.queue, refill if self.refill is None else self.refill,
+                         prestart if self.prestart is None else self.prestart)
+
+
+LONG_WALK_STEPS: float = 6.0
+"""Mean events per walk from which a walk counts as long for :func:`walk_plan`."""
+
+
+def walk_plan(walk_steps: float | None) -> tuple[int, bool]:
+    """
+    The queue's ``refill`` period and ``prestart`` for a specimen whose walks take
+    ``walk_steps`` events on average (:func:`virtspec_mi.kernel.walk.walk_steps`; ``None``:
+    not declared). Long walks (≥ :data:`LONG_WALK_STEPS`): refill every 4th iteration, starts
+    computed before the loop; short or undeclared: every 2nd iteration, starts computed in the
+    refill. Chosen by measurement (benchmarks/RESULTS.md, issue 14): on the ABM leaf (10.2
+    events per ray over the soybean spectrum, 15.7 at 800 nm) precomputed starts save
+    8–11 % of the CPU time and refill 4 up to 8 % more; on the MCML slab (3.2 events)
+    gathering a start costs more than computing it (7–10 % slower) and refill 4 loses 5–7 %.
+    """
+
+    if walk_steps is not None and walk_steps >= LONG_WALK_STEPS:
+        return 4, True
+    return 2, False
 
 
 @dataclass(frozen=True)
@@ -309,7 +348,7 @@ class _Kernel:
         self.settings = settings
         # A random-walk specimen's steps run on queued lanes (walk.lanes = 0: sample() per ray).
         self.queued = walk.lanes > 0 and is_random_walk(self.bsdf)
-        self.walk_queue, self.walk_stats = walk, walk_stats
+        self.walk_queue, self.walk_stats = walk.planned(walk_steps(self.bsdf)), walk_stats
         # Specular/regular counts: per ray only for a BSDF with both delta and other lobes.
         flags = self.bsdf.flags()
         delta = mi.has_flag(flags, mi.BSDFFlags.Delta)
@@ -456,7 +495,7 @@ class _Kernel:
             cursor = {"position": position}
             if groups > 1:
                 cursor["group"] = group
-            if source.single:
+            if source.single or (self.walk_queue.prestart and ray_bins is None):  # no reading needed
                 return cursor
             if before is None:
                 slot = source.slot(position)
@@ -470,10 +509,23 @@ class _Kernel:
         def queue_end(group: Any) -> Any:
             return dr.minimum(group * share + share, size) if groups > 1 else mi.UInt32(size)
 
-        def start(cursor: dict) -> tuple[Any, Any, Any]:
-            ray = source.incident(cursor["position"], None if source.single else cursor["slot"])
+        def begin(position: Any, slot: Any) -> tuple[Any, Any, Any]:
+            ray = source.incident(position, slot)
             state = self._walk_start(ray["si"], ray["sample1"], ray["sample2"])
             return state, ray["si"].wi.z >= 0.0, ray["survival"]
+
+        if self.walk_queue.prestart:
+            # Every ray's start (incident ray, walk_start) in one kernel over the whole chunk at
+            # full SIMD use; a refill then only gathers its ray's start from it.
+            everyone = dr.arange(mi.UInt32, size)
+            started = begin(everyone, source.slot(everyone))
+            dr.eval(started)
+
+            def start(cursor: dict) -> tuple[Any, Any, Any]:
+                return _gather_tree(started, cursor["position"])
+        else:
+            def start(cursor: dict) -> tuple[Any, Any, Any]:
+                return begin(cursor["position"], None if source.single else cursor["slot"])
 
         def next_ray(position: Any, group: Any) -> Any:
             if counter is None:
@@ -789,6 +841,21 @@ def _search(edges: np.ndarray, key: Any) -> Any:
     last = len(edges) - 1
     below = dr.select(key == float(edges[-1]), mi.UInt32(last), below)
     return below - 1  # no edge <= key: wraps to 2^32 - 1, outside
+
+
+def _gather_tree(tree: Any, index: Any) -> Any:
+    """Entries ``index`` of every array of a PyTree (tuples, lists, dicts, Dr.Jit arrays and
+    structs); a width-1 value (a literal, a scalar) is the same for every entry and kept."""
+
+    if isinstance(tree, (tuple, list)):
+        return type(tree)(_gather_tree(item, index) for item in tree)
+    if isinstance(tree, dict):
+        return {key: _gather_tree(item, index) for key, item in tree.items()}
+    if not dr.is_array_v(tree) and not hasattr(type(tree), "DRJIT_STRUCT"):
+        return tree
+    if dr.width(tree) <= 1:
+        return tree
+    return dr.gather(type(tree), tree, index)
 
 
 def _full(value: Any, size: int) -> Any:

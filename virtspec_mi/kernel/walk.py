@@ -23,6 +23,10 @@ random walk. They share three conventions with the ``spectrophotometer`` integra
   queue instead of idling until the longest walk of its packet ends; a ray's events and
   random numbers are the same either way, so are the counts.
 
+A specimen may also declare ``walk_steps``, its mean number of events per walk
+(:func:`walk_steps`): the kernel picks how it queues the rays from it, the counts never
+depend on it.
+
 A walk state is any Dr.Jit PyTree (a tuple of Dr.Jit arrays and structs such as
 ``mi.PCG32``): the kernel keeps it as loop state and never looks inside.
 
@@ -35,7 +39,7 @@ from __future__ import annotations
 
 from typing import Any, Protocol, runtime_checkable
 
-__all__ = ["CAPPED_COMPONENT", "RandomWalk", "is_random_walk", "walk_rng", "walk_to_end"]
+__all__ = ["CAPPED_COMPONENT", "RandomWalk", "is_random_walk", "walk_rng", "walk_steps", "walk_to_end"]
 
 CAPPED_COMPONENT: int = 0xFFFFFFFF
 """``BSDFSample3f.sampled_component`` of a walk that reached its step cap."""
@@ -72,6 +76,17 @@ def is_random_walk(bsdf: Any) -> bool:
     """True when ``bsdf`` declares the :class:`RandomWalk` steps (the kernel then drives them)."""
 
     return isinstance(bsdf, RandomWalk)
+
+
+def walk_steps(bsdf: Any) -> float | None:
+    """
+    The mean number of events per walk that a walk specimen declares (optional attribute
+    ``walk_steps``; ``None`` when it declares none): a hint for how the kernel queues its
+    rays (:func:`virtspec_mi.kernel.tracer.walk_plan`), never for a count.
+    """
+
+    steps = getattr(bsdf, "walk_steps", None)
+    return None if steps is None else float(steps)
 
 
 def walk_to_end(walk: RandomWalk, state: Any) -> Any:

@@ -313,19 +313,9 @@ def main(argv: Sequence[str] | None = None) -> int:
             from virtspec_mi.llvm import main as llvm_main
 
             return llvm_main([args.action])
-        if args.command == "sweep":
-            return _sweep(args)
-        if args.command == "colour":
-            return _colour(args)
-        if args.command == "gonio":
-            return _gonio(args)
-        if args.command == "compare":
-            return _compare(args)
-        if args.command == "plot":
-            return _plot(args)
-        if args.command == "sphere":
-            return _sphere(args)
-        return _measure(args)
+        handlers = {"measure": _measure, "sweep": _sweep, "gonio": _gonio, "sphere": _sphere, "colour": _colour,
+                    "compare": _compare, "plot": _plot}
+        return handlers[args.command](args)
     except (ValueError, RuntimeError, OSError) as error:
         print(f"virtspec: error: {error}", file=sys.stderr)
         return 1

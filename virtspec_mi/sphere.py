@@ -46,6 +46,8 @@ from typing import Any, Sequence
 
 import numpy as np
 
+from virtspec_mi.checks import number
+
 __all__ = ["ROLES", "HOLDER_ROLES", "MEASUREMENTS", "SPECULAR", "METHODS", "Port", "Baffle", "Sphere",
            "SphereSettings", "SPHERE_SETTING_NAMES", "SPHERE_PARAMETERS", "sphere_from_parameters", "parse_port", "parse_baffle", "parse_wall_reflectance"]
 
@@ -62,10 +64,12 @@ def _direction(polar: float, azimuth: float) -> np.ndarray:
 
 
 def _finite(name: str, value: Any) -> float:
-    if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)) \
-            or not math.isfinite(float(value)):
+    """A finite number (:func:`virtspec_mi.checks.number`, which refuses booleans, non-numbers and NaN)."""
+
+    result = number(name, value)
+    if not math.isfinite(result):
         raise ValueError(f"{name} must be a finite number (got {value!r})")
-    return float(value)
+    return result
 
 
 @dataclass(frozen=True)

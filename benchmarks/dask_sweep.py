@@ -50,7 +50,7 @@ from revisions import load_average, machine, machine_lines  # noqa: E402
 
 import virtspec_mi as vm  # noqa: E402
 from virtspec_mi import scaleout  # noqa: E402
-from virtspec_mi.counts import Counts  # noqa: E402
+from virtspec_mi.kernel.counts import Counts  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 LEAF = str(ROOT / "scenes" / "soybean_abmb.xml")

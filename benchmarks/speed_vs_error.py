@@ -27,9 +27,10 @@ from pathlib import Path
 import numpy as np
 
 import virtspec_mi
-from virtspec_mi import bounds, validation
-from virtspec_mi.reference import fresnel_reflectance
-from virtspec_mi.twostage import two_stage_law
+from virtspec_mi import validation
+from virtspec_mi.budgets import bounds
+from virtspec_mi.references.quadrature import fresnel_reflectance
+from virtspec_mi.budgets.twostage import two_stage_law
 
 BOUNDS = ("hoeffding", "chebyshev", "exact", "two-stage")
 HERE = Path(__file__).resolve().parent

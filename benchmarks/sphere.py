@@ -39,13 +39,13 @@ def main() -> None:
     parser.add_argument("--rays", type=int, default=105_967)
     args = parser.parse_args()
     from virtspec_mi.kernel.sphere_walk import SphereWalk, tally_sphere
-    from virtspec_mi.scene import find_instrument
-    from virtspec_mi.sphere_readout import configurations
+    from virtspec_mi.scene import find_bench
+    from virtspec_mi.instruments.sphere import configurations
 
     mi = vm.mitsuba()
     scene = mi.load_file(SCENE)
     integrator = scene.integrator()
-    instrument = find_instrument(scene)
+    instrument = find_bench(scene)
     settings = integrator.settings.updated(rays=args.rays)
     sphere, options = integrator.sphere, integrator.sphere_settings
     standard = mi.load_dict({"type": "diffuse", "reflectance": options.standard})

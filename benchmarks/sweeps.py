@@ -16,7 +16,7 @@ Prints, in one run:
     one ``virtspec_mi.sweep`` call vs a loop of 301 single-wavelength
     ``virtspec_mi.measure`` calls; seconds, rays/s and the ratio.
 (c) **CSV of a large sweep** — a 91 θi × 1000 wavelength result (91,000 readings, built
-    from counts: nothing traced) written as CSV: ``virtspec_mi.results_io.csv_text`` of
+    from counts: nothing traced) written as CSV: ``virtspec_mi.results.io.csv_text`` of
     its dataset, in cells (rows × columns) per second (target ≥ 10⁶ cells/s; the text
     grows linearly with the cells), best of the repeats; and the whole
     ``Result.write(".csv")`` (which also builds the dataset: every Clopper–Pearson
@@ -91,10 +91,10 @@ def csv_grid(repeats: int) -> dict:
     from dataclasses import replace
     from tempfile import TemporaryDirectory
 
-    from virtspec_mi.counts import Counts
-    from virtspec_mi.geometry import InstrumentGeometry
-    from virtspec_mi.result import Result
-    from virtspec_mi.results_io import csv_text
+    from virtspec_mi.kernel.counts import Counts
+    from virtspec_mi.geometry.disks import InstrumentGeometry
+    from virtspec_mi.results.hemispherical import Result
+    from virtspec_mi.results.io import csv_text
     from virtspec_mi.settings import Settings
 
     wavelengths, angles = np.arange(400.0, 1400.0, 1.0), np.arange(91.0)

@@ -26,7 +26,7 @@ import platform
 import time
 
 import virtspec_mi as vm
-from virtspec_mi.analytic_tables import equal_projected_edges, phong_model, quadrature_table, uniform_edges
+from virtspec_mi.references.analytic_tables import equal_projected_edges, phong_model, quadrature_table, uniform_edges
 
 
 def rays_per_second(scene: dict, rays: int) -> tuple[float, float]:

@@ -9,7 +9,7 @@ side by side in one run:
 1. **Mitsuba** — ``virtspec_mi.measure`` of ``turbid_slab`` in the instrument: the
    fused integrator kernel calling the plugin's ``@dr.syntax`` walk (one symbolic
    loop per ray). Warm (a small call compiles the kernel first); best of 3.
-2. **NumPy** — :func:`virtspec_mi.slab_reference.walk_slab`, the same analog walk in
+2. **NumPy** — :func:`virtspec_mi.references.slab.walk_slab`, the same analog walk in
    float64 NumPy, vectorised over rays (compacting the live photons every step).
 
 Each method's reflectance and transmittance are printed with their agreement
@@ -55,7 +55,7 @@ def mitsuba_rows(rays: int, repeats: int) -> list[tuple]:
 
 
 def numpy_row(rays: int) -> tuple:
-    from virtspec_mi.slab_reference import walk_slab
+    from virtspec_mi.references.slab import walk_slab
 
     start = time.perf_counter()
     counts = walk_slab(rays, 10.0, 90.0, 0.75, 0.02, seed=0)

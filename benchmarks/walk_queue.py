@@ -189,7 +189,7 @@ def occupancy(scale: int) -> list[list[str]]:
     vm.mitsuba()
     from virtspec_mi.kernel.tracer import ReadingPlan, WalkQueue, tally_readings
     from virtspec_mi.kernel.walk import walk_steps
-    from virtspec_mi.scene import find_instrument
+    from virtspec_mi.scene import find_bench
     from virtspec_mi.settings import Settings
 
     workloads = {
@@ -207,7 +207,7 @@ def occupancy(scale: int) -> list[list[str]]:
             (default, 1 << 20), (default, 1 << 24)]
     rows = []
     for name, (specimen, readings, rays) in workloads.items():
-        instrument = find_instrument(vm.instrument_scene(specimen))
+        instrument = find_bench(vm.instrument_scene(specimen))
         plans = [ReadingPlan(w, t, 0.0, rays) for w, t in readings]
         settings = Settings(beam="collimated")
         base = None
@@ -240,9 +240,9 @@ def gonio(scale: int) -> list[list[str]]:
     import virtspec_mi as vm
 
     vm.mitsuba()
-    from virtspec_mi.gonio_bins import make_bins
+    from virtspec_mi.geometry.bins import make_bins
     from virtspec_mi.kernel.tracer import ReadingPlan, WalkQueue, tally_gonio_readings, tally_readings
-    from virtspec_mi.scene import find_instrument
+    from virtspec_mi.scene import find_bench
     from virtspec_mi.settings import Settings
 
     bins = make_bins(36, 36)
@@ -253,7 +253,7 @@ def gonio(scale: int) -> list[list[str]]:
     }
     rows = []
     for name, (specimen, wavelength, rays) in workloads.items():
-        instrument = find_instrument(vm.instrument_scene(specimen))
+        instrument = find_bench(vm.instrument_scene(specimen))
         plans = [ReadingPlan(wavelength, 8.0, 0.0, rays)]
         settings = Settings(beam="collimated")
         walks = {"queued": WalkQueue(), "one loop": WalkQueue(lanes=0)}

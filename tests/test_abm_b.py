@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 
 import virtspec_mi as vm
-from virtspec_mi.instrument import SceneError
-from virtspec_mi.engine import take_readings
+from virtspec_mi.engine.bench import SceneError
+from virtspec_mi.engine.readings import take_readings
 from abm_reference import SOYBEAN, SOYBEAN_RAYS, SOYBEAN_WAVELENGTHS, mismatches
 
 ANGLES = (0.0, 8.0, 45.0, 60.0)
@@ -22,7 +22,7 @@ def soybean_table(sieve: bool, rays: int, angles=ANGLES, abaxial: bool = True, s
     for side, thetas in (("adaxial", angles), ("abaxial", (8.0,) if abaxial else ())):
         if not thetas:
             continue
-        instrument = vm.find_instrument(vm.instrument_scene({"type": "abm_b", "side": side, "sieve_detour": sieve}))
+        instrument = vm.find_bench(vm.instrument_scene({"type": "abm_b", "side": side, "sieve_detour": sieve}))
         readings = [(w, t, 0.0) for t in thetas for w in SOYBEAN_WAVELENGTHS]
         tallies, _ = take_readings(instrument, readings, settings)
         assert tallies.capped.sum() == 0 and tallies.weight_violations.sum() == 0

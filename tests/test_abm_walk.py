@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 import virtspec_mi as vm
-from virtspec_mi.instrument import SceneError
+from virtspec_mi.engine.bench import SceneError
 from virtspec_mi.leaf_data import LEAF_DATA_FILES
 
 PLUGINS = ("abm_b", "abm_u")

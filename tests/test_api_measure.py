@@ -19,8 +19,8 @@ import pytest
 from scipy import stats
 
 import virtspec_mi as vm
-from virtspec_mi.bounds import hoeffding_rays, miss_probability
-from virtspec_mi.reference import fresnel_reflectance
+from virtspec_mi.budgets.bounds import hoeffding_rays, miss_probability
+from virtspec_mi.references.quadrature import fresnel_reflectance
 
 MU, DELTA = 0.005, 0.01
 
@@ -271,7 +271,7 @@ def test_exact_bound_reading(diamond):
 
 
 def test_two_stage_reading_spends_pilot_and_sized_second_batch(traced_diamond):
-    from virtspec_mi import twostage
+    from virtspec_mi.budgets import twostage
 
     wavelengths = [450, 550, 650]  # traced_diamond: each wavelength has its own rays
     reading = collimated(traced_diamond, 0, bound="two-stage", wavelengths=wavelengths, seed=7)
@@ -404,7 +404,7 @@ def test_specimens_needing_uv_partials_are_refused_with_the_reason(mi):
 
 def test_a_scene_dict_with_a_none_value_is_refused_not_a_crash(mi):
     # Mitsuba 3.9.1's load_dict ends the process with a segmentation fault on a None value
-    from virtspec_mi.instrument import SceneError
+    from virtspec_mi.engine.bench import SceneError
 
     with pytest.raises(SceneError, match=r"\[specimen.bsdf.eta\] has no value \(None\)"):
         vm.measure(vm.instrument_scene({"type": "simple_dielectric", "eta": None}), rays=10)
@@ -413,7 +413,7 @@ def test_a_scene_dict_with_a_none_value_is_refused_not_a_crash(mi):
 def test_a_long_measurement_shows_progress_in_a_terminal(traced_diamond, capsys, monkeypatch):
     import sys
 
-    import virtspec_mi.progress as progress
+    import virtspec_mi.engine.progress as progress
 
     monkeypatch.setattr(sys.stderr, "isatty", lambda: True)
     kwargs = dict(theta_i=30, wavelengths="400:700:10", rays=20_000, chunk_size=65_536)

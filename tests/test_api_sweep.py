@@ -21,9 +21,9 @@ import numpy as np
 import pytest
 
 import virtspec_mi as vm
-from virtspec_mi.bounds import hoeffding_mu
-from virtspec_mi.reference import fresnel_reflectance
-from virtspec_mi.checkpoint import CheckpointError
+from virtspec_mi.budgets.bounds import hoeffding_mu
+from virtspec_mi.references.quadrature import fresnel_reflectance
+from virtspec_mi.engine.checkpoint import CheckpointError
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -111,7 +111,7 @@ def test_fluctuation_shrinks_with_ray_density(diamond):
 def _interrupting(monkeypatch, after: int):
     """Make the sweep's take_readings raise KeyboardInterrupt after ``after`` batches."""
 
-    import virtspec_mi.engine as engine
+    import virtspec_mi.engine.readings as engine
 
     real, calls = engine.take_readings, []
 
@@ -212,7 +212,7 @@ def test_progress_bar_only_when_asked_or_in_a_slow_terminal_sweep(diamond, capsy
 
 
 def test_progress_bar_in_a_terminal_when_the_sweep_is_expected_to_be_slow(diamond, capsys, monkeypatch):
-    import virtspec_mi.progress as progress
+    import virtspec_mi.engine.progress as progress
 
     monkeypatch.setattr(sys.stderr, "isatty", lambda: True)
     vm.sweep(diamond, theta_i="0:90:10", rays=1000, chunk_size=1024)  # ~ms: under the 2 s threshold
@@ -273,8 +273,8 @@ def test_sweep_out_writes_the_file_and_then_removes_the_checkpoint(diamond, tmp_
 def test_a_failed_output_write_keeps_every_finished_reading(diamond, monkeypatch, tmp_path, fault):
     import errno
 
-    import virtspec_mi.engine as engine
-    import virtspec_mi.results_io as results_io
+    import virtspec_mi.engine.readings as engine
+    import virtspec_mi.results.io as results_io
 
     kwargs = dict(theta_i="0:90:10", rays=2000, seed=6, chunk_size=1024 * 2)
     whole = vm.sweep(diamond, **kwargs)
@@ -326,7 +326,7 @@ def test_a_failed_output_write_keeps_every_finished_reading(diamond, monkeypatch
 
 
 def test_an_output_that_cannot_be_written_fails_before_any_tracing(diamond, monkeypatch, tmp_path):
-    import virtspec_mi.engine as engine
+    import virtspec_mi.engine.readings as engine
 
     monkeypatch.setattr(engine, "take_readings", lambda *a, **k: pytest.fail("traced before the check"))
     (tmp_path / "taken.nc").mkdir()

@@ -1,4 +1,4 @@
-"""Tests of virtspec_mi.bounds: eqs. (15), (23), inverses, Table 1, exact miss probability."""
+"""Tests of virtspec_mi.budgets.bounds: eqs. (15), (23), inverses, Table 1, exact miss probability."""
 
 from __future__ import annotations
 
@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 from scipy import stats
 
-from virtspec_mi import bounds
-from virtspec_mi.budgets import BUDGETS
+from virtspec_mi.budgets import bounds
+from virtspec_mi.budgets.rules import BUDGETS
 from virtspec_mi.settings import Settings
 
 
@@ -133,7 +133,7 @@ def test_exact_rays_brute_force(mu, delta):
 
 
 def test_shipped_exact_table_matches_the_computation():
-    from virtspec_mi.budget_tables import EXACT
+    from virtspec_mi.budgets.tables import EXACT
 
     assert EXACT[(0.005, 0.01)] == 66_501
     for key in [(0.05, 0.2), (0.05, 0.001), (0.02, 0.01), (0.01, 0.1), (0.005, 0.2)]:
@@ -142,7 +142,7 @@ def test_shipped_exact_table_matches_the_computation():
 
 @pytest.mark.slow
 def test_shipped_exact_table_matches_the_computation_everywhere():
-    from virtspec_mi.budget_tables import EXACT
+    from virtspec_mi.budgets.tables import EXACT
 
     for key, n in EXACT.items():
         if key[0] >= 0.005:

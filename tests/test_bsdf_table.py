@@ -1,5 +1,5 @@
-"""Tests of virtspec_mi.bsdf_table (reading/validating goniophotometer tables) and
-virtspec_mi.analytic_tables (tables of analytic models by NumPy quadrature)."""
+"""Tests of virtspec_mi.plugins.bsdfs.bsdf_table (reading/validating goniophotometer tables) and
+virtspec_mi.references.analytic_tables (tables of analytic models by NumPy quadrature)."""
 
 from __future__ import annotations
 
@@ -8,7 +8,7 @@ import math
 import numpy as np
 import pytest
 
-from virtspec_mi.analytic_tables import (
+from virtspec_mi.references.analytic_tables import (
     equal_projected_edges,
     lambertian_table,
     phong_model,
@@ -16,7 +16,7 @@ from virtspec_mi.analytic_tables import (
     sample_counts,
     uniform_edges,
 )
-from virtspec_mi.bsdf_table import BSDFTable, projected_solid_angles, read_table, table_dataset
+from virtspec_mi.plugins.bsdfs.bsdf_table import BSDFTable, projected_solid_angles, read_table, table_dataset
 
 
 def test_projected_solid_angles_cover_pi_per_hemisphere():

@@ -1,4 +1,4 @@
-"""Tests of virtspec_mi.budgets: the ray-budget rules as objects (one entry per rule)."""
+"""Tests of virtspec_mi.budgets.rules: the ray-budget rules as objects (one entry per rule)."""
 
 from __future__ import annotations
 
@@ -6,8 +6,8 @@ import math
 
 import pytest
 
-from virtspec_mi import bounds
-from virtspec_mi.budgets import BUDGETS
+from virtspec_mi.budgets import bounds
+from virtspec_mi.budgets.rules import BUDGETS
 from virtspec_mi.settings import Settings
 
 MU, DELTA = 0.005, 0.01

@@ -1,5 +1,5 @@
 """
-Tests of virtspec_mi.checkpoint: one run per checkpoint (an OS lock, checked with real
+Tests of virtspec_mi.engine.checkpoint: one run per checkpoint (an OS lock, checked with real
 processes), writability checked before any tracing, tampered checkpoints refused with
 the reason — never accepted, never deleted — and what ``virtspec sweep --out`` says
 about its checkpoint (Ctrl-C, resume).
@@ -19,7 +19,7 @@ import numpy as np
 import pytest
 
 import virtspec_mi as vm
-from virtspec_mi.checkpoint import CheckpointError, checkpoint_for, claim
+from virtspec_mi.engine.checkpoint import CheckpointError, checkpoint_for, claim
 
 ROOT = Path(__file__).resolve().parents[1]
 KWARGS = dict(theta_i="0:90:10", rays=2000, seed=3, chunk_size=1024 * 2)  # 10 readings, 1 per batch
@@ -28,7 +28,7 @@ KWARGS = dict(theta_i="0:90:10", rays=2000, seed=3, chunk_size=1024 * 2)  # 10 r
 def _no_tracing(monkeypatch):
     """Make any tracing fail the test: what is checked must be checked before it."""
 
-    import virtspec_mi.engine as engine
+    import virtspec_mi.engine.readings as engine
 
     def traced(*args, **kwargs):
         raise AssertionError("traced rays before the check")
@@ -39,7 +39,7 @@ def _no_tracing(monkeypatch):
 def _interrupted_checkpoint(scene, path: Path, after: int, **kwargs) -> dict:
     """A real checkpoint: the sweep interrupted (KeyboardInterrupt) after ``after`` batches."""
 
-    import virtspec_mi.engine as engine
+    import virtspec_mi.engine.readings as engine
 
     real, calls = engine.take_readings, []
 
@@ -62,7 +62,7 @@ def _interrupted_checkpoint(scene, path: Path, after: int, **kwargs) -> dict:
 def _holder(path: Path) -> subprocess.Popen:
     """Another process holding checkpoint ``path`` until its stdin is closed."""
 
-    code = ("import sys\nfrom virtspec_mi.checkpoint import claim\n"
+    code = ("import sys\nfrom virtspec_mi.engine.checkpoint import claim\n"
             "with claim(sys.argv[1]):\n    print('held', flush=True)\n    sys.stdin.read()\n")
     process = subprocess.Popen([sys.executable, "-c", code, str(path)], stdin=subprocess.PIPE,
                                stdout=subprocess.PIPE, text=True, cwd=ROOT)
@@ -267,9 +267,9 @@ def test_readings_traced_together_must_be_done_together(diamond, tmp_path, monke
 def test_slow_saves_are_spaced_out_and_what_is_left_is_saved_on_the_way_out(diamond, tmp_path, monkeypatch):
     import errno
 
-    import virtspec_mi.checkpoint as checkpoint_module
-    import virtspec_mi.results_io as results_io
-    from virtspec_mi.checkpoint import Checkpoint
+    import virtspec_mi.engine.checkpoint as checkpoint_module
+    import virtspec_mi.results.io as results_io
+    from virtspec_mi.engine.checkpoint import Checkpoint
 
     saves, real_save = [], Checkpoint._save
 
@@ -304,7 +304,7 @@ def test_slow_saves_are_spaced_out_and_what_is_left_is_saved_on_the_way_out(diam
 def _interrupt_after(monkeypatch, batches: int) -> None:
     """Ctrl-C (KeyboardInterrupt) once ``batches`` batches of the sweep have been traced."""
 
-    import virtspec_mi.engine as engine
+    import virtspec_mi.engine.readings as engine
 
     real, calls = engine.take_readings, []
 
@@ -356,7 +356,7 @@ def test_ctrl_c_before_any_reading_finished(scenes_dir, tmp_path, monkeypatch, c
 
 
 def test_sweep_out_that_is_a_directory_fails_before_tracing(scenes_dir, tmp_path, monkeypatch, capsys):
-    import virtspec_mi.engine as engine
+    import virtspec_mi.engine.readings as engine
     from virtspec_mi.cli import main
 
     (tmp_path / "taken.nc").mkdir()

@@ -117,7 +117,7 @@ def test_sweep_bad_input_is_one_line_error(scenes_dir, args, message):
 def test_colour_reads_colour_science_csv_spectra(diamond, tmp_path, capsys):
     import virtspec_mi as vm
     from virtspec_mi.cli import main
-    from virtspec_mi.results_io import write_spectra_csv
+    from virtspec_mi.results.io import write_spectra_csv
 
     result = vm.sweep(diamond, theta_i=[20], wavelengths="380:780:20", rays=2000)
     path = write_spectra_csv(result, tmp_path / "spectra.csv")

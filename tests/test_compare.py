@@ -66,7 +66,7 @@ def patch_csv(tmp_path_factory):
 def synthetic(values, wavelengths, rays=10**6, violations=0) -> vm.Result:
     """A one-angle result of given reflectance (exact counts), optionally with weight violations."""
 
-    from virtspec_mi.counts import Counts
+    from virtspec_mi.kernel.counts import Counts
 
     shape = (len(wavelengths), 1)
     counts = replace(Counts.zeros(shape), rays=np.full(shape, rays, dtype=np.int64),

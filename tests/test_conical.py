@@ -2,7 +2,7 @@
 Conical-hemispherical readings against the quadrature reference.
 
 A conical reading of the ``simple_dielectric`` specimen (diamond, η = 2.419) must
-agree with :func:`virtspec_mi.reference.conical_reflectance`, the deterministic
+agree with :func:`virtspec_mi.references.quadrature.conical_reflectance`, the deterministic
 average of the Fresnel reflectance over the instrument's emitter/specimen pairs.
 
 Tolerance: each reading counts N = 10⁶ independent Bernoulli rays whose mean success
@@ -28,8 +28,8 @@ import numpy as np
 import pytest
 
 import virtspec_mi
-from virtspec_mi.bounds import hoeffding_mu
-from virtspec_mi.reference import (
+from virtspec_mi.budgets.bounds import hoeffding_mu
+from virtspec_mi.references.quadrature import (
     conical_average,
     conical_reflectance,
     fresnel_reflectance,
@@ -86,7 +86,7 @@ def reflectance_judged_by_face(theta: float) -> float:
     The wrong convention: a back-lit ray that the back face reflects counts as reflected.
 
     ``F(γ, η)`` on the front face, ``F(π − γ, 1/η)`` on the back face (module docstring
-    of :mod:`virtspec_mi.reference`, *Back-lit rays*, for the convention the integrator uses).
+    of :mod:`virtspec_mi.references.quadrature`, *Back-lit rays*, for the convention the integrator uses).
     """
 
     def by_face(c: np.ndarray) -> np.ndarray:

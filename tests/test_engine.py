@@ -1,5 +1,5 @@
 """
-Tests of virtspec_mi.engine.take_readings: per-reading ray offsets (the key of a
+Tests of virtspec_mi.engine.readings.take_readings: per-reading ray offsets (the key of a
 reading's random numbers) and the tracing-once of wavelength-independent specimens.
 """
 
@@ -9,9 +9,9 @@ import numpy as np
 import pytest
 
 import virtspec_mi as vm
-from virtspec_mi.scene import find_instrument
+from virtspec_mi.scene import find_bench
 from virtspec_mi.settings import Settings
-from virtspec_mi.engine import shares_wavelengths, take_readings
+from virtspec_mi.engine.readings import shares_wavelengths, take_readings
 
 WORD = 2**32
 
@@ -20,12 +20,12 @@ WORD = 2**32
 def dielectric(mi):
     """Mitsuba's smooth dielectric: traced per wavelength (not flagged wavelength-independent)."""
 
-    return find_instrument(vm.instrument_scene({"type": "dielectric", "int_ior": 2.419, "ext_ior": 1.0}))
+    return find_bench(vm.instrument_scene({"type": "dielectric", "int_ior": 2.419, "ext_ior": 1.0}))
 
 
 @pytest.fixture(scope="module")
 def diamond_instrument(mi):
-    return find_instrument(vm.instrument_scene({"type": "simple_dielectric"}))
+    return find_bench(vm.instrument_scene({"type": "simple_dielectric"}))
 
 
 READINGS = [(500.0, 10.0, 0.0), (600.0, 40.0, 0.0), (700.0, 70.0, 0.0), (550.0, 85.0, 0.0)]
@@ -89,7 +89,7 @@ def test_wavelength_independent_specimen_is_traced_once_per_incidence(diamond_in
 def _refused_fast(monkeypatch):
     """Refused before any ray is traced: the engine's one kernel call (``_fixed``) must not run."""
 
-    from virtspec_mi import engine
+    from virtspec_mi.engine import readings as engine
 
     def untraced(*args, **kwargs):
         raise AssertionError("rays were traced before the budget was refused")
@@ -121,14 +121,15 @@ def test_readings_and_rays_per_call_are_capped(diamond, _refused_fast):
     _refused_fast(lambda: vm.sweep(dielectric, wavelengths="400:2900:1", rays=2**32 - 1, theta_i=[10]),
                   r"at most 1e\+13 rays")
     # a wavelength-independent specimen traces one reading per angle: its rays are counted once
-    instrument = find_instrument(diamond)
+    instrument = find_bench(diamond)
     with pytest.raises(ValueError, match=r"at most 1e\+13 rays \(got 12,884,901,885,000 = 3,000 readings"):
         take_readings(instrument, [(500.0, float(t), 0.0) for t in np.linspace(0, 90, 3000)],
                       Settings(rays=2**32 - 1))
 
 
 def test_the_second_stage_is_range_checked_before_it_is_traced(diamond, monkeypatch):
-    from virtspec_mi import engine, twostage
+    from virtspec_mi.engine import readings as engine
+    from virtspec_mi.budgets import twostage
 
     monkeypatch.setattr(twostage, "stage_two_rays", lambda *args, **kwargs: np.array([2**32], dtype=np.int64))
     traced = []
@@ -142,4 +143,4 @@ def test_the_second_stage_is_range_checked_before_it_is_traced(diamond, monkeypa
 
 def test_a_tiny_mu_with_given_rays_is_a_reading(diamond):
     reading = vm.measure(diamond, mu=1e-300, rays=1000)
-    assert reading.certified_mu[0] == pytest.approx(vm.bounds.hoeffding_mu(1000, 0.01), rel=1e-3)
+    assert reading.certified_mu[0] == pytest.approx(vm.hoeffding_mu(1000, 0.01), rel=1e-3)

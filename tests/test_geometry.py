@@ -5,7 +5,7 @@ Tests of the instrument's ray geometry, through the real ray kernel.
 emitter point (specimen frame), specimen point and directions. The tests recover the
 disk coordinates of both points and check that every sampling strategy is uniform by
 area (χ², mean r², inner-disk share), that the rays lie in the cone the geometry
-allows (:func:`virtspec_mi.reference.incidence_angle_range`), the back-lit share
+allows (:func:`virtspec_mi.references.quadrature.incidence_angle_range`), the back-lit share
 above atan(D/r₁), and the collimated beam.
 
 Statistical checks use fixed seeds (the counter-based random numbers make every run
@@ -26,8 +26,8 @@ import pytest
 from scipy import stats
 
 import virtspec_mi
-from virtspec_mi.geometry import InstrumentGeometry, backlit_fraction, incidence_frame
-from virtspec_mi.reference import (
+from virtspec_mi.geometry.disks import InstrumentGeometry, backlit_fraction, incidence_frame
+from virtspec_mi.references.quadrature import (
     cone_half_angle_bound,
     conical_average,
     incidence_angle_range,
@@ -43,14 +43,14 @@ FLOAT32_MM = 1e-5
 
 @pytest.fixture(scope="module")
 def instrument():
-    return virtspec_mi.find_instrument(virtspec_mi.instrument_scene({"type": "simple_dielectric"}))
+    return virtspec_mi.find_bench(virtspec_mi.instrument_scene({"type": "simple_dielectric"}))
 
 
 @pytest.fixture(scope="module")
 def trace(instrument):
     """``trace(theta, phi, sampling, rays, seed, beam)`` → the traced rays (cached)."""
 
-    # The plugin module needs Mitsuba's variant, which find_instrument has set.
+    # The plugin module needs Mitsuba's variant, which find_bench has set.
     from virtspec_mi.kernel.tracer import ReadingPlan, trace_rays
 
     cache: dict = {}

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 import virtspec_mi as vm
-from virtspec_mi.gonio_bins import make_bins
+from virtspec_mi.geometry.bins import make_bins
 from virtspec_mi.settings import Settings
 
 ROUGH = {"type": "roughdielectric", "alpha": 0.3, "int_ior": 1.5}
@@ -38,9 +38,9 @@ def test_bins_add_up_to_reflected_plus_transmitted_exactly_and_counts_are_unchan
 
 def test_tallies_do_not_depend_on_chunking_or_on_the_other_readings(mi, rough):
     from virtspec_mi.kernel.tracer import ReadingPlan, tally_gonio_readings, tally_readings
-    from virtspec_mi.scene import find_instrument
+    from virtspec_mi.scene import find_bench
 
-    instrument = find_instrument(rough)
+    instrument = find_bench(rough)
     bins = make_bins([0, 10, 30, 90, 120, 180], [0, 45, 200, 360])  # searched edges
     plans = [ReadingPlan(550.0, t, p, 5000) for t, p in ((10, 0), (50, 30), (80, 200))]
     big = Settings(seed=9)
@@ -66,11 +66,11 @@ def test_each_ray_lands_in_the_bin_of_its_direction(mi, rough, spec):
     """The kernel's bin of every ray against a float64 NumPy binning of its outgoing direction."""
 
     from virtspec_mi.kernel.tracer import ReadingPlan, trace_rays
-    from virtspec_mi.scene import find_instrument
+    from virtspec_mi.scene import find_bench
 
     bins = make_bins(**spec)
     phi_i = 30.0
-    rays = trace_rays(find_instrument(rough), ReadingPlan(550.0, 35.0, phi_i, 20_000), Settings(), 20_000, bins)
+    rays = trace_rays(find_bench(rough), ReadingPlan(550.0, 35.0, phi_i, 20_000), Settings(), 20_000, bins)
     wo, fate = rays["wo"].astype(np.float64), rays["fate"]
     theta = np.degrees(np.arctan2(np.hypot(wo[:, 0], wo[:, 1]), wo[:, 2]))
     phi = np.degrees(np.arctan2(wo[:, 1], wo[:, 0])) % 360.0
@@ -121,7 +121,7 @@ def test_certificate_is_the_union_bound_of_the_spent_rays(rough):
     reading = vm.gonio(rough, theta_i=30, theta_o_bins=4, phi_o_bins=5, mu=0.02, delta=0.05)
     k = 40
     assert reading.guarantee == "union"
-    from virtspec_mi.gonio_bounds import dkw_mu, union_rays
+    from virtspec_mi.budgets.bins import dkw_mu, union_rays
 
     assert int(reading.rays[0, 0]) == union_rays(0.02, 0.05, k)
     assert reading.bins_mu[0, 0] <= 0.02
@@ -155,7 +155,7 @@ def test_a_reading_with_too_few_rays_says_not_certified(rough):
 
 
 def test_relative_guarantee_sizes_n_for_the_floor(rough):
-    from virtspec_mi.gonio_bounds import relative_rays
+    from virtspec_mi.budgets.bins import relative_rays
 
     reading = vm.gonio(rough, theta_o_bins=2, phi_o_bins=2, guarantee="relative", relative_tolerance=0.5,
                        brdf_floor=0.05)
@@ -197,7 +197,7 @@ def test_every_gonio_parameter_is_a_keyword_a_flag_and_an_integrator_parameter(c
     import inspect
 
     from virtspec_mi.cli import build_parser
-    from virtspec_mi.gonio_bins import GONIO_PARAMETERS
+    from virtspec_mi.geometry.bins import GONIO_PARAMETERS
     from virtspec_mi.plugins.integrators import spectrophotometer
     from virtspec_mi.settings import SETTING_NAMES
 
@@ -237,7 +237,7 @@ def test_cli_gonio_prints_the_certificate_and_writes_the_file(rough, tmp_path, c
 
 
 def test_plots_and_spectra_per_bin(rough, tmp_path):
-    from virtspec_mi.gonio_plot import plane_bins, plot_hemisphere, plot_polar, plot_series
+    from virtspec_mi.results.angular_plot import plane_bins, plot_hemisphere, plot_polar, plot_series
 
     reading = vm.gonio(rough, theta_i=[0, 50], wavelengths=[500, 600], theta_o_bins=6, phi_o_bins=8, rays=4000)
     assert plane_bins(reading) == (4, 0) and plane_bins(reading, across=True) == (2, 6)  # 180 / 0; 90 / 270

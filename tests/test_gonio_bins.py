@@ -1,11 +1,11 @@
-"""Goniophotometer bins (virtspec_mi.gonio_bins): layouts, projected solid angles, bad specifications."""
+"""Goniophotometer bins (virtspec_mi.geometry.bins): layouts, projected solid angles, bad specifications."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from virtspec_mi.gonio_bins import GONIO_PARAMETERS, MAX_BINS, gonio_options, make_bins, parse_edges
+from virtspec_mi.geometry.bins import GONIO_PARAMETERS, MAX_BINS, gonio_options, make_bins, parse_edges
 
 
 def test_uniform_bins_cover_both_hemispheres_with_90_as_an_edge():
@@ -71,7 +71,7 @@ def test_gonio_options_defaults_and_unknown_names():
 
 
 def test_round_trip_of_the_bins_as_plain_data():
-    from virtspec_mi.gonio_bins import GonioBins
+    from virtspec_mi.geometry.bins import GonioBins
 
     bins = make_bins(5, 7, "projected", True, "reflection")
     again = GonioBins.from_dict(bins.as_dict())

@@ -1,4 +1,4 @@
-"""Certificates of goniophotometer readings (virtspec_mi.gonio_bounds): formulas and their inverses."""
+"""Certificates of goniophotometer readings (virtspec_mi.budgets.bins): formulas and their inverses."""
 
 from __future__ import annotations
 
@@ -7,8 +7,8 @@ import math
 import numpy as np
 import pytest
 
-from virtspec_mi import gonio_bounds as gb
-from virtspec_mi.bounds import hoeffding_rays
+from virtspec_mi.budgets import bins as gb
+from virtspec_mi.budgets.bounds import hoeffding_rays
 
 
 def test_dkw_needs_the_papers_n():

@@ -34,7 +34,7 @@ import numpy as np
 import pytest
 
 import virtspec_mi as vm
-from virtspec_mi.bsdf_table import read_table
+from virtspec_mi.plugins.bsdfs.bsdf_table import read_table
 
 DELTA = 1e-3
 READING = dict(beam="collimated", delta=DELTA, joint=True)

@@ -1,16 +1,16 @@
-"""Tests of virtspec_mi.instrument: scenes in, instrument geometry out, clear errors."""
+"""Tests of virtspec_mi.engine.bench: scenes in, instrument geometry out, clear errors."""
 
 from __future__ import annotations
 
 import pytest
 
 import virtspec_mi as vm
-from virtspec_mi.instrument import SceneError
+from virtspec_mi.engine.bench import SceneError
 
 
 @pytest.mark.parametrize("name", ["diamond_conical.xml", "diamond_collimated.xml"])
 def test_shipped_scenes_have_the_papers_geometry(mi, scenes_dir, name):
-    instrument = vm.find_instrument(str(scenes_dir / name))
+    instrument = vm.find_bench(str(scenes_dir / name))
     g = instrument.geometry
     assert (g.emitter_radius, g.specimen_radius, g.distance) == pytest.approx((8.0, 12.5, 100.0))
     assert instrument.integrator is not None
@@ -20,7 +20,7 @@ def test_shipped_scenes_have_the_papers_geometry(mi, scenes_dir, name):
 def test_dict_and_loaded_scene_are_accepted(mi):
     scene = vm.instrument_scene({"type": "simple_dielectric"}, emitter_radius=5, specimen_radius=10, distance=50)
     for form in (scene, mi.load_dict(scene)):
-        g = vm.find_instrument(form).geometry
+        g = vm.find_bench(form).geometry
         assert (g.emitter_radius, g.specimen_radius, g.distance) == pytest.approx((5.0, 10.0, 50.0))
 
 
@@ -58,12 +58,12 @@ def test_bad_scenes_get_clear_errors(mi, scene, message):
         scene["specimen"]["to_world"] = mi.ScalarTransform4f().scale([2.0, 1.0, 1.0])
         message = "disk 'specimen' is not circular"
     with pytest.raises(SceneError, match=message):
-        vm.find_instrument(scene)
+        vm.find_bench(scene)
 
 
 def test_coincident_disks_are_refused(mi):
     with pytest.raises(SceneError, match="distance D must be > 0"):
-        vm.find_instrument({"type": "scene", "emitter": {"type": "disk"}, "specimen": {"type": "disk"}})
+        vm.find_bench({"type": "scene", "emitter": {"type": "disk"}, "specimen": {"type": "disk"}})
 
 
 @pytest.mark.parametrize("name", ["emitter_radius", "specimen_radius", "distance"])
@@ -77,14 +77,14 @@ def test_malformed_and_missing_files(mi, tmp_path):
     bad = tmp_path / "bad.xml"
     bad.write_text('<scene version="3.0.0"><shape type="disk" id="emitter"></scene>')
     with pytest.raises(SceneError, match="could not load scene .*bad.xml.*mismatch"):
-        vm.find_instrument(str(bad))
+        vm.find_bench(str(bad))
     with pytest.raises(SceneError, match="scene file not found"):
-        vm.find_instrument(str(tmp_path / "missing.xml"))
+        vm.find_bench(str(tmp_path / "missing.xml"))
     with pytest.raises(SceneError, match="scene must be an XML path, a dict or a mitsuba Scene"):
-        vm.find_instrument(42)
+        vm.find_bench(42)
 
 
 def test_bad_integrator_parameter_names_it(mi):
     scene = vm.instrument_scene({"type": "diffuse"}, integrator={"theta_i": 120.0})
     with pytest.raises(SceneError, match="spectrophotometer: theta_i must satisfy 0 <= theta_i <= 90"):
-        vm.find_instrument(scene)
+        vm.find_bench(scene)

@@ -1,4 +1,4 @@
-"""Tests of virtspec_mi.intervals: the Clopper-Pearson interval."""
+"""Tests of virtspec_mi.budgets.intervals: the Clopper-Pearson interval."""
 
 from __future__ import annotations
 
@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from scipy import stats
 
-from virtspec_mi.intervals import clopper_pearson
+from virtspec_mi.budgets.intervals import clopper_pearson
 
 
 def test_closed_forms_at_the_ends():

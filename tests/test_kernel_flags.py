@@ -13,9 +13,9 @@ import numpy as np
 import pytest
 
 import virtspec_mi as vm
-from virtspec_mi.counts import Counts, Fate
+from virtspec_mi.kernel.counts import Counts, Fate
 from virtspec_mi.kernel.tracer import ReadingPlan, tally_readings, trace_rays
-from virtspec_mi.scene import find_instrument
+from virtspec_mi.scene import find_bench
 from virtspec_mi.settings import Settings
 
 from mirror_specimen import register_mirror
@@ -79,7 +79,7 @@ def test_invalid_directions_are_counted_apart_in_no_fate(mi, invalid_bsdf):
 
 
 def test_trace_rays_marks_invalid_directions(mi, invalid_bsdf):
-    instrument = find_instrument(vm.instrument_scene({"type": invalid_bsdf}))
+    instrument = find_bench(vm.instrument_scene({"type": invalid_bsdf}))
     settings = Settings(theta_i=30, beam="collimated", rays=4000)
     lanes = trace_rays(instrument, ReadingPlan(551.0, 30.0, 0.0, 4000), settings, 4000)
     wo, fate = lanes["wo"], lanes["fate"]
@@ -145,6 +145,6 @@ def test_chunk_cuts_match_the_per_reading_rule():
 
 
 def test_the_kernel_refuses_a_reading_beyond_two_to_the_32(diamond):
-    instrument = find_instrument(diamond)
+    instrument = find_bench(diamond)
     with pytest.raises(ValueError, match="rays must satisfy 1 <= rays <= 4294967295"):
         tally_readings(instrument, [ReadingPlan(551.0, 0.0, 0.0, 2**32)], Settings())

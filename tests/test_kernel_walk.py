@@ -87,11 +87,11 @@ def test_queued_walks_count_as_one_loop_per_ray(mi, case):
     """Bit-identical counts: sample() per ray (one loop) vs queued lanes of any count, queue and chunk size."""
 
     from virtspec_mi.kernel.tracer import WalkQueue
-    from virtspec_mi.scene import find_instrument
+    from virtspec_mi.scene import find_bench
     from virtspec_mi.settings import Settings
 
     specimen, options, readings = _QUEUE_CASES[case]
-    instrument = find_instrument(vm.instrument_scene(specimen))
+    instrument = find_bench(vm.instrument_scene(specimen))
     rays = 3000
     one_loop = _tally(instrument, readings, Settings(**options), rays, lanes=0)
     assert one_loop[0].sum() > 0 and one_loop[1].sum() > 0  # both fates occur: the comparison can fail
@@ -121,13 +121,13 @@ _GONIO_CASES = {
 def test_queued_walks_bin_as_one_loop_per_ray(mi, case):
     """Goniophotometer bins bit-identical: sample() per ray (one loop) vs queued lanes, any chunk size."""
 
-    from virtspec_mi.gonio_bins import make_bins
+    from virtspec_mi.geometry.bins import make_bins
     from virtspec_mi.kernel.tracer import ReadingPlan, WalkQueue, tally_gonio_readings
-    from virtspec_mi.scene import find_instrument
+    from virtspec_mi.scene import find_bench
     from virtspec_mi.settings import Settings
 
     specimen, options, readings, spec = _GONIO_CASES[case]
-    instrument = find_instrument(vm.instrument_scene(specimen))
+    instrument = find_bench(vm.instrument_scene(specimen))
     bins = make_bins(**spec)
     plans = [ReadingPlan(w, t, p, 3000) for w, t, p in readings]
     counts, one_loop = tally_gonio_readings(instrument, plans, Settings(**options), bins, walk=WalkQueue(lanes=0))
@@ -144,11 +144,11 @@ def test_queued_walks_bin_as_one_loop_per_ray(mi, case):
 
 def test_walk_specimens_declare_their_steps(mi, diamond):
     from virtspec_mi.kernel.walk import is_random_walk
-    from virtspec_mi.scene import find_instrument
+    from virtspec_mi.scene import find_bench
 
     for specimen in ({"type": "abm_b"}, {"type": "abm_u"}, {"type": "turbid_slab"}):
-        assert is_random_walk(find_instrument(vm.instrument_scene(specimen)).bsdf)
-    assert not is_random_walk(find_instrument(diamond).bsdf)
+        assert is_random_walk(find_bench(vm.instrument_scene(specimen)).bsdf)
+    assert not is_random_walk(find_bench(diamond).bsdf)
 
 
 @pytest.fixture(scope="module")
@@ -198,10 +198,10 @@ def test_any_specimen_declaring_the_steps_runs_queued(mi, coin_walk):
     """The protocol is generic: a new walk specimen gets the queued lanes, with the one-loop counts."""
 
     from virtspec_mi.kernel.walk import is_random_walk
-    from virtspec_mi.scene import find_instrument
+    from virtspec_mi.scene import find_bench
     from virtspec_mi.settings import Settings
 
-    instrument = find_instrument(vm.instrument_scene({"type": coin_walk}))
+    instrument = find_bench(vm.instrument_scene({"type": coin_walk}))
     assert is_random_walk(instrument.bsdf)
     n = 20_000
     one_loop = _tally(instrument, [(551.0, 10.0)], Settings(), n, lanes=0)
@@ -226,11 +226,11 @@ def test_queued_walks_do_not_depend_on_the_thread_count(mi):
 
     import drjit as dr
 
-    from virtspec_mi.scene import find_instrument
+    from virtspec_mi.scene import find_bench
     from virtspec_mi.settings import Settings
 
     specimen, options, readings = _QUEUE_CASES["abm_b_conical"]
-    instrument = find_instrument(vm.instrument_scene(specimen))
+    instrument = find_bench(vm.instrument_scene(specimen))
     threads = dr.thread_count()
     several = _tally(instrument, readings, Settings(chunk_size=4096, **options), 3000, lanes=64)
     try:

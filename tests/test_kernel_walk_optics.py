@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from virtspec_mi.reference import fresnel_reflectance_cos
+from virtspec_mi.references.quadrature import fresnel_reflectance_cos
 from virtspec_mi.kernel.walk_optics import cross_interface, free_path, sample_hg
 
 N = 200_000

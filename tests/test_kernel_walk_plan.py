@@ -31,11 +31,11 @@ def test_walk_specimens_declare_their_length(mi):
 
     from virtspec_mi.kernel.tracer import LONG_WALK_STEPS
     from virtspec_mi.kernel.walk import walk_steps
-    from virtspec_mi.scene import find_instrument
+    from virtspec_mi.scene import find_bench
 
     for leaf in ("abm_b", "abm_u"):
-        assert walk_steps(find_instrument(vm.instrument_scene({"type": leaf})).bsdf) >= LONG_WALK_STEPS
-    assert walk_steps(find_instrument(vm.instrument_scene({"type": "turbid_slab"})).bsdf) is None
+        assert walk_steps(find_bench(vm.instrument_scene({"type": leaf})).bsdf) >= LONG_WALK_STEPS
+    assert walk_steps(find_bench(vm.instrument_scene({"type": "turbid_slab"})).bsdf) is None
 
 
 def test_prestart_is_checked(mi):
@@ -57,13 +57,13 @@ _CASES = {
 def test_prestart_counts_as_one_loop_per_ray(mi, case):
     """Bit-identical counts and bins: starts computed in the refill or before the loop, any chunk size."""
 
-    from virtspec_mi.gonio_bins import make_bins
+    from virtspec_mi.geometry.bins import make_bins
     from virtspec_mi.kernel.tracer import ReadingPlan, WalkQueue, tally_gonio_readings, tally_readings
-    from virtspec_mi.scene import find_instrument
+    from virtspec_mi.scene import find_bench
     from virtspec_mi.settings import Settings
 
     specimen, options, readings = _CASES[case]
-    instrument = find_instrument(vm.instrument_scene(specimen))
+    instrument = find_bench(vm.instrument_scene(specimen))
     plans = [ReadingPlan(w, t, 0.0, 3000) for w, t in readings]
     offsets = [k * 5000 + 11 for k in range(len(plans))]
 

@@ -1,5 +1,5 @@
 """
-Tests of parameter sweeps (virtspec_mi.parameters, engine.take_keyed_readings, sweep(parameters=)):
+Tests of parameter sweeps (virtspec_mi.engine.parameters, engine.take_keyed_readings, sweep(parameters=)):
 names through mi.traverse, grids and points as result dims, the key rule (a reading's
 counts depend on (seed, its flat index) only), resume, files, the CLI and recompilation.
 
@@ -14,10 +14,10 @@ import numpy as np
 import pytest
 
 import virtspec_mi as vm
-from virtspec_mi.checkpoint import CheckpointError
+from virtspec_mi.engine.checkpoint import CheckpointError
 from virtspec_mi.cli import main
-from virtspec_mi.counts import Counts
-from virtspec_mi.engine import take_keyed_readings
+from virtspec_mi.kernel.counts import Counts
+from virtspec_mi.engine.readings import take_keyed_readings
 
 THICKNESS, CHLOROPHYLL = "specimen.thickness", "specimen.chlorophyll_a"
 SWEEP = dict(theta_i=8, wavelengths=[550, 800], rays=1500, seed=4, beam="collimated")
@@ -62,7 +62,7 @@ def test_setting_a_parameter_through_mi_traverse_updates_the_plugin(mi):
     params = mi.traverse(scene)
     params["specimen.bsdf.g"] = mi.Float64(0.5)
     params.update()
-    assert "g=0.5" in str(vm.find_instrument(scene).bsdf)
+    assert "g=0.5" in str(vm.find_bench(scene).bsdf)
     params = mi.traverse(scene)
     params["specimen.bsdf.g"] = mi.Float64(1.5)  # the plugin's own range check
     with pytest.raises(ValueError, match=r"turbid_slab: 'g' must satisfy -1 <= g <= 1"):
@@ -119,7 +119,7 @@ def test_a_reading_equals_the_scene_loaded_with_that_value_under_the_same_key(mi
     settings = vm.Settings(**{k: v for k, v in SWEEP.items() if k != "theta_i"}, theta_i=8)
     n_lam = 2
     for i_t, i_c in [(0, 0), (1, 2)]:
-        loaded = vm.find_instrument(vm.instrument_scene({"type": "abm_b", "thickness": GRID[THICKNESS][i_t],
+        loaded = vm.find_bench(vm.instrument_scene({"type": "abm_b", "thickness": GRID[THICKNESS][i_t],
                                                          "chlorophyll_a": 2.0 + 2 * i_c}))
         point = i_t * 3 + i_c
         keys = np.arange(point * n_lam, (point + 1) * n_lam)
@@ -141,13 +141,13 @@ def test_counts_do_not_depend_on_how_the_sweep_is_split(soybean, leaf_grid):
     small = vm.sweep(soybean, parameters=GRID, chunk_size=1500, **SWEEP)  # one reading per batch
     _same_counts(small.counts, leaf_grid.counts)
     # any block of readings, in any order, through the one per-batch function
-    instrument = vm.find_instrument(soybean)
-    from virtspec_mi.parameters import parameter_space
+    instrument = vm.find_bench(soybean)
+    from virtspec_mi.engine.parameters import parameter_space
 
     space = parameter_space(instrument, GRID)
     settings = vm.Settings(**{k: v for k, v in SWEEP.items() if k != "theta_i"}, theta_i=8)
     block = np.array([11, 3, 4, 0])
-    from virtspec_mi.parameters import apply_point, current_values
+    from virtspec_mi.engine.parameters import apply_point, current_values
 
     original = current_values(instrument, space.keys)
     try:
@@ -160,9 +160,9 @@ def test_counts_do_not_depend_on_how_the_sweep_is_split(soybean, leaf_grid):
 
 
 def test_a_sweep_leaves_the_scene_with_its_own_values(mi, soybean):
-    from virtspec_mi.parameters import current_values
+    from virtspec_mi.engine.parameters import current_values
 
-    instrument = vm.find_instrument(soybean)
+    instrument = vm.find_bench(soybean)
     before = current_values(instrument, ["specimen.bsdf.thickness"])
     vm.sweep(soybean, parameters={THICKNESS: [1e-4, 3e-4]}, theta_i=8, wavelengths=[550], rays=100)
     assert current_values(instrument, ["specimen.bsdf.thickness"]) == before == (1.66e-4,)
@@ -195,7 +195,7 @@ def test_a_wavelength_independent_specimen_is_traced_once_per_angle_and_point(di
 
 def test_an_interrupted_parameter_sweep_resumes_to_the_uninterrupted_result(soybean, leaf_grid, monkeypatch,
                                                                             tmp_path):
-    import virtspec_mi.engine as engine
+    import virtspec_mi.engine.readings as engine
 
     real, calls = engine.take_readings, []
 
@@ -250,7 +250,7 @@ def test_a_parameter_sweep_round_trips_through_every_file_format(soybean, leaf_g
     ({THICKNESS: []}, False, "at least one value"),
 ])
 def test_bad_parameters_are_refused_before_any_tracing(soybean, monkeypatch, parameters, points, message):
-    import virtspec_mi.engine as engine
+    import virtspec_mi.engine.readings as engine
 
     monkeypatch.setattr(engine, "take_readings", lambda *a, **k: pytest.fail("traced before the check"))
     with pytest.raises(ValueError, match=message):
@@ -258,9 +258,9 @@ def test_bad_parameters_are_refused_before_any_tracing(soybean, monkeypatch, par
 
 
 def test_a_refused_value_leaves_the_scene_as_it_was(soybean):
-    from virtspec_mi.parameters import current_values
+    from virtspec_mi.engine.parameters import current_values
 
-    instrument = vm.find_instrument(soybean)
+    instrument = vm.find_bench(soybean)
     with pytest.raises(ValueError):
         vm.sweep(soybean, parameters={THICKNESS: [1e-4, -1.0]}, theta_i=8, wavelengths=[550], rays=100)
     assert current_values(instrument, ["specimen.bsdf.thickness"]) == (1.66e-4,)
@@ -395,14 +395,14 @@ def test_a_parameter_space_survives_pickling_as_a_worker_receives_it(mi, leaf_da
 
     import pickle
 
-    from virtspec_mi.parameters import parameter_space
+    from virtspec_mi.engine.parameters import parameter_space
 
     scene = vm.instrument_scene({"type": "abm_b"})
-    here = vm.find_instrument(scene)
+    here = vm.find_bench(scene)
     space = pickle.loads(pickle.dumps(parameter_space(here, GRID)))
     settings = vm.Settings(**{k: v for k, v in SWEEP.items() if k != "theta_i"}, theta_i=8)
     block = np.array([5, 6, 7])
-    counts, _ = take_keyed_readings(vm.find_instrument(scene), settings, [8.0], block, space)
+    counts, _ = take_keyed_readings(vm.find_bench(scene), settings, [8.0], block, space)
     whole = vm.sweep(scene, parameters=GRID, **SWEEP)
     flat = whole.counts.map(lambda v: np.moveaxis(v, (0, 1), (-1, -2)).reshape(-1))
     _same_counts(counts, flat.map(lambda v: v[block]))

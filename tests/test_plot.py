@@ -1,4 +1,4 @@
-"""Tests of virtspec_mi.plot: Fig. 5 style curves with the certified band, Figs. 5–6 of densities."""
+"""Tests of virtspec_mi.results.plot: Fig. 5 style curves with the certified band, Figs. 5–6 of densities."""
 
 from __future__ import annotations
 
@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import virtspec_mi as vm
-from virtspec_mi.plot import SPARSE, curve_style, plot_comparison, plot_densities, plot_sweep, select
+from virtspec_mi.results.plot import SPARSE, curve_style, plot_comparison, plot_densities, plot_sweep, select
 
 
 @pytest.fixture(scope="module")
@@ -53,7 +53,7 @@ def grid_result(values, wavelengths, thetas, rays=10**4, scene="sha256:012345678
 
     from dataclasses import replace
 
-    from virtspec_mi.counts import Counts
+    from virtspec_mi.kernel.counts import Counts
 
     values = np.asarray(values, dtype=np.float64).reshape(len(wavelengths), len(thetas))
     counts = replace(Counts.zeros(values.shape), rays=np.full(values.shape, rays, dtype=np.int64),

@@ -1,5 +1,5 @@
 """
-Tests of :mod:`virtspec_mi.reference`: the NumPy references the instrument is checked against.
+Tests of :mod:`virtspec_mi.references.quadrature`: the NumPy references the instrument is checked against.
 
 Fresnel values are the research notes' anchors (shared/research/anchors.md §2(a),
 computed independently and cross-checked with ``iadpython.fresnel_reflection`` and
@@ -18,8 +18,8 @@ import math
 import numpy as np
 import pytest
 
-from virtspec_mi.geometry import InstrumentGeometry
-from virtspec_mi.reference import (
+from virtspec_mi.geometry.disks import InstrumentGeometry
+from virtspec_mi.references.quadrature import (
     DEFAULT_NODES,
     QuadratureNodes,
     cone_half_angle_bound,

@@ -1,5 +1,5 @@
 """
-Tests of virtspec_mi.result: one result type for a reading or a sweep, and the truth of
+Tests of virtspec_mi.results.hemispherical: one result type for a reading or a sweep, and the truth of
 every certificate it prints (issue "One result, one engine, one set of settings").
 """
 
@@ -14,8 +14,8 @@ import numpy as np
 import pytest
 
 import virtspec_mi as vm
-from virtspec_mi.bounds import exact_mu, hoeffding_mu
-from virtspec_mi.counts import WEIGHT_ROUNDING
+from virtspec_mi.budgets.bounds import exact_mu, hoeffding_mu
+from virtspec_mi.kernel.counts import WEIGHT_ROUNDING
 
 DELTA = 0.01
 ROUGH = {"type": "roughconductor", "alpha": 0.3}
@@ -116,8 +116,8 @@ def test_a_reading_is_a_result_with_one_dimension(grey_reading):
 
 
 def test_a_reading_becomes_spectra_colour_plots_and_files(grey_reading, tmp_path):
-    from virtspec_mi.colorimetry import colorimetry
-    from virtspec_mi.plot import plot_sweep
+    from virtspec_mi.results.colorimetry import colorimetry
+    from virtspec_mi.results.plot import plot_sweep
 
     sd = grey_reading.to_sd()
     np.testing.assert_allclose(sd.values, grey_reading.reflectance)

@@ -1,4 +1,4 @@
-"""Tests of virtspec_mi.results_io: xarray / NetCDF, CSV, JSON and colour-science CSV spectra."""
+"""Tests of virtspec_mi.results.io: xarray / NetCDF, CSV, JSON and colour-science CSV spectra."""
 
 from __future__ import annotations
 
@@ -7,7 +7,7 @@ import pytest
 
 import virtspec_mi as vm
 from virtspec_mi.api import read_result as read_sweep
-from virtspec_mi.results_io import read_spectra_csv, write_spectra_csv
+from virtspec_mi.results.io import read_spectra_csv, write_spectra_csv
 
 
 def to_dataset(result):
@@ -82,8 +82,8 @@ def _grid_result(n_lam: int, n_theta: int, seed: int = 0):
 
     from dataclasses import replace
 
-    from virtspec_mi.counts import Counts
-    from virtspec_mi.result import Result
+    from virtspec_mi.kernel.counts import Counts
+    from virtspec_mi.results.hemispherical import Result
     from virtspec_mi.settings import Settings
 
     rng = np.random.default_rng(seed)
@@ -125,7 +125,7 @@ def test_a_failed_write_leaves_the_old_file_and_no_temporary(result, tmp_path, m
 
     import xarray as xr
 
-    import virtspec_mi.results_io as results_io
+    import virtspec_mi.results.io as results_io
 
     path = write_sweep(result, tmp_path / f"sweep{suffix}")
     before = path.read_bytes()
@@ -162,7 +162,7 @@ def test_concurrent_writers_never_show_a_partial_file(tmp_path):
 
     path = tmp_path / "shared.json"
     results = [_grid_result(30, 91, seed) for seed in range(2)]
-    from virtspec_mi.results_io import write
+    from virtspec_mi.results.io import write
 
     write(results[0], path)
     errors, stop = [], threading.Event()

@@ -17,9 +17,9 @@ import pytest
 
 import virtspec_mi as vm
 from virtspec_mi import scaleout
-from virtspec_mi.checkpoint import Checkpoint
+from virtspec_mi.engine.checkpoint import Checkpoint
 from virtspec_mi.cli import main
-from virtspec_mi.counts import Counts
+from virtspec_mi.kernel.counts import Counts
 
 SMALL = {"theta_i": [0, 40, 75], "wavelengths": "450:650:50", "rays": 20_000, "progress": False}
 """15 readings of 20,000 rays: a sweep of a fraction of a second."""

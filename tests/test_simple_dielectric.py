@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import virtspec_mi as vm
-from virtspec_mi.reference import fresnel_reflectance
+from virtspec_mi.references.quadrature import fresnel_reflectance
 
 
 def sample(mi, bsdf, theta_deg, n=200_000):

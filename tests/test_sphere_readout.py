@@ -1,4 +1,4 @@
-"""Tests of virtspec_mi.sphere_readout and vm.sphere_measure: the readout, its certificate, its interfaces."""
+"""Tests of virtspec_mi.instruments.sphere and vm.sphere_measure: the readout, its certificate, its interfaces."""
 
 from __future__ import annotations
 
@@ -7,9 +7,9 @@ import numpy as np
 import pytest
 
 import virtspec_mi as vm
-from virtspec_mi import sphere_theory as st
-from virtspec_mi.bounds import hoeffding_mu
-from virtspec_mi.sphere_readout import SphereResult
+from virtspec_mi.references import sphere_theory as st
+from virtspec_mi.budgets.bounds import hoeffding_mu
+from virtspec_mi.results.sphere import SphereResult
 
 SCENE = "scenes/sphere_150mm_8d.xml"
 
@@ -66,7 +66,7 @@ def test_readout_interval_and_result_files(tmp_path):
 
 
 def test_default_rays_certify_each_fraction_at_half_delta():
-    from virtspec_mi.bounds import hoeffding_rays
+    from virtspec_mi.budgets.bounds import hoeffding_rays
 
     result = vm.sphere_measure(SCENE, mu=0.05)
     assert result.rays == hoeffding_rays(0.05, 0.005)
@@ -96,7 +96,7 @@ def test_bad_sphere_readings_name_the_problem():
         vm.sphere_measure(SCENE, sphere=vm.Sphere(150, 0.98, _sphere().ports[:2]), rays=100)
     with pytest.raises(ValueError, match="needs a sphere"):
         vm.sphere_measure(vm.instrument_scene({"type": "diffuse"}), rays=100)
-    from virtspec_mi.instrument import SceneError
+    from virtspec_mi.engine.bench import SceneError
 
     with pytest.raises(SceneError, match="role must be one of"):
         vm.load_scene({"type": "scene", "integrator": {"type": "integrating_sphere", "diameter": 60.0,

@@ -1,4 +1,4 @@
-"""Tests of virtspec_mi.sphere_theory: port fractions, gain, readouts, corrections.
+"""Tests of virtspec_mi.references.sphere_theory: port fractions, gain, readouts, corrections.
 
 Independent references: iadpython's ``Sphere`` (cap model), a Markov-chain solve of the
 sphere written here from the landing rules (not from the closed forms), and a NumPy
@@ -16,7 +16,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from virtspec_mi import sphere_theory as st
+from virtspec_mi.references import sphere_theory as st
 
 import iadpython as iad  # noqa: E402  (a declared test dependency: no skip)
 

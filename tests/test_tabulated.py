@@ -11,8 +11,8 @@ import pytest
 from scipy import stats
 
 import virtspec_mi as vm
-from virtspec_mi.analytic_tables import equal_projected_edges, lambertian_table, phong_model, quadrature_table, uniform_edges
-from virtspec_mi.bsdf_table import table_dataset
+from virtspec_mi.references.analytic_tables import equal_projected_edges, lambertian_table, phong_model, quadrature_table, uniform_edges
+from virtspec_mi.plugins.bsdfs.bsdf_table import table_dataset
 
 WAVELENGTHS = [450.0, 650.0]
 THETA_I = [0.0, 30.0, 60.0]

@@ -18,7 +18,7 @@ import numpy as np
 import pytest
 
 import virtspec_mi as vm
-from virtspec_mi.slab_reference import clear_slab_diffuse_reflectance, clear_slab_reflectance, walk_slab
+from virtspec_mi.references.slab import clear_slab_diffuse_reflectance, clear_slab_reflectance, walk_slab
 
 K = 5.0
 AD_ACCURACY = 5e-4  # iadpython 0.5.3 at quad_pts = 24 (≤ 24: it diverges from 32 on, anchors §1.1)
@@ -157,10 +157,10 @@ def test_diffuse_beam_gives_the_hemispherical_fresnel_reflectance(mi):
 
 
 def test_diffuse_beam_directions_are_cosine_distributed(mi):
-    from virtspec_mi.scene import find_instrument
+    from virtspec_mi.scene import find_bench
     from virtspec_mi.kernel.tracer import ReadingPlan, trace_rays
 
-    instrument = find_instrument(vm.instrument_scene({"type": "simple_dielectric"}))
+    instrument = find_bench(vm.instrument_scene({"type": "simple_dielectric"}))
     for sampling in ("jittered", "random"):
         settings = vm.Settings(beam="diffuse", sampling=sampling, rays=200_000)
         rays = trace_rays(instrument, ReadingPlan(551.0, 0.0, 0.0, 200_000), settings, 200_000)

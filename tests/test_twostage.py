@@ -1,12 +1,13 @@
-"""Tests of virtspec_mi.twostage: pilot-sized second batches and their exact law."""
+"""Tests of virtspec_mi.budgets.twostage: pilot-sized second batches and their exact law."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from virtspec_mi import bounds, twostage
-from virtspec_mi.intervals import clopper_pearson
+from virtspec_mi.budgets import bounds
+from virtspec_mi.budgets import twostage
+from virtspec_mi.budgets.intervals import clopper_pearson
 
 
 @pytest.mark.parametrize("rho, anchor", [(0.05, 19_393), (0.2, 50_524), (0.5, 70_401)])
@@ -44,7 +45,7 @@ def test_second_stage_is_the_exact_rule_over_the_pilot_interval():
 
 
 def test_shipped_stage_two_tables_match_the_computation():
-    from virtspec_mi.budget_tables import STAGE_TWO
+    from virtspec_mi.budgets.tables import STAGE_TWO
 
     for (mu, delta, n1, d1, joint), values in STAGE_TWO.items():
         assert len(values) == n1 + 1

@@ -13,7 +13,8 @@ from __future__ import annotations
 
 import pytest
 
-from virtspec_mi import twostage, validation
+from virtspec_mi import validation
+from virtspec_mi.budgets import twostage
 from virtspec_mi.settings import Settings
 
 BOUNDS = ["hoeffding", "chebyshev", "exact", "two-stage"]

@@ -1,4 +1,4 @@
-"""Tests of virtspec_mi.zarr_table: a sweep's Zarr store filled region by region, read back as a Result."""
+"""Tests of virtspec_mi.results.zarr: a sweep's Zarr store filled region by region, read back as a Result."""
 
 from __future__ import annotations
 
@@ -9,8 +9,8 @@ import pytest
 import xarray as xr
 
 import virtspec_mi as vm
-from virtspec_mi.checkpoint import Checkpoint
-from virtspec_mi.counts import Counts
+from virtspec_mi.engine.checkpoint import Checkpoint
+from virtspec_mi.kernel.counts import Counts
 
 SMALL = {"theta_i": [0, 40, 75], "wavelengths": "450:650:50", "rays": 20_000, "progress": False}
 
@@ -79,7 +79,7 @@ def test_a_zarr_out_that_is_a_file_is_refused(dielectric, tmp_path):
 
 
 def test_batches_in_any_order_land_in_their_cells_and_whole_rows_merge(tmp_path):
-    from virtspec_mi.zarr_table import ZarrTable
+    from virtspec_mi.results.zarr import ZarrTable
 
     n_lam, n_theta = 7, 4
     table = ZarrTable(tmp_path / "t.zarr", np.arange(n_lam) * 5 + 400.0, np.arange(n_theta) * 10.0, {"test": 1},
@@ -98,7 +98,7 @@ def test_batches_in_any_order_land_in_their_cells_and_whole_rows_merge(tmp_path)
 
 
 def test_a_run_of_readings_is_a_few_hyper_rectangles_covering_it_exactly():
-    from virtspec_mi.zarr_table import regions
+    from virtspec_mi.results.zarr import regions
 
     shape = (3, 2, 4, 5)  # two parameter dims, theta_i, wavelength: k in C order
     rng = np.random.default_rng(3)

@@ -1,8 +1,8 @@
 """
-Regenerate ``virtspec_mi/budget_tables.py``: the shipped ray-budget tables.
+Regenerate ``virtspec_mi/budgets/tables.py``: the shipped ray-budget tables.
 
-The exact rule (``virtspec_mi.bounds.exact_rays``) and the two-stage sizing
-(``virtspec_mi.twostage.stage_two_rays``) take 10–1000 ms per uncached (μ, δ) or pilot
+The exact rule (``virtspec_mi.budgets.bounds.exact_rays``) and the two-stage sizing
+(``virtspec_mi.budgets.twostage.stage_two_rays``) take 10–1000 ms per uncached (μ, δ) or pilot
 count; the tables make the common settings cost microseconds. Tests recompute a
 sample of the entries. Run: ``.venv/bin/python tools/budget_tables.py`` (minutes).
 """
@@ -12,7 +12,8 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
-from virtspec_mi import bounds, twostage
+from virtspec_mi.budgets import bounds
+from virtspec_mi.budgets import twostage
 
 MUS = (0.002, 0.005, 0.01, 0.02, 0.05)
 DELTAS = (0.0005, 0.001, 0.005, 0.01, 0.025, 0.05, 0.1, 0.2)

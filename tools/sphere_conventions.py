@@ -1,5 +1,5 @@
 """
-Print the README's port-fraction convention table (``virtspec_mi.sphere_theory``).
+Print the README's port-fraction convention table (``virtspec_mi.references.sphere_theory``).
 
 Grid: wall reflectance ρw ∈ {0.90, 0.95, 0.98, 0.99} × port fraction f ∈ {1 %, 5 %, 10 %},
 where the sphere has three ports (entrance, sample, detector) whose exact cap fraction is
@@ -21,7 +21,7 @@ Run: ``.venv/bin/python tools/sphere_conventions.py``.
 
 from __future__ import annotations
 
-from virtspec_mi import sphere_theory as st
+from virtspec_mi.references import sphere_theory as st
 
 WALL_REFLECTANCES = (0.90, 0.95, 0.98, 0.99)
 PORT_FRACTIONS = (0.01, 0.05, 0.10)

@@ -1,6 +1,6 @@
 """
-Print the README's sphere validation tables: the simulation against ``virtspec_mi.sphere_theory``
-(through the one mapping, ``virtspec_mi.sphere_model.theory_inputs``) and the correction of
+Print the README's sphere validation tables: the simulation against ``virtspec_mi.references.sphere_theory``
+(through the one mapping, ``virtspec_mi.references.sphere_model.theory_inputs``) and the correction of
 instrument readings. The README tables must equal this script's output
 (``tests/test_sphere_model.py``, a slow test). The same cases are asserted, one by one,
 by ``tests/test_sphere_walk.py`` and ``tests/test_sphere_model.py``.
@@ -31,11 +31,11 @@ ROOT = Path(__file__).resolve().parents[1]
 os.environ.setdefault("VIRTSPEC_LEAF_DATA", str(ROOT.parent / "shared" / "data" / "abm-npsg"))  # as tests/conftest.py
 
 import virtspec_mi as vm  # noqa: E402
-from virtspec_mi import sphere_theory as st  # noqa: E402
-from virtspec_mi.bounds import hoeffding_mu  # noqa: E402
+from virtspec_mi.references import sphere_theory as st  # noqa: E402
+from virtspec_mi.budgets.bounds import hoeffding_mu  # noqa: E402
 from virtspec_mi.settings import Settings  # noqa: E402
-from virtspec_mi.sphere import Port, Sphere, SphereSettings  # noqa: E402
-from virtspec_mi.sphere_model import theory_inputs  # noqa: E402
+from virtspec_mi.geometry.sphere import Port, Sphere, SphereSettings  # noqa: E402
+from virtspec_mi.references.sphere_model import theory_inputs  # noqa: E402
 
 RAYS, DELTA = 105_967, 1e-3
 LAB, LEAF = ROOT / "scenes/sphere_150mm_8d.xml", ROOT / "scenes/sphere_leaf_60mm.xml"
@@ -51,7 +51,7 @@ def ideal_table() -> str:
     """Table 1: the ideal sphere's detector fraction, simulated and in three models."""
 
     from virtspec_mi.kernel.sphere_walk import Holder, SphereWalk, holder_frame, tally_sphere
-    from virtspec_mi.scene import find_instrument
+    from virtspec_mi.scene import find_bench
 
     mu = hoeffding_mu(RAYS, DELTA)
     lines = ["| ρw | f | simulated | flat model (exact caps) | cap model, caps (Goebel, iadpython) "
@@ -62,7 +62,7 @@ def ideal_table() -> str:
             sphere = Sphere(150, rho_w, (Port("sample", "sample", 180, 0, radius),
                                          Port("entrance", "entrance", 0, 0, radius),
                                          Port("detector", "detector", 90, 90, radius)))
-            instrument = find_instrument(vm.instrument_scene({"type": "diffuse", "reflectance": 0.5},
+            instrument = find_bench(vm.instrument_scene({"type": "diffuse", "reflectance": 0.5},
                                                              specimen_radius=radius))
             holder = Holder(0, instrument.bsdf, radius, holder_frame(sphere.ports[0].axis, False))
             walk = SphereWalk(sphere, [holder], [6, 7, 0], 100_000)

@@ -5,18 +5,18 @@ The measurement API: :func:`measure`, :func:`sweep`, :func:`read_result`, :func:
 :func:`measure` takes a scene (XML path, dict or ``mi.Scene``), resolves the settings
 (explicit keywords, then the scene's ``spectrophotometer`` integrator, then the
 defaults of :class:`~virtspec_mi.settings.Settings`), sizes each reading with the ray
-budget and returns a :class:`~virtspec_mi.result.Result` with the dim ``wavelength``:
+budget and returns a :class:`~virtspec_mi.results.hemispherical.Result` with the dim ``wavelength``:
 reflectance ρ = m/N (eq. 2), transmittance τ and absorptance α = 1 − ρ − τ per
 wavelength, with the exact counts behind them and the certificate they give.
 
 :func:`sweep` measures a grid (wavelength × θi) at one φi — the paper's Fig. 5 or a
 spectrum — and returns the same type with dims ``(wavelength, theta_i)``; with
 ``parameters`` also over specimen parameters (a grid: one dim per parameter; or
-explicit points: the dim ``point``; :mod:`virtspec_mi.parameters`). Its reading
+explicit points: the dim ``point``; :mod:`virtspec_mi.engine.parameters`). Its reading
 k (k = (i_p·n_θ + i_θ)·n_λ + i_λ, i_p the parameter point) owns the global ray indices
 [k·stride, k·stride + N): its counts depend on (seed, k) only, which makes a sweep
 resumable from a checkpoint and its readings independent of how they are batched
-(:func:`virtspec_mi.engine.take_keyed_readings`).
+(:func:`virtspec_mi.engine.readings.take_keyed_readings`).
 
 Both take every setting of :class:`~virtspec_mi.settings.Settings` as a keyword (their
 signatures are derived from it); a bad value raises ``ValueError`` naming the setting
@@ -38,21 +38,22 @@ from typing import Any, Iterator
 
 import numpy as np
 
-from virtspec_mi.checkpoint import checkpoint_for, claim, remove
+from virtspec_mi.engine.checkpoint import checkpoint_for, claim, remove
 from virtspec_mi.checks import parse_theta_i
-from virtspec_mi.engine import gonio_reading, in_process_runner, measure_reading, run
-from virtspec_mi.gonio_bins import GONIO_PARAMETERS
-from virtspec_mi.gonio_result import GonioResult
-from virtspec_mi.instrument import Instrument
-from virtspec_mi.parameters import apply_point, current_values, parameter_space
-from virtspec_mi.result import Result
-from virtspec_mi.results_io import check_output
-from virtspec_mi.scene import find_instrument, scene_fingerprint
+from virtspec_mi.engine.readings import gonio_reading, in_process_runner, measure_reading, run
+from virtspec_mi.geometry.bins import GONIO_PARAMETERS
+from virtspec_mi.results.goniophotometer import GonioResult
+from virtspec_mi.engine.bench import Bench
+from virtspec_mi.engine.parameters import apply_point, current_values, parameter_space
+from virtspec_mi.results.hemispherical import Result
+from virtspec_mi.results.io import check_output
+from virtspec_mi.scene import find_bench, scene_fingerprint
 from virtspec_mi.settings import Settings, settings_keywords, with_settings
-from virtspec_mi.sphere import SPHERE_SETTING_NAMES, Sphere, SphereSettings
-from virtspec_mi.sphere_readout import SphereResult, measure_sphere
-from virtspec_mi.zarr_table import SUFFIX as ZARR_SUFFIX
-from virtspec_mi.zarr_table import ZarrTable
+from virtspec_mi.geometry.sphere import SPHERE_SETTING_NAMES, Sphere, SphereSettings
+from virtspec_mi.instruments.sphere import measure_sphere
+from virtspec_mi.results.sphere import SphereResult
+from virtspec_mi.results.zarr import SUFFIX as ZARR_SUFFIX
+from virtspec_mi.results.zarr import ZarrTable
 
 __all__ = ["measure", "sweep", "gonio", "read_result", "read_gonio", "fluctuation", "sphere_measure"]
 
@@ -60,7 +61,7 @@ __all__ = ["measure", "sweep", "gonio", "read_result", "read_gonio", "fluctuatio
 def measure(scene: Any, *, parameters: dict[str, Any] | None = None, defines: dict[str, Any] | None = None,
             progress: bool | None = None, **settings: Any) -> Result:
     """
-    Measure the specimen of ``scene`` and return a certified :class:`~virtspec_mi.result.Result`
+    Measure the specimen of ``scene`` and return a certified :class:`~virtspec_mi.results.hemispherical.Result`
     over wavelength (θi a scalar label).
 
     Parameters
@@ -88,7 +89,7 @@ def measure(scene: Any, *, parameters: dict[str, Any] | None = None, defines: di
     Baranoski et al. (2001), eqs. (2), (23).
     """
 
-    instrument = find_instrument(scene, defines)
+    instrument = find_bench(scene, defines)
     settings = with_settings(_scene_settings(instrument), settings, "measure")
     space = parameter_space(instrument, parameters or {})
     if space is not None and space.size != 1:
@@ -138,7 +139,7 @@ def sweep(
         such as ``"1e-4:2e-4:5e-5"``, stop included within rounding). Names are the
         ``mi.traverse`` keys of the specimen's BSDF (``specimen.bsdf.thickness``,
         ``specimen.bsdf.alpha.value``) or their short form (``specimen.thickness``,
-        ``specimen.alpha``): see :mod:`virtspec_mi.parameters`. A grid (the outer
+        ``specimen.alpha``): see :mod:`virtspec_mi.engine.parameters`. A grid (the outer
         product) adds one result dim per parameter, named as given.
     points
         ``True``: ``parameters`` holds explicit points (equal-length lists, e.g. Latin
@@ -147,17 +148,17 @@ def sweep(
         Values of an XML scene's ``$name`` parameters, name → value (``mitsuba -D``).
     checkpoint
         Path of a JSON file recording finished readings as the sweep goes; an existing
-        file of the same sweep is resumed (:mod:`virtspec_mi.checkpoint`; a note on
+        file of the same sweep is resumed (:mod:`virtspec_mi.engine.checkpoint`; a note on
         stderr says how many readings were reused). Held by one sweep at a time (an OS
         lock; another run gets ``ValueError``) and checked writable before any tracing.
         Removed when the sweep completes — with ``out``, only once the output file is
         written. A corrupt or foreign checkpoint raises
-        :class:`~virtspec_mi.checkpoint.CheckpointError` and is left as it is.
+        :class:`~virtspec_mi.engine.checkpoint.CheckpointError` and is left as it is.
     out
         Result file (``.nc``, ``.csv`` or ``.json``, :meth:`Result.write`) to write,
         atomically, when the sweep completes — or a Zarr store (``.zarr``, for tables too
         large for one file; parameter sweeps too) that receives each batch's counts as it
-        finishes, region by region (:mod:`virtspec_mi.zarr_table`);
+        finishes, region by region (:mod:`virtspec_mi.results.zarr`);
         checked before any tracing. The checkpoint defaults to ``OUT.partial.json``: if
         the write fails (a full disk …) every finished reading stays there and the same
         call, re-run, only writes.
@@ -191,7 +192,7 @@ def sweep(
     if out is not None:
         check_output(out)
         checkpoint = checkpoint if checkpoint is not None else checkpoint_for(out)
-    instrument = find_instrument(scene, defines)
+    instrument = find_bench(scene, defines)
     base = with_settings(_scene_settings(instrument), settings, "sweep")
     space = parameter_space(instrument, parameters or {}, points=points)
     angles = np.array(parse_theta_i(base.theta_i if theta_i is None else theta_i))
@@ -271,7 +272,7 @@ def gonio(scene: Any, *, theta_i: Any = None, out: str | os.PathLike | None = No
     """
     A certified goniophotometer reading of ``scene``: the spectrophotometer's readings
     over every (wavelength, θi), with every escaping ray also binned by its outgoing
-    direction (θo, φo) in the specimen frame (:class:`~virtspec_mi.gonio_result.GonioResult`).
+    direction (θo, φo) in the specimen frame (:class:`~virtspec_mi.results.goniophotometer.GonioResult`).
 
     Parameters
     ----------
@@ -282,21 +283,21 @@ def gonio(scene: Any, *, theta_i: Any = None, out: str | os.PathLike | None = No
     out
         File to write (``.nc``, ``.csv`` or ``.json``), checked before any tracing.
     **options
-        The goniophotometer parameters (:data:`~virtspec_mi.gonio_bins.GONIO_PARAMETERS`:
+        The goniophotometer parameters (:data:`~virtspec_mi.geometry.bins.GONIO_PARAMETERS`:
         ``theta_o_bins``, ``phi_o_bins``, ``binning``, ``fold_phi``, ``hemispheres``,
         ``guarantee``, ``relative_tolerance``, ``brdf_floor``) and every setting of
         :class:`~virtspec_mi.settings.Settings` (a fixed budget); one left ``None`` comes
         from the scene's ``spectrophotometer`` integrator, else from its default. Without
         ``rays``, N is sized by ``guarantee`` at ``mu`` and ``delta`` over the K bins
-        (:func:`virtspec_mi.gonio_bounds.gonio_rays`).
+        (:func:`virtspec_mi.budgets.bins.gonio_rays`).
 
     References
     ----------
-    Baranoski et al. (2001), eq. (23), Sect. 6; :mod:`virtspec_mi.gonio_bounds`.
+    Baranoski et al. (2001), eq. (23), Sect. 6; :mod:`virtspec_mi.budgets.bins`.
     """
 
     out = check_output(_file_path(out, "out")) if out is not None else None
-    instrument = find_instrument(scene)
+    instrument = find_bench(scene)
     given = {name: options.pop(name) for name in list(options) if name in GONIO_PARAMETERS}
     scene_gonio = instrument.integrator.gonio if instrument.integrator is not None else {}
     spec = {**scene_gonio, **{name: value for name, value in given.items() if value is not None}}
@@ -367,7 +368,7 @@ def fluctuation(a: Result | np.ndarray, b: Result | np.ndarray, quantity: str = 
 def sphere_measure(scene: Any, *, sphere: Sphere | None = None, **settings: Any) -> SphereResult:
     """
     Read the specimen of ``scene`` as a physical integrating sphere would: a
-    :class:`~virtspec_mi.sphere_readout.SphereResult` over wavelength (the reading
+    :class:`~virtspec_mi.results.sphere.SphereResult` over wavelength (the reading
     ρ_std·p_sample/p_standard with its certified interval, the hemispherical reading of
     the same rays, the instrument error, every count of both configurations).
 
@@ -377,10 +378,10 @@ def sphere_measure(scene: Any, *, sphere: Sphere | None = None, **settings: Any)
         XML path, scene dict or ``mi.Scene`` with ``emitter`` and ``specimen`` disks; its
         ``integrating_sphere`` integrator (if any) gives the sphere and the settings.
     sphere
-        A :class:`~virtspec_mi.sphere.Sphere` (overrides the scene's).
+        A :class:`~virtspec_mi.geometry.sphere.Sphere` (overrides the scene's).
     **settings
         Any setting of :class:`~virtspec_mi.settings.Settings` and of
-        :class:`~virtspec_mi.sphere.SphereSettings` (``measurement``, ``specular``,
+        :class:`~virtspec_mi.geometry.sphere.SphereSettings` (``measurement``, ``specular``,
         ``method``, ``standard``, ``max_bounces``); ``None`` keeps the scene's value.
 
     References
@@ -388,7 +389,7 @@ def sphere_measure(scene: Any, *, sphere: Sphere | None = None, **settings: Any)
     Baranoski et al. (2001), eqs. (2), (23); Goebel (1967).
     """
 
-    instrument = find_instrument(scene)
+    instrument = find_bench(scene)
     integrator = instrument.integrator
     own = {k: settings.pop(k) for k in list(settings) if k in SPHERE_SETTING_NAMES}
     base = with_settings(_scene_settings(instrument), settings, "sphere_measure")
@@ -415,7 +416,7 @@ def _sphere_signature() -> Any:
 sphere_measure.__signature__ = _sphere_signature()  # type: ignore[attr-defined]
 
 
-def _scene_settings(instrument: Instrument) -> Settings:
+def _scene_settings(instrument: Bench) -> Settings:
     """The settings of the scene's ``spectrophotometer`` integrator, else the defaults."""
 
     return instrument.integrator.settings if instrument.integrator is not None else Settings()

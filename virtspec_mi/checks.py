@@ -3,7 +3,7 @@ Checks of measurement inputs: one message style, naming the parameter and its ra
 ===================================================================================
 
 The bottom of the package: every check that turns user input into a validated value
-(:mod:`virtspec_mi.settings`, :mod:`virtspec_mi.bounds`, :mod:`virtspec_mi.geometry`,
+(:mod:`virtspec_mi.settings`, :mod:`virtspec_mi.budgets.bounds`, :mod:`virtspec_mi.geometry.disks`,
 the specimen plugins, …) lives here, so each rule is written once. A bad value raises
 ``ValueError`` with a message such as
 ``theta_i must satisfy 0 <= theta_i <= 90 degrees (got 95)``; values are shown with

@@ -9,10 +9,10 @@ Command line: ``virtspec``
 - ``virtspec sweep SCENE --theta-i 0:90:1 [--wavelengths 400:700:10] [--out FILE(.nc|.csv|.json)]
   [--plot FIG(.png|.svg)] [--densities 3 4 5 6] [--quiet] [--workers N | --scheduler ADDRESS]
   [--task-readings K] [measure options]``: a sweep (resumable when ``--out`` is given: see
-  :mod:`virtspec_mi.checkpoint`), on Dask workers with ``--workers``/``--scheduler``
+  :mod:`virtspec_mi.engine.checkpoint`), on Dask workers with ``--workers``/``--scheduler``
   (:mod:`virtspec_mi.scaleout`); ``--param NAME=VALUES`` (repeatable; VALUES ``v1,v2,v3``
   or ``start:stop:step``, stop included within rounding) sweeps a specimen parameter too
-  (a grid; ``--points``: explicit points, equal-length lists; :mod:`virtspec_mi.parameters`).
+  (a grid; ``--points``: explicit points, equal-length lists; :mod:`virtspec_mi.engine.parameters`).
 - ``measure`` and ``sweep`` take ``-D NAME=VALUE`` (repeatable): the XML scene's ``$NAME``
   parameter, as Mitsuba's own ``mitsuba -D`` (``mi.load_file(path, NAME=VALUE)``);
   ``measure --param NAME=VALUE`` sets one specimen parameter for the reading.
@@ -25,7 +25,7 @@ Command line: ``virtspec``
   (:mod:`virtspec_mi.compare`); ``virtspec plot FILE [...]``: a figure of a result file.
 - ``virtspec sphere SCENE [--measurement] [--specular SCI|SCE] [--method] [--standard]
   [--max-bounces] [--out FILE(.json|.nc)] [--json] [measure options]``: the readout of a
-  physical integrating sphere (:mod:`virtspec_mi.sphere_readout`).
+  physical integrating sphere (:mod:`virtspec_mi.instruments.sphere`).
 - ``virtspec llvm {find,check}``: the libLLVM Dr.Jit uses (``make setup`` calls it).
 
 Errors in the input (bad ranges, unreadable scenes, a bad libLLVM) print one line
@@ -67,7 +67,7 @@ def build_parser() -> argparse.ArgumentParser:
     """The ``virtspec`` argument parser (the measurement flags come from the ``Settings`` fields)."""
 
     from virtspec_mi import __version__
-    from virtspec_mi.counts import QUANTITIES
+    from virtspec_mi.kernel.counts import QUANTITIES
 
     parser = argparse.ArgumentParser(
         prog="virtspec", description="Virtual spectrophotometer: certified reflectance, transmittance and "
@@ -229,11 +229,11 @@ def _pairs(items: Sequence[str], flag: str) -> dict[str, str]:
 
 
 def _sphere_options(parser: argparse.ArgumentParser) -> None:
-    """One flag per field of :class:`~virtspec_mi.sphere.SphereSettings` (default: the scene's)."""
+    """One flag per field of :class:`~virtspec_mi.geometry.sphere.SphereSettings` (default: the scene's)."""
 
     from dataclasses import fields
 
-    from virtspec_mi.sphere import SphereSettings
+    from virtspec_mi.geometry.sphere import SphereSettings
 
     kinds = {"standard": float, "max_bounces": int}
     for item in fields(SphereSettings):
@@ -271,9 +271,9 @@ def _measurement_options(parser: argparse.ArgumentParser, sweep: bool) -> None:
 
 
 def _gonio_options(parser: argparse.ArgumentParser) -> None:
-    """One flag per goniophotometer parameter (:data:`~virtspec_mi.gonio_bins.GONIO_PARAMETERS`)."""
+    """One flag per goniophotometer parameter (:data:`~virtspec_mi.geometry.bins.GONIO_PARAMETERS`)."""
 
-    from virtspec_mi.gonio_bins import GONIO_PARAMETERS
+    from virtspec_mi.geometry.bins import GONIO_PARAMETERS
     from virtspec_mi.settings import shown
 
     for name, (default, meaning) in GONIO_PARAMETERS.items():
@@ -302,8 +302,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     args = parser.parse_args(argv)
     try:
         if args.command == "bounds":
-            from virtspec_mi.bounds import format_table_1
-            from virtspec_mi.budgets import format_budgets
+            from virtspec_mi.budgets.bounds import format_table_1
+            from virtspec_mi.budgets.rules import format_budgets
 
             print(format_table_1(args.mu, args.delta))
             print()
@@ -339,7 +339,7 @@ def _measure(args: argparse.Namespace) -> int:
 
 def _sphere(args: argparse.Namespace) -> int:
     from virtspec_mi.api import sphere_measure
-    from virtspec_mi.sphere import SPHERE_SETTING_NAMES
+    from virtspec_mi.geometry.sphere import SPHERE_SETTING_NAMES
 
     own = {name: getattr(args, name) for name in SPHERE_SETTING_NAMES}
     result = sphere_measure(args.scene, **_settings(args), **own)
@@ -353,9 +353,9 @@ def _sweep(args: argparse.Namespace) -> int:
     from pathlib import Path
 
     from virtspec_mi.api import sweep
-    from virtspec_mi.checkpoint import checkpoint_for
-    from virtspec_mi.plot import check_figure_path, plot_sweep
-    from virtspec_mi.results_io import check_output, csv_text
+    from virtspec_mi.engine.checkpoint import checkpoint_for
+    from virtspec_mi.results.plot import check_figure_path, plot_sweep
+    from virtspec_mi.results.io import check_output, csv_text
 
     out = check_output(args.out) if args.out else None  # a bad suffix or directory fails before any tracing
     check_figure_path(args.plot)
@@ -404,7 +404,7 @@ def _densities(args: argparse.Namespace, kwargs: dict, run: Any, out: Any) -> in
     """``--densities``: a sweep per ray density, its seconds and the fluctuation Δ against the previous one."""
 
     from virtspec_mi.api import fluctuation, sweep
-    from virtspec_mi.plot import plot_densities
+    from virtspec_mi.results.plot import plot_densities
 
     # Fig. 6b: time linear in N. The first sweep compiles the kernel (Dr.Jit caches it for every
     # N): run it once at the smallest density first, so no density's seconds include compilation.
@@ -429,8 +429,8 @@ def _densities(args: argparse.Namespace, kwargs: dict, run: Any, out: Any) -> in
 
 def _gonio(args: argparse.Namespace) -> int:
     from virtspec_mi.api import gonio
-    from virtspec_mi.gonio_bins import GONIO_PARAMETERS
-    from virtspec_mi.plot import check_figure_path
+    from virtspec_mi.geometry.bins import GONIO_PARAMETERS
+    from virtspec_mi.results.plot import check_figure_path
 
     check_figure_path(args.plot)  # a bad suffix fails before any tracing
     check_figure_path(args.plot_series)
@@ -471,8 +471,8 @@ def _colour(args: argparse.Namespace) -> int:
     from pathlib import Path
 
     from virtspec_mi.api import read_result
-    from virtspec_mi.colorimetry import colorimetry
-    from virtspec_mi.results_io import is_result_csv, read_spectra_csv
+    from virtspec_mi.results.colorimetry import colorimetry
+    from virtspec_mi.results.io import is_result_csv, read_spectra_csv
 
     path = Path(args.file)
     if path.suffix.lower() == ".csv" and path.is_file() and not is_result_csv(path):
@@ -496,7 +496,7 @@ def _colour(args: argparse.Namespace) -> int:
 def _comparison_options(parser: argparse.ArgumentParser) -> None:
     """The flags of ``virtspec compare``: quantity, theta_i, uncertainty, illuminant, observer."""
 
-    from virtspec_mi.counts import QUANTITIES
+    from virtspec_mi.kernel.counts import QUANTITIES
 
     parser.add_argument("--quantity", choices=list(QUANTITIES), default="reflectance",
                         help="quantity compared: the result's and the measured column of that name "
@@ -513,7 +513,7 @@ def _comparison_options(parser: argparse.ArgumentParser) -> None:
 
 def _compare(args: argparse.Namespace) -> int:
     from virtspec_mi.compare import compare
-    from virtspec_mi.plot import check_figure_path
+    from virtspec_mi.results.plot import check_figure_path
 
     check_figure_path(args.plot)  # a bad suffix fails before any work
     comparison = compare(args.result, args.measured, quantity=args.quantity, theta_i=args.theta_i,
@@ -537,7 +537,7 @@ def _plot(args: argparse.Namespace) -> int:
     from virtspec_mi.api import read_result
     from virtspec_mi.checks import parse_theta_i, parse_wavelengths
     from virtspec_mi.compare import compare
-    from virtspec_mi.plot import check_figure_path, plot_sweep, select
+    from virtspec_mi.results.plot import check_figure_path, plot_sweep, select
 
     path = Path(args.file)
     against = Path(args.against) if args.against else None

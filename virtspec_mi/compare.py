@@ -4,7 +4,7 @@ Simulated against measured spectra: :func:`compare`
 
 The paper's first application: a virtual measurement of a material model set against
 a real measurement of the material. :func:`compare` takes a
-:class:`~virtspec_mi.result.Result` (or a result file) and a measured spectrum and
+:class:`~virtspec_mi.results.hemispherical.Result` (or a result file) and a measured spectrum and
 reports, over their common wavelengths:
 
 - the residuals (simulated − measured), their RMSE, mean and largest absolute value;
@@ -15,7 +15,7 @@ reports, over their common wavelengths:
   probability ≥ 1 − δ (less the measurement's own risk); a share well below that
   flags a model that differs from the measured material;
 - ΔE2000 between the colours of both spectra under an illuminant (CIE D65 by
-  default), through :func:`virtspec_mi.colorimetry.colorimetry` on the common
+  default), through :func:`virtspec_mi.results.colorimetry.colorimetry` on the common
   wavelengths (refused, with the reason, when they cover too little of the
   colour-matching weight, e.g. a sparse spectrum).
 
@@ -52,9 +52,9 @@ from typing import Any
 
 import numpy as np
 
-from virtspec_mi.colorimetry import DEFAULT_ILLUMINANT, DEFAULT_OBSERVER, Colour, colorimetry
-from virtspec_mi.counts import QUANTITIES
-from virtspec_mi.result import Result, plain_data
+from virtspec_mi.results.colorimetry import DEFAULT_ILLUMINANT, DEFAULT_OBSERVER, Colour, colorimetry
+from virtspec_mi.kernel.counts import QUANTITIES
+from virtspec_mi.results.hemispherical import Result, plain_data
 
 __all__ = ["MeasuredSpectrum", "Comparison", "read_measured", "compare", "MEASURED_SUFFIXES"]
 
@@ -149,7 +149,7 @@ def read_measured(source: Any, quantity: str = "reflectance", theta_i: float | N
     """
     A measured spectrum of ``quantity`` from a file (see the module docstring for the
     formats), a ``colour.SpectralDistribution``, a ``(wavelengths, values[, uncertainty])``
-    tuple, a :class:`MeasuredSpectrum` or a :class:`~virtspec_mi.result.Result` (at
+    tuple, a :class:`MeasuredSpectrum` or a :class:`~virtspec_mi.results.hemispherical.Result` (at
     ``theta_i``; its ``certified_mu`` becomes the uncertainty).
     """
 
@@ -185,7 +185,7 @@ def _read_file(path: Path, quantity: str, theta_i: float | None) -> MeasuredSpec
 
 
 def _is_result_csv(path: Path) -> bool:
-    from virtspec_mi.results_io import is_result_csv
+    from virtspec_mi.results.io import is_result_csv
 
     return is_result_csv(path)
 
@@ -520,9 +520,9 @@ class Comparison:
         }
 
     def plot(self, path: str | os.PathLike | None = None, **options: Any) -> Any:
-        """The overlay with a residual panel (:func:`virtspec_mi.plot.plot_comparison`)."""
+        """The overlay with a residual panel (:func:`virtspec_mi.results.plot.plot_comparison`)."""
 
-        from virtspec_mi.plot import plot_comparison
+        from virtspec_mi.results.plot import plot_comparison
 
         return plot_comparison(self, path, **options)
 
@@ -543,7 +543,7 @@ def compare(
     Parameters
     ----------
     result
-        A :class:`~virtspec_mi.result.Result` (a reading or a sweep) or a result file
+        A :class:`~virtspec_mi.results.hemispherical.Result` (a reading or a sweep) or a result file
         (``.nc``, ``.csv``, ``.json``; also ``virtspec measure --json`` output).
     measured
         A measured spectrum: a file (colour-science CSV, plain ``wavelength,value[,

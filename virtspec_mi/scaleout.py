@@ -3,10 +3,10 @@ Scale-out: the readings of a sweep on Dask workers
 ==================================================
 
 :func:`virtspec_mi.sweep` with ``workers=`` runs the batches of its keyed grid
-(:func:`virtspec_mi.engine.run`) on ``dask.distributed`` workers instead of in this
+(:func:`virtspec_mi.engine.readings.run`) on ``dask.distributed`` workers instead of in this
 process. Nothing else changes: the driver (this process) plans the batches, keeps the
 checkpoint and the progress bar, and every batch is traced by the one function the
-in-process sweep calls, :func:`virtspec_mi.engine.take_keyed_readings`. A reading's
+in-process sweep calls, :func:`virtspec_mi.engine.readings.take_keyed_readings`. A reading's
 counts depend on (seed, its index) only, so a sweep on any number of workers gives
 counts bit-identical to the in-process sweep.
 
@@ -69,10 +69,10 @@ from typing import Any, Iterator
 import numpy as np
 from distributed import WorkerPlugin
 
-from virtspec_mi.counts import Counts
-from virtspec_mi.engine import BatchRunner, take_keyed_readings
+from virtspec_mi.kernel.counts import Counts
+from virtspec_mi.engine.readings import BatchRunner, take_keyed_readings
 from virtspec_mi.runtime import mitsuba, variant
-from virtspec_mi.scene import find_instrument
+from virtspec_mi.scene import find_bench
 from virtspec_mi.settings import Settings
 
 __all__ = [
@@ -306,7 +306,7 @@ def _run_block(scene: Any, defines: dict[str, Any] | None, fingerprint: str, set
     _initialise()  # in the thread this task runs in (idempotent)
     instrument = _instruments.get(fingerprint)
     if instrument is None:
-        instrument = _instruments[fingerprint] = find_instrument(_restored(scene), defines)
+        instrument = _instruments[fingerprint] = find_bench(_restored(scene), defines)
     done = []
     for batch in batches:
         start = time.perf_counter()
@@ -342,10 +342,10 @@ def task_size(rate: float, remaining: int, n_workers: int, seconds: float = TASK
 def dask_runner(client: Any, scene: Any, fingerprint: str, settings: Settings, task_readings: int | None = None,
                 defines: dict[str, Any] | None = None, **grid: Any) -> BatchRunner:
     """
-    A :data:`~virtspec_mi.engine.BatchRunner` that runs the batches on ``client``'s
+    A :data:`~virtspec_mi.engine.readings.BatchRunner` that runs the batches on ``client``'s
     workers in tasks sized by :func:`task_size` (or of ``task_readings`` readings), yields
     each task's batches as it finishes and cancels what is left when it is closed.
-    ``grid``: the keyed grid's arguments of :func:`~virtspec_mi.engine.take_keyed_readings`
+    ``grid``: the keyed grid's arguments of :func:`~virtspec_mi.engine.readings.take_keyed_readings`
     besides the batch (``theta_i``, ``parameters``), sent with every task as the
     in-process runner passes them; ``defines``: the XML scene's ``$name`` values, with
     which every worker loads it.

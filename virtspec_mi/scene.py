@@ -7,8 +7,8 @@ Scenes: loading, building and fingerprinting instrument scenes
   parameters (``$name`` with a ``<default name="name" value="…"/>``) are set by
   ``defines`` (name → value), as Mitsuba's ``mitsuba -D name=value`` and
   ``mi.load_file(path, name=value)`` do;
-- :func:`find_instrument` loads a scene and reads its instrument
-  (:func:`virtspec_mi.instrument.read_instrument`);
+- :func:`find_bench` loads a scene and reads its instrument
+  (:func:`virtspec_mi.engine.bench.read_bench`);
 - :func:`instrument_scene` builds the paper's instrument (r₁ = 8, r₂ = 12.5, D = 100, in
   mm) around any BSDF dict;
 - :func:`scene_fingerprint` names a scene in result files and checkpoints.
@@ -30,18 +30,18 @@ from typing import Any
 
 import numpy as np
 
-from virtspec_mi.geometry import (
+from virtspec_mi.geometry.disks import (
     PAPER_DISTANCE,
     PAPER_EMITTER_RADIUS,
     PAPER_SPECIMEN_RADIUS,
     InstrumentGeometry,
 )
-from virtspec_mi.instrument import EMITTER_ID, SPECIMEN_ID, Instrument, SceneError, read_instrument
+from virtspec_mi.engine.bench import EMITTER_ID, SPECIMEN_ID, Bench, SceneError, read_bench
 from virtspec_mi.runtime import mitsuba
 from virtspec_mi.settings import SETTING_NAMES
 
 __all__ = [
-    "load_scene", "check_defines", "find_instrument", "instrument_scene", "placeholder_sensor", "scene_fingerprint",
+    "load_scene", "check_defines", "find_bench", "instrument_scene", "placeholder_sensor", "scene_fingerprint",
     "tabulated_bsdf",
 ]
 
@@ -129,10 +129,10 @@ def _check_dict(scene: dict, path: str = "") -> None:
             _check_dict(value, where)
 
 
-def find_instrument(scene: Any, defines: dict[str, Any] | None = None) -> Instrument:
+def find_bench(scene: Any, defines: dict[str, Any] | None = None) -> Bench:
     """Load ``scene`` (XML path, dict or ``mi.Scene``; ``defines`` for an XML file) and read its instrument."""
 
-    return read_instrument(load_scene(scene, defines))
+    return read_bench(load_scene(scene, defines))
 
 
 def instrument_scene(
@@ -179,7 +179,7 @@ def placeholder_sensor() -> dict:
     return {"type": "perspective", "film": {"type": "hdrfilm", "width": 1, "height": 1}}
 
 
-def scene_fingerprint(scene: Any, instrument: Instrument, defines: dict[str, Any] | None = None) -> str:
+def scene_fingerprint(scene: Any, instrument: Bench, defines: dict[str, Any] | None = None) -> str:
     """
     A short fingerprint of a scene for result files and checkpoints: SHA-256 over the
     XML file's bytes (or the dict's ``repr``), the XML parameters set (``defines``, when
@@ -226,13 +226,13 @@ def tabulated_bsdf(source: Any) -> dict:
     """
     The dict-scene entry of a ``tabulated`` BSDF holding ``source`` — a goniophotometer
     dataset (``xarray.Dataset``), an object with ``to_dataset()``, a NetCDF path or a
-    :class:`virtspec_mi.bsdf_table.BSDFTable`. Mitsuba properties hold Dr.Jit arrays but
+    :class:`virtspec_mi.plugins.bsdfs.bsdf_table.BSDFTable`. Mitsuba properties hold Dr.Jit arrays but
     no Python objects, so the table travels as flat ``Float64`` arrays (``fraction`` in C
     order over wavelength, theta_i, theta_o, phi_o);
     ``vm.instrument_scene(vm.tabulated_bsdf(dataset))`` measures it.
     """
 
-    from virtspec_mi.bsdf_table import BSDFTable, read_table
+    from virtspec_mi.plugins.bsdfs.bsdf_table import BSDFTable, read_table
 
     mi = mitsuba()
     table = source if isinstance(source, BSDFTable) else read_table(source)

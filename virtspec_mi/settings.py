@@ -30,7 +30,7 @@ import math
 from dataclasses import dataclass, field, fields, replace
 from typing import Any, Callable
 
-from virtspec_mi.budgets import BUDGETS, RayBudget
+from virtspec_mi.budgets.rules import BUDGETS, RayBudget
 from virtspec_mi.checks import (
     MAX_CHUNK_SIZE,
     WAVELENGTH_RANGE,
@@ -180,7 +180,7 @@ class Settings:
 
     @property
     def budget(self) -> RayBudget:
-        """The ray-budget rule object of :data:`virtspec_mi.budgets.BUDGETS` named by ``bound``."""
+        """The ray-budget rule object of :data:`virtspec_mi.budgets.rules.BUDGETS` named by ``bound``."""
 
         return BUDGETS[self.bound]
 

@@ -3,19 +3,19 @@ Coverage harness: do certified readings miss as often as the binomial law says?
 ==============================================================================
 
 For specimens whose reflectance ρ is known exactly, :func:`coverage` takes K
-independent readings in **one** :func:`virtspec_mi.engine.take_readings` call (at
+independent readings in **one** :func:`virtspec_mi.engine.readings.take_readings` call (at
 551 nm, one reading per azimuth φi = 360°·k/K: every reading has its own rays, and
 these isotropic specimens do not depend on φi — nor on wavelength, but readings that
-differ only in wavelength share rays, see :mod:`virtspec_mi.engine`), counts the *misses* ``|m/N − ρ| ≥ μ`` and compares that count
+differ only in wavelength share rays, see :mod:`virtspec_mi.engine.readings`), counts the *misses* ``|m/N − ρ| ≥ μ`` and compares that count
 with its exact law: Binomial(K, q), with q the exact miss probability of the rule —
-:func:`virtspec_mi.bounds.miss_probability` at the rule's N for a fixed rule, the
-exact mixture over the pilot count (:func:`virtspec_mi.twostage.two_stage_law`) for
+:func:`virtspec_mi.budgets.bounds.miss_probability` at the rule's N for a fixed rule, the
+exact mixture over the pilot count (:func:`virtspec_mi.budgets.twostage.two_stage_law`) for
 ``two-stage``. The test is two-sided (an exact binomial test): a plain "misses ≤ δK"
 check has almost no power, because the rules are conservative (anchors.md §2e).
 
 Specimens (:data:`SPECIMENS`): the paper's diamond (``simple_dielectric``, η = 2.419)
 under a collimated beam at θi = 0°, 45° and 80° (ρ = Fresnel reflectance,
-:func:`virtspec_mi.reference.fresnel_reflectance`; the rest transmitted), Mitsuba's
+:func:`virtspec_mi.references.quadrature.fresnel_reflectance`; the rest transmitted), Mitsuba's
 ``diffuse`` with albedo 0.3 (ρ = 0.3, the rest absorbed) and an absorber (``diffuse``
 with reflectance 0: ρ = 0, so q = 0 and no reading may miss).
 
@@ -51,7 +51,7 @@ class Specimen:
 
 
 def _specimens() -> tuple[Specimen, ...]:
-    from virtspec_mi.reference import fresnel_reflectance
+    from virtspec_mi.references.quadrature import fresnel_reflectance
 
     diamond = [
         Specimen(f"diamond {theta:g} deg", {"type": "simple_dielectric", "eta": 2.419}, theta, "collimated",
@@ -111,7 +111,8 @@ class Coverage:
 def predicted_miss_probability(specimen: Specimen, settings: Settings) -> float:
     """Exact probability that one reading of ``specimen`` under ``settings`` misses by μ or more."""
 
-    from virtspec_mi import bounds, twostage
+    from virtspec_mi.budgets import bounds
+    from virtspec_mi.budgets import twostage
 
     rho = specimen.reflectance
     if settings.adaptive:
@@ -144,16 +145,16 @@ def coverage(
 
     from scipy import stats
 
-    from virtspec_mi.engine import take_readings
-    from virtspec_mi.intervals import clopper_pearson
-    from virtspec_mi.scene import find_instrument, instrument_scene
+    from virtspec_mi.engine.readings import take_readings
+    from virtspec_mi.budgets.intervals import clopper_pearson
+    from virtspec_mi.scene import find_bench, instrument_scene
 
     if readings < 1:
         raise ValueError(f"readings must be a whole number >= 1 (got {readings!r})")
     azimuths = 360.0 * np.arange(readings) / readings
     config = Settings(theta_i=specimen.theta_i, beam=specimen.beam, wavelengths=551.0, mu=mu,
                       delta=delta, bound=bound, seed=seed, **settings)
-    instrument = find_instrument(instrument_scene(specimen.bsdf))
+    instrument = find_bench(instrument_scene(specimen.bsdf))
     start = time.perf_counter()
     tallies, pilot = take_readings(instrument, [(551.0, config.theta_i, phi) for phi in azimuths], config)
     seconds = time.perf_counter() - start

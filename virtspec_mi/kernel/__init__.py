@@ -11,5 +11,5 @@ package itself imports nothing, so a plugin that needs one helper loads only tha
 - :mod:`~virtspec_mi.kernel.walk` and :mod:`~virtspec_mi.kernel.walk_optics` — the
   conventions and optical pieces of random-walk specimens;
 - :mod:`~virtspec_mi.kernel.tracer` — the ray kernel itself: rays → specimen BSDF →
-  fate → exact integer counts (driven by :mod:`virtspec_mi.engine`).
+  fate → exact integer counts (driven by :mod:`virtspec_mi.engine.readings`).
 """

@@ -53,12 +53,12 @@ import drjit as dr
 import mitsuba as mi
 import numpy as np
 
-from virtspec_mi.counts import DIRECTION_TOLERANCE, WEIGHT_ROUNDING, Fate
+from virtspec_mi.kernel.counts import DIRECTION_TOLERANCE, WEIGHT_ROUNDING, Fate
 from virtspec_mi.kernel.rng import GOLDEN, chunk_root, hash32, to_unit
 from virtspec_mi.kernel.tracer import ReadingPlan, first_interactions
 from virtspec_mi.kernel.walk import CAPPED_COMPONENT
 from virtspec_mi.settings import Settings
-from virtspec_mi.sphere import Sphere
+from virtspec_mi.geometry.sphere import Sphere
 
 __all__ = ["FATES", "WALK_BASE", "Holder", "SphereWalk", "holder_frame", "tally_sphere"]
 
@@ -338,7 +338,7 @@ def tally_sphere(walk: SphereWalk, instrument: Any, wavelengths: Sequence[float]
                  rays: int, settings: Settings) -> list[dict[str, Any]]:
     """
     Every reading (one per wavelength, ``rays`` rays each, consecutive global ray ranges
-    as :func:`virtspec_mi.engine.measure_reading` numbers them) in chunks of at most
+    as :func:`virtspec_mi.engine.readings.measure_reading` numbers them) in chunks of at most
     ``settings.chunk_size`` rays cut at 2³² boundaries; the chunks' tallies summed.
     """
 

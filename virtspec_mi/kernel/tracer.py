@@ -6,9 +6,9 @@ One reading = one (wavelength, θi, φi) with its own N independent rays. All re
 of a call run in chunks of one fused Dr.Jit kernel each: counter-based random numbers
 (:mod:`virtspec_mi.kernel.rng`) → emitter and specimen points
 (:mod:`virtspec_mi.kernel.disk`) → incident direction → the specimen BSDF's ``sample``
-(:class:`virtspec_mi.plugins` specimens or Mitsuba built-ins) → :class:`~virtspec_mi.counts.Fate`
-→ exact integer tallies by name (:class:`~virtspec_mi.counts.Counts`).
-:func:`virtspec_mi.engine.take_readings` drives it.
+(:class:`virtspec_mi.plugins` specimens or Mitsuba built-ins) → :class:`~virtspec_mi.kernel.counts.Fate`
+→ exact integer tallies by name (:class:`~virtspec_mi.kernel.counts.Counts`).
+:func:`virtspec_mi.engine.readings.take_readings` drives it.
 
 A specimen whose random walk is declared as steps
 (:class:`~virtspec_mi.kernel.walk.RandomWalk`: ``abm_b``, ``abm_u``, ``turbid_slab``) is
@@ -31,20 +31,20 @@ Conventions
 - A walk that reached its step cap (``bs.sampled_component`` ==
   :data:`virtspec_mi.kernel.walk.CAPPED_COMPONENT`) is :attr:`Fate.CAPPED`.
 - An outgoing direction with a NaN or infinite component, or a length off 1 by more
-  than :data:`~virtspec_mi.counts.DIRECTION_TOLERANCE`, sampled with a weight w > 0 is
+  than :data:`~virtspec_mi.kernel.counts.DIRECTION_TOLERANCE`, sampled with a weight w > 0 is
   :attr:`Fate.INVALID` (``invalid_directions``): it cannot be judged reflected or
   transmitted, and counts in no fate, like a capped walk.
 - Per-ray values a BSDF returns at width 1 (a constant weight, say) are broadcast to
   the chunk, so every per-ray flag is counted once per ray.
 - A BSDF weight w ∈ [0, 1] survives with probability w (Russian roulette), so each ray
-  stays a Bernoulli trial. Weights within :data:`~virtspec_mi.counts.WEIGHT_ROUNDING`
+  stays a Bernoulli trial. Weights within :data:`~virtspec_mi.kernel.counts.WEIGHT_ROUNDING`
   of [0, 1] are rounding (counted in ``rounded_weights``; the roulette uses them as 1 or
   0 by construction); weights beyond, or NaN, are ``weight_violations`` and the largest
   is kept.
 - Rays are traced in ``TransportMode.Importance`` (light travels from the emitter).
 - A goniophotometer reading (:func:`tally_gonio_readings`) also bins every reflected
   or transmitted ray by its outgoing direction in the specimen frame
-  (:mod:`virtspec_mi.gonio_bins`), in the same fused kernel; the fate decides the
+  (:mod:`virtspec_mi.geometry.bins`), in the same fused kernel; the fate decides the
   hemisphere (grazing exits included). A random walk on queued lanes bins each ray by
   the same rule when its walk ends and keeps the bin in the ray's slot; the chunk's
   bins are tallied after the walk loop. Without bins none of this is compiled: the
@@ -68,9 +68,9 @@ import mitsuba as mi
 import numpy as np
 
 from virtspec_mi.checks import check_rays
-from virtspec_mi.counts import DIRECTION_TOLERANCE, WEIGHT_ROUNDING, Counts, Fate
-from virtspec_mi.geometry import incidence_frame
-from virtspec_mi.gonio_bins import GonioBins
+from virtspec_mi.kernel.counts import DIRECTION_TOLERANCE, WEIGHT_ROUNDING, Counts, Fate
+from virtspec_mi.geometry.disks import incidence_frame
+from virtspec_mi.geometry.bins import GonioBins
 from virtspec_mi.kernel.disk import jittered_cell, sample_disk
 from virtspec_mi.kernel.rng import chunk_root, dimension_key, dimension_keys, hash32, to_unit
 from virtspec_mi.kernel.walk import CAPPED_COMPONENT, is_random_walk, walk_steps
@@ -193,7 +193,7 @@ def tally_readings(
     on_chunk: Callable[[int], None] | None = None, walk: WalkQueue = WalkQueue(), walk_stats: dict | None = None,
 ) -> Counts:
     """
-    Trace every reading of ``plans`` and return their exact :class:`~virtspec_mi.counts.Counts`
+    Trace every reading of ``plans`` and return their exact :class:`~virtspec_mi.kernel.counts.Counts`
     (one entry per plan).
 
     Reading k's rays are the global ray indices [offsets[k], offsets[k] + rays_k);
@@ -223,7 +223,7 @@ def tally_gonio_readings(
 ) -> tuple[Counts, np.ndarray]:
     """
     :func:`tally_readings` that also bins every escaping ray by its outgoing direction
-    (θo, φo) in the specimen frame (:class:`~virtspec_mi.gonio_bins.GonioBins`): the
+    (θo, φo) in the specimen frame (:class:`~virtspec_mi.geometry.bins.GonioBins`): the
     same rays and the same counts, plus exact per-bin tallies, an ``int64`` array of
     shape (readings, θo bins, φo bins). A reflected ray is binned among the bins with
     θo ≤ 90°, a transmitted one among those with θo ≥ 90° (its fate decides the
@@ -307,7 +307,7 @@ def trace_rays(instrument: Any, plan: ReadingPlan, settings: Settings, count: in
     ``sample()`` per ray, whose fates the queued lanes reproduce): NumPy arrays of emitter
     points ``origin`` (specimen frame), specimen points ``target``, incident
     directions ``wi`` (towards the emitter), outgoing ``wo``, ``fate`` (a
-    :class:`~virtspec_mi.counts.Fate` code) and the BSDF ``weight``; with ``bins``, also
+    :class:`~virtspec_mi.kernel.counts.Fate` code) and the BSDF ``weight``; with ``bins``, also
     each ray's flat ``bin`` (θo bin × φo bins + φo bin; the number of bins: not binned).
     """
 

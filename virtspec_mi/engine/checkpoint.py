@@ -1,0 +1,370 @@
+"""
+Checkpoints: finished readings of a long run, kept on disk
+==========================================================
+
+A run keyed on reading indices (:func:`virtspec_mi.engine.readings.run`, e.g. a sweep) records
+every finished batch in a JSON file, atomically (an interruption leaves the old or the
+new file; saves are spaced out when they would take more than about a tenth of the
+run, and what is left is saved at the end and on an interruption); a later run of the
+same measurement picks the finished readings up and traces only the rest, ending with
+exactly the counts of an uninterrupted run. The file
+records what decides the counts (settings, grids, geometry, scene fingerprint): a
+mismatch or a corrupt file raises :class:`CheckpointError` (a ``ValueError``) rather
+than mixing results. Every count is kept by name, the pilot's too.
+
+A checkpoint is read as strictly as user input: counts are whole numbers with
+0 ≤ count ≤ rays and reflected + transmitted + capped ≤ rays, each reading's rays are
+those its settings give, ``done`` holds distinct reading indices in range, ``seconds``
+is finite and ≥ 0, and readings traced together (a wavelength-independent specimen's
+wavelengths) are done together with equal counts. A file that breaks any of these is
+refused with the reason and left as it is: nothing here ever deletes a checkpoint that
+was not completed.
+
+One run at a time: :func:`claim` checks, before any tracing, that the checkpoint can be
+written where it is, and holds an OS lock (``fcntl.flock`` on ``PATH.lock``) for the
+whole run; a second run on the same file is refused ("… is in use by another run (pid
+…)"). Removing the file is the caller's decision (:func:`remove`), taken once the work
+is safe elsewhere: :func:`virtspec_mi.api.sweep` removes it when it returns the result,
+or, with ``out=``, once the output file is written and flushed to disk.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import time
+from contextlib import contextmanager
+from pathlib import Path
+from typing import Any, Iterator
+
+import numpy as np
+
+from virtspec_mi import __version__
+from virtspec_mi.kernel.counts import Counts
+
+try:
+    import fcntl
+except ImportError:  # not a POSIX system: checkpoints are not locked
+    fcntl = None  # type: ignore[assignment]
+
+__all__ = ["CheckpointError", "Checkpoint", "checkpoint_for", "claim", "remove"]
+
+_FORMAT = "virtspec-mi sweep checkpoint 3"  # 3: invalid_directions counted
+_SAVE_EVERY = 10.0  # save again once the time since the last save is this many times what it took
+_SUFFIX = ".partial.json"
+_LOCK_SUFFIX = ".lock"
+
+
+class CheckpointError(ValueError):
+    """A checkpoint file is corrupt, belongs to another measurement, cannot be written or is in use."""
+
+
+def checkpoint_for(out: str | os.PathLike) -> Path:
+    """The checkpoint of a run written to ``out``: ``OUT.partial.json`` beside it."""
+
+    out = Path(out)
+    return out.with_name(out.name + _SUFFIX)
+
+
+@contextmanager
+def claim(path: str | os.PathLike) -> Iterator[Path]:
+    """
+    Hold checkpoint ``path`` for one run: check that it can be written there and take
+    an exclusive OS lock on ``PATH.lock`` until the block ends (the lock file is then
+    removed; the lock of a killed process ends with it). ``CheckpointError`` naming the
+    path when it cannot be written, or when another run holds it (with that run's pid).
+    """
+
+    path = Path(path)
+    _check_writable(path)
+    handle = _lock(path)
+    try:
+        yield path
+    finally:
+        _unlock(path, handle)
+
+
+def remove(path: str | os.PathLike) -> None:
+    """Remove checkpoint ``path`` (if it exists): call only once its readings are safe elsewhere."""
+
+    Path(path).unlink(missing_ok=True)
+
+
+def _check_writable(path: Path) -> None:
+    """``CheckpointError`` unless a file ``path`` can be created or replaced."""
+
+    parent = path.parent
+    if path.is_dir():
+        raise CheckpointError(f"checkpoint {path} is a directory; give a file path")
+    if not parent.exists():
+        raise CheckpointError(f"checkpoint {path} cannot be written: directory {parent} does not exist")
+    if not parent.is_dir():
+        raise CheckpointError(f"checkpoint {path} cannot be written: {parent} is not a directory")
+    if not os.access(parent, os.W_OK | os.X_OK):
+        raise CheckpointError(f"checkpoint {path} cannot be written: no permission to write in {parent}")
+
+
+def _lock(path: Path) -> int:
+    """An open descriptor of ``PATH.lock`` holding its exclusive lock, with this process's pid in it."""
+
+    lock = path.with_name(path.name + _LOCK_SUFFIX)
+    while True:
+        try:
+            handle = os.open(lock, os.O_RDWR | os.O_CREAT, 0o644)
+        except OSError as error:
+            raise CheckpointError(f"checkpoint {path} cannot be written: {error.strerror} ({lock})") from None
+        if fcntl is None:
+            return handle
+        try:
+            fcntl.flock(handle, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            owner = os.pread(handle, 32, 0).decode("ascii", "replace").strip()
+            os.close(handle)
+            raise CheckpointError(
+                f"checkpoint {path} is in use by another run (pid {owner if owner.isdigit() else 'unknown'}); "
+                "wait for it to end, or write to another file") from None
+        except OSError as error:
+            os.close(handle)
+            raise CheckpointError(f"checkpoint {path} cannot be locked: {error.strerror} ({lock})") from None
+        if _same_file(handle, lock):
+            os.ftruncate(handle, 0)
+            os.pwrite(handle, f"{os.getpid()}\n".encode("ascii"), 0)
+            return handle
+        os.close(handle)  # its last holder removed the file meanwhile: lock the one at the path now
+
+
+def _same_file(handle: int, path: Path) -> bool:
+    """Whether the open ``handle`` is still the file at ``path``."""
+
+    try:
+        here, there = os.fstat(handle), os.stat(path)
+    except FileNotFoundError:
+        return False
+    return (here.st_dev, here.st_ino) == (there.st_dev, there.st_ino)
+
+
+def _unlock(path: Path, handle: int) -> None:
+    """Remove the lock file (still locked, so no other run holds it) and release the lock."""
+
+    try:
+        path.with_name(path.name + _LOCK_SUFFIX).unlink(missing_ok=True)
+    finally:
+        os.close(handle)
+
+
+class _Corrupt(Exception):
+    """What is wrong with a checkpoint's content (becomes a :class:`CheckpointError`)."""
+
+
+class Checkpoint:
+    """Finished readings of a run (``done``, ``counts``, ``pilot``, ``seconds``), optionally mirrored in a file."""
+
+    def __init__(self, path: Path | None, identity: dict[str, Any], size: int) -> None:
+        self.path, self.identity = path, identity
+        self.done = np.zeros(size, dtype=bool)
+        self.counts, self.pilot = Counts.zeros(size), Counts.zeros(size)
+        self.seconds = 0.0
+        self._unsaved, self._saved_at, self._save_seconds = False, time.perf_counter(), 0.0
+
+    @classmethod
+    def open(
+        cls,
+        path: str | os.PathLike | None,
+        identity: dict[str, Any],
+        size: int,
+        *,
+        rays: tuple[int, int],
+        pilot_rays: tuple[int, int] = (0, 0),
+        group: int = 1,
+    ) -> "Checkpoint":
+        """
+        The state of a run of ``size`` readings, resumed from ``path`` when it exists.
+
+        A finished reading has between ``rays[0]`` and ``rays[1]`` rays (its pilot
+        ``pilot_rays``); readings ``k·group`` to ``(k + 1)·group − 1`` are traced together
+        (done together, equal counts). A file that breaks these, or any rule of the
+        module docstring, raises :class:`CheckpointError` and is left as it is.
+        """
+
+        state = cls(Path(path) if path is not None else None, identity, size)
+        if state.path is not None and state.path.exists():
+            state._load(rays, pilot_rays, group)
+        return state
+
+    @property
+    def reused(self) -> int:
+        """How many readings are done (after :meth:`open`: how many were resumed)."""
+
+        return int(self.done.sum())
+
+    def record(self, batch: np.ndarray, counts: Counts, pilot: Counts | None, seconds: float) -> None:
+        """
+        Keep the counts of readings ``batch`` and save the file — unless saving is slow
+        next to the batches (a file of many thousand readings): it is then saved once
+        the time since the last save is ten times what that save took, so saving never
+        costs more than about a tenth of the run. :meth:`flush` saves what is left.
+        """
+
+        self.counts.put(batch, counts)
+        if pilot is not None:
+            self.pilot.put(batch, pilot)
+        self.done[batch] = True
+        self.seconds += seconds
+        self._unsaved = self.path is not None
+        if self._unsaved and time.perf_counter() - self._saved_at >= _SAVE_EVERY * self._save_seconds:
+            self.flush()
+
+    def flush(self) -> None:
+        """Save every finished reading not saved yet (at the end of a run, or when it is interrupted)."""
+
+        if self._unsaved:
+            start = time.perf_counter()
+            self._save()
+            self._unsaved, self._saved_at = False, time.perf_counter()
+            self._save_seconds = self._saved_at - start
+
+    def _load(self, rays: tuple[int, int], pilot_rays: tuple[int, int], group: int) -> None:
+        path = self.path
+        try:
+            data = json.loads(path.read_text())
+        except (OSError, ValueError) as error:  # ValueError: JSON and UTF-8 decoding
+            raise CheckpointError(
+                f"checkpoint {path} is corrupt ({type(error).__name__}: {error}); delete it to start the sweep over"
+            ) from None
+        if not isinstance(data, dict) or data.get("format") != _FORMAT:
+            raise CheckpointError(f"checkpoint {path} is not a virtspec-mi sweep checkpoint of this version "
+                                  f"({_FORMAT!r}); delete it to start the sweep over")
+        try:
+            stored = data.get("identity")
+            if not isinstance(stored, dict):
+                raise _Corrupt(f"identity is {type(stored).__name__}, not an object")
+            self._check_identity(stored)
+            done = _indices(data.get("done"), self.done.size)
+            counts = _counts(data.get("counts"), "counts", len(done), rays)
+            pilot = _counts(data.get("pilot"), "pilot", len(done), pilot_rays)
+            seconds = data.get("seconds")
+            if type(seconds) not in (int, float) or not math.isfinite(seconds) or seconds < 0:
+                raise _Corrupt(f"seconds must be a finite number >= 0 (got {seconds!r})")
+        except _Corrupt as reason:
+            raise CheckpointError(f"checkpoint {path} is corrupt ({reason}); "
+                                  "delete it to start the sweep over") from None
+        self.done[done] = True
+        self.counts.put(done, counts)
+        self.pilot.put(done, pilot)
+        self.seconds = float(seconds)
+        if group > 1:
+            self._check_groups(group)
+
+    def _check_identity(self, stored: dict[str, Any]) -> None:
+        expected = json.loads(json.dumps(self.identity))
+        if stored != expected:
+            keys = sorted(k for k in set(stored) | set(expected) if stored.get(k) != expected.get(k))
+            raise CheckpointError(
+                f"checkpoint {self.path} belongs to a different sweep (differs in: {', '.join(keys)}); "
+                "re-run with the same scene and settings, or delete it to start over"
+            )
+
+    def _check_groups(self, group: int) -> None:
+        """Readings traced together must be done together, with equal counts."""
+
+        done = self.done.reshape(-1, group)
+        equal = np.ones(done.shape[0], dtype=bool)
+        for counts in (self.counts, self.pilot):
+            for name in Counts.names():
+                values = getattr(counts, name).reshape(-1, group)
+                equal &= np.all((values == values[:, :1]) | (np.isnan(values) & np.isnan(values[:, :1]))
+                                if values.dtype.kind == "f" else values == values[:, :1], axis=1)
+        bad = np.flatnonzero((done.any(axis=1) & ~done.all(axis=1)) | (done.all(axis=1) & ~equal))
+        if len(bad):
+            first = int(bad[0]) * group
+            raise CheckpointError(
+                f"checkpoint {self.path} is corrupt (readings {first} to {first + group - 1} are traced together but "
+                "are not all done with equal counts); delete it to start the sweep over")
+
+    def _save(self) -> None:
+        done = np.flatnonzero(self.done)
+
+        def plain(counts: Counts) -> dict[str, list]:
+            return {name: [None if np.isnan(v) else v for v in getattr(counts, name)[done].tolist()]
+                    if name == "largest_weight" else getattr(counts, name)[done].tolist() for name in Counts.names()}
+
+        data = {
+            "format": _FORMAT,
+            "version": __version__,
+            "identity": self.identity,
+            "seconds": self.seconds,
+            "done": done.tolist(),
+            "counts": plain(self.counts),
+            "pilot": plain(self.pilot),
+        }
+        temporary = self.path.with_name(self.path.name + ".tmp")
+        try:
+            temporary.write_text(json.dumps(data))
+            os.replace(temporary, self.path)  # atomic: an interruption leaves the old or the new file
+        except BaseException:
+            temporary.unlink(missing_ok=True)
+            raise
+
+
+def _whole_numbers(values: Any, what: str, low: int, high: int, rule: str) -> np.ndarray:
+    """``values`` as int64 when it is a list of whole numbers (not bools) in [low, high], else ``_Corrupt``."""
+
+    if not isinstance(values, list):
+        raise _Corrupt(f"{what} is {type(values).__name__}, not a list")
+    for value in values:
+        if type(value) is not int:
+            raise _Corrupt(f"{what} holds {value!r}, not a whole number")
+        if not low <= value <= high:
+            raise _Corrupt(f"{what} holds {value}: it must satisfy {rule}")
+    return np.array(values, dtype=np.int64)
+
+
+def _indices(values: Any, size: int) -> np.ndarray:
+    """The ``done`` list: distinct reading indices in [0, size)."""
+
+    done = _whole_numbers(values, "done", 0, size - 1, f"0 <= index < {size}")
+    if len(np.unique(done)) != len(done):
+        raise _Corrupt("done holds a reading index twice: indices must be unique")
+    return done
+
+
+def _counts(values: Any, what: str, length: int, rays: tuple[int, int]) -> Counts:
+    """The counts of the ``length`` done readings, checked against each other and ``rays``."""
+
+    if not isinstance(values, dict):
+        raise _Corrupt(f"{what} is {type(values).__name__}, not an object")
+    missing = [name for name in Counts.names() if name not in values]
+    if missing:
+        raise _Corrupt(f"{what} lacks {', '.join(missing)}")
+    for name in Counts.names():
+        if not isinstance(values[name], list) or len(values[name]) != length:
+            raise _Corrupt(f"{what}.{name} must hold one value per done reading ({length})")
+    low, high = rays
+    label = "pilot rays" if what == "pilot" else "rays"
+    rule = f"{label} = {low}" if low == high else f"{low} <= {label} <= {high}"
+    fields = {"rays": _whole_numbers(values["rays"], f"{what}.rays", low, high, f"{rule} (the settings')")}
+    for name in Counts.names():
+        if name not in ("rays", "largest_weight"):
+            fields[name] = _whole_numbers(values[name], f"{what}.{name}", 0, high, f"0 <= {name} <= rays")
+    fields["largest_weight"] = _weights(values["largest_weight"], f"{what}.largest_weight")
+    counts = Counts(**fields)
+    bounded = {"reflected": counts.rays, "transmitted": counts.rays, "capped": counts.rays,
+               "weight_violations": counts.rays, "rounded_weights": counts.rays,
+               "specular_reflected": counts.reflected, "regular_transmitted": counts.transmitted}
+    for name, bound in bounded.items():
+        if np.any(getattr(counts, name) > bound):
+            limit = "rays" if bound is counts.rays else ("reflected" if name == "specular_reflected" else "transmitted")
+            raise _Corrupt(f"{what}.{name} must satisfy 0 <= {name} <= {limit} for every reading")
+    if np.any(counts.reflected + counts.transmitted + counts.capped > counts.rays):
+        raise _Corrupt(f"{what} must satisfy reflected + transmitted + capped <= rays for every reading")
+    return counts
+
+
+def _weights(values: list, what: str) -> np.ndarray:
+    """The largest violating weights: real numbers, ``None`` for none (NaN)."""
+
+    for value in values:
+        if value is not None and (type(value) not in (int, float) or math.isnan(value)):
+            raise _Corrupt(f"{what} holds {value!r}, not a number or null")
+    return np.array([np.nan if v is None else float(v) for v in values], dtype=np.float64)

@@ -1,0 +1,6 @@
+"""
+Instruments
+===========
+
+The instruments that measure a specimen through the engine.
+"""

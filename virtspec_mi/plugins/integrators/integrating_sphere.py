@@ -1,0 +1,80 @@
+"""
+``integrating_sphere``: a physical integrating sphere around the specimen (Mitsuba integrator)
+=============================================================================================
+
+The ``spectrophotometer`` integrator's settings plus a sphere description: the sphere
+of :mod:`virtspec_mi.geometry.sphere` and how it is read (:class:`virtspec_mi.geometry.sphere.SphereSettings`).
+A thin adapter: :func:`virtspec_mi.sphere_measure` reads it from a scene, and
+``mi.render`` takes the sphere readings with :func:`virtspec_mi.instruments.sphere.measure_sphere`.
+
+Parameters
+----------
+(every parameter of ``spectrophotometer``: theta_i, phi_i, wavelengths, mu, delta, rays,
+bound, joint, pilot_rays, pilot_delta, beam, sampling, seed, chunk_size)
+diameter : float, required
+    Inner diameter of the sphere, mm (> 0).
+wall_reflectance : float or string, default 0.98
+    ρw in [0, 1]: a number, or ``"nm:value, nm:value, …"`` (linear interpolation).
+port_<name> : string
+    One per port: ``"role=ROLE polar=DEG azimuth=DEG radius=MM"``; ROLE one of sample,
+    entrance, reference, detector, specular, open; polar/azimuth of the port centre in
+    sphere coordinates (centre at the origin, +z up).
+baffle : string, optional
+    ``"centre=x,y,z normal=x,y,z radius=r"`` (mm, sphere coordinates).
+measurement : string, default "reflectance"
+    ``reflectance`` (specimen in the sample port) or ``transmittance`` (at the entrance port).
+specular : string, default "SCI"
+    ``SCI`` (specular port plugged) or ``SCE`` (open to a light trap).
+method : string, default "substitution"
+    ``substitution`` (single beam) or ``comparison`` (standard in the reference port, swapped).
+standard : float, default 0.99
+    Reflectance of the Lambertian reference standard, 0 < standard ≤ 1.
+max_bounces : integer, default 100000
+    Step cap of a sphere walk (capped walks are counted, the reading then not certified).
+
+``mi.render(scene)`` returns a ``TensorXf`` of shape ``(len(wavelengths), 4)``: per
+wavelength the reading, the hemispherical reading of the same rays, and the detector
+fractions with the sample and with the standard; the full
+:class:`~virtspec_mi.results.sphere.SphereResult` is kept in ``integrator.last_reading``.
+"""
+
+from __future__ import annotations
+
+import mitsuba as mi
+import numpy as np
+
+from virtspec_mi.engine.bench import read_bench
+from virtspec_mi.geometry.sphere import SPHERE_PARAMETERS, SPHERE_SETTING_NAMES, SphereSettings, sphere_from_parameters
+from virtspec_mi.instruments.sphere import measure_sphere
+
+from .spectrophotometer import Spectrophotometer, check_spp
+
+__all__ = ["IntegratingSphere"]
+
+_WORD = 1 << 32
+
+
+class IntegratingSphere(Spectrophotometer):
+    """The sphere instrument as a Mitsuba integrator (see the module docstring)."""
+
+    def __init__(self, props: mi.Properties) -> None:
+        super().__init__(props)
+        keys = [k for k in props.keys() if k in SPHERE_PARAMETERS or k.startswith("port_")]
+        try:
+            self.sphere = sphere_from_parameters({k: props.get(k) for k in keys})
+            self.sphere_settings = SphereSettings(
+                **{k: props.get(k) for k in SPHERE_SETTING_NAMES if k in props})
+        except (ValueError, TypeError) as error:
+            raise ValueError(f"integrating_sphere: {error}") from None
+
+    def render(self, scene, sensor=None, seed=0, spp=0, develop=True, evaluate=True):
+        rays = check_spp(spp)
+        settings = self.settings.updated(seed=(self.settings.seed + int(seed)) % _WORD, rays=rays or None)
+        reading = measure_sphere(read_bench(scene), self.sphere, settings, self.sphere_settings)
+        self.last_reading = reading
+        table = np.stack([reading.reading, reading.hemispherical, reading.detector_fraction,
+                          reading.standard_fraction], axis=1)
+        return mi.TensorXf(table.astype(np.float32))
+
+    def to_string(self) -> str:
+        return f"IntegratingSphere[{self.sphere.describe()}; {self.sphere_settings}]"

@@ -1,0 +1,727 @@
+"""
+One result type for one reading or many: :class:`Result`
+========================================================
+
+A :class:`Result` holds exact :class:`~virtspec_mi.kernel.counts.Counts` over labelled
+dimensions (xarray conventions): a single reading of :func:`virtspec_mi.measure` has the
+dim ``wavelength`` (θi is a scalar coordinate), a sweep has ``(wavelength, theta_i)``;
+new dimensions add labels, not classes. Everything else is derived here, once, from the
+counts: reflectance ρ = m/N (eq. 2), transmittance, absorptance, the specular/regular
+parts, the Clopper–Pearson intervals, the back-lit fraction and the **certified
+tolerance** — the μ that the rays actually spent guarantee at δ under the rule used
+(:mod:`virtspec_mi.budgets.rules`), or "not certified" (NaN) where no rule applies.
+
+The same methods serve one reading or many: :meth:`Result.summary`,
+:meth:`Result.as_dict` (JSON), :meth:`Result.to_dataset` (``xarray.Dataset``),
+:meth:`Result.write` / :meth:`Result.read` (NetCDF, CSV, JSON;
+:mod:`virtspec_mi.results.io`), :meth:`Result.to_sd` / :meth:`Result.to_msds` /
+:meth:`Result.colour` (colour-science; :mod:`virtspec_mi.results.colorimetry`) and
+:meth:`Result.plot` (:mod:`virtspec_mi.results.plot`).
+
+References
+----------
+Baranoski et al. (2001), eqs. (2), (14), (19), (23); Clopper & Pearson (1934).
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import warnings
+from dataclasses import asdict, dataclass, field, replace
+from functools import cached_property
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from virtspec_mi import __version__
+from virtspec_mi.kernel.counts import DIRECTION_TOLERANCE, QUANTITIES, WEIGHT_ROUNDING, Counts
+from virtspec_mi.geometry.disks import InstrumentGeometry, backlit_fraction
+from virtspec_mi.budgets.intervals import clopper_pearson
+from virtspec_mi.settings import Settings
+
+__all__ = ["Result", "plain_data"]
+
+_PARTS = ("specular_reflectance", "diffuse_reflectance", "regular_transmittance", "diffuse_transmittance")
+
+
+def _counts(name: str, doc: str) -> property:
+    return property(lambda self: getattr(self.counts, name), doc=doc)
+
+
+def plain_data(values: Any) -> Any:
+    """An array as JSON-ready nested lists, NaN as ``None`` (JSON has no NaN)."""
+
+    values = np.asarray(values)
+    if values.dtype.kind == "f":
+        return np.where(np.isnan(values), None, values).tolist()
+    return values.tolist()
+
+
+def _round_up(value: float, digits: int = 3) -> float:
+    """``value`` rounded *up* to ``digits`` significant digits (a printed tolerance never shrinks)."""
+
+    if not np.isfinite(value) or value <= 0:
+        return value
+    scale = 10.0 ** (np.floor(np.log10(value)) - digits + 1)
+    return float(np.ceil(value / scale * (1 - 1e-12)) * scale)
+
+
+@dataclass(frozen=True, eq=False)
+class Result:
+    """
+    Certified readings over labelled dimensions (see the module docstring).
+
+    Attributes
+    ----------
+    dims : tuple of str
+        The dimensions of every per-reading array, e.g. ``("wavelength",)`` or
+        ``("wavelength", "theta_i")``.
+    coords : dict of str to ndarray
+        Labels: ``wavelength`` (nm) and ``theta_i`` (degrees); a coordinate that is not a
+        dim is a 0-d array (θi of a single reading).
+    counts : Counts
+        Exact counts by name behind the estimates.
+    pilot : Counts or None
+        Two-stage pilot counts (spent, not in the estimates); ``None`` for a fixed budget.
+    settings : Settings
+        The settings used (its ``theta_i`` is the first angle).
+    geometry : InstrumentGeometry
+        r₁, r₂ and D of the scene.
+    seconds : float
+        Time spent tracing, summed over the batches (and over interrupted and resumed
+        runs): the wall time of a sweep in this process; for a sweep on Dask workers the
+        workers' tracing time added up (worker-seconds), not the wall time.
+    scene : str
+        Fingerprint of the scene (``sha256:…``), or "".
+    wavelength_independent : bool
+        The specimen declared itself wavelength-independent: readings that differ only
+        in wavelength were traced once and share their counts.
+    version : str
+        virtspec-mi version that made the result.
+    parameters : dict or None
+        The swept specimen parameters (:meth:`virtspec_mi.engine.parameters.ParameterSpace.as_dict`:
+        names, ``mi.traverse`` keys, values, grid or points), ``None`` for none. A grid adds
+        one dim per parameter (named as given) after ``theta_i``; points add the dim
+        ``point`` with each parameter as a coordinate along it. A parameter selected with
+        :meth:`sel` stays as a scalar coordinate.
+    """
+
+    dims: tuple[str, ...]
+    coords: dict[str, np.ndarray]
+    counts: Counts
+    pilot: Counts | None
+    settings: Settings
+    geometry: InstrumentGeometry
+    seconds: float
+    scene: str = ""
+    wavelength_independent: bool = False
+    version: str = field(default=__version__)
+    parameters: dict | None = None
+
+    # -- labels ------------------------------------------------------------------------
+
+    @property
+    def shape(self) -> tuple[int, ...]:
+        return tuple(len(self.coords[d]) for d in self.dims)
+
+    @property
+    def wavelengths(self) -> np.ndarray:
+        """Wavelengths in nm, in the order requested."""
+
+        return self.coords["wavelength"]
+
+    @property
+    def theta_i(self) -> Any:
+        """Polar incidence in degrees: a float for a single reading, an array for a θi dim."""
+
+        value = self.coords["theta_i"]
+        return float(value) if np.ndim(value) == 0 else value
+
+    @property
+    def phi_i(self) -> float:
+        return self.settings.phi_i
+
+    @property
+    def mu(self) -> float:
+        """The tolerance asked for (see :attr:`certified_mu` for the one the rays give)."""
+
+        return self.settings.mu
+
+    @property
+    def delta(self) -> float:
+        return self.settings.delta
+
+    # -- counts by name ----------------------------------------------------------------
+
+    rays = _counts("rays", "Rays N per reading behind the estimates (int64).")
+    reflected = _counts("reflected", "Rays reflected into the upper hemisphere, per reading.")
+    transmitted = _counts("transmitted", "Rays transmitted into the lower hemisphere, per reading.")
+    capped = _counts("capped", "Random walks stopped by the specimen's step cap: in none of R, T, A.")
+    invalid_directions = _counts(
+        "invalid_directions", "Rays the BSDF sent in an invalid direction (NaN, infinite, not unit): in none of R, T, A.")
+    weight_violations = _counts("weight_violations", "Rays whose BSDF weight was outside [−ε, 1 + ε] or NaN.")
+    rounded_weights = _counts("rounded_weights", "Rays whose BSDF weight was within ε of [0, 1] (rounding).")
+    specular_reflected = _counts("specular_reflected", "Reflected rays whose sampled event was a delta event.")
+    regular_transmitted = _counts("regular_transmitted", "Transmitted rays whose sampled event was a delta event.")
+    largest_weight = _counts("largest_weight", "Largest violating BSDF weight per reading (NaN: none).")
+
+    @property
+    def absorbed(self) -> np.ndarray:
+        """Absorbed rays: rays − reflected − transmitted − capped − invalid_directions."""
+
+        return self.counts.absorbed
+
+    @property
+    def pilot_rays(self) -> np.ndarray | None:
+        """Two-stage pilot rays per reading (spent, not in the estimates); ``None`` for a fixed budget."""
+
+        return None if self.pilot is None else self.pilot.rays
+
+    @property
+    def rays_spent(self) -> np.ndarray:
+        """All rays traced per reading (two-stage: pilot included)."""
+
+        return self.rays if self.pilot is None else self.rays + self.pilot.rays
+
+    # -- estimates ---------------------------------------------------------------------
+
+    @property
+    def reflectance(self) -> np.ndarray:
+        """ρ = m/N per reading (eq. 2)."""
+
+        return self.reflected / self.rays
+
+    @property
+    def transmittance(self) -> np.ndarray:
+        """τ = t/N per reading."""
+
+        return self.transmitted / self.rays
+
+    @property
+    def absorptance(self) -> np.ndarray:
+        """α = absorbed/N per reading (ρ + τ + α = 1 − (capped + invalid_directions)/N)."""
+
+        return self.absorbed / self.rays
+
+    @property
+    def specular_reflectance(self) -> np.ndarray:
+        """ρs: reflected by a mirror (delta) event (CIE regular reflectance; MCML Rsp)."""
+
+        return self.specular_reflected / self.rays
+
+    @property
+    def diffuse_reflectance(self) -> np.ndarray:
+        """ρd = ρ − ρs: reflected by scattering (MCML's Rd)."""
+
+        return (self.reflected - self.specular_reflected) / self.rays
+
+    @property
+    def regular_transmittance(self) -> np.ndarray:
+        """τr: transmitted by a delta event (unscattered, collimated transmittance)."""
+
+        return self.regular_transmitted / self.rays
+
+    @property
+    def diffuse_transmittance(self) -> np.ndarray:
+        """τd = τ − τr: transmitted after scattering."""
+
+        return (self.transmitted - self.regular_transmitted) / self.rays
+
+    def quantity(self, name: str) -> np.ndarray:
+        """``reflectance``, ``transmittance`` or ``absorptance`` by name."""
+
+        if name not in QUANTITIES:
+            raise ValueError(f"quantity must be one of {', '.join(QUANTITIES)} (got {name!r})")
+        return getattr(self, name)
+
+    @property
+    def backlit_fraction(self) -> Any:
+        """
+        Share of the emitter area below the specimen plane (conical beam, θi > atan(D/r₁)):
+        those rays strike the specimen's back face. A float for one θi, else per θi.
+        """
+
+        angles = np.atleast_1d(self.coords["theta_i"])
+        values = np.array([backlit_fraction(self.geometry, t) if self.settings.beam == "conical" else 0.0
+                           for t in angles])
+        return float(values[0]) if np.ndim(self.coords["theta_i"]) == 0 else values
+
+    # -- the certificate ---------------------------------------------------------------
+
+    @property
+    def bound(self) -> str:
+        """The ray budget used: the settings' bound, or ``"rays"`` when N was given explicitly."""
+
+        return self.settings.bound if self.settings.rays is None else "rays"
+
+    @property
+    def interval_delta(self) -> float:
+        """δ of each certified quantity and interval: δ, or δ/2 with ``joint``."""
+
+        return self.settings.quantity_delta
+
+    @property
+    def rounding_bias(self) -> np.ndarray:
+        """Largest shift of each estimate by BSDF weights rounded to 0 or 1: rounded_weights·ε/N."""
+
+        return self.rounded_weights * WEIGHT_ROUNDING / self.rays
+
+    @property
+    def certified(self) -> np.ndarray:
+        """True for the readings a rule certifies: no weight violations, capped walks or invalid directions."""
+
+        return (self.weight_violations == 0) & (self.capped == 0) & (self.invalid_directions == 0)
+
+    @cached_property
+    def certified_mu(self) -> np.ndarray:
+        """
+        The tolerance each reading's rays guarantee at its δ (:attr:`interval_delta`),
+        per reading: μ for a reading sized by an adaptive rule (two-stage), else the
+        rule's :meth:`~virtspec_mi.budgets.rules.RayBudget.certified` tolerance of its N —
+        ≤ μ when N came from the rule, larger when fewer rays were asked for (e.g.
+        ``rays=1000`` gives 0.0515 under eq. (19)) — plus :attr:`rounding_bias`. NaN
+        where no rule applies (weight violations, capped walks or invalid directions).
+        """
+
+        s = self.settings
+        if s.adaptive:
+            tolerance = np.full(self.shape, s.mu)
+        else:
+            unique, inverse = np.unique(self.rays, return_inverse=True)
+            values = np.array([s.budget.certified(int(n), self.interval_delta, s.mu) for n in unique])
+            tolerance = values[inverse].reshape(self.shape)
+        return np.where(self.certified, tolerance + self.rounding_bias, np.nan)
+
+    def interval(self, quantity: str = "reflectance") -> tuple[np.ndarray, np.ndarray]:
+        """Clopper–Pearson interval ``(lower, upper)`` of ``quantity`` per reading at :attr:`interval_delta`."""
+
+        self.quantity(quantity)  # validates the name
+        return self._intervals[quantity]
+
+    @cached_property
+    def _intervals(self) -> dict[str, tuple[np.ndarray, np.ndarray]]:
+        """Every quantity's interval, computed once (the beta quantiles cost ~1 µs per reading)."""
+
+        counts = {"reflectance": self.reflected, "transmittance": self.transmitted, "absorptance": self.absorbed}
+        return {name: clopper_pearson(values, self.rays, self.interval_delta) for name, values in counts.items()}
+
+    @property
+    def reflectance_interval(self) -> np.ndarray:
+        """Clopper–Pearson interval ``[lower, upper]`` of ρ per reading, shape (…, 2)."""
+
+        return np.stack(self.interval("reflectance"), axis=-1)
+
+    @property
+    def transmittance_interval(self) -> np.ndarray:
+        """Clopper–Pearson interval of τ per reading, shape (…, 2)."""
+
+        return np.stack(self.interval("transmittance"), axis=-1)
+
+    @property
+    def absorptance_interval(self) -> np.ndarray:
+        """Clopper–Pearson interval of α per reading, shape (…, 2)."""
+
+        return np.stack(self.interval("absorptance"), axis=-1)
+
+    def warn_if_uncertified(self, stacklevel: int = 3) -> None:
+        """``RuntimeWarning`` for every reason a reading escaped its certificate."""
+
+        for line in self._uncertified():
+            warnings.warn(line, RuntimeWarning, stacklevel=stacklevel)
+
+    def _uncertified(self) -> list[str]:
+        lines = []
+        if np.any(self.weight_violations):
+            largest = self.largest_weight[~np.isnan(self.largest_weight)]
+            seen = f", the largest {largest.max():.6g}" if largest.size else " (NaN)"
+            lines.append(f"{int(np.sum(self.weight_violations))} BSDF sample weights fell outside [0, 1] by more "
+                         f"than the rounding tolerance {WEIGHT_ROUNDING:g}{seen}: the specimen is not energy "
+                         "conserving, so these readings are not certified")
+        if np.any(self.capped):
+            lines.append(f"{int(np.sum(self.capped))} random walks reached the specimen's step cap; they are counted "
+                         "in capped and in none of reflectance, transmittance and absorptance (not certified)")
+        if np.any(self.invalid_directions):
+            lines.append(f"{int(np.sum(self.invalid_directions))} rays left the specimen BSDF in an invalid direction "
+                         f"(NaN, infinite, or length off 1 by more than {DIRECTION_TOLERANCE:g}); they are counted in "
+                         "invalid_directions and in none of reflectance, transmittance and absorptance (not certified)")
+        return lines
+
+    # -- views -------------------------------------------------------------------------
+
+    def angle_index(self, theta_i: float | None = None) -> int:
+        """
+        The index of ``theta_i`` among the result's angles (``None``: the only one);
+        ``ValueError`` naming the angles otherwise.
+        """
+
+        angles = np.atleast_1d(np.asarray(self.coords["theta_i"], dtype=np.float64))
+        if theta_i is None:
+            if len(angles) != 1:
+                raise ValueError(f"theta_i must be given for a result over several angles (one of {angles.tolist()})")
+            return 0
+        matches = np.flatnonzero(np.isclose(angles, float(theta_i), rtol=0, atol=1e-9))
+        if not len(matches):
+            raise ValueError(f"theta_i must be one of the result's angles {angles.tolist()} (got {theta_i:g})")
+        return int(matches[0])
+
+    @property
+    def parameter_names(self) -> tuple[str, ...]:
+        """Names of the swept specimen parameters (empty without parameters)."""
+
+        return () if self.parameters is None else tuple(self.parameters["names"])
+
+    def coord_dims(self, name: str) -> tuple[str, ...]:
+        """The dims a coordinate lies along: its own, ``("point",)`` for a parameter of points, ``()`` if scalar."""
+
+        if name in self.dims:
+            return (name,)
+        return ("point",) if np.ndim(self.coords[name]) == 1 and "point" in self.dims else ()
+
+    def isel(self, **indices: int) -> "Result":
+        """The readings at one index of each given dim (``point=3``); the dim becomes a scalar coordinate."""
+
+        result = self
+        for dim, index in indices.items():
+            if dim not in result.dims:
+                raise ValueError(f"{dim!r} is not a dim of this result (dims: {', '.join(result.dims)})")
+            size = len(result.coords[dim])
+            if isinstance(index, bool) or not isinstance(index, (int, np.integer)) or not -size <= index < size:
+                raise ValueError(f"the index of {dim!r} must be an integer in [{-size}, {size}) (got {index!r})")
+            axis = result.dims.index(dim)
+            coords = {name: (np.asarray(value[index]) if result.coord_dims(name) == (dim,) else value)
+                      for name, value in result.coords.items()}
+            take = lambda v: np.take(v, int(index), axis=axis)  # noqa: E731
+            result = replace(result, dims=tuple(d for d in result.dims if d != dim), coords=coords,
+                             counts=result.counts.map(take), pilot=None if result.pilot is None else result.pilot.map(take))
+        return result
+
+    def sel(self, **labels: Any) -> "Result":
+        """
+        The readings at one label of each given dim, e.g. ``sel(**{"specimen.thickness": 2e-4})``,
+        ``sel(theta_i=8)`` or ``sel(wavelength=550)``; the dim becomes a scalar coordinate
+        (a result with dims ``(wavelength, theta_i)`` is a sweep again). ``ValueError``
+        naming the labels when none matches (to within 1e-9 relative).
+        """
+
+        indices = {}
+        for dim, label in labels.items():
+            if dim not in self.dims:
+                raise ValueError(f"{dim!r} is not a dim of this result (dims: {', '.join(self.dims)})")
+            values = np.asarray(self.coords[dim], dtype=np.float64)
+            matches = np.flatnonzero(np.isclose(values, float(label), rtol=1e-9, atol=1e-12))
+            if not len(matches):
+                raise ValueError(f"{dim} must be one of the result's labels {values.tolist()} (got {label!r})")
+            indices[dim] = int(matches[0])
+        return self.isel(**indices)
+
+    def as_grid(self) -> "Result":
+        """
+        The same result with θi as a dimension (a single reading becomes a one-angle grid):
+        what spectra, colours, comparisons and plots read. A result with parameter dims
+        raises ``ValueError``: select one parameter point first (:meth:`sel`, :meth:`isel`).
+        """
+
+        extra = [d for d in self.dims if d not in ("wavelength", "theta_i")]
+        if extra:
+            name = extra[0]
+            example = "isel(point=0)" if name == "point" else \
+                f"sel(**{{{name!r}: {float(np.asarray(self.coords[name])[0]):g}}})"
+            raise ValueError(f"this result also has the dims {', '.join(extra)} (a parameter sweep): select one "
+                             f"parameter point first, e.g. result.{example}")
+        if "theta_i" in self.dims:
+            return self
+        coords = {**self.coords, "theta_i": np.atleast_1d(self.coords["theta_i"])}
+        return replace(self, dims=(*self.dims, "theta_i"), coords=coords,
+                       counts=self.counts.map(lambda v: v[..., np.newaxis]),
+                       pilot=None if self.pilot is None else self.pilot.map(lambda v: v[..., np.newaxis]))
+
+    def squeeze(self) -> "Result":
+        """The same result without a θi dimension of length one (θi becomes a scalar label)."""
+
+        if "theta_i" not in self.dims or len(self.coords["theta_i"]) != 1:
+            return self
+        axis = self.dims.index("theta_i")
+        coords = {**self.coords, "theta_i": np.asarray(self.coords["theta_i"][0])}
+        return replace(self, dims=tuple(d for d in self.dims if d != "theta_i"), coords=coords,
+                       counts=self.counts.map(lambda v: np.take(v, 0, axis=axis)),
+                       pilot=None if self.pilot is None else self.pilot.map(lambda v: np.take(v, 0, axis=axis)))
+
+    def __repr__(self) -> str:
+        sizes = ", ".join(f"{d}: {n}" for d, n in zip(self.dims, self.shape))
+        mu = self.certified_mu
+        certified = "not certified" if np.all(np.isnan(mu)) else f"certified mu <= {_round_up(float(np.nanmax(mu))):g}"
+        return (f"<virtspec_mi.Result ({sizes}) {self.settings.beam}, {self.bound} bound, "
+                f"N = {_span(self.rays)}, {certified} at delta = {self.interval_delta:g}>")
+
+    def _repr_html_(self) -> str:
+        """Jupyter: the one-line description, then xarray's HTML view of :meth:`to_dataset`."""
+
+        import html
+
+        dataset = self.to_dataset()
+        del dataset.attrs["result_json"]  # the whole result as JSON: for files, not for reading
+        return f"<p><code>{html.escape(repr(self))}</code></p>" + dataset._repr_html_()
+
+    # -- text --------------------------------------------------------------------------
+
+    def summary(self, sized_by: str | None = None) -> str:
+        """
+        Human-readable summary: settings, the certificate, and a table for a single reading.
+        ``sized_by`` names the rule that sized N when it was not this result's own bound
+        (a goniophotometer's guarantee over its bins): it replaces "rays given".
+        """
+
+        s = self.settings
+        incidence = ("cosine-weighted over the hemisphere" if s.beam == "diffuse"
+                     else f"theta_i = {self._angles()} deg, phi_i = {s.phi_i:g} deg")
+        if self.dims == ("wavelength",):
+            head = f"{s.beam} reading, {incidence}, sampling = {s.sampling}, seed = {s.seed}"
+        else:
+            sizes = " x ".join(f"{n} {'wavelengths' if d == 'wavelength' else d}"
+                               for d, n in reversed(list(zip(self.dims, self.shape))))
+            head = f"{s.beam} sweep: {sizes} (phi_i = {s.phi_i:g} deg, sampling = {s.sampling}, seed = {s.seed})"
+        spent = f"; {self.seconds * 1e3:.1f} ms"
+        if self.dims != ("wavelength",):
+            spent += " of tracing summed over the batches (on Dask workers: worker time, not wall time)"
+        lines = [head, self._certificate(sized_by) + spent]
+        fixed = [f"{name} = {float(self.coords[name]):g}" for name in self.parameter_names
+                 if not self.coord_dims(name)]
+        if fixed:
+            lines.insert(1, "specimen parameters: " + ", ".join(fixed))
+        if self.dims == ("wavelength",):
+            lines += self._table()
+        if self.wavelength_independent and len(self.wavelengths) > 1:
+            lines.append("note: wavelength-independent specimen: traced once"
+                         + ("" if self.dims == ("wavelength",) else " per theta_i") + ", the same rays for every wavelength")
+        backlit = np.atleast_1d(self.backlit_fraction)
+        if np.any(backlit > 0):
+            lines.append(f"note: up to {backlit.max():.2%} of the emitter lies below the specimen plane "
+                         f"(theta_i > {self.geometry.backlit_threshold:.2f} deg): those rays strike the back face")
+        if np.any(self.rounded_weights):
+            lines.append(f"note: {int(self.rounded_weights.sum())} BSDF weights within {WEIGHT_ROUNDING:g} of [0, 1] "
+                         f"were rounded (bias <= {_round_up(float(self.rounding_bias.max())):g}, in the tolerance)")
+        lines += [f"WARNING: {line}" for line in self._uncertified()]
+        return "\n".join(lines)
+
+    def _angles(self) -> str:
+        angles = np.atleast_1d(self.coords["theta_i"])
+        return f"{angles[0]:g}" if len(angles) == 1 else f"{angles.min():g}..{angles.max():g}"
+
+    def _certificate(self, sized_by: str | None = None) -> str:
+        s = self.settings
+        unit = "wavelength" if self.dims == ("wavelength",) else "reading"
+        pilot = "" if self.pilot is None else f" + {int(self.pilot.rays.max()):,} pilot"
+        counted = f"N = {_span(self.rays)}{pilot} rays per {unit}"
+        mu = self.certified_mu
+        if np.all(np.isnan(mu)):
+            return f"{counted} ({'' if sized_by is None else sized_by + '; '}NOT CERTIFIED: see the warnings below)"
+        worst = _round_up(float(np.nanmax(mu)))
+        together = "R and T together" if s.joint else "|rho - m/N|"
+        if sized_by is not None:
+            rule = f"{sized_by}; at these N the {s.bound} bound gives"
+        else:
+            rule = f"{s.bound} bound" if s.rays is None else f"rays given; {s.bound} bound"
+        text = f"{counted} ({rule}: {together} < {worst:g} with probability >= {1 - s.delta:g}"
+        if sized_by is None and worst > s.mu * (1 + 1e-9):
+            text += f"; mu = {s.mu:g} was asked: these rays guarantee only {worst:g}"
+        if np.any(np.isnan(mu)):
+            text += "; some readings NOT CERTIFIED"
+        return text + ")"
+
+    def _table(self) -> list[str]:
+        rays = self.rays
+        lines = [f"{'lambda/nm':>10} {'reflectance':>12} {'transmittance':>14} {'absorptance':>12}"
+                 f"   Clopper-Pearson {1 - self.interval_delta:g} intervals (R; T)"]
+        r_int, t_int = self.reflectance_interval, self.transmittance_interval
+        varies = rays.min() != rays.max()
+        for i, wavelength in enumerate(self.wavelengths):
+            lines.append(
+                f"{wavelength:>10g} {self.reflectance[i]:>12.5f} {self.transmittance[i]:>14.5f} "
+                f"{self.absorptance[i]:>12.5f}   [{r_int[i, 0]:.5f}, {r_int[i, 1]:.5f}]; "
+                f"[{t_int[i, 0]:.5f}, {t_int[i, 1]:.5f}]" + (f"  N = {int(rays[i]):,}" if varies else ""))
+        mixed = ((0 < self.specular_reflected) & (self.specular_reflected < self.reflected)) | (
+            (0 < self.regular_transmitted) & (self.regular_transmitted < self.transmitted))
+        if np.any(mixed):  # a specimen with both mirror and scattered light: show the parts
+            lines.append(f"{'lambda/nm':>10} {'specular R':>12} {'diffuse R':>14} {'regular T':>12} {'diffuse T':>12}")
+            for i, wavelength in enumerate(self.wavelengths):
+                lines.append(f"{wavelength:>10g} " + " ".join(
+                    f"{getattr(self, part)[i]:>{width}.5f}" for part, width in zip(_PARTS, (12, 14, 12, 12))))
+        return lines
+
+    # -- plain data, datasets and files ------------------------------------------------
+
+    def as_dict(self) -> dict[str, Any]:
+        """
+        Every field by name as plain data (JSON-ready; NaN as ``None``): counts, estimates,
+        parts, intervals, the certificate, the pilot, settings, geometry and provenance.
+        Arrays are nested lists over :attr:`dims`. :meth:`from_dict` reads it back.
+        """
+
+        plain = plain_data
+        return {
+            "format": "virtspec-mi result 1",
+            "dims": list(self.dims),
+            "wavelengths": plain(self.wavelengths),
+            "theta_i": plain(self.coords["theta_i"]),
+            **{name: plain(values) for name, values in self.counts.as_dict().items()},
+            **{name: plain(self.quantity(name)) for name in QUANTITIES},
+            **{name: plain(getattr(self, name)) for name in _PARTS},
+            **{f"{name}_interval": plain(getattr(self, f"{name}_interval")) for name in QUANTITIES},
+            "interval_delta": self.interval_delta,
+            "bound": self.bound,
+            "certified_mu": plain(self.certified_mu),
+            "rounding_bias": plain(self.rounding_bias),
+            "backlit_fraction": plain(self.backlit_fraction),
+            "rays_spent": plain(self.rays_spent),
+            "pilot_rays": None if self.pilot is None else plain(self.pilot.rays),
+            "pilot": None if self.pilot is None else {k: plain(v) for k, v in self.pilot.as_dict().items()},
+            "seconds": self.seconds,
+            "settings": {**asdict(self.settings), "wavelengths": list(self.settings.wavelengths)},
+            "geometry": asdict(self.geometry),
+            "scene": self.scene,
+            "wavelength_independent": self.wavelength_independent,
+            "version": self.version,
+            **({} if self.parameters is None else {
+                "parameters": self.parameters,
+                "parameter_coords": {name: plain(self.coords[name]) for name in (*self.parameter_names, "point")
+                                     if name in self.coords}}),
+        }
+
+    @classmethod
+    def from_dict(cls, data: dict[str, Any]) -> "Result":
+        """The result of :meth:`as_dict` (``ValueError`` if ``data`` is not one)."""
+
+        try:
+            if data.get("format") != "virtspec-mi result 1":
+                raise KeyError("format")
+            dims = tuple(data["dims"])
+
+            def counts(source: dict[str, Any]) -> Counts:
+                # Results written before invalid directions were counted have none.
+                source = {"invalid_directions": np.zeros_like(np.asarray(source["rays"]), dtype=np.int64), **source}
+                return Counts(**{name: np.array(source[name], dtype=np.float64 if name == "largest_weight"
+                                                else np.int64) for name in Counts.names()})
+
+            parameters = data.get("parameters")
+            extra = {name: np.asarray(value, dtype=np.int64 if name == "point" else np.float64)
+                     for name, value in (data.get("parameter_coords") or {}).items()}
+            return cls(
+                dims=dims,
+                coords={"wavelength": np.asarray(data["wavelengths"], dtype=np.float64),
+                        "theta_i": np.asarray(data["theta_i"], dtype=np.float64), **extra},
+                parameters=None if parameters is None else dict(parameters),
+                counts=counts(data),
+                pilot=None if data["pilot"] is None else counts(data["pilot"]),
+                settings=Settings(**data["settings"]),
+                geometry=InstrumentGeometry(**data["geometry"]),
+                seconds=float(data["seconds"]),
+                scene=str(data["scene"]),
+                wavelength_independent=bool(data["wavelength_independent"]),
+                version=str(data["version"]),
+            )
+        except (KeyError, TypeError, ValueError, AttributeError) as error:
+            raise ValueError(f"not a virtspec-mi result (missing or bad {error})") from None
+
+    def to_dataset(self) -> Any:
+        """
+        An ``xarray.Dataset`` over :attr:`dims`: the estimates and parts (float64), every
+        count (int64), each quantity's Clopper–Pearson bounds ``<quantity>_lower`` /
+        ``_upper`` and ``certified_mu``; attributes hold the settings, geometry and
+        provenance (``result_json``: the whole result, from which :meth:`from_dataset`
+        rebuilds it).
+        """
+
+        import xarray as xr
+
+        data = self.as_dict()
+        variables: dict[str, Any] = {}
+        for name in (*QUANTITIES, *_PARTS, *Counts.names(), "absorbed", "certified_mu", "rounding_bias"):
+            values = np.asarray(getattr(self, name))
+            variables[name] = (self.dims, values.astype(np.int64 if values.dtype.kind in "iu" else np.float64))
+        for name in QUANTITIES:
+            lower, upper = self.interval(name)
+            bound = {"clopper_pearson_delta": self.interval_delta}
+            variables[f"{name}_lower"] = (self.dims, lower, bound)
+            variables[f"{name}_upper"] = (self.dims, upper, bound)
+        coords = {"wavelength": ("wavelength", self.wavelengths),
+                  "theta_i": ("theta_i", self.coords["theta_i"]) if "theta_i" in self.dims else self.theta_i}
+        for name in (*self.parameter_names, "point"):
+            if name in self.coords:
+                coords[name] = (self.coord_dims(name), self.coords[name])
+        s = self.settings
+        attrs = {"mu": s.mu, "delta": s.delta, "bound": s.bound, "joint": int(s.joint), "beam": s.beam,
+                 "sampling": s.sampling, "seed": s.seed, "phi_i": s.phi_i, "interval_delta": self.interval_delta,
+                 **asdict(self.geometry), "seconds": self.seconds, "scene": self.scene,
+                 "wavelength_independent": int(self.wavelength_independent), "version": self.version,
+                 **({} if self.parameters is None else {"parameters": json.dumps(self.parameters)}),
+                 "result_json": json.dumps(data)}
+        dataset = xr.Dataset(variables, coords=coords, attrs=attrs)
+        dataset["wavelength"].attrs["units"] = "nm"
+        dataset["theta_i"].attrs["units"] = "degree"
+        dataset["certified_mu"].attrs["meaning"] = ("tolerance the rays guarantee at interval_delta under the "
+                                                    "rule used; NaN: not certified")
+        return dataset
+
+    @classmethod
+    def from_dataset(cls, dataset: Any) -> "Result":
+        """The result of a dataset made by :meth:`to_dataset`."""
+
+        if "result_json" not in dataset.attrs:
+            if "gonio_json" in dataset.attrs:
+                raise ValueError("this is a goniophotometer reading: read it with virtspec_mi.read_gonio "
+                                 "(GonioResult.read); its .result is the spectrophotometer reading")
+            raise ValueError("not a virtspec-mi result (no result_json attribute)")
+        return cls.from_dict(json.loads(dataset.attrs["result_json"]))
+
+    def write(self, path: str | os.PathLike) -> Path:
+        """Write to ``.nc`` (NetCDF-4), ``.csv`` or ``.json`` by suffix (:mod:`virtspec_mi.results.io`)."""
+
+        from virtspec_mi.results import io as results_io
+
+        return results_io.write(self, path)
+
+    @classmethod
+    def read(cls, path: str | os.PathLike) -> "Result":
+        """Read a result written by :meth:`write` (or printed by ``virtspec measure --json``)."""
+
+        from virtspec_mi.results import io as results_io
+
+        kind, content = results_io.read(path)
+        return cls.from_dataset(content) if kind == "dataset" else cls.from_dict(content)
+
+    # -- colour and plots --------------------------------------------------------------
+
+    def to_sd(self, quantity: str = "reflectance", theta_i: float | None = None) -> Any:
+        """One quantity at one θi as a ``colour.SpectralDistribution`` (:mod:`virtspec_mi.results.colorimetry`)."""
+
+        from virtspec_mi.results.colorimetry import spectral_distribution
+
+        return spectral_distribution(self.as_grid(), quantity, theta_i)
+
+    def to_msds(self, theta_i: float | None = None) -> Any:
+        """R, T and A at one θi as a ``colour.MultiSpectralDistributions``."""
+
+        from virtspec_mi.results.colorimetry import multi_spectral_distributions
+
+        return multi_spectral_distributions(self.as_grid(), theta_i)
+
+    def colour(self, quantity: str = "reflectance", theta_i: float | None = None, **options: Any) -> Any:
+        """CIE XYZ, L*a*b* and sRGB of one quantity at one θi (``illuminant=``, ``observer=``)."""
+
+        from virtspec_mi.results.colorimetry import colorimetry
+
+        return colorimetry(self.to_sd(quantity, theta_i), **options)
+
+    def plot(self, path: str | os.PathLike | None = None, **options: Any) -> Any:
+        """Plot against θi or wavelength with the certified band (:func:`virtspec_mi.results.plot.plot_sweep`)."""
+
+        from virtspec_mi.results.plot import plot_sweep
+
+        return plot_sweep(self, path, **options)
+
+
+def _span(rays: np.ndarray) -> str:
+    low, high = int(np.min(rays)), int(np.max(rays))
+    return f"{low:,}" if low == high else f"{low:,} to {high:,}"

@@ -1,0 +1,265 @@
+"""
+Result files: NetCDF, CSV and JSON, and colour-science CSV spectra
+==================================================================
+
+The file formats of a :class:`~virtspec_mi.results.hemispherical.Result` (which builds the dataset
+and the plain data; this module only writes and reads them, by suffix):
+
+- ``.nc`` — NetCDF-4 of ``result.to_dataset()``: an ``xarray.Dataset`` over the
+  result's dims (``wavelength`` in nm, ``theta_i`` in degrees, a parameter sweep's
+  parameters or ``point``, …) with the estimates,
+  parts, every count, the Clopper–Pearson bounds and ``certified_mu`` as variables and
+  the settings, geometry and provenance as attributes;
+- ``.csv`` — one row per reading with the same variables as columns, after one
+  ``# virtspec-mi result {…}`` line holding the attributes as JSON;
+- ``.json`` — ``result.as_dict()``: one object (what ``virtspec measure --json``
+  prints), arrays as nested lists over the dims;
+- ``.zarr`` — a Zarr store (a directory) of the same dataset, which a sweep fills region
+  by region as its batches finish (:mod:`virtspec_mi.results.zarr`).
+
+Each round-trips exactly (the counts are the data; everything else is derived).
+:func:`write_spectra_csv` / :func:`read_spectra_csv` write and read R, T and A at one θi
+in colour-science's CSV spectral format.
+
+Every file (not a Zarr store) is written atomically: into a temporary file beside it (``.NAME.*.tmp``),
+flushed to disk, then renamed onto the name. A failed or interrupted write (a full
+disk, a directory of that name, Ctrl-C) leaves the old file — or none — and no
+temporary; readers and concurrent writers never see a partial file.
+:func:`check_output` refuses, before any work, a path that cannot become a file.
+
+References
+----------
+colour-science ``colour.io`` CSV spectral files; xarray / NetCDF conventions.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import uuid
+from contextlib import contextmanager
+from pathlib import Path
+from typing import Any, Iterator
+
+import numpy as np
+
+__all__ = [
+    "SUFFIXES",
+    "result_format",
+    "check_output",
+    "csv_text",
+    "write",
+    "read",
+    "write_spectra_csv",
+    "read_spectra_csv",
+    "is_result_csv",
+]
+
+SUFFIXES: tuple[str, ...] = (".nc", ".csv", ".json", ".zarr")
+"""Result file formats understood by :func:`write` and :func:`read`."""
+
+_CSV_HEADER = "# virtspec-mi result "
+
+
+def write(result: Any, path: str | os.PathLike) -> Path:
+    """
+    Write ``result`` to ``path``; the suffix picks the format, and only what it needs is
+    built: ``result.to_dataset()`` for ``.nc`` and ``.csv``, ``result.as_dict()`` for ``.json``.
+    """
+
+    path = Path(path)
+    suffix = result_format(path)
+    if suffix == ".zarr":
+        from virtspec_mi.results.zarr import write_result
+
+        return write_result(result, path)
+    with _atomic(path) as temporary:
+        if suffix == ".nc":
+            result.to_dataset().to_netcdf(temporary, engine="netcdf4")
+        elif suffix == ".json":
+            temporary.write_text(json.dumps(result.as_dict(), indent=1))
+        else:
+            temporary.write_text(csv_text(result.to_dataset()))
+    return path
+
+
+def check_output(path: str | os.PathLike, name: str = "out") -> Path:
+    """
+    ``path`` as a ``Path`` when a result file can be written there (a known suffix, an
+    existing directory, not itself a directory), else ``ValueError`` naming ``name``.
+    """
+
+    path = Path(path)
+    zarr = result_format(path) == ".zarr"
+    if path.is_dir() and not zarr:
+        raise ValueError(f"{name} {path} is a directory; give a file path")
+    if zarr and path.exists() and not path.is_dir():
+        raise ValueError(f"{name} {path} is a file; a Zarr store is a directory")
+    if not path.parent.exists():
+        raise ValueError(f"{name} {path} cannot be written: directory {path.parent} does not exist")
+    if not path.parent.is_dir():
+        raise ValueError(f"{name} {path} cannot be written: {path.parent} is not a directory")
+    return path
+
+
+def csv_text(dataset: Any) -> str:
+    """
+    The CSV form of a result's dataset: the attribute header line, then one row per
+    reading (floats in their shortest exact form, NaN as an empty field). Linear in the
+    cells, and column by column (no Python call per cell but the float's ``repr``).
+    """
+
+    frame = dataset.to_dataframe().reset_index()
+    columns = [_csv_fields(frame[name].to_numpy()) for name in frame.columns]
+    lines = [_CSV_HEADER + json.dumps(dataset.attrs), ",".join(map(str, frame.columns)), *map(",".join, zip(*columns))]
+    return "\n".join(lines) + "\n"
+
+
+def read(path: str | os.PathLike) -> tuple[str, Any]:
+    """
+    What a result file holds: ``("dataset", xarray.Dataset)`` for ``.nc`` and ``.csv``
+    (the CSV's attributes), ``("plain", dict)`` for ``.json``; ``ValueError`` if it is
+    missing or not a virtspec-mi result.
+    """
+
+    path = Path(path)
+    suffix = result_format(path, "file")
+    if suffix == ".zarr":
+        if not path.is_dir():
+            raise ValueError(f"Zarr result not found: {path}")
+        from virtspec_mi.results.zarr import as_plain, read as read_zarr
+
+        return "plain", as_plain(read_zarr(path))
+    if not path.is_file():
+        raise ValueError(f"result file not found: {path}")
+    if suffix == ".nc":
+        import xarray as xr
+
+        try:
+            with xr.open_dataset(path, engine="netcdf4") as dataset:
+                return "dataset", dataset.load()
+        except (OSError, ValueError) as error:
+            raise ValueError(f"could not read NetCDF result {path}: {error}") from None
+    text = path.read_text()
+    if suffix == ".json":
+        try:
+            data = json.loads(text)
+        except json.JSONDecodeError as error:
+            raise ValueError(f"result file {path} is not valid JSON: {error}") from None
+        if not isinstance(data, dict):
+            raise ValueError(f"not a virtspec-mi result file: {path}")
+        return "plain", data
+    first = text.split("\n", 1)[0]
+    if not first.startswith(_CSV_HEADER):
+        raise ValueError(f"not a virtspec-mi result CSV (first line must start with {_CSV_HEADER.strip()!r}): {path}")
+    import xarray as xr
+
+    try:
+        attrs = json.loads(first[len(_CSV_HEADER):])
+    except json.JSONDecodeError as error:
+        raise ValueError(f"result CSV {path} has a bad header line: {error}") from None
+    return "dataset", xr.Dataset(attrs=attrs)
+
+
+def is_result_csv(path: str | os.PathLike) -> bool:
+    """True when ``path`` is a CSV written by :func:`write` (not colour-science spectra)."""
+
+    path = Path(path)
+    with path.open() as handle:
+        return handle.readline().startswith(_CSV_HEADER)
+
+
+def write_spectra_csv(result: Any, path: str | os.PathLike, theta_i: float | None = None) -> Path:
+    """R, T and A at one θi in colour-science's CSV spectral format (wavelength column + one per quantity)."""
+
+    import colour
+
+    if len(result.wavelengths) < 6:  # colour-science's CSV writer asserts on fewer
+        raise ValueError(f"colour-science CSV spectra need at least 6 wavelengths (got {len(result.wavelengths)})")
+    msds = result.to_msds(theta_i)
+    sds = {label: colour.SpectralDistribution(msds.values[:, k], msds.wavelengths, name=label)
+           for k, label in enumerate(msds.labels)}
+    with _atomic(Path(path)) as temporary:
+        colour.write_sds_to_csv_file(sds, str(temporary))
+    return Path(path)
+
+
+def read_spectra_csv(path: str | os.PathLike) -> dict[str, Any]:
+    """The spectra of a colour-science CSV spectral file, by column name (``colour.SpectralDistribution``)."""
+
+    import colour
+
+    path = Path(path)
+    if not path.is_file():
+        raise ValueError(f"spectra file not found: {path}")
+    try:
+        return dict(colour.read_sds_from_csv_file(str(path)))
+    except (ValueError, KeyError, IndexError) as error:
+        raise ValueError(f"could not read colour-science CSV spectra {path}: {error}") from None
+
+
+def result_format(path: str | os.PathLike, name: str = "out") -> str:
+    """
+    The result format of ``path`` by its suffix (``.nc``, ``.csv``, ``.json``), else
+    ``ValueError`` naming ``name`` (``out`` for a file to write, ``file`` for one to read).
+    """
+
+    path = Path(path)
+    suffix = path.suffix.lower()
+    if suffix not in SUFFIXES:
+        what = "" if name == "out" else " (a virtspec-mi result file: a sweep, a reading or `measure --json` output)"
+        raise ValueError(f"{name} must end in one of {', '.join(SUFFIXES)}{what} (got {path.name!r})")
+    return suffix
+
+
+def _csv_fields(values: np.ndarray) -> list[str]:
+    """
+    One CSV column: floats as Python's shortest exact ``repr`` (NaN: empty), other values
+    as ``str``. Not numpy's or pandas' formatting: it follows numpy's print options, and
+    colour-science sets the legacy ones (12 significant digits) when it is imported.
+    """
+
+    if values.dtype.kind != "f":
+        return list(map(str, values.tolist()))
+    fields = list(map(repr, values.astype(np.float64).tolist()))
+    for k in np.flatnonzero(np.isnan(values)).tolist():
+        fields[k] = ""
+    return fields
+
+
+@contextmanager
+def _atomic(path: Path) -> Iterator[Path]:
+    """
+    A fresh temporary path beside ``path`` to write; when the block ends the file is
+    flushed to disk and renamed onto ``path`` (one step), or, if the block fails, removed.
+    """
+
+    temporary = path.with_name(f".{path.name}.{uuid.uuid4().hex[:12]}.tmp")
+    os.close(os.open(temporary, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666))  # the umask's permissions
+    try:
+        yield temporary
+        _flush(temporary)
+        os.replace(temporary, path)
+    except BaseException:
+        temporary.unlink(missing_ok=True)
+        raise
+    _flush_directory(path.parent)
+
+
+def _flush(path: Path) -> None:
+    """Flush a written file to disk (a failure, e.g. a full disk, raises ``OSError``)."""
+
+    handle = os.open(path, os.O_RDONLY)
+    try:
+        os.fsync(handle)
+    finally:
+        os.close(handle)
+
+
+def _flush_directory(path: Path) -> None:
+    """Flush a directory's entries (a rename in it) to disk, where the system allows it."""
+
+    try:
+        _flush(path)
+    except OSError:  # not every system opens or syncs directories
+        pass

@@ -47,7 +47,8 @@ def main() -> None:
     integrator = scene.integrator()
     instrument = find_bench(scene)
     settings = integrator.settings.updated(rays=args.rays)
-    sphere, options = integrator.sphere, integrator.sphere_settings
+    options = integrator.sphere_options
+    sphere = options.sphere
     standard = mi.load_dict({"type": "diffuse", "reflectance": options.standard})
     holders, actions = configurations(sphere, options, instrument.bsdf, instrument.geometry.specimen_radius,
                                       standard, mi.load_dict({"type": "null"}))["sample"]

@@ -193,14 +193,35 @@ def test_integrator_parameters_make_render_a_goniophotometer_reading(mi):
         mi.load_dict(scene)
 
 
+def test_gonio_options_defaults_and_unknown_names():
+    from virtspec_mi.instruments.goniophotometer import GonioOptions
+
+    assert GonioOptions.from_parameters({}).as_dict() == {
+        "theta_o_bins": 18, "phi_o_bins": 36, "binning": "uniform", "fold_phi": False, "hemispheres": "both",
+        "guarantee": "union", "relative_tolerance": None, "brdf_floor": None}
+    with pytest.raises(TypeError, match="theta_bins"):
+        GonioOptions().updated(theta_bins=3)
+    # strings (XML, command line) are read by the same checks; a boolean is not a number of bins
+    options = GonioOptions.from_parameters({"theta_o_bins": "3", "phi_o_bins": "0 90 360", "fold_phi": "false",
+                                            "guarantee": "relative", "relative_tolerance": "0.5",
+                                            "brdf_floor": "0.05"})
+    assert (options.theta_o_bins, options.phi_o_bins, options.relative_tolerance) == (3, (0.0, 90.0, 360.0), 0.5)
+    assert options.bins.shape == (6, 2)
+    with pytest.raises(ValueError, match="theta_o_bins"):
+        GonioOptions(theta_o_bins=True)
+    with pytest.raises(ValueError, match="brdf_floor must be a finite BRDF value > 0"):
+        GonioOptions(brdf_floor=0)
+
+
 def test_every_gonio_parameter_is_a_keyword_a_flag_and_an_integrator_parameter(capsys):
     import inspect
 
     from virtspec_mi.cli import build_parser
-    from virtspec_mi.geometry.bins import GONIO_PARAMETERS
+    from virtspec_mi.instruments.goniophotometer import GonioOptions
     from virtspec_mi.plugins.integrators import spectrophotometer
     from virtspec_mi.settings import SETTING_NAMES
 
+    GONIO_PARAMETERS = GonioOptions.names()
     keywords = inspect.signature(vm.gonio).parameters
     assert set(GONIO_PARAMETERS) | set(SETTING_NAMES) - {"theta_i"} <= set(keywords)
     parser = build_parser()

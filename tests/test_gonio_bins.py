@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from virtspec_mi.geometry.bins import GONIO_PARAMETERS, MAX_BINS, gonio_options, make_bins, parse_edges
+from virtspec_mi.geometry.bins import MAX_BINS, make_bins, parse_edges
 
 
 def test_uniform_bins_cover_both_hemispheres_with_90_as_an_edge():
@@ -62,12 +62,6 @@ def test_bad_bin_specifications_name_the_parameter(kwargs, name):
 
 def test_too_many_bins_is_refused():
     assert 32768 * 2 * 64 > MAX_BINS
-
-
-def test_gonio_options_defaults_and_unknown_names():
-    assert gonio_options({}, "x") == {name: default for name, (default, _) in GONIO_PARAMETERS.items()}
-    with pytest.raises(TypeError, match="theta_bins"):
-        gonio_options({"theta_bins": 3}, "gonio")
 
 
 def test_round_trip_of_the_bins_as_plain_data():

@@ -185,3 +185,56 @@ def test_chunk_size_is_capped_by_memory():
     with pytest.raises(ValueError, match=r"chunk_size must be a whole number with 1024 <= chunk_size <= 2\*\*25 "
                                          r"\(got 67108864\)"):
         Settings(chunk_size=2**26)
+
+
+# --- the one-definition machinery (virtspec_mi.settings.Options) ---------------------------
+
+
+def test_options_machinery_reads_validates_and_describes_one_way():
+    from virtspec_mi.instruments.goniophotometer import GonioOptions
+    from virtspec_mi.instruments.sphere import SphereOptions
+    from virtspec_mi.settings import keywords, resolve
+
+    # numeric strings are numbers everywhere; None means the default; booleans are not numbers
+    assert Settings(seed="5").seed == 5 and SphereOptions(max_bounces="100").max_bounces == 100
+    assert Settings(theta_i=None, seed=None) == Settings()
+    for kind, name in ((Settings, "seed"), (SphereOptions, "max_bounces"), (GonioOptions, "relative_tolerance")):
+        with pytest.raises(ValueError, match=name):
+            kind(**{name: True})
+    # the XML/dict reader: the options named there, converted by the checks; others ignored
+    settings = Settings.from_parameters({"theta_i": "30", "joint": "true", "theta_o_bins": 3, "type": "x"})
+    assert (settings.theta_i, settings.joint, settings.rays) == (30.0, True, None)
+    assert GonioOptions.parameters_in({"theta_i": 1, "fold_phi": True}) == ["fold_phi"]
+    assert SphereOptions.parameters_in({"mu": 0.1, "diameter": 60.0, "port_a": "x", "method": "comparison"}) == [
+        "diameter", "port_a", "method"]
+    # the signature builder: the function's own parameters, then each kind's options
+    def f(scene, *, theta_i=None, **given):
+        pass
+    names = list(keywords(f, GonioOptions, Settings).parameters)
+    assert names == ["scene", "theta_i", *GonioOptions.names(), *[n for n in Settings.names() if n != "theta_i"]]
+    # an API call's keywords: each to the options that declare it, over the scene's values
+    base = Settings(theta_i=30)
+    settings, options = resolve("gonio", {"mu": 0.1, "fold_phi": "true", "theta_i": None}, base, GonioOptions())
+    assert (settings.mu, settings.theta_i, options.fold_phi) == (0.1, 30.0, True)
+    with pytest.raises(TypeError, match=r"gonio\(\) got unexpected keyword argument\(s\) theta_bins; the settings "
+                                        r"are theta_i.*; the goniophotometer options are theta_o_bins"):
+        resolve("gonio", {"theta_bins": 3}, base, GonioOptions())
+    assert "max_bounces = 100000: step cap of a sphere walk" in SphereOptions.describe()
+
+
+def test_every_option_is_a_flag_of_its_subcommand(capsys):
+    from virtspec_mi.cli import build_parser
+    from virtspec_mi.instruments.goniophotometer import GonioOptions
+    from virtspec_mi.instruments.sphere import SphereOptions
+
+    parser = build_parser()
+    for command, kinds in (("measure", (Settings,)), ("sweep", (Settings,)), ("gonio", (Settings, GonioOptions)),
+                           ("sphere", (Settings, SphereOptions))):
+        with pytest.raises(SystemExit):
+            parser.parse_args([command, "--help"])
+        text = capsys.readouterr().out
+        for kind in kinds:
+            for name in kind.names():
+                assert ("--" + name.replace("_", "-") in text) == (name != "sphere"), (command, name)
+    args = parser.parse_args(["sphere", "scene.xml", "--max-bounces", "100", "--specular", "SCE"])
+    assert (args.max_bounces, args.specular) == ("100", "SCE")  # validated by SphereOptions, as the API's

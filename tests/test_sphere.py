@@ -7,8 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from virtspec_mi.geometry.sphere import (Baffle, Port, Sphere, SphereSettings, parse_wall_reflectance,
-                                sphere_from_parameters)
+from virtspec_mi.geometry.sphere import Baffle, Port, Sphere, parse_wall_reflectance, sphere_from_parameters
 
 
 def small_sphere(**changes):
@@ -86,16 +85,6 @@ def test_sphere_from_parameters_reads_the_xml_strings():
     assert sphere.baffle.normal == pytest.approx((0, 2 ** -0.5, 2 ** -0.5))
     with pytest.raises(ValueError, match="port 'd': missing radius"):
         sphere_from_parameters({"diameter": 60.0, "port_d": "role=detector polar=90"})
-
-
-def test_sphere_settings_are_validated():
-    assert SphereSettings(specular="sce").specular == "SCE"
-    with pytest.raises(ValueError, match="method must be one of substitution, comparison"):
-        SphereSettings(method="double")
-    with pytest.raises(ValueError, match="standard must satisfy 0 < standard <= 1"):
-        SphereSettings(standard=1.5)
-    with pytest.raises(ValueError, match="max_bounces must be a whole number"):
-        SphereSettings(max_bounces=0)
 
 
 def test_parameters_round_trip():

@@ -14,6 +14,25 @@ from virtspec_mi.results.sphere import SphereResult
 SCENE = "scenes/sphere_150mm_8d.xml"
 
 
+def test_sphere_options_are_validated():
+    from virtspec_mi.instruments.sphere import SphereOptions
+
+    assert SphereOptions(specular="sce").specular == "SCE"
+    with pytest.raises(ValueError, match="method must be one of substitution, comparison"):
+        SphereOptions(method="double")
+    with pytest.raises(ValueError, match="standard must satisfy 0 < standard <= 1"):
+        SphereOptions(standard=1.5)
+    with pytest.raises(ValueError, match="max_bounces must be a whole number"):
+        SphereOptions(max_bounces=0)
+    # a numeric string is read as the number, as every setting is; a boolean is not a number
+    assert SphereOptions(max_bounces="100", standard="0.5").max_bounces == 100
+    for name, value in (("max_bounces", True), ("standard", True), ("sphere", 150.0)):
+        with pytest.raises(ValueError, match=name):
+            SphereOptions(**{name: value})
+    with pytest.raises(TypeError, match="diameter; the sphere options are measurement"):
+        SphereOptions().updated(diameter=150)
+
+
 def test_hemispherical_reading_is_the_measure_of_the_same_rays():
     result = vm.sphere_measure(SCENE, rays=20000, wavelengths="500, 600")
     scene = vm.instrument_scene({"type": "diffuse", "reflectance": 0.5}, specimen_radius=12.7)
@@ -171,7 +190,7 @@ def test_a_scene_dict_gives_the_counts_of_the_xml_scene():
     integrator = xml.integrator()
     scene = vm.instrument_scene({"type": "diffuse", "reflectance": 0.5}, specimen_radius=12.7)
     scene["integrator"] = {"type": "integrating_sphere", "theta_i": 8.0, "beam": "collimated",
-                           **integrator.sphere.parameters()}
+                           **integrator.sphere_options.sphere.parameters()}
     from_dict = vm.sphere_measure(scene, rays=3000)
     from_xml = vm.sphere_measure(xml, rays=3000)
     assert from_dict.counts["sample"]["detected"] == from_xml.counts["sample"]["detected"]

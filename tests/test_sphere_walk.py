@@ -16,7 +16,8 @@ from virtspec_mi.budgets.bounds import hoeffding_mu
 from virtspec_mi.scene import find_bench
 from virtspec_mi.settings import Settings
 from virtspec_mi.references import sphere_theory as st
-from virtspec_mi.geometry.sphere import Baffle, Port, Sphere, SphereSettings
+from virtspec_mi.geometry.sphere import Baffle, Port, Sphere
+from virtspec_mi.instruments.sphere import SphereOptions
 from virtspec_mi.references.sphere_model import theory_inputs
 
 R = 75.0
@@ -100,7 +101,7 @@ def theory(sphere, rho_s, rho_w, port_surface="flat", convention="cap"):
     r²/4R² with ``convention="projected"``).
     """
 
-    kw = theory_inputs(sphere, SphereSettings(), [551.0])
+    kw = theory_inputs(sphere, SphereOptions().as_dict(), [551.0])
     fractions = {k: kw[k] for k in ("sample_fraction", "detector_fraction", "open_fraction")}
     if convention == "projected":  # r²/4R² = a (1 − a) for each port (the ports here fill their caps)
         fractions = {k: v * (1 - v) for k, v in fractions.items()}

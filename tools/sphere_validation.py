@@ -34,7 +34,8 @@ import virtspec_mi as vm  # noqa: E402
 from virtspec_mi.references import sphere_theory as st  # noqa: E402
 from virtspec_mi.budgets.bounds import hoeffding_mu  # noqa: E402
 from virtspec_mi.settings import Settings  # noqa: E402
-from virtspec_mi.geometry.sphere import Port, Sphere, SphereSettings  # noqa: E402
+from virtspec_mi.geometry.sphere import Port, Sphere  # noqa: E402
+from virtspec_mi.instruments.sphere import SphereOptions  # noqa: E402
 from virtspec_mi.references.sphere_model import theory_inputs  # noqa: E402
 
 RAYS, DELTA = 105_967, 1e-3
@@ -68,7 +69,7 @@ def ideal_table() -> str:
             walk = SphereWalk(sphere, [holder], [6, 7, 0], 100_000)
             counts = tally_sphere(walk, instrument, [551.0], [rho_w], RAYS, Settings(theta_i=0, beam="conical"))[0]
             simulated = counts["cross"][:, 0].sum() / RAYS
-            kw = theory_inputs(sphere, SphereSettings(), [551.0])
+            kw = theory_inputs(sphere, SphereOptions().as_dict(), [551.0])
             fractions = {k: kw[k] for k in ("sample_fraction", "detector_fraction", "open_fraction")}
             projected = {k: v * (1 - v) for k, v in fractions.items()}
             flat, cap, iad = (0.5 * st.detected_fraction(rho_w, 0.5, port_surface=s, **fr)

@@ -29,7 +29,6 @@ Baranoski et al. (2001), eqs. (2), (23), (24); Figs. 5 and 6.
 
 from __future__ import annotations
 
-import inspect
 import os
 from contextlib import ExitStack, contextmanager
 from dataclasses import replace
@@ -40,17 +39,16 @@ import numpy as np
 
 from virtspec_mi.engine.checkpoint import checkpoint_for, claim, remove
 from virtspec_mi.checks import parse_theta_i
-from virtspec_mi.engine.readings import gonio_reading, in_process_runner, measure_reading, run
-from virtspec_mi.geometry.bins import GONIO_PARAMETERS
+from virtspec_mi.engine.readings import in_process_runner, measure_reading, run
+from virtspec_mi.instruments.goniophotometer import GonioOptions, gonio_reading
 from virtspec_mi.results.goniophotometer import GonioResult
 from virtspec_mi.engine.bench import Bench
 from virtspec_mi.engine.parameters import apply_point, current_values, parameter_space
 from virtspec_mi.results.hemispherical import Result
 from virtspec_mi.results.io import check_output
 from virtspec_mi.scene import find_bench, scene_fingerprint
-from virtspec_mi.settings import Settings, settings_keywords, with_settings
-from virtspec_mi.geometry.sphere import SPHERE_SETTING_NAMES, Sphere, SphereSettings
-from virtspec_mi.instruments.sphere import measure_sphere
+from virtspec_mi.settings import Settings, keywords, resolve
+from virtspec_mi.instruments.sphere import SphereOptions, measure_sphere
 from virtspec_mi.results.sphere import SphereResult
 from virtspec_mi.results.zarr import SUFFIX as ZARR_SUFFIX
 from virtspec_mi.results.zarr import ZarrTable
@@ -90,7 +88,7 @@ def measure(scene: Any, *, parameters: dict[str, Any] | None = None, defines: di
     """
 
     instrument = find_bench(scene, defines)
-    settings = with_settings(_scene_settings(instrument), settings, "measure")
+    settings, = resolve("measure", settings, _scene_settings(instrument))
     space = parameter_space(instrument, parameters or {})
     if space is not None and space.size != 1:
         raise ValueError("measure takes one value per parameter (a sweep takes several: use sweep)")
@@ -193,7 +191,7 @@ def sweep(
         check_output(out)
         checkpoint = checkpoint if checkpoint is not None else checkpoint_for(out)
     instrument = find_bench(scene, defines)
-    base = with_settings(_scene_settings(instrument), settings, "sweep")
+    base, = resolve("sweep", settings, _scene_settings(instrument))
     space = parameter_space(instrument, parameters or {}, points=points)
     angles = np.array(parse_theta_i(base.theta_i if theta_i is None else theta_i))
     resolved = base.updated(theta_i=float(angles[0]))
@@ -264,8 +262,8 @@ def _write(result: Result, out: Path, checkpoint: Path) -> None:
         raise failure from error
 
 
-measure.__signature__ = settings_keywords(measure)  # type: ignore[attr-defined]
-sweep.__signature__ = settings_keywords(sweep)  # type: ignore[attr-defined]
+measure.__signature__ = keywords(measure, Settings)  # type: ignore[attr-defined]
+sweep.__signature__ = keywords(sweep, Settings)  # type: ignore[attr-defined]
 
 
 def gonio(scene: Any, *, theta_i: Any = None, out: str | os.PathLike | None = None, **options: Any) -> GonioResult:
@@ -283,7 +281,7 @@ def gonio(scene: Any, *, theta_i: Any = None, out: str | os.PathLike | None = No
     out
         File to write (``.nc``, ``.csv`` or ``.json``), checked before any tracing.
     **options
-        The goniophotometer parameters (:data:`~virtspec_mi.geometry.bins.GONIO_PARAMETERS`:
+        The goniophotometer options (:class:`~virtspec_mi.instruments.goniophotometer.GonioOptions`:
         ``theta_o_bins``, ``phi_o_bins``, ``binning``, ``fold_phi``, ``hemispheres``,
         ``guarantee``, ``relative_tolerance``, ``brdf_floor``) and every setting of
         :class:`~virtspec_mi.settings.Settings` (a fixed budget); one left ``None`` comes
@@ -298,16 +296,12 @@ def gonio(scene: Any, *, theta_i: Any = None, out: str | os.PathLike | None = No
 
     out = check_output(_file_path(out, "out")) if out is not None else None
     instrument = find_bench(scene)
-    given = {name: options.pop(name) for name in list(options) if name in GONIO_PARAMETERS}
-    scene_gonio = instrument.integrator.gonio if instrument.integrator is not None else {}
-    spec = {**scene_gonio, **{name: value for name, value in given.items() if value is not None}}
-    base = with_settings(_scene_settings(instrument), options, "gonio")
+    integrator = instrument.integrator
+    scene_options = getattr(integrator, "gonio_options", None) or GonioOptions()
+    base, spec = resolve("gonio", options, _scene_settings(instrument), scene_options)
     angles = np.array(parse_theta_i(base.theta_i if theta_i is None else theta_i))
     if len(np.unique(angles)) != len(angles):
         raise ValueError("theta_i of a goniophotometer reading must be distinct (got repeated values)")
-    if base.adaptive:
-        raise ValueError("bound must be a fixed budget for a goniophotometer reading (hoeffding, chebyshev, "
-                         "exact, or rays given); N is sized by guarantee= over the bins")
     result = gonio_reading(instrument, base, spec, angles, scene=scene_fingerprint(scene, instrument))
     result.result.warn_if_uncertified(stacklevel=3)
     if out is not None:
@@ -315,16 +309,7 @@ def gonio(scene: Any, *, theta_i: Any = None, out: str | os.PathLike | None = No
     return result
 
 
-def _gonio_signature() -> inspect.Signature:
-    """:func:`gonio`'s signature: its own parameters, the goniophotometer parameters, then the settings."""
-
-    own = settings_keywords(gonio)
-    parameters = list(own.parameters.values())
-    extra = [inspect.Parameter(name, inspect.Parameter.KEYWORD_ONLY, default=None) for name in GONIO_PARAMETERS]
-    return own.replace(parameters=[*parameters[:3], *extra, *parameters[3:]])
-
-
-gonio.__signature__ = _gonio_signature()  # type: ignore[attr-defined]
+gonio.__signature__ = keywords(gonio, GonioOptions, Settings)  # type: ignore[attr-defined]
 
 
 def read_gonio(path: str | os.PathLike) -> GonioResult:
@@ -365,7 +350,7 @@ def fluctuation(a: Result | np.ndarray, b: Result | np.ndarray, quantity: str = 
     return float(np.mean(np.abs(a - b)))
 
 
-def sphere_measure(scene: Any, *, sphere: Sphere | None = None, **settings: Any) -> SphereResult:
+def sphere_measure(scene: Any, **settings: Any) -> SphereResult:
     """
     Read the specimen of ``scene`` as a physical integrating sphere would: a
     :class:`~virtspec_mi.results.sphere.SphereResult` over wavelength (the reading
@@ -377,12 +362,12 @@ def sphere_measure(scene: Any, *, sphere: Sphere | None = None, **settings: Any)
     scene
         XML path, scene dict or ``mi.Scene`` with ``emitter`` and ``specimen`` disks; its
         ``integrating_sphere`` integrator (if any) gives the sphere and the settings.
-    sphere
-        A :class:`~virtspec_mi.geometry.sphere.Sphere` (overrides the scene's).
     **settings
-        Any setting of :class:`~virtspec_mi.settings.Settings` and of
-        :class:`~virtspec_mi.geometry.sphere.SphereSettings` (``measurement``, ``specular``,
-        ``method``, ``standard``, ``max_bounces``); ``None`` keeps the scene's value.
+        Any setting of :class:`~virtspec_mi.settings.Settings` and any option of
+        :class:`~virtspec_mi.instruments.sphere.SphereOptions` (``measurement``,
+        ``specular``, ``method``, ``standard``, ``max_bounces``, and ``sphere``: a
+        :class:`~virtspec_mi.geometry.sphere.Sphere` that overrides the scene's); ``None``
+        keeps the scene's value.
 
     References
     ----------
@@ -390,30 +375,16 @@ def sphere_measure(scene: Any, *, sphere: Sphere | None = None, **settings: Any)
     """
 
     instrument = find_bench(scene)
-    integrator = instrument.integrator
-    own = {k: settings.pop(k) for k in list(settings) if k in SPHERE_SETTING_NAMES}
-    base = with_settings(_scene_settings(instrument), settings, "sphere_measure")
-    options = getattr(integrator, "sphere_settings", None) or SphereSettings()
-    options = options.updated(**own)
-    sphere = sphere if sphere is not None else getattr(integrator, "sphere", None)
-    if not isinstance(sphere, Sphere):
+    scene_options = getattr(instrument.integrator, "sphere_options", None) or SphereOptions()
+    base, options = resolve("sphere_measure", settings, _scene_settings(instrument), scene_options)
+    if options.sphere is None:
         raise ValueError("sphere_measure needs a sphere: an 'integrating_sphere' integrator in the scene or "
                          "sphere=Sphere(...)")
     fingerprint = scene_fingerprint(scene, instrument)
-    return measure_sphere(instrument, sphere, base, options, scene=fingerprint)
+    return measure_sphere(instrument, options.sphere, base, options, scene=fingerprint)
 
 
-def _sphere_signature() -> Any:
-    """``sphere_measure``'s signature: the settings, then the sphere settings, as keywords."""
-
-    import inspect
-
-    signature = settings_keywords(sphere_measure)
-    extra = [inspect.Parameter(name, inspect.Parameter.KEYWORD_ONLY, default=None) for name in SPHERE_SETTING_NAMES]
-    return signature.replace(parameters=[*signature.parameters.values(), *extra])
-
-
-sphere_measure.__signature__ = _sphere_signature()  # type: ignore[attr-defined]
+sphere_measure.__signature__ = keywords(sphere_measure, Settings, SphereOptions)  # type: ignore[attr-defined]
 
 
 def _scene_settings(instrument: Bench) -> Settings:

@@ -92,7 +92,7 @@ def build_parser() -> argparse.ArgumentParser:
                       "the scene's spectrophotometer integrator, else to the paper's defaults.")
     measure.add_argument("scene", help="Mitsuba XML scene with 'emitter' and 'specimen' disks")
     _scene_options(measure, sweep=False)
-    _measurement_options(measure, sweep=False)
+    _option_flags(measure, _kind("settings"))
     measure.add_argument("--json", action="store_true",
                          help="print the reading as one JSON object (a result file: `virtspec colour` reads it)")
 
@@ -101,7 +101,7 @@ def build_parser() -> argparse.ArgumentParser:
                     "and certificate; resumable when --out is given.")
     sweep.add_argument("scene", help="Mitsuba XML scene with 'emitter' and 'specimen' disks")
     _scene_options(sweep, sweep=True)
-    _measurement_options(sweep, sweep=True)
+    _option_flags(sweep, _kind("settings"), words=("theta_i",))
     sweep.add_argument("--out", help="result file .nc, .csv or .json (finished readings are kept in "
                                      "FILE.partial.json until the result file is written: re-run to resume)")
     sweep.add_argument("--plot", help="figure .png or .svg (readings with the band of their certified tolerance)")
@@ -123,8 +123,8 @@ def build_parser() -> argparse.ArgumentParser:
                     "BRDF/BTDF per bin with their certificate (DKW for the CDFs, union bound for the bins, "
                     "Clopper-Pearson intervals for f).")
     gonio.add_argument("scene", help="Mitsuba XML scene with 'emitter' and 'specimen' disks")
-    _measurement_options(gonio, sweep=True)
-    _gonio_options(gonio)
+    _option_flags(gonio, _kind("settings"), words=("theta_i",))
+    _option_flags(gonio, _kind("gonio"))
     gonio.add_argument("--out", help="result file .nc, .csv or .json (the tabulated BSDF reads the .nc)")
     gonio.add_argument("--plot", help="figure .png or .svg: polar plot of f in and across the plane of incidence")
     gonio.add_argument("--plot-series", help="figure .png or .svg: the distribution over theta_i as a series (f in "
@@ -189,8 +189,8 @@ def build_parser() -> argparse.ArgumentParser:
                      "the scene's integrating_sphere integrator.")
     sphere.add_argument("scene", help="Mitsuba XML scene with an integrating_sphere integrator and "
                                       "'emitter' and 'specimen' disks")
-    _measurement_options(sphere, sweep=False)
-    _sphere_options(sphere)
+    _option_flags(sphere, _kind("settings"))
+    _option_flags(sphere, _kind("sphere"))
     sphere.add_argument("--out", help="result file .json or .nc")
     sphere.add_argument("--json", action="store_true", help="print the result as one JSON object")
     return parser
@@ -228,69 +228,48 @@ def _pairs(items: Sequence[str], flag: str) -> dict[str, str]:
     return pairs
 
 
-def _sphere_options(parser: argparse.ArgumentParser) -> None:
-    """One flag per field of :class:`~virtspec_mi.geometry.sphere.SphereSettings` (default: the scene's)."""
+def _kind(name: str) -> Any:
+    """The options class ``name`` (``settings``, ``gonio``, ``sphere``), imported when the parser is built."""
 
-    from dataclasses import fields
+    from virtspec_mi.instruments.goniophotometer import GonioOptions
+    from virtspec_mi.instruments.sphere import SphereOptions
+    from virtspec_mi.settings import Settings
 
-    from virtspec_mi.geometry.sphere import SphereSettings
-
-    kinds = {"standard": float, "max_bounces": int}
-    for item in fields(SphereSettings):
-        choices = item.metadata["choices"]
-        parser.add_argument("--" + item.name.replace("_", "-"), type=kinds.get(item.name, str),
-                            choices=list(choices) if choices else None,
-                            help=f"{item.metadata['help']} (default: the scene's, else {item.default})")
+    return {"settings": Settings, "gonio": GonioOptions, "sphere": SphereOptions}[name]
 
 
-def _measurement_options(parser: argparse.ArgumentParser, sweep: bool) -> None:
+def _option_flags(parser: argparse.ArgumentParser, kind: Any, words: tuple[str, ...] = ()) -> None:
     """
-    One flag per field of :class:`~virtspec_mi.settings.Settings` (``--theta-i`` …): the
-    choices, defaults and help come from the field; values go to ``Settings`` as given
-    (it validates them). A flag left out takes the scene's value, else the default.
+    The one flag builder: one flag per option of ``kind`` (an
+    :class:`~virtspec_mi.settings.Options` class: ``--theta-i`` …), its choices, default
+    and help from the field; a switch (a ``bool`` default) is a flag without a value,
+    an option the command line writes as several words (the field's ``words``, or one
+    named in ``words``) takes them all. Values go to the options as given (they validate
+    them); a flag left out takes the scene's value, else the default.
     """
 
     from dataclasses import fields
 
-    from virtspec_mi.settings import Settings, help_text, shown
+    from virtspec_mi.settings import help_text, shown
 
-    for item in fields(Settings):
+    for item in fields(kind):
+        meta = item.metadata
+        if not meta["flag"]:
+            continue
         flag = "--" + item.name.replace("_", "-")
-        choices = item.metadata["choices"]
-        default = f"default: the scene's, else {shown(item.default)}" if item.default is not None else \
-            "default: the scene's, else from the rule"
-        if item.name == "joint":
-            parser.add_argument(flag, action="store_true", default=None, help=f"{help_text(item)} ({default})")
-            continue
-        if item.name == "theta_i" and sweep:
-            parser.add_argument(flag, nargs="+", help="polar incidence angles, degrees in [0, 90]: numbers and "
-                                                      "start:stop:step ranges (default: the scene's, else 0)")
-            continue
-        parser.add_argument(flag, nargs="+" if item.name == "wavelengths" else None,
-                            choices=list(choices) if choices else None, help=f"{help_text(item)} ({default})")
-
-
-def _gonio_options(parser: argparse.ArgumentParser) -> None:
-    """One flag per goniophotometer parameter (:data:`~virtspec_mi.geometry.bins.GONIO_PARAMETERS`)."""
-
-    from virtspec_mi.geometry.bins import GONIO_PARAMETERS
-    from virtspec_mi.settings import shown
-
-    for name, (default, meaning) in GONIO_PARAMETERS.items():
-        flag = "--" + name.replace("_", "-")
-        text = f"{meaning} (default: the scene's, else {shown(default)})"
-        if isinstance(default, bool):
+        default = f"default: the scene's, else {shown(item.default) if item.default is not None else meta['unset']}"
+        text = f"{help_text(item)} ({default})"
+        if isinstance(item.default, bool):
             parser.add_argument(flag, action="store_true", default=None, help=text)
         else:
-            parser.add_argument(flag, nargs="+" if name.endswith("_bins") else None, help=text)
+            parser.add_argument(flag, nargs="+" if meta["words"] or item.name in words else None,
+                                choices=list(meta["choices"]) if meta["choices"] else None, help=text)
 
 
-def _settings(args: argparse.Namespace) -> dict:
-    """The settings given on the command line (lists joined into one string)."""
+def _given(args: argparse.Namespace, kind: Any) -> dict[str, Any]:
+    """The options of ``kind`` given on the command line (several words joined into one string)."""
 
-    from virtspec_mi.settings import SETTING_NAMES
-
-    values = {name: getattr(args, name, None) for name in SETTING_NAMES}
+    values = {name: getattr(args, name, None) for name in kind.names()}
     return {name: " ".join(value) if isinstance(value, list) else value for name, value in values.items()}
 
 
@@ -332,17 +311,15 @@ def _measure(args: argparse.Namespace) -> int:
     from virtspec_mi.api import measure
 
     reading = measure(args.scene, parameters=_pairs(args.params, "--param"), defines=_pairs(args.defines, "-D"),
-                      **_settings(args))
+                      **_given(args, _kind("settings")))
     print(json.dumps(reading.as_dict()) if args.json else reading.summary())
     return 0
 
 
 def _sphere(args: argparse.Namespace) -> int:
     from virtspec_mi.api import sphere_measure
-    from virtspec_mi.geometry.sphere import SPHERE_SETTING_NAMES
 
-    own = {name: getattr(args, name) for name in SPHERE_SETTING_NAMES}
-    result = sphere_measure(args.scene, **_settings(args), **own)
+    result = sphere_measure(args.scene, **_given(args, _kind("settings")), **_given(args, _kind("sphere")))
     if args.out:
         result.write(args.out)
     print(json.dumps(result.as_dict()) if args.json else result.summary())
@@ -363,7 +340,7 @@ def _sweep(args: argparse.Namespace) -> int:
     if parameters and args.plot:
         raise ValueError("--plot draws a sweep over wavelength x theta_i; a parameter sweep is plotted by selecting "
                          "one parameter point first (Result.sel in Python)")
-    kwargs = {**_settings(args), "progress": False if args.quiet else None, "parameters": parameters,
+    kwargs = {**_given(args, _kind("settings")), "progress": False if args.quiet else None, "parameters": parameters,
               "points": args.points, "defines": _pairs(args.defines, "-D"),
               "workers": args.scheduler if args.scheduler is not None else args.workers,
               "task_readings": args.task_readings}
@@ -429,14 +406,12 @@ def _densities(args: argparse.Namespace, kwargs: dict, run: Any, out: Any) -> in
 
 def _gonio(args: argparse.Namespace) -> int:
     from virtspec_mi.api import gonio
-    from virtspec_mi.geometry.bins import GONIO_PARAMETERS
     from virtspec_mi.results.plot import check_figure_path
 
     check_figure_path(args.plot)  # a bad suffix fails before any tracing
     check_figure_path(args.plot_series)
-    options = {name: getattr(args, name) for name in GONIO_PARAMETERS}
-    options = {name: " ".join(v) if isinstance(v, list) else v for name, v in options.items()}
-    settings = _settings(args)
+    options = _given(args, _kind("gonio"))
+    settings = _given(args, _kind("settings"))
     theta_i = settings.pop("theta_i")
     reading = gonio(args.scene, theta_i=theta_i, out=args.out, **options, **settings)
     if args.plot:

@@ -48,7 +48,7 @@ from virtspec_mi.results.hemispherical import Result
 from virtspec_mi.settings import Settings
 
 __all__ = ["take_readings", "take_keyed_readings", "in_process_runner", "shares_wavelengths", "run", "measure_reading",
-           "take_gonio_readings", "run_gonio", "gonio_reading", "BatchRunner"]
+           "take_gonio_readings", "run_gonio", "BatchRunner"]
 
 BatchRunner = Callable[[list[np.ndarray]], Iterable[tuple[np.ndarray, Counts, "Counts | None", float]]]
 """
@@ -438,35 +438,3 @@ def run_gonio(instrument: Any, settings: Settings, theta_i: Sequence[float], bin
     return GonioResult(result=result, bin_counts=grid(tallies), bins=bins, guarantee=guarantee,
                        relative_tolerance=relative_tolerance, brdf_floor=brdf_floor)
 
-
-def gonio_reading(instrument: Any, settings: Settings, options: dict[str, Any],
-                  theta_i: Sequence[float] | None = None, scene: str = "") -> Any:
-    """
-    A goniophotometer reading of an instrument at ``theta_i`` (default: ``settings.theta_i``)
-    with the goniophotometer parameters ``options``
-    (:data:`~virtspec_mi.geometry.bins.GONIO_PARAMETERS`; absent ones take their default):
-    the bins are built (a bad specification is a ``ValueError`` naming the parameter),
-    N is ``settings.rays`` or sized by ``guarantee`` over the K bins
-    (:func:`virtspec_mi.budgets.bins.gonio_rays`), then :func:`run_gonio`.
-    """
-
-    from virtspec_mi.geometry.bins import gonio_options, make_bins
-    from virtspec_mi.budgets.bins import gonio_rays
-
-    spec = gonio_options(options, "gonio")
-    angles = np.atleast_1d(np.asarray(settings.theta_i if theta_i is None else theta_i, dtype=np.float64))
-    bins = make_bins(spec["theta_o_bins"], spec["phi_o_bins"], spec["binning"], spec["fold_phi"], spec["hemispheres"])
-    relative, floor = spec["relative_tolerance"], spec["brdf_floor"]
-    if settings.rays is None:
-        rays = gonio_rays(spec["guarantee"], settings.mu, settings.delta, bins.size, relative, floor,
-                          float(bins.projected_solid_angles().min()))
-        guarantee = spec["guarantee"]
-    else:
-        rays, guarantee = settings.rays, "rays"
-        if spec["guarantee"] == "relative" or floor is not None:
-            gonio_rays("relative", settings.mu, settings.delta, bins.size, relative, floor,
-                       float(bins.projected_solid_angles().min()))  # checks relative_tolerance and brdf_floor
-    resolved = settings.updated(theta_i=float(angles[0]), rays=rays)
-    return run_gonio(instrument, resolved, angles, bins, scene=scene, guarantee=guarantee,
-                     relative_tolerance=None if relative is None else float(relative),
-                     brdf_floor=None if floor is None else float(floor))

@@ -57,8 +57,7 @@ import numpy as np
 
 from virtspec_mi.checks import shown_value
 
-__all__ = ["BINNINGS", "HEMISPHERES", "MAX_BINS", "GONIO_PARAMETERS", "GonioBins", "make_bins", "parse_edges",
-           "gonio_options"]
+__all__ = ["BINNINGS", "HEMISPHERES", "MAX_BINS", "GonioBins", "make_bins", "parse_edges"]
 
 BINNINGS: dict[str, str] = {
     "uniform": "equal widths in theta_o (per hemisphere) and phi_o",
@@ -75,41 +74,6 @@ MAX_BINS: int = 1 << 20
 """Most bins (θo × φo) of one reading: per-reading tallies are int64, 8 MiB at most per reading."""
 
 _MAX_PER_AXIS = 1 << 16
-
-GONIO_PARAMETERS: dict[str, tuple[Any, str]] = {
-    "theta_o_bins": (18, "theta_o bins per hemisphere (1 ... 32768), or theta_o edges in degrees within [0, 180] "
-                         "(numbers, or start:stop:step; 90 an edge if crossed)"),
-    "phi_o_bins": (36, "phi_o bins over [0, 360) (folded: [0, 180]), 1 ... 65536, or phi_o edges in degrees"),
-    "binning": ("uniform", "theta_o binning of a number of bins: " + "; ".join(f"{k}: {v}" for k, v in BINNINGS.items())),
-    "fold_phi": (False, "fold phi_o to the relative azimuth |phi_o - phi_i| in [0, 180] (isotropic specimens)"),
-    "hemispheres": ("both", "what a number of theta_o bins covers: both, reflection (0-90) or transmission (90-180)"),
-    "guarantee": ("union", "how N is sized when rays is not given: union (every bin fraction within mu), "
-                           "union-exact, dkw (the CDFs within mu) or relative"),
-    "relative_tolerance": (None, "guarantee relative: relative tolerance on f_k, 0 < eps <= 1"),
-    "brdf_floor": (None, "guarantee relative: the BRDF/BTDF value (1/sr) above which f_k is held to "
-                         "relative_tolerance"),
-}
-"""
-The goniophotometer's own parameters (beside the :class:`~virtspec_mi.settings.Settings`):
-name → (default, help). The one definition: :func:`virtspec_mi.gonio` takes them as
-keywords, ``virtspec gonio`` as flags and the ``spectrophotometer`` integrator as
-parameters.
-"""
-
-
-def gonio_options(values: dict[str, Any], caller: str) -> dict[str, Any]:
-    """
-    The goniophotometer parameters of ``values`` (``None`` or absent: the default),
-    unknown names refused with ``TypeError``; :func:`make_bins` checks the bin ones.
-    """
-
-    unknown = sorted(set(values) - set(GONIO_PARAMETERS))
-    if unknown:
-        raise TypeError(f"{caller}() got unexpected goniophotometer parameter(s) {', '.join(unknown)}; they are "
-                        f"{', '.join(GONIO_PARAMETERS)}")
-    return {name: default if values.get(name) is None else values[name]
-            for name, (default, _) in GONIO_PARAMETERS.items()}
-
 
 @dataclass(frozen=True, eq=False)
 class GonioBins:

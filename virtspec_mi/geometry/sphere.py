@@ -41,15 +41,15 @@ sphere theory, Applied Optics 6, 125–128.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field, fields, replace
+from dataclasses import dataclass, field
 from typing import Any, Sequence
 
 import numpy as np
 
 from virtspec_mi.checks import number
 
-__all__ = ["ROLES", "HOLDER_ROLES", "MEASUREMENTS", "SPECULAR", "METHODS", "Port", "Baffle", "Sphere",
-           "SphereSettings", "SPHERE_SETTING_NAMES", "SPHERE_PARAMETERS", "sphere_from_parameters", "parse_port", "parse_baffle", "parse_wall_reflectance"]
+__all__ = ["ROLES", "HOLDER_ROLES", "Port", "Baffle", "Sphere", "SPHERE_PARAMETERS", "is_sphere_parameter",
+           "sphere_from_parameters", "parse_port", "parse_baffle", "parse_wall_reflectance"]
 
 ROLES: tuple[str, ...] = ("sample", "entrance", "reference", "detector", "specular", "open")
 """The roles a port may have (see the module docstring)."""
@@ -390,82 +390,28 @@ def parse_baffle(text: str) -> Baffle:
         raise ValueError(f"baffle: {error}") from None
 
 
-MEASUREMENTS: dict[str, str] = {
-    "reflectance": "8/d-type reflectance: the specimen in the sample port, lit through the entrance port",
-    "transmittance": "the specimen at the entrance port, light transmitted into the sphere (reference: open port)",
-}
-SPECULAR: dict[str, str] = {
-    "SCI": "specular component included: the specular port closed by a plug of wall material",
-    "SCE": "specular component excluded: the specular port open to a light trap",
-}
-METHODS: dict[str, str] = {
-    "substitution": "single beam: sample, then the standard, in the same port (the reference port plugged)",
-    "comparison": "sample and standard both mounted (sample and reference ports), then swapped",
-}
-
-
-def _sphere_setting(default: Any, help: str, choices: dict | None = None) -> Any:
-    return field(default=default, metadata={"help": help, "choices": choices})
-
-
-@dataclass(frozen=True)
-class SphereSettings:
-    """
-    How a sphere reading is taken (defined once: the API keywords, the CLI flags and the
-    ``integrating_sphere`` integrator's parameters derive from these fields).
-    """
-
-    measurement: str = _sphere_setting("reflectance", "what the sphere measures", MEASUREMENTS)
-    specular: str = _sphere_setting("SCI", "specular component included or excluded", SPECULAR)
-    method: str = _sphere_setting("substitution", "how the reference standard is measured", METHODS)
-    standard: float = _sphere_setting(0.99, "reflectance of the Lambertian reference standard, 0 < standard <= 1")
-    max_bounces: int = _sphere_setting(100_000, "step cap of a sphere walk, 1 ... 10**7 (capped walks are counted)")
-
-    def __post_init__(self) -> None:
-        for name, choices in (("measurement", MEASUREMENTS), ("specular", SPECULAR), ("method", METHODS)):
-            value = getattr(self, name)
-            if name == "specular" and isinstance(value, str):
-                value = value.upper()
-                object.__setattr__(self, name, value)
-            if value not in choices:
-                raise ValueError(f"{name} must be one of {', '.join(choices)} (got {value!r})")
-        standard = _finite("standard", self.standard)
-        if not 0.0 < standard <= 1.0:
-            raise ValueError(f"standard must satisfy 0 < standard <= 1 (got {standard:g})")
-        object.__setattr__(self, "standard", standard)
-        bounces = self.max_bounces
-        if isinstance(bounces, bool) or not isinstance(bounces, (int, np.integer)) or not 1 <= bounces <= 10**7:
-            raise ValueError(f"max_bounces must be a whole number with 1 <= max_bounces <= 10**7 (got {bounces!r})")
-        object.__setattr__(self, "max_bounces", int(bounces))
-
-    def updated(self, **changes: Any) -> "SphereSettings":
-        """A copy with ``changes`` (``None`` values ignored), validated."""
-
-        return replace(self, **{k: v for k, v in changes.items() if v is not None})
-
-    def as_dict(self) -> dict[str, Any]:
-        return {item.name: getattr(self, item.name) for item in fields(self)}
-
-
-SPHERE_SETTING_NAMES: tuple[str, ...] = tuple(item.name for item in fields(SphereSettings))
-"""The names of :class:`SphereSettings`' fields."""
-
-
 SPHERE_PARAMETERS: tuple[str, ...] = ("diameter", "wall_reflectance", "baffle")
 """Parameters of a sphere description besides its ``port_<name>`` entries."""
 
 
-def sphere_from_parameters(values: dict[str, Any]) -> Sphere:
+def is_sphere_parameter(name: str) -> bool:
+    """True for a flat parameter of a sphere description: :data:`SPHERE_PARAMETERS` or ``port_<name>``."""
+
+    return name in SPHERE_PARAMETERS or name.startswith("port_")
+
+
+def sphere_from_parameters(values: Any) -> Sphere:
     """
-    A :class:`Sphere` from flat parameters (the ``integrating_sphere`` integrator's XML or
-    dict): ``diameter`` (mm), ``wall_reflectance`` (number or ``"nm:value, …"``), one
-    ``port_<name>`` string per port (``"role=… polar=… azimuth=… radius=…"``) and an
+    A :class:`Sphere` from flat parameters (a dict or ``mi.Properties``: the
+    ``integrating_sphere`` integrator's XML or dict): ``diameter`` (mm),
+    ``wall_reflectance`` (number or ``"nm:value, …"``), one ``port_<name>`` string per port (``"role=… polar=… azimuth=… radius=…"``) and an
     optional ``baffle`` string (``"centre=x,y,z normal=x,y,z radius=r"``).
     """
 
     if "diameter" not in values:
         raise ValueError("sphere: diameter (mm) is required")
-    ports = tuple(parse_port(key[len("port_"):], str(text)) for key, text in values.items()
+    ports = tuple(parse_port(key[len("port_"):], str(values.get(key))) for key in values.keys()
                   if key.startswith("port_"))
-    baffle = parse_baffle(str(values["baffle"])) if values.get("baffle") else None
-    return Sphere(float(values["diameter"]), values.get("wall_reflectance", 0.98), ports, baffle)
+    baffle = parse_baffle(str(values.get("baffle"))) if "baffle" in values and values.get("baffle") else None
+    wall = {"wall_reflectance": values.get("wall_reflectance")} if "wall_reflectance" in values else {}
+    return Sphere(values.get("diameter"), ports=ports, baffle=baffle, **wall)

@@ -48,21 +48,84 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import replace
-from typing import Any
+from dataclasses import dataclass, replace
+from typing import Any, ClassVar
 
 import numpy as np
 
-from virtspec_mi.geometry.sphere import Sphere, SphereSettings
+from virtspec_mi.geometry.sphere import Sphere, is_sphere_parameter, sphere_from_parameters
 from virtspec_mi.results.sphere import SphereResult
-from virtspec_mi.settings import Settings
+from virtspec_mi.settings import Options, Settings, one_of, option, share, whole_number
 
-__all__ = ["measure_sphere", "configurations"]
+__all__ = ["MEASUREMENTS", "SPECULAR", "METHODS", "SphereOptions", "measure_sphere", "configurations"]
+
+MEASUREMENTS: dict[str, str] = {
+    "reflectance": "8/d-type reflectance: the specimen in the sample port, lit through the entrance port",
+    "transmittance": "the specimen at the entrance port, light transmitted into the sphere (reference: open port)",
+}
+SPECULAR: dict[str, str] = {
+    "SCI": "specular component included: the specular port closed by a plug of wall material",
+    "SCE": "specular component excluded: the specular port open to a light trap",
+}
+METHODS: dict[str, str] = {
+    "substitution": "single beam: sample, then the standard, in the same port (the reference port plugged)",
+    "comparison": "sample and standard both mounted (sample and reference ports), then swapped",
+}
+
+
+def _check_sphere(value: Any) -> Sphere:
+    if not isinstance(value, Sphere):
+        raise ValueError(f"sphere must be a virtspec_mi.Sphere (got {type(value).__name__})")
+    return value
+
+
+@dataclass(frozen=True)
+class SphereOptions(Options):
+    """
+    How a sphere reading is taken, and the sphere (defined once: the API keywords, the
+    CLI flags and the ``integrating_sphere`` integrator's parameters derive from these
+    fields; the sphere is read from the integrator's flat parameters ``diameter``,
+    ``wall_reflectance``, ``port_<name>`` and ``baffle``:
+    :func:`virtspec_mi.geometry.sphere.sphere_from_parameters`).
+    """
+
+    title: ClassVar[str] = "sphere options"
+
+    measurement: str = option("reflectance", one_of("measurement", MEASUREMENTS), "what the sphere measures",
+                              MEASUREMENTS)
+    specular: str = option("SCI", one_of("specular", SPECULAR, fold=str.upper),
+                           "specular component included or excluded", SPECULAR)
+    method: str = option("substitution", one_of("method", METHODS), "how the reference standard is measured",
+                         METHODS)
+    standard: float = option(0.99, share("standard"),
+                             "reflectance of the Lambertian reference standard, 0 < standard <= 1")
+    max_bounces: int = option(100_000, whole_number("max_bounces", 1, 10**7, "1 <= max_bounces <= 10**7"),
+                              "step cap of a sphere walk, 1 ... 10**7 (capped walks are counted)")
+    sphere: Sphere | None = option(
+        None, _check_sphere, "the integrating sphere (a virtspec_mi.Sphere; as integrator parameters: diameter, "
+                             "wall_reflectance, port_<name>, baffle)", flag=False)
+
+    @classmethod
+    def _gathered(cls, parameters: Any) -> dict[str, Any]:
+        """The sphere, from its flat parameters (when any is given)."""
+
+        if not any(is_sphere_parameter(name) for name in parameters.keys()):
+            return {}
+        return {"sphere": sphere_from_parameters(parameters)}
+
+    @classmethod
+    def _gathers(cls, name: str) -> bool:
+        return is_sphere_parameter(name)
+
+    def as_dict(self) -> dict[str, Any]:
+        """How the reading is taken, as plain data (the sphere is recorded apart: :meth:`Sphere.parameters`)."""
+
+        return {name: value for name, value in super().as_dict().items() if name != "sphere"}
 
 _FATES = ("detected", "absorbed_wall", "absorbed_specimen", "absorbed_other", "capped", "invalid_directions")
 
 
-def configurations(sphere: Sphere, options: SphereSettings, specimen_bsdf: Any, specimen_radius: float,
+def configurations(sphere: Sphere, options: SphereOptions, specimen_bsdf: Any, specimen_radius: float,
                    standard_bsdf: Any, open_bsdf: Any) -> dict[str, tuple[list, list]]:
     """
     Per configuration: the holders (port index, BSDF, disk radius, frame) — holder 0 in
@@ -127,7 +190,7 @@ def configurations(sphere: Sphere, options: SphereSettings, specimen_bsdf: Any, 
     return {"sample": (sample, actions), "standard": (standard, actions)}
 
 
-def _check_beam(sphere: Sphere, options: SphereSettings, settings: Settings, frame: np.ndarray) -> None:
+def _check_beam(sphere: Sphere, options: SphereOptions, settings: Settings, frame: np.ndarray) -> None:
     """A reflectance beam must come in through the entrance port (its axis, from the specimen centre)."""
 
     if settings.beam == "diffuse":
@@ -147,7 +210,7 @@ def _check_beam(sphere: Sphere, options: SphereSettings, settings: Settings, fra
                          "give the angles the entrance port is built for")
 
 
-def measure_sphere(instrument: Any, sphere: Sphere, settings: Settings, options: SphereSettings,
+def measure_sphere(instrument: Any, sphere: Sphere, settings: Settings, options: SphereOptions,
                    scene: str = "") -> "SphereResult":
     """
     The sphere readings of ``instrument``'s specimen at every wavelength of ``settings``

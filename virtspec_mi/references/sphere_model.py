@@ -3,7 +3,8 @@ A sphere description in the terms of the sphere theory (the one rule that ties t
 ====================================================================================
 
 :mod:`virtspec_mi.geometry.sphere` describes a physical sphere (ports with roles, wall, baffle)
-and how it is read (:class:`~virtspec_mi.geometry.sphere.SphereSettings`);
+and how it is read (plain values: ``measurement``, ``specular``, ``method``, ``standard``,
+as :meth:`virtspec_mi.instruments.sphere.SphereOptions.as_dict` gives them);
 :mod:`virtspec_mi.references.sphere_theory` predicts readings from port *fractions*. This module is
 the single place where the one becomes the other: :func:`theory_inputs` maps a sphere,
 its reading mode and the specimen disk's radius to the keywords of
@@ -49,12 +50,12 @@ Goebel (1967), eq. 2 (port fractions); :mod:`virtspec_mi.references.sphere_theor
 
 from __future__ import annotations
 
-from typing import Any, Sequence
+from typing import Any, Mapping, Sequence
 
 import numpy as np
 
 from virtspec_mi.references import sphere_theory as st
-from virtspec_mi.geometry.sphere import Sphere, SphereSettings
+from virtspec_mi.geometry.sphere import Sphere
 
 __all__ = ["REFLECTANCE_ROLES", "TRANSMITTANCE_ROLES", "disk_share", "theory_inputs", "invertible_range",
            "correct_readings"]
@@ -90,7 +91,7 @@ def disk_share(sphere: Sphere, port: Any, disk_radius: float) -> float:
     return disk_radius**2 / (4.0 * sphere.radius**2 * (1.0 - cap))
 
 
-def theory_inputs(sphere: Sphere, options: SphereSettings, wavelengths: Sequence[float],
+def theory_inputs(sphere: Sphere, options: Mapping[str, Any], wavelengths: Sequence[float],
                   specimen_radius: float | None = None) -> dict[str, Any]:
     """
     The :mod:`~virtspec_mi.references.sphere_theory` keywords of a sphere reading (see the module
@@ -101,7 +102,8 @@ def theory_inputs(sphere: Sphere, options: SphereSettings, wavelengths: Sequence
     sphere
         The sphere.
     options
-        How it is read: ``measurement``, ``specular`` (``mode``), ``method``, ``standard``.
+        How it is read, plain values by name: ``measurement``, ``specular`` (``mode``),
+        ``method``, ``standard`` (other names are ignored).
     wavelengths
         nm; ``wall_reflectance`` is ρw at these (an array).
     specimen_radius
@@ -120,21 +122,21 @@ def theory_inputs(sphere: Sphere, options: SphereSettings, wavelengths: Sequence
         ``port_surface`` — those of ``transmittance_reading`` / ``correct_transmittance``.
     """
 
-    transmittance = options.measurement == "transmittance"
+    transmittance = options["measurement"] == "transmittance"
     beam_role = "entrance" if transmittance else "sample"
     beam_port = sphere.port(beam_role)
     if beam_port is None:
-        raise ValueError(f"sphere: a {options.measurement} reading needs a port with role {beam_role!r}")
+        raise ValueError(f"sphere: a {options['measurement']} reading needs a port with role {beam_role!r}")
     if sphere.port("detector") is None:
         raise ValueError("sphere: a reading needs a port with role 'detector'")
     radius = beam_port.radius if specimen_radius is None else float(specimen_radius)
     roles = TRANSMITTANCE_ROLES if transmittance else REFLECTANCE_ROLES
     out: dict[str, Any] = {name: 0.0 for name in set(roles.values())}
-    comparison = options.method == "comparison" and not transmittance
+    comparison = options["method"] == "comparison" and not transmittance
     for port in sphere.ports:
         cap = sphere.cap_fraction(port)
         key = roles[port.role]
-        if transmittance and (port.role == "specular" and options.specular == "SCI"
+        if transmittance and (port.role == "specular" and options["specular"] == "SCI"
                               or port.role == "reference" and sphere.port("sample") is None):
             continue  # plugged with wall material: wall (as simulated)
         disk = None
@@ -149,11 +151,11 @@ def theory_inputs(sphere: Sphere, options: SphereSettings, wavelengths: Sequence
         else:
             out[key] += cap
     out["wall_reflectance"] = sphere.wall_reflectance_at(np.atleast_1d(np.asarray(wavelengths, dtype=float)))
-    out["standard_reflectance"] = float(options.standard)
+    out["standard_reflectance"] = float(options["standard"])
     out["port_surface"] = "flat"
     if not transmittance:
-        out["method"] = options.method
-        out["mode"] = options.specular
+        out["method"] = options["method"]
+        out["mode"] = options["specular"]
     return out
 
 

@@ -37,7 +37,7 @@ import numpy as np
 
 from virtspec_mi.budgets.bounds import hoeffding_mu
 from virtspec_mi.budgets.intervals import clopper_pearson
-from virtspec_mi.geometry.sphere import SPHERE_SETTING_NAMES, SphereSettings, sphere_from_parameters
+from virtspec_mi.geometry.sphere import sphere_from_parameters
 from virtspec_mi.references.sphere_model import correct_readings, theory_inputs
 
 __all__ = ["CONFIGURATIONS", "SphereResult"]
@@ -198,9 +198,7 @@ class SphereResult:
         (:func:`virtspec_mi.references.sphere_model.theory_inputs` of its sphere, mode and specimen radius).
         """
 
-        options = {k: v for k, v in self.options.items() if k in SPHERE_SETTING_NAMES}
-        return theory_inputs(self.sphere_description, SphereSettings(**options), self.wavelengths,
-                             self.specimen_radius)
+        return theory_inputs(self.sphere_description, self.options, self.wavelengths, self.specimen_radius)
 
     def corrected(self, *, specular_reflectance: Any = 0.0, sample_reflectance: Any = None,
                   collimated_transmittance: Any = 0.0) -> np.ndarray:

@@ -3,7 +3,8 @@
 =============================================================================================
 
 The ``spectrophotometer`` integrator's settings plus a sphere description: the sphere
-of :mod:`virtspec_mi.geometry.sphere` and how it is read (:class:`virtspec_mi.geometry.sphere.SphereSettings`).
+of :mod:`virtspec_mi.geometry.sphere` and how it is read: the fields of
+:class:`virtspec_mi.instruments.sphere.SphereOptions`, the one definition.
 A thin adapter: :func:`virtspec_mi.sphere_measure` reads it from a scene, and
 ``mi.render`` takes the sphere readings with :func:`virtspec_mi.instruments.sphere.measure_sphere`.
 
@@ -44,8 +45,7 @@ import mitsuba as mi
 import numpy as np
 
 from virtspec_mi.engine.bench import read_bench
-from virtspec_mi.geometry.sphere import SPHERE_PARAMETERS, SPHERE_SETTING_NAMES, SphereSettings, sphere_from_parameters
-from virtspec_mi.instruments.sphere import measure_sphere
+from virtspec_mi.instruments.sphere import SphereOptions, measure_sphere
 
 from .spectrophotometer import Spectrophotometer, check_spp
 
@@ -59,22 +59,22 @@ class IntegratingSphere(Spectrophotometer):
 
     def __init__(self, props: mi.Properties) -> None:
         super().__init__(props)
-        keys = [k for k in props.keys() if k in SPHERE_PARAMETERS or k.startswith("port_")]
         try:
-            self.sphere = sphere_from_parameters({k: props.get(k) for k in keys})
-            self.sphere_settings = SphereSettings(
-                **{k: props.get(k) for k in SPHERE_SETTING_NAMES if k in props})
+            self.sphere_options = SphereOptions.from_parameters(props)
+            if self.sphere_options.sphere is None:
+                raise ValueError("sphere: diameter (mm) is required")
         except (ValueError, TypeError) as error:
             raise ValueError(f"integrating_sphere: {error}") from None
 
     def render(self, scene, sensor=None, seed=0, spp=0, develop=True, evaluate=True):
         rays = check_spp(spp)
         settings = self.settings.updated(seed=(self.settings.seed + int(seed)) % _WORD, rays=rays or None)
-        reading = measure_sphere(read_bench(scene), self.sphere, settings, self.sphere_settings)
+        options = self.sphere_options
+        reading = measure_sphere(read_bench(scene), options.sphere, settings, options)
         self.last_reading = reading
         table = np.stack([reading.reading, reading.hemispherical, reading.detector_fraction,
                           reading.standard_fraction], axis=1)
         return mi.TensorXf(table.astype(np.float32))
 
     def to_string(self) -> str:
-        return f"IntegratingSphere[{self.sphere.describe()}; {self.sphere_settings}]"
+        return f"IntegratingSphere[{self.sphere_options.sphere.describe()}; {self.sphere_options.as_dict()}]"

@@ -49,8 +49,8 @@ chunk_size : integer, default 4194304
 These are the fields of :class:`virtspec_mi.settings.Settings` (the one definition;
 this list is checked against it by the tests).
 
-Goniophotometer parameters (:data:`virtspec_mi.geometry.bins.GONIO_PARAMETERS`, the one
-definition; any of them makes ``mi.render`` take a goniophotometer reading, kept in
+Goniophotometer parameters (the options of
+:class:`virtspec_mi.instruments.goniophotometer.GonioOptions`, the one definition; any of them makes ``mi.render`` take a goniophotometer reading, kept in
 ``integrator.last_reading`` as a :class:`~virtspec_mi.results.goniophotometer.GonioResult`;
 :func:`virtspec_mi.gonio` on the scene uses them as its defaults):
 ``theta_o_bins`` (integer or string of edges, default 18 per hemisphere),
@@ -82,10 +82,10 @@ import mitsuba as mi
 import numpy as np
 
 from virtspec_mi.checks import MAX_RAYS, shown_value
-from virtspec_mi.engine.readings import gonio_reading, measure_reading
-from virtspec_mi.geometry.bins import GONIO_PARAMETERS, gonio_options, make_bins
 from virtspec_mi.engine.bench import read_bench
-from virtspec_mi.settings import SETTING_NAMES, Settings
+from virtspec_mi.engine.readings import measure_reading
+from virtspec_mi.instruments.goniophotometer import GonioOptions, gonio_reading
+from virtspec_mi.settings import Settings
 
 __all__ = ["Spectrophotometer", "check_spp", "clear_render_errors"]
 
@@ -97,14 +97,9 @@ class Spectrophotometer(mi.SamplingIntegrator):
 
     def __init__(self, props: mi.Properties) -> None:
         super().__init__(props)
-        values = {name: props.get(name) for name in SETTING_NAMES if name in props}
-        self.gonio = {name: props.get(name) for name in GONIO_PARAMETERS if name in props}
         try:
-            self.settings = Settings(**values)
-            if self.gonio:
-                spec = gonio_options(self.gonio, "spectrophotometer")
-                make_bins(spec["theta_o_bins"], spec["phi_o_bins"], spec["binning"], spec["fold_phi"],
-                          spec["hemispheres"])  # a bad bin specification fails at load time
+            self.settings = Settings.from_parameters(props)
+            self.gonio_options = GonioOptions.from_parameters(props) if GonioOptions.parameters_in(props) else None
         except ValueError as error:
             raise ValueError(f"spectrophotometer: {error}") from None
         self.last_reading = None
@@ -112,12 +107,12 @@ class Spectrophotometer(mi.SamplingIntegrator):
     def render(self, scene, sensor=None, seed=0, spp=0, develop=True, evaluate=True):
         rays = check_spp(spp)
         settings = self.settings.updated(seed=(self.settings.seed + int(seed)) % _WORD, rays=rays or None)
-        instrument = read_bench(scene)
-        if self.gonio:
-            self.last_reading = gonio_reading(instrument, settings, self.gonio)
+        bench = read_bench(scene)
+        if self.gonio_options is not None:
+            self.last_reading = gonio_reading(bench, settings, self.gonio_options)
             reading = self.last_reading.result.squeeze()
         else:
-            reading = measure_reading(instrument, settings)
+            reading = measure_reading(bench, settings)
             self.last_reading = reading
         reading.warn_if_uncertified(stacklevel=2)
         table = np.stack([reading.reflectance, reading.transmittance, reading.absorptance], axis=1)

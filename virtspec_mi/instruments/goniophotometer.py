@@ -1,0 +1,126 @@
+"""
+The goniophotometer: the spectrophotometer's rays binned by their outgoing direction
+===================================================================================
+
+:class:`GonioOptions` is the one definition of the goniophotometer's options beside the
+common :class:`~virtspec_mi.settings.Settings`: how the escaping rays are binned by
+their outgoing direction (θo, φo) in the specimen frame (:mod:`virtspec_mi.geometry.bins`)
+and how N is sized over the K bins (``guarantee``, :mod:`virtspec_mi.budgets.bins`).
+:func:`virtspec_mi.gonio` takes them as keywords, ``virtspec gonio`` as flags and the
+``spectrophotometer`` integrator as parameters; a bad value raises ``ValueError`` naming
+it, once, when the options are built (the bins are laid out then:
+:attr:`GonioOptions.bins`).
+
+References
+----------
+Baranoski et al. (2001), Sect. 6; Nicodemus et al. (1977), NBS Monograph 160.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any, ClassVar
+
+import numpy as np
+
+from virtspec_mi.budgets.bins import GUARANTEES, gonio_rays
+from virtspec_mi.checks import number, shown_value
+from virtspec_mi.geometry.bins import BINNINGS, HEMISPHERES, GonioBins, make_bins, parse_edges
+from virtspec_mi.engine.readings import run_gonio
+from virtspec_mi.results.goniophotometer import GonioResult
+from virtspec_mi.settings import Options, Settings, one_of, option, share, true_or_false
+
+__all__ = ["GonioOptions", "gonio_reading"]
+
+
+def _bin_spec(name: str) -> Any:
+    """The check of a bin specification as written: a whole number of bins, or edges (a tuple of degrees)."""
+
+    def check(value: Any) -> int | tuple[float, ...]:
+        spec = parse_edges(name, value)
+        return spec if isinstance(spec, int) else tuple(float(v) for v in spec)
+    return check
+
+
+def _check_floor(value: Any) -> float:
+    floor = number("brdf_floor", value)
+    if not (math.isfinite(floor) and floor > 0.0):
+        raise ValueError(f"brdf_floor must be a finite BRDF value > 0 in 1/sr (got {shown_value(value)})")
+    return floor
+
+
+@dataclass(frozen=True)
+class GonioOptions(Options):
+    """
+    How a goniophotometer reading bins its rays and sizes N (validated on construction;
+    ``GonioOptions.describe()`` lists every option).
+    """
+
+    title: ClassVar[str] = "goniophotometer options"
+
+    theta_o_bins: int | tuple[float, ...] = option(
+        18, _bin_spec("theta_o_bins"),
+        "theta_o bins per hemisphere (1 ... 32768), or theta_o edges in degrees within [0, 180] (numbers, or "
+        "start:stop:step; 90 an edge if crossed)", words=True)
+    phi_o_bins: int | tuple[float, ...] = option(
+        36, _bin_spec("phi_o_bins"),
+        "phi_o bins over [0, 360) (folded: [0, 180]), 1 ... 65536, or phi_o edges in degrees", words=True)
+    binning: str = option("uniform", one_of("binning", BINNINGS), "theta_o binning of a number of bins", BINNINGS)
+    fold_phi: bool = option(False, true_or_false("fold_phi"),
+                            "fold phi_o to the relative azimuth |phi_o - phi_i| in [0, 180] (isotropic specimens)")
+    hemispheres: str = option("both", one_of("hemispheres", HEMISPHERES), "what a number of theta_o bins covers",
+                              {name: f"theta_o {low:g} ... {high:g}" for name, (low, high) in HEMISPHERES.items()})
+    guarantee: str = option("union", one_of("guarantee", GUARANTEES), "how N is sized when rays is not given",
+                            GUARANTEES)
+    relative_tolerance: float | None = option(None, share("relative_tolerance"),
+                                              "guarantee relative: relative tolerance on f_k, 0 < eps <= 1")
+    brdf_floor: float | None = option(
+        None, _check_floor, "guarantee relative: the BRDF/BTDF value (1/sr) above which f_k is held to "
+                            "relative_tolerance")
+
+    def _check_together(self) -> None:
+        """The bins are laid out (a bad specification names its option); ``relative`` needs its two values."""
+
+        bins = make_bins(self.theta_o_bins, self.phi_o_bins, self.binning, self.fold_phi, self.hemispheres)
+        object.__setattr__(self, "_bins", bins)
+        if self.guarantee == "relative" and (self.relative_tolerance is None or self.brdf_floor is None):
+            raise ValueError("guarantee 'relative' needs relative_tolerance (0 < relative_tolerance <= 1) and "
+                             "brdf_floor (> 0, in 1/sr)")
+
+    @property
+    def bins(self) -> GonioBins:
+        """The θo × φo bins these options lay out (:func:`virtspec_mi.geometry.bins.make_bins`)."""
+
+        return self._bins  # type: ignore[attr-defined]
+
+    @property
+    def smallest_solid_angle(self) -> float:
+        """Ω_min: the smallest projected solid angle of a bin (sr; the relative guarantee's N depends on it)."""
+
+        return float(np.min(self.bins.projected_solid_angles()))
+
+
+def gonio_reading(bench: Any, settings: Settings, options: GonioOptions, theta_i: Any = None,
+                  scene: str = "") -> GonioResult:
+    """
+    A goniophotometer reading of ``bench`` at ``theta_i`` (default: ``settings.theta_i``):
+    N is ``settings.rays`` or sized by ``options.guarantee`` over the K bins
+    (:func:`virtspec_mi.budgets.bins.gonio_rays`); a fixed budget only (two-stage sizes
+    each reading for R and T, not for its bins).
+    """
+
+    if settings.adaptive:
+        raise ValueError("bound must be a fixed budget for a goniophotometer reading (hoeffding, chebyshev, "
+                         "exact, or rays given); N is sized by guarantee= over the bins")
+    angles = np.atleast_1d(np.asarray(settings.theta_i if theta_i is None else theta_i, dtype=np.float64))
+    bins = options.bins
+    if settings.rays is None:
+        rays = gonio_rays(options.guarantee, settings.mu, settings.delta, bins.size, options.relative_tolerance,
+                          options.brdf_floor, options.smallest_solid_angle)
+        guarantee = options.guarantee
+    else:
+        rays, guarantee = settings.rays, "rays"
+    resolved = settings.updated(theta_i=float(angles[0]), rays=rays)
+    return run_gonio(bench, resolved, angles, bins, scene=scene, guarantee=guarantee,
+                     relative_tolerance=options.relative_tolerance, brdf_floor=options.brdf_floor)

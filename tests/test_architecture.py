@@ -197,23 +197,21 @@ def import_graph() -> tuple[Graph, dict[tuple[str, str], list[Site]]]:
             if site not in sites[name, target]:
                 sites[name, target].append(site)
     for target, line in registered_plugins(files):
-        graph["virtspec_mi.plugins"].add(target)
-        sites["virtspec_mi.plugins", target].append(("plugins/__init__.py", line))
+        graph["virtspec_mi.runtime"].add(target)
+        sites["virtspec_mi.runtime", target].append(("virtspec_mi/runtime.py", line))
     return graph, sites
 
 
 def registered_plugins(files: dict[str, tuple[Path, bool]]) -> list[tuple[str, int]]:
-    """The modules ``virtspec_mi.plugins.register()`` imports: its ``PLUGINS`` table, as a literal."""
+    """The modules ``virtspec_mi.runtime.register()`` imports: its ``PLUGINS`` table, as a literal."""
 
-    if "virtspec_mi.plugins" not in files:
-        return []
-    tree = ast.parse(files["virtspec_mi.plugins"][0].read_text(encoding="utf-8"))
+    tree = ast.parse(files["virtspec_mi.runtime"][0].read_text(encoding="utf-8"))
     for node in ast.walk(tree):
         targets = [node.target] if isinstance(node, ast.AnnAssign) else getattr(node, "targets", [])
         if any(isinstance(t, ast.Name) and t.id == "PLUGINS" for t in targets) and node.value is not None:
             table = ast.literal_eval(node.value)
-            return [("virtspec_mi.plugins" + module, node.lineno) for _, module, _ in table.values()]
-    return []
+            return [(module, node.lineno) for _, module, _ in table.values()]
+    raise AssertionError("virtspec_mi/runtime.py has no literal PLUGINS table")
 
 
 # ------------------------------------------------------------------------ cycle finder
@@ -318,7 +316,8 @@ def describe_cycles(graph: Graph, sites: dict[tuple[str, str], list[Site]] | Non
 
 # ------------------------------------------------------------------------ layering
 def _in(module: str, prefixes: tuple[str, ...]) -> bool:
-    return any(module == p or module.startswith(p + ".") for p in prefixes)
+    return any(module == p[1:] if p.startswith("=") else module == p or module.startswith(p + ".")
+               for p in prefixes)
 
 
 def layer_of(module: str) -> int | None:
@@ -360,7 +359,7 @@ def test_the_import_graph_sees_the_project(project_graph):
 
     graph, _ = project_graph
     assert "virtspec_mi" in graph and "virtspec_mi.plugins" in graph
-    assert "virtspec_mi.plugins.integrators.spectrophotometer" in graph["virtspec_mi.plugins"]
+    assert "virtspec_mi.plugins.integrators.spectrophotometer" in graph["virtspec_mi.runtime"]
     assert any(name.startswith("virtspec_mi.plugins.") for name in graph)
     assert sum(map(len, graph.values())) > len(graph) // 2
 

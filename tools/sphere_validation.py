@@ -86,7 +86,7 @@ def grey_table() -> str:
 
     import dataclasses
 
-    sphere = dataclasses.replace(vm.mitsuba().load_file(str(LAB)).integrator().sphere, baffle=None)
+    sphere = dataclasses.replace(vm.mitsuba().load_file(str(LAB)).integrator().sphere_options.sphere, baffle=None)
     lines = ["| ρ | substitution [certified interval] | theory | comparison [certified interval] | theory |",
              "|---|---|---|---|---|"]
     for rho in (0.05, 0.25, 0.45, 0.65, 0.85, 0.95):

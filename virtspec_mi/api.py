@@ -31,27 +31,28 @@ from __future__ import annotations
 
 import os
 from contextlib import ExitStack, contextmanager
-from dataclasses import replace
 from pathlib import Path
 from typing import Any, Iterator
 
 import numpy as np
 
-from virtspec_mi.engine.checkpoint import checkpoint_for, claim, remove
 from virtspec_mi.checks import parse_theta_i
-from virtspec_mi.engine.readings import in_process_runner, measure_reading, run
-from virtspec_mi.instruments.goniophotometer import GonioOptions, gonio_reading
-from virtspec_mi.results.goniophotometer import GonioResult
 from virtspec_mi.engine.bench import Bench
-from virtspec_mi.engine.parameters import apply_point, current_values, parameter_space
+from virtspec_mi.engine.checkpoint import checkpoint_for, claim, remove
+from virtspec_mi.engine.parameters import parameter_space
+from virtspec_mi.engine.readings import in_process_runner
+from virtspec_mi.instruments import INSTRUMENTS
+from virtspec_mi.instruments.base import take
+from virtspec_mi.instruments.goniophotometer import GonioOptions
+from virtspec_mi.instruments.sphere import SphereOptions
+from virtspec_mi.results.goniophotometer import GonioResult
 from virtspec_mi.results.hemispherical import Result
 from virtspec_mi.results.io import check_output
-from virtspec_mi.scene import find_bench, scene_fingerprint
-from virtspec_mi.settings import Settings, keywords, resolve
-from virtspec_mi.instruments.sphere import SphereOptions, measure_sphere
 from virtspec_mi.results.sphere import SphereResult
 from virtspec_mi.results.zarr import SUFFIX as ZARR_SUFFIX
 from virtspec_mi.results.zarr import ZarrTable
+from virtspec_mi.scene import find_bench, scene_fingerprint
+from virtspec_mi.settings import Settings, keywords, resolve
 
 __all__ = ["measure", "sweep", "gonio", "read_result", "read_gonio", "fluctuation", "sphere_measure"]
 
@@ -87,22 +88,13 @@ def measure(scene: Any, *, parameters: dict[str, Any] | None = None, defines: di
     Baranoski et al. (2001), eqs. (2), (23).
     """
 
-    instrument = find_bench(scene, defines)
-    settings, = resolve("measure", settings, _scene_settings(instrument))
-    space = parameter_space(instrument, parameters or {})
+    bench = find_bench(scene, defines)
+    settings, = resolve("measure", settings, _scene_options(bench, Settings))
+    space = parameter_space(bench, parameters or {})
     if space is not None and space.size != 1:
         raise ValueError("measure takes one value per parameter (a sweep takes several: use sweep)")
-    if space is None:
-        result = measure_reading(instrument, settings, progress=progress)
-    else:
-        original = current_values(instrument, space.keys)
-        try:
-            apply_point(instrument, space.keys, space.point(0))
-            result = measure_reading(instrument, settings, progress=progress)
-        finally:
-            apply_point(instrument, space.keys, original)
-        result = replace(result, parameters=space.as_dict(),
-                         coords={**result.coords, **{n: np.asarray(v[0]) for n, v in space.coords().items()}})
+    result = take(INSTRUMENTS["hemispherical"](), bench, settings, parameters=space, keyed=False,
+                  progress=progress).squeeze()
     result.warn_if_uncertified(stacklevel=3)
     return result
 
@@ -190,15 +182,14 @@ def sweep(
     if out is not None:
         check_output(out)
         checkpoint = checkpoint if checkpoint is not None else checkpoint_for(out)
-    instrument = find_bench(scene, defines)
-    base, = resolve("sweep", settings, _scene_settings(instrument))
-    space = parameter_space(instrument, parameters or {}, points=points)
-    angles = np.array(parse_theta_i(base.theta_i if theta_i is None else theta_i))
+    bench = find_bench(scene, defines)
+    base, = resolve("sweep", settings, _scene_options(bench, Settings))
+    space = parameter_space(bench, parameters or {}, points=points)
+    angles = _angles(base, theta_i, "a sweep")
     resolved = base.updated(theta_i=float(angles[0]))
-    for name, values in (("theta_i", angles), ("wavelengths", np.array(resolved.wavelengths))):
-        if len(np.unique(values)) != len(values):
-            raise ValueError(f"{name} of a sweep must be distinct (got repeated values)")
-    fingerprint = scene_fingerprint(scene, instrument, defines)
+    if len(np.unique(resolved.wavelengths)) != len(resolved.wavelengths):
+        raise ValueError("wavelengths of a sweep must be distinct (got repeated values)")
+    fingerprint = scene_fingerprint(scene, bench, defines)
     with ExitStack() as held:
         if checkpoint is not None:  # one run per checkpoint, writable: checked before any cluster or tracing
             held.enter_context(claim(checkpoint))
@@ -208,9 +199,9 @@ def sweep(
             identity = {"scene": fingerprint, **resolved.as_dict(), "theta_i": [float(t) for t in angles],
                         **({} if space is None else {"parameters": space.as_dict()})}
             table = ZarrTable(out, resolved.wavelengths, angles, identity, pilot=resolved.adaptive, parameters=space)
-            runner = table.stream(runner or in_process_runner(instrument, resolved, theta_i=angles, parameters=space))
-        result = run(instrument, resolved, angles, keyed=True, scene=fingerprint, checkpoint=checkpoint,
-                     progress=progress, parameters=space, runner=runner)
+            runner = table.stream(runner or in_process_runner(bench, resolved, theta_i=angles, parameters=space))
+        result = take(INSTRUMENTS["hemispherical"](fingerprint), bench, resolved, theta_i=angles, parameters=space,
+                      keyed=True, checkpoint=checkpoint, progress=progress, runner=runner)
         if checkpoint is not None:
             if out is not None:
                 _write(result, out, checkpoint)
@@ -262,6 +253,22 @@ def _write(result: Result, out: Path, checkpoint: Path) -> None:
         raise failure from error
 
 
+def _angles(settings: Settings, theta_i: Any, what: str) -> np.ndarray:
+    """The incidence angles of a call: ``theta_i`` as given, else the settings'; distinct."""
+
+    angles = np.array(parse_theta_i(settings.theta_i if theta_i is None else theta_i))
+    if len(np.unique(angles)) != len(angles):
+        raise ValueError(f"theta_i of {what} must be distinct (got repeated values)")
+    return angles
+
+
+def _scene_options(bench: Bench, kind: type) -> Any:
+    """The options of kind ``kind`` the scene's integrator holds (its settings, its instrument's options), else the defaults."""
+
+    held = getattr(bench.integrator, "options", {}) if bench.integrator is not None else {}
+    return held.get(kind) or kind()
+
+
 measure.__signature__ = keywords(measure, Settings)  # type: ignore[attr-defined]
 sweep.__signature__ = keywords(sweep, Settings)  # type: ignore[attr-defined]
 
@@ -295,14 +302,11 @@ def gonio(scene: Any, *, theta_i: Any = None, out: str | os.PathLike | None = No
     """
 
     out = check_output(_file_path(out, "out")) if out is not None else None
-    instrument = find_bench(scene)
-    integrator = instrument.integrator
-    scene_options = getattr(integrator, "gonio_options", None) or GonioOptions()
-    base, spec = resolve("gonio", options, _scene_settings(instrument), scene_options)
-    angles = np.array(parse_theta_i(base.theta_i if theta_i is None else theta_i))
-    if len(np.unique(angles)) != len(angles):
-        raise ValueError("theta_i of a goniophotometer reading must be distinct (got repeated values)")
-    result = gonio_reading(instrument, base, spec, angles, scene=scene_fingerprint(scene, instrument))
+    bench = find_bench(scene)
+    settings, spec = resolve("gonio", options, _scene_options(bench, Settings), _scene_options(bench, GonioOptions))
+    angles = _angles(settings, theta_i, "a goniophotometer reading")
+    result = take(INSTRUMENTS["goniophotometer"](scene_fingerprint(scene, bench)), bench, settings, spec,
+                  theta_i=angles)
     result.result.warn_if_uncertified(stacklevel=3)
     if out is not None:
         result.write(out)
@@ -374,20 +378,10 @@ def sphere_measure(scene: Any, **settings: Any) -> SphereResult:
     Baranoski et al. (2001), eqs. (2), (23); Goebel (1967).
     """
 
-    instrument = find_bench(scene)
-    scene_options = getattr(instrument.integrator, "sphere_options", None) or SphereOptions()
-    base, options = resolve("sphere_measure", settings, _scene_settings(instrument), scene_options)
-    if options.sphere is None:
-        raise ValueError("sphere_measure needs a sphere: an 'integrating_sphere' integrator in the scene or "
-                         "sphere=Sphere(...)")
-    fingerprint = scene_fingerprint(scene, instrument)
-    return measure_sphere(instrument, options.sphere, base, options, scene=fingerprint)
+    bench = find_bench(scene)
+    base, options = resolve("sphere_measure", settings, _scene_options(bench, Settings),
+                            _scene_options(bench, SphereOptions))
+    return take(INSTRUMENTS["sphere"](scene_fingerprint(scene, bench)), bench, base, options)
 
 
 sphere_measure.__signature__ = keywords(sphere_measure, Settings, SphereOptions)  # type: ignore[attr-defined]
-
-
-def _scene_settings(instrument: Bench) -> Settings:
-    """The settings of the scene's ``spectrophotometer`` integrator, else the defaults."""
-
-    return instrument.integrator.settings if instrument.integrator is not None else Settings()

@@ -8,10 +8,26 @@ first call
 1. points Dr.Jit at a working libLLVM (:mod:`virtspec_mi.llvm`) and refuses a bad one,
 2. selects the Mitsuba variant (``llvm_ad_spectral``; ``VIRTSPEC_VARIANT`` overrides it,
    e.g. ``cuda_ad_spectral`` on a GPU machine),
-3. registers the project's plugins (:mod:`virtspec_mi.plugins`) under that variant, and
-   lets ``mi.render`` raise the ``spectrophotometer`` integrator's ``ValueError`` (e.g. a
-   bad ``spp``) as itself rather than wrapped in Dr.Jit's ``RuntimeError``
+3. registers the project's plugins (:data:`PLUGINS`: :mod:`virtspec_mi.plugins`) under
+   that variant (:func:`register`), and lets ``mi.render`` raise the
+   ``spectrophotometer`` integrator's ``ValueError`` (e.g. a bad ``spp``) as itself
+   rather than wrapped in Dr.Jit's ``RuntimeError``
    (:func:`virtspec_mi.plugins.integrators.spectrophotometer.clear_render_errors`).
+
+The plugins, one per file (``bsdfs/``: specimens; ``integrators/``: the instruments'
+Mitsuba entry):
+
+======================  ===========  ===============================================
+name                    kind         module (under :mod:`virtspec_mi.plugins`)
+======================  ===========  ===============================================
+``simple_dielectric``   BSDF         :mod:`.bsdfs.simple_dielectric`
+``turbid_slab``         BSDF         :mod:`.bsdfs.turbid_slab`
+``abm_b``               BSDF         :mod:`.bsdfs.abm_b` (walk: :mod:`.bsdfs.abm_walk`)
+``abm_u``               BSDF         :mod:`.bsdfs.abm_u` (walk: :mod:`.bsdfs.abm_walk`)
+``tabulated``           BSDF         :mod:`.bsdfs.tabulated` (a goniophotometer table)
+``spectrophotometer``   integrator   :mod:`.integrators.spectrophotometer`
+``integrating_sphere``  integrator   :mod:`.integrators.integrating_sphere`
+======================  ===========  ===============================================
 """
 
 from __future__ import annotations
@@ -21,9 +37,21 @@ from types import ModuleType
 
 from virtspec_mi.llvm import check_loaded_llvm, select_libllvm
 
-__all__ = ["DEFAULT_VARIANT", "mitsuba", "variant"]
+__all__ = ["DEFAULT_VARIANT", "PLUGINS", "mitsuba", "register", "variant"]
 
 DEFAULT_VARIANT: str = "llvm_ad_spectral"
+
+PLUGINS: dict[str, tuple[str, str, str]] = {
+    "simple_dielectric": ("bsdf", "virtspec_mi.plugins.bsdfs.simple_dielectric", "SimpleDielectric"),
+    "turbid_slab": ("bsdf", "virtspec_mi.plugins.bsdfs.turbid_slab", "TurbidSlab"),
+    "abm_b": ("bsdf", "virtspec_mi.plugins.bsdfs.abm_b", "ABMB"),
+    "abm_u": ("bsdf", "virtspec_mi.plugins.bsdfs.abm_u", "ABMU"),
+    "tabulated": ("bsdf", "virtspec_mi.plugins.bsdfs.tabulated", "Tabulated"),
+    "spectrophotometer": ("integrator", "virtspec_mi.plugins.integrators.spectrophotometer", "Spectrophotometer"),
+    "integrating_sphere": ("integrator", "virtspec_mi.plugins.integrators.integrating_sphere",
+                           "IntegratingSphereIntegrator"),
+}
+"""Every plugin of the project: Mitsuba name → (kind, module, class)."""
 
 _registered: set[str] = set()
 
@@ -46,10 +74,22 @@ def mitsuba() -> ModuleType:
     if mi.variant() != name:
         mi.set_variant(name)
     if name not in _registered:
-        from virtspec_mi.plugins import register
         from virtspec_mi.plugins.integrators.spectrophotometer import clear_render_errors
 
         register()
         mi.render = clear_render_errors(mi.render)
         _registered.add(name)
     return mi
+
+
+def register() -> None:
+    """Register every plugin of :data:`PLUGINS` under the current Mitsuba variant."""
+
+    import importlib
+
+    import mitsuba as mi
+
+    registrars = {"bsdf": mi.register_bsdf, "integrator": mi.register_integrator}
+    for name, (kind, module, cls) in PLUGINS.items():
+        plugin = getattr(importlib.import_module(module), cls)
+        registrars[kind](name, lambda props, plugin=plugin: plugin(props))

@@ -107,7 +107,7 @@ WORKER_TIMEOUT: float = 60.0
 _POLL_SECONDS = 0.1  # as distributed.as_completed's own wait
 _TRANSFORM = "__virtspec_transform4f__"
 _setup_threads: set[int] = set()
-_instruments: dict[str, Any] = {}
+_benches: dict[str, Any] = {}
 
 
 def _initialise() -> None:
@@ -298,19 +298,19 @@ def _as_finished(client: Any, finished: Any) -> Iterator[Any]:
 def _run_block(scene: Any, defines: dict[str, Any] | None, fingerprint: str, settings: Settings,
                grid: dict[str, Any], batches: list[np.ndarray]) -> list[tuple[np.ndarray, Counts, Counts | None, float]]:
     """
-    The task: each batch of the block traced by ``take_keyed_readings(instrument, settings,
+    The task: each batch of the block traced by ``take_keyed_readings(bench, settings,
     batch=batch, **grid)`` — exactly the in-process runner's call — with its seconds. The
     scene is loaded (with ``defines``) once per worker process and kept by its fingerprint.
     """
 
     _initialise()  # in the thread this task runs in (idempotent)
-    instrument = _instruments.get(fingerprint)
-    if instrument is None:
-        instrument = _instruments[fingerprint] = find_bench(_restored(scene), defines)
+    bench = _benches.get(fingerprint)
+    if bench is None:
+        bench = _benches[fingerprint] = find_bench(_restored(scene), defines)
     done = []
     for batch in batches:
         start = time.perf_counter()
-        counts, pilot = take_keyed_readings(instrument, settings, batch=batch, **grid)
+        counts, pilot = take_keyed_readings(bench, settings, batch=batch, **grid)
         done.append((batch, counts, pilot, time.perf_counter() - start))
     return done
 

@@ -7,7 +7,7 @@ Scenes: loading, building and fingerprinting instrument scenes
   parameters (``$name`` with a ``<default name="name" value="…"/>``) are set by
   ``defines`` (name → value), as Mitsuba's ``mitsuba -D name=value`` and
   ``mi.load_file(path, name=value)`` do;
-- :func:`find_bench` loads a scene and reads its instrument
+- :func:`find_bench` loads a scene and reads its bench (the emitter and specimen disks)
   (:func:`virtspec_mi.engine.bench.read_bench`);
 - :func:`instrument_scene` builds the paper's instrument (r₁ = 8, r₂ = 12.5, D = 100, in
   mm) around any BSDF dict;
@@ -130,7 +130,7 @@ def _check_dict(scene: dict, path: str = "") -> None:
 
 
 def find_bench(scene: Any, defines: dict[str, Any] | None = None) -> Bench:
-    """Load ``scene`` (XML path, dict or ``mi.Scene``; ``defines`` for an XML file) and read its instrument."""
+    """Load ``scene`` (XML path, dict or ``mi.Scene``; ``defines`` for an XML file) and read its bench (emitter and specimen disks)."""
 
     return read_bench(load_scene(scene, defines))
 
@@ -179,7 +179,7 @@ def placeholder_sensor() -> dict:
     return {"type": "perspective", "film": {"type": "hdrfilm", "width": 1, "height": 1}}
 
 
-def scene_fingerprint(scene: Any, instrument: Bench, defines: dict[str, Any] | None = None) -> str:
+def scene_fingerprint(scene: Any, bench: Bench, defines: dict[str, Any] | None = None) -> str:
     """
     A short fingerprint of a scene for result files and checkpoints: SHA-256 over the
     XML file's bytes (or the dict's ``repr``), the XML parameters set (``defines``, when
@@ -193,9 +193,9 @@ def scene_fingerprint(scene: Any, instrument: Bench, defines: dict[str, Any] | N
             digest.update(repr(sorted(check_defines(defines).items())).encode())
     elif isinstance(scene, dict):
         digest.update(repr(sorted(scene.items(), key=lambda item: str(item[0]))).encode())
-    digest.update(str(instrument.bsdf).encode())
-    digest.update(np.asarray(instrument.to_world, dtype=np.float64).round(9).tobytes())
-    digest.update(repr(asdict(instrument.geometry)).encode())
+    digest.update(str(bench.bsdf).encode())
+    digest.update(np.asarray(bench.to_world, dtype=np.float64).round(9).tobytes())
+    digest.update(repr(asdict(bench.geometry)).encode())
     return f"sha256:{digest.hexdigest()[:16]}"
 
 

@@ -27,11 +27,13 @@ import numpy as np
 from virtspec_mi.budgets.bins import GUARANTEES, gonio_rays
 from virtspec_mi.checks import number, shown_value
 from virtspec_mi.geometry.bins import BINNINGS, HEMISPHERES, GonioBins, make_bins, parse_edges
+from virtspec_mi.engine.parameters import ParameterSpace
 from virtspec_mi.engine.readings import run_gonio
+from virtspec_mi.instruments.base import Instrument, Plan
 from virtspec_mi.results.goniophotometer import GonioResult
 from virtspec_mi.settings import Options, Settings, one_of, option, share, true_or_false
 
-__all__ = ["GonioOptions", "gonio_reading"]
+__all__ = ["GonioOptions", "Goniophotometer"]
 
 
 def _bin_spec(name: str) -> Any:
@@ -101,26 +103,46 @@ class GonioOptions(Options):
         return float(np.min(self.bins.projected_solid_angles()))
 
 
-def gonio_reading(bench: Any, settings: Settings, options: GonioOptions, theta_i: Any = None,
-                  scene: str = "") -> GonioResult:
+
+class Goniophotometer(Instrument):
     """
-    A goniophotometer reading of ``bench`` at ``theta_i`` (default: ``settings.theta_i``):
-    N is ``settings.rays`` or sized by ``options.guarantee`` over the K bins
-    (:func:`virtspec_mi.budgets.bins.gonio_rays`); a fixed budget only (two-stage sizes
-    each reading for R and T, not for its bins).
+    The goniophotometer (see the module docstring): the spectrophotometer's readings
+    over every (wavelength, θi), every escaping ray also binned by its outgoing
+    direction; the result is a :class:`~virtspec_mi.results.goniophotometer.GonioResult`.
+    N is ``settings.rays``, or sized by ``guarantee`` over the K bins
+    (:func:`virtspec_mi.budgets.bins.gonio_rays`).
     """
 
-    if settings.adaptive:
-        raise ValueError("bound must be a fixed budget for a goniophotometer reading (hoeffding, chebyshev, "
-                         "exact, or rays given); N is sized by guarantee= over the bins")
-    angles = np.atleast_1d(np.asarray(settings.theta_i if theta_i is None else theta_i, dtype=np.float64))
-    bins = options.bins
-    if settings.rays is None:
-        rays = gonio_rays(options.guarantee, settings.mu, settings.delta, bins.size, options.relative_tolerance,
-                          options.brdf_floor, options.smallest_solid_angle)
-        guarantee = options.guarantee
-    else:
-        rays, guarantee = settings.rays, "rays"
-    resolved = settings.updated(theta_i=float(angles[0]), rays=rays)
-    return run_gonio(bench, resolved, angles, bins, scene=scene, guarantee=guarantee,
-                     relative_tolerance=options.relative_tolerance, brdf_floor=options.brdf_floor)
+    name: ClassVar[str] = "goniophotometer"
+    options: ClassVar[type[Options] | None] = GonioOptions
+    result: ClassVar[type] = GonioResult
+
+    def init(self, bench: Any, settings: Settings, options: GonioOptions | None, theta_i: np.ndarray,
+             parameters: ParameterSpace | None) -> Plan:
+        """The bins and N of the options; a fixed budget only (two-stage sizes a reading for R and T, not its bins)."""
+
+        options = options if options is not None else GonioOptions()
+        if settings.adaptive:
+            raise ValueError("bound must be a fixed budget for a goniophotometer reading (hoeffding, chebyshev, "
+                             "exact, or rays given); N is sized by guarantee= over the bins")
+        if parameters is not None:
+            raise ValueError("a goniophotometer reading over specimen parameters is not available yet")
+        bins = options.bins
+        if settings.rays is None:
+            rays = gonio_rays(options.guarantee, settings.mu, settings.delta, bins.size, options.relative_tolerance,
+                              options.brdf_floor, options.smallest_solid_angle)
+            self.guarantee = options.guarantee
+        else:
+            rays, self.guarantee = settings.rays, "rays"
+        self.bench, self.gonio_options = bench, options
+        return Plan(settings.updated(theta_i=float(theta_i[0]), rays=rays), theta_i, parameters)
+
+    def process(self, plan: Plan, *, keyed: bool = True, checkpoint: Any = None, progress: bool | None = False,
+                runner: Any = None) -> GonioResult:
+        options = self.gonio_options
+        return run_gonio(self.bench, plan.settings, plan.theta_i, options.bins, scene=self.scene,
+                         guarantee=self.guarantee, relative_tolerance=options.relative_tolerance,
+                         brdf_floor=options.brdf_floor)
+
+    def postprocess(self, tally: GonioResult) -> GonioResult:
+        return tally

@@ -3,9 +3,9 @@ The sphere's readout: sample over standard, certified, beside the hemispherical 
 =======================================================================================
 
 A real integrating-sphere instrument reads a detector signal and ratios it against a
-reference standard of known reflectance ρ_std. :func:`measure_sphere` simulates both
+reference standard of known reflectance ρ_std. :class:`IntegratingSphere` simulates both
 configurations with the sphere walk (:mod:`virtspec_mi.kernel.sphere_walk`) and returns
-a :class:`SphereResult`:
+a :class:`SphereResult` (:class:`SphereOptions`: its options, the sphere among them):
 
 - **single-beam substitution** (``method="substitution"``): the sample in the sample
   port, then the standard in its place (a reference port, if any, plugged with wall
@@ -53,11 +53,13 @@ from typing import Any, ClassVar
 
 import numpy as np
 
+from virtspec_mi.engine.parameters import ParameterSpace
 from virtspec_mi.geometry.sphere import Sphere, is_sphere_parameter, sphere_from_parameters
+from virtspec_mi.instruments.base import Instrument, Plan
 from virtspec_mi.results.sphere import SphereResult
 from virtspec_mi.settings import Options, Settings, one_of, option, share, whole_number
 
-__all__ = ["MEASUREMENTS", "SPECULAR", "METHODS", "SphereOptions", "measure_sphere", "configurations"]
+__all__ = ["MEASUREMENTS", "SPECULAR", "METHODS", "SphereOptions", "IntegratingSphere", "configurations"]
 
 MEASUREMENTS: dict[str, str] = {
     "reflectance": "8/d-type reflectance: the specimen in the sample port, lit through the entrance port",
@@ -210,42 +212,71 @@ def _check_beam(sphere: Sphere, options: SphereOptions, settings: Settings, fram
                          "give the angles the entrance port is built for")
 
 
-def measure_sphere(instrument: Any, sphere: Sphere, settings: Settings, options: SphereOptions,
-                   scene: str = "") -> "SphereResult":
+class IntegratingSphere(Instrument):
     """
-    The sphere readings of ``instrument``'s specimen at every wavelength of ``settings``
-    (see the module docstring): both configurations, traced with the settings' seed,
-    each with the settings' rule's N at (μ, δ/2) (or ``settings.rays``).
+    The integrating sphere (see the module docstring): both configurations of every
+    reading, each with the settings' rule's N at (μ, δ/2) (or ``settings.rays``), traced
+    with the settings' seed (the same rays in both); the result is a
+    :class:`~virtspec_mi.results.sphere.SphereResult`.
     """
 
-    import mitsuba as mi
+    name: ClassVar[str] = "sphere"
+    options: ClassVar[type[Options] | None] = SphereOptions
+    result: ClassVar[type] = SphereResult
 
-    from virtspec_mi.kernel.sphere_walk import SphereWalk, tally_sphere
+    def init(self, bench: Any, settings: Settings, options: SphereOptions | None, theta_i: np.ndarray,
+             parameters: ParameterSpace | None) -> Plan:
+        """The configurations (holders and port fates), the beam through the entrance port, N at δ/2."""
 
-    if settings.rays is None and settings.budget.adaptive:
-        raise ValueError("bound='two-stage' is not available for sphere readings (each configuration is sized "
-                         "in advance): use hoeffding, chebyshev or exact, or give rays")
-    rays = settings.rays if settings.rays is not None else settings.updated(delta=settings.delta / 2).rays_per_reading
-    standard_bsdf = mi.load_dict({"type": "diffuse", "reflectance": options.standard})
-    open_bsdf = mi.load_dict({"type": "null"})
-    radius = instrument.geometry.specimen_radius
-    setups = configurations(sphere, options, instrument.bsdf, radius, standard_bsdf, open_bsdf)
-    frame = setups["sample"][0][0].frame
-    _check_beam(sphere, options, settings, frame)
-    wavelengths = np.asarray(settings.wavelengths, dtype=np.float64)
-    rho_w = sphere.wall_reflectance_at(wavelengths)
-    counts: dict[str, dict[str, np.ndarray]] = {}
-    start = time.perf_counter()
-    for name, (holders, actions) in setups.items():
-        walk = SphereWalk(sphere, holders, actions, options.max_bounces)
-        traced = replace(instrument, bsdf=holders[0].bsdf)
-        tallies = tally_sphere(walk, traced, wavelengths, rho_w, rays, settings)
-        counts[name] = _named_counts(sphere, tallies)
-    seconds = time.perf_counter() - start
-    return SphereResult(wavelengths=wavelengths, rays=int(rays), counts=counts, sphere=sphere.describe(),
-                        cap_fractions=sphere.cap_fractions, wall_reflectance=rho_w, options=options.as_dict(),
-                        settings=settings.as_dict(), seconds=seconds, scene=scene,
-                        sphere_parameters=sphere.parameters(), specimen_radius=float(radius))
+        import mitsuba as mi
+
+        if options is None or options.sphere is None:
+            raise ValueError("a sphere reading needs a sphere: an 'integrating_sphere' integrator in the scene or "
+                             "sphere=Sphere(...)")
+        if len(theta_i) != 1 or parameters is not None:
+            raise ValueError("a sphere reading over several theta_i or specimen parameters is not available yet")
+        if settings.adaptive:
+            raise ValueError("bound='two-stage' is not available for sphere readings (each configuration is sized "
+                             "in advance): use hoeffding, chebyshev or exact, or give rays")
+        sphere = options.sphere
+        rays = settings.rays if settings.rays is not None else settings.updated(delta=settings.delta / 2).rays_per_reading
+        standard_bsdf = mi.load_dict({"type": "diffuse", "reflectance": options.standard})
+        open_bsdf = mi.load_dict({"type": "null"})
+        self.setups = configurations(sphere, options, bench.bsdf, bench.geometry.specimen_radius, standard_bsdf,
+                                     open_bsdf)
+        _check_beam(sphere, options, settings, self.setups["sample"][0][0].frame)
+        self.bench, self.sphere_options = bench, options
+        return Plan(settings.updated(theta_i=float(theta_i[0]), rays=rays), theta_i, parameters)
+
+    def process(self, plan: Plan, *, keyed: bool = True, checkpoint: Any = None, progress: bool | None = False,
+                runner: Any = None) -> dict[str, Any]:
+        """Both configurations' walk tallies per wavelength (transitional: one kernel per wavelength)."""
+
+        from virtspec_mi.kernel.sphere_walk import SphereWalk, tally_sphere
+
+        settings, options = plan.settings, self.sphere_options
+        wavelengths = np.asarray(settings.wavelengths, dtype=np.float64)
+        rho_w = options.sphere.wall_reflectance_at(wavelengths)
+        tallies = {}
+        start = time.perf_counter()
+        for name, (holders, actions) in self.setups.items():
+            walk = SphereWalk(options.sphere, holders, actions, options.max_bounces)
+            traced = replace(self.bench, bsdf=holders[0].bsdf)
+            tallies[name] = tally_sphere(walk, traced, wavelengths, rho_w, settings.rays, settings)
+        return {"settings": settings, "wavelengths": wavelengths, "wall_reflectance": rho_w, "tallies": tallies,
+                "seconds": time.perf_counter() - start}
+
+    def postprocess(self, tally: dict[str, Any]) -> SphereResult:
+        """The readout: named counts of both configurations, the sphere and its reading mode."""
+
+        sphere, settings = self.sphere_options.sphere, tally["settings"]
+        counts = {name: _named_counts(sphere, tallies) for name, tallies in tally["tallies"].items()}
+        return SphereResult(wavelengths=tally["wavelengths"], rays=int(settings.rays), counts=counts,
+                            sphere=sphere.describe(), cap_fractions=sphere.cap_fractions,
+                            wall_reflectance=tally["wall_reflectance"], options=self.sphere_options.as_dict(),
+                            settings=settings.as_dict(), seconds=tally["seconds"], scene=self.scene,
+                            sphere_parameters=sphere.parameters(),
+                            specimen_radius=float(self.bench.geometry.specimen_radius))
 
 
 def _named_counts(sphere: Sphere, tallies: list[dict[str, Any]]) -> dict[str, np.ndarray]:

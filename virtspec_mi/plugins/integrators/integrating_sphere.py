@@ -5,8 +5,10 @@
 The ``spectrophotometer`` integrator's settings plus a sphere description: the sphere
 of :mod:`virtspec_mi.geometry.sphere` and how it is read: the fields of
 :class:`virtspec_mi.instruments.sphere.SphereOptions`, the one definition.
-A thin adapter: :func:`virtspec_mi.sphere_measure` reads it from a scene, and
-``mi.render`` takes the sphere readings with :func:`virtspec_mi.instruments.sphere.measure_sphere`.
+A thin adapter: it reads its parameters with the one reader
+(:meth:`virtspec_mi.settings.Options.from_parameters`), :func:`virtspec_mi.sphere_measure`
+takes them from a scene as its defaults, and ``mi.render`` takes the sphere readings with
+the ``sphere`` instrument of the registry (:data:`virtspec_mi.instruments.INSTRUMENTS`).
 
 Parameters
 ----------
@@ -45,16 +47,18 @@ import mitsuba as mi
 import numpy as np
 
 from virtspec_mi.engine.bench import read_bench
-from virtspec_mi.instruments.sphere import SphereOptions, measure_sphere
+from virtspec_mi.instruments import INSTRUMENTS
+from virtspec_mi.instruments.base import take
+from virtspec_mi.instruments.sphere import SphereOptions
 
 from .spectrophotometer import Spectrophotometer, check_spp
 
-__all__ = ["IntegratingSphere"]
+__all__ = ["IntegratingSphereIntegrator"]
 
 _WORD = 1 << 32
 
 
-class IntegratingSphere(Spectrophotometer):
+class IntegratingSphereIntegrator(Spectrophotometer):
     """The sphere instrument as a Mitsuba integrator (see the module docstring)."""
 
     def __init__(self, props: mi.Properties) -> None:
@@ -65,12 +69,12 @@ class IntegratingSphere(Spectrophotometer):
                 raise ValueError("sphere: diameter (mm) is required")
         except (ValueError, TypeError) as error:
             raise ValueError(f"integrating_sphere: {error}") from None
+        self.options[SphereOptions] = self.sphere_options
 
     def render(self, scene, sensor=None, seed=0, spp=0, develop=True, evaluate=True):
         rays = check_spp(spp)
         settings = self.settings.updated(seed=(self.settings.seed + int(seed)) % _WORD, rays=rays or None)
-        options = self.sphere_options
-        reading = measure_sphere(read_bench(scene), options.sphere, settings, options)
+        reading = take(INSTRUMENTS["sphere"](), read_bench(scene), settings, self.sphere_options)
         self.last_reading = reading
         table = np.stack([reading.reading, reading.hemispherical, reading.detector_fraction,
                           reading.standard_fraction], axis=1)

@@ -2,9 +2,11 @@
 ``spectrophotometer``: the virtual integrating-sphere instrument as a Mitsuba integrator
 =======================================================================================
 
-A thin adapter: it reads the measurement settings from its XML/dict parameters and,
-on ``mi.render``, measures the scene's specimen with the engine
-(:func:`virtspec_mi.engine.readings.measure_reading`). The tracing itself — rays from the
+A thin adapter: it reads the measurement settings (and the goniophotometer's options)
+from its XML/dict parameters with the one reader
+(:meth:`virtspec_mi.settings.Options.from_parameters`) and, on ``mi.render``, measures
+the scene's specimen with the instrument of the registry
+(:data:`virtspec_mi.instruments.INSTRUMENTS`: ``hemispherical``, or ``goniophotometer``). The tracing itself — rays from the
 emitter disk, the specimen BSDF, fates and exact tallies — is
 :mod:`virtspec_mi.kernel.tracer`.
 
@@ -83,8 +85,9 @@ import numpy as np
 
 from virtspec_mi.checks import MAX_RAYS, shown_value
 from virtspec_mi.engine.bench import read_bench
-from virtspec_mi.engine.readings import measure_reading
-from virtspec_mi.instruments.goniophotometer import GonioOptions, gonio_reading
+from virtspec_mi.instruments import INSTRUMENTS
+from virtspec_mi.instruments.base import take
+from virtspec_mi.instruments.goniophotometer import GonioOptions
 from virtspec_mi.settings import Settings
 
 __all__ = ["Spectrophotometer", "check_spp", "clear_render_errors"]
@@ -102,6 +105,8 @@ class Spectrophotometer(mi.SamplingIntegrator):
             self.gonio_options = GonioOptions.from_parameters(props) if GonioOptions.parameters_in(props) else None
         except ValueError as error:
             raise ValueError(f"spectrophotometer: {error}") from None
+        self.options = {Settings: self.settings, GonioOptions: self.gonio_options}
+        """The options the scene holds, by class: the API's defaults (:func:`virtspec_mi.gonio` …)."""
         self.last_reading = None
 
     def render(self, scene, sensor=None, seed=0, spp=0, develop=True, evaluate=True):
@@ -109,10 +114,10 @@ class Spectrophotometer(mi.SamplingIntegrator):
         settings = self.settings.updated(seed=(self.settings.seed + int(seed)) % _WORD, rays=rays or None)
         bench = read_bench(scene)
         if self.gonio_options is not None:
-            self.last_reading = gonio_reading(bench, settings, self.gonio_options)
+            self.last_reading = take(INSTRUMENTS["goniophotometer"](), bench, settings, self.gonio_options)
             reading = self.last_reading.result.squeeze()
         else:
-            reading = measure_reading(bench, settings)
+            reading = take(INSTRUMENTS["hemispherical"](), bench, settings, keyed=False).squeeze()
             self.last_reading = reading
         reading.warn_if_uncertified(stacklevel=2)
         table = np.stack([reading.reflectance, reading.transmittance, reading.absorptance], axis=1)

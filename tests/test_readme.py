@@ -5,7 +5,7 @@ Python blocks run one by one, each in a fresh namespace (so each must import wha
 uses); shell commands are the lines of ``sh`` blocks and the ``$ ``-prefixed lines of
 output blocks, run with the project's ``virtspec`` on ``PATH`` (``make`` and ``export``
 lines set the machine up and are left to CI). Everything runs in a scratch directory
-that holds ``scenes/`` and sees ``../shared`` as the checkout does, so the commands
+that holds ``scenes/`` (the package ships its leaf data), so the commands
 work as written and write nothing into the checkout.
 """
 
@@ -45,13 +45,12 @@ def shell_commands() -> list[str]:
 
 @pytest.fixture(scope="module")
 def workdir(tmp_path_factory):
-    """A scratch checkout-like folder: scenes/, docs/, and ../shared beside it."""
+    """A scratch checkout-like folder: scenes/ and docs/ (nothing beside it: the package ships its data)."""
 
     base = tmp_path_factory.mktemp("readme")
     work = base / "work"
     (work / "docs").mkdir(parents=True)
     (work / "scenes").symlink_to(ROOT / "scenes")
-    (base / "shared").symlink_to(ROOT.parent / "shared")
     return work
 
 

@@ -12,35 +12,24 @@ work as written and write nothing into the checkout.
 from __future__ import annotations
 
 import os
-import re
 import subprocess
 import sys
 from pathlib import Path
 
 import pytest
 
+import code_blocks
+
 ROOT = Path(__file__).resolve().parents[1]
-BLOCK = re.compile(r"^```(\w*)\n(.*?)^```", re.M | re.S)
-SKIPPED = ("make ", "export ", ". ")  # set-up lines: make, environment, activation
+README = ROOT / "README.md"
 
 
 def blocks(kind: str) -> list[str]:
-    return [body for language, body in BLOCK.findall((ROOT / "README.md").read_text()) if language == kind]
+    return code_blocks.blocks(README, kind)
 
 
 def shell_commands() -> list[str]:
-    commands = []
-    for language, body in BLOCK.findall((ROOT / "README.md").read_text()):
-        for line in body.splitlines():
-            if language == "sh":
-                command = re.sub(r"\s+#.*$", "", line).strip()
-            elif language == "" and line.startswith("$ "):
-                command = line[2:].strip()
-            else:
-                continue
-            if command and not command.startswith("#") and not command.startswith(SKIPPED):
-                commands.append(command)
-    return commands
+    return code_blocks.shell_commands(README)
 
 
 @pytest.fixture(scope="module")

@@ -33,8 +33,8 @@ Run::
     .venv/bin/python benchmarks/abm_spectrum.py --markdown   # results as markdown
     .venv/bin/python benchmarks/abm_spectrum.py --against ece9609   # also: old walk vs current
 
-Needs the NPSG leaf data: ``VIRTSPEC_LEAF_DATA`` (default here: ../shared/data/abm-npsg
-beside the checkout). Other work on the machine slows every figure; the 1-minute load
+Needs the NPSG leaf data: ``VIRTSPEC_LEAF_DATA`` (default here: this checkout's
+shipped copy, which older trees read too). Other work on the machine slows every figure; the 1-minute load
 average is printed with the results.
 """
 
@@ -51,7 +51,7 @@ from pathlib import Path
 import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
-os.environ.setdefault("VIRTSPEC_LEAF_DATA", str(ROOT.parent / "shared" / "data" / "abm-npsg"))
+os.environ.setdefault("VIRTSPEC_LEAF_DATA", str(ROOT / "virtspec_mi" / "data" / "abm-npsg"))  # older trees too
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 import virtspec_mi as vm  # noqa: E402

@@ -133,7 +133,8 @@ PARAMETER_DOCS: tuple[tuple[str, str, Any, str], ...] = (
                                     "NPSG C++ reference (551 nm reads the 550 nm data), ``linear`` = "
                                     "interpolation (NPSG MATLAB)."),
     ("data_dir", "string", '""', "Directory of the NPSG data files; empty = the environment variable "
-                                  "``VIRTSPEC_LEAF_DATA`` (see :mod:`virtspec_mi.leaf_data`)."),
+                                  "``VIRTSPEC_LEAF_DATA`` if set, else the data shipped with the package "
+                                  "(see :mod:`virtspec_mi.leaf_data`)."),
     ("max_steps", "integer", "100000", "Cap on interface events per walk; a walk reaching it is counted in "
                                         "``Result.capped`` (never in R, T or A). The longest soybean walks "
                                         "are ≈ 200 events."),

@@ -17,9 +17,14 @@ reference's spectral lookup for any wavelength.
 
 References
 ----------
-Baranoski (2006), RSE 100:335–347 (ABM-B/ABM-U); NPSG reference C++
-``abm_interfaces.cpp::buildInterfaces`` (α(λ) and unit conversions) as described in
-``shared/research/abm.md`` §1.3, §2 and §3.1.
+Baranoski, G.V.G. (2006). Modeling the interaction of infrared radiation (750 to 2500 nm)
+with bifacial and unifacial plant leaves. Remote Sens. Environ. 100, 335–347 (ABM-B/ABM-U).
+
+NPSG reference C++ implementation of ABM-B and ABM-U (BSD-3, © 2010 NPSG),
+https://github.com/turtlesoupy/ABM-U-and-ABM-B-CPP: ``abm_interfaces.cpp``
+(``buildInterfaces``: α(λ) and the unit conversions), the ``data/`` files (names as in
+:data:`LEAF_DATA_FILES`) and the sample leaves ``samples/lopex_0219_0220.json``
+(soybean) and ``samples/lopex_0141_0142.json`` (corn).
 """
 
 from __future__ import annotations
@@ -112,7 +117,8 @@ def leaf_data_dir(data_dir: str | os.PathLike | None = None) -> Path:
         raise FileNotFoundError(
             f"ABM leaf data not found: set the environment variable {ENV_VAR} (or the BSDF "
             f"parameter data_dir) to a directory holding the NPSG files {_needed()} "
-            f"(BSD-3, e.g. {ENV_VAR}=../shared/data/abm-npsg)"
+            f"(BSD-3, the data/ folder of the NPSG reference implementation, "
+            f"github.com/turtlesoupy/ABM-U-and-ABM-B-CPP)"
         )
     if not directory.is_dir():
         raise FileNotFoundError(
@@ -172,7 +178,7 @@ def mesophyll_absorption(
 
     References
     ----------
-    abm.md §1.3 (NPSG C++ ``buildInterfaces``).
+    Baranoski (2006); NPSG reference C++, ``abm_interfaces.cpp`` (``buildInterfaces``).
     """
 
     return (

@@ -165,12 +165,8 @@ def test_extreme_inputs_are_refused_with_the_rule_and_the_limit(call, message):
 
 
 def test_exact_rays_falls_back_to_hoeffding_where_the_exact_law_costs_too_much():
-    import time
-
-    start = time.perf_counter()
     assert bounds.exact_rays(1e-4, 0.01) == bounds.hoeffding_rays(1e-4, 0.01)  # N ~ 2.6e8: hours before
     assert bounds.exact_rays(1e-9, 0.3) == bounds.hoeffding_rays(1e-9, 0.3)
-    assert time.perf_counter() - start < 1.0
     # a narrow pilot interval is cheap: the exact law is still evaluated
     assert bounds.exact_rays(1e-4, 0.01, 0.0, 1e-4) < bounds.hoeffding_rays(1e-4, 0.01) / 10
 

@@ -5,7 +5,6 @@ from __future__ import annotations
 
 import math
 import resource
-import time
 
 import numpy as np
 import pytest
@@ -26,13 +25,15 @@ from virtspec_mi.settings import Settings
 
 
 def _fast_and_small(call, message: str) -> None:
-    """``call`` raises ValueError matching ``message`` within 0.2 s and 50 MiB."""
+    """
+    ``call`` raises ValueError matching ``message`` without building the grid: the process's
+    peak memory grows by less than 50 MiB (a grid of 10^8 values would take gigabytes). No
+    timing: the machine's load must not decide a test.
+    """
 
     before = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
-    start = time.perf_counter()
     with pytest.raises(ValueError, match=message):
         call()
-    assert time.perf_counter() - start < 0.2
     assert resource.getrusage(resource.RUSAGE_SELF).ru_maxrss - before < 50 * 1024  # KiB
 
 

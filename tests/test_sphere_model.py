@@ -54,7 +54,7 @@ def slab_xml(slab=SLAB) -> str:
 def test_the_150mm_sphere_maps_its_ports_by_role():
     _, sphere, options = loaded(LAB)
     cap = {p.role: sphere.cap_fraction(p) for p in sphere.ports}
-    sci = theory_inputs(sphere, options.as_dict(), [551.0])
+    sci = theory_inputs(sphere, options, [551.0])
     assert sci["sample_fraction"] == cap["sample"] and sci["detector_fraction"] == cap["detector"]
     assert sci["open_fraction"] == cap["entrance"] and sci["trap_fraction"] == cap["specular"]
     assert sci["reference_fraction"] == cap["reference"]  # a plug in substitution: wall in the theory
@@ -63,14 +63,14 @@ def test_the_150mm_sphere_maps_its_ports_by_role():
     assert np.array_equal(sci["wall_reflectance"], [0.98])
     # every keyword is one the theory takes, and the forward model runs on them
     assert 0 < st.instrument_reading(0.5, **sci) < 0.5
-    sce = theory_inputs(sphere, options.updated(specular="SCE", method="comparison").as_dict(), [400, 700])
+    sce = theory_inputs(sphere, options.updated(specular="SCE", method="comparison"), [400, 700])
     assert sce["mode"] == "SCE" and sce["method"] == "comparison" and sce["wall_reflectance"].shape == (2,)
     assert st.comparison_reading(0.5, **{k: v for k, v in sce.items() if k != "method"}).shape == (2,)
 
 
 def test_the_leaf_sphere_maps_transmittance_and_spectral_walls():
     _, sphere, options = loaded(LEAF)
-    kw = theory_inputs(sphere, options.updated(measurement="transmittance").as_dict(), [400, 550, 900])
+    kw = theory_inputs(sphere, options.updated(measurement="transmittance"), [400, 550, 900])
     assert set(kw) == {"wall_reflectance", "entrance_fraction", "sample_fraction", "detector_fraction",
                        "open_fraction", "standard_reflectance", "port_surface"}
     assert kw["entrance_fraction"] == sphere.cap_fraction("entrance") and kw["open_fraction"] == 0.0
@@ -84,17 +84,17 @@ def test_a_disk_smaller_than_its_port_leaves_an_open_ring():
     a = sphere.cap_fraction("s")
     assert disk_share(sphere, "s", 10.0) == a
     assert disk_share(sphere, "s", 5.0) == pytest.approx(25 / (4 * 900 * (1 - a)), rel=1e-12)
-    kw = theory_inputs(sphere, SphereOptions().as_dict(), [551.0], specimen_radius=5.0)
+    kw = theory_inputs(sphere, SphereOptions(), [551.0], specimen_radius=5.0)
     assert kw["sample_fraction"] + kw["open_fraction"] == pytest.approx(a + sphere.cap_fraction("e"), rel=1e-12)
     with pytest.raises(ValueError, match="disk_radius must satisfy"):
         disk_share(sphere, "s", 11.0)
     with pytest.raises(ValueError, match="role 'detector'"):
-        theory_inputs(Sphere(60, 0.98, sphere.ports[:2]), SphereOptions().as_dict(), [551.0])
+        theory_inputs(Sphere(60, 0.98, sphere.ports[:2]), SphereOptions(), [551.0])
 
 
 def test_correct_readings_inverts_and_clips_to_the_invertible_range():
     _, sphere, options = loaded(LEAF)
-    kw = theory_inputs(sphere, options.as_dict(), [550.0, 850.0])
+    kw = theory_inputs(sphere, options, [550.0, 850.0])
     x = np.array([0.1, 0.45])
     readings = st.instrument_reading(x, **kw)
     assert correct_readings(readings, kw) == pytest.approx(x, abs=1e-12)
@@ -104,12 +104,12 @@ def test_correct_readings_inverts_and_clips_to_the_invertible_range():
     assert np.isnan(correct_readings(np.array([np.nan, readings[1]]), kw)[0])
     # a given diffuse-light reflectance u = x + r: the linear inverse is the theory's inverse
     for method, mode, r in (("substitution", "SCI", 0.04), ("substitution", "SCE", 0.04), ("comparison", "SCI", 0.0)):
-        lab = theory_inputs(loaded(LAB)[1], SphereOptions(method=method, specular=mode).as_dict(), [550.0, 850.0])
+        lab = theory_inputs(loaded(LAB)[1], SphereOptions(method=method, specular=mode), [550.0, 850.0])
         m = st.instrument_reading(x, specular_reflectance=r, **lab)
         assert correct_readings(m, lab, specular_reflectance=r, sample_reflectance=x + r) == \
             pytest.approx(x + r, abs=1e-12)
     # per-wavelength specular parts with an interval (n, 2): each row brackets its corrected point
-    lab = theory_inputs(loaded(LAB)[1], SphereOptions().as_dict(), [550.0, 850.0])
+    lab = theory_inputs(loaded(LAB)[1], SphereOptions(), [550.0, 850.0])
     r = np.array([0.04, 0.05])
     m = st.instrument_reading(x, specular_reflectance=r, **lab)
     for u in (None, x + r):
@@ -118,7 +118,7 @@ def test_correct_readings_inverts_and_clips_to_the_invertible_range():
         assert np.all(rows[:, 0] < x + r) and np.all(x + r < rows[:, 1])
     with pytest.raises(ValueError, match="sample_reflectance must satisfy"):
         correct_readings(readings, kw, sample_reflectance=1.5)
-    kt = theory_inputs(sphere, options.updated(measurement="transmittance").as_dict(), [550.0])
+    kt = theory_inputs(sphere, options.updated(measurement="transmittance"), [550.0])
     with pytest.raises(ValueError, match="sample_reflectance is required"):
         correct_readings(0.5, kt)
 

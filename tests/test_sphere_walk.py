@@ -101,7 +101,7 @@ def theory(sphere, rho_s, rho_w, port_surface="flat", convention="cap"):
     r²/4R² with ``convention="projected"``).
     """
 
-    kw = theory_inputs(sphere, SphereOptions().as_dict(), [551.0])
+    kw = theory_inputs(sphere, SphereOptions(), [551.0])
     fractions = {k: kw[k] for k in ("sample_fraction", "detector_fraction", "open_fraction")}
     if convention == "projected":  # r²/4R² = a (1 − a) for each port (the ports here fill their caps)
         fractions = {k: v * (1 - v) for k, v in fractions.items()}

@@ -67,7 +67,7 @@ def ideal_table() -> str:
             walk = SphereWalk(sphere, [holder], [6, 7, 0], 100_000)
             counts = tally_sphere(walk, instrument, [551.0], [rho_w], RAYS, Settings(theta_i=0, beam="conical"))[0]
             simulated = counts["cross"][:, 0].sum() / RAYS
-            kw = theory_inputs(sphere, SphereOptions().as_dict(), [551.0])
+            kw = theory_inputs(sphere, SphereOptions(), [551.0])
             fractions = {k: kw[k] for k in ("sample_fraction", "detector_fraction", "open_fraction")}
             projected = {k: v * (1 - v) for k, v in fractions.items()}
             flat, cap, iad = (0.5 * st.detected_fraction(rho_w, 0.5, port_surface=s, **fr)

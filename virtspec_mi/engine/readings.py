@@ -437,4 +437,3 @@ def run_gonio(instrument: Any, settings: Settings, theta_i: Sequence[float], bin
                     wavelength_independent=shares_wavelengths(instrument))
     return GonioResult(result=result, bin_counts=grid(tallies), bins=bins, guarantee=guarantee,
                        relative_tolerance=relative_tolerance, brdf_floor=brdf_floor)
-

@@ -18,20 +18,19 @@ Baranoski et al. (2001), Sect. 6; Nicodemus et al. (1977), NBS Monograph 160.
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 from typing import Any, ClassVar
 
 import numpy as np
 
-from virtspec_mi.budgets.bins import GUARANTEES, gonio_rays
-from virtspec_mi.checks import number, shown_value
+from virtspec_mi.budgets.rules import GUARANTEES, check_gonio_options
+from virtspec_mi.checks import check_brdf_floor, check_relative_tolerance
 from virtspec_mi.geometry.bins import BINNINGS, HEMISPHERES, GonioBins, make_bins, parse_edges
 from virtspec_mi.engine.parameters import ParameterSpace
 from virtspec_mi.engine.readings import run_gonio
 from virtspec_mi.instruments.base import Instrument, Plan
 from virtspec_mi.results.goniophotometer import GonioResult
-from virtspec_mi.settings import Options, Settings, one_of, option, share, true_or_false
+from virtspec_mi.settings import Options, Settings, one_of, option, true_or_false
 
 __all__ = ["GonioOptions", "Goniophotometer"]
 
@@ -43,13 +42,6 @@ def _bin_spec(name: str) -> Any:
         spec = parse_edges(name, value)
         return spec if isinstance(spec, int) else tuple(float(v) for v in spec)
     return check
-
-
-def _check_floor(value: Any) -> float:
-    floor = number("brdf_floor", value)
-    if not (math.isfinite(floor) and floor > 0.0):
-        raise ValueError(f"brdf_floor must be a finite BRDF value > 0 in 1/sr (got {shown_value(value)})")
-    return floor
 
 
 @dataclass(frozen=True)
@@ -75,20 +67,17 @@ class GonioOptions(Options):
                               {name: f"theta_o {low:g} ... {high:g}" for name, (low, high) in HEMISPHERES.items()})
     guarantee: str = option("union", one_of("guarantee", GUARANTEES), "how N is sized when rays is not given",
                             GUARANTEES)
-    relative_tolerance: float | None = option(None, share("relative_tolerance"),
+    relative_tolerance: float | None = option(None, check_relative_tolerance,
                                               "guarantee relative: relative tolerance on f_k, 0 < eps <= 1")
     brdf_floor: float | None = option(
-        None, _check_floor, "guarantee relative: the BRDF/BTDF value (1/sr) above which f_k is held to "
+        None, check_brdf_floor, "guarantee relative: the BRDF/BTDF value (1/sr) above which f_k is held to "
                             "relative_tolerance")
 
     def _check_together(self) -> None:
-        """The bins are laid out (a bad specification names its option); ``relative`` needs its two values."""
+        """The bins are laid out (a bad specification names its option)."""
 
-        bins = make_bins(self.theta_o_bins, self.phi_o_bins, self.binning, self.fold_phi, self.hemispheres)
-        object.__setattr__(self, "_bins", bins)
-        if self.guarantee == "relative" and (self.relative_tolerance is None or self.brdf_floor is None):
-            raise ValueError("guarantee 'relative' needs relative_tolerance (0 < relative_tolerance <= 1) and "
-                             "brdf_floor (> 0, in 1/sr)")
+        object.__setattr__(self, "_bins", make_bins(self.theta_o_bins, self.phi_o_bins, self.binning, self.fold_phi,
+                                                    self.hemispheres))
 
     @property
     def bins(self) -> GonioBins:
@@ -128,10 +117,12 @@ class Goniophotometer(Instrument):
         if parameters is not None:
             raise ValueError("a goniophotometer reading over specimen parameters is not available yet")
         bins = options.bins
+        rule, relative, floor = check_gonio_options(options.guarantee, settings.delta, bins.size,
+                                                    options.relative_tolerance, options.brdf_floor)
         if settings.rays is None:
-            rays = gonio_rays(options.guarantee, settings.mu, settings.delta, bins.size, options.relative_tolerance,
-                              options.brdf_floor, options.smallest_solid_angle)
-            self.guarantee = options.guarantee
+            rays = rule.rays(settings.mu, settings.delta, bins.size, relative=relative, floor=floor,
+                             smallest_solid_angle=options.smallest_solid_angle)
+            self.guarantee = rule.name
         else:
             rays, self.guarantee = settings.rays, "rays"
         self.bench, self.gonio_options = bench, options

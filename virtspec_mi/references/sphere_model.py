@@ -2,9 +2,9 @@
 A sphere description in the terms of the sphere theory (the one rule that ties them)
 ====================================================================================
 
-:mod:`virtspec_mi.geometry.sphere` describes a physical sphere (ports with roles, wall, baffle)
-and how it is read (plain values: ``measurement``, ``specular``, ``method``, ``standard``,
-as :meth:`virtspec_mi.instruments.sphere.SphereOptions.as_dict` gives them);
+:mod:`virtspec_mi.geometry.sphere` describes a physical sphere (ports with roles, wall, baffle),
+the sphere's options say how it is read (:class:`ReadingMode`: plain values, whatever
+options class carries them);
 :mod:`virtspec_mi.references.sphere_theory` predicts readings from port *fractions*. This module is
 the single place where the one becomes the other: :func:`theory_inputs` maps a sphere,
 its reading mode and the specimen disk's radius to the keywords of
@@ -50,15 +50,32 @@ Goebel (1967), eq. 2 (port fractions); :mod:`virtspec_mi.references.sphere_theor
 
 from __future__ import annotations
 
-from typing import Any, Mapping, Sequence
+from typing import Any, Protocol, Sequence
 
 import numpy as np
 
-from virtspec_mi.references import sphere_theory as st
 from virtspec_mi.geometry.sphere import Sphere
+from virtspec_mi.references import sphere_theory as st
 
-__all__ = ["REFLECTANCE_ROLES", "TRANSMITTANCE_ROLES", "disk_share", "theory_inputs", "invertible_range",
-           "correct_readings"]
+__all__ = ["REFLECTANCE_ROLES", "TRANSMITTANCE_ROLES", "ReadingMode", "disk_share", "theory_inputs",
+           "invertible_range", "correct_readings"]
+
+
+class ReadingMode(Protocol):
+    """
+    How a sphere is read, as :func:`theory_inputs` takes it: the plain values of the
+    sphere's options (any object with these attributes; this module imports no options
+    class, which belongs to the instrument above it).
+    """
+
+    measurement: str
+    """``"reflectance"`` or ``"transmittance"``."""
+    specular: str
+    """``"SCI"`` or ``"SCE"``."""
+    method: str
+    """``"substitution"`` or ``"comparison"``."""
+    standard: float
+    """Reflectance of the white standard."""
 
 REFLECTANCE_ROLES: dict[str, str] = {
     "sample": "sample_fraction", "entrance": "open_fraction", "reference": "reference_fraction",
@@ -91,7 +108,7 @@ def disk_share(sphere: Sphere, port: Any, disk_radius: float) -> float:
     return disk_radius**2 / (4.0 * sphere.radius**2 * (1.0 - cap))
 
 
-def theory_inputs(sphere: Sphere, options: Mapping[str, Any], wavelengths: Sequence[float],
+def theory_inputs(sphere: Sphere, options: ReadingMode, wavelengths: Sequence[float],
                   specimen_radius: float | None = None) -> dict[str, Any]:
     """
     The :mod:`~virtspec_mi.references.sphere_theory` keywords of a sphere reading (see the module
@@ -102,8 +119,8 @@ def theory_inputs(sphere: Sphere, options: Mapping[str, Any], wavelengths: Seque
     sphere
         The sphere.
     options
-        How it is read, plain values by name: ``measurement``, ``specular`` (``mode``),
-        ``method``, ``standard`` (other names are ignored).
+        How it is read (:class:`ReadingMode`): ``measurement``, ``specular`` (``mode``),
+        ``method``, ``standard``.
     wavelengths
         nm; ``wall_reflectance`` is ρw at these (an array).
     specimen_radius
@@ -122,21 +139,21 @@ def theory_inputs(sphere: Sphere, options: Mapping[str, Any], wavelengths: Seque
         ``port_surface`` — those of ``transmittance_reading`` / ``correct_transmittance``.
     """
 
-    transmittance = options["measurement"] == "transmittance"
+    transmittance = options.measurement == "transmittance"
     beam_role = "entrance" if transmittance else "sample"
     beam_port = sphere.port(beam_role)
     if beam_port is None:
-        raise ValueError(f"sphere: a {options['measurement']} reading needs a port with role {beam_role!r}")
+        raise ValueError(f"sphere: a {options.measurement} reading needs a port with role {beam_role!r}")
     if sphere.port("detector") is None:
         raise ValueError("sphere: a reading needs a port with role 'detector'")
     radius = beam_port.radius if specimen_radius is None else float(specimen_radius)
     roles = TRANSMITTANCE_ROLES if transmittance else REFLECTANCE_ROLES
     out: dict[str, Any] = {name: 0.0 for name in set(roles.values())}
-    comparison = options["method"] == "comparison" and not transmittance
+    comparison = options.method == "comparison" and not transmittance
     for port in sphere.ports:
         cap = sphere.cap_fraction(port)
         key = roles[port.role]
-        if transmittance and (port.role == "specular" and options["specular"] == "SCI"
+        if transmittance and (port.role == "specular" and options.specular == "SCI"
                               or port.role == "reference" and sphere.port("sample") is None):
             continue  # plugged with wall material: wall (as simulated)
         disk = None
@@ -151,11 +168,11 @@ def theory_inputs(sphere: Sphere, options: Mapping[str, Any], wavelengths: Seque
         else:
             out[key] += cap
     out["wall_reflectance"] = sphere.wall_reflectance_at(np.atleast_1d(np.asarray(wavelengths, dtype=float)))
-    out["standard_reflectance"] = float(options["standard"])
+    out["standard_reflectance"] = float(options.standard)
     out["port_surface"] = "flat"
     if not transmittance:
-        out["method"] = options["method"]
-        out["mode"] = options["specular"]
+        out["method"] = options.method
+        out["mode"] = options.specular
     return out
 
 

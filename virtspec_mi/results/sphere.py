@@ -31,6 +31,7 @@ import math
 import os
 from dataclasses import dataclass, field
 from pathlib import Path
+from types import SimpleNamespace
 from typing import Any
 
 import numpy as np
@@ -198,7 +199,8 @@ class SphereResult:
         (:func:`virtspec_mi.references.sphere_model.theory_inputs` of its sphere, mode and specimen radius).
         """
 
-        return theory_inputs(self.sphere_description, self.options, self.wavelengths, self.specimen_radius)
+        mode = SimpleNamespace(**self.options)  # the reading mode's plain values (references.sphere_model.ReadingMode)
+        return theory_inputs(self.sphere_description, mode, self.wavelengths, self.specimen_radius)
 
     def corrected(self, *, specular_reflectance: Any = 0.0, sample_reflectance: Any = None,
                   collimated_transmittance: Any = 0.0) -> np.ndarray:

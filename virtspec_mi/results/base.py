@@ -180,6 +180,37 @@ class ResultBase:
     # -- labels -----------------------------------------------------------------------
 
     @property
+    def wavelengths(self) -> np.ndarray:
+        """Wavelengths in nm, in the order requested (a 0-d array once one is selected)."""
+
+        return self.coords["wavelength"]
+
+    @property
+    def theta_i(self) -> Any:
+        """Polar incidence in degrees: a float for a single reading, an array for a θi dim."""
+
+        value = self.coords["theta_i"]
+        return float(value) if np.ndim(value) == 0 else value
+
+    @property
+    def phi_i(self) -> float:
+        """Azimuth of incidence in degrees (the settings')."""
+
+        return float(self.settings.phi_i)  # type: ignore[attr-defined]
+
+    @property
+    def mu(self) -> float:
+        """The tolerance asked for (the settings'; what the rays give is each kind's certificate)."""
+
+        return float(self.settings.mu)  # type: ignore[attr-defined]
+
+    @property
+    def delta(self) -> float:
+        """The failure probability δ asked for (the settings')."""
+
+        return float(self.settings.delta)  # type: ignore[attr-defined]
+
+    @property
     def shape(self) -> tuple[int, ...]:
         return tuple(len(self.coords[d]) for d in self.dims)
 
@@ -456,6 +487,33 @@ class ResultBase:
 
     def as_dict(self) -> dict[str, Any]:
         raise NotImplementedError
+
+    def _labels_as_dict(self) -> dict[str, Any]:
+        """The labels as plain data: ``dims``, ``wavelengths``, ``theta_i`` (what :meth:`labels_from_dict` reads)."""
+
+        return {"dims": list(self.dims), "wavelengths": plain_data(self.coords["wavelength"]),
+                "theta_i": plain_data(self.coords["theta_i"])}
+
+    def _parameters_as_dict(self) -> dict[str, Any]:
+        """The swept parameters and their coordinates as plain data (none: nothing)."""
+
+        if self.parameters is None:
+            return {}
+        return {"parameters": self.parameters,
+                "parameter_coords": {name: plain_data(self.coords[name]) for name in (*self.parameter_names, "point")
+                                     if name in self.coords}}
+
+    @staticmethod
+    def labels_from_dict(data: dict[str, Any]) -> dict[str, Any]:
+        """``dims``, ``coords`` and ``parameters`` (constructor keywords) from a result's plain data."""
+
+        extra = {name: np.asarray(value, dtype=np.int64 if name == "point" else np.float64)
+                 for name, value in (data.get("parameter_coords") or {}).items()}
+        parameters = data.get("parameters")
+        return {"dims": tuple(data["dims"]),
+                "coords": {"wavelength": np.asarray(data["wavelengths"], dtype=np.float64),
+                           "theta_i": np.asarray(data["theta_i"], dtype=np.float64), **extra},
+                "parameters": None if parameters is None else dict(parameters)}
 
     def _parameter_keys(self) -> dict[str, str] | None:
         """Swept parameter names → their ``mi.traverse`` keys (for :func:`annotate`), or ``None``."""

@@ -140,18 +140,10 @@ class GonioResult(ResultBase):
         return replace(self, result=result, bin_counts=arrays["bin_counts"])
 
     @property
-    def wavelengths(self) -> np.ndarray:
-        return self.result.wavelengths
-
-    @property
     def theta_i(self) -> np.ndarray:
         """Polar incidence in degrees, as an array (one element for a scalar label)."""
 
         return np.atleast_1d(self.result.coords["theta_i"])
-
-    @property
-    def phi_i(self) -> float:
-        return self.result.phi_i
 
     @property
     def theta_o(self) -> np.ndarray:
@@ -170,10 +162,6 @@ class GonioResult(ResultBase):
         """Rays N per reading (wavelength, θi)."""
 
         return self.result.rays
-
-    @property
-    def delta(self) -> float:
-        return self.result.delta
 
     @property
     def size(self) -> int:

@@ -123,33 +123,6 @@ class Result(ResultBase):
         return replace(self, dims=dims, coords=coords, counts=counts("counts"),
                        pilot=None if self.pilot is None else counts("pilot"))
 
-    @property
-    def wavelengths(self) -> np.ndarray:
-        """Wavelengths in nm, in the order requested."""
-
-        return self.coords["wavelength"]
-
-    @property
-    def theta_i(self) -> Any:
-        """Polar incidence in degrees: a float for a single reading, an array for a θi dim."""
-
-        value = self.coords["theta_i"]
-        return float(value) if np.ndim(value) == 0 else value
-
-    @property
-    def phi_i(self) -> float:
-        return self.settings.phi_i
-
-    @property
-    def mu(self) -> float:
-        """The tolerance asked for (see :attr:`certified_mu` for the one the rays give)."""
-
-        return self.settings.mu
-
-    @property
-    def delta(self) -> float:
-        return self.settings.delta
-
     # -- counts by name ----------------------------------------------------------------
 
     rays = _counts("rays", "Rays N per reading behind the estimates (int64).")
@@ -451,9 +424,7 @@ class Result(ResultBase):
         plain = plain_data
         return {
             "format": self.FORMAT,
-            "dims": list(self.dims),
-            "wavelengths": plain(self.wavelengths),
-            "theta_i": plain(self.coords["theta_i"]),
+            **self._labels_as_dict(),
             **{name: plain(values) for name, values in self.counts.as_dict().items()},
             **{name: plain(self.quantity(name)) for name in QUANTITIES},
             **{name: plain(getattr(self, name)) for name in _PARTS},
@@ -472,10 +443,7 @@ class Result(ResultBase):
             "scene": self.scene,
             "wavelength_independent": self.wavelength_independent,
             "version": self.version,
-            **({} if self.parameters is None else {
-                "parameters": self.parameters,
-                "parameter_coords": {name: plain(self.coords[name]) for name in (*self.parameter_names, "point")
-                                     if name in self.coords}}),
+            **self._parameters_as_dict(),
         }
 
     @classmethod
@@ -485,7 +453,6 @@ class Result(ResultBase):
         try:
             if data.get("format") != cls.FORMAT:
                 raise KeyError("format")
-            dims = tuple(data["dims"])
 
             def counts(source: dict[str, Any]) -> Counts:
                 # Results written before invalid directions were counted have none.
@@ -493,14 +460,8 @@ class Result(ResultBase):
                 return Counts(**{name: np.array(source[name], dtype=np.float64 if name == "largest_weight"
                                                 else np.int64) for name in Counts.names()})
 
-            parameters = data.get("parameters")
-            extra = {name: np.asarray(value, dtype=np.int64 if name == "point" else np.float64)
-                     for name, value in (data.get("parameter_coords") or {}).items()}
             return cls(
-                dims=dims,
-                coords={"wavelength": np.asarray(data["wavelengths"], dtype=np.float64),
-                        "theta_i": np.asarray(data["theta_i"], dtype=np.float64), **extra},
-                parameters=None if parameters is None else dict(parameters),
+                **cls.labels_from_dict(data),
                 counts=counts(data),
                 pilot=None if data["pilot"] is None else counts(data["pilot"]),
                 settings=Settings(**data["settings"]),

@@ -40,6 +40,7 @@ import json
 import os
 from dataclasses import asdict, dataclass, field, replace
 from functools import cached_property
+from types import SimpleNamespace
 from typing import Any, ClassVar
 
 import numpy as np
@@ -47,7 +48,7 @@ import numpy as np
 from virtspec_mi import __version__
 from virtspec_mi.budgets.bounds import hoeffding_mu
 from virtspec_mi.budgets.intervals import clopper_pearson
-from virtspec_mi.geometry.sphere import SPHERE_SETTING_NAMES, Sphere, SphereSettings, sphere_from_parameters
+from virtspec_mi.geometry.sphere import Sphere, sphere_from_parameters
 from virtspec_mi.references.sphere_model import correct_readings, theory_inputs
 from virtspec_mi.results.base import ResultBase, per_count, plain_data, round_up, span
 from virtspec_mi.results.formats import annotate
@@ -153,19 +154,6 @@ class SphereResult(ResultBase):
             "wall_reflectance"], pilot=None if self.pilot is None else groups("pilot"))
 
     @property
-    def wavelengths(self) -> np.ndarray:
-        """Wavelengths in nm."""
-
-        return self.coords["wavelength"]
-
-    @property
-    def theta_i(self) -> Any:
-        """Polar incidence in degrees: a float for one angle, an array for a θi dim."""
-
-        value = self.coords["theta_i"]
-        return float(value) if np.ndim(value) == 0 else value
-
-    @property
     def rays(self) -> np.ndarray:
         """N per reading and configuration, shape (…, 2) (``sample``, ``standard``)."""
 
@@ -189,10 +177,6 @@ class SphereResult(ResultBase):
         """p_standard: the detected fraction with the reference standard (or the open port)."""
 
         return self.fraction("detected", "standard")
-
-    @property
-    def delta(self) -> float:
-        return float(self.settings.delta)
 
     @property
     def fraction_delta(self) -> float:
@@ -320,13 +304,14 @@ class SphereResult(ResultBase):
     def theory_inputs(self) -> dict[str, Any]:
         """
         The :mod:`virtspec_mi.references.sphere_theory` keywords of this reading
-        (:func:`virtspec_mi.references.sphere_model.theory_inputs` of its sphere, mode and specimen radius).
+        (:func:`virtspec_mi.references.sphere_model.theory_inputs` of its sphere, its reading
+        mode — the ``measurement``, ``specular``, ``method`` and ``standard`` it was read with,
+        as plain values — and its specimen radius).
         """
 
         self._check_spectrum("the sphere theory's inputs")
-        options = {k: v for k, v in self.options.items() if k in SPHERE_SETTING_NAMES}
-        return theory_inputs(self.sphere_description, SphereSettings(**options), np.atleast_1d(self.wavelengths),
-                             self.specimen_radius)
+        mode = SimpleNamespace(**{k: self.options[k] for k in ("measurement", "specular", "method", "standard")})
+        return theory_inputs(self.sphere_description, mode, np.atleast_1d(self.wavelengths), self.specimen_radius)
 
     def corrected(self, *, specular_reflectance: Any = 0.0, sample_reflectance: Any = None,
                   collimated_transmittance: Any = 0.0) -> np.ndarray:
@@ -417,8 +402,7 @@ class SphereResult(ResultBase):
                     f"{1 - self.delta:g})" if np.any(self.certified) else
                     "NOT CERTIFIED (capped walks, invalid directions or weight violations)")
                  + f"; {self.seconds * 1e3:.1f} ms"]
-        fixed = [f"{name} = {float(value):g}" for name, value in self.coords.items()
-                 if name not in ("wavelength",) and not self.coord_dims(name)]
+        fixed = [f"{name} = {float(value):g}" for name, value in self.coords.items() if not self.coord_dims(name)]
         if fixed:
             lines.append("at " + ", ".join(fixed))
         labels = [d for d in self.dims]
@@ -454,13 +438,8 @@ class SphereResult(ResultBase):
 
         return {
             "format": self.FORMAT,
-            "dims": list(self.dims),
-            "wavelengths": plain_data(self.wavelengths),
-            "theta_i": plain_data(self.coords["theta_i"]),
-            **({} if self.parameters is None else {
-                "parameters": self.parameters,
-                "parameter_coords": {name: plain_data(self.coords[name]) for name in (*self.parameter_names, "point")
-                                     if name in self.coords}}),
+            **self._labels_as_dict(),
+            **self._parameters_as_dict(),
             "counts": groups(self.counts),
             "pilot": None if self.pilot is None else groups(self.pilot),
             "wall_reflectance": plain_data(self.wall_reflectance),
@@ -493,13 +472,8 @@ class SphereResult(ResultBase):
                 return {c: {name: np.asarray(values, dtype=np.int64) for name, values in named.items()}
                         for c, named in source.items()}
 
-            extra = {name: np.asarray(value, dtype=np.int64 if name == "point" else np.float64)
-                     for name, value in (data.get("parameter_coords") or {}).items()}
-            parameters = data.get("parameters")
             return cls(
-                dims=tuple(data["dims"]),
-                coords={"wavelength": np.asarray(data["wavelengths"], dtype=np.float64),
-                        "theta_i": np.asarray(data["theta_i"], dtype=np.float64), **extra},
+                **cls.labels_from_dict(data),
                 counts=groups(data["counts"]),
                 pilot=None if data.get("pilot") is None else groups(data["pilot"]),
                 wall_reflectance=np.asarray(data["wall_reflectance"], dtype=np.float64),
@@ -507,7 +481,6 @@ class SphereResult(ResultBase):
                 settings=Settings(**data["settings"]), seconds=float(data["seconds"]), scene=str(data["scene"]),
                 sphere_parameters=dict(data.get("sphere_parameters") or {}),
                 specimen_radius=data.get("specimen_radius"), version=str(data["version"]),
-                parameters=None if parameters is None else dict(parameters),
             )
         except (KeyError, TypeError, ValueError, AttributeError) as error:
             raise ValueError(f"not a virtspec-mi sphere result (missing or bad {error})") from None

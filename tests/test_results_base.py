@@ -149,7 +149,8 @@ def test_as_grid_and_squeeze_undo_a_scalar_selection(hemispherical, gonio, spher
 
 
 def test_as_grid_refuses_parameter_dims_with_an_example(hemispherical, sphere):
-    with pytest.raises(ValueError, match=r"dims specimen.thickness \(a parameter sweep\).*sel\(\*\*\{'specimen.thickness'"):
+    with pytest.raises(ValueError, match=r"dims specimen.thickness \(a parameter sweep\).*"
+                                         r"sel\(\*\*\{'specimen.thickness'"):
         hemispherical.as_grid()
     with pytest.raises(ValueError, match=r"isel\(point=0\)"):
         sphere.spectrum()

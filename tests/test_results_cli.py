@@ -21,7 +21,8 @@ from virtspec_mi.cli import main
 def files(mi, tmp_path_factory):
     folder = tmp_path_factory.mktemp("kinds")
     gonio, sphere, grid, sweep = gonio_reading(), sphere_reading(), sphere_grid(), hemispherical_grid()
-    return {"gonio": (gonio, gonio.write(folder / "gonio.nc")), "sphere": (sphere, sphere.write(folder / "sphere.json")),
+    return {"gonio": (gonio, gonio.write(folder / "gonio.nc")),
+            "sphere": (sphere, sphere.write(folder / "sphere.json")),
             "sphere grid": (grid, grid.write(folder / "grid.nc")), "sweep": (sweep, sweep.write(folder / "lut.csv")),
             "folder": folder}
 

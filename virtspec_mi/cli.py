@@ -528,7 +528,8 @@ def _colour(args: argparse.Namespace) -> int:
     path = Path(args.file)
     if path.suffix.lower() == ".csv" and path.is_file() and not is_result_csv(path):
         if args.selections:
-            raise ValueError("--sel selects labels of a result file; a colour-science CSV holds one spectrum per column")
+            raise ValueError("--sel selects labels of a result file; a colour-science CSV holds one spectrum per "
+                             "column (pick it with --quantity)")
         quantity = args.quantity or "reflectance"
         spectra = read_spectra_csv(path)
         if quantity not in spectra:
@@ -537,7 +538,7 @@ def _colour(args: argparse.Namespace) -> int:
         heading = f"{quantity} of {path}"
     else:
         result = _selected(path, args.selections)
-        quantity = result._check_quantity(args.quantity)
+        quantity = result.check_quantity(args.quantity)
         sd = result.to_sd(quantity, args.theta_i)
         heading = f"{quantity} of {path} ({sd.name})"
     colour = colorimetry(sd, args.illuminant, args.observer)
@@ -570,11 +571,11 @@ def _comparison_options(parser: argparse.ArgumentParser) -> None:
 
 
 def _compare(args: argparse.Namespace) -> int:
-    from virtspec_mi.compare import compare
-    from virtspec_mi.results.plot import check_figure_path
-
     from dataclasses import replace
     from pathlib import Path
+
+    from virtspec_mi.compare import compare
+    from virtspec_mi.results.plot import check_figure_path
 
     check_figure_path(args.plot)  # a bad suffix fails before any work
     result = _selected(args.result, args.selections)

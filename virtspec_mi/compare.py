@@ -162,7 +162,7 @@ def read_measured(source: Any, quantity: str = "reflectance", theta_i: float | N
     certified tolerance becomes the uncertainty).
     """
 
-    _check_quantity(quantity)
+    check_quantity(quantity)
     if isinstance(source, MeasuredSpectrum):
         return source
     if isinstance(source, ResultBase):
@@ -583,7 +583,7 @@ def compare(
     """
 
     result, result_name = _result_of(result)
-    quantity = result._check_quantity(quantity)
+    quantity = result.check_quantity(quantity)
     _check_colour_names(illuminant, observer)
     simulation = result.spectrum(quantity, theta_i)
     spectrum = read_measured(measured, simulation.measures, theta_i)
@@ -635,7 +635,7 @@ def _delta_e(wavelengths: np.ndarray, simulated: np.ndarray, measured: np.ndarra
 # -- helpers -------------------------------------------------------------------------
 
 
-def _check_quantity(quantity: str) -> None:
+def check_quantity(quantity: str) -> None:
     if quantity not in QUANTITIES:
         raise ValueError(f"quantity must be one of {', '.join(QUANTITIES)} (got {quantity!r})")
 

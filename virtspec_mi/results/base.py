@@ -59,6 +59,7 @@ NEAREST: str = "nearest"
 _MATCH = {"rtol": 1e-9, "atol": 1e-12}  # labels this close are the same label
 _GRID = ("wavelength", "theta_i")  # the dims every reading has, in this order, first
 
+
 def plain_data(values: Any) -> Any:
     """An array as JSON-ready nested lists, NaN as ``None`` (JSON has no NaN)."""
 
@@ -110,8 +111,9 @@ class Spectrum:
     wavelengths, values : ndarray
         nm, increasing; the values.
     tolerance : ndarray
-        Each value is within ``tolerance`` of what the model gives (its expectation)
-        with probability ≥ 1 − ``delta``; NaN: not certified.
+        Each value is within ``tolerance`` of what it estimates — the expected fraction
+        of the model (a reading's R, T, A), the ratio of the expected detector fractions
+        (a sphere's reading) — with probability ≥ 1 − ``delta``; NaN: not certified.
     delta : float
         The failure probability of each point's tolerance.
     theta_i : float
@@ -235,9 +237,7 @@ class ResultBase:
     def coord_dims(self, name: str) -> tuple[str, ...]:
         """The dims a coordinate lies along: its own, ``("point",)`` for a parameter of points, ``()`` if scalar."""
 
-        if name in self.dims:
-            return (name,)
-        return ("point",) if np.ndim(self.coords[name]) == 1 and "point" in self.dims else ()
+        return _coord_dims(name, self.coords, self.dims)
 
     def angle_index(self, theta_i: float | None = None) -> int:
         """
@@ -383,21 +383,24 @@ class ResultBase:
         point first.
         """
 
-        quantity = self._check_quantity(quantity)
+        quantity = self.check_quantity(quantity)
         grid = self.as_grid()
         column = grid.angle_index(theta_i)
         values, tolerance, delta = grid._quantity(quantity)
         order = np.argsort(grid.coords["wavelength"], kind="stable")
-        return Spectrum(quantity, self.spectrum_measures(quantity), np.asarray(grid.coords["wavelength"], dtype=np.float64)[order],
+        return Spectrum(quantity, self.spectrum_measures(quantity),
+                        np.asarray(grid.coords["wavelength"], dtype=np.float64)[order],
                         np.asarray(values)[order, column], np.asarray(tolerance, dtype=np.float64)[order, column],
                         float(delta), float(np.atleast_1d(grid.coords["theta_i"])[column]))
 
     def spectrum_measures(self, quantity: str | None = None) -> str:
         """What a quantity estimates: ``reflectance``, ``transmittance`` or ``absorptance`` (a reading's own)."""
 
-        return self._check_quantity(quantity)
+        return self.check_quantity(quantity)
 
-    def _check_quantity(self, quantity: str | None) -> str:
+    def check_quantity(self, quantity: str | None) -> str:
+        """``quantity`` if it is one of :attr:`QUANTITIES` (``None``: the first); else ``ValueError`` naming them."""
+
         if quantity is None:
             return self.QUANTITIES[0]
         if quantity not in self.QUANTITIES:

@@ -132,7 +132,7 @@ def describe_variable(name: str, parameters: Mapping[str, str] | None = None) ->
 
 
 def annotate(dataset: Any, parameters: Mapping[str, str] | None = None) -> Any:
-    """``dataset`` with ``units`` and ``long_name`` on every data variable and coordinate (:func:`describe_variable`)."""
+    """``dataset`` with ``units`` and ``long_name`` on every variable and coordinate (:func:`describe_variable`)."""
 
     for name in (*dataset.data_vars, *dataset.coords):
         units, long_name = describe_variable(str(name), parameters)

@@ -457,7 +457,7 @@ class GonioResult(ResultBase):
         """
 
         if quantity not in (None, "brdf"):
-            return self.result.plot(path, quantity=self._check_quantity(quantity), **options)
+            return self.result.plot(path, quantity=self.check_quantity(quantity), **options)
         from virtspec_mi.results.angular_plot import plot_polar
 
         return plot_polar(self.as_grid(), path, **options)

@@ -528,4 +528,4 @@ class Result(ResultBase):
 
         from virtspec_mi.results.plot import plot_sweep
 
-        return plot_sweep(self, path, quantity=self._check_quantity(quantity), **options)
+        return plot_sweep(self, path, quantity=self.check_quantity(quantity), **options)

@@ -241,7 +241,7 @@ class SphereResult(ResultBase):
 
     @property
     def reading_interval(self) -> np.ndarray:
-        """[ρ_std·p_s⁻/p_r⁺, ρ_std·p_s⁺/p_r⁻] (…, 2): holds with probability ≥ 1 − δ; NaN if not certified."""
+        """[ρ_std·p_s⁻/p_r⁺, ρ_std·p_s⁺/p_r⁻], shape (…, 2): holds with probability ≥ 1 − δ (NaN: uncertified)."""
 
         sample, standard = self.fraction_interval("sample"), self.fraction_interval("standard")
         with np.errstate(divide="ignore", invalid="ignore"):
@@ -371,7 +371,7 @@ class SphereResult(ResultBase):
     def spectrum_measures(self, quantity: str | None = None) -> str:
         """What the sphere measures (``reflectance`` or ``transmittance``), whichever of its quantities."""
 
-        self._check_quantity(quantity)
+        self.check_quantity(quantity)
         return str(self.options["measurement"])
 
     def plot(self, path: str | os.PathLike | None = None, quantity: str | None = None, **options: Any) -> Any:
@@ -383,7 +383,7 @@ class SphereResult(ResultBase):
 
         from virtspec_mi.results.plot import plot_spectra
 
-        quantities = ("reading", "hemispherical") if quantity is None else (self._check_quantity(quantity),)
+        quantities = ("reading", "hemispherical") if quantity is None else (self.check_quantity(quantity),)
         return plot_spectra(self, path, quantities=quantities, **options)
 
     # -- text -------------------------------------------------------------------------

@@ -91,11 +91,12 @@ def test_parameter_dims_and_points_select_like_any_dim(hemispherical, sphere):
     np.testing.assert_array_equal(thin.reflected, hemispherical.reflected[..., 0])
     assert "specimen parameters: specimen.thickness = 0.0001" in thin.summary()
     point = sphere.sel(point=1)  # a point: its parameters become scalar labels
-    assert point.dims == ("wavelength", "theta_i") and float(point.coords["specimen.reflectance"]) == 0.6
+    assert point.dims == ("wavelength", "theta_i", "configuration")
+    assert float(point.coords["specimen.reflectance"]) == 0.6
     np.testing.assert_array_equal(point.counts["standard"]["rays"], sphere.counts["standard"]["rays"][..., 1])
     np.testing.assert_array_equal(point.reading, sphere.reading[..., 1])
     both = sphere.sel(point=1, theta_i=9.2, method="nearest")
-    assert both.dims == ("wavelength",) and float(both.coords["theta_i"]) == 10.0
+    assert both.dims == ("wavelength", "configuration") and float(both.coords["theta_i"]) == 10.0
     np.testing.assert_array_equal(both.reading_interval, sphere.reading_interval[:, 1, 1])
 
 
@@ -136,11 +137,21 @@ def test_the_bins_of_a_goniophotometer_stay_whole_with_the_reason(gonio):
     assert "K = 12 bins" in one.summary() and repr(one).startswith("GonioResult(2 wavelength x 6 theta_o x 2 phi_o")
 
 
+def test_a_sphere_keeps_both_configurations_with_the_reason(sphere):
+    assert sphere.dims[-1] == "configuration" and sphere.sizes["configuration"] == 2
+    assert list(sphere.coords["configuration"]) == ["sample", "standard"]
+    assert sphere.reading_dims == ("wavelength", "theta_i", "point") and sphere.rays.shape == (3, 2, 2, 2)
+    with pytest.raises(ValueError, match=r"'configuration' is a dim a integrating-sphere reading keeps whole: a "
+                                         r"reading is the ratio of both configurations"):
+        sphere.sel(configuration=0)
+    np.testing.assert_array_equal(sphere.rays[..., 1], sphere.counts["standard"]["rays"])  # N per configuration
+
+
 @pytest.mark.parametrize("kind", ["hemispherical", "gonio", "sphere"])
 def test_as_grid_and_squeeze_undo_a_scalar_selection(hemispherical, gonio, sphere, kind):
     result = kinds(hemispherical, gonio, sphere)[kind]
     if kind != "gonio":
-        result = result.isel({result.dims[-1]: 0})  # no parameter dim: as_grid refuses those (see below)
+        result = result.isel({result.reading_dims[-1]: 0})  # no parameter dim: as_grid refuses those (see below)
     single = result.sel(theta_i=result.coords["theta_i"][0], wavelength=700)
     grid = single.as_grid()
     assert grid.dims[:2] == ("wavelength", "theta_i") and grid.shape[:2] == (1, 1)

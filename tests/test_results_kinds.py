@@ -101,7 +101,7 @@ def test_sphere_files_of_cff7fea_read_with_their_counts_and_readout(suffix):
     written = json.loads((BEFORE / "sphere.json").read_text())  # the former layout: "kind": "sphere_result"
     assert written["kind"] == "sphere_result"
     back = vm.read_result(BEFORE / f"sphere{suffix}")
-    assert isinstance(back, vm.SphereResult) and back.dims == ("wavelength",) and back.theta_i == 8.0
+    assert isinstance(back, vm.SphereResult) and back.dims == ("wavelength", "configuration") and back.theta_i == 8.0
     np.testing.assert_array_equal(back.wavelengths, written["wavelengths"])
     for configuration, counts in written["counts"].items():
         for name, values in counts.items():

@@ -71,10 +71,12 @@ class SphereResult(ResultBase):
     Attributes
     ----------
     dims : tuple of str
-        The dims of the readings, e.g. ``("wavelength",)``.
+        The dims of the readings, e.g. ``("wavelength",)``, then ``configuration`` (added
+        when not given): the kind's own dim, which :meth:`sel` keeps whole.
     coords : dict of str to ndarray
         Labels: ``wavelength`` (nm), ``theta_i`` (degrees; a 0-d array for one angle),
-        parameters as for :class:`~virtspec_mi.results.hemispherical.Result`.
+        parameters as for :class:`~virtspec_mi.results.hemispherical.Result`,
+        ``configuration`` (``sample``, ``standard``; added when not given).
     counts : dict
         Per configuration (``"sample"``, ``"standard"``): every count by name, ``int64``
         over :attr:`dims` — ``rays`` (N of that configuration and reading), ``detected``,
@@ -126,16 +128,29 @@ class SphereResult(ResultBase):
     FORMAT: ClassVar[str] = "virtspec-mi sphere 1"
     LEGACY: ClassVar[tuple[str, ...]] = ("virtspec-mi sphere 0",)
     KIND: ClassVar[str] = "integrating-sphere reading"
+    KIND_DIMS: ClassVar[tuple[str, ...]] = ("configuration",)
+    KIND_DIMS_REASON: ClassVar[str] = (
+        "a reading is the ratio of both configurations; each one's counts are counts['sample'] and "
+        "counts['standard'] (in to_dataset(): the dim configuration)")
     QUANTITIES: ClassVar[tuple[str, ...]] = ("reading", "corrected", "hemispherical")
     _QUANTITY_NOTE: ClassVar[str] = "a sphere reading has no R, T, A triple"
+
+    def __post_init__(self) -> None:
+        """The dim ``configuration`` (``sample``, ``standard``) after the readings' dims, and its labels."""
+
+        if "configuration" not in self.dims:
+            object.__setattr__(self, "dims", (*self.dims, "configuration"))
+        if "configuration" not in self.coords:
+            labels = np.array(CONFIGURATIONS, dtype=object)  # variable-length text (NetCDF, Zarr)
+            object.__setattr__(self, "coords", {**self.coords, "configuration": labels})
 
     # -- labels -----------------------------------------------------------------------
 
     def _labelled(self) -> dict[str, tuple[tuple[str, ...], np.ndarray]]:
-        arrays = {"wall_reflectance": (self.dims, self.wall_reflectance)}
+        arrays = {"wall_reflectance": (self.reading_dims, self.wall_reflectance)}
         for prefix, groups in (("counts", self.counts), ("pilot", self.pilot or {})):
             for configuration, named in groups.items():
-                arrays.update({f"{prefix}.{configuration}.{name}": (self.dims, values)
+                arrays.update({f"{prefix}.{configuration}.{name}": (self.reading_dims, values)
                                for name, values in named.items()})
         return arrays
 
@@ -346,7 +361,7 @@ class SphereResult(ResultBase):
         return values.reshape(interval.shape)
 
     def _check_spectrum(self, what: str) -> None:
-        other = [d for d in self.dims if d != "wavelength"]
+        other = [d for d in self.reading_dims if d != "wavelength"]
         if other:
             raise ValueError(f"{what} need a reading over wavelength only: select one label of "
                              f"{', '.join(other)} first (sel)")
@@ -405,12 +420,12 @@ class SphereResult(ResultBase):
         fixed = [f"{name} = {float(value):g}" for name, value in self.coords.items() if not self.coord_dims(name)]
         if fixed:
             lines.append("at " + ", ".join(fixed))
-        labels = [d for d in self.dims]
+        labels = list(self.reading_dims)
         heads = ["lambda/nm" if d == "wavelength" else d for d in labels]
         lines.append(" ".join(f"{h:>10}" for h in heads) + "  rho_w   p_sample  p_standard   reading  [interval]"
                      "            hemispherical    error")
         interval, certified = self.reading_interval, self.certified
-        for index in np.ndindex(*self.shape):
+        for index in np.ndindex(*(self.sizes[d] for d in labels)):
             at = " ".join(f"{float(self.coords[d][k]):>10g}" for d, k in zip(labels, index))
             lines.append(f"{at}  {self.wall_reflectance[index]:.4f}  {self.detector_fraction[index]:.5f}  "
                          f"{self.standard_fraction[index]:.5f}    {self.reading[index]:.5f}  "
@@ -501,27 +516,27 @@ class SphereResult(ResultBase):
 
         import xarray as xr
 
-        per = (*self.dims, "configuration")
+        per = self.dims  # the readings' dims, then configuration
         variables: dict[str, Any] = {}
         for prefix, groups in (("", self.counts), ("pilot_", self.pilot or {})):
             for name in groups.get("sample", {}):
                 variables[prefix + name] = (per, np.stack([groups[c][name] for c in CONFIGURATIONS], axis=-1))
         interval, hemispherical = self.reading_interval, self.hemispherical_interval
+        band = {"clopper_pearson_delta": self.delta}
         variables.update({
-            "wall_reflectance": (self.dims, self.wall_reflectance),
-            "detector_fraction": (self.dims, self.detector_fraction),
-            "standard_fraction": (self.dims, self.standard_fraction),
-            "reading": (self.dims, self.reading),
-            "reading_lower": (self.dims, interval[..., 0]),
-            "reading_upper": (self.dims, interval[..., 1]),
-            "hemispherical": (self.dims, self.hemispherical),
-            "hemispherical_lower": (self.dims, hemispherical[..., 0], {"clopper_pearson_delta": self.delta}),
-            "hemispherical_upper": (self.dims, hemispherical[..., 1], {"clopper_pearson_delta": self.delta}),
-            "instrument_error": (self.dims, self.instrument_error),
-            "fraction_mu": (self.dims, self.fraction_mu),
+            "wall_reflectance": (self.reading_dims, self.wall_reflectance),
+            "detector_fraction": (self.reading_dims, self.detector_fraction),
+            "standard_fraction": (self.reading_dims, self.standard_fraction),
+            "reading": (self.reading_dims, self.reading),
+            "reading_lower": (self.reading_dims, interval[..., 0]),
+            "reading_upper": (self.reading_dims, interval[..., 1]),
+            "hemispherical": (self.reading_dims, self.hemispherical),
+            "hemispherical_lower": (self.reading_dims, hemispherical[..., 0], band),
+            "hemispherical_upper": (self.reading_dims, hemispherical[..., 1], band),
+            "instrument_error": (self.reading_dims, self.instrument_error),
+            "fraction_mu": (self.reading_dims, self.fraction_mu),
         })
         coords = {name: (self.coord_dims(name), values) for name, values in self.coords.items()}
-        coords["configuration"] = ("configuration", np.array(CONFIGURATIONS, dtype=object))  # variable-length text
         s = self.settings
         attrs = {"sphere": self.sphere, **{k: v for k, v in self.options.items() if k != "max_bounces"},
                  "max_bounces": int(self.options.get("max_bounces", 0)), "mu": s.mu, "delta": s.delta,

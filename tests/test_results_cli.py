@@ -99,6 +99,9 @@ def test_plot_colour_and_compare_of_a_sphere_file_go_through_its_reading(files, 
     interval = sphere.reading_interval
     assert np.all(np.array(data["certified_mu"]) >= np.maximum(sphere.reading - interval[:, 0],
                                                                interval[:, 1] - sphere.reading) - 1e-15)
+    status, printed, _ = run(capsys, "compare", path, measured, "--quantity", "corrected", "--json")
+    assert status == 0 and json.loads(printed)["quantity"] == "corrected"
+    np.testing.assert_allclose(json.loads(printed)["simulated"], sphere.corrected())  # the theory's inverse
     err = one_line_error(capsys, "colour", path, "--quantity", "absorptance")
     assert "quantity must be one of reading, corrected, hemispherical (got 'absorptance'): a sphere reading" in err
 

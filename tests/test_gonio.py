@@ -256,5 +256,7 @@ def test_plots_and_spectra_per_bin(rough, tmp_path):
         reading.plot(tmp_path / "x.pdf")
     sd = reading.to_sd(theta_o=40, phi_o=190)
     assert list(sd.wavelengths) == [500, 600] and np.allclose(sd.values, reading.brdf[:, 0, 2, 4])
-    with pytest.raises(ValueError, match="read_gonio"):
-        vm.read_result(reading.write(tmp_path / "g.nc"))
+    path = reading.write(tmp_path / "g.nc")  # read_result reads every kind; Result.read names it
+    assert isinstance(vm.read_result(path), vm.GonioResult) and vm.read_result(path).as_dict() == reading.as_dict()
+    with pytest.raises(ValueError, match="goniophotometer reading.*read it with virtspec_mi.read_result"):
+        vm.Result.read(path)

@@ -179,10 +179,14 @@ def measure_sphere(instrument: Any, sphere: Sphere, settings: Settings, options:
         tallies = tally_sphere(walk, traced, wavelengths, rho_w, rays, settings)
         counts[name] = _named_counts(sphere, tallies)
     seconds = time.perf_counter() - start
-    return SphereResult(wavelengths=wavelengths, rays=int(rays), counts=counts, sphere=sphere.describe(),
-                        cap_fractions=sphere.cap_fractions, wall_reflectance=rho_w, options=options.as_dict(),
-                        settings=settings.as_dict(), seconds=seconds, scene=scene,
-                        sphere_parameters=sphere.parameters(), specimen_radius=float(radius))
+    for named in counts.values():  # N per configuration and reading
+        named["rays"] = np.full(wavelengths.shape, int(rays), dtype=np.int64)
+    return SphereResult(dims=("wavelength",), coords={"wavelength": wavelengths,
+                                                      "theta_i": np.asarray(settings.theta_i, dtype=np.float64)},
+                        counts=counts, wall_reflectance=np.asarray(rho_w, dtype=np.float64), sphere=sphere.describe(),
+                        cap_fractions=sphere.cap_fractions, options=options.as_dict(), settings=settings,
+                        seconds=seconds, scene=scene, sphere_parameters=sphere.parameters(),
+                        specimen_radius=float(radius))
 
 
 def _named_counts(sphere: Sphere, tallies: list[dict[str, Any]]) -> dict[str, np.ndarray]:

@@ -78,6 +78,23 @@ class BinLayout(ExitHook):
     def size(self) -> int:
         return self.shape[0] * self.shape[1]
 
+    def pairing(self, phi_i: float) -> int:
+        """
+        Pair the two φo bins either side of the mirror azimuth φi + 180° in one word:
+        specular lobes lie in the plane of incidence and straddle that edge when the φo
+        edges are symmetric about it (folded bins: 0, the lobes sit at the range's end).
+        """
+
+        if self.fold_phi:
+            return 0
+        mirror = (float(phi_i) + 180.0) % 360.0
+        edges = self.phi_edges.astype(np.float64)
+        distance = np.abs((edges - mirror + 180.0) % 360.0 - 180.0)
+        edge = int(np.argmin(distance))
+        if edge in (0, len(edges) - 1):  # the row's first and last bins meet there: never one word
+            return 0
+        return (edge - 1) % 2
+
     def bin(self, wo: Any, fate: Any, phi_i: Any) -> Any:
         """Flat bin of each ray; K for a ray that is not binned (see the module docstring)."""
 

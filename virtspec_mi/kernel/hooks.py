@@ -101,6 +101,16 @@ class ExitHook:
 
         return specimen
 
+    def pairing(self, phi_i: float) -> int:
+        """
+        0 or 1: the kernel tallies bins two to a 64-bit word, (2m − p, 2m + 1 − p) for
+        pairing p, in a reading at azimuth ``phi_i`` (degrees). Only speed depends on it
+        (a SIMD packet costs one memory update per distinct word): pair the bins a
+        reading's rays most often fall into side by side. 0 by default.
+        """
+
+        return 0
+
     def bin(self, wo: Any, fate: Any, phi_i: Any) -> Any:
         """Per-ray bin code (``UInt32`` in [0, K]) from the outgoing direction, fate and φi (degrees)."""
 

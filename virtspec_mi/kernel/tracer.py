@@ -354,6 +354,7 @@ class _Kernel:
         self.bsdf = bench.bsdf if hook is None else hook.beam_bsdf(bench.bsdf)
         self.seed, self.beam, self.sampling = seed, beam, sampling
         self.phi_i = np.array([plan.phi_i for plan in plans], dtype=np.float64)
+        self.pairing = np.array([0 if hook is None else hook.pairing(phi) for phi in self.phi_i], dtype=np.uint32)
         # A random-walk specimen's steps run on queued lanes (walk.lanes = 0: sample() per ray),
         # unless the hook continues every ray's own lane.
         self.queued = walk.lanes > 0 and is_random_walk(self.bsdf) and not (hook is not None and hook.needs_rays)
@@ -413,11 +414,11 @@ class _Kernel:
         else:
             # The same kernel also adds each ray to its reading's bin (a queued walk: the kernel
             # after the walk loop, from each ray's kept bin).
-            table = self._bin_table(lanes["bin"], lanes["slot"], len(slots))
+            table = self._bin_table(source, lanes["bin"], lanes["slot"])
             per_ray = {} if exits is None else {name: sums[name] for name in hook.sums}
             totals = {name: self._per_reading(value, lanes["slot"], len(slots)) for name, value in per_ray.items()}
             dr.eval(*packed_codes.values(), rare, table, *totals.values())
-            tally.bins[slots] += self._unpacked(table, len(slots))
+            tally.bins[slots] += self._unpacked(table, slots)
             for name, total in totals.items():
                 tally.sums[name][slots] += np.array(total, dtype=np.uint64).astype(np.int64)
         bounds, ends = source.bounds, np.append(source.bounds[1:], source.size)
@@ -438,30 +439,36 @@ class _Kernel:
             getattr(counts, name)[slots] += _segment_sums(dr.cumsum(flags), bounds, ends).astype(np.int64)
         self._largest_weights(lanes["weight"], rare, bounds, slots, counts)
 
-    def _bin_table(self, code: Any, slot: Any, readings: int) -> Any:
+    def _bin_table(self, source: _RaySource, code: Any, slot: Any) -> Any:
         """
         The chunk's histogram of the hook's codes (symbolic): two bins per UInt64 word
         (32-bit fields: a chunk holds < 2³² rays, so no field overflows), scatter-added into
         per-thread copies of the table (``ReduceMode.Expand``: no atomics; Dr.Jit sums the
-        copies). Neighbouring bins share a word, so fewer distinct words per SIMD packet:
-        measured the fastest of 32-bit/64-bit tallies × Local/Expand/Direct (benchmarks/gonio.py).
+        copies). A SIMD packet costs one read-modify-write per distinct word its rays hit,
+        so neighbouring bins share a word, paired as the hook says for each reading
+        (:meth:`~virtspec_mi.kernel.hooks.ExitHook.pairing`: each reading's block holds
+        K + 1 fields, its bins from field ``pairing`` on). Measured the fastest of
+        32-bit/64-bit tallies × Local/Expand/Direct (benchmarks/gonio.py).
         """
 
-        size_k = self.hook.size
-        flat = readings * size_k
-        table = dr.zeros(mi.UInt64, (flat + 1) // 2)
-        where = code if readings == 1 else slot * size_k + code
+        readings, block = len(source.slots), self.hook.size + 1
+        table = dr.zeros(mi.UInt64, (readings * block + 1) // 2)
+        shift = source.column(self.pairing[source.slots], mi.UInt32, slot)
+        where = code + shift if readings == 1 else slot * block + code + shift
         value = dr.select((where & 1) != 0, mi.UInt64(_WORD), mi.UInt64(1))
-        dr.scatter_reduce(dr.ReduceOp.Add, table, value, where >> 1, code < size_k, mode=dr.ReduceMode.Expand)
+        dr.scatter_reduce(dr.ReduceOp.Add, table, value, where >> 1, code < self.hook.size,
+                          mode=dr.ReduceMode.Expand)
         return table
 
-    def _unpacked(self, table: Any, readings: int) -> np.ndarray:
-        """The evaluated :meth:`_bin_table` as ``int64`` counts, shape (readings, K)."""
+    def _unpacked(self, table: Any, slots: np.ndarray) -> np.ndarray:
+        """The evaluated :meth:`_bin_table` of readings ``slots`` as ``int64`` counts, shape (readings, K)."""
 
+        size = self.hook.size
         words = np.array(table, dtype=np.uint64)
-        flat = readings * self.hook.size
-        pairs = np.stack([words & np.uint64(_WORD - 1), words >> np.uint64(32)], axis=1).reshape(-1)[:flat]
-        return pairs.astype(np.int64).reshape(readings, self.hook.size)
+        fields = np.stack([words & np.uint64(_WORD - 1), words >> np.uint64(32)], axis=1).reshape(-1)
+        blocks = fields[: len(slots) * (size + 1)].astype(np.int64).reshape(len(slots), size + 1)
+        first = self.pairing[slots].astype(np.int64)
+        return blocks[np.arange(len(slots))[:, None], first[:, None] + np.arange(size)[None, :]]
 
     @staticmethod
     def _per_reading(value: Any, slot: Any, readings: int) -> Any:

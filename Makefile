@@ -9,14 +9,14 @@ STAMP  := $(VENV)/.installed
 SUDO   := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
 PYTEST_ARGS ?=
 
-.PHONY: setup llvm demo test test-fast bench notebooks clean
+.PHONY: setup llvm demo test test-fast docs lab bench notebooks clean
 
 setup: $(STAMP) llvm
 
 $(STAMP): pyproject.toml
 	@[ -x $(PY) ] || $(PYTHON) -m venv $(VENV)
 	$(PY) -m pip install --quiet --upgrade pip
-	$(PY) -m pip install --quiet -e '.[test]'
+	$(PY) -m pip install --quiet -e '.[test,docs]'
 	@touch $(STAMP)
 
 # Dr.Jit aborts under libLLVM 14/15/16 (Debian 12's defaults): install 19 when no good one is found.
@@ -36,6 +36,15 @@ test: setup
 test-fast: setup
 	$(PY) -m pytest $(PYTEST_ARGS)
 
+# The manual (Sphinx): docs/_build/html/index.html, warnings are errors (the tests build it too).
+docs: setup
+	$(PY) -m sphinx -E -W --keep-going -b html docs docs/_build/html
+
+# Open the notebooks in JupyterLab (installs the notebook extra into .venv once).
+lab: setup
+	@$(PY) -c "import jupyterlab" 2>/dev/null || $(PY) -m pip install --quiet -e '.[test,docs,notebook]'
+	$(VENV)/bin/jupyter lab notebooks
+
 # Execute the notebooks (the paper reproduced) at full size and write their outputs back
 # (several minutes); the test suite runs them at the reduced size.
 notebooks: setup
@@ -52,4 +61,4 @@ bench: setup
 	$(PY) benchmarks/gonio.py
 
 clean:
-	rm -rf $(VENV) build *.egg-info .pytest_cache
+	rm -rf $(VENV) build *.egg-info .pytest_cache docs/_build docs/_generated

@@ -49,8 +49,6 @@ def run(values: int, wavelengths: int, rays: int) -> None:
     import virtspec_mi as vm
 
     vm.mitsuba()
-    os.environ.setdefault("VIRTSPEC_LEAF_DATA", os.path.join(os.path.dirname(__file__), "..", "..", "shared",
-                                                             "data", "abm-npsg"))
     thickness = np.linspace(1.2e-4, 2.4e-4, values)
     lams = np.linspace(450, 850, wavelengths)
     settings = dict(theta_i=8, beam="collimated", wavelengths=lams, rays=rays, seed=0)

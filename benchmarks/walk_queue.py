@@ -37,8 +37,8 @@ Run::
     .venv/bin/python benchmarks/walk_queue.py --quick             # 10x fewer rays
     .venv/bin/python benchmarks/walk_queue.py --skip-against      # occupancy grid and gonio only
 
-Needs the NPSG leaf data (``VIRTSPEC_LEAF_DATA``, default ../shared/data/abm-npsg beside
-the checkout). Other work on the machine slows every figure; the load average is printed.
+Needs the NPSG leaf data (``VIRTSPEC_LEAF_DATA``, default this checkout's shipped copy,
+which older trees read too). Other work on the machine slows every figure; the load average is printed.
 """
 
 from __future__ import annotations
@@ -54,7 +54,7 @@ from pathlib import Path
 import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
-os.environ.setdefault("VIRTSPEC_LEAF_DATA", str(ROOT.parent / "shared" / "data" / "abm-npsg"))
+os.environ.setdefault("VIRTSPEC_LEAF_DATA", str(ROOT / "virtspec_mi" / "data" / "abm-npsg"))  # older trees too
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 from revisions import describe_worktree, load_average, machine, machine_lines, python_env, worktree  # noqa: E402

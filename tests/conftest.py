@@ -2,18 +2,18 @@
 
 from __future__ import annotations
 
-import os
 from pathlib import Path
 
 import pytest
 
 import virtspec_mi
+from virtspec_mi.leaf_data import leaf_data_dir
 
 ROOT = Path(__file__).resolve().parents[1]
 SCENES = ROOT / "scenes"
-# The NPSG leaf data (third party, not committed) for the ABM specimens: ../shared beside
-# the checkout unless VIRTSPEC_LEAF_DATA points elsewhere.
-LEAF_DATA = Path(os.environ.setdefault("VIRTSPEC_LEAF_DATA", str(ROOT.parent / "shared" / "data" / "abm-npsg")))
+# The NPSG leaf data for the ABM specimens: the package's shipped copy (VIRTSPEC_LEAF_DATA,
+# when set, points elsewhere).
+LEAF_DATA = leaf_data_dir()
 
 
 @pytest.fixture(scope="session")

@@ -62,16 +62,16 @@ def test_sieve_and_detour_changes_the_reading(mi):
 
 
 def test_soybean_scene_from_xml(mi, scenes_dir, leaf_data_dir, monkeypatch):
-    """scenes/soybean_abmb.xml: collimated, 8 deg; data from $VIRTSPEC_LEAF_DATA or data_dir."""
+    """scenes/soybean_abmb.xml: collimated, 8 deg; the shipped data, or data_dir / $VIRTSPEC_LEAF_DATA."""
 
     path = scenes_dir / "soybean_abmb.xml"
     reading = vm.measure(str(path), rays=20_000)
     assert reading.settings.beam == "collimated" and reading.theta_i == 8
     assert reading.wavelengths.tolist() == list(SOYBEAN_WAVELENGTHS)
     assert reading.capped.sum() == 0
-    # without the variable the scene needs data_dir, and says so
-    monkeypatch.delenv("VIRTSPEC_LEAF_DATA")
-    with pytest.raises(SceneError, match="set the environment variable VIRTSPEC_LEAF_DATA"):
+    # a data directory that lacks the files: the scene says which, and where it looked
+    monkeypatch.setenv("VIRTSPEC_LEAF_DATA", str(leaf_data_dir / "absent"))
+    with pytest.raises(SceneError, match="absent' .from .VIRTSPEC_LEAF_DATA. does not exist"):
         vm.measure(str(path), rays=10)
     scene = mi.load_file(str(path), data_dir=str(leaf_data_dir), side="abaxial", wavelengths="551")
     table = mi.render(scene, spp=20_000)

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import shutil
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -10,6 +11,7 @@ import pytest
 from virtspec_mi import leaf_data
 from virtspec_mi.leaf_data import (
     ENV_VAR,
+    SHIPPED,
     GRID,
     LEAF_DATA_FILES,
     grid_lookup,
@@ -20,6 +22,7 @@ from virtspec_mi.leaf_data import (
 SOYBEAN_CONCENTRATIONS = dict(chlorophyll_a=3.9775, chlorophyll_b=1.1613, carotenoids=1.1323,
                               protein=78.7059, cellulose=37.7565, lignin=10.7441)
 D_M = 0.5 * 1.66e-4
+ROOT = Path(__file__).resolve().parents[1]
 
 # abm.md §2: mesophyll absorption of the soybean defaults (C++ step lookup), m^-1:
 # λ, α_chl, α_car, α_prot, α_cel+lig, μ_w, α total, α·d_m (values printed to 3-4 digits).
@@ -86,9 +89,29 @@ def test_step_lookup_reads_the_grid_value_below(data):
         grid_lookup(alpha, 551.0, "cubic")
 
 
-def test_missing_data_names_the_files_and_the_variable(tmp_path, leaf_data_dir, monkeypatch):
+def test_shipped_data_by_default_and_the_overrides_win(tmp_path, leaf_data_dir, monkeypatch):
     monkeypatch.delenv(ENV_VAR, raising=False)
-    with pytest.raises(FileNotFoundError, match=f"set the environment variable {ENV_VAR}") as info:
+    assert leaf_data.leaf_data_dir(None) == SHIPPED  # the package's own copy, nothing to set
+    assert (SHIPPED / "LICENSE").read_text().startswith("Copyright (c) 2010, Natural Phenomena Simulation Group")
+    monkeypatch.setenv(ENV_VAR, str(leaf_data_dir))
+    assert leaf_data.leaf_data_dir(None) == leaf_data_dir  # the variable overrides the shipped copy
+
+
+def test_the_shipped_copy_is_the_npsg_data():
+    """Byte for byte the NPSG files of the reference implementation (as kept beside the checkout)."""
+
+    source = ROOT.parent / "shared" / "data" / "abm-npsg"
+    if not source.is_dir():
+        pytest.skip(f"{source} (the NPSG files beside the checkout) is not here to compare with")
+    for name, _, _ in LEAF_DATA_FILES.values():
+        assert (SHIPPED / name).read_bytes() == (source / name).read_bytes(), name
+    assert (SHIPPED / "LICENSE").read_bytes() == (source / "LICENSE").read_bytes()
+
+
+def test_missing_data_names_the_files_and_where_it_looked(tmp_path, leaf_data_dir, monkeypatch):
+    monkeypatch.delenv(ENV_VAR, raising=False)
+    monkeypatch.setattr(leaf_data, "SHIPPED", tmp_path / "absent")
+    with pytest.raises(FileNotFoundError, match="data shipped with virtspec-mi") as info:
         leaf_data.leaf_data_dir(None)
     for name, _, _ in LEAF_DATA_FILES.values():
         assert name in str(info.value)

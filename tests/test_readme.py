@@ -5,53 +5,41 @@ Python blocks run one by one, each in a fresh namespace (so each must import wha
 uses); shell commands are the lines of ``sh`` blocks and the ``$ ``-prefixed lines of
 output blocks, run with the project's ``virtspec`` on ``PATH`` (``make`` and ``export``
 lines set the machine up and are left to CI). Everything runs in a scratch directory
-that holds ``scenes/`` and sees ``../shared`` as the checkout does, so the commands
+that holds ``scenes/`` (the package ships its leaf data), so the commands
 work as written and write nothing into the checkout.
 """
 
 from __future__ import annotations
 
 import os
-import re
 import subprocess
 import sys
 from pathlib import Path
 
 import pytest
 
+import code_blocks
+
 ROOT = Path(__file__).resolve().parents[1]
-BLOCK = re.compile(r"^```(\w*)\n(.*?)^```", re.M | re.S)
-SKIPPED = ("make ", "export ", ". ")  # set-up lines: make, environment, activation
+README = ROOT / "README.md"
 
 
 def blocks(kind: str) -> list[str]:
-    return [body for language, body in BLOCK.findall((ROOT / "README.md").read_text()) if language == kind]
+    return code_blocks.blocks(README, kind)
 
 
 def shell_commands() -> list[str]:
-    commands = []
-    for language, body in BLOCK.findall((ROOT / "README.md").read_text()):
-        for line in body.splitlines():
-            if language == "sh":
-                command = re.sub(r"\s+#.*$", "", line).strip()
-            elif language == "" and line.startswith("$ "):
-                command = line[2:].strip()
-            else:
-                continue
-            if command and not command.startswith("#") and not command.startswith(SKIPPED):
-                commands.append(command)
-    return commands
+    return code_blocks.shell_commands(README)
 
 
 @pytest.fixture(scope="module")
 def workdir(tmp_path_factory):
-    """A scratch checkout-like folder: scenes/, docs/, and ../shared beside it."""
+    """A scratch checkout-like folder: scenes/ and docs/ (nothing beside it: the package ships its data)."""
 
     base = tmp_path_factory.mktemp("readme")
     work = base / "work"
     (work / "docs").mkdir(parents=True)
     (work / "scenes").symlink_to(ROOT / "scenes")
-    (base / "shared").symlink_to(ROOT.parent / "shared")
     return work
 
 

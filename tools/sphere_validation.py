@@ -21,14 +21,12 @@ Run: python tools/sphere_validation.py   (about 15 s)
 
 from __future__ import annotations
 
-import os
 import re
 from pathlib import Path
 
 import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
-os.environ.setdefault("VIRTSPEC_LEAF_DATA", str(ROOT.parent / "shared" / "data" / "abm-npsg"))  # as tests/conftest.py
 
 import virtspec_mi as vm  # noqa: E402
 from virtspec_mi.references import sphere_theory as st  # noqa: E402

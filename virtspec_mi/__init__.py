@@ -43,6 +43,7 @@ __all__ = [
     "chebyshev_mu",
     "BUDGETS",
     "mitsuba",
+    "scenes",
 ]
 
 _LAZY = {
@@ -87,6 +88,15 @@ def _prefer_working_libllvm() -> None:
 
 
 _prefer_working_libllvm()
+
+
+from virtspec_mi import scenes  # noqa: E402  (the shipped scenes by name: paths only, no Mitsuba)
+
+
+def __dir__() -> list[str]:
+    """The public names (lazy ones included), for ``dir(vm)`` and tab completion."""
+
+    return sorted(__all__)
 
 
 def __getattr__(name: str) -> Any:

@@ -26,6 +26,8 @@ Command line: ``virtspec``
 - ``virtspec sphere SCENE [--measurement] [--specular SCI|SCE] [--method] [--standard]
   [--max-bounces] [--out FILE(.json|.nc)] [--json] [measure options]``: the readout of a
   physical integrating sphere (:mod:`virtspec_mi.instruments.sphere`).
+- ``virtspec scenes``: the shipped scenes, one line each; every ``SCENE`` argument takes a
+  shipped scene's name as well as a path (:mod:`virtspec_mi.scenes`).
 - ``virtspec llvm {find,check}``: the libLLVM Dr.Jit uses (``make setup`` calls it).
 
 Errors in the input (bad ranges, unreadable scenes, a bad libLLVM) print one line
@@ -58,6 +60,7 @@ _EXAMPLES = {
     "colour": "examples:\n  virtspec colour spectrum.csv\n"
               "  virtspec colour fig5.nc --theta-i 30 --illuminant A --quantity transmittance",
     "llvm": "example: virtspec llvm check",
+    "scenes": "examples:\n  virtspec scenes\n  virtspec measure soybean_abmb --wavelengths 400:2500:5",
     "sphere": "examples:\n  virtspec sphere scenes/sphere_150mm_8d.xml --specular SCE\n"
               "  virtspec sphere scenes/sphere_150mm_8d.xml --method comparison --wavelengths 400:700:100 --out r.json",
 }
@@ -90,7 +93,7 @@ def build_parser() -> argparse.ArgumentParser:
                       "Measure the specimen of a scene: reflectance, transmittance and absorptance per "
                       "wavelength, with the tolerance the rays spent guarantee. Every setting defaults to "
                       "the scene's spectrophotometer integrator, else to the paper's defaults.")
-    measure.add_argument("scene", help="Mitsuba XML scene with 'emitter' and 'specimen' disks")
+    measure.add_argument("scene", help="Mitsuba XML scene with 'emitter' and 'specimen' disks, or a shipped scene's name (virtspec scenes)")
     _scene_options(measure, sweep=False)
     _measurement_options(measure, sweep=False)
     measure.add_argument("--json", action="store_true",
@@ -99,7 +102,7 @@ def build_parser() -> argparse.ArgumentParser:
     sweep = command("sweep", "certified readings over theta_i x wavelengths (few kernel launches)",
                     "Measure a grid of readings (wavelengths x theta_i) at one phi_i, each with its own rays "
                     "and certificate; resumable when --out is given.")
-    sweep.add_argument("scene", help="Mitsuba XML scene with 'emitter' and 'specimen' disks")
+    sweep.add_argument("scene", help="Mitsuba XML scene with 'emitter' and 'specimen' disks, or a shipped scene's name (virtspec scenes)")
     _scene_options(sweep, sweep=True)
     _measurement_options(sweep, sweep=True)
     sweep.add_argument("--out", help="result file .nc, .csv or .json (finished readings are kept in "
@@ -122,7 +125,7 @@ def build_parser() -> argparse.ArgumentParser:
                     "its outgoing direction (theta_o, phi_o) in the specimen frame: exact counts, fractions and "
                     "BRDF/BTDF per bin with their certificate (DKW for the CDFs, union bound for the bins, "
                     "Clopper-Pearson intervals for f).")
-    gonio.add_argument("scene", help="Mitsuba XML scene with 'emitter' and 'specimen' disks")
+    gonio.add_argument("scene", help="Mitsuba XML scene with 'emitter' and 'specimen' disks, or a shipped scene's name (virtspec scenes)")
     _measurement_options(gonio, sweep=True)
     _gonio_options(gonio)
     gonio.add_argument("--out", help="result file .nc, .csv or .json (the tabulated BSDF reads the .nc)")
@@ -145,6 +148,10 @@ def build_parser() -> argparse.ArgumentParser:
                         help="colour.MSDS_CMFS name (default CIE 1931 2 degree)")
     colour.add_argument("--json", action="store_true",
                         help="print one JSON object: XYZ, Lab, sRGB and its hex, coverage, note")
+
+    command("scenes", "the shipped scenes, one line each (any SCENE argument takes their names)",
+            "List the scenes shipped with virtspec-mi. Every subcommand that takes a SCENE takes a shipped "
+            "scene's name as well as a file path (e.g. virtspec measure soybean_abmb).")
 
     llvm = command("llvm", "find or check the libLLVM Dr.Jit uses (set-up)",
                    "find: print a libLLVM >= 17 on this machine (exit 1 if none); check: load it in Dr.Jit "
@@ -308,6 +315,11 @@ def main(argv: Sequence[str] | None = None) -> int:
             print(format_table_1(args.mu, args.delta))
             print()
             print(format_budgets(args.mu, args.delta))
+            return 0
+        if args.command == "scenes":
+            from virtspec_mi.scenes import catalogue
+
+            print(catalogue())
             return 0
         if args.command == "llvm":
             from virtspec_mi.llvm import main as llvm_main

@@ -4,10 +4,11 @@ NPSG leaf data for the ABM-B / ABM-U specimens
 
 The ABM leaf models (``abm_b``, ``abm_u``) take their spectral data from the files of
 the NPSG reference implementation (BSD-3-Clause, © 2010 Natural Phenomena Simulation
-Group, University of Waterloo). They are third-party data and are not part of this
-repository: :func:`leaf_data_dir` finds them in the directory given by the plugin
-parameter ``data_dir`` or, when that is empty, by the environment variable
-``VIRTSPEC_LEAF_DATA``.
+Group, University of Waterloo), shipped with the package under that licence
+(``virtspec_mi/data/abm-npsg``, with its LICENSE and a provenance note). :func:`leaf_data_dir`
+reads them from the directory given by the plugin parameter ``data_dir``, else by the
+environment variable ``VIRTSPEC_LEAF_DATA`` (an override, e.g. for other data files of the
+same layout), else from the shipped copy.
 
 Every file holds 421 values, one per line, 400–2500 nm in 5 nm steps. :func:`load_leaf_data`
 reads them and converts to SI units (specific absorption coefficients cm² g⁻¹ × 0.1 →
@@ -17,9 +18,14 @@ reference's spectral lookup for any wavelength.
 
 References
 ----------
-Baranoski (2006), RSE 100:335–347 (ABM-B/ABM-U); NPSG reference C++
-``abm_interfaces.cpp::buildInterfaces`` (α(λ) and unit conversions) as described in
-``shared/research/abm.md`` §1.3, §2 and §3.1.
+Baranoski, G.V.G. (2006). Modeling the interaction of infrared radiation (750 to 2500 nm)
+with bifacial and unifacial plant leaves. Remote Sens. Environ. 100, 335–347 (ABM-B/ABM-U).
+
+NPSG reference C++ implementation of ABM-B and ABM-U (BSD-3, © 2010 NPSG),
+https://github.com/turtlesoupy/ABM-U-and-ABM-B-CPP: ``abm_interfaces.cpp``
+(``buildInterfaces``: α(λ) and the unit conversions), the ``data/`` files (names as in
+:data:`LEAF_DATA_FILES`) and the sample leaves ``samples/lopex_0219_0220.json``
+(soybean) and ``samples/lopex_0141_0142.json`` (corn).
 """
 
 from __future__ import annotations
@@ -33,6 +39,7 @@ import numpy as np
 
 __all__ = [
     "ENV_VAR",
+    "SHIPPED",
     "LEAF_DATA_FILES",
     "WAVELENGTH_RANGE",
     "GRID_STEP",
@@ -46,7 +53,10 @@ __all__ = [
 ]
 
 ENV_VAR: str = "VIRTSPEC_LEAF_DATA"
-"""Environment variable naming the directory of the NPSG leaf data files."""
+"""Environment variable naming a directory of NPSG leaf data files (overrides the shipped copy)."""
+
+SHIPPED: Path = Path(__file__).resolve().parent / "data" / "abm-npsg"
+"""The NPSG leaf data shipped with the package (BSD-3-Clause, with its LICENSE)."""
 
 WAVELENGTH_RANGE: tuple[float, float] = (400.0, 2500.0)
 """Wavelengths (nm) covered by the data, both ends included."""
@@ -94,14 +104,16 @@ class LeafData:
 
 
 def _needed() -> str:
-    return ", ".join(name for name, _, _ in LEAF_DATA_FILES.values())
+    names = ", ".join(name for name, _, _ in LEAF_DATA_FILES.values())
+    return f"{names} (BSD-3: the data/ folder of github.com/turtlesoupy/ABM-U-and-ABM-B-CPP)"
 
 
 def leaf_data_dir(data_dir: str | os.PathLike | None = None) -> Path:
     """
     The directory holding the NPSG leaf data: ``data_dir`` if given (not empty), else
-    ``$VIRTSPEC_LEAF_DATA``. Raises ``FileNotFoundError`` (one line) naming the files
-    needed and how to point the variable at them when the directory or a file is missing.
+    ``$VIRTSPEC_LEAF_DATA`` if set, else the shipped copy (:data:`SHIPPED`). Raises
+    ``FileNotFoundError`` (one line) naming the files needed and where they were looked for
+    when the directory or a file is missing.
     """
 
     if data_dir not in (None, ""):
@@ -109,11 +121,7 @@ def leaf_data_dir(data_dir: str | os.PathLike | None = None) -> Path:
     elif os.environ.get(ENV_VAR):
         directory, origin = Path(os.environ[ENV_VAR]), f"${ENV_VAR}"
     else:
-        raise FileNotFoundError(
-            f"ABM leaf data not found: set the environment variable {ENV_VAR} (or the BSDF "
-            f"parameter data_dir) to a directory holding the NPSG files {_needed()} "
-            f"(BSD-3, e.g. {ENV_VAR}=../shared/data/abm-npsg)"
-        )
+        directory, origin = SHIPPED, "the data shipped with virtspec-mi (an incomplete installation)"
     if not directory.is_dir():
         raise FileNotFoundError(
             f"ABM leaf data not found: directory '{directory}' (from {origin}) does not exist; point "
@@ -172,7 +180,7 @@ def mesophyll_absorption(
 
     References
     ----------
-    abm.md §1.3 (NPSG C++ ``buildInterfaces``).
+    Baranoski (2006); NPSG reference C++, ``abm_interfaces.cpp`` (``buildInterfaces``).
     """
 
     return (

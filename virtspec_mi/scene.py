@@ -2,7 +2,8 @@
 Scenes: loading, building and fingerprinting instrument scenes
 ==============================================================
 
-- :func:`load_scene` accepts an XML path, a scene dict or a loaded ``mi.Scene`` and
+- :func:`load_scene` accepts an XML path, a shipped scene's name
+  (:mod:`virtspec_mi.scenes`), a scene dict or a loaded ``mi.Scene`` and
   turns Mitsuba's loader errors into messages that name the problem; an XML scene's
   parameters (``$name`` with a ``<default name="name" value="…"/>``) are set by
   ``defines`` (name → value), as Mitsuba's ``mitsuba -D name=value`` and
@@ -37,6 +38,7 @@ from virtspec_mi.geometry.disks import (
     InstrumentGeometry,
 )
 from virtspec_mi.engine.bench import EMITTER_ID, SPECIMEN_ID, Bench, SceneError, read_bench
+from virtspec_mi import scenes
 from virtspec_mi.runtime import mitsuba
 from virtspec_mi.settings import SETTING_NAMES
 
@@ -53,6 +55,7 @@ def load_scene(scene: Any, defines: dict[str, Any] | None = None) -> Any:
     """
 
     mi = mitsuba()
+    scene = scenes.resolve(scene)
     defines = check_defines(defines, scene)
     if isinstance(scene, mi.Scene):
         return scene
@@ -187,6 +190,7 @@ def scene_fingerprint(scene: Any, instrument: Bench, defines: dict[str, Any] | N
     """
 
     digest = hashlib.sha256()
+    scene = scenes.resolve(scene)
     if isinstance(scene, (str, os.PathLike)):
         digest.update(Path(scene).read_bytes())
         if defines:

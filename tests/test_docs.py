@@ -1,0 +1,65 @@
+"""
+The manual (``docs/``, Sphinx): it builds with warnings as errors, and every ``python``
+block and shell command of its pages runs, as the README's do (``tests/test_readme.py``).
+"""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+import code_blocks
+
+ROOT = Path(__file__).resolve().parents[1]
+DOCS = ROOT / "docs"
+PAGES = sorted(p for p in DOCS.rglob("*.md") if "_build" not in p.parts and "_generated" not in p.parts
+               and "notebooks" not in p.parts)
+PYTHON = [(page, i) for page in PAGES for i in range(len(code_blocks.blocks(page, "python")))]
+SHELL = [(page, command) for page in PAGES for command in code_blocks.shell_commands(page)]
+
+
+def _id(item: tuple[Path, object]) -> str:
+    return f"{item[0].relative_to(DOCS)}:{item[1]}"
+
+
+@pytest.mark.slow
+def test_the_manual_builds_without_a_warning(tmp_path):
+    run = subprocess.run([sys.executable, "-m", "sphinx", "-E", "-W", "--keep-going", "-q", "-b", "html",
+                          str(DOCS), str(tmp_path / "html")], capture_output=True, text=True)
+    assert run.returncode == 0, run.stderr[-6000:]
+    assert (tmp_path / "html" / "index.html").is_file()
+
+
+@pytest.fixture(scope="module")
+def workdir(tmp_path_factory):
+    """A scratch checkout-like folder: scenes/ and docs/ (the package ships its data)."""
+
+    work = tmp_path_factory.mktemp("docs") / "work"
+    (work / "docs").mkdir(parents=True)
+    (work / "scenes").symlink_to(ROOT / "scenes")
+    return work
+
+
+def test_the_manual_has_code_to_run():
+    assert PAGES and PYTHON
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("item", PYTHON, ids=[_id(item) for item in PYTHON])
+def test_python_block_runs(item, workdir, monkeypatch):
+    page, index = item
+    monkeypatch.chdir(workdir)
+    source = code_blocks.blocks(page, "python")[index]
+    exec(compile(source, f"{page.name} python block {index}", "exec"), {"__name__": "__docs__"})
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("item", SHELL, ids=[_id(item) for item in SHELL])
+def test_shell_command_runs(item, workdir):
+    env = dict(os.environ, PATH=f"{Path(sys.executable).parent}{os.pathsep}{os.environ['PATH']}")
+    result = subprocess.run(["bash", "-c", item[1]], cwd=workdir, env=env, capture_output=True, text=True)
+    assert result.returncode == 0, f"{item[1]}\n{result.stderr[-2000:]}"

@@ -33,7 +33,7 @@ from typing import Any
 
 import numpy as np
 
-from virtspec_mi.budgets import twostage
+from virtspec_mi.budgets import rules, twostage
 from virtspec_mi.checks import check_rays_needed, shown_value
 from virtspec_mi.engine.parameters import ParameterSpace
 from virtspec_mi.kernel.counts import Counts
@@ -55,10 +55,18 @@ class Columns:
     """
     What a two-stage pilot certifies of each reading: the **columns**, each a count out of
     the reading's rays whose fraction is held within μ, from which N₂ is sized
-    (:func:`virtspec_mi.budgets.twostage.stage_two_rays`).
+    (:func:`virtspec_mi.budgets.twostage.stage_two_rays`). The rule table says what the
+    columns are and how δ is shared among them (``budget``, a
+    :class:`virtspec_mi.budgets.rules.Columns`: :func:`~virtspec_mi.budgets.rules.quantity_columns`,
+    :meth:`~virtspec_mi.budgets.rules.Guarantee.stage_two`,
+    :data:`~virtspec_mi.budgets.rules.DETECTOR_COLUMNS`); the instrument says where each
+    column is in a reading's tallies.
 
     Parameters
     ----------
+    budget : virtspec_mi.budgets.rules.Columns
+        The columns in words and ``share``: δ is split over that many statements made
+        together (1: each column at δ on its own).
     counts : tuple of str
         Fate counts by name (:class:`~virtspec_mi.kernel.counts.Counts`, ``absorbed``
         included): the hemispherical reading's R, T (and A).
@@ -66,30 +74,17 @@ class Columns:
         ``"each"``: every bin of the hook a column (the goniophotometer's bin fractions);
         a tuple of tuples of bin codes: each a column, the sum of those bins (the sphere's
         detector fraction); ``None``: no bins.
-    joint : bool
-        Certify the columns together: δ₁ and δ − δ₁ split evenly over them (the union
-        bound); else each column at δ on its own.
-    share : int
-        Each reading's δ is the settings' δ / ``share`` (the sphere's two configurations
-        each at δ/2).
     """
 
+    budget: rules.Columns
     counts: tuple[str, ...] = ()
     bins: str | tuple[tuple[int, ...], ...] | None = None
-    joint: bool = False
-    share: int = 1
 
     @classmethod
     def fates(cls, joint: bool) -> "Columns":
         """The hemispherical reading's: R, T and A at δ each, or R and T together at δ (``joint``)."""
 
-        return cls(counts=("reflected", "transmitted") + (() if joint else ("absorbed",)), joint=joint)
-
-    def width(self, size: int | None) -> int:
-        """The number of columns, for a hook of ``size`` bins."""
-
-        bins = 0 if self.bins is None else (size or 0) if self.bins == "each" else len(self.bins)
-        return len(self.counts) + bins
+        return cls(rules.quantity_columns(joint), counts=("reflected", "transmitted") + (() if joint else ("absorbed",)))
 
     def of(self, counts: Counts, bins: np.ndarray | None) -> np.ndarray:
         """The columns of every reading, shape (readings, columns), from its counts and bins."""
@@ -102,18 +97,23 @@ class Columns:
         return np.concatenate([np.asarray(p, dtype=np.int64) for p in parts], axis=1)
 
     def stage_two_rays(self, pilot: np.ndarray, settings: Settings) -> np.ndarray:
-        """N₂ of every reading from its pilot's columns (``pilot``, shape (readings, columns))."""
+        """
+        N₂ of every reading from its pilot's columns (``pilot``, shape (readings, columns)):
+        each column at δ (share 1), all of them together at δ/share each (share = the
+        number of columns: the joint sizing), else each at δ/share.
+        """
 
-        return twostage.stage_two_rays(pilot, settings.pilot_rays_per_reading, settings.mu,
-                                       settings.delta / self.share, settings.pilot_delta_value / self.share,
-                                       joint=self.joint)
+        share, width = self.budget.share, pilot.shape[1]
+        delta, pilot_delta = settings.delta, settings.pilot_delta_value
+        if share not in (1, width):
+            delta, pilot_delta = delta / share, pilot_delta / share
+        return twostage.stage_two_rays(pilot, settings.pilot_rays_per_reading, settings.mu, delta, pilot_delta,
+                                       joint=share == width and share > 1)
 
-    def most_second_rays(self, settings: Settings, size: int | None) -> int:
+    def most_second_rays(self, settings: Settings) -> int:
         """The most rays a second batch can take (:func:`virtspec_mi.budgets.twostage.most_second_rays`)."""
 
-        quantities = self.width(size) if self.joint else 1
-        return twostage.most_second_rays(settings.mu, settings.delta / self.share,
-                                         settings.pilot_delta_value / self.share, quantities)
+        return twostage.most_second_rays(settings.mu, settings.delta, settings.pilot_delta_value, self.budget.share)
 
 
 @dataclass(frozen=True, eq=False)
@@ -245,9 +245,9 @@ class Plan:
             return settings.rays_per_reading
         if self.columns == Columns.fates(settings.joint):  # the hemispherical reading's: the settings' own
             return settings.most_rays_per_reading
-        most = self.columns.most_second_rays(settings, self.bins)
+        most = self.columns.most_second_rays(settings)
         rule = (f"the {settings.bound} bound for mu = {shown_value(settings.mu)}, delta = "
-                f"{shown_value(settings.delta)} over {self.columns.width(self.bins)} certified column(s)")
+                f"{shown_value(settings.delta)} over {self.columns.budget.what}")
         return max(settings.pilot_rays_per_reading, check_rays_needed(most, rule))
 
     @property

@@ -217,6 +217,11 @@ class SphereLayout(ExitHook):
     def size(self) -> int:
         return len(HEMISPHERES) * self.codes
 
+    def codes_of(self, fate: int) -> tuple[int, ...]:
+        """The bin codes of the rays whose sphere fate is ``fate`` (one per first-interaction hemisphere)."""
+
+        return tuple(h * self.codes + int(fate) for h in range(len(HEMISPHERES)))
+
     def beam_bsdf(self, specimen: Any) -> Any:
         return _loaded(self.holders[0].bsdf, specimen)
 

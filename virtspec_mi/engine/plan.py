@@ -160,12 +160,12 @@ class Plan:
     def __post_init__(self) -> None:
         object.__setattr__(self, "theta_i", tuple(float(t) for t in np.atleast_1d(self.theta_i)))
         object.__setattr__(self, "groups", tuple(self.groups))
-        if self.hooks is not None:
+        if self.hooks is not None:  # the one check of a plan's shape (an instrument's contract, not user input)
             object.__setattr__(self, "hooks", tuple(self.hooks))
-            hooks = [h for h in self.hooks if h is not None]
-            assert len(self.hooks) == len(self.groups), "one hook (or None) per group"
-            assert len({(h.size, tuple(h.sums)) for h in hooks}) <= 1, "the groups' hooks share K and sums"
-            assert not hooks or len(hooks) == len(self.hooks), "every group has a hook, or none"
+            if (len(self.hooks) != len(self.groups) or any(h is None for h in self.hooks)
+                    or len({(h.size, tuple(h.sums)) for h in self.hooks}) != 1):
+                raise ValueError(f"a plan's hooks must be one per group ({len(self.groups)}), all of one size K and "
+                                 "one set of sums")
 
     # -- the flat reading index -------------------------------------------------------
 

@@ -392,8 +392,8 @@ class _Kernel:
         exits = None
         if hook is not None and hook.needs_rays:
             # The hook continues the traced lanes: evaluate them once (one kernel), then both
-            # the fate counts and the hook read them.
-            dr.eval(*(lanes[name] for name in ("wo", "target", "fate", "rare", "weight", "specular", "regular")))
+            # the fate counts and the hook read them (a violating weight, rare, is traced again).
+            dr.eval(*(lanes[name] for name in ("wo", "target", "fate", "rare", "specular", "regular")))
             slot = lanes["slot"]
             exits = hook.exits(ChunkRays(lanes=lanes, slot=slot, root=source.root,
                                          wavelengths=source.rows[:, _WAVELENGTH], specimen=self.specimen,

@@ -34,7 +34,9 @@ def test_take_runs_init_process_postprocess_and_gives_the_apis_counts(mi):
 
 def test_each_instrument_refuses_what_it_cannot_take(mi):
     bench = vm.find_bench(vm.instrument_scene({"type": "diffuse"}))
-    with pytest.raises(ValueError, match="bound must be a fixed budget for a goniophotometer reading"):
-        take(INSTRUMENTS["goniophotometer"](), bench, Settings(bound="two-stage"))
+    gonio = INSTRUMENTS["goniophotometer"]
+    with pytest.raises(ValueError, match="bound='two-stage' cannot size these readings: bound 'two-stage' cannot "
+                                         "size guarantee 'dkw'"):  # the rule row's reason, before any tracing
+        take(gonio(), bench, Settings(bound="two-stage"), gonio.options(guarantee="dkw"))
     with pytest.raises(ValueError, match="needs a sphere"):
         take(INSTRUMENTS["sphere"](), bench, Settings(rays=10), INSTRUMENTS["sphere"].options())

@@ -40,6 +40,7 @@ from virtspec_mi.checks import parse_theta_i
 from virtspec_mi.engine.bench import Bench
 from virtspec_mi.engine.checkpoint import checkpoint_for, claim, remove
 from virtspec_mi.engine.parameters import parameter_space
+from virtspec_mi.engine.plan import Plan
 from virtspec_mi.engine.readings import in_process_runner
 from virtspec_mi.instruments import INSTRUMENTS
 from virtspec_mi.instruments.base import take
@@ -93,9 +94,9 @@ def measure(scene: Any, *, parameters: dict[str, Any] | None = None, defines: di
     space = parameter_space(bench, parameters or {})
     if space is not None and space.size != 1:
         raise ValueError("measure takes one value per parameter (a sweep takes several: use sweep)")
-    result = take(INSTRUMENTS["hemispherical"](), bench, settings, parameters=space, keyed=False,
-                  progress=progress).squeeze()
-    result.warn_if_uncertified(stacklevel=3)
+    instrument = INSTRUMENTS["hemispherical"]()
+    result = take(instrument, bench, settings, parameters=space, keyed=False, progress=progress).squeeze()
+    instrument.warn_if_uncertified(result)
     return result
 
 
@@ -178,42 +179,60 @@ def sweep(
     Baranoski et al. (2001), eq. (23), Fig. 5.
     """
 
+    bench = find_bench(scene, defines)
+    base, = resolve("sweep", settings, _scene_options(bench, Settings))
+    return _keyed("hemispherical", "a sweep", scene, bench, base, None, theta_i=theta_i, parameters=parameters, points=points,
+                  defines=defines, checkpoint=checkpoint, out=out, progress=progress, workers=workers,
+                  task_readings=task_readings)
+
+
+def _keyed(name: str, what: str, scene: Any, bench: Bench, settings: Settings, options: Any, *, theta_i: Any,
+           parameters: dict[str, Any] | None, points: bool, defines: dict[str, Any] | None, checkpoint: Any, out: Any,
+           progress: bool | None, workers: Any, task_readings: int | None) -> Any:
+    """
+    One keyed measurement (``what``, in messages) with the instrument ``name`` of the registry, as
+    :func:`sweep`, :func:`gonio` and :func:`sphere_measure` take it: the call's
+    incidence angles (distinct) and specimen parameter points parsed here, the
+    instrument's plan (:meth:`~virtspec_mi.instruments.base.Instrument.init`) traced
+    with a checkpoint (``out``'s ``OUT.partial.json`` by default, held by one run at a
+    time), in this process or on Dask workers, then its result: written atomically to
+    ``out`` when given (a plan without a kernel hook fills a Zarr store batch by batch),
+    and the checkpoint removed once the result is safe.
+    """
+
     checkpoint, out = _file_path(checkpoint, "checkpoint"), _file_path(out, "out")
     if out is not None:
         check_output(out)
         checkpoint = checkpoint if checkpoint is not None else checkpoint_for(out)
-    bench = find_bench(scene, defines)
-    base, = resolve("sweep", settings, _scene_options(bench, Settings))
     space = parameter_space(bench, parameters or {}, points=points)
-    angles = _angles(base, theta_i, "a sweep")
-    resolved = base.updated(theta_i=float(angles[0]))
-    if len(np.unique(resolved.wavelengths)) != len(resolved.wavelengths):
-        raise ValueError("wavelengths of a sweep must be distinct (got repeated values)")
-    fingerprint = scene_fingerprint(scene, bench, defines)
+    angles = _angles(settings, theta_i, what)
+    if len(np.unique(settings.wavelengths)) != len(settings.wavelengths):
+        raise ValueError(f"wavelengths of {what} must be distinct (got repeated values)")
+    instrument = INSTRUMENTS[name](scene_fingerprint(scene, bench, defines))
+    plan = instrument.init(bench, settings, options, angles, space)
     with ExitStack() as held:
         if checkpoint is not None:  # one run per checkpoint, writable: checked before any cluster or tracing
             held.enter_context(claim(checkpoint))
-        runner = held.enter_context(_runner(scene, defines, workers, task_readings, fingerprint, resolved, angles,
-                                            space))
-        if out is not None and out.suffix.lower() == ZARR_SUFFIX:  # the store fills as the batches finish
-            identity = {"scene": fingerprint, **resolved.as_dict(), "theta_i": [float(t) for t in angles],
+        runner = held.enter_context(_runner(scene, defines, workers, task_readings, instrument.scene, plan))
+        if out is not None and out.suffix.lower() == ZARR_SUFFIX and plan.hooks is None:  # fills as batches finish
+            identity = {"scene": instrument.scene, **plan.settings.as_dict(), "theta_i": [float(t) for t in angles],
                         **({} if space is None else {"parameters": space.as_dict()})}
-            table = ZarrTable(out, resolved.wavelengths, angles, identity, pilot=resolved.adaptive, parameters=space)
-            runner = table.stream(runner or in_process_runner(bench, resolved, theta_i=angles, parameters=space))
-        result = take(INSTRUMENTS["hemispherical"](fingerprint), bench, resolved, theta_i=angles, parameters=space,
-                      keyed=True, checkpoint=checkpoint, progress=progress, runner=runner)
+            table = ZarrTable(out, plan.settings.wavelengths, angles, identity, pilot=plan.adaptive, parameters=space)
+            runner = table.stream(runner or in_process_runner(bench, plan))
+        result = instrument.postprocess(instrument.process(plan, keyed=True, checkpoint=checkpoint, progress=progress,
+                                                           runner=runner))
         if checkpoint is not None:
             if out is not None:
                 _write(result, out, checkpoint)
             remove(checkpoint)  # the readings are safe: returned, and written to out when given
-    result.warn_if_uncertified(stacklevel=3)
+    instrument.warn_if_uncertified(result, stacklevel=3)  # at the caller of sweep, gonio, sphere_measure
     return result
 
 
 @contextmanager
 def _runner(scene: Any, defines: dict[str, Any] | None, workers: Any, task_readings: int | None, fingerprint: str,
-            settings: Settings, angles: np.ndarray, space: Any) -> Iterator[Any]:
-    """``None`` (the engine's in-process default) or a Dask runner on ``workers``, held for the sweep."""
+            plan: Plan) -> Iterator[Any]:
+    """``None`` (the engine's in-process default) or a Dask runner of ``plan`` on ``workers``, held for the run."""
 
     if workers is None:
         if task_readings is not None:
@@ -226,8 +245,7 @@ def _runner(scene: Any, defines: dict[str, Any] | None, workers: Any, task_readi
     scaleout.check_task_readings(task_readings)
     scaleout.portable_scene(scene)  # refused before any cluster starts
     with scaleout.connect(workers) as client:
-        yield scaleout.dask_runner(client, scene, fingerprint, settings, task_readings, defines=defines,
-                                   theta_i=angles, parameters=space)
+        yield scaleout.dask_runner(client, scene, fingerprint, plan, task_readings, defines=defines)
 
 
 def _file_path(value: Any, name: str) -> Path | None:
@@ -248,7 +266,7 @@ def _write(result: Result, out: Path, checkpoint: Path) -> None:
         result.write(out)
     except (OSError, RuntimeError) as error:  # netCDF reports some failures as RuntimeError
         failure = OSError(f"could not write {out} ({getattr(error, 'strerror', None) or error}); every finished "
-                          f"reading is kept in {checkpoint}: re-run the same sweep to write it")
+                          f"reading is kept in {checkpoint}: re-run the same call to write it")
         failure.errno = getattr(error, "errno", None)  # e.g. errno.ENOSPC, for callers that check it
         raise failure from error
 
@@ -273,59 +291,70 @@ measure.__signature__ = keywords(measure, Settings)  # type: ignore[attr-defined
 sweep.__signature__ = keywords(sweep, Settings)  # type: ignore[attr-defined]
 
 
-def gonio(scene: Any, *, theta_i: Any = None, out: str | os.PathLike | None = None, **options: Any) -> GonioResult:
+def gonio(scene: Any, *, theta_i: Any = None, parameters: dict[str, Any] | None = None, points: bool = False,
+          defines: dict[str, Any] | None = None, checkpoint: str | os.PathLike | None = None,
+          out: str | os.PathLike | None = None, progress: bool | None = None, workers: Any = None,
+          task_readings: int | None = None, **options: Any) -> GonioResult:
     """
     A certified goniophotometer reading of ``scene``: the spectrophotometer's readings
-    over every (wavelength, θi), with every escaping ray also binned by its outgoing
-    direction (θo, φo) in the specimen frame (:class:`~virtspec_mi.results.goniophotometer.GonioResult`).
+    over every (wavelength, θi, specimen parameter point), with every escaping ray also
+    binned by its outgoing direction (θo, φo) in the specimen frame
+    (:class:`~virtspec_mi.results.goniophotometer.GonioResult`), keyed as a sweep's:
+    reading k traces the global rays [k·N, k·N + N) (counts depend on (seed, k) only), so
+    it resumes from a checkpoint and runs on Dask workers with the same counts.
 
     Parameters
     ----------
     scene
         XML path, scene dict or loaded ``mi.Scene`` (as for :func:`measure`).
-    theta_i
-        Incidence angles in degrees (as for :func:`sweep`); default: the scene's θi (or 0).
-    out
-        File to write (``.nc``, ``.csv`` or ``.json``), checked before any tracing.
+    theta_i, parameters, points, defines, checkpoint, out, progress, workers, task_readings
+        As for :func:`sweep`: incidence angles (default: the scene's θi, or 0), specimen
+        parameters (a grid, or explicit ``points``), the XML scene's ``$name`` values, the
+        checkpoint (default ``OUT.partial.json`` with ``out``), the result file (``.nc``,
+        ``.csv``, ``.json`` or ``.zarr``, written atomically when the reading completes,
+        checked before any tracing), the progress bar and the Dask workers.
     **options
         The goniophotometer options (:class:`~virtspec_mi.instruments.goniophotometer.GonioOptions`:
         ``theta_o_bins``, ``phi_o_bins``, ``binning``, ``fold_phi``, ``hemispheres``,
         ``guarantee``, ``relative_tolerance``, ``brdf_floor``) and every setting of
-        :class:`~virtspec_mi.settings.Settings` (a fixed budget); one left ``None`` comes
-        from the scene's ``spectrophotometer`` integrator, else from its default. Without
-        ``rays``, N is sized by ``guarantee`` at ``mu`` and ``delta`` over the K bins
-        (:func:`virtspec_mi.budgets.rules.gonio_rays`).
+        :class:`~virtspec_mi.settings.Settings`; one left ``None`` comes from the scene's
+        ``spectrophotometer`` integrator, else from its default. Without ``rays``, N is
+        sized by ``guarantee`` at ``mu`` and ``delta`` over the K bins (a row of
+        :data:`virtspec_mi.budgets.rules.GUARANTEES`); ``bound="two-stage"`` sizes each
+        reading from its pilot where the guarantee allows it (``union``, ``union-exact``),
+        else it is refused with the reason.
 
     References
     ----------
     Baranoski et al. (2001), eq. (23), Sect. 6; :mod:`virtspec_mi.budgets.bins`.
     """
 
-    out = check_output(_file_path(out, "out")) if out is not None else None
-    bench = find_bench(scene)
+    bench = find_bench(scene, defines)
     settings, spec = resolve("gonio", options, _scene_options(bench, Settings), _scene_options(bench, GonioOptions))
-    angles = _angles(settings, theta_i, "a goniophotometer reading")
-    result = take(INSTRUMENTS["goniophotometer"](scene_fingerprint(scene, bench)), bench, settings, spec,
-                  theta_i=angles)
-    result.result.warn_if_uncertified(stacklevel=3)
-    if out is not None:
-        result.write(out)
-    return result
+    return _keyed("goniophotometer", "a goniophotometer reading", scene, bench, settings, spec, theta_i=theta_i, parameters=parameters,
+                  points=points, defines=defines, checkpoint=checkpoint, out=out, progress=progress, workers=workers,
+                  task_readings=task_readings)
 
 
 gonio.__signature__ = keywords(gonio, GonioOptions, Settings)  # type: ignore[attr-defined]
 
 
 def read_gonio(path: str | os.PathLike) -> GonioResult:
-    """A goniophotometer reading from a file written by :meth:`GonioResult.write`."""
+    """A goniophotometer reading from a file written by its ``write`` (any kind: :func:`read_result`)."""
 
     return GonioResult.read(path)
 
 
-def read_result(path: str | os.PathLike) -> Result:
-    """A result from a file written by ``Result.write`` or printed by ``virtspec measure --json``."""
+def read_result(path: str | os.PathLike) -> Any:
+    """
+    The result in a file, whatever its kind — a hemispherical reading or sweep, a
+    goniophotometer reading, a sphere reading — by its format tag
+    (:func:`virtspec_mi.results.kinds.read_result`).
+    """
 
-    return Result.read(path)
+    from virtspec_mi.results.kinds import read_result as read_any
+
+    return read_any(path)
 
 
 def fluctuation(a: Result | np.ndarray, b: Result | np.ndarray, quantity: str = "reflectance") -> float:
@@ -354,34 +383,45 @@ def fluctuation(a: Result | np.ndarray, b: Result | np.ndarray, quantity: str = 
     return float(np.mean(np.abs(a - b)))
 
 
-def sphere_measure(scene: Any, **settings: Any) -> SphereResult:
+def sphere_measure(scene: Any, *, theta_i: Any = None, parameters: dict[str, Any] | None = None, points: bool = False,
+                   defines: dict[str, Any] | None = None, checkpoint: str | os.PathLike | None = None,
+                   out: str | os.PathLike | None = None, progress: bool | None = None, workers: Any = None,
+                   task_readings: int | None = None, **settings: Any) -> SphereResult:
     """
     Read the specimen of ``scene`` as a physical integrating sphere would: a
-    :class:`~virtspec_mi.results.sphere.SphereResult` over wavelength (the reading
-    ρ_std·p_sample/p_standard with its certified interval, the hemispherical reading of
-    the same rays, the instrument error, every count of both configurations).
+    :class:`~virtspec_mi.results.sphere.SphereResult` over wavelength (and θi and specimen
+    parameters when several are given): the reading ρ_std·p_sample/p_standard with its
+    certified interval, the hemispherical reading of the same rays, the instrument error,
+    every count of both configurations. Keyed as a sweep's (reading k of a configuration
+    traces the global rays [k·N, k·N + N), the same rays in both): it resumes from a
+    checkpoint and runs on Dask workers with the same counts.
 
     Parameters
     ----------
     scene
         XML path, scene dict or ``mi.Scene`` with ``emitter`` and ``specimen`` disks; its
         ``integrating_sphere`` integrator (if any) gives the sphere and the settings.
+    theta_i, parameters, points, defines, checkpoint, out, progress, workers, task_readings
+        As for :func:`sweep` (every θi must bring the beam in through the entrance port).
     **settings
         Any setting of :class:`~virtspec_mi.settings.Settings` and any option of
         :class:`~virtspec_mi.instruments.sphere.SphereOptions` (``measurement``,
         ``specular``, ``method``, ``standard``, ``max_bounces``, and ``sphere``: a
         :class:`~virtspec_mi.geometry.sphere.Sphere` that overrides the scene's); ``None``
-        keeps the scene's value.
+        keeps the scene's value. ``bound="two-stage"`` sizes each configuration's reading
+        from its pilot's detector fraction (each at δ/2).
 
     References
     ----------
     Baranoski et al. (2001), eqs. (2), (23); Goebel (1967).
     """
 
-    bench = find_bench(scene)
+    bench = find_bench(scene, defines)
     base, options = resolve("sphere_measure", settings, _scene_options(bench, Settings),
                             _scene_options(bench, SphereOptions))
-    return take(INSTRUMENTS["sphere"](scene_fingerprint(scene, bench)), bench, base, options)
+    return _keyed("sphere", "a sphere reading", scene, bench, base, options, theta_i=theta_i, parameters=parameters, points=points,
+                  defines=defines, checkpoint=checkpoint, out=out, progress=progress, workers=workers,
+                  task_readings=task_readings)
 
 
 sphere_measure.__signature__ = keywords(sphere_measure, Settings, SphereOptions)  # type: ignore[attr-defined]

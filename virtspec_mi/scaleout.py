@@ -2,13 +2,15 @@
 Scale-out: the readings of a sweep on Dask workers
 ==================================================
 
-:func:`virtspec_mi.sweep` with ``workers=`` runs the batches of its keyed grid
-(:func:`virtspec_mi.engine.readings.run`) on ``dask.distributed`` workers instead of in this
-process. Nothing else changes: the driver (this process) plans the batches, keeps the
-checkpoint and the progress bar, and every batch is traced by the one function the
-in-process sweep calls, :func:`virtspec_mi.engine.readings.take_keyed_readings`. A reading's
-counts depend on (seed, its index) only, so a sweep on any number of workers gives
-counts bit-identical to the in-process sweep.
+:func:`virtspec_mi.sweep`, :func:`virtspec_mi.gonio` and :func:`virtspec_mi.sphere_measure`
+with ``workers=`` run the batches of their keyed plan (:func:`virtspec_mi.engine.readings.run`
+of an instrument's :class:`~virtspec_mi.engine.plan.Plan`) on ``dask.distributed`` workers
+instead of in this process. Nothing else changes: the driver (this process) plans the
+batches, keeps the checkpoint and the progress bar, and every batch is traced by the one
+function the in-process run calls, :func:`virtspec_mi.engine.readings.take_keyed_readings`
+(the plan, plain values, is sent with every task). A reading's tallies depend on (seed,
+its key) only, so a run on any number of workers gives tallies bit-identical to the
+in-process run.
 
 ``workers``
     ``None``: in this process (no Dask). An int N: a ``LocalCluster`` of N worker
@@ -44,8 +46,8 @@ three tries of its task; the other tasks go on meanwhile and are cancelled then)
 A cluster with no worker (a scheduler whose workers have not started, or all of them
 gone) cannot run a task: the sweep waits for one at most :data:`WORKER_TIMEOUT` seconds,
 when it starts and whenever no task has finished for that long, then raises
-``TimeoutError`` naming the scheduler. ``Result.seconds`` of a distributed sweep is the
-tracing time summed over the tasks (worker-seconds, several per wall second), not the
+``TimeoutError`` naming the scheduler. The ``seconds`` of a distributed run's result are
+the tracing time summed over the tasks (worker-seconds, several per wall second), not the
 wall time.
 
 References
@@ -69,11 +71,11 @@ from typing import Any, Iterator
 import numpy as np
 from distributed import WorkerPlugin
 
-from virtspec_mi.kernel.counts import Counts
+from virtspec_mi.engine.plan import Plan
 from virtspec_mi.engine.readings import BatchRunner, take_keyed_readings
+from virtspec_mi.engine.tally import Tally
 from virtspec_mi.runtime import mitsuba, variant
 from virtspec_mi.scene import find_bench
-from virtspec_mi.settings import Settings
 
 __all__ = [
     "TASK_SECONDS",
@@ -295,12 +297,12 @@ def _as_finished(client: Any, finished: Any) -> Iterator[Any]:
             time.sleep(_POLL_SECONDS)
 
 
-def _run_block(scene: Any, defines: dict[str, Any] | None, fingerprint: str, settings: Settings,
-               grid: dict[str, Any], batches: list[np.ndarray]) -> list[tuple[np.ndarray, Counts, Counts | None, float]]:
+def _run_block(scene: Any, defines: dict[str, Any] | None, fingerprint: str, plan: Plan,
+               batches: list[np.ndarray]) -> list[tuple[np.ndarray, Tally]]:
     """
-    The task: each batch of the block traced by ``take_keyed_readings(bench, settings,
-    batch=batch, **grid)`` — exactly the in-process runner's call — with its seconds. The
-    scene is loaded (with ``defines``) once per worker process and kept by its fingerprint.
+    The task: each batch of the block traced by ``take_keyed_readings(bench, plan, batch)``
+    — exactly the in-process runner's call — its tally carrying its seconds. The scene is
+    loaded (with ``defines``) once per worker process and kept by its fingerprint.
     """
 
     _initialise()  # in the thread this task runs in (idempotent)
@@ -310,8 +312,7 @@ def _run_block(scene: Any, defines: dict[str, Any] | None, fingerprint: str, set
     done = []
     for batch in batches:
         start = time.perf_counter()
-        counts, pilot = take_keyed_readings(bench, settings, batch=batch, **grid)
-        done.append((batch, counts, pilot, time.perf_counter() - start))
+        done.append((batch, take_keyed_readings(bench, plan, batch).with_seconds(time.perf_counter() - start)))
     return done
 
 
@@ -339,28 +340,27 @@ def task_size(rate: float, remaining: int, n_workers: int, seconds: float = TASK
     return max(1, min(wanted, math.ceil(remaining / (2 * max(1, n_workers)))))
 
 
-def dask_runner(client: Any, scene: Any, fingerprint: str, settings: Settings, task_readings: int | None = None,
-                defines: dict[str, Any] | None = None, **grid: Any) -> BatchRunner:
+def dask_runner(client: Any, scene: Any, fingerprint: str, plan: Plan, task_readings: int | None = None,
+                defines: dict[str, Any] | None = None) -> BatchRunner:
     """
-    A :data:`~virtspec_mi.engine.readings.BatchRunner` that runs the batches on ``client``'s
-    workers in tasks sized by :func:`task_size` (or of ``task_readings`` readings), yields
-    each task's batches as it finishes and cancels what is left when it is closed.
-    ``grid``: the keyed grid's arguments of :func:`~virtspec_mi.engine.readings.take_keyed_readings`
-    besides the batch (``theta_i``, ``parameters``), sent with every task as the
-    in-process runner passes them; ``defines``: the XML scene's ``$name`` values, with
-    which every worker loads it.
+    A :data:`~virtspec_mi.engine.readings.BatchRunner` that runs the batches of ``plan``
+    on ``client``'s workers in tasks sized by :func:`task_size` (or of ``task_readings``
+    readings), yields each task's batches as it finishes and cancels what is left when it
+    is closed. Every task receives the plan (plain values) and traces its batches with
+    :func:`~virtspec_mi.engine.readings.take_keyed_readings`, as the in-process runner
+    does; ``defines``: the XML scene's ``$name`` values, with which every worker loads it.
     """
 
     check_task_readings(task_readings)
     portable = portable_scene(scene)
 
-    def runner(batches: list[np.ndarray]) -> Iterator[tuple[np.ndarray, Counts, Counts | None, float]]:
+    def runner(batches: list[np.ndarray]) -> Iterator[tuple[np.ndarray, Tally]]:
         from distributed import as_completed
 
         n_workers = wait_for_a_worker(client)
 
         def submit(tasks: list[list[np.ndarray]]) -> list[Any]:
-            return [client.submit(_run_block, portable, defines, fingerprint, settings, grid, task, pure=False,
+            return [client.submit(_run_block, portable, defines, fingerprint, plan, task, pure=False,
                                   retries=RETRIES) for task in tasks]
 
         left = list(batches)
@@ -375,7 +375,7 @@ def dask_runner(client: Any, scene: Any, fingerprint: str, settings: Settings, t
             for future in _as_finished(client, finished):
                 results = future.result()
                 if left:  # sized from the first probe back, submitted before its results are recorded
-                    rate = max(len(b) / max(s, 1e-9) for b, _, _, s in results)
+                    rate = max(len(b) / max(t.seconds, 1e-9) for b, t in results)
                     remaining = sum(len(b) for b in left)
                     more = submit(_tasks(left, task_size(rate, remaining, n_workers)))
                     futures += more

@@ -11,12 +11,15 @@ instrument here by name.
   :mod:`.hemispherical`;
 - ``goniophotometer``: its readings binned by outgoing direction (:func:`virtspec_mi.gonio`),
   :mod:`.goniophotometer`;
-- ``sphere``: a physical integrating sphere (:func:`virtspec_mi.sphere_measure`), :mod:`.sphere`.
+- ``sphere``: a physical integrating sphere (:func:`virtspec_mi.sphere_measure`), :mod:`.sphere`;
+- ``gloss``: a specular gloss meter, the example of a fourth instrument (one module, one
+  row), :mod:`.gloss`.
 """
 
 from __future__ import annotations
 
 from virtspec_mi.instruments.base import Instrument
+from virtspec_mi.instruments.gloss import GlossMeter
 from virtspec_mi.instruments.goniophotometer import Goniophotometer
 from virtspec_mi.instruments.hemispherical import Hemispherical
 from virtspec_mi.instruments.sphere import IntegratingSphere
@@ -24,6 +27,6 @@ from virtspec_mi.instruments.sphere import IntegratingSphere
 __all__ = ["INSTRUMENTS"]
 
 INSTRUMENTS: dict[str, type[Instrument]] = {
-    instrument.name: instrument for instrument in (Hemispherical, Goniophotometer, IntegratingSphere)
+    instrument.name: instrument for instrument in (Hemispherical, Goniophotometer, IntegratingSphere, GlossMeter)
 }
 """Every instrument by name (its ``name``): the API's and the command line's one registry."""

@@ -30,35 +30,24 @@ Baranoski et al. (2001), Sect. 3 (the instrument).
 from __future__ import annotations
 
 from abc import ABC, abstractmethod
-from dataclasses import dataclass
 from typing import Any, ClassVar
 
 import numpy as np
 
 from virtspec_mi.engine.parameters import ParameterSpace
+from virtspec_mi.engine.plan import Plan
+from virtspec_mi.engine.readings import BatchRunner, run
+from virtspec_mi.engine.tally import Tally
 from virtspec_mi.settings import Options, Settings
 
-__all__ = ["Plan", "Instrument", "take"]
-
-
-@dataclass(frozen=True)
-class Plan:
-    """
-    What a measurement traces: the settings, the incidence angles and the specimen
-    parameter points (the readings: wavelength × θi × points). Transitional: the
-    engine's keyed plan replaces it.
-    """
-
-    settings: Settings
-    theta_i: np.ndarray
-    parameters: ParameterSpace | None = None
+__all__ = ["Instrument", "take", "reading_labels", "reading_grid"]
 
 
 class Instrument(ABC):
     """
     One instrument (see the module docstring): ``init`` → plan, ``process`` → tallies,
     ``postprocess`` → result. An instance takes one measurement: ``init`` keeps what
-    ``postprocess`` needs.
+    ``process`` and ``postprocess`` need (the bench, the plan, the options).
     """
 
     name: ClassVar[str]
@@ -70,21 +59,42 @@ class Instrument(ABC):
 
     def __init__(self, scene: str = "") -> None:
         self.scene = scene
-        """Fingerprint of the scene, recorded in the result."""
+        """Fingerprint of the scene, recorded in the plan (a checkpoint's identity) and the result."""
+        self.bench: Any = None
+        self.plan: Plan | None = None
 
     @abstractmethod
     def init(self, bench: Any, settings: Settings, options: Options | None, theta_i: np.ndarray,
-             parameters: ParameterSpace | None) -> Any:
-        """Check the measurement and plan it (see the module docstring)."""
+             parameters: ParameterSpace | None) -> Plan:
+        """
+        Check the measurement (the rules between the settings, the options and the bench)
+        and plan it: a :class:`~virtspec_mi.engine.plan.Plan` (kept as :attr:`plan`).
+        ``options`` are the instrument's own (``None`` only for an instrument that has
+        none), validated; ``theta_i`` the incidence angles; ``parameters`` the specimen
+        parameter points, or ``None``.
+        """
+
+    def process(self, plan: Plan, *, keyed: bool = True, checkpoint: Any = None, progress: bool | None = False,
+                runner: BatchRunner | None = None) -> Tally:
+        """
+        Trace ``plan`` on the bench through the engine (:func:`virtspec_mi.engine.readings.run`):
+        keyed on the reading indices (``checkpoint``, ``progress``, ``runner``: Dask
+        workers), or over consecutive ray ranges (``keyed=False``).
+        """
+
+        return run(self.bench, plan, keyed=keyed, checkpoint=checkpoint, progress=progress, runner=runner)
 
     @abstractmethod
-    def process(self, plan: Any, *, keyed: bool = True, checkpoint: Any = None, progress: bool | None = False,
-                runner: Any = None) -> Any:
-        """Trace ``plan`` through the engine: exact tallies."""
-
-    @abstractmethod
-    def postprocess(self, tally: Any) -> Any:
+    def postprocess(self, tally: Tally) -> Any:
         """The instrument's result from the tallies of :meth:`process`."""
+
+    def warn_if_uncertified(self, result: Any, stacklevel: int = 2) -> None:
+        """
+        A ``RuntimeWarning`` for every reason a reading of ``result`` escaped its
+        certificate, attributed to the frame ``stacklevel`` levels up from the caller (1:
+        the caller; 2, the default: its caller). None by default: an instrument whose
+        result says so in its summary.
+        """
 
 
 def take(instrument: Instrument, bench: Any, settings: Settings, options: Options | None = None,
@@ -93,9 +103,45 @@ def take(instrument: Instrument, bench: Any, settings: Settings, options: Option
     One measurement with ``instrument``: :meth:`~Instrument.init`,
     :meth:`~Instrument.process` (``run``: ``keyed``, ``checkpoint``, ``progress``,
     ``runner``) and :meth:`~Instrument.postprocess`. ``theta_i``: the incidence angles
-    (default: ``settings.theta_i``).
+    (default: ``settings.theta_i``); ``options``: the instrument's (default: their defaults).
     """
 
     angles = np.atleast_1d(np.asarray(settings.theta_i if theta_i is None else theta_i, dtype=np.float64))
+    if options is None and instrument.options is not None:
+        options = instrument.options()
     plan = instrument.init(bench, settings, options, angles, parameters)
     return instrument.postprocess(instrument.process(plan, **run))
+
+
+def reading_labels(plan: Plan, theta_dim: bool = True) -> tuple[tuple[str, ...], dict[str, np.ndarray]]:
+    """
+    The dims and coordinates of ``plan``'s readings, as every result labels them:
+    ``wavelength``, ``theta_i`` (with ``theta_dim=False`` and one angle, a scalar label),
+    then the parameter dims (:attr:`~virtspec_mi.engine.parameters.ParameterSpace.dims`).
+    """
+
+    angles, space = np.asarray(plan.theta_i, dtype=np.float64), plan.parameters
+    keep = theta_dim or len(angles) > 1
+    dims = ("wavelength", *(("theta_i",) if keep else ()), *(() if space is None else space.dims))
+    coords = {"wavelength": plan.wavelengths, "theta_i": angles if keep else np.asarray(angles[0]),
+              **({} if space is None else space.coords())}
+    return dims, coords
+
+
+def reading_grid(plan: Plan, values: Any, group: int = 0, theta_dim: bool = True) -> np.ndarray:
+    """
+    ``values`` of ``plan``'s flat readings (indexed by reading first, any trailing axes)
+    for reading group ``group``, laid out over the dims of :func:`reading_labels` (then
+    the trailing axes): reading k = ((g·n_p + i_p)·n_θ + i_θ)·n_λ + i_λ goes to
+    [i_λ, i_θ, *i_p].
+    """
+
+    _, _, n_theta, n_lam = plan.shape
+    values = np.asarray(values)[group * plan.keys:(group + 1) * plan.keys]
+    extra = () if plan.parameters is None else tuple(plan.parameters.shape)
+    shaped = values.reshape(*extra, n_theta, n_lam, *values.shape[1:])
+    p = len(extra)
+    out = np.transpose(shaped, (p + 1, p, *range(p), *range(p + 2, shaped.ndim)))
+    if not (theta_dim or n_theta > 1):
+        out = out[:, 0]
+    return out.copy()

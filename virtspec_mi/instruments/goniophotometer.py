@@ -23,12 +23,15 @@ from typing import Any, ClassVar
 
 import numpy as np
 
+from virtspec_mi.budgets import rules
 from virtspec_mi.budgets.rules import GUARANTEES, check_gonio_options
 from virtspec_mi.checks import check_brdf_floor, check_relative_tolerance
-from virtspec_mi.geometry.bins import BINNINGS, HEMISPHERES, GonioBins, make_bins, parse_edges
 from virtspec_mi.engine.parameters import ParameterSpace
-from virtspec_mi.engine.readings import run_gonio
-from virtspec_mi.instruments.base import Instrument, Plan
+from virtspec_mi.engine.plan import Columns, Plan
+from virtspec_mi.engine.tally import Tally
+from virtspec_mi.geometry.bins import BINNINGS, HEMISPHERES, GonioBins, make_bins, parse_edges
+from virtspec_mi.instruments.base import Instrument, reading_grid
+from virtspec_mi.instruments.hemispherical import hemispherical_result
 from virtspec_mi.results.goniophotometer import GonioResult
 from virtspec_mi.settings import Options, Settings, one_of, option, true_or_false
 
@@ -96,44 +99,60 @@ class GonioOptions(Options):
 class Goniophotometer(Instrument):
     """
     The goniophotometer (see the module docstring): the spectrophotometer's readings
-    over every (wavelength, θi), every escaping ray also binned by its outgoing
-    direction; the result is a :class:`~virtspec_mi.results.goniophotometer.GonioResult`.
-    N is ``settings.rays``, or sized by ``guarantee`` over the K bins
-    (:func:`virtspec_mi.budgets.bins.gonio_rays`).
+    over every (wavelength, θi, parameter point), every escaping ray also binned by its
+    outgoing direction (the kernel hook :class:`~virtspec_mi.kernel.bins.BinLayout`); the
+    result is a :class:`~virtspec_mi.results.goniophotometer.GonioResult`.
+
+    N is ``settings.rays``, or sized by ``guarantee`` over the K bins (a row of
+    :data:`virtspec_mi.budgets.rules.GUARANTEES`), or — a two-stage rule — sized per
+    reading from its pilot where the guarantee's row allows it (its
+    :meth:`~virtspec_mi.budgets.rules.Guarantee.stage_two`; refused with the row's reason
+    otherwise): the pilot's columns are then every bin fraction (δ shared over the K bins,
+    as the union bound) and the reading's R, T and A, each at the same share, so that
+    the reading's R/T certificate holds as well as its bins'.
     """
 
     name: ClassVar[str] = "goniophotometer"
     options: ClassVar[type[Options] | None] = GonioOptions
     result: ClassVar[type] = GonioResult
 
-    def init(self, bench: Any, settings: Settings, options: GonioOptions | None, theta_i: np.ndarray,
+    def init(self, bench: Any, settings: Settings, options: GonioOptions, theta_i: np.ndarray,
              parameters: ParameterSpace | None) -> Plan:
-        """The bins and N of the options; a fixed budget only (two-stage sizes a reading for R and T, not its bins)."""
+        """The bins (the kernel hook) and N, or the two-stage columns, of the options."""
 
-        options = options if options is not None else GonioOptions()
-        if settings.adaptive:
-            raise ValueError("bound must be a fixed budget for a goniophotometer reading (hoeffding, chebyshev, "
-                             "exact, or rays given); N is sized by guarantee= over the bins")
-        if parameters is not None:
-            raise ValueError("a goniophotometer reading over specimen parameters is not available yet")
         bins = options.bins
         rule, relative, floor = check_gonio_options(options.guarantee, settings.delta, bins.size,
                                                     options.relative_tolerance, options.brdf_floor)
-        if settings.rays is None:
-            rays = rule.rays(settings.mu, settings.delta, bins.size, relative=relative, floor=floor,
-                             smallest_solid_angle=options.smallest_solid_angle)
-            self.guarantee = rule.name
+        columns, refusal, self.guarantee = None, "", rule.name
+        if settings.rays is not None:
+            self.guarantee = rules.RAYS_GIVEN.name
+        elif settings.adaptive:
+            try:
+                budget = rule.stage_two(bins.size)
+            except ValueError as why:  # the row's reason: the engine refuses the plan with it
+                refusal = str(why)
+            else:
+                fates = Columns.fates(settings.joint)
+                share = max(budget.share, fates.budget.share)
+                columns = Columns(rules.Columns(f"{budget.what} and {fates.budget.what}", share),
+                                  counts=fates.counts, bins="each")
         else:
-            rays, self.guarantee = settings.rays, "rays"
+            settings = settings.updated(rays=rule.rays(settings.mu, settings.delta, bins.size, relative=relative,
+                                                       floor=floor, smallest_solid_angle=options.smallest_solid_angle))
         self.bench, self.gonio_options = bench, options
-        return Plan(settings.updated(theta_i=float(theta_i[0]), rays=rays), theta_i, parameters)
+        self.plan = Plan(settings.updated(theta_i=float(theta_i[0])), theta_i, parameters, hooks=(bins.layout(),),
+                         columns=columns, refusal=refusal, scene=self.scene, instrument=self.name,
+                         options={"bins": bins.as_dict(), "guarantee": self.guarantee})
+        return self.plan
 
-    def process(self, plan: Plan, *, keyed: bool = True, checkpoint: Any = None, progress: bool | None = False,
-                runner: Any = None) -> GonioResult:
-        options = self.gonio_options
-        return run_gonio(self.bench, plan.settings, plan.theta_i, options.bins, scene=self.scene,
-                         guarantee=self.guarantee, relative_tolerance=options.relative_tolerance,
-                         brdf_floor=options.brdf_floor)
+    def postprocess(self, tally: Tally) -> GonioResult:
+        """The hemispherical reading of the same rays and its per-bin counts over the readings' dims."""
 
-    def postprocess(self, tally: GonioResult) -> GonioResult:
-        return tally
+        plan, options = self.plan, self.gonio_options
+        result = hemispherical_result(self.bench, plan, tally, self.scene)
+        bin_counts = reading_grid(plan, tally.bins.reshape(-1, *options.bins.shape))
+        return GonioResult(result=result, bin_counts=bin_counts, bins=options.bins, guarantee=self.guarantee,
+                           relative_tolerance=options.relative_tolerance, brdf_floor=options.brdf_floor)
+
+    def warn_if_uncertified(self, result: GonioResult, stacklevel: int = 2) -> None:
+        result.result.warn_if_uncertified(stacklevel=stacklevel + 2)

@@ -8,8 +8,10 @@ lower one, absorbed — giving reflectance ρ = m/N (eq. 2), transmittance τ an
 absorptance α = 1 − ρ − τ per reading, with the certificate of the ray budget
 (:mod:`virtspec_mi.budgets.rules`). :func:`virtspec_mi.measure` and
 :func:`virtspec_mi.sweep` take their readings with :class:`Hemispherical`: no options
-beside the :class:`~virtspec_mi.settings.Settings`; the result is a
-:class:`~virtspec_mi.results.hemispherical.Result`.
+beside the :class:`~virtspec_mi.settings.Settings` and no exit hook (the fates are what
+it tallies); the result is a :class:`~virtspec_mi.results.hemispherical.Result` over
+(wavelength, θi, parameter dims). A two-stage rule sizes each reading from its pilot's
+R, T and A (or R and T together, ``joint``).
 
 A measurement is keyed (a sweep: reading k owns the global ray indices
 [k·stride, k·stride + N), resumable, on Dask workers) or not (``measure``: consecutive
@@ -30,12 +32,14 @@ from typing import Any, ClassVar
 import numpy as np
 
 from virtspec_mi.engine.parameters import ParameterSpace, apply_point, current_values
-from virtspec_mi.engine.readings import run
-from virtspec_mi.instruments.base import Instrument, Plan
+from virtspec_mi.engine.plan import Columns, Plan
+from virtspec_mi.engine.readings import BatchRunner, shares_wavelengths
+from virtspec_mi.engine.tally import Tally
+from virtspec_mi.instruments.base import Instrument, reading_grid, reading_labels
 from virtspec_mi.results.hemispherical import Result
 from virtspec_mi.settings import Options, Settings
 
-__all__ = ["Hemispherical"]
+__all__ = ["Hemispherical", "hemispherical_result"]
 
 
 class Hemispherical(Instrument):
@@ -47,25 +51,51 @@ class Hemispherical(Instrument):
 
     def init(self, bench: Any, settings: Settings, options: Options | None, theta_i: np.ndarray,
              parameters: ParameterSpace | None) -> Plan:
-        self.bench = bench
-        return Plan(settings, theta_i, parameters)
+        self.bench, self.point = bench, None
+        self.plan = Plan(settings.updated(theta_i=float(theta_i[0])), theta_i, parameters,
+                         columns=Columns.fates(settings.joint), scene=self.scene, instrument=self.name)
+        return self.plan
 
     def process(self, plan: Plan, *, keyed: bool = True, checkpoint: Any = None, progress: bool | None = False,
-                runner: Any = None) -> Result:
+                runner: BatchRunner | None = None) -> Tally:
+        """The engine's run; unkeyed with one parameter point: the point set on the scene for the run."""
+
         space = plan.parameters
         if keyed or space is None:
-            return run(self.bench, plan.settings, plan.theta_i, keyed=keyed, scene=self.scene, checkpoint=checkpoint,
-                       progress=progress, parameters=space, runner=runner)
+            return super().process(plan, keyed=keyed, checkpoint=checkpoint, progress=progress, runner=runner)
         if space.size != 1:
             raise ValueError("an unkeyed measurement takes one value per parameter (a sweep takes several)")
         original = current_values(self.bench, space.keys)
+        self.plan, self.point = replace(plan, parameters=None), space  # the point: a scalar label of the result
         try:
             apply_point(self.bench, space.keys, space.point(0))
-            result = run(self.bench, plan.settings, plan.theta_i, keyed=False, progress=progress)
+            return super().process(self.plan, keyed=False, progress=progress)
         finally:
             apply_point(self.bench, space.keys, original)
-        return replace(result, parameters=space.as_dict(),
-                       coords={**result.coords, **{n: np.asarray(v[0]) for n, v in space.coords().items()}})
 
-    def postprocess(self, tally: Result) -> Result:
-        return tally
+    def postprocess(self, tally: Tally) -> Result:
+        return hemispherical_result(self.bench, self.plan, tally, self.scene, self.point)
+
+    def warn_if_uncertified(self, result: Result, stacklevel: int = 2) -> None:
+        result.warn_if_uncertified(stacklevel=stacklevel + 2)
+
+
+def hemispherical_result(bench: Any, plan: Plan, tally: Tally, scene: str = "",
+                         point: ParameterSpace | None = None) -> Result:
+    """
+    The hemispherical reading of ``plan``'s readings (one group) from their tallies: a
+    :class:`~virtspec_mi.results.hemispherical.Result` over (wavelength, θi, parameter
+    dims); ``point``: the one parameter point an unkeyed reading was taken at (scalar labels).
+    """
+
+    space = plan.parameters if point is None else point
+    dims, coords = reading_labels(plan)
+    if point is not None:
+        coords.update({name: np.asarray(values[0]) for name, values in point.coords().items()})
+    return Result(
+        dims=dims, coords=coords,
+        counts=tally.counts.map(lambda v: reading_grid(plan, v)),
+        pilot=None if tally.pilot is None else tally.pilot.map(lambda v: reading_grid(plan, v)),
+        settings=plan.settings, geometry=bench.geometry, seconds=tally.seconds, scene=scene,
+        wavelength_independent=shares_wavelengths(bench),
+        parameters=None if space is None else space.as_dict())

@@ -47,16 +47,19 @@ J. Kessel (1986), Appl. Opt. 25, 2752–2756 (transmittance in a one-port sphere
 from __future__ import annotations
 
 import math
-import time
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from typing import Any, ClassVar
 
 import numpy as np
 
+from virtspec_mi.budgets.rules import DETECTOR_COLUMNS
 from virtspec_mi.engine.parameters import ParameterSpace
+from virtspec_mi.engine.plan import Columns, Plan
+from virtspec_mi.engine.tally import Tally
 from virtspec_mi.geometry.sphere import Sphere, is_sphere_parameter, sphere_from_parameters
-from virtspec_mi.instruments.base import Instrument, Plan
-from virtspec_mi.results.sphere import SphereResult
+from virtspec_mi.instruments.base import Instrument, reading_grid, reading_labels
+from virtspec_mi.kernel.sphere_walk import FATES, HEMISPHERES, SPECIMEN, Holder, SphereFate, holder_frame
+from virtspec_mi.results.sphere import CONFIGURATIONS, SphereResult
 from virtspec_mi.settings import Options, Settings, one_of, option, share, whole_number
 
 __all__ = ["MEASUREMENTS", "SPECULAR", "METHODS", "SphereOptions", "IntegratingSphere", "configurations"]
@@ -124,19 +127,20 @@ class SphereOptions(Options):
 
         return {name: value for name, value in super().as_dict().items() if name != "sphere"}
 
-_FATES = ("detected", "absorbed_wall", "absorbed_specimen", "absorbed_other", "capped", "invalid_directions")
 
-
-def configurations(sphere: Sphere, options: SphereOptions, specimen_bsdf: Any, specimen_radius: float,
-                   standard_bsdf: Any, open_bsdf: Any) -> dict[str, tuple[list, list]]:
+def configurations(sphere: Sphere, options: SphereOptions, specimen_radius: float,
+                   specimen_bsdf: Any = SPECIMEN) -> dict[str, tuple[list, list]]:
     """
     Per configuration: the holders (port index, BSDF, disk radius, frame) — holder 0 in
-    the beam — and each port's cap fate (a code of :mod:`virtspec_mi.kernel.sphere_walk`,
-    ``None`` for a plugged port).
+    the beam — and each port's cap fate (a :class:`~virtspec_mi.kernel.sphere_walk.SphereFate`
+    code, ``None`` for a plugged port). The specimen's BSDF is ``specimen_bsdf`` (by
+    default :data:`~virtspec_mi.kernel.sphere_walk.SPECIMEN`: the bench's), the standard
+    a Lambertian of reflectance ``options.standard`` and the open port a null BSDF, as
+    Mitsuba plugin dicts.
     """
 
-    from virtspec_mi.kernel.sphere_walk import Holder, holder_frame
-
+    standard_bsdf = {"type": "diffuse", "reflectance": options.standard}
+    open_bsdf = {"type": "null"}
     index = {p.role: i for i, p in enumerate(sphere.ports) if p.role not in ("detector", "open")}
     transmittance = options.measurement == "transmittance"
     beam_role = "entrance" if transmittance else "sample"
@@ -162,9 +166,9 @@ def configurations(sphere: Sphere, options: SphereOptions, specimen_bsdf: Any, s
                          "sits")
     actions: list[int | None] = []
     for j, port in enumerate(sphere.ports):
-        lost = 6 + j
+        lost = SphereFate.lost(j)
         if port.role == "detector":
-            actions.append(0)
+            actions.append(int(SphereFate.DETECTED))
         elif port.role == "specular":
             actions.append(lost if options.specular == "SCE" else None)
         elif port.role == "reference" and other_port is None:
@@ -215,8 +219,11 @@ def _check_beam(sphere: Sphere, options: SphereOptions, settings: Settings, fram
 class IntegratingSphere(Instrument):
     """
     The integrating sphere (see the module docstring): both configurations of every
-    reading, each with the settings' rule's N at (μ, δ/2) (or ``settings.rays``), traced
-    with the settings' seed (the same rays in both); the result is a
+    reading (wavelength × θi × specimen parameter point) in one keyed run of the engine —
+    reading k of a configuration traces the global rays [k·N, k·N + N) with the settings'
+    seed, the same rays in both (two reading groups of one plan) — each with the settings'
+    rule's N at (μ, δ/2) (or ``settings.rays``), or sized per reading by a two-stage pilot
+    of its detector fraction at δ/2; the result is a
     :class:`~virtspec_mi.results.sphere.SphereResult`.
     """
 
@@ -224,73 +231,64 @@ class IntegratingSphere(Instrument):
     options: ClassVar[type[Options] | None] = SphereOptions
     result: ClassVar[type] = SphereResult
 
-    def init(self, bench: Any, settings: Settings, options: SphereOptions | None, theta_i: np.ndarray,
+    def init(self, bench: Any, settings: Settings, options: SphereOptions, theta_i: np.ndarray,
              parameters: ParameterSpace | None) -> Plan:
-        """The configurations (holders and port fates), the beam through the entrance port, N at δ/2."""
+        """The configurations (holders and port fates), the beam through the entrance port at every θi, the budget."""
 
-        import mitsuba as mi
-
-        if options is None or options.sphere is None:
+        if options.sphere is None:
             raise ValueError("a sphere reading needs a sphere: an 'integrating_sphere' integrator in the scene or "
                              "sphere=Sphere(...)")
-        if len(theta_i) != 1 or parameters is not None:
-            raise ValueError("a sphere reading over several theta_i or specimen parameters is not available yet")
-        if settings.adaptive:
-            raise ValueError("bound='two-stage' is not available for sphere readings (each configuration is sized "
-                             "in advance): use hoeffding, chebyshev or exact, or give rays")
         sphere = options.sphere
-        rays = settings.rays if settings.rays is not None else settings.updated(delta=settings.delta / 2).rays_per_reading
-        standard_bsdf = mi.load_dict({"type": "diffuse", "reflectance": options.standard})
-        open_bsdf = mi.load_dict({"type": "null"})
-        self.setups = configurations(sphere, options, bench.bsdf, bench.geometry.specimen_radius, standard_bsdf,
-                                     open_bsdf)
-        _check_beam(sphere, options, settings, self.setups["sample"][0][0].frame)
+        setups = configurations(sphere, options, bench.geometry.specimen_radius)
+        for angle in theta_i:
+            _check_beam(sphere, options, settings.updated(theta_i=float(angle)), setups["sample"][0][0].frame)
+        if not settings.adaptive and settings.rays is None:  # each detector fraction at delta/2
+            settings = settings.updated(rays=settings.updated(delta=settings.delta / DETECTOR_COLUMNS.share)
+                                        .rays_per_reading)
+        layouts = tuple(sphere.layout(holders, caps, options.max_bounces, settings.wavelengths)
+                        for holders, caps in (setups[name] for name in CONFIGURATIONS))
+        detected = tuple(h * layouts[0].codes + int(SphereFate.DETECTED) for h in range(len(HEMISPHERES)))
         self.bench, self.sphere_options = bench, options
-        return Plan(settings.updated(theta_i=float(theta_i[0]), rays=rays), theta_i, parameters)
+        self.plan = Plan(settings.updated(theta_i=float(theta_i[0])), theta_i, parameters, groups=CONFIGURATIONS,
+                         hooks=layouts, columns=Columns(DETECTOR_COLUMNS, bins=(detected,)), scene=self.scene,
+                         instrument=self.name, options={"sphere": sphere.parameters(), **options.as_dict()})
+        return self.plan
 
-    def process(self, plan: Plan, *, keyed: bool = True, checkpoint: Any = None, progress: bool | None = False,
-                runner: Any = None) -> dict[str, Any]:
-        """Both configurations' walk tallies per wavelength (transitional: one kernel per wavelength)."""
+    def postprocess(self, tally: Tally) -> SphereResult:
+        """The readout: named counts of both configurations over the readings' dims, the sphere and its mode."""
 
-        from virtspec_mi.kernel.sphere_walk import SphereWalk, tally_sphere
-
-        settings, options = plan.settings, self.sphere_options
-        wavelengths = np.asarray(settings.wavelengths, dtype=np.float64)
-        rho_w = options.sphere.wall_reflectance_at(wavelengths)
-        tallies = {}
-        start = time.perf_counter()
-        for name, (holders, actions) in self.setups.items():
-            walk = SphereWalk(options.sphere, holders, actions, options.max_bounces)
-            traced = replace(self.bench, bsdf=holders[0].bsdf)
-            tallies[name] = tally_sphere(walk, traced, wavelengths, rho_w, settings.rays, settings)
-        return {"settings": settings, "wavelengths": wavelengths, "wall_reflectance": rho_w, "tallies": tallies,
-                "seconds": time.perf_counter() - start}
-
-    def postprocess(self, tally: dict[str, Any]) -> SphereResult:
-        """The readout: named counts of both configurations, the sphere and its reading mode."""
-
-        sphere, settings = self.sphere_options.sphere, tally["settings"]
-        counts = {name: _named_counts(sphere, tallies) for name, tallies in tally["tallies"].items()}
-        return SphereResult(wavelengths=tally["wavelengths"], rays=int(settings.rays), counts=counts,
+        plan, sphere = self.plan, self.sphere_options.sphere
+        dims, coords = reading_labels(plan, theta_dim=False)
+        named = {**_named_counts(sphere, plan.hook(0), tally.bins, tally.sums), "rays": tally.counts.rays}
+        counts = {name: {key: reading_grid(plan, values, g, theta_dim=False) for key, values in named.items()}
+                  for g, name in enumerate(CONFIGURATIONS)}
+        pilot = None if tally.pilot is None else {
+            name: {key: reading_grid(plan, values, g, theta_dim=False) for key, values in tally.pilot.as_dict().items()
+                   if key != "largest_weight"} for g, name in enumerate(CONFIGURATIONS)}
+        shape = counts["sample"]["rays"].shape
+        rho_w = sphere.wall_reflectance_at(plan.wavelengths).reshape(-1, *(1,) * (len(shape) - 1))
+        return SphereResult(dims=dims, coords=coords, counts=counts, pilot=pilot,
+                            wall_reflectance=np.broadcast_to(rho_w, shape).astype(np.float64),
                             sphere=sphere.describe(), cap_fractions=sphere.cap_fractions,
-                            wall_reflectance=tally["wall_reflectance"], options=self.sphere_options.as_dict(),
-                            settings=settings.as_dict(), seconds=tally["seconds"], scene=self.scene,
-                            sphere_parameters=sphere.parameters(),
-                            specimen_radius=float(self.bench.geometry.specimen_radius))
+                            options=self.sphere_options.as_dict(), settings=plan.settings, seconds=tally.seconds,
+                            scene=self.scene, sphere_parameters=sphere.parameters(),
+                            specimen_radius=float(self.bench.geometry.specimen_radius),
+                            parameters=None if plan.parameters is None else plan.parameters.as_dict())
 
 
-def _named_counts(sphere: Sphere, tallies: list[dict[str, Any]]) -> dict[str, np.ndarray]:
-    """Per-wavelength counts by name from the walk's histograms."""
+def _named_counts(sphere: Sphere, layout: Any, bins: np.ndarray, sums: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
+    """Per-reading counts by name from the walk's bins (readings, hemisphere · codes + fate) and sums."""
 
-    cross = np.stack([t["cross"] for t in tallies])  # (wavelength, hemisphere, code)
+    cross = bins.reshape(len(bins), len(HEMISPHERES), layout.codes)  # (reading, hemisphere, code)
     by_code = cross.sum(axis=1)
-    out = {name: by_code[:, k] for k, name in enumerate(_FATES)}
+    out = {name: by_code[:, k] for k, name in enumerate(FATES)}
     for j, port in enumerate(sphere.ports):
-        out[f"lost_{port.name}"] = by_code[:, 6 + j]
-    out["hemispherical_reflected"] = cross[:, 1, :].sum(axis=1) + cross[:, 3, :].sum(axis=1)
-    out["hemispherical_specular"] = cross[:, 3, :].sum(axis=1)  # reflected by a delta event (part of the above)
-    out["hemispherical_transmitted"] = cross[:, 2, :].sum(axis=1)
-    out["detected_from_upper"] = cross[:, 1, 0] + cross[:, 3, 0]
-    for name in ("wall_reflections", "weight_violations", "rounded_weights"):
-        out[name] = np.array([t[name] for t in tallies], dtype=np.int64)
+        out[f"lost_{port.name}"] = by_code[:, SphereFate.lost(j)]
+    upper, lower, specular = (HEMISPHERES.index(h) for h in ("upper", "lower", "specular"))
+    out["hemispherical_reflected"] = cross[:, upper, :].sum(axis=1) + cross[:, specular, :].sum(axis=1)
+    out["hemispherical_specular"] = cross[:, specular, :].sum(axis=1)  # reflected by a delta event (part of the above)
+    out["hemispherical_transmitted"] = cross[:, lower, :].sum(axis=1)
+    detected = int(SphereFate.DETECTED)
+    out["detected_from_upper"] = cross[:, upper, detected] + cross[:, specular, detected]
+    out.update(sums)
     return {k: np.asarray(v, dtype=np.int64) for k, v in out.items()}

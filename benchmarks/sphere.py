@@ -48,7 +48,8 @@ def main() -> None:
     integrator = scene.integrator()
     instrument = find_bench(scene)
     settings = integrator.settings.updated(rays=args.rays)
-    sphere, options = integrator.sphere, integrator.sphere_settings
+    options = integrator.sphere_options
+    sphere = options.sphere
     holders, actions = configurations(sphere, options, instrument.geometry.specimen_radius)["sample"]
     layout = sphere.layout(holders, actions, options.max_bounces, settings.wavelengths)
     plans = [ReadingPlan(w, settings.theta_i, settings.phi_i, args.rays) for w in settings.wavelengths]

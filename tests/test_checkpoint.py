@@ -365,3 +365,62 @@ def test_sweep_out_that_is_a_directory_fails_before_tracing(scenes_dir, tmp_path
                  "--out", str(tmp_path / "taken.nc")]) == 1
     err = capsys.readouterr().err
     assert err.startswith("virtspec: error: out ") and "is a directory" in err
+
+
+# --- a goniophotometer reading and a sphere spectrum resume after SIGKILL ------------------
+
+_ROUGH_XML = """<scene version="3.0.0">
+    <shape type="disk" id="emitter"><transform name="to_world"><rotate x="1" angle="180"/><scale value="8"/>
+        <translate z="100"/></transform></shape>
+    <shape type="disk" id="specimen"><transform name="to_world"><scale value="12.5"/></transform>
+        <bsdf type="roughdielectric"><float name="alpha" value="0.3"/><float name="int_ior" value="1.5"/></bsdf></shape>
+</scene>"""
+
+
+def _kill_then_resume(command: list[str], out: Path, readings: int, cwd: Path) -> None:
+    """Run ``command`` (writing ``out``), SIGKILL it once its checkpoint holds a reading, then run it again."""
+
+    partial = checkpoint_for(out)
+    process = subprocess.Popen(command, cwd=cwd)
+    deadline = time.monotonic() + 120
+    while not partial.exists() and process.poll() is None and time.monotonic() < deadline:
+        time.sleep(0.005)
+    process.send_signal(signal.SIGKILL)
+    process.wait()
+    assert process.returncode == -signal.SIGKILL, "the run ended before it could be interrupted"
+    done = len(json.loads(partial.read_text())["done"])
+    assert 0 < done < readings and not out.exists()
+    subprocess.run(command, cwd=cwd, check=True)
+    assert out.is_file() and not partial.exists()
+
+
+@pytest.mark.slow
+def test_killing_a_real_goniophotometer_process_and_rerunning_gives_the_uninterrupted_reading(tmp_path):
+    scene = tmp_path / "rough.xml"
+    scene.write_text(_ROUGH_XML)
+    options = ["--theta-i", "0:80:2", "--wavelengths", "400:700:50", "--rays", "200000", "--theta-o-bins", "6",
+               "--phi-o-bins", "8", "--json"]
+    out = tmp_path / "gonio.nc"
+    command = [sys.executable, "-m", "virtspec_mi.cli", "gonio", str(scene), *options, "--out", str(out)]
+    _kill_then_resume(command, out, 41 * 7, tmp_path)
+    resumed = vm.read_result(out)
+    whole = vm.gonio(str(scene), theta_i="0:80:2", wavelengths="400:700:50", rays=200_000, theta_o_bins=6,
+                     phi_o_bins=8)
+    np.testing.assert_array_equal(resumed.bin_counts, whole.bin_counts)
+    for name in ("reflected", "transmitted", "absorbed", "rays"):
+        np.testing.assert_array_equal(getattr(resumed.result, name), getattr(whole.result, name))
+
+
+@pytest.mark.slow
+def test_killing_a_real_sphere_spectrum_process_and_rerunning_gives_the_uninterrupted_reading(tmp_path):
+    out = tmp_path / "sphere.json"
+    keywords = dict(wavelengths="400:2500:20", rays=40_000, seed=2)
+    code = ("import sys, virtspec_mi as vm; "
+            f"vm.sphere_measure({str(ROOT / 'scenes' / 'sphere_150mm_8d.xml')!r}, out=sys.argv[1], progress=False, "
+            f"**{keywords!r})")
+    _kill_then_resume([sys.executable, "-c", code, str(out)], out, 2 * 106, tmp_path)
+    resumed = vm.read_result(out)
+    whole = vm.sphere_measure(str(ROOT / "scenes" / "sphere_150mm_8d.xml"), **keywords)
+    for configuration in ("sample", "standard"):
+        for name, values in whole.counts[configuration].items():
+            np.testing.assert_array_equal(resumed.counts[configuration][name], values, err_msg=name)

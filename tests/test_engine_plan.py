@@ -54,9 +54,10 @@ def sphere(mi):
     integrator = scene.integrator()
     bench = find_bench(scene)
     settings = integrator.settings.updated(wavelengths=(450.0, 550.0, 650.0))
-    setups = configurations(integrator.sphere, integrator.sphere_settings, bench.geometry.specimen_radius)
-    layouts = tuple(integrator.sphere.layout(*setups[name], integrator.sphere_settings.max_bounces,
-                                             settings.wavelengths) for name in CONFIGURATIONS)
+    options = integrator.sphere_options
+    setups = configurations(options.sphere, options, bench.geometry.specimen_radius)
+    layouts = tuple(options.sphere.layout(*setups[name], options.max_bounces, settings.wavelengths)
+                    for name in CONFIGURATIONS)
     return bench, layouts, settings
 
 
@@ -119,7 +120,7 @@ def test_tallies_depend_on_the_key_only(rough, bins, sphere):
 
 
 def test_a_keyed_sphere_run_is_the_sphere_measurement(sphere):
-    """The transitional measure_sphere is this keyed run: its counts come from the same tallies."""
+    """The sphere instrument's reading is this keyed run: its counts come from the same tallies."""
 
     bench, layouts, settings = sphere
     tally = run(bench, sphere_plan(sphere, rays=3000), keyed=True)

@@ -288,3 +288,24 @@ def test_plots_and_spectra_per_bin(rough, tmp_path):
     assert isinstance(vm.read_result(path), vm.GonioResult) and vm.read_result(path).as_dict() == reading.as_dict()
     with pytest.raises(ValueError, match="goniophotometer reading.*read it with virtspec_mi.read_result"):
         vm.Result.read(path)
+
+
+def test_two_stage_sizes_each_reading_from_its_pilots_bins_and_rt(mi):
+    """
+    Two-stage under the union guarantee: every bin fraction and R, T, A of a Lambertian
+    (ρ = 0.6, equal projected bins: each holds ρ/K) within μ — what the pilot sized the
+    second batch for, at the fixed seed; dkw (no pilot bounds its CDFs) is refused.
+    """
+
+    rho = 0.6
+    scene = vm.instrument_scene({"type": "diffuse", "reflectance": {"type": "spectrum", "value": rho}})
+    spec = dict(theta_o_bins=2, phi_o_bins=3, binning="projected", hemispheres="reflection", mu=0.02, seed=3)
+    reading = vm.gonio(scene, theta_i=[20, 50], bound="two-stage", **spec)
+    result = reading.result
+    assert result.pilot is not None and np.all(result.pilot.rays == 500)  # ceil(10/mu)
+    assert np.all(reading.rays > 0)
+    assert np.max(np.abs(reading.fraction - rho / reading.size)) < 0.02
+    assert np.max(np.abs(result.reflectance - rho)) < 0.02 and np.all(result.certified_mu == pytest.approx(0.02))
+    assert np.array_equal(reading.bin_counts.sum(axis=(2, 3)), result.reflected)
+    with pytest.raises(ValueError, match="cannot size guarantee 'dkw'"):
+        vm.gonio(scene, bound="two-stage", guarantee="dkw", **spec)

@@ -320,3 +320,25 @@ def test_a_portable_scene_dict_rebuilds_the_same_transforms(dielectric_dict):
         assert np.array_equal(np.array(restored[shape]["to_world"].matrix),
                               np.array(dielectric_dict[shape]["to_world"].matrix))
     assert restored["specimen"]["bsdf"] == dielectric_dict["specimen"]["bsdf"]
+
+
+@pytest.mark.slow
+def test_a_goniophotometer_reading_and_a_sphere_spectrum_on_two_workers_are_bit_identical(client, tmp_path):
+    """Every instrument's plan runs on the workers (engine.take_keyed_readings): bins, sums and both groups."""
+
+    rough = vm.instrument_scene({"type": "roughdielectric", "alpha": 0.3, "int_ior": 1.5})
+    gonio = dict(theta_i=[0, 40, 75], wavelengths="450:650:100", rays=20_000, theta_o_bins=4, phi_o_bins=6,
+                 progress=False)
+    here = vm.gonio(rough, **gonio)
+    there = vm.gonio(rough, workers=client, chunk_size=1024, task_readings=2, **gonio)
+    assert np.array_equal(here.bin_counts, there.bin_counts)
+    same_counts(here.result, there.result)
+    sphere = dict(wavelengths="400:2500:300", rays=5_000, progress=False)
+    here = vm.sphere_measure("scenes/sphere_150mm_8d.xml", **sphere)
+    there = vm.sphere_measure("scenes/sphere_150mm_8d.xml", workers=client, task_readings=3,
+                              out=tmp_path / "sphere.nc", **sphere)
+    for configuration in ("sample", "standard"):
+        for name, values in here.counts[configuration].items():
+            assert np.array_equal(values, there.counts[configuration][name]), (configuration, name)
+    assert np.array_equal(vm.read_result(tmp_path / "sphere.nc").counts["sample"]["detected"],
+                          here.counts["sample"]["detected"])

@@ -194,3 +194,32 @@ def test_a_scene_dict_gives_the_counts_of_the_xml_scene():
     from_xml = vm.sphere_measure(xml, rays=3000)
     assert from_dict.counts["sample"]["detected"] == from_xml.counts["sample"]["detected"]
     assert from_dict.counts["standard"]["wall_reflections"] == from_xml.counts["standard"]["wall_reflections"]
+
+
+def test_two_stage_sizes_each_configurations_detector_fraction():
+    """Two-stage: each configuration's N from its pilot's detector fraction at delta/2; the same rays in both."""
+
+    scene = vm.mitsuba().load_file(SCENE, reflectance="0.99")  # the sample is the standard itself
+    result = vm.sphere_measure(scene, bound="two-stage", mu=0.01, wavelengths="500, 600")
+    assert result.pilot is not None and np.all(result.pilot["sample"]["rays"] == 1000)  # ceil(10/mu)
+    assert np.array_equal(result.counts["sample"]["rays"], result.counts["standard"]["rays"])
+    assert np.all(result.reading == 0.99)  # identical configurations, identical rays, identical N
+    assert np.all(result.fraction_mu == pytest.approx(0.01))
+    grey = vm.sphere_measure(SCENE, bound="two-stage", mu=0.01, wavelengths="500")
+    assert grey.counts["sample"]["rays"][0] != grey.counts["standard"]["rays"][0]  # each sized from its own pilot
+
+
+def test_a_sphere_reading_over_theta_i_and_parameters_is_keyed_like_a_sweep():
+    """Several theta_i and specimen parameter points: labelled dims, each reading the one-angle reading's counts."""
+
+    scene = vm.instrument_scene({"type": "roughdielectric", "alpha": 0.3, "int_ior": 1.5}, specimen_radius=12.7)
+    scene["integrator"] = {"type": "integrating_sphere", "beam": "collimated",
+                           **vm.mitsuba().load_file(SCENE).integrator().sphere_options.sphere.parameters()}
+    both = vm.sphere_measure(scene, theta_i=[8, 12], wavelengths="500, 600", rays=3000,
+                             parameters={"specimen.alpha": [0.2, 0.4]})
+    assert both.dims == ("wavelength", "theta_i", "specimen.alpha", "configuration")
+    assert both.counts["sample"]["detected"].shape == (2, 2, 2)
+    one = vm.sphere_measure(scene, theta_i=8, wavelengths="500, 600", rays=3000, parameters={"specimen.alpha": [0.2]})
+    assert np.array_equal(one.counts["sample"]["detected"][:, 0], both.counts["sample"]["detected"][:, 0, 0])
+    with pytest.raises(ValueError, match="theta_i = 40"):
+        vm.sphere_measure(scene, theta_i=[8, 40], rays=100)

@@ -32,7 +32,8 @@ import virtspec_mi as vm  # noqa: E402
 from virtspec_mi.references import sphere_theory as st  # noqa: E402
 from virtspec_mi.budgets.bounds import hoeffding_mu  # noqa: E402
 from virtspec_mi.settings import Settings  # noqa: E402
-from virtspec_mi.geometry.sphere import Port, Sphere, SphereSettings  # noqa: E402
+from virtspec_mi.geometry.sphere import Port, Sphere  # noqa: E402
+from virtspec_mi.instruments.sphere import SphereOptions  # noqa: E402
 from virtspec_mi.references.sphere_model import theory_inputs  # noqa: E402
 
 RAYS, DELTA = 105_967, 1e-3
@@ -69,7 +70,7 @@ def ideal_table() -> str:
             tally = tally_readings(instrument, [ReadingPlan(551.0, 0.0, 0.0, RAYS)], hook=layout,
                                    **kernel_options(Settings(theta_i=0, beam="conical")))
             simulated = tally.bins[0].reshape(4, layout.codes)[:, 0].sum() / RAYS
-            kw = theory_inputs(sphere, SphereSettings(), [551.0])
+            kw = theory_inputs(sphere, SphereOptions(), [551.0])
             fractions = {k: kw[k] for k in ("sample_fraction", "detector_fraction", "open_fraction")}
             projected = {k: v * (1 - v) for k, v in fractions.items()}
             flat, cap, iad = (0.5 * st.detected_fraction(rho_w, 0.5, port_surface=s, **fr)
@@ -86,7 +87,7 @@ def grey_table() -> str:
 
     import dataclasses
 
-    sphere = dataclasses.replace(vm.mitsuba().load_file(str(LAB)).integrator().sphere, baffle=None)
+    sphere = dataclasses.replace(vm.mitsuba().load_file(str(LAB)).integrator().sphere_options.sphere, baffle=None)
     lines = ["| ρ | substitution [certified interval] | theory | comparison [certified interval] | theory |",
              "|---|---|---|---|---|"]
     for rho in (0.05, 0.25, 0.45, 0.65, 0.85, 0.95):

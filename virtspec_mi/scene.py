@@ -215,12 +215,15 @@ def _clean(error: Exception) -> str:
 def _suggestion(error: Exception) -> str:
     """
     "; did you mean 'theta_i'?" when Mitsuba's message quotes a parameter name that is a
-    near miss of a setting (Mitsuba reports an unused ``<float name="thetai" …>`` as
+    near miss of a setting or of an instrument's option (Mitsuba reports an unused ``<float name="thetai" …>`` as
     ``float "thetai": 45``).
     """
 
     names = re.findall(r'"(\w+)"', str(error))
-    close = {name: difflib.get_close_matches(name, SETTING_NAMES, n=1, cutoff=0.75) for name in names}
+    from virtspec_mi.instruments import INSTRUMENTS
+
+    known = {*SETTING_NAMES, *(n for i in INSTRUMENTS.values() if i.options is not None for n in i.options.names())}
+    close = {name: difflib.get_close_matches(name, sorted(known), n=1, cutoff=0.75) for name in names}
     hints = [f"'{name}' is not a setting: did you mean '{match[0]}'?" for name, match in close.items()
              if match and match[0] != name]
     return f" ({'; '.join(hints)})" if hints else ""

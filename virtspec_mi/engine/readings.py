@@ -63,7 +63,7 @@ from virtspec_mi.kernel.counts import Counts
 from virtspec_mi.settings import Settings
 
 __all__ = ["BatchRunner", "run", "take_keyed_readings", "trace_readings", "in_process_runner", "shares_wavelengths",
-           "take_readings", "measure_reading", "take_gonio_readings", "run_gonio"]
+           "take_readings", "take_gonio_readings"]
 
 BatchRunner = Callable[[list[np.ndarray]], Iterable[tuple[np.ndarray, Tally]]]
 """
@@ -78,8 +78,8 @@ runs them on Dask workers.
 # -- one plan, one path ---------------------------------------------------------------------
 
 
-def run(bench: Any, plan: Any, *args: Any, keyed: bool, checkpoint: Any = None, progress: bool | None = False,
-        runner: BatchRunner | None = None, **transitional: Any) -> Any:
+def run(bench: Any, plan: Plan, *, keyed: bool, checkpoint: Any = None, progress: bool | None = False,
+        runner: BatchRunner | None = None) -> Tally:
     """
     Every reading of ``plan`` on ``bench`` as one :class:`~virtspec_mi.engine.tally.Tally`
     over the flat readings (see the module docstring).
@@ -93,16 +93,8 @@ def run(bench: Any, plan: Any, *args: Any, keyed: bool, checkpoint: Any = None, 
     (Dask workers); the default runs them here. The batches, the checkpoint and the
     tallies are the same either way. ``keyed=False``: one call over consecutive ray
     ranges (one group, no parameter points), its bar updated per chunk.
-
-    *Transitional:* ``run(instrument, settings, theta_i, *, keyed, scene, checkpoint,
-    progress, parameters, runner)`` — a hemispherical run returning a
-    :class:`~virtspec_mi.results.hemispherical.Result` (its runner yielding
-    ``(batch, counts, pilot, seconds)``) — still works until its callers build plans.
     """
 
-    if not isinstance(plan, Plan):
-        return _run_hemispherical(bench, plan, *args, keyed=keyed, checkpoint=checkpoint, progress=progress,
-                                  runner=runner, **transitional)
     shared = _shares(bench, plan)
     size = plan.size
     check_readings(size, (size // len(plan.wavelengths) if shared else size) * plan.most_rays_spent)
@@ -207,17 +199,11 @@ def trace_readings(bench: Any, plan: Plan, group: int, readings: Sequence[tuple[
     return Tally(tally.counts, None if pilot is None else pilot.counts, tally.bins, tally.sums).take(back)
 
 
-def in_process_runner(bench: Any, plan: Any, **transitional: Any) -> BatchRunner:
+def in_process_runner(bench: Any, plan: Plan) -> BatchRunner:
     """
     The default :data:`BatchRunner`: every batch here, one after the other, traced by
     :func:`take_keyed_readings` with its seconds.
-
-    *Transitional:* ``in_process_runner(instrument, settings, theta_i=…, parameters=…)``
-    yields a hemispherical batch's ``(batch, counts, pilot, seconds)``.
     """
-
-    if not isinstance(plan, Plan):
-        return _counts_runner(in_process_runner(bench, _hemispherical_plan(plan, **transitional)))
 
     def runner(batches: list[np.ndarray]) -> Iterator[tuple[np.ndarray, Tally]]:
         for batch in batches:
@@ -359,38 +345,6 @@ def _hemispherical_plan(settings: Settings, theta_i: Sequence[float] | None = No
     return Plan(settings, angles, parameters=parameters, columns=Columns.fates(settings.joint), scene=scene)
 
 
-def _counts_runner(runner: BatchRunner) -> Callable[[list[np.ndarray]], Iterator[tuple]]:
-    """*Transitional:* a runner of tallies as one of ``(batch, counts, pilot, seconds)``."""
-
-    def counts(batches: list[np.ndarray]) -> Iterator[tuple]:
-        finished = iter(runner(batches))
-        try:
-            for batch, tally in finished:
-                yield batch, tally.counts, tally.pilot, tally.seconds
-        finally:
-            close = getattr(finished, "close", None)
-            if close is not None:
-                close()
-
-    return counts
-
-
-def _tally_runner(runner: Callable[[list[np.ndarray]], Iterable[tuple]]) -> BatchRunner:
-    """*Transitional:* a runner of ``(batch, counts, pilot, seconds)`` as one of tallies."""
-
-    def tallies(batches: list[np.ndarray]) -> Iterator[tuple[np.ndarray, Tally]]:
-        finished = iter(runner(batches))
-        try:
-            for batch, counts, pilot, seconds in finished:
-                yield batch, Tally(counts, pilot, seconds=seconds)
-        finally:
-            close = getattr(finished, "close", None)
-            if close is not None:
-                close()
-
-    return tallies
-
-
 def _take_keyed_hemispherical(instrument: Any, settings: Settings, theta_i: Sequence[float], batch: np.ndarray,
                               parameters: ParameterSpace | None = None) -> tuple[Counts, Counts | None]:
     """
@@ -408,47 +362,6 @@ def _take_keyed_hemispherical(instrument: Any, settings: Settings, theta_i: Sequ
     return tally.counts, tally.pilot
 
 
-def _run_hemispherical(instrument: Any, settings: Settings, theta_i: Sequence[float], *, keyed: bool,
-                       scene: str = "", checkpoint: Any = None, progress: bool | None = False,
-                       parameters: ParameterSpace | None = None, runner: Any = None) -> Any:
-    """
-    *Transitional:* every reading of the grid ``settings.wavelengths`` × ``theta_i`` (×
-    the points of ``parameters``, keyed only) at ``settings.phi_i`` as one
-    :class:`~virtspec_mi.results.hemispherical.Result` with dims
-    ``("wavelength", "theta_i", *parameter dims)``; ``runner`` yields
-    ``(batch, counts, pilot, seconds)``.
-    """
-
-    from virtspec_mi.results.hemispherical import Result
-
-    if parameters is not None and not keyed:
-        raise ValueError("a run over parameters must be keyed on reading indices (keyed=True)")
-    plan = _hemispherical_plan(settings, np.asarray(theta_i, dtype=np.float64), parameters, scene)
-    tally = run(instrument, plan, keyed=keyed, checkpoint=checkpoint, progress=progress,
-                runner=None if runner is None else _tally_runner(runner))
-    n_lam, n_theta = len(plan.wavelengths), len(plan.theta_i)
-    extra = () if parameters is None else parameters.shape
-    axes = tuple(range(len(extra) + 2))
-
-    def layout(values: np.ndarray) -> np.ndarray:  # flat k -> (wavelength, theta_i, *parameter dims)
-        return np.transpose(values.reshape(*extra, n_theta, n_lam), (axes[-1], axes[-2], *axes[:-2])).copy()
-
-    angles = np.asarray(plan.theta_i)
-    return Result(
-        dims=("wavelength", "theta_i", *(() if parameters is None else parameters.dims)),
-        coords={"wavelength": plan.wavelengths, "theta_i": angles,
-                **({} if parameters is None else parameters.coords())},
-        counts=tally.counts.map(layout),
-        pilot=None if tally.pilot is None else tally.pilot.map(layout),
-        settings=settings.updated(theta_i=float(angles[0])),
-        geometry=instrument.geometry,
-        seconds=tally.seconds,
-        scene=scene,
-        wavelength_independent=shares_wavelengths(instrument),
-        parameters=None if parameters is None else parameters.as_dict(),
-    )
-
-
 def take_readings(
     instrument: Any,
     readings: Sequence[tuple[float, float, float]],
@@ -464,17 +377,6 @@ def take_readings(
 
     tally = trace_readings(instrument, _hemispherical_plan(settings), 0, readings, offsets, progress)
     return tally.counts, tally.pilot
-
-
-def measure_reading(instrument: Any, settings: Settings, progress: bool | None = False) -> Any:
-    """
-    *Transitional:* one reading per wavelength of ``settings`` at its θi on an instrument
-    read from a loaded scene: a :class:`~virtspec_mi.results.hemispherical.Result` with
-    the dim ``wavelength`` (what :func:`virtspec_mi.measure` and the
-    ``spectrophotometer`` integrator return).
-    """
-
-    return _run_hemispherical(instrument, settings, [settings.theta_i], keyed=False, progress=progress).squeeze()
 
 
 _GONIO_TWO_STAGE = ("two-stage sizes each reading for R and T, not for its bins; the goniophotometer's N is sized "
@@ -501,32 +403,3 @@ def take_gonio_readings(instrument: Any, readings: Sequence[tuple[float, float, 
 
     tally = trace_readings(instrument, _gonio_plan(settings, [settings.theta_i], bins), 0, readings)
     return tally.counts, tally.bins.reshape(len(readings), *bins.shape)
-
-
-def run_gonio(instrument: Any, settings: Settings, theta_i: Sequence[float], bins: Any, *, scene: str = "",
-              guarantee: str = "rays", relative_tolerance: float | None = None,
-              brdf_floor: float | None = None) -> Any:
-    """
-    *Transitional:* goniophotometer readings over the grid ``settings.wavelengths`` ×
-    ``theta_i`` at ``settings.phi_i``, binned by ``bins``, keyed on their index (a fixed
-    budget: reading k traces [k·N, k·N + N)), as one
-    :class:`~virtspec_mi.results.goniophotometer.GonioResult`.
-    """
-
-    from virtspec_mi.results.goniophotometer import GonioResult
-    from virtspec_mi.results.hemispherical import Result
-
-    plan = _gonio_plan(settings, np.asarray(theta_i, dtype=np.float64), bins, scene)
-    tally = run(instrument, plan, keyed=True)
-    n_lam, n_theta = len(plan.wavelengths), len(plan.theta_i)
-
-    def grid(values: np.ndarray) -> np.ndarray:  # flat k -> (wavelength, theta_i, …)
-        return np.moveaxis(values.reshape(n_theta, n_lam, *values.shape[1:]), 0, 1).copy()
-
-    angles = np.asarray(plan.theta_i)
-    result = Result(dims=("wavelength", "theta_i"), coords={"wavelength": plan.wavelengths, "theta_i": angles},
-                    counts=tally.counts.map(grid), pilot=None, settings=settings.updated(theta_i=float(angles[0])),
-                    geometry=instrument.geometry, seconds=tally.seconds, scene=scene,
-                    wavelength_independent=shares_wavelengths(instrument))
-    return GonioResult(result=result, bin_counts=grid(tally.bins.reshape(-1, *bins.shape)), bins=bins,
-                       guarantee=guarantee, relative_tolerance=relative_tolerance, brdf_floor=brdf_floor)

@@ -247,10 +247,9 @@ class IntegratingSphere(Instrument):
                                         .rays_per_reading)
         layouts = tuple(sphere.layout(holders, caps, options.max_bounces, settings.wavelengths)
                         for holders, caps in (setups[name] for name in CONFIGURATIONS))
-        detected = tuple(h * layouts[0].codes + int(SphereFate.DETECTED) for h in range(len(HEMISPHERES)))
         self.bench, self.sphere_options = bench, options
         self.plan = Plan(settings.updated(theta_i=float(theta_i[0])), theta_i, parameters, groups=CONFIGURATIONS,
-                         hooks=layouts, columns=Columns(DETECTOR_COLUMNS, bins=(detected,)), scene=self.scene,
+                         hooks=layouts, columns=Columns(DETECTOR_COLUMNS, bins=(layouts[0].codes_of(SphereFate.DETECTED),)), scene=self.scene,
                          instrument=self.name, options={"sphere": sphere.parameters(), **options.as_dict()})
         return self.plan
 

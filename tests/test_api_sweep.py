@@ -11,16 +11,15 @@ from __future__ import annotations
 
 import json
 import os
-import signal
 import subprocess
 import sys
-import time
 from pathlib import Path
 
 import numpy as np
 import pytest
 
 import virtspec_mi as vm
+from killed_runs import kill_then_resume
 from virtspec_mi.budgets.bounds import hoeffding_mu
 from virtspec_mi.references.quadrature import fresnel_reflectance
 from virtspec_mi.engine.checkpoint import CheckpointError
@@ -177,19 +176,7 @@ def test_killing_a_real_sweep_process_and_rerunning_gives_the_uninterrupted_resu
     command = [sys.executable, "-m", "virtspec_mi.cli", "sweep", str(scene), "--theta-i", "0:90:1",
                "--wavelengths", "400:700:50", "--rays", "100000", "--quiet"]
     out = tmp_path / "sweep.nc"
-    partial = tmp_path / "sweep.nc.partial.json"
-    process = subprocess.Popen(command + ["--out", str(out)], cwd=tmp_path)
-    deadline = time.monotonic() + 120
-    while not partial.exists() and process.poll() is None and time.monotonic() < deadline:
-        time.sleep(0.005)
-    process.send_signal(signal.SIGKILL)
-    process.wait()
-    assert process.returncode == -signal.SIGKILL, "the sweep ended before it could be interrupted"
-    done = len(json.loads(partial.read_text())["done"])
-    assert 0 < done < 91 * 7
-    assert not out.exists()
-    subprocess.run(command + ["--out", str(out)], cwd=tmp_path, check=True)
-    assert not partial.exists()
+    kill_then_resume(command + ["--out", str(out)], out, 91 * 7, tmp_path)  # killed mid-sweep, then resumed
     subprocess.run(command + ["--out", str(tmp_path / "whole.nc")], cwd=tmp_path, check=True)
     from virtspec_mi.api import read_result as read_sweep
 

@@ -19,6 +19,7 @@ import numpy as np
 import pytest
 
 import virtspec_mi as vm
+from killed_runs import kill_then_resume
 from virtspec_mi.engine.checkpoint import CheckpointError, checkpoint_for, claim
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -377,23 +378,6 @@ _ROUGH_XML = """<scene version="3.0.0">
 </scene>"""
 
 
-def _kill_then_resume(command: list[str], out: Path, readings: int, cwd: Path) -> None:
-    """Run ``command`` (writing ``out``), SIGKILL it once its checkpoint holds a reading, then run it again."""
-
-    partial = checkpoint_for(out)
-    process = subprocess.Popen(command, cwd=cwd)
-    deadline = time.monotonic() + 120
-    while not partial.exists() and process.poll() is None and time.monotonic() < deadline:
-        time.sleep(0.005)
-    process.send_signal(signal.SIGKILL)
-    process.wait()
-    assert process.returncode == -signal.SIGKILL, "the run ended before it could be interrupted"
-    done = len(json.loads(partial.read_text())["done"])
-    assert 0 < done < readings and not out.exists()
-    subprocess.run(command, cwd=cwd, check=True)
-    assert out.is_file() and not partial.exists()
-
-
 @pytest.mark.slow
 def test_killing_a_real_goniophotometer_process_and_rerunning_gives_the_uninterrupted_reading(tmp_path):
     scene = tmp_path / "rough.xml"
@@ -402,7 +386,7 @@ def test_killing_a_real_goniophotometer_process_and_rerunning_gives_the_uninterr
                "--phi-o-bins", "8", "--json"]
     out = tmp_path / "gonio.nc"
     command = [sys.executable, "-m", "virtspec_mi.cli", "gonio", str(scene), *options, "--out", str(out)]
-    _kill_then_resume(command, out, 41 * 7, tmp_path)
+    kill_then_resume(command, out, 41 * 7, tmp_path)
     resumed = vm.read_result(out)
     whole = vm.gonio(str(scene), theta_i="0:80:2", wavelengths="400:700:50", rays=200_000, theta_o_bins=6,
                      phi_o_bins=8)
@@ -418,7 +402,7 @@ def test_killing_a_real_sphere_spectrum_process_and_rerunning_gives_the_uninterr
     code = ("import sys, virtspec_mi as vm; "
             f"vm.sphere_measure({str(ROOT / 'scenes' / 'sphere_150mm_8d.xml')!r}, out=sys.argv[1], progress=False, "
             f"**{keywords!r})")
-    _kill_then_resume([sys.executable, "-c", code, str(out)], out, 2 * 106, tmp_path)
+    kill_then_resume([sys.executable, "-c", code, str(out)], out, 2 * 106, tmp_path)
     resumed = vm.read_result(out)
     whole = vm.sphere_measure(str(ROOT / "scenes" / "sphere_150mm_8d.xml"), **keywords)
     for configuration in ("sample", "standard"):

@@ -1,6 +1,6 @@
 """
 The measurement API: :func:`measure`, :func:`sweep`, :func:`read_result`, :func:`fluctuation`
-===========================================================================================
+=============================================================================================
 
 :func:`measure` takes a scene (XML path, dict or ``mi.Scene``), resolves the settings
 (explicit keywords, then the scene's ``spectrophotometer`` integrator, then the

@@ -133,7 +133,7 @@ def reading_grid(plan: Plan, values: Any, group: int = 0, theta_dim: bool = True
     ``values`` of ``plan``'s flat readings (indexed by reading first, any trailing axes)
     for reading group ``group``, laid out over the dims of :func:`reading_labels` (then
     the trailing axes): reading k = ((g·n_p + i_p)·n_θ + i_θ)·n_λ + i_λ goes to
-    [i_λ, i_θ, *i_p].
+    ``[i_λ, i_θ, *i_p]`` (i_p over the parameter dims).
     """
 
     _, _, n_theta, n_lam = plan.shape

@@ -105,8 +105,8 @@ class GlossResult:
 
     Attributes
     ----------
-    result : Result
-        The hemispherical reading of the same rays (:class:`~virtspec_mi.results.hemispherical.Result`).
+    result : virtspec_mi.results.hemispherical.Result
+        The hemispherical reading of the same rays.
     glossy : ndarray
         Rays reflected into the receptor cone, per reading (``int64``, over ``result.dims``).
     cone : float

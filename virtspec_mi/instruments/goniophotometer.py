@@ -1,6 +1,6 @@
 """
 The goniophotometer: the spectrophotometer's rays binned by their outgoing direction
-===================================================================================
+====================================================================================
 
 :class:`GonioOptions` is the one definition of the goniophotometer's options beside the
 common :class:`~virtspec_mi.settings.Settings`: how the escaping rays are binned by

@@ -1,6 +1,6 @@
 """
 ``integrating_sphere``: a physical integrating sphere around the specimen (Mitsuba integrator)
-=============================================================================================
+==============================================================================================
 
 The ``spectrophotometer`` integrator's settings plus a sphere description: the sphere
 of :mod:`virtspec_mi.geometry.sphere` and how it is read: the fields of

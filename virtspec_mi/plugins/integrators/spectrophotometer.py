@@ -1,6 +1,6 @@
 """
 ``spectrophotometer``: the virtual integrating-sphere instrument as a Mitsuba integrator
-=======================================================================================
+========================================================================================
 
 A thin adapter: it reads the measurement settings (and the goniophotometer's options)
 from its XML/dict parameters with the one reader

@@ -1,6 +1,6 @@
 """
-The measurement API: :func:`measure`, :func:`sweep`, :func:`read_result`, :func:`fluctuation`
-=============================================================================================
+The measurement API: :func:`measure`, :func:`sweep`, :func:`gonio`, :func:`sphere_measure`
+============================================================================================
 
 :func:`measure` takes a scene (XML path, dict or ``mi.Scene``), resolves the settings
 (explicit keywords, then the scene's ``spectrophotometer`` integrator, then the
@@ -18,9 +18,15 @@ k (k = (i_p·n_θ + i_θ)·n_λ + i_λ, i_p the parameter point) owns the global
 resumable from a checkpoint and its readings independent of how they are batched
 (:func:`virtspec_mi.engine.readings.take_keyed_readings`).
 
-Both take every setting of :class:`~virtspec_mi.settings.Settings` as a keyword (their
-signatures are derived from it); a bad value raises ``ValueError`` naming the setting
-and its allowed range.
+:func:`gonio` (the goniophotometer) and :func:`sphere_measure` (the integrating sphere)
+take their readings the same keyed way, with the same keywords (``theta_i``,
+``parameters``, ``points``, ``defines``, ``checkpoint``, ``out``, ``progress``,
+``workers``, ``task_readings``). Every function here is thin: it parses its keywords at
+the boundary — every setting of :class:`~virtspec_mi.settings.Settings` and every option
+of its instrument (its signature is built from their fields,
+:func:`virtspec_mi.settings.keywords`; a bad value raises ``ValueError`` naming it and
+its allowed range, an unknown name ``TypeError``) — and runs the instrument of the
+registry (:data:`virtspec_mi.instruments.INSTRUMENTS`).
 
 References
 ----------
@@ -181,8 +187,8 @@ def sweep(
 
     bench = find_bench(scene, defines)
     base, = resolve("sweep", settings, _scene_options(bench, Settings))
-    return _keyed("hemispherical", "a sweep", scene, bench, base, None, theta_i=theta_i, parameters=parameters, points=points,
-                  defines=defines, checkpoint=checkpoint, out=out, progress=progress, workers=workers,
+    return _keyed("hemispherical", "a sweep", scene, bench, base, None, theta_i=theta_i, parameters=parameters,
+                  points=points, defines=defines, checkpoint=checkpoint, out=out, progress=progress, workers=workers,
                   task_readings=task_readings)
 
 
@@ -281,7 +287,7 @@ def _angles(settings: Settings, theta_i: Any, what: str) -> np.ndarray:
 
 
 def _scene_options(bench: Bench, kind: type) -> Any:
-    """The options of kind ``kind`` the scene's integrator holds (its settings, its instrument's options), else the defaults."""
+    """The options of class ``kind`` that the scene's integrator holds, else the defaults."""
 
     held = getattr(bench.integrator, "options", {}) if bench.integrator is not None else {}
     return held.get(kind) or kind()
@@ -331,9 +337,9 @@ def gonio(scene: Any, *, theta_i: Any = None, parameters: dict[str, Any] | None 
 
     bench = find_bench(scene, defines)
     settings, spec = resolve("gonio", options, _scene_options(bench, Settings), _scene_options(bench, GonioOptions))
-    return _keyed("goniophotometer", "a goniophotometer reading", scene, bench, settings, spec, theta_i=theta_i, parameters=parameters,
-                  points=points, defines=defines, checkpoint=checkpoint, out=out, progress=progress, workers=workers,
-                  task_readings=task_readings)
+    return _keyed("goniophotometer", "a goniophotometer reading", scene, bench, settings, spec, theta_i=theta_i,
+                  parameters=parameters, points=points, defines=defines, checkpoint=checkpoint, out=out,
+                  progress=progress, workers=workers, task_readings=task_readings)
 
 
 gonio.__signature__ = keywords(gonio, GonioOptions, Settings)  # type: ignore[attr-defined]
@@ -419,8 +425,8 @@ def sphere_measure(scene: Any, *, theta_i: Any = None, parameters: dict[str, Any
     bench = find_bench(scene, defines)
     base, options = resolve("sphere_measure", settings, _scene_options(bench, Settings),
                             _scene_options(bench, SphereOptions))
-    return _keyed("sphere", "a sphere reading", scene, bench, base, options, theta_i=theta_i, parameters=parameters, points=points,
-                  defines=defines, checkpoint=checkpoint, out=out, progress=progress, workers=workers,
+    return _keyed("sphere", "a sphere reading", scene, bench, base, options, theta_i=theta_i, parameters=parameters,
+                  points=points, defines=defines, checkpoint=checkpoint, out=out, progress=progress, workers=workers,
                   task_readings=task_readings)
 
 

@@ -133,7 +133,7 @@ def _check_dict(scene: dict, path: str = "") -> None:
 
 
 def find_bench(scene: Any, defines: dict[str, Any] | None = None) -> Bench:
-    """Load ``scene`` (XML path, dict or ``mi.Scene``; ``defines`` for an XML file) and read its bench (emitter and specimen disks)."""
+    """Load ``scene`` (XML path, dict or ``mi.Scene``; ``defines`` for an XML file) and read its bench (the disks)."""
 
     return read_bench(load_scene(scene, defines))
 

@@ -434,7 +434,8 @@ def sphere_from_parameters(values: Any) -> Sphere:
     """
     A :class:`Sphere` from flat parameters (a dict or ``mi.Properties``: the
     ``integrating_sphere`` integrator's XML or dict): ``diameter`` (mm),
-    ``wall_reflectance`` (number or ``"nm:value, …"``), one ``port_<name>`` string per port (``"role=… polar=… azimuth=… radius=…"``) and an
+    ``wall_reflectance`` (number or ``"nm:value, …"``), one ``port_<name>`` string per port
+    (``"role=… polar=… azimuth=… radius=…"``) and an
     optional ``baffle`` string (``"centre=x,y,z normal=x,y,z radius=r"``).
     """
 

@@ -248,8 +248,9 @@ class IntegratingSphere(Instrument):
         layouts = tuple(sphere.layout(holders, caps, options.max_bounces, settings.wavelengths)
                         for holders, caps in (setups[name] for name in CONFIGURATIONS))
         self.bench, self.sphere_options = bench, options
+        detected = layouts[0].codes_of(SphereFate.DETECTED)  # the detector fraction: a two-stage column
         self.plan = Plan(settings.updated(theta_i=float(theta_i[0])), theta_i, parameters, groups=CONFIGURATIONS,
-                         hooks=layouts, columns=Columns(DETECTOR_COLUMNS, bins=(layouts[0].codes_of(SphereFate.DETECTED),)), scene=self.scene,
+                         hooks=layouts, columns=Columns(DETECTOR_COLUMNS, bins=(detected,)), scene=self.scene,
                          instrument=self.name, options={"sphere": sphere.parameters(), **options.as_dict()})
         return self.plan
 

@@ -6,9 +6,9 @@ A thin adapter: it reads the measurement settings (and the goniophotometer's opt
 from its XML/dict parameters with the one reader
 (:meth:`virtspec_mi.settings.Options.from_parameters`) and, on ``mi.render``, measures
 the scene's specimen with the instrument of the registry
-(:data:`virtspec_mi.instruments.INSTRUMENTS`: ``hemispherical``, or ``goniophotometer``). The tracing itself — rays from the
-emitter disk, the specimen BSDF, fates and exact tallies — is
-:mod:`virtspec_mi.kernel.tracer`.
+(:data:`virtspec_mi.instruments.INSTRUMENTS`: ``hemispherical``, or ``goniophotometer``).
+The tracing itself — rays from the emitter disk, the specimen BSDF, fates and exact
+tallies — is :mod:`virtspec_mi.kernel.tracer`.
 
 Parameters
 ----------
@@ -52,7 +52,8 @@ These are the fields of :class:`virtspec_mi.settings.Settings` (the one definiti
 this list is checked against it by the tests).
 
 Goniophotometer parameters (the options of
-:class:`virtspec_mi.instruments.goniophotometer.GonioOptions`, the one definition; any of them makes ``mi.render`` take a goniophotometer reading, kept in
+:class:`virtspec_mi.instruments.goniophotometer.GonioOptions`, the one definition; any of
+them makes ``mi.render`` take a goniophotometer reading, kept in
 ``integrator.last_reading`` as a :class:`~virtspec_mi.results.goniophotometer.GonioResult`;
 :func:`virtspec_mi.gonio` on the scene uses them as its defaults):
 ``theta_o_bins`` (integer or string of edges, default 18 per hemisphere),

@@ -43,6 +43,7 @@ __all__ = [
     "chebyshev_mu",
     "BUDGETS",
     "mitsuba",
+    "albedo_table",
 ]
 
 _LAZY = {
@@ -72,6 +73,7 @@ _LAZY = {
     "chebyshev_mu": "virtspec_mi.bounds",
     "BUDGETS": "virtspec_mi.budgets",
     "mitsuba": "virtspec_mi.runtime",
+    "albedo_table": "virtspec_mi.exchange.albedo",
 }
 
 

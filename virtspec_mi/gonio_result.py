@@ -387,6 +387,14 @@ class GonioResult:
         kind, content = results_io.read(path)
         return cls.from_dataset(content) if kind == "dataset" else cls.from_dict(content)
 
+    def to_klems(self, path: str | os.PathLike, back: "GonioResult | None" = None, basis: str = "full",
+                 isotropic: bool = False) -> Path:
+        """Write a WINDOW 6 Klems XML (and its NetCDF sidecar): :func:`virtspec_mi.exchange.klems.klems_from_gonio`."""
+
+        from virtspec_mi.exchange.klems import klems_from_gonio
+
+        return klems_from_gonio(self, back, basis, isotropic).write(path)
+
     # -- colour and plots --------------------------------------------------------------
 
     def to_sd(self, theta_o: float, phi_o: float, theta_i: float | None = None) -> Any:

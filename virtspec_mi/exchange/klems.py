@@ -568,9 +568,13 @@ def check_klems(path: str | os.PathLike, sidecar: str | os.PathLike | None = Non
         from pyradiance import bsdf as radiance
 
         try:
-            data = radiance.load_file(str(path))
-        except Exception as error:  # Radiance's SDError, as the binding raises it
-            raise ValueError(f"{path}: Radiance cannot read it ({error})") from None
+            data = radiance.load_file(str(path))  # Radiance's SDcacheFile: None (and a message on stderr) on failure
+        except Exception as error:
+            data, reason = None, str(error)
+        else:
+            reason = "Radiance's BSDF library reports a format error on stderr"
+        if data is None:
+            raise ValueError(f"{path}: Radiance cannot read it ({reason})")
         flags = {"reflection": radiance.SAMPLE_ALL & ~radiance.SAMPLE_T,
                  "transmission": radiance.SAMPLE_ALL & ~radiance.SAMPLE_R}
         for s, side in enumerate(measured.sides):

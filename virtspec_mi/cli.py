@@ -586,9 +586,6 @@ def _plot(args: argparse.Namespace) -> int:
     return 0
 
 
-if __name__ == "__main__":
-    sys.exit(main())
-
 
 def _klems(args: argparse.Namespace) -> int:
     """``virtspec gonio SCENE --klems FILE``: the Klems matrices (:func:`virtspec_mi.exchange.klems_gonio.klems_measure`)."""
@@ -661,3 +658,7 @@ def _albedo_table(args: argparse.Namespace) -> int:
                                    rounding=args.rounding)
         print(comparison.summary())
     return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

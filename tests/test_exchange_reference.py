@@ -11,16 +11,16 @@ from virtspec_mi.reference import fresnel_reflectance_cos
 
 def test_quadrature_converges_when_the_nodes_double():
     for args in ((1.0, 1.0, "ggx", None), (0.3, 0.5, "beckmann", None), (0.7, 0.5, "ggx", 1.5)):
-        coarse, fine = directional_albedo(*args, nodes=256), directional_albedo(*args, nodes=512)
+        coarse, fine = directional_albedo(*args, nodes=192), directional_albedo(*args, nodes=384)
         assert abs(coarse.total - fine.total) < 2e-5
 
 
 def test_smooth_limit_is_fresnel():
     """α → 0: a conductor with F = 1 keeps everything, a dielectric splits by Fresnel."""
 
-    assert directional_albedo(0.8, 1e-3, "ggx").total == pytest.approx(1.0, abs=1e-5)
+    assert directional_albedo(0.8, 1e-3, "ggx", nodes=256).total == pytest.approx(1.0, abs=1e-5)
     for eta in (1.5, 1 / 1.5):
-        smooth = directional_albedo(0.8, 1e-3, "ggx", eta=eta)
+        smooth = directional_albedo(0.8, 1e-3, "ggx", eta=eta, nodes=256)
         fresnel = float(fresnel_reflectance_cos(0.8, eta))
         assert smooth.reflected == pytest.approx(fresnel, abs=1e-4)
         assert smooth.transmitted == pytest.approx(1 - fresnel, abs=1e-4)
@@ -40,9 +40,9 @@ def test_masking_functions():
 def test_energy_is_lost_by_rough_single_scattering():
     """GGX at α = 1 keeps about 31 % at normal incidence (separable masking), less than 1 everywhere."""
 
-    e = directional_albedo(1.0, 1.0, "ggx").total
+    e = directional_albedo(1.0, 1.0, "ggx", nodes=256).total
     assert 0.30 < e < 0.32
-    assert average_albedo(0.5, "ggx", nodes=128, mu_nodes=16).total < 1.0
+    assert average_albedo(0.5, "ggx", nodes=64, mu_nodes=8).total < 1.0
 
 
 def test_bad_input_names_the_parameter():

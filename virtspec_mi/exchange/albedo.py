@@ -80,6 +80,7 @@ from typing import Any, Sequence
 import numpy as np
 
 from virtspec_mi import __version__
+from virtspec_mi.exchange.common import atomic_write, derived_seed
 from virtspec_mi.exchange.conventions import Convention, convention
 from virtspec_mi.exchange.sizing import (binomial_rays, clopper_pearson_each, pilot_intervals, stage_two_shares,
                                          union_hoeffding_rays, union_hoeffding_rays_array)
@@ -447,16 +448,16 @@ class AlbedoTable:
         path = Path(path)
         suffix = path.suffix.lower()
         if suffix == ".nc":
-            _atomic_write(path, lambda tmp: self.to_dataset().to_netcdf(tmp))
+            atomic_write(path, lambda tmp: self.to_dataset().to_netcdf(tmp))
         elif suffix == ".npy":
-            _atomic_write(path, lambda tmp: _save_npy(tmp, self.layout().astype(np.float32)))
+            atomic_write(path, lambda tmp: _save_npy(tmp, self.layout().astype(np.float32)))
             if self.E_avg is not None:
                 avg = path.with_name(path.stem + "_avg.npy")
-                _atomic_write(avg, lambda tmp: _save_npy(tmp, self.E_avg.astype(np.float32)))
+                atomic_write(avg, lambda tmp: _save_npy(tmp, self.E_avg.astype(np.float32)))
             sidecar = path.with_suffix(".json")
-            _atomic_write(sidecar, lambda tmp: Path(tmp).write_text(json.dumps(self.description(), indent=1)))
+            atomic_write(sidecar, lambda tmp: Path(tmp).write_text(json.dumps(self.description(), indent=1)))
         elif suffix in (".h", ".hpp"):
-            _atomic_write(path, lambda tmp: Path(tmp).write_text(write_header(self)))
+            atomic_write(path, lambda tmp: Path(tmp).write_text(write_header(self)))
         else:
             raise ValueError(f"path must end in .nc, .npy, .h or .hpp (got {path.name!r})")
         return path
@@ -588,18 +589,6 @@ def _save_npy(path: str, values: np.ndarray) -> None:
         np.save(handle, values)
 
 
-def _atomic_write(path: Path, write: Any) -> None:
-    """Write through a temporary file beside ``path``, then rename it onto ``path``."""
-
-    path = Path(path)
-    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-    try:
-        write(str(tmp))
-        os.replace(tmp, path)
-    finally:
-        if tmp.exists():
-            tmp.unlink()
-
 
 # ----------------------------------------------------------------------------- measuring
 
@@ -704,10 +693,6 @@ def _scene(grid: _Grid) -> dict[str, Any]:
     return instrument_scene(bsdf)
 
 
-def _derived_seed(seed: int, label: str) -> int:
-    digest = hashlib.blake2b(f"{seed}:{label}".encode(), digest_size=4).digest()
-    return int.from_bytes(digest, "little")
-
 
 _KEYS = ("reflected", "transmitted", "rounded_weights", "weight_violations", "invalid_directions", "capped")
 
@@ -732,7 +717,7 @@ class _Store:
                 raise ValueError(f"checkpoint {directory} belongs to a different table (differs in: "
                                  f"{', '.join(differ)}); re-run with the same settings, or delete it")
         else:
-            _atomic_write(stamp, lambda tmp: Path(tmp).write_text(text))
+            atomic_write(stamp, lambda tmp: Path(tmp).write_text(text))
 
     def path(self, label: str) -> Path | None:
         if self.directory is None:
@@ -889,7 +874,7 @@ def albedo_table(
         if result is None:
             result = sweep(scene, theta_i=list(angles), beam=beam, rays=int(rays), wavelengths=[wavelength],
                            parameters={n: pts[:, k].tolist() for k, n in enumerate(names)}, points=True,
-                           seed=_derived_seed(seed, label), sampling="random", progress=False,
+                           seed=derived_seed(seed, label), sampling="random", progress=False,
                            **({} if chunk_size is None else {"chunk_size": chunk_size}))
             store.save(label, result)
         traced_seconds += result.seconds

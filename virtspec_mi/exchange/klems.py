@@ -70,6 +70,7 @@ from xml.sax.saxutils import escape
 import numpy as np
 
 from virtspec_mi import __version__
+from virtspec_mi.exchange.common import atomic_write
 from virtspec_mi.exchange.klems_basis import KlemsBasis, klems_basis
 from virtspec_mi.intervals import clopper_pearson
 
@@ -318,8 +319,8 @@ class KlemsMeasurement:
             raise ValueError(f"path must end in .xml (got {path.name!r})")
         sidecar = sidecar_path(path)
         measured = KlemsMeasurement(**{**self.__dict__, "provenance": {**self.provenance, "sidecar": sidecar.name}})
-        _atomic(sidecar, lambda tmp: measured.to_dataset().to_netcdf(tmp))
-        _atomic(path, lambda tmp: Path(tmp).write_text(measured.xml(name), encoding="utf-8"))
+        atomic_write(sidecar, lambda tmp: measured.to_dataset().to_netcdf(tmp))
+        atomic_write(path, lambda tmp: Path(tmp).write_text(measured.xml(name), encoding="utf-8"))
         return path
 
 
@@ -328,15 +329,6 @@ def sidecar_path(path: str | os.PathLike) -> Path:
 
     return Path(path).with_suffix(".nc")
 
-
-def _atomic(path: Path, write: Any) -> None:
-    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-    try:
-        write(str(tmp))
-        os.replace(tmp, path)
-    finally:
-        if tmp.exists():
-            tmp.unlink()
 
 
 def read_klems_sidecar(path: str | os.PathLike) -> KlemsMeasurement:

@@ -31,7 +31,6 @@ Klems, J.H. (1994). ASHRAE Transactions 100(1), 1065–1072. Hoeffding, W. (1963
 
 from __future__ import annotations
 
-import hashlib
 import os
 import time
 from dataclasses import dataclass
@@ -42,15 +41,13 @@ from typing import Any
 import numpy as np
 
 from virtspec_mi import __version__
+from virtspec_mi.exchange.common import derived_seed
 from virtspec_mi.exchange.klems import SIDES, KlemsMeasurement, aggregate, check_escaped
 from virtspec_mi.exchange.klems_basis import klems_basis
 from virtspec_mi.exchange.sizing import union_hoeffding_rays
 
 __all__ = ["klems_measure"]
 
-
-def _derived_seed(seed: int, label: str) -> int:
-    return int.from_bytes(hashlib.blake2b(f"{seed}:{label}".encode(), digest_size=4).digest(), "little")
 
 
 def klems_measure(
@@ -153,7 +150,7 @@ def klems_measure(
                 label = f"{SIDES[s]}:{phi_i:.9g}"
                 reading = gonio(loaded, theta_i=[float(klems.theta[p]) for p in patches], phi_i=phi_i,
                                 beam="collimated", wavelengths=lams.tolist(), rays=n_rays,
-                                seed=_derived_seed(seed, label), theta_o_bins=edges.tolist(), phi_o_bins=phi_bins)
+                                seed=derived_seed(seed, label), theta_o_bins=edges.tolist(), phi_o_bins=phi_bins)
                 patch_counts = aggregate(reading, klems)
                 r = np.asarray(reading.result.reflected)
                 t = np.asarray(reading.result.transmitted)

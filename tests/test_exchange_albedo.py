@@ -91,6 +91,18 @@ def test_the_certificate_says_what_was_spent(ggx):
                            + ggx.average_counts["rays"].sum() + ggx.average_counts["pilot_rays"].sum())
 
 
+def test_interpolation_between_the_cells(ggx):
+    """At the nodes the interpolation is the table; between them the estimate is labelled, not certified."""
+
+    mu, alpha = np.meshgrid(ggx.mu, ggx.alpha, indexing="ij")
+    assert np.allclose(ggx.interpolate(mu, alpha), ggx.E, atol=1e-12)
+    halfway = ggx.interpolate(0.75, 0.3)
+    assert min(ggx.E[:2, :2].min(), 1) <= halfway <= ggx.E[:2, :2].max()
+    estimate = ggx.interpolation_estimate()
+    assert estimate["mu"].shape == (3, 2) and estimate["alpha"].shape == (3, 2)  # (other axis, intervals)
+    assert np.all(estimate["mu"][np.isfinite(estimate["mu"])] > 0)
+
+
 def test_two_stage_spends_fewer_rays_than_hoeffding_near_one(mi):
     smooth = dict(engine=None, mu=[1.0, 0.8], alpha=[0.02, 0.05], epsilon=5e-3, average=False, seed=3,
                   progress=False)

@@ -586,7 +586,6 @@ def _plot(args: argparse.Namespace) -> int:
     return 0
 
 
-
 def _klems(args: argparse.Namespace) -> int:
     """``virtspec gonio SCENE --klems FILE``: the Klems matrices (:func:`virtspec_mi.exchange.klems_gonio.klems_measure`)."""
 

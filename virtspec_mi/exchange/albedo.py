@@ -30,13 +30,14 @@ near grazing incidence, where E changes fastest).
   E_R and E_T alongside (certified too with ``parts=True``).
 
 **The certificate.** Every cell of the table (and every E_avg value) is within ε of the
-model's true value *at once* with probability ≥ 1 − δ: δ is split over the C cells and
-the |Q| certified quantities of each (union bound). ``bound="hoeffding"`` gives every cell
-N = ⌈ln(2C|Q|/δ)/(2ε²)⌉ rays; ``bound="two-stage"`` (default) spends a pilot per cell and
-sizes a fresh second batch by the binomial tail bounds of Zubkov & Serov (2013) over the
-pilot's interval (:mod:`virtspec_mi.exchange.sizing`),
-which for cells near 0 or 1 (low roughness: E ≈ 1) needs a small fraction of
-Hoeffding's rays. A BSDF weight rounded into [0, 1] adds its largest bias to the cell's
+model's true value *at once* with probability ≥ 1 − δ: the union bound over the C cells
+and the |Q| certified quantities of each. ``bound="hoeffding"`` gives every cell
+N = ⌈ln(2C|Q|/δ)/(2ε²)⌉ rays (δ split evenly); ``bound="two-stage"`` (default) spends a
+pilot per cell (δ/10 split evenly over the pilots) and sizes a fresh second batch by the
+binomial tail bounds of Zubkov & Serov (2013) over the pilot's interval, the other 9δ/10
+shared among the cells in proportion to the variance their pilot allows
+(:mod:`virtspec_mi.exchange.sizing`); cells near 0 or 1 (low roughness: E ≈ 1) then need
+a small fraction of Hoeffding's rays. A BSDF weight rounded into [0, 1] adds its largest bias to the cell's
 tolerance (``certified_epsilon``: Mitsuba's Beckmann G₁ overshoots 1 by 6·10⁻⁵);
 weight violations or invalid directions leave a cell uncertified (NaN).
 
@@ -61,6 +62,8 @@ Kulla, C., Conty, A. (2017). Revisiting physically based shading at Imageworks. 
 course *Physically Based Shading in Theory and Practice*: E(μ), E_avg, energy compensation.
 Walter, B. et al. (2007). Microfacet models for refraction through rough surfaces. EGSR.
 Hoeffding, W. (1963). JASA 58, 13–30: Theorem 1, eq. (2.3).
+Zubkov, A.M., Serov, A.A. (2013). Theory of Probability and its Applications 57(3),
+539–544: Theorem 1.
 Baranoski, G.V.G., Rokne, J.G., Xu, G. (2001). The Visual Computer 17, 506–518: eqs. (2), (23).
 """
 
@@ -311,10 +314,12 @@ class AlbedoTable:
 
     def interpolation_estimate(self) -> dict[str, np.ndarray]:
         """
-        Per axis (``mu``, ``alpha``), h²·|E″|/8 between each pair of neighbouring nodes
-        with |E″| ≈ 2·max(|E[x₀,x₁,x₂]| + 4ε/((x₁−x₀)(x₂−x₀)) …) of the adjacent triples:
-        an *estimate* of the linear-interpolation error under the assumption that E″
-        varies little over three nodes (the rays certify |Δ²E| ≤ |Δ²Ê| + 4ε, not E″).
+        Per axis (``mu``, ``alpha``), h²·|E″|/8 between each pair of neighbouring nodes,
+        with |E″| ≈ 2(|Ê[x₀,x₁,x₂]| + 2ε(1/h₀ + 1/h₁)/(h₀ + h₁)), the larger of the two
+        adjacent triples (Ê[·] the second divided difference; the added term bounds what
+        ε-accurate values can change it): an *estimate* of the linear-interpolation error
+        under the assumption that E″ varies little over three nodes (the rays certify the
+        divided differences, not E″).
         Arrays along the axis have one entry fewer than the nodes (NaN where no triple).
         """
 
@@ -334,7 +339,7 @@ class AlbedoTable:
             d0, d1 = x[1:-1] - x[:-2], x[2:] - x[1:-1]
             # second divided difference E[x0,x1,x2] = ((v2-v1)/d1 - (v1-v0)/d0)/(d0+d1) ≈ E''/2
             dd = ((v[..., 2:] - v[..., 1:-1]) / d1 - (v[..., 1:-1] - v[..., :-2]) / d0) / (d0 + d1)
-            slack = 2 * self.epsilon * (1 / d0 + 1 / d1) / (d0 + d1)  # |Δ(E−Ê)| terms: ε/d0 + 2ε·… bound
+            slack = 2 * self.epsilon * (1 / d0 + 1 / d1) / (d0 + d1)  # the most ε-accurate values can move it
             curvature = 2 * (np.abs(dd) + slack)
             h = np.diff(x)
             left = np.concatenate([np.full(v.shape[:-1] + (1,), np.nan), curvature], axis=-1)

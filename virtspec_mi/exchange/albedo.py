@@ -302,8 +302,11 @@ class AlbedoTable:
             worst = max(worst, np.nanmax(self.certified_epsilon(average=True)))
         what = " and ".join(self.quantities) + (" and E_avg" if self.average_counts is not None else "")
         if not self.certified:
-            return (f"NOT CERTIFIED: some cells had weight violations, invalid directions or capped walks "
-                    f"(certified_epsilon is NaN there); the others: |value - true| < {worst:.4g}")
+            bad = int(np.isnan(self.certified_epsilon()).sum())
+            if self.average_counts is not None:
+                bad += int(np.isnan(self.certified_epsilon(average=True)).sum())
+            return (f"NOT CERTIFIED: {bad:,} of {self.cells:,} values had weight violations, invalid directions or "
+                    f"capped walks (certified_epsilon is NaN there); the others: |value - true| < {worst:.4g}")
         split = (f"delta split evenly over {self.cells:,} cells x {len(self.quantities)} quantities"
                  if self.bound == "hoeffding" else
                  f"delta/10 over the {self.cells:,} pilots, 9 delta/10 over the second batches by pilot variance")
@@ -877,10 +880,12 @@ def albedo_table(
         groups += 1
         result = store.load(label)
         if result is None:
-            result = sweep(scene, theta_i=list(angles), beam=beam, rays=int(rays), wavelengths=[wavelength],
-                           parameters={n: pts[:, k].tolist() for k, n in enumerate(names)}, points=True,
-                           seed=derived_seed(seed, label), sampling="random", progress=False,
-                           **({} if chunk_size is None else {"chunk_size": chunk_size}))
+            with warnings.catch_warnings():  # a group's uncertified readings are reported once, for the table
+                warnings.simplefilter("ignore", RuntimeWarning)
+                result = sweep(scene, theta_i=list(angles), beam=beam, rays=int(rays), wavelengths=[wavelength],
+                               parameters={n: pts[:, k].tolist() for k, n in enumerate(names)}, points=True,
+                               seed=derived_seed(seed, label), sampling="random", progress=False,
+                               **({} if chunk_size is None else {"chunk_size": chunk_size}))
             store.save(label, result)
         traced_seconds += result.seconds
         bar.reach(bar.done + len(angles) * len(pts))

@@ -243,3 +243,15 @@ def test_cycles_glass_grid_cells_match_the_quadrature(mi):
                 for j, alpha in enumerate(table.alpha):
                     expected, quad = _reference(mu, alpha, "ggx", eta if s == 0 else 1 / eta)
                     assert abs(table.E[s, e, i, j] - expected) < table.certified_epsilon()[s, e, i, j] + quad
+
+
+def test_a_cell_with_invalid_directions_is_not_certified(ggx):
+    from dataclasses import replace
+
+    counts = {k: v.copy() for k, v in ggx.counts.items()}
+    counts["invalid_directions"][1, 1] = 1
+    broken = replace(ggx, counts=counts)
+    assert not broken.certified and np.isnan(broken.certified_epsilon()[1, 1])
+    assert np.isfinite(np.delete(broken.certified_epsilon().ravel(), 4)).all()  # (1, 1) of a 3 x 3 grid
+    assert broken.statement().startswith("NOT CERTIFIED: 1 of 12 values")
+    assert broken.compare(broken.E).outside[0]["index"] == (1, 1)  # no tolerance: reported as outside

@@ -519,6 +519,43 @@ def read_klems(path: str | os.PathLike) -> dict[str, Any]:
     return {"basis": basis, "structure": structure, "blocks": blocks}
 
 
+_RADIANCE_SCRIPT = """
+import json, sys
+from pyradiance import bsdf
+path, queries = sys.argv[1], json.loads(sys.stdin.read())
+data = bsdf.load_file(path)
+if data is None:
+    sys.exit(3)
+r, t = bsdf.SAMPLE_ALL & ~bsdf.SAMPLE_T, bsdf.SAMPLE_ALL & ~bsdf.SAMPLE_R
+print(json.dumps([[bsdf.direct_hemi(data, th, ph, r), bsdf.direct_hemi(data, th, ph, t)] for th, ph in queries]))
+"""
+
+
+def _radiance_direct_hemi(path: Path, queries: list[tuple[float, float]]) -> np.ndarray:
+    """
+    Radiance's SDdirectHemi (reflection, transmission) at each incident (θ, φ) in Radiance's
+    frame, in a child process: the library may crash on a malformed file, which must not
+    take the caller with it.
+    """
+
+    import subprocess
+    import sys
+
+    try:
+        import pyradiance  # noqa: F401  (fail here, clearly, when the reader is missing)
+    except ImportError as error:
+        raise ImportError(f"reader='pyradiance' needs the pyradiance package ({error})") from None
+    run = subprocess.run([sys.executable, "-c", _RADIANCE_SCRIPT, str(path)], input=json.dumps(queries),
+                         capture_output=True, text=True)
+    if run.returncode != 0:
+        detail = run.stderr.strip().splitlines()
+        reason = detail[-1] if detail and run.returncode != 3 else "a format error"
+        if run.returncode < 0:
+            reason = f"the library crashed (signal {-run.returncode})"
+        raise ValueError(f"{path}: Radiance cannot read it ({reason})")
+    return np.array(json.loads(run.stdout), dtype=np.float64)
+
+
 def check_klems(path: str | os.PathLike, sidecar: str | os.PathLike | None = None,
                 reader: str = "pyradiance") -> dict[str, Any]:
     """
@@ -533,8 +570,8 @@ def check_klems(path: str | os.PathLike, sidecar: str | os.PathLike | None = Non
         Its NetCDF sidecar (default: :func:`sidecar_path`).
     reader
         ``pyradiance`` (Radiance's own BSDF library, ``SDdirectHemi`` through the
-        ``pyradiance`` package) or ``xml`` (:func:`read_klems`, the standard library's
-        parser, summing f·Λ).
+        ``pyradiance`` package, in a child process: the library may crash on a malformed
+        file) or ``xml`` (:func:`read_klems`, the standard library's parser, summing f·Λ).
 
     Returns
     -------
@@ -557,26 +594,13 @@ def check_klems(path: str | os.PathLike, sidecar: str | os.PathLike | None = Non
     tolerance = float(np.max(measured.certified_epsilon))
     found = np.full(expected.shape, np.nan)
     if reader == "pyradiance":
-        from pyradiance import bsdf as radiance
-
-        try:
-            data = radiance.load_file(str(path))  # Radiance's SDcacheFile: None (and a message on stderr) on failure
-        except Exception as error:
-            data, reason = None, str(error)
-        else:
-            reason = "Radiance's BSDF library reports a format error on stderr"
-        if data is None:
-            raise ValueError(f"{path}: Radiance cannot read it ({reason})")
-        flags = {"reflection": radiance.SAMPLE_ALL & ~radiance.SAMPLE_T,
-                 "transmission": radiance.SAMPLE_ALL & ~radiance.SAMPLE_R}
-        for s, side in enumerate(measured.sides):
+        queries = []
+        for side in measured.sides:
             for i in range(basis.size):
-                theta, phi_source = float(basis.theta[i]), float((basis.phi[i] + 180.0) % 360.0)
-                # Radiance's +Z is WINDOW's back: our front incidence is (180 - theta) there
-                query = 180.0 - theta if side == "front" else theta
-                for k, kind in enumerate(KINDS):
-                    found[s, i, k] = radiance.direct_hemi(data, query, phi_source, flags[kind])
-        # (no radiance.free: the binding frees Radiance's cache entry with the object)
+                # Radiance's +Z is WINDOW's back: our front incidence (theta, source azimuth) is 180 - theta there
+                theta = 180.0 - float(basis.theta[i]) if side == "front" else float(basis.theta[i])
+                queries.append((theta, float((basis.phi[i] + 180.0) % 360.0)))
+        found = _radiance_direct_hemi(Path(path), queries).reshape(found.shape)
     elif reader == "xml":
         blocks = read_klems(path)["blocks"]
         for s, side in enumerate(measured.sides):

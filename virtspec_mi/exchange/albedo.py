@@ -73,6 +73,7 @@ import hashlib
 import json
 import math
 import os
+import re
 import time
 import warnings
 from dataclasses import dataclass, field
@@ -749,8 +750,8 @@ class _Store:
     def remove(self) -> None:
         if self.directory is None:
             return
-        for path in self.directory.iterdir():
-            if path.suffix in (".nc", ".json"):
+        for path in self.directory.iterdir():  # only what this store wrote: identity.json and <16 hex>.nc
+            if path.name == "identity.json" or re.fullmatch(r"[0-9a-f]{16}\.nc", path.name):
                 path.unlink()
         try:
             self.directory.rmdir()

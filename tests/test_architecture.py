@@ -55,14 +55,18 @@ ROOT = Path(__file__).resolve().parents[1]
 LAYERS: list[tuple[str, tuple[str, ...]]] = [
     ("cli", ("virtspec_mi.cli", "virtspec_mi.__main__")),
     ("api", ("virtspec_mi.api", "virtspec_mi.compare", "virtspec_mi.scaleout", "virtspec_mi.validation",
-             "virtspec_mi.scene", "virtspec_mi.runtime")),
+             "virtspec_mi.scene", "virtspec_mi.runtime",
+             # the exchange formats that take their readings through the API
+             "virtspec_mi.exchange.albedo", "virtspec_mi.exchange.klems_gonio", "virtspec_mi.exchange.flip")),
     # the integrators: Mitsuba's entry (mi.render), thin adapters over the instruments
     ("adapter", ("virtspec_mi.plugins.integrators",)),
     ("instruments", ("virtspec_mi.instruments",)),
     ("results", ("virtspec_mi.results",)),
     ("engine", ("virtspec_mi.engine",)),
     ("settings", ("virtspec_mi.settings",)),
-    ("budgets/geometry/references", ("virtspec_mi.budgets", "virtspec_mi.geometry", "virtspec_mi.references")),
+    # exchange: the file formats and their sizing (the modules that measure are in the api layer)
+    ("budgets/geometry/references", ("virtspec_mi.budgets", "virtspec_mi.geometry", "virtspec_mi.references",
+                                     "virtspec_mi.exchange")),
     ("plugins", ("=virtspec_mi.plugins", "virtspec_mi.plugins.bsdfs", "virtspec_mi.leaf_data")),
     ("kernel", ("virtspec_mi.kernel",)),
     # the root package imports llvm and scenes (its public names load lazily: not counted);

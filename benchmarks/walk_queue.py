@@ -46,7 +46,6 @@ from __future__ import annotations
 import argparse
 import json
 import os
-import subprocess
 import sys
 import time
 from pathlib import Path
@@ -57,7 +56,8 @@ ROOT = Path(__file__).resolve().parents[1]
 os.environ.setdefault("VIRTSPEC_LEAF_DATA", str(ROOT / "virtspec_mi" / "data" / "abm-npsg"))  # older trees too
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from revisions import describe_worktree, load_average, machine, machine_lines, python_env, worktree  # noqa: E402
+from revisions import (Worker, describe_worktree, load_average, machine, machine_lines, serve,  # noqa: E402
+                       worktree)
 
 SLAB = {"type": "turbid_slab", "mu_a": 10.0, "mu_s": 90.0, "g": 0.75, "thickness": 0.02}
 SOYBEAN = {"type": "abm_b"}
@@ -78,17 +78,14 @@ NPSG_FULL_SECONDS, NPSG_FULL_RAYS = 58.0, 100_000  # NPSG C++, 421 wavelengths, 
 
 
 def worker(root: str) -> None:
-    """Answer case requests on stdin (JSON lines) with timings and counts on stdout."""
+    """Answer case requests (JSON lines on stdin) with timings and counts (:func:`revisions.serve`)."""
 
     import virtspec_mi as vm
 
     mi = vm.mitsuba()
-    from revisions import foreign_modules
-
     scenes = {}
-    print(json.dumps({"ready": True, "foreign": foreign_modules(Path(root))}), flush=True)
-    for line in sys.stdin:
-        request = json.loads(line)
+
+    def answer(request: dict) -> dict:
         specimen, options, rays = CASES[request["case"]]
         key = json.dumps(specimen, sort_keys=True)
         if key not in scenes:
@@ -100,43 +97,18 @@ def worker(root: str) -> None:
         if request.get("warm"):  # the same call, 100x fewer rays: every kernel compiled
             small = {"rays": max(1000, rays // 100)} if rays else {"mu": 0.05}
             vm.measure(scenes[key], **options, **small)
-            print(json.dumps({}), flush=True)
-            continue
+            return {}
         start, start_cpu = time.perf_counter(), time.process_time()
         result = vm.measure(scenes[key], **options, **extra)
         wall, cpu = time.perf_counter() - start, time.process_time() - start_cpu
-        rays_spent = int(np.sum(result.rays))
-        print(json.dumps({"wall": wall, "cpu": cpu, "rays": rays_spent,
-                          "counts": [np.asarray(result.reflected).tolist(), np.asarray(result.transmitted).tolist(),
-                                     np.asarray(result.capped).tolist()]}), flush=True)
+        return {"wall": wall, "cpu": cpu, "rays": int(np.sum(result.rays)),
+                "counts": [np.asarray(result.reflected).tolist(), np.asarray(result.transmitted).tolist(),
+                           np.asarray(result.capped).tolist()]}
+
+    serve(Path(root), answer)
 
 
-class Worker:
-    """A worker process running ``root``'s code."""
-
-    def __init__(self, label: str, root: Path) -> None:
-        self.label = label
-        self.process = subprocess.Popen(
-            [sys.executable, __file__, "--worker", str(root)], stdin=subprocess.PIPE, stdout=subprocess.PIPE,
-            text=True, env=python_env(root), cwd=str(root))
-        hello = self.receive()
-        if hello.get("foreign"):
-            raise RuntimeError(f"{label}: modules from another tree: {hello['foreign']}")
-
-    def receive(self) -> dict:
-        line = self.process.stdout.readline()
-        if not line:
-            raise RuntimeError(f"{self.label}: the worker ended")
-        return json.loads(line)
-
-    def ask(self, **request) -> dict:
-        self.process.stdin.write(json.dumps(request) + "\n")
-        self.process.stdin.flush()
-        return self.receive()
-
-    def close(self) -> None:
-        self.process.stdin.close()
-        self.process.wait(timeout=60)
+# --- side by side ------------------------------------------------------------------------------
 
 
 def against(revision: str, repeats: int, scale: int) -> tuple[list[list[str]], list[str]]:
@@ -144,7 +116,10 @@ def against(revision: str, repeats: int, scale: int) -> tuple[list[list[str]], l
 
     rows, notes = [], []
     with worktree(revision) as old_root:
-        trees = {"before": Worker(revision, old_root), "after": Worker(describe_worktree(), ROOT)}
+        script = Path(__file__).resolve()
+        trees = {"before": Worker(revision, old_root, script), "after": Worker(describe_worktree(), ROOT, script)}
+        for tree in trees.values():
+            tree.start()
         try:
             for case in CASES:
                 for tree in trees.values():

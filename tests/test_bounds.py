@@ -61,7 +61,7 @@ def test_miss_probability_matches_brute_force_binomial():
 
 
 def test_miss_probability_below_delta_at_certified_n():
-    # The bound is conservative: at N = 105,967 the worst case is ~0.0011 (anchors.md §2e).
+    # The bound is conservative: at N = 105,967 the exact worst case is ~0.0011, not 0.01.
     n = bounds.hoeffding_rays(0.005, 0.01)
     worst = max(bounds.miss_probability(n, p, 0.005) for p in np.linspace(0.45, 0.55, 41))
     assert 0.0009 < worst < 0.0013
@@ -91,7 +91,7 @@ def test_bad_input_names_parameter_and_range(call, message):
 
 
 def test_exact_rays_at_the_defaults_is_66501():
-    # anchors.md section 3: 66,501, 0.63x the Hoeffding rays; 66,453 ... 66,500 fail.
+    # 66,501, 0.63x the Hoeffding rays; 66,453 ... 66,500 fail (the failure probability is not monotone in N).
     n = bounds.exact_rays(0.005, 0.01)
     assert n == 66_501 and round(n / bounds.hoeffding_rays(0.005, 0.01), 2) == 0.63
     assert bounds.max_miss_probability(n, 0.005) <= 0.01
@@ -165,12 +165,8 @@ def test_extreme_inputs_are_refused_with_the_rule_and_the_limit(call, message):
 
 
 def test_exact_rays_falls_back_to_hoeffding_where_the_exact_law_costs_too_much():
-    import time
-
-    start = time.perf_counter()
     assert bounds.exact_rays(1e-4, 0.01) == bounds.hoeffding_rays(1e-4, 0.01)  # N ~ 2.6e8: hours before
     assert bounds.exact_rays(1e-9, 0.3) == bounds.hoeffding_rays(1e-9, 0.3)
-    assert time.perf_counter() - start < 1.0
     # a narrow pilot interval is cheap: the exact law is still evaluated
     assert bounds.exact_rays(1e-4, 0.01, 0.0, 1e-4) < bounds.hoeffding_rays(1e-4, 0.01) / 10
 

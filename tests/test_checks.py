@@ -5,7 +5,6 @@ from __future__ import annotations
 
 import math
 import resource
-import time
 
 import numpy as np
 import pytest
@@ -26,13 +25,15 @@ from virtspec_mi.settings import Settings
 
 
 def _fast_and_small(call, message: str) -> None:
-    """``call`` raises ValueError matching ``message`` within 0.2 s and 50 MiB."""
+    """
+    ``call`` raises ValueError matching ``message`` without building the grid: the process's
+    peak memory grows by less than 50 MiB (a grid of 10^8 values would take gigabytes). No
+    timing: the machine's load must not decide a test.
+    """
 
     before = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
-    start = time.perf_counter()
     with pytest.raises(ValueError, match=message):
         call()
-    assert time.perf_counter() - start < 0.2
     assert resource.getrusage(resource.RUSAGE_SELF).ru_maxrss - before < 50 * 1024  # KiB
 
 
@@ -126,3 +127,36 @@ def test_check_float32(value, ok):
         with pytest.raises(ValueError, match=r"plugin: 'x' must be a number \(a float32"):
             call()
     assert check_float32("x", math.inf, "be > 0", lambda v: v > 0, allow_inf=True) == math.inf
+
+
+def test_validated_checks_each_named_argument_once_and_keeps_the_trusting_body():
+    import inspect
+
+    from virtspec_mi.checks import check_delta, check_mu, validated
+
+    seen = []
+
+    @validated(mu=check_mu, delta=check_delta)
+    def rule(mu, delta, other=None):
+        seen.append((mu, delta, other))
+        return mu
+
+    assert rule("0.25", delta=0.5) == 0.25 and seen[-1] == (0.25, 0.5, None)  # checked and converted
+    assert inspect.signature(rule) == inspect.signature(rule.unchecked)
+    with pytest.raises(ValueError, match="mu must satisfy"):  # in the order of the signature: mu first
+        rule(0.7, 1.5)
+    assert rule.unchecked(0.7, 1.5) == 0.7  # below the boundary: trusted as given
+    with pytest.raises(TypeError, match="has no parameter"):
+        validated(rays=check_mu)(lambda mu: mu)
+
+
+def test_public_bound_entries_still_check_what_users_give():
+    import virtspec_mi as vm
+
+    for call, message in [(lambda: vm.hoeffding_rays(0.7, 0.01), "mu must satisfy 0 < mu < 0.5 \\(got 0.7\\)"),
+                          (lambda: vm.chebyshev_rays(0.01, True), "delta must be a number"),
+                          (lambda: vm.hoeffding_mu(0, 0.01), "rays must satisfy 1 <= rays"),
+                          (lambda: vm.chebyshev_mu(10, 1.0), "delta must satisfy 0 < delta < 1")]:
+        with pytest.raises(ValueError, match=message):
+            call()
+    assert vm.hoeffding_rays("0.005", "0.01") == 105_967  # strings read as numbers, as everywhere

@@ -9,6 +9,7 @@ import pytest
 
 from virtspec_mi.budgets import bins as gb
 from virtspec_mi.budgets.bounds import hoeffding_rays
+from virtspec_mi.budgets.rules import gonio_rays
 
 
 def test_dkw_needs_the_papers_n():
@@ -55,14 +56,14 @@ def test_brdf_intervals_cover_the_estimate_and_scale_with_solid_angle():
 
 
 @pytest.mark.parametrize("call, name", [
-    (lambda: gb.gonio_rays("bogus", 0.01, 0.01, 10), "guarantee"),
-    (lambda: gb.gonio_rays("union", 0.7, 0.01, 10), "mu"),
-    (lambda: gb.gonio_rays("union", 0.01, 1.5, 10), "delta"),
-    (lambda: gb.gonio_rays("union", 0.01, 0.01, 0), "bins"),
-    (lambda: gb.gonio_rays("relative", 0.01, 0.01, 10), "relative_tolerance"),
-    (lambda: gb.gonio_rays("relative", 0.01, 0.01, 10, 2.0, 0.1, 0.01), "relative_tolerance"),
-    (lambda: gb.gonio_rays("relative", 0.01, 0.01, 10, 0.1, -1.0, 0.01), "brdf_floor"),
-    (lambda: gb.gonio_rays("union", 1e-6, 0.01, 10), "union bound"),
+    (lambda: gonio_rays("bogus", 0.01, 0.01, 10), "guarantee"),
+    (lambda: gonio_rays("union", 0.7, 0.01, 10), "mu"),
+    (lambda: gonio_rays("union", 0.01, 1.5, 10), "delta"),
+    (lambda: gonio_rays("union", 0.01, 0.01, 0), "bins"),
+    (lambda: gonio_rays("relative", 0.01, 0.01, 10), "relative_tolerance"),
+    (lambda: gonio_rays("relative", 0.01, 0.01, 10, 2.0, 0.1, 0.01), "relative_tolerance"),
+    (lambda: gonio_rays("relative", 0.01, 0.01, 10, 0.1, -1.0, 0.01), "brdf_floor"),
+    (lambda: gonio_rays("union", 1e-6, 0.01, 10), "union bound"),
 ])
 def test_bad_inputs_name_the_parameter(call, name):
     with pytest.raises(ValueError, match=name):

@@ -8,11 +8,13 @@ import pytest
 from virtspec_mi.budgets import bounds
 from virtspec_mi.budgets import twostage
 from virtspec_mi.budgets.intervals import clopper_pearson
+from virtspec_mi.settings import Settings
 
 
 @pytest.mark.parametrize("rho, anchor", [(0.05, 19_393), (0.2, 50_524), (0.5, 70_401)])
 def test_expected_rays_reproduce_anchors(rho, anchor):
-    # anchors.md section 3: 2,000-ray pilot, delta1 = 0.001, exact N2; E[N] 19,393 / 50,524 / 70,401.
+    # The two-stage design at its defaults (2,000-ray pilot, delta1 = 0.001, exact N2): E[N] 19,393 / 50,524 /
+    # 70,401, the smallest-passing-N2 figures computed independently when the rule was designed.
     # Ours sizes N2 as "N and every larger N pass" (so the max over R, T, A stays certified),
     # which is at most one period (100 rays) above the smallest passing N: within 0.5 %.
     law = twostage.two_stage_law(rho, 0.005, 0.01)  # defaults: n1 = 2000, delta1 = 0.001
@@ -64,10 +66,13 @@ def test_seeds_and_defaults():
 
 
 @pytest.mark.parametrize("call, message", [
-    (lambda: twostage.stage_two_rays([[5, 5, 0]], 10, 0.05, 0.2, 0.2), "pilot_delta must satisfy"),
+    # pilot_delta >= delta is refused once, where it enters (the settings; stage_two_rays takes their values)
+    (lambda: Settings(mu=0.05, delta=0.2, pilot_delta=0.2, bound="two-stage"), "pilot_delta must satisfy"),
     (lambda: twostage.stage_two_rays([[11, 0, 0]], 10, 0.05, 0.2, 0.02), "pilot_counts must satisfy"),
     (lambda: twostage.two_stage_law(0.3, 0.05, 0.2, other="capped"), "other must be"),
     (lambda: twostage.two_stage_law(0.3, 0.05, 0.2, pilot_delta=0.3), "pilot_delta must satisfy"),
+    (lambda: twostage.two_stage_law(0.3, 0.05, 0.2, pilot_rays=0), "pilot_rays must satisfy 1 <= pilot_rays"),
+    (lambda: twostage.two_stage_law(0.3, 0.5, 0.2), "mu must satisfy 0 < mu < 0.5"),
 ])
 def test_bad_input(call, message):
     with pytest.raises(ValueError, match=message):

@@ -8,7 +8,8 @@ incidence and across it with the certified band); ``gonio_leaf_series.png`` is
 :func:`virtspec_mi.results.angular_plot.plot_series` (the distribution over θi as a series). The
 reading's summary is printed.
 
-Run: VIRTSPEC_LEAF_DATA=../shared/data/abm-npsg python tools/gonio_leaf_figure.py [--out-dir docs]
+Run: VIRTSPEC_LEAF_DATA=DIR python tools/gonio_leaf_figure.py [--out-dir docs], DIR holding the
+NPSG data files (the ``data/`` folder of github.com/turtlesoupy/ABM-U-and-ABM-B-CPP, BSD-3).
 """
 
 from __future__ import annotations

@@ -289,7 +289,7 @@ def gonio(scene: Any, *, theta_i: Any = None, out: str | os.PathLike | None = No
         :class:`~virtspec_mi.settings.Settings` (a fixed budget); one left ``None`` comes
         from the scene's ``spectrophotometer`` integrator, else from its default. Without
         ``rays``, N is sized by ``guarantee`` at ``mu`` and ``delta`` over the K bins
-        (:func:`virtspec_mi.budgets.bins.gonio_rays`).
+        (:func:`virtspec_mi.budgets.rules.gonio_rays`).
 
     References
     ----------

@@ -9,6 +9,11 @@ the specimen plugins, …) lives here, so each rule is written once. A bad value
 ``theta_i must satisfy 0 <= theta_i <= 90 degrees (got 95)``; values are shown with
 all the digits they were given (``399.99999999``, not ``400``).
 
+Values are checked once, where they enter: the settings and options dataclasses, and
+the few functions users call directly (:func:`validated` makes such an entry of a
+function that trusts its arguments, and keeps the trusting function for the callers
+below the boundary as ``.unchecked``).
+
 Limits
 ------
 Every cap of a call is a constant here, checked *before* anything of that size is
@@ -26,9 +31,11 @@ built (lists, kernels), so a request beyond them is refused in milliseconds:
 
 from __future__ import annotations
 
+import functools
+import inspect
 import math
 import sys
-from typing import Any, Iterable
+from typing import Any, Callable, Iterable, TypeVar
 
 import numpy as np
 
@@ -48,6 +55,10 @@ __all__ = [
     "check_delta",
     "check_rays",
     "check_rays_needed",
+    "check_bins",
+    "check_relative_tolerance",
+    "check_brdf_floor",
+    "validated",
     "check_readings",
     "check_theta_i",
     "check_positive",
@@ -207,6 +218,68 @@ def check_rays_needed(rays: int, rule: str) -> int:
             f"{rule} needs N = {shown} rays per reading, more than the {MAX_RAYS:,} (2**32 - 1) one reading may "
             "trace (its rays are numbered with 32 bits); raise mu or delta, or give rays")
     return int(rays)
+
+
+def check_bins(bins: Any) -> int:
+    """K, the number of bins of a goniophotometer reading: a whole number ≥ 1."""
+
+    if isinstance(bins, bool) or not isinstance(bins, (int, np.integer)) or bins < 1:
+        raise ValueError(f"bins must be a whole number of bins >= 1 (got {bins!r})")
+    return int(bins)
+
+
+def check_relative_tolerance(value: Any) -> float:
+    """ε, the relative tolerance on a bin's BRDF value: 0 < ε ≤ 1."""
+
+    tolerance = number("relative_tolerance", value)
+    if not 0.0 < tolerance <= 1.0:
+        raise ValueError(f"relative_tolerance must satisfy 0 < relative_tolerance <= 1 (got {shown_value(value)})")
+    return tolerance
+
+
+def check_brdf_floor(value: Any) -> float:
+    """The BRDF/BTDF value (sr⁻¹) above which bins are held to a relative tolerance: finite and > 0."""
+
+    floor = number("brdf_floor", value)
+    if not (math.isfinite(floor) and floor > 0.0):
+        raise ValueError(f"brdf_floor must be a finite BRDF value > 0 in 1/sr (got {shown_value(value)})")
+    return floor
+
+
+_Function = TypeVar("_Function", bound=Callable[..., Any])
+
+
+def validated(**checks: Callable[[Any], Any]) -> Callable[[_Function], _Function]:
+    """
+    Make a function that trusts its arguments into a public entry that checks them once.
+
+    ``@validated(mu=check_mu, delta=check_delta)`` puts each named argument, when given
+    and not ``None``, through its check (which returns the value to use or raises
+    ``ValueError`` naming the parameter), in the order of the signature, before the body
+    runs. The body stays reachable as ``function.unchecked`` for callers below the
+    boundary, which hold validated values already (the settings and options dataclasses
+    validate on construction).
+    """
+
+    def decorate(function: _Function) -> _Function:
+        signature = inspect.signature(function)
+        unknown = sorted(set(checks) - set(signature.parameters))
+        if unknown:
+            raise TypeError(f"{function.__qualname__} has no parameter(s) {', '.join(unknown)} to check")
+        order = [name for name in signature.parameters if name in checks]
+
+        @functools.wraps(function)
+        def checked(*args: Any, **kwargs: Any) -> Any:
+            call = signature.bind(*args, **kwargs)
+            for name in order:
+                if call.arguments.get(name) is not None:
+                    call.arguments[name] = checks[name](call.arguments[name])
+            return function(*call.args, **call.kwargs)
+
+        checked.unchecked = function  # type: ignore[attr-defined]
+        return checked  # type: ignore[return-value]
+
+    return decorate
 
 
 def check_readings(readings: int, rays: int) -> None:

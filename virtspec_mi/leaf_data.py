@@ -18,9 +18,14 @@ reference's spectral lookup for any wavelength.
 
 References
 ----------
-Baranoski (2006), RSE 100:335–347 (ABM-B/ABM-U); NPSG reference C++
-``abm_interfaces.cpp::buildInterfaces`` (α(λ) and unit conversions) as described in
-``shared/research/abm.md`` §1.3, §2 and §3.1.
+Baranoski, G.V.G. (2006). Modeling the interaction of infrared radiation (750 to 2500 nm)
+with bifacial and unifacial plant leaves. Remote Sens. Environ. 100, 335–347 (ABM-B/ABM-U).
+
+NPSG reference C++ implementation of ABM-B and ABM-U (BSD-3, © 2010 NPSG),
+https://github.com/turtlesoupy/ABM-U-and-ABM-B-CPP: ``abm_interfaces.cpp``
+(``buildInterfaces``: α(λ) and the unit conversions), the ``data/`` files (names as in
+:data:`LEAF_DATA_FILES`) and the sample leaves ``samples/lopex_0219_0220.json``
+(soybean) and ``samples/lopex_0141_0142.json`` (corn).
 """
 
 from __future__ import annotations
@@ -99,7 +104,8 @@ class LeafData:
 
 
 def _needed() -> str:
-    return ", ".join(name for name, _, _ in LEAF_DATA_FILES.values())
+    names = ", ".join(name for name, _, _ in LEAF_DATA_FILES.values())
+    return f"{names} (BSD-3: the data/ folder of github.com/turtlesoupy/ABM-U-and-ABM-B-CPP)"
 
 
 def leaf_data_dir(data_dir: str | os.PathLike | None = None) -> Path:
@@ -174,7 +180,7 @@ def mesophyll_absorption(
 
     References
     ----------
-    abm.md §1.3 (NPSG C++ ``buildInterfaces``).
+    Baranoski (2006); NPSG reference C++, ``abm_interfaces.cpp`` (``buildInterfaces``).
     """
 
     return (

@@ -11,7 +11,8 @@ with its exact law: Binomial(K, q), with q the exact miss probability of the rul
 :func:`virtspec_mi.budgets.bounds.miss_probability` at the rule's N for a fixed rule, the
 exact mixture over the pilot count (:func:`virtspec_mi.budgets.twostage.two_stage_law`) for
 ``two-stage``. The test is two-sided (an exact binomial test): a plain "misses ≤ δK"
-check has almost no power, because the rules are conservative (anchors.md §2e).
+check has almost no power, because the rules are conservative (at ρ = ½ eq. (23)'s N
+misses with probability 0.0011, not 0.01: :func:`virtspec_mi.budgets.bounds.max_miss_probability`).
 
 Specimens (:data:`SPECIMENS`): the paper's diamond (``simple_dielectric``, η = 2.419)
 under a collimated beam at θi = 0°, 45° and 80° (ρ = Fresnel reflectance,
@@ -21,7 +22,9 @@ with reflectance 0: ρ = 0, so q = 0 and no reading may miss).
 
 References
 ----------
-anchors.md §2(e) (end-to-end coverage with the real ray tracer) and §3.
+Clopper, C.J., Pearson, E.S. (1934). Biometrika 26, 404–413 (the miss rate's interval).
+The exact law of a miss is :func:`virtspec_mi.budgets.bounds.miss_probability` (fixed
+rules) and :func:`virtspec_mi.budgets.twostage.two_stage_law` (the two-stage rule).
 """
 
 from __future__ import annotations

@@ -56,6 +56,12 @@ samples. All hold per reading at δ (as the R/T certificates of :mod:`virtspec_m
 
    (Bins below the floor carry their Clopper–Pearson interval only.)
 
+Which of these sizes a reading (``guarantee=``), and whether a two-stage pilot may size
+it, is the rule table's to say (:data:`virtspec_mi.budgets.rules.GUARANTEES`); the
+functions here are the formulas, and they trust their arguments: μ, δ, K, ε and the
+floor are validated where they enter (the goniophotometer's options,
+:func:`virtspec_mi.budgets.rules.gonio_rays`).
+
 A printed certificate is what the spent rays give: the μ (or ε) for the reading's N,
 rounded up; a reading whose R/T are not certified (weight violations, capped walks,
 invalid directions: :attr:`virtspec_mi.results.hemispherical.Result.certified`) carries none, and a
@@ -75,16 +81,15 @@ Mitzenmacher, M., Upfal, E. (2005). Probability and Computing, Thm. 4.4, 4.5 (Ch
 from __future__ import annotations
 
 import math
-from typing import Any
+from typing import Any, Callable
 
 import numpy as np
 
-from virtspec_mi.budgets.bounds import exact_mu, exact_rays, hoeffding_mu, hoeffding_rays
-from virtspec_mi.checks import check_delta, check_mu, check_rays_needed, number, shown_value
+from virtspec_mi.budgets.bounds import exact_certified, exact_mu, exact_rays, hoeffding_mu, hoeffding_rays
 from virtspec_mi.budgets.intervals import clopper_pearson
+from virtspec_mi.checks import check_rays_needed, shown_value
 
 __all__ = [
-    "GUARANTEES",
     "dkw_rays",
     "dkw_mu",
     "union_rays",
@@ -95,72 +100,52 @@ __all__ = [
     "relative_rays",
     "relative_tolerance",
     "brdf_intervals",
-    "gonio_rays",
-    "check_bins_count",
 ]
-
-GUARANTEES: dict[str, str] = {
-    "union": "every bin fraction |m_k/N - p_k| < mu at once: N = ceil(ln(2K/delta)/(2 mu^2)) (Hoeffding + union)",
-    "union-exact": "every bin fraction at once, exact binomial rule at delta/K per bin (fewer rays)",
-    "dkw": "the CDFs of theta_o and phi_o within mu everywhere (DKW-Massart): N = ceil(ln(2/delta)/(2 mu^2))",
-    "relative": "f_k within relative_tolerance for every bin with f_k >= brdf_floor (Chernoff + union)",
-}
-"""How a goniophotometer reading may be sized (``guarantee``), and what each certifies."""
-
-
-def check_bins_count(bins: Any) -> int:
-    """K, the number of bins: a whole number ≥ 1."""
-
-    if isinstance(bins, bool) or not isinstance(bins, (int, np.integer)) or bins < 1:
-        raise ValueError(f"bins must be a whole number of bins >= 1 (got {bins!r})")
-    return int(bins)
 
 
 def dkw_rays(mu: float, delta: float) -> int:
     """N certifying sup_x |F̂_N(x) − F(x)| < μ at δ (DKW–Massart): ⌈ln(2/δ)/(2μ²)⌉, the paper's eq. (23)."""
 
-    return hoeffding_rays(mu, delta)
+    return hoeffding_rays.unchecked(mu, delta)
 
 
 def dkw_mu(rays: Any, delta: float) -> Any:
     """The sup-error μ = √(ln(2/δ)/(2N)) that N rays certify for an empirical CDF at δ."""
 
-    return _per_rays(lambda n: hoeffding_mu(n, delta), rays)
+    return _per_rays(lambda n: hoeffding_mu.unchecked(n, delta), rays)
 
 
 def union_rays(mu: float, delta: float, bins: int) -> int:
     """N certifying |m_k/N − p_k| < μ for all K bins at once at δ: ⌈ln(2K/δ)/(2μ²)⌉."""
 
-    return hoeffding_rays(mu, _split(delta, bins))
+    return hoeffding_rays.unchecked(mu, delta / bins)
 
 
 def union_mu(rays: Any, delta: float, bins: int) -> Any:
     """The μ = √(ln(2K/δ)/(2N)) that N rays certify for all K bin fractions at once."""
 
-    share = _split(delta, bins)
-    return _per_rays(lambda n: hoeffding_mu(n, share), rays)
+    share = delta / bins
+    return _per_rays(lambda n: hoeffding_mu.unchecked(n, share), rays)
 
 
 def union_exact_rays(mu: float, delta: float, bins: int) -> int:
     """The exact-binomial union: each bin's smallest certified N at δ/K (:func:`virtspec_mi.budgets.bounds.exact_rays`)."""
 
-    return exact_rays(mu, _split(delta, bins))
+    return exact_rays.unchecked(mu, delta / bins)
 
 
 def union_exact_mu(rays: Any, delta: float, bins: int, mu: float | None = None) -> Any:
     """
     The exact-binomial μ of N rays at δ/K (:func:`virtspec_mi.budgets.bounds.exact_mu`); with the
-    μ asked for, μ itself where N is at least the exact rule's N for (μ, δ/K) (as
-    :meth:`virtspec_mi.budgets.rules.RayBudget.certified`: the exact inverse is only computed up
+    μ asked for, μ itself where N is at least the exact rule's N for (μ, δ/K)
+    (:func:`virtspec_mi.budgets.bounds.exact_certified`: the exact inverse is only computed up
     to :data:`~virtspec_mi.budgets.bounds.EXACT_MU_MAX_RAYS` rays, Hoeffding's μ beyond).
     """
 
-    from virtspec_mi.budgets.rules import BUDGETS
-
-    share = _split(delta, bins)
+    share = delta / bins
     if mu is None:
-        return _per_rays(lambda n: exact_mu(n, share), rays)
-    return _per_rays(lambda n: BUDGETS["exact"].certified(n, share, mu), rays)
+        return _per_rays(lambda n: exact_mu.unchecked(n, share), rays)
+    return _per_rays(lambda n: exact_certified(n, share, mu), rays)
 
 
 def bins_mu(rays: Any, delta: float, bins: int) -> Any:
@@ -173,24 +158,19 @@ def relative_rays(tolerance: float, floor: float, delta: float, bins: int, small
     """
     N certifying |f̂_k − f_k| ≤ ε·f_k for every bin with f_k ≥ ``floor`` (sr⁻¹) at once at δ:
     ⌈3 ln(2K/δ)/(ε² · floor · Ω_min)⌉ (multiplicative Chernoff + union; ε = ``tolerance`` ≤ 1).
+    ``ValueError`` where that N is more than one reading may trace.
     """
 
-    tolerance = _check_tolerance(tolerance)
-    floor, omega = _check_floor(floor), float(smallest_solid_angle)
-    need = 3.0 * math.log(2.0 / _split(delta, bins)) / (tolerance**2 * floor * omega)
-    if not math.isfinite(need):
-        need = float("inf")
-    return check_rays_needed(math.ceil(need) if math.isfinite(need) else need,
+    need = 3.0 * math.log(2.0 / (delta / bins)) / (tolerance**2 * floor * float(smallest_solid_angle))
+    return check_rays_needed(math.ceil(need) if math.isfinite(need) else math.inf,
                              f"relative_tolerance = {shown_value(tolerance)} above brdf_floor = {shown_value(floor)}")
 
 
 def relative_tolerance(rays: Any, floor: float, delta: float, bins: int, smallest_solid_angle: float) -> Any:
     """The relative ε that N rays certify for every bin with f_k ≥ ``floor``; NaN where ε > 1 (none)."""
 
-    floor = _check_floor(floor)
-    share = _split(delta, bins)
     n = np.asarray(rays, dtype=np.float64)
-    eps = np.sqrt(3.0 * math.log(2.0 / share) / (n * floor * float(smallest_solid_angle)))
+    eps = np.sqrt(3.0 * math.log(2.0 / (delta / bins)) / (n * floor * float(smallest_solid_angle)))
     return np.where(eps <= 1.0, eps, np.nan)
 
 
@@ -200,34 +180,11 @@ def brdf_intervals(counts: Any, rays: Any, solid_angles: Any, delta: float, bins
     δ/K, divided by its projected solid angle Ω_k (broadcast: counts (…, K…), rays (…)).
     """
 
-    lower, upper = clopper_pearson(counts, rays, _split(delta, bins))
+    lower, upper = clopper_pearson.unchecked(counts, rays, delta / bins)
     return lower / solid_angles, upper / solid_angles
 
 
-def gonio_rays(guarantee: str, mu: float, delta: float, bins: int, relative: float | None = None,
-               floor: float | None = None, smallest_solid_angle: float | None = None) -> int:
-    """Rays per reading for ``guarantee`` (:data:`GUARANTEES`) at μ (or ε and floor) and δ over K bins."""
-
-    if guarantee not in GUARANTEES:
-        raise ValueError(f"guarantee must be one of {', '.join(GUARANTEES)} (got {guarantee!r})")
-    mu, delta, bins = check_mu(mu), check_delta(delta), check_bins_count(bins)
-    if guarantee == "union":
-        return check_rays_needed(union_rays(mu, delta, bins), f"the union bound for mu = {shown_value(mu)}")
-    if guarantee == "union-exact":
-        return check_rays_needed(union_exact_rays(mu, delta, bins), f"the exact union for mu = {shown_value(mu)}")
-    if guarantee == "dkw":
-        return check_rays_needed(dkw_rays(mu, delta), f"the DKW bound for mu = {shown_value(mu)}")
-    if relative is None or floor is None:
-        raise ValueError("guarantee 'relative' needs relative_tolerance (0 < relative_tolerance <= 1) and "
-                         "brdf_floor (> 0, in 1/sr)")
-    return relative_rays(relative, floor, delta, bins, smallest_solid_angle)
-
-
-def _split(delta: float, bins: int) -> float:
-    return check_delta(check_delta(delta) / check_bins_count(bins), name="delta/K")
-
-
-def _per_rays(function: Any, rays: Any) -> Any:
+def _per_rays(function: Callable[[int], float], rays: Any) -> Any:
     """``function`` of each distinct N (a number or an array of whole numbers)."""
 
     values = np.asarray(rays)
@@ -235,17 +192,3 @@ def _per_rays(function: Any, rays: Any) -> Any:
         return float(function(int(values)))
     unique, inverse = np.unique(values, return_inverse=True)
     return np.array([function(int(n)) for n in unique])[inverse].reshape(values.shape)
-
-
-def _check_tolerance(value: Any) -> float:
-    tolerance = number("relative_tolerance", value)
-    if not 0.0 < tolerance <= 1.0:
-        raise ValueError(f"relative_tolerance must satisfy 0 < relative_tolerance <= 1 (got {shown_value(value)})")
-    return tolerance
-
-
-def _check_floor(value: Any) -> float:
-    floor = number("brdf_floor", value)
-    if not (math.isfinite(floor) and floor > 0.0):
-        raise ValueError(f"brdf_floor must be a finite BRDF value > 0 in 1/sr (got {shown_value(value)})")
-    return floor

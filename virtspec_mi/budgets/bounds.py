@@ -22,14 +22,26 @@ the same rigorous guarantee as eq. (23) with about 0.63× the rays at μ = 0.005
 δ = 0.01 (66,501 instead of 105,967). The adaptive ``"two-stage"`` rule lives in
 :mod:`virtspec_mi.budgets.twostage`.
 
+Validation: the public functions here are entries users call (``vm.hoeffding_rays``,
+``virtspec bounds``, the notebooks): each checks its arguments once
+(:func:`virtspec_mi.checks.validated`). The rule objects of
+:mod:`virtspec_mi.budgets.rules` and the other budget modules hold validated values
+(the settings and options dataclasses check them) and call the trusting bodies,
+``hoeffding_rays.unchecked`` and so on.
+
 References
 ----------
 Baranoski, G.V.G., Rokne, J.G., Xu, G. (2001). Virtual spectrophotometric
 measurements for biologically and physically based rendering. The Visual Computer
 17, 506–518: eqs. (10)–(23) and Table 1.
 
-``../shared/research/anchors.md`` §2(e), §3 and Appendix A (exact failure probability,
-lattice jump points, 66,501).
+Hoeffding, W. (1963). Probability inequalities for sums of bounded random variables.
+J. Amer. Statist. Assoc. 58, 13–30 (the exponential bound behind eq. (23)).
+
+The exact failure probability, its lattice jump points and the exact rule's N (66,501
+at μ = 0.005, δ = 0.01) are computed by this module (:func:`max_miss_probability`,
+:func:`exact_rays`); ``tools/budget_tables.py`` tabulates them into
+:mod:`virtspec_mi.budgets.tables` and ``tests/test_bounds.py`` recomputes the tables.
 """
 
 from __future__ import annotations
@@ -37,11 +49,11 @@ from __future__ import annotations
 import functools
 import math
 from dataclasses import dataclass
-from typing import Any, Sequence
+from typing import Any, Callable, Sequence
 
 import numpy as np
 
-from virtspec_mi.checks import MAX_RAYS, check_delta, check_mu, check_rays
+from virtspec_mi.checks import MAX_RAYS, check_delta, check_mu, check_rays, validated
 
 __all__ = [
     "chebyshev_rays",
@@ -50,6 +62,8 @@ __all__ = [
     "hoeffding_mu",
     "exact_rays",
     "exact_mu",
+    "exact_certified",
+    "stated_mu",
     "EXACT_MU_MAX_RAYS",
     "EXACT_MAX_POINTS",
     "miss_probability",
@@ -60,6 +74,13 @@ __all__ = [
 ]
 
 
+def _any_rays(rays: Any) -> int:
+    """A number of rays ≥ 1 of any size (a tolerance may be asked of more rays than one reading traces)."""
+
+    return check_rays(rays, math.inf)
+
+
+@validated(mu=check_mu, delta=check_delta)
 def chebyshev_rays(mu: float, delta: float) -> int:
     """
     Rays the ordinary Chebyshev inequality needs: ``⌈1/(4μ²δ)⌉``.
@@ -69,11 +90,10 @@ def chebyshev_rays(mu: float, delta: float) -> int:
     Baranoski et al. (2001), eq. (15).
     """
 
-    check_mu(mu)
-    check_delta(delta)
     return _ceil(_ratio(1.0, 4.0 * mu * mu * delta), "chebyshev", mu, delta)
 
 
+@validated(mu=check_mu, delta=check_delta)
 def hoeffding_rays(mu: float, delta: float) -> int:
     """
     Rays the exponential Chebyshev (Hoeffding) inequality needs: ``⌈ln(2/δ)/(2μ²)⌉``.
@@ -83,33 +103,30 @@ def hoeffding_rays(mu: float, delta: float) -> int:
     Baranoski et al. (2001), eqs. (20) and (23); μ = 0.005, δ = 0.01 gives 105,967.
     """
 
-    check_mu(mu)
-    check_delta(delta)
     return _hoeffding(mu, delta, "hoeffding")
 
 
 def _hoeffding(mu: float, delta: float, rule: str) -> int:
-    """Eq. (23) after validation; ``rule`` names the bound in the message when N overflows."""
+    """Eq. (23); ``rule`` names the bound in the message when N overflows."""
 
     return _ceil(_ratio(math.log(2.0 / delta), 2.0 * mu * mu), rule, mu, delta)
 
 
+@validated(rays=_any_rays, delta=check_delta)
 def chebyshev_mu(rays: int, delta: float) -> float:
     """Tolerance μ that ``rays`` rays guarantee at δ under eq. (14): ``μ = 1/(2√(Nδ))``."""
 
-    check_rays(rays, math.inf)
-    check_delta(delta)
     return 1.0 / (2.0 * math.sqrt(rays * delta))
 
 
+@validated(rays=_any_rays, delta=check_delta)
 def hoeffding_mu(rays: int, delta: float) -> float:
     """Tolerance μ that ``rays`` rays guarantee at δ under eq. (19): ``μ = √(ln(2/δ)/(2N))``."""
 
-    check_rays(rays, math.inf)
-    check_delta(delta)
     return math.sqrt(math.log(2.0 / delta) / (2.0 * rays))
 
 
+@validated(rays=_any_rays, mu=check_mu)
 def max_miss_probability(rays: int, mu: float, lo: float = 0.0, hi: float = 1.0) -> float:
     """
     ``sup_{ρ ∈ [lo, hi]} P(|m/N − ρ| ≥ μ)``, exactly, for ``m ~ Binomial(N, ρ)``.
@@ -126,15 +143,12 @@ def max_miss_probability(rays: int, mu: float, lo: float = 0.0, hi: float = 1.0)
     ``P(m ≥ b, ρ) = P(N − m ≤ N − b, 1 − ρ)`` makes it symmetric about ρ = ½, so only
     half of the interval is evaluated when it straddles ½.
 
-    References
-    ----------
-    anchors.md §2(e) and Appendix A.
+    ``tests/test_bounds.py`` checks the supremum against the whole binomial pmf on a
+    dense grid of ρ.
     """
 
     from scipy import special
 
-    check_rays(rays, math.inf)
-    check_mu(mu)
     n = int(rays)
     lo, hi = max(0.0, float(lo)), min(1.0, float(hi))
     if not lo <= hi:
@@ -175,6 +189,7 @@ def _lattice_points(n: int, mu: float, lo: float, hi: float) -> float:
     return n * min(1.0, hi - lo + 2.0 * mu)
 
 
+@validated(mu=check_mu, delta=check_delta)
 def exact_rays(mu: float, delta: float, lo: float = 0.0, hi: float = 1.0) -> int:
     """
     Smallest fixed N certified by the exact binomial law: ``sup_ρ P(|m/N − ρ| ≥ μ) ≤ δ``
@@ -198,12 +213,10 @@ def exact_rays(mu: float, delta: float, lo: float = 0.0, hi: float = 1.0) -> int
     microseconds there; other (μ, δ) take one search per process (milliseconds at
     μ ≥ 0.02, seconds at μ = 0.005, about 30 s at μ = 0.001).
 
-    References
-    ----------
-    anchors.md §3 ("Exact binomial, fixed, worst case over p": 66,501; −37.2 %).
+    At μ = 0.005, δ = 0.01 it gives 66,501 rays, 37.2 % fewer than eq. (23)'s 105,967
+    (``tests/test_bounds.py`` checks N − 1 and every N up to Hoeffding's by brute force).
     """
 
-    mu, delta = check_mu(mu), check_delta(delta)
     lo, hi = max(0.0, float(lo)), min(1.0, float(hi))
     if (lo, hi) == (0.0, 1.0) and (mu, delta) in _shipped_exact():
         return _shipped_exact()[(mu, delta)]
@@ -234,7 +247,7 @@ def _exact_rays(mu: float, delta: float, lo: float, hi: float) -> int:
     def passes(n: int) -> bool:
         if _lattice_points(n, mu, lo, hi) > EXACT_MAX_POINTS:
             raise _TooCostly
-        return max_miss_probability(n, mu, lo, hi) <= delta
+        return max_miss_probability.unchecked(n, mu, lo, hi) <= delta
 
     try:
         return _search_exact(passes, mu, delta, lo, hi, ceiling, stats.norm.isf(delta / 2))
@@ -274,6 +287,7 @@ EXACT_MU_MAX_RAYS: int = 20_000
 above it the Hoeffding tolerance (eq. 19), valid for any N, is returned instead."""
 
 
+@validated(rays=_any_rays, delta=check_delta)
 @functools.lru_cache(maxsize=1024)
 def exact_mu(rays: int, delta: float) -> float:
     """
@@ -286,23 +300,55 @@ def exact_mu(rays: int, delta: float) -> float:
 
     References
     ----------
-    anchors.md §2(e) (exact failure probability); Baranoski et al. (2001), eq. (19).
+    Baranoski et al. (2001), eq. (19); the exact law of :func:`max_miss_probability`.
     """
 
-    rays, delta = check_rays(rays, math.inf), check_delta(delta)
-    upper = hoeffding_mu(rays, delta)
+    upper = hoeffding_mu.unchecked(rays, delta)
     if rays > EXACT_MU_MAX_RAYS or upper >= 0.5:
         return upper
     lower = 0.0
     while upper - lower > 1e-6 * upper:
         middle = 0.5 * (lower + upper)
-        if max_miss_probability(rays, middle) <= delta:
+        if max_miss_probability.unchecked(rays, middle) <= delta:
             upper = middle
         else:
             lower = middle
     return upper
 
 
+def stated_mu(rays: int, mu: float, tolerance: float, rays_for_mu: Callable[[], int]) -> float:
+    """
+    The tolerance a reading of ``rays`` rays may state when μ was asked for, under a rule
+    whose tolerance of those rays is ``tolerance`` and whose N for μ is ``rays_for_mu()``:
+    μ itself where the rule certifies μ for these rays (N ≥ the rule's N; every rule here
+    certifies N and all larger N), else ``tolerance`` — and never more than ``tolerance``.
+    A rule whose N for μ is beyond any float (μ ~ 1e-300: ``ValueError``) certifies
+    ``tolerance`` only. Values are trusted (validated where they entered).
+    """
+
+    if tolerance <= mu:
+        return tolerance
+    try:
+        needed = rays_for_mu()
+    except ValueError:  # the rule's N is beyond any float: these rays are fewer
+        return tolerance
+    return mu if rays >= needed else tolerance
+
+
+def exact_certified(rays: int, delta: float, mu: float) -> float:
+    """
+    :func:`stated_mu` under the exact rule: below :data:`EXACT_MU_MAX_RAYS` rays the exact
+    inverse :func:`exact_mu` (no search for N), above it μ where ``rays`` ≥ the exact
+    rule's N for (μ, δ), else Hoeffding's tolerance. Values are trusted.
+    """
+
+    tolerance = exact_mu.unchecked(int(rays), delta)
+    if rays <= EXACT_MU_MAX_RAYS:
+        return tolerance
+    return stated_mu(rays, mu, tolerance, lambda: exact_rays.unchecked(mu, delta))
+
+
+@validated(rays=_any_rays, mu=check_mu)
 def miss_probability(rays: int, rho: float, mu: float) -> float:
     """
     Exact probability that a reading of ``rays`` rays misses ρ by μ or more.
@@ -314,8 +360,6 @@ def miss_probability(rays: int, rho: float, mu: float) -> float:
 
     from scipy import stats
 
-    check_rays(rays, math.inf)
-    check_mu(mu)
     n = int(rays)
     # m ≤ N(ρ − μ) or m ≥ N(ρ + μ); the 1e-9 guards the lattice points against rounding.
     low = math.floor(n * (rho - mu) + 1e-9)

@@ -22,11 +22,12 @@ from typing import Any
 
 import numpy as np
 
-from virtspec_mi.checks import check_delta
+from virtspec_mi.checks import check_delta, validated
 
 __all__ = ["clopper_pearson"]
 
 
+@validated(delta=check_delta)
 def clopper_pearson(k: Any, n: Any, delta: float) -> tuple[np.ndarray, np.ndarray]:
     """
     Exact two-sided ``1 − δ`` confidence interval ``(lower, upper)`` of a binomial
@@ -34,6 +35,9 @@ def clopper_pearson(k: Any, n: Any, delta: float) -> tuple[np.ndarray, np.ndarra
 
     ``lower = B⁻¹(δ/2; k, n − k + 1)`` (0 when k = 0) and
     ``upper = B⁻¹(1 − δ/2; k + 1, n − k)`` (1 when k = n), with B⁻¹ the beta quantile.
+    δ is checked here, once; callers holding a validated δ (the two-stage sizing, the
+    goniophotometer's bands) call ``clopper_pearson.unchecked``. The counts are checked on
+    every call: they are the caller's contract (tallies of n rays).
 
     Examples
     --------
@@ -44,7 +48,6 @@ def clopper_pearson(k: Any, n: Any, delta: float) -> tuple[np.ndarray, np.ndarra
 
     from scipy.special import betainccinv, betaincinv  # scipy.stats would add ~1 s to a cold start
 
-    delta = check_delta(delta)
     k, n = np.broadcast_arrays(np.asarray(k, dtype=np.float64), np.asarray(n, dtype=np.float64))
     if np.any(n < 1) or np.any(k < 0) or np.any(k > n) or np.any(k != np.floor(k)):
         raise ValueError("clopper_pearson needs whole counts with 0 <= k <= n and n >= 1")

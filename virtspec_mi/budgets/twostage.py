@@ -26,10 +26,17 @@ Rays per reading: 2,000 + N₂, on average 19,393 / 50,524 / 70,401 at ρ = 0.05
 0.5 (μ = 0.005, δ = 0.01; :func:`two_stage_law` computes them exactly) against
 105,967 for eq. (23).
 
+Validation: :func:`two_stage_law` is an entry users call and checks its arguments
+once; the sizing (:func:`stage_two_rays`) and the defaults take the settings' validated
+values (:class:`virtspec_mi.settings.Settings` checks μ, δ, n₁ and 0 < δ₁ < δ).
+
 References
 ----------
-anchors.md §3 (two-stage design, 2,000-ray pilot, δ₁ = 0.001) and Appendix A;
-Clopper & Pearson (1934); Baranoski et al. (2001), eq. (23) for comparison.
+Clopper, C.J., Pearson, E.S. (1934). Biometrika 26, 404–413 (the pilot's interval).
+Baranoski et al. (2001), eq. (23), for comparison. The expected rays and the exact
+miss probability are computed by :func:`two_stage_law` (the mixture over the pilot
+count); ``tools/budget_tables.py`` tabulates the sizing at the defaults and
+``tests/test_twostage.py`` recomputes it.
 """
 
 from __future__ import annotations
@@ -43,7 +50,7 @@ import numpy as np
 
 from virtspec_mi.budgets.bounds import exact_rays, miss_probability
 from virtspec_mi.budgets.intervals import clopper_pearson
-from virtspec_mi.checks import check_delta, check_mu, check_rays
+from virtspec_mi.checks import check_delta, check_mu, check_rays, validated
 
 __all__ = [
     "STAGE_TWO_SEED_MASK",
@@ -61,9 +68,9 @@ the pilot's (which uses ``seed``), so its rays are fresh; the map is a bijection
 
 
 def default_pilot_rays(mu: float) -> int:
-    """Default pilot size ``⌈10/μ⌉`` (2,000 at μ = 0.005, anchors.md §3)."""
+    """Default pilot size ``⌈10/μ⌉`` (2,000 at μ = 0.005) for a validated μ."""
 
-    rays = 10.0 / check_mu(mu) - 1e-9
+    rays = 10.0 / mu - 1e-9
     if not math.isfinite(rays):
         raise ValueError(f"the default two-stage pilot ceil(10/mu) for mu = {mu!r} is beyond the float range; "
                          "give pilot_rays (1 ... 2**32 - 1)")
@@ -71,9 +78,9 @@ def default_pilot_rays(mu: float) -> int:
 
 
 def default_pilot_delta(delta: float) -> float:
-    """Default pilot failure probability δ₁ = δ/10 (0.001 at δ = 0.01, anchors.md §3)."""
+    """Default pilot failure probability δ₁ = δ/10 (0.001 at δ = 0.01) for a validated δ."""
 
-    return check_delta(delta) / 10.0
+    return delta / 10.0
 
 
 def stage_two_seed(seed: int) -> int:
@@ -99,7 +106,7 @@ def stage_two_rays(
         Shape ``(readings, quantities)``: per reading the pilot's count of each certified
         quantity (reflected, transmitted, absorbed; or reflected, transmitted with ``joint``).
     pilot_rays, mu, delta, pilot_delta
-        n₁, μ, the reading's δ and the pilot's δ₁ (0 < δ₁ < δ).
+        n₁, μ, the reading's δ and the pilot's δ₁ (0 < δ₁ < δ), validated by the settings.
     joint
         Certify the quantities together: δ₁ and δ − δ₁ are split evenly over them.
 
@@ -107,20 +114,20 @@ def stage_two_rays(
     -------
     ndarray of int64
         The largest N₂ over the quantities of each reading.
+
+    The one check left is the caller's contract, which no user input reaches: every count
+    is a count of the pilot's rays (0 ≤ count ≤ n₁).
     """
 
     counts = np.atleast_2d(np.asarray(pilot_counts, dtype=np.int64))
-    n1 = check_rays(pilot_rays)
-    mu, delta, pilot_delta = check_mu(mu), check_delta(delta), check_delta(pilot_delta)
-    if not pilot_delta < delta:
-        raise ValueError(f"pilot_delta must satisfy 0 < pilot_delta < delta = {delta:g} (got {pilot_delta:g})")
+    n1 = int(pilot_rays)
     if np.any(counts < 0) or np.any(counts > n1):
         raise ValueError(f"pilot_counts must satisfy 0 <= count <= pilot_rays = {n1}")
     return _sizing(counts, n1, mu, delta, pilot_delta, bool(joint))
 
 
 def _sizing(counts: np.ndarray, n1: int, mu: float, delta: float, pilot_delta: float, joint: bool) -> np.ndarray:
-    """:func:`stage_two_rays` after validation (:func:`two_stage_law` calls it directly)."""
+    """:func:`stage_two_rays` of valid counts (:func:`two_stage_law` calls it directly)."""
 
     share = counts.shape[1] if joint else 1
     d1, d2 = pilot_delta / share, (delta - pilot_delta) / share
@@ -143,8 +150,8 @@ def _shipped_stage_two() -> dict:
 def _rays_for_count(k: int, n1: int, mu: float, delta2: float, delta1: float) -> int:
     """N₂ for a pilot count k of n₁: the exact rule at δ₂ over the Clopper–Pearson interval at δ₁."""
 
-    lower, upper = clopper_pearson(k, n1, delta1)
-    return exact_rays(mu, delta2, float(lower), float(upper))
+    lower, upper = clopper_pearson.unchecked(k, n1, delta1)
+    return exact_rays.unchecked(mu, delta2, float(lower), float(upper))
 
 
 @dataclass(frozen=True)
@@ -160,6 +167,8 @@ class TwoStageLaw:
     """P(|m/N₂ − ρ| ≥ μ), the exact mixture over the pilot count."""
 
 
+@validated(mu=check_mu, delta=check_delta, pilot_rays=lambda value: check_rays(value, name="pilot_rays"),
+           pilot_delta=lambda value: check_delta(value, name="pilot_delta"))
 def two_stage_law(
     rho: float,
     mu: float,
@@ -182,16 +191,15 @@ def two_stage_law(
     ``joint``). Pilot counts of probability below ``tail`` are left out; their
     total mass is added to ``miss_probability`` (an upper bound, not an estimate).
 
-    References
-    ----------
-    anchors.md §3 and Appendix A (exact expectation and failure probability).
+    The two-stage design and these two sums are those of Clopper & Pearson's interval
+    followed by the exact rule; ``tests/test_twostage.py`` checks them against the
+    expected rays 19,393 / 50,524 / 70,401 at ρ = 0.05 / 0.2 / 0.5 (μ = 0.005, δ = 0.01).
     """
 
     from scipy import stats
 
-    mu, delta = check_mu(mu), check_delta(delta)
-    n1 = default_pilot_rays(mu) if pilot_rays is None else check_rays(pilot_rays)
-    d1 = default_pilot_delta(delta) if pilot_delta is None else check_delta(pilot_delta)
+    n1 = default_pilot_rays(mu) if pilot_rays is None else pilot_rays
+    d1 = default_pilot_delta(delta) if pilot_delta is None else pilot_delta
     if not d1 < delta:
         raise ValueError(f"pilot_delta must satisfy 0 < pilot_delta < delta = {delta:g} (got {d1:g})")
     k = np.arange(n1 + 1)
@@ -204,7 +212,7 @@ def two_stage_law(
     columns = [k, n1 - k, zeros] if other == "transmitted" else [k, zeros, n1 - k]
     counts = np.stack(columns[:2] if joint else columns, axis=1)
     n2 = _sizing(counts, n1, mu, delta, d1, bool(joint))
-    miss = np.array([miss_probability(int(n), rho, mu) for n in n2])
+    miss = np.array([miss_probability.unchecked(int(n), rho, mu) for n in n2])
     total = weights.sum()
     return TwoStageLaw(
         rho=float(rho),

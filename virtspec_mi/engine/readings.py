@@ -446,27 +446,25 @@ def gonio_reading(instrument: Any, settings: Settings, options: dict[str, Any],
     with the goniophotometer parameters ``options``
     (:data:`~virtspec_mi.geometry.bins.GONIO_PARAMETERS`; absent ones take their default):
     the bins are built (a bad specification is a ``ValueError`` naming the parameter),
-    N is ``settings.rays`` or sized by ``guarantee`` over the K bins
-    (:func:`virtspec_mi.budgets.bins.gonio_rays`), then :func:`run_gonio`.
+    N is ``settings.rays`` or sized by ``guarantee`` over the K bins (the rule's
+    :meth:`~virtspec_mi.budgets.rules.Guarantee.rays`, its options checked by
+    :func:`virtspec_mi.budgets.rules.check_gonio_options`), then :func:`run_gonio`.
     """
 
+    from virtspec_mi.budgets.rules import check_gonio_options
     from virtspec_mi.geometry.bins import gonio_options, make_bins
-    from virtspec_mi.budgets.bins import gonio_rays
 
     spec = gonio_options(options, "gonio")
     angles = np.atleast_1d(np.asarray(settings.theta_i if theta_i is None else theta_i, dtype=np.float64))
     bins = make_bins(spec["theta_o_bins"], spec["phi_o_bins"], spec["binning"], spec["fold_phi"], spec["hemispheres"])
-    relative, floor = spec["relative_tolerance"], spec["brdf_floor"]
+    rule, relative, floor = check_gonio_options(spec["guarantee"], settings.delta, bins.size,
+                                                spec["relative_tolerance"], spec["brdf_floor"])
     if settings.rays is None:
-        rays = gonio_rays(spec["guarantee"], settings.mu, settings.delta, bins.size, relative, floor,
-                          float(bins.projected_solid_angles().min()))
-        guarantee = spec["guarantee"]
+        rays = rule.rays(settings.mu, settings.delta, bins.size, relative=relative, floor=floor,
+                         smallest_solid_angle=float(bins.projected_solid_angles().min()))
+        guarantee = rule.name
     else:
         rays, guarantee = settings.rays, "rays"
-        if spec["guarantee"] == "relative" or floor is not None:
-            gonio_rays("relative", settings.mu, settings.delta, bins.size, relative, floor,
-                       float(bins.projected_solid_angles().min()))  # checks relative_tolerance and brdf_floor
     resolved = settings.updated(theta_i=float(angles[0]), rays=rays)
     return run_gonio(instrument, resolved, angles, bins, scene=scene, guarantee=guarantee,
-                     relative_tolerance=None if relative is None else float(relative),
-                     brdf_floor=None if floor is None else float(floor))
+                     relative_tolerance=relative, brdf_floor=floor)

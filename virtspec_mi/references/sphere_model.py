@@ -2,8 +2,9 @@
 A sphere description in the terms of the sphere theory (the one rule that ties them)
 ====================================================================================
 
-:mod:`virtspec_mi.geometry.sphere` describes a physical sphere (ports with roles, wall, baffle)
-and how it is read (:class:`~virtspec_mi.geometry.sphere.SphereSettings`);
+:mod:`virtspec_mi.geometry.sphere` describes a physical sphere (ports with roles, wall, baffle),
+the sphere's options say how it is read (:class:`ReadingMode`: plain values, whatever
+options class carries them);
 :mod:`virtspec_mi.references.sphere_theory` predicts readings from port *fractions*. This module is
 the single place where the one becomes the other: :func:`theory_inputs` maps a sphere,
 its reading mode and the specimen disk's radius to the keywords of
@@ -49,15 +50,32 @@ Goebel (1967), eq. 2 (port fractions); :mod:`virtspec_mi.references.sphere_theor
 
 from __future__ import annotations
 
-from typing import Any, Sequence
+from typing import Any, Protocol, Sequence
 
 import numpy as np
 
+from virtspec_mi.geometry.sphere import Sphere
 from virtspec_mi.references import sphere_theory as st
-from virtspec_mi.geometry.sphere import Sphere, SphereSettings
 
-__all__ = ["REFLECTANCE_ROLES", "TRANSMITTANCE_ROLES", "disk_share", "theory_inputs", "invertible_range",
-           "correct_readings"]
+__all__ = ["REFLECTANCE_ROLES", "TRANSMITTANCE_ROLES", "ReadingMode", "disk_share", "theory_inputs",
+           "invertible_range", "correct_readings"]
+
+
+class ReadingMode(Protocol):
+    """
+    How a sphere is read, as :func:`theory_inputs` takes it: the plain values of the
+    sphere's options (any object with these attributes; this module imports no options
+    class, which belongs to the instrument above it).
+    """
+
+    measurement: str
+    """``"reflectance"`` or ``"transmittance"``."""
+    specular: str
+    """``"SCI"`` or ``"SCE"``."""
+    method: str
+    """``"substitution"`` or ``"comparison"``."""
+    standard: float
+    """Reflectance of the white standard."""
 
 REFLECTANCE_ROLES: dict[str, str] = {
     "sample": "sample_fraction", "entrance": "open_fraction", "reference": "reference_fraction",
@@ -90,7 +108,7 @@ def disk_share(sphere: Sphere, port: Any, disk_radius: float) -> float:
     return disk_radius**2 / (4.0 * sphere.radius**2 * (1.0 - cap))
 
 
-def theory_inputs(sphere: Sphere, options: SphereSettings, wavelengths: Sequence[float],
+def theory_inputs(sphere: Sphere, options: ReadingMode, wavelengths: Sequence[float],
                   specimen_radius: float | None = None) -> dict[str, Any]:
     """
     The :mod:`~virtspec_mi.references.sphere_theory` keywords of a sphere reading (see the module
@@ -101,7 +119,8 @@ def theory_inputs(sphere: Sphere, options: SphereSettings, wavelengths: Sequence
     sphere
         The sphere.
     options
-        How it is read: ``measurement``, ``specular`` (``mode``), ``method``, ``standard``.
+        How it is read (:class:`ReadingMode`): ``measurement``, ``specular`` (``mode``),
+        ``method``, ``standard``.
     wavelengths
         nm; ``wall_reflectance`` is ρw at these (an array).
     specimen_radius

@@ -40,6 +40,7 @@ from typing import Any
 import numpy as np
 
 from virtspec_mi.budgets import bins as gonio_bounds
+from virtspec_mi.budgets.rules import guarantee_of
 from virtspec_mi.geometry.bins import GonioBins
 from virtspec_mi.results.hemispherical import Result, _round_up, plain_data
 
@@ -62,7 +63,7 @@ class GonioResult:
     bins : GonioBins
         The bins (edges in degrees, folding).
     guarantee : str
-        How N was sized (:data:`~virtspec_mi.budgets.bins.GUARANTEES`), or ``"rays"`` when given.
+        How N was sized (:data:`~virtspec_mi.budgets.rules.GUARANTEES`), or ``"rays"`` when given.
     relative_tolerance, brdf_floor : float or None
         The relative certificate asked for (``guarantee="relative"``), else ``None``.
     """
@@ -188,12 +189,8 @@ class GonioResult:
     def bins_mu(self) -> np.ndarray:
         """μ with |m_k/N − p_k| < μ for every bin at once at δ (per reading; NaN: not certified)."""
 
-        if self.guarantee == "union-exact":
-            mu = np.minimum(gonio_bounds.union_exact_mu(self.rays, self.delta, self.size, self.result.mu),
-                            gonio_bounds.bins_mu(self.rays, self.delta, self.size))
-        else:
-            mu = gonio_bounds.bins_mu(self.rays, self.delta, self.size)
-        return self._certified(mu)
+        return self._certified(guarantee_of(self.guarantee).certified(self.rays, self.delta, self.result.mu,
+                                                                      self.size))
 
     @property
     def cdf_mu(self) -> np.ndarray:
@@ -219,18 +216,9 @@ class GonioResult:
         it is :meth:`certificate`'s to say.
         """
 
-        s, k = self.result.settings, self.size
-        if self.guarantee == "rays":
-            return None
-        if self.guarantee == "relative":
-            target = (f"f_k within relative {self.relative_tolerance:g} for every bin with f_k >= "
-                      f"{self.brdf_floor:g}/sr (Chernoff + union over K = {k})")
-        elif self.guarantee == "dkw":
-            target = f"the CDFs of theta_o and phi_o within mu = {s.mu:g} (DKW-Massart)"
-        else:
-            rule = "exact binomial at delta/K" if self.guarantee == "union-exact" else "Hoeffding + union"
-            target = f"every bin fraction within mu = {s.mu:g} at once ({rule} over K = {k})"
-        return f"sized by guarantee={self.guarantee} for {target}, delta = {s.delta:g}"
+        s, rule = self.result.settings, guarantee_of(self.guarantee)
+        target = rule.target(s.mu, self.size, self.relative_tolerance, self.brdf_floor)
+        return None if target is None else f"{rule.sized} for {target}, delta = {s.delta:g}"
 
     def certificate(self) -> str:
         """What the reading's rays guarantee, in words (worst reading), or "not certified"."""
@@ -238,7 +226,7 @@ class GonioResult:
         k, delta = self.size, self.delta
         counted = f"N = {int(self.rays.min()):,}" + (f" to {int(self.rays.max()):,}" if self.rays.min() != self.rays.max()
                                                       else "") + f" rays per reading, K = {k} bins"
-        rule = "rays given" if self.guarantee == "rays" else f"sized by guarantee={self.guarantee}"
+        rule = guarantee_of(self.guarantee).sized
         bins_mu, cdf_mu = self.bins_mu, self.cdf_mu
         if np.all(np.isnan(cdf_mu)):
             return f"{counted} ({rule}): NOT CERTIFIED (see the reading's warnings, or too few rays)"
@@ -249,7 +237,7 @@ class GonioResult:
             lines.append("  bin fractions: not certified (too few rays for K bins)")
         else:
             lines.append(f"  every bin fraction at once: |m_k/N - p_k| < {_round_up(float(np.nanmax(bins_mu))):g} "
-                         f"({'exact-binomial ' if self.guarantee == 'union-exact' else ''}union bound over K)")
+                         f"({guarantee_of(self.guarantee).union_words})")
         lines.append(f"  f_k: simultaneous Clopper-Pearson intervals, each at delta/K = {delta / k:.3g}")
         relative = self.relative_mu
         if relative is not None:

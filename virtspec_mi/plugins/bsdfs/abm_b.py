@@ -9,7 +9,7 @@ mesophyll (the one absorbing slab) | intercellular air | antidermal wall | abaxi
 epidermis | air — run inside ``sample()`` (see :mod:`.abm_walk` for the event order
 and conventions). Each ray is reflected, transmitted or absorbed with unit weight.
 
-Interface table (abm.md §1.4; exponents: reflected going down / refracted going
+Interface table (NPSG reference C++ ``abmb_interfaces.cpp``; exponents: reflected going down / refracted going
 down / reflected going up / refracted going up; ∞ = specular):
 
 ==  ==============================  =====  =====  =====  =====  ==============
@@ -27,13 +27,16 @@ Parameters
 ----------
 {parameters}
 
-Defaults: soybean, LOPEX 0219/0220 (NPSG online ABM-B model, abm.md §2).
+Defaults: soybean, LOPEX93 specimens 0219/0220 (Hosgood et al. 1995), as in the NPSG
+reference's ``samples/lopex_0219_0220.json``.
 
 References
 ----------
 Baranoski & Rokne (1997), CGF 16(3):C141–C150; Baranoski (2006), RSE 100:335–347;
-Baranoski & Eng (2007), IEEE TGRS 45(8):2593–2599; NPSG reference C++
-``abmb_interfaces.cpp`` (abm.md §1.4, §2).
+Baranoski & Eng (2007), IEEE TGRS 45(8):2593–2599; NPSG reference C++ implementation
+(BSD-3), https://github.com/turtlesoupy/ABM-U-and-ABM-B-CPP: ``abmb_interfaces.cpp``, ``samples/lopex_0219_0220.json``;
+Hosgood, B. et al. (1995), Leaf Optical Properties EXperiment 93 (LOPEX93), EUR 16095 EN,
+European Commission, Joint Research Centre.
 """
 
 from __future__ import annotations
@@ -43,7 +46,7 @@ from virtspec_mi.plugins.bsdfs.abm_walk import AIR, ANTIDERMAL, CUTICLE, MESOPHY
 __all__ = ["ABMB", "SOYBEAN"]
 
 SOYBEAN: dict[str, float] = leaf_defaults(0)
-"""Soybean (LOPEX 0219/0220) parameters in SI units (abm.md §2)."""
+"""Soybean (LOPEX 0219/0220) parameters in SI units (NPSG ``samples/lopex_0219_0220.json``)."""
 
 __doc__ = __doc__.replace("{parameters}", parameter_docs(SOYBEAN))  # the rows are written once, in abm_walk
 

@@ -10,7 +10,7 @@ depth u·d_m, u ~ U(0, 1) drawn once per ray. The walk runs inside ``sample()`` 
 :mod:`.abm_walk` for the event order and conventions); each ray is reflected,
 transmitted or absorbed with unit weight.
 
-Interface table (abm.md §1.4; exponents: reflected going down / refracted going
+Interface table (NPSG reference C++ ``abmu_interfaces.cpp``; exponents: reflected going down / refracted going
 down / reflected going up / refracted going up; ∞ = specular):
 
 ==  ==============================  =====  =====  =====  =====  ==================
@@ -30,13 +30,16 @@ Parameters
 ----------
 {parameters}
 
-Defaults: corn, LOPEX 0141/0142 (NPSG online ABM-U model, abm.md §2).
+Defaults: corn, LOPEX93 specimens 0141/0142 (Hosgood et al. 1995), as in the NPSG
+reference's ``samples/lopex_0141_0142.json``.
 
 References
 ----------
 Baranoski & Rokne (1997), CGF 16(3):C141–C150; Baranoski (2006), RSE 100:335–347;
-Baranoski & Eng (2007), IEEE TGRS 45(8):2593–2599; NPSG reference C++
-``abmu_interfaces.cpp`` (abm.md §1.4, §2).
+Baranoski & Eng (2007), IEEE TGRS 45(8):2593–2599; NPSG reference C++ implementation
+(BSD-3), https://github.com/turtlesoupy/ABM-U-and-ABM-B-CPP: ``abmu_interfaces.cpp``, ``samples/lopex_0141_0142.json``;
+Hosgood, B. et al. (1995), Leaf Optical Properties EXperiment 93 (LOPEX93), EUR 16095 EN,
+European Commission, Joint Research Centre.
 """
 
 from __future__ import annotations
@@ -46,7 +49,7 @@ from virtspec_mi.plugins.bsdfs.abm_walk import AIR, CUTICLE, MESOPHYLL, ABMLeaf,
 __all__ = ["ABMU", "CORN"]
 
 CORN: dict[str, float] = leaf_defaults(1)
-"""Corn (LOPEX 0141/0142) parameters in SI units (abm.md §2)."""
+"""Corn (LOPEX 0141/0142) parameters in SI units (NPSG ``samples/lopex_0141_0142.json``)."""
 
 __doc__ = __doc__.replace("{parameters}", parameter_docs(CORN))  # the rows are written once, in abm_walk
 

@@ -54,9 +54,10 @@ Conventions
 References
 ----------
 Baranoski & Rokne (1997), CGF 16(3); Baranoski (2006), RSE 100:335–347; Baranoski & Eng
-(2007), IEEE TGRS 45(8) (sieve and detour). Implemented from ``shared/research/abm.md``
-§1.3–1.7 (NPSG reference C++ ``run_abm.cpp``, ``abmb_interfaces.cpp``,
-``abmu_interfaces.cpp``).
+(2007), IEEE TGRS 45(8):2593–2599 (sieve and detour). The event order and its semantics
+follow the NPSG reference C++ implementation (BSD-3), https://github.com/turtlesoupy/ABM-U-and-ABM-B-CPP:
+``run_abm.cpp`` (the walk, ``freePathLength``, the lobe sampling), ``abm_interfaces.cpp``,
+``abmb_interfaces.cpp`` and ``abmu_interfaces.cpp``.
 """
 
 from __future__ import annotations
@@ -114,7 +115,8 @@ PARAMETER_DOCS: tuple[tuple[str, str, Any, str], ...] = (
     ("chlorophyll_b", "float", None, "Chlorophyll b, kg m⁻³, ≥ 0 (it shares chlorophyll a's coefficient)."),
     ("carotenoids", "float", None, "Carotenoids, kg m⁻³, ≥ 0."),
     ("protein", "float", None, "Protein, kg m⁻³, ≥ 0 (the NPSG online form's 0.078059 g cm⁻³ for soybean "
-                               "is a typo, abm.md §1.10)."),
+                               "drops a digit; the reference's samples/lopex_0219_0220.json holds "
+                               "0.0787059)."),
     ("cellulose", "float", None, "Cellulose, kg m⁻³, ≥ 0 (corn: the NPSG online form's split of the sample "
                                  "file's 0 + 59.245619, the same sum)."),
     ("lignin", "float", None, "Lignin, kg m⁻³, ≥ 0 (it uses the cellulose coefficient)."),
@@ -156,7 +158,7 @@ def parameter_docs(defaults: dict[str, float]) -> str:
 
 
 LEAF_DEFAULTS: tuple[tuple[str, float, float | None], ...] = (
-    # parameter               soybean (ABM-B)  corn (ABM-U)   SI units, abm.md §2
+    # parameter               soybean (ABM-B)  corn (ABM-U)   SI units; NPSG samples/lopex_*.json × 1000
     ("thickness",              1.66e-4,         2.04e-4),
     ("mesophyll_fraction",     0.5,             0.8),
     ("chlorophyll_a",          3.9775,          2.895146),
@@ -182,7 +184,7 @@ def leaf_defaults(column: int) -> dict[str, float]:
 
 class Interface(NamedTuple):
     """
-    One interface of the stack (abm.md §1.2, §1.4).
+    One interface of the stack (NPSG C++ ``abm_interfaces.cpp``).
 
     ``above``/``below`` are media; ``e_da``, ``e_db``, ``e_ub``, ``e_ua`` name the
     aspect-ratio parameter used as the lobe exponent (``None`` = ∞, no perturbation)
@@ -329,7 +331,7 @@ class ABMLeaf(SampledOnlyBSDF):
 
     @property
     def mesophyll_thickness(self) -> float:
-        """d_m = f_m · h in m (abm.md §1.3)."""
+        """d_m = f_m · h in m (NPSG C++ ``buildInterfaces``)."""
 
         return self.params["mesophyll_fraction"] * self.params["thickness"]
 
@@ -436,7 +438,7 @@ class ABMLeaf(SampledOnlyBSDF):
 
     def walk_step(self, state):
         """
-        One step (abm.md §1.5, §1.7) of the lanes the caller runs: an interface event —
+        One step (NPSG C++ ``run_abm.cpp``) of the lanes the caller runs: an interface event —
         absorption test, Fresnel choice and one Warn-lobe sample — or, for a lane whose
         lobe sample fell on the wrong side, the next lobe sample of that event. The lobe's
         retries are steps of their own (no loop inside a step), so a packet of lanes never

@@ -38,9 +38,10 @@ def main() -> None:
     parser.add_argument("--repeat", type=int, default=5)
     parser.add_argument("--rays", type=int, default=105_967)
     args = parser.parse_args()
-    from virtspec_mi.kernel.sphere_walk import SphereWalk, tally_sphere
-    from virtspec_mi.scene import find_bench
+    from virtspec_mi.engine.plan import kernel_options
     from virtspec_mi.instruments.sphere import configurations
+    from virtspec_mi.kernel.tracer import ReadingPlan, tally_readings
+    from virtspec_mi.scene import find_bench
 
     mi = vm.mitsuba()
     scene = mi.load_file(SCENE)
@@ -48,14 +49,14 @@ def main() -> None:
     instrument = find_bench(scene)
     settings = integrator.settings.updated(rays=args.rays)
     sphere, options = integrator.sphere, integrator.sphere_settings
-    standard = mi.load_dict({"type": "diffuse", "reflectance": options.standard})
-    holders, actions = configurations(sphere, options, instrument.bsdf, instrument.geometry.specimen_radius,
-                                      standard, mi.load_dict({"type": "null"}))["sample"]
-    walk = SphereWalk(sphere, holders, actions, options.max_bounces)
-    rho_w = sphere.wall_reflectance_at(settings.wavelengths)
+    holders, actions = configurations(sphere, options, instrument.geometry.specimen_radius)["sample"]
+    layout = sphere.layout(holders, actions, options.max_bounces, settings.wavelengths)
+    plans = [ReadingPlan(w, settings.theta_i, settings.phi_i, args.rays) for w in settings.wavelengths]
 
     def one_configuration():
-        return tally_sphere(walk, instrument, settings.wavelengths, rho_w, args.rays, settings)
+        tally = tally_readings(instrument, plans, hook=layout, **kernel_options(settings))
+        return [{"cross": tally.bins[k].reshape(4, layout.codes), **{name: value[k] for name, value in tally.sums.items()}}
+                for k in range(len(plans))]
 
     def hemispherical():
         return vm.measure(scene, rays=args.rays)

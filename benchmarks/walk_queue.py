@@ -27,7 +27,7 @@ Three parts, printed as one report:
    (one ``sample()`` per ray), whose idle share is measured by queueing one ray per lane.
 
 3. **Goniophotometer on walks** (working tree only): a reading binned in 36 × 36 (θo, φo)
-   bins per hemisphere (``tally_gonio_readings``) against the plain reading, on the
+   bins per hemisphere (``tally_readings`` with the bins' layout as its hook) against the plain reading, on the
    queued lanes and as the one-loop walk (CPU time best of 3, all threads), and whether
    the queued and one-loop bin tallies are identical.
 
@@ -162,6 +162,7 @@ def occupancy(scale: int) -> list[list[str]]:
     import virtspec_mi as vm
 
     vm.mitsuba()
+    from virtspec_mi.engine.plan import kernel_options
     from virtspec_mi.kernel.tracer import ReadingPlan, WalkQueue, tally_readings
     from virtspec_mi.kernel.walk import walk_steps
     from virtspec_mi.scene import find_bench
@@ -188,15 +189,16 @@ def occupancy(scale: int) -> list[list[str]]:
         base = None
         for queue, chunk in grid:
             run = lambda stats=None: tally_readings(  # noqa: E731
-                instrument, plans, settings.updated(chunk_size=chunk), walk=queue, walk_stats=stats)
-            tally_readings(instrument, plans[:1], settings.updated(chunk_size=1 << 12), walk=queue)  # compile
+                instrument, plans, walk=queue, walk_stats=stats, **kernel_options(settings.updated(chunk_size=chunk)))
+            tally_readings(instrument, plans[:1], walk=queue,
+                           **kernel_options(settings.updated(chunk_size=1 << 12)))  # compile
             cpu = min(_cpu(run) for _ in range(3))
             stats: dict = {}
             if queue.lanes:
                 run(stats)
             else:  # one ray per lane: the one-loop walk's packets
-                tally_readings(instrument, plans, settings.updated(chunk_size=chunk),
-                               walk=WalkQueue(lanes=min(chunk, 1 << 24), queue="stride", refill=1), walk_stats=stats)
+                tally_readings(instrument, plans, walk=WalkQueue(lanes=min(chunk, 1 << 24), queue="stride", refill=1),
+                               walk_stats=stats, **kernel_options(settings.updated(chunk_size=chunk)))
             base = base or cpu
             total = rays * len(plans)
             planned = queue.planned(walk_steps(instrument.bsdf))  # refill and prestart as the kernel ran them
@@ -215,8 +217,9 @@ def gonio(scale: int) -> list[list[str]]:
     import virtspec_mi as vm
 
     vm.mitsuba()
+    from virtspec_mi.engine.plan import kernel_options
     from virtspec_mi.geometry.bins import make_bins
-    from virtspec_mi.kernel.tracer import ReadingPlan, WalkQueue, tally_gonio_readings, tally_readings
+    from virtspec_mi.kernel.tracer import ReadingPlan, WalkQueue, tally_readings
     from virtspec_mi.scene import find_bench
     from virtspec_mi.settings import Settings
 
@@ -234,9 +237,10 @@ def gonio(scale: int) -> list[list[str]]:
         walks = {"queued": WalkQueue(), "one loop": WalkQueue(lanes=0)}
         calls = {}
         for label, queue in walks.items():
-            calls[f"plain, {label}"] = lambda queue=queue: tally_readings(instrument, plans, settings, walk=queue)
-            calls[f"gonio, {label}"] = lambda queue=queue: tally_gonio_readings(
-                instrument, plans, settings, bins, walk=queue)[1]
+            calls[f"plain, {label}"] = lambda queue=queue: tally_readings(instrument, plans, walk=queue,
+                                                                          **kernel_options(settings))
+            calls[f"gonio, {label}"] = lambda queue=queue: tally_readings(
+                instrument, plans, hook=bins.layout(), walk=queue, **kernel_options(settings)).bins
         tallies = {label: call() for label, call in calls.items()}  # compile (and the bins to compare)
         cpu = {label: np.inf for label in calls}
         for _ in range(3):  # interleaved

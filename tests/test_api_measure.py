@@ -353,9 +353,9 @@ def test_budgets_run_batched(monkeypatch, traced_diamond, bound, calls):
     seen = []
     original = tracer.tally_readings
 
-    def counting(instrument, plans, settings, offsets=None, on_chunk=None):
+    def counting(instrument, plans, **options):
         seen.append([plan.rays for plan in plans])
-        return original(instrument, plans, settings, offsets, on_chunk)
+        return original(instrument, plans, **options)
 
     monkeypatch.setattr(tracer, "tally_readings", counting)
     reading = vm.measure(traced_diamond, theta_i=75, bound=bound, wavelengths="400:700:20", mu=0.02, delta=0.05)

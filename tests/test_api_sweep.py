@@ -113,7 +113,7 @@ def _interrupting(monkeypatch, after: int):
 
     import virtspec_mi.engine.readings as engine
 
-    real, calls = engine.take_readings, []
+    real, calls = engine.trace_readings, []
 
     def flaky(*args, **kwargs):
         if len(calls) == after:
@@ -121,7 +121,7 @@ def _interrupting(monkeypatch, after: int):
         calls.append(1)
         return real(*args, **kwargs)
 
-    monkeypatch.setattr(engine, "take_readings", flaky)
+    monkeypatch.setattr(engine, "trace_readings", flaky)
     return calls
 
 
@@ -282,13 +282,13 @@ def test_a_failed_output_write_keeps_every_finished_reading(diamond, monkeypatch
     checkpoint = tmp_path / "sweep.csv.partial.json"
     with monkeypatch.context() as patch:
         if fault == "directory appears":  # e.g. another program made a directory of that name meanwhile
-            real = engine.take_readings
+            real = engine.trace_readings
 
             def making_a_directory(*args, **kw):
                 out.mkdir(exist_ok=True)
                 return real(*args, **kw)
 
-            patch.setattr(engine, "take_readings", making_a_directory)
+            patch.setattr(engine, "trace_readings", making_a_directory)
         elif fault == "disk full at rename":
             real_replace = os.replace
 
@@ -317,7 +317,7 @@ def test_a_failed_output_write_keeps_every_finished_reading(diamond, monkeypatch
     if out.is_dir():
         out.rmdir()
     with monkeypatch.context() as patch:  # the re-run traces nothing: every reading is reused
-        patch.setattr(engine, "take_readings", lambda *a, **k: pytest.fail("traced again"))
+        patch.setattr(engine, "trace_readings", lambda *a, **k: pytest.fail("traced again"))
         resumed = vm.sweep(diamond, out=out, **kwargs)
     for name in ("reflected", "transmitted", "rays"):
         np.testing.assert_array_equal(getattr(vm.read_result(out), name), getattr(whole, name))
@@ -328,7 +328,7 @@ def test_a_failed_output_write_keeps_every_finished_reading(diamond, monkeypatch
 def test_an_output_that_cannot_be_written_fails_before_any_tracing(diamond, monkeypatch, tmp_path):
     import virtspec_mi.engine.readings as engine
 
-    monkeypatch.setattr(engine, "take_readings", lambda *a, **k: pytest.fail("traced before the check"))
+    monkeypatch.setattr(engine, "trace_readings", lambda *a, **k: pytest.fail("traced before the check"))
     (tmp_path / "taken.nc").mkdir()
     (tmp_path / "file").write_text("")
     for out, message in ((tmp_path / "taken.nc", "is a directory"),

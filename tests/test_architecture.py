@@ -444,3 +444,15 @@ class C:
     found = {name for name, _ in imports_of('import importlib\nimportlib.import_module(".x", __name__)', "p", True,
                                            {"p", "p.x"})}
     assert found == {"p.x"}
+
+
+def test_the_kernel_imports_nothing_above_it(project_graph):
+    """The kernel takes plain values: no module of ``virtspec_mi.kernel`` imports a package module outside it."""
+
+    graph, sites = project_graph
+    kernel = [name for name in graph if name == "virtspec_mi.kernel" or name.startswith("virtspec_mi.kernel.")]
+    assert {"virtspec_mi.kernel.tracer", "virtspec_mi.kernel.sphere_walk", "virtspec_mi.kernel.bins"} <= set(kernel)
+    outside = sorted(f"{a} -> {b}  ({', '.join(f'{p}:{line}' for p, line in sites.get((a, b), []))})"
+                     for a in kernel for b in graph[a]
+                     if not (b == "virtspec_mi.kernel" or b.startswith("virtspec_mi.kernel.")))
+    assert not outside, "the kernel imports modules above it:\n" + "\n".join(outside)

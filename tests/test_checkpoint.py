@@ -33,7 +33,7 @@ def _no_tracing(monkeypatch):
     def traced(*args, **kwargs):
         raise AssertionError("traced rays before the check")
 
-    monkeypatch.setattr(engine, "take_readings", traced)
+    monkeypatch.setattr(engine, "trace_readings", traced)
 
 
 def _interrupted_checkpoint(scene, path: Path, after: int, **kwargs) -> dict:
@@ -41,7 +41,7 @@ def _interrupted_checkpoint(scene, path: Path, after: int, **kwargs) -> dict:
 
     import virtspec_mi.engine.readings as engine
 
-    real, calls = engine.take_readings, []
+    real, calls = engine.trace_readings, []
 
     def flaky(*args, **kw):
         if len(calls) == after:
@@ -50,7 +50,7 @@ def _interrupted_checkpoint(scene, path: Path, after: int, **kwargs) -> dict:
         return real(*args, **kw)
 
     with pytest.MonkeyPatch.context() as patch:
-        patch.setattr(engine, "take_readings", flaky)
+        patch.setattr(engine, "trace_readings", flaky)
         with pytest.raises(KeyboardInterrupt):
             vm.sweep(scene, checkpoint=path, **kwargs)
     return json.loads(path.read_text())
@@ -306,7 +306,7 @@ def _interrupt_after(monkeypatch, batches: int) -> None:
 
     import virtspec_mi.engine.readings as engine
 
-    real, calls = engine.take_readings, []
+    real, calls = engine.trace_readings, []
 
     def flaky(*args, **kwargs):
         if len(calls) == batches:
@@ -314,7 +314,7 @@ def _interrupt_after(monkeypatch, batches: int) -> None:
         calls.append(1)
         return real(*args, **kwargs)
 
-    monkeypatch.setattr(engine, "take_readings", flaky)
+    monkeypatch.setattr(engine, "trace_readings", flaky)
 
 
 def test_ctrl_c_names_the_checkpoint_and_the_rerun_says_what_it_reused(scenes_dir, tmp_path, monkeypatch, capsys):
@@ -360,7 +360,7 @@ def test_sweep_out_that_is_a_directory_fails_before_tracing(scenes_dir, tmp_path
     from virtspec_mi.cli import main
 
     (tmp_path / "taken.nc").mkdir()
-    monkeypatch.setattr(engine, "take_readings", lambda *a, **k: pytest.fail("traced before the check"))
+    monkeypatch.setattr(engine, "trace_readings", lambda *a, **k: pytest.fail("traced before the check"))
     assert main(["sweep", str(scenes_dir / "diamond_collimated.xml"), "--theta-i", "0", "--rays", "100",
                  "--out", str(tmp_path / "taken.nc")]) == 1
     err = capsys.readouterr().err

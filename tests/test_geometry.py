@@ -59,8 +59,8 @@ def trace(instrument):
             seed: int = 0, beam: str = "conical") -> dict:
         key = (theta, phi, sampling, rays, seed, beam)
         if key not in cache:
-            settings = virtspec_mi.Settings(theta_i=theta, phi_i=phi, sampling=sampling, beam=beam, seed=seed)
-            cache[key] = trace_rays(instrument, ReadingPlan(551.0, theta, phi, rays), settings, rays)
+            cache[key] = trace_rays(instrument, ReadingPlan(551.0, theta, phi, rays), rays, seed=seed, beam=beam,
+                                    sampling=sampling)
         return cache[key]
 
     return run

@@ -37,22 +37,28 @@ def test_bins_add_up_to_reflected_plus_transmitted_exactly_and_counts_are_unchan
 
 
 def test_tallies_do_not_depend_on_chunking_or_on_the_other_readings(mi, rough):
-    from virtspec_mi.kernel.tracer import ReadingPlan, tally_gonio_readings, tally_readings
+    from virtspec_mi.engine.plan import kernel_options
+    from virtspec_mi.kernel.tracer import ReadingPlan, tally_readings
     from virtspec_mi.scene import find_bench
 
     instrument = find_bench(rough)
     bins = make_bins([0, 10, 30, 90, 120, 180], [0, 45, 200, 360])  # searched edges
     plans = [ReadingPlan(550.0, t, p, 5000) for t, p in ((10, 0), (50, 30), (80, 200))]
     big = Settings(seed=9)
-    counts, tallies = tally_gonio_readings(instrument, plans, big, bins)
-    small_counts, small = tally_gonio_readings(instrument, plans, big.updated(chunk_size=1024), bins)
-    assert np.array_equal(tallies, small) and np.array_equal(counts.reflected, small_counts.reflected)
-    plain = tally_readings(instrument, plans, big)
+
+    def tally(settings, plans=plans, hook=bins.layout(), **kwargs):
+        return tally_readings(instrument, plans, hook=hook, **kernel_options(settings), **kwargs)
+
+    binned = tally(big)
+    counts, tallies = binned.counts, binned.bins
+    small = tally(big.updated(chunk_size=1024))
+    assert np.array_equal(tallies, small.bins) and np.array_equal(counts.reflected, small.counts.reflected)
+    plain = tally(big, hook=None).counts
     assert np.array_equal(plain.reflected, counts.reflected) and np.array_equal(plain.transmitted, counts.transmitted)
     for k, plan in enumerate(plans):  # alone, with its own ray range: the same tallies
-        _, alone = tally_gonio_readings(instrument, [plan], big, bins, offsets=[5000 * k])
+        alone = tally(big, [plan], offsets=[5000 * k]).bins
         assert np.array_equal(alone[0], tallies[k])
-    assert np.array_equal(tallies.sum(axis=(1, 2)), counts.reflected + counts.transmitted)
+    assert np.array_equal(tallies.sum(axis=1), counts.reflected + counts.transmitted)
 
 
 @pytest.mark.parametrize("spec", [
@@ -70,7 +76,8 @@ def test_each_ray_lands_in_the_bin_of_its_direction(mi, rough, spec):
 
     bins = make_bins(**spec)
     phi_i = 30.0
-    rays = trace_rays(find_bench(rough), ReadingPlan(550.0, 35.0, phi_i, 20_000), Settings(), 20_000, bins)
+    rays = trace_rays(find_bench(rough), ReadingPlan(550.0, 35.0, phi_i, 20_000), 20_000, seed=0, beam="conical",
+                      sampling="jittered", hook=bins.layout())
     wo, fate = rays["wo"].astype(np.float64), rays["fate"]
     theta = np.degrees(np.arctan2(np.hypot(wo[:, 0], wo[:, 1]), wo[:, 2]))
     phi = np.degrees(np.arctan2(wo[:, 1], wo[:, 0])) % 360.0
@@ -256,5 +263,7 @@ def test_plots_and_spectra_per_bin(rough, tmp_path):
         reading.plot(tmp_path / "x.pdf")
     sd = reading.to_sd(theta_o=40, phi_o=190)
     assert list(sd.wavelengths) == [500, 600] and np.allclose(sd.values, reading.brdf[:, 0, 2, 4])
-    with pytest.raises(ValueError, match="read_gonio"):
-        vm.read_result(reading.write(tmp_path / "g.nc"))
+    path = reading.write(tmp_path / "g.nc")  # read_result reads every kind; Result.read names it
+    assert isinstance(vm.read_result(path), vm.GonioResult) and vm.read_result(path).as_dict() == reading.as_dict()
+    with pytest.raises(ValueError, match="goniophotometer reading.*read it with virtspec_mi.read_result"):
+        vm.Result.read(path)

@@ -14,7 +14,7 @@ import pytest
 
 import virtspec_mi as vm
 from virtspec_mi.kernel.counts import Counts, Fate
-from virtspec_mi.kernel.tracer import ReadingPlan, tally_readings, trace_rays
+from virtspec_mi.kernel.tracer import ReadingPlan, trace_rays
 from virtspec_mi.scene import find_bench
 from virtspec_mi.settings import Settings
 
@@ -80,8 +80,8 @@ def test_invalid_directions_are_counted_apart_in_no_fate(mi, invalid_bsdf):
 
 def test_trace_rays_marks_invalid_directions(mi, invalid_bsdf):
     instrument = find_bench(vm.instrument_scene({"type": invalid_bsdf}))
-    settings = Settings(theta_i=30, beam="collimated", rays=4000)
-    lanes = trace_rays(instrument, ReadingPlan(551.0, 30.0, 0.0, 4000), settings, 4000)
+    lanes = trace_rays(instrument, ReadingPlan(551.0, 30.0, 0.0, 4000), 4000, seed=0, beam="collimated",
+                       sampling="jittered")
     wo, fate = lanes["wo"], lanes["fate"]
     length = np.linalg.norm(wo, axis=1)
     bad = ~(np.abs(length - 1) <= 1e-3) & (lanes["weight"] > 0)
@@ -144,7 +144,11 @@ def test_chunk_cuts_match_the_per_reading_rule():
         np.testing.assert_array_equal(_cuts(starts, offsets, rays), _cuts_by_loop(starts, offsets, rays))
 
 
-def test_the_kernel_refuses_a_reading_beyond_two_to_the_32(diamond):
-    instrument = find_bench(diamond)
+def test_a_reading_beyond_two_to_the_32_is_refused_at_the_boundary(diamond):
+    """The kernel trusts its readings (at most 2**32 - 1 rays: a reading crosses one 2**32 boundary at most);
+    the boundary refuses more, before anything is traced."""
+
     with pytest.raises(ValueError, match="rays must satisfy 1 <= rays <= 4294967295"):
-        tally_readings(instrument, [ReadingPlan(551.0, 0.0, 0.0, 2**32)], Settings())
+        Settings(rays=2**32)
+    with pytest.raises(ValueError, match="rays must satisfy 1 <= rays <= 4294967295"):
+        vm.measure(diamond, rays=2**32)

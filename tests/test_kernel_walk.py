@@ -73,11 +73,12 @@ _QUEUE_CASES = {
 
 
 def _tally(instrument, readings, settings, rays, **queue):
+    from virtspec_mi.engine.plan import kernel_options
     from virtspec_mi.kernel.tracer import ReadingPlan, WalkQueue, tally_readings
 
     plans = [ReadingPlan(w, t, 0.0, rays) for w, t in readings]
     offsets = [k * 3 * rays + 17 for k in range(len(plans))]  # gaps: readings keyed apart
-    counts = tally_readings(instrument, plans, settings, offsets, walk=WalkQueue(**queue))
+    counts = tally_readings(instrument, plans, offsets=offsets, walk=WalkQueue(**queue), **kernel_options(settings)).counts
     return np.stack([counts.reflected, counts.transmitted, counts.capped, counts.specular_reflected,
                      counts.regular_transmitted, counts.rounded_weights, counts.weight_violations])
 
@@ -121,8 +122,9 @@ _GONIO_CASES = {
 def test_queued_walks_bin_as_one_loop_per_ray(mi, case):
     """Goniophotometer bins bit-identical: sample() per ray (one loop) vs queued lanes, any chunk size."""
 
+    from virtspec_mi.engine.plan import kernel_options
     from virtspec_mi.geometry.bins import make_bins
-    from virtspec_mi.kernel.tracer import ReadingPlan, WalkQueue, tally_gonio_readings
+    from virtspec_mi.kernel.tracer import ReadingPlan, WalkQueue, tally_readings
     from virtspec_mi.scene import find_bench
     from virtspec_mi.settings import Settings
 
@@ -130,13 +132,17 @@ def test_queued_walks_bin_as_one_loop_per_ray(mi, case):
     instrument = find_bench(vm.instrument_scene(specimen))
     bins = make_bins(**spec)
     plans = [ReadingPlan(w, t, p, 3000) for w, t, p in readings]
-    counts, one_loop = tally_gonio_readings(instrument, plans, Settings(**options), bins, walk=WalkQueue(lanes=0))
+
+    def tally(settings, walk):
+        result = tally_readings(instrument, plans, hook=bins.layout(), walk=walk, **kernel_options(settings))
+        return result.counts, result.bins
+
+    counts, one_loop = tally(Settings(**options), WalkQueue(lanes=0))
     assert np.count_nonzero(one_loop) > 4  # rays spread over bins: the comparison can fail
-    assert np.array_equal(one_loop.sum(axis=(1, 2)), counts.reflected + counts.transmitted)
+    assert np.array_equal(one_loop.sum(axis=1), counts.reflected + counts.transmitted)
     for queue, chunk in ((WalkQueue(), 1 << 22), (WalkQueue(lanes=40, queue="group"), 1024),
                          (WalkQueue(lanes=1000, queue="stride", refill=1), 4096)):
-        queued_counts, queued = tally_gonio_readings(instrument, plans, Settings(chunk_size=chunk, **options), bins,
-                                                     walk=queue)
+        queued_counts, queued = tally(Settings(chunk_size=chunk, **options), queue)
         assert np.array_equal(queued, one_loop), (queue, chunk)
         assert np.array_equal(queued_counts.reflected, counts.reflected)
         assert np.array_equal(queued_counts.transmitted, counts.transmitted)

@@ -57,8 +57,9 @@ _CASES = {
 def test_prestart_counts_as_one_loop_per_ray(mi, case):
     """Bit-identical counts and bins: starts computed in the refill or before the loop, any chunk size."""
 
+    from virtspec_mi.engine.plan import kernel_options
     from virtspec_mi.geometry.bins import make_bins
-    from virtspec_mi.kernel.tracer import ReadingPlan, WalkQueue, tally_gonio_readings, tally_readings
+    from virtspec_mi.kernel.tracer import ReadingPlan, WalkQueue, tally_readings
     from virtspec_mi.scene import find_bench
     from virtspec_mi.settings import Settings
 
@@ -67,8 +68,11 @@ def test_prestart_counts_as_one_loop_per_ray(mi, case):
     plans = [ReadingPlan(w, t, 0.0, 3000) for w, t in readings]
     offsets = [k * 5000 + 11 for k in range(len(plans))]
 
+    def tally(settings, walk, hook=None):
+        return tally_readings(instrument, plans, offsets=offsets, walk=walk, hook=hook, **kernel_options(settings))
+
     def counts(walk, chunk):
-        c = tally_readings(instrument, plans, Settings(chunk_size=chunk, **options), offsets, walk=walk)
+        c = tally(Settings(chunk_size=chunk, **options), walk).counts
         return np.stack([c.reflected, c.transmitted, c.capped, c.specular_reflected, c.regular_transmitted])
 
     one_loop = counts(WalkQueue(lanes=0), 1 << 22)
@@ -77,8 +81,7 @@ def test_prestart_counts_as_one_loop_per_ray(mi, case):
                         (WalkQueue(prestart=False, refill=4, queue="group", lanes=64), 4096)):
         assert np.array_equal(counts(walk, chunk), one_loop), (walk, chunk)
     bins = make_bins(theta_o_bins=6, phi_o_bins=8)
-    _, binned = tally_gonio_readings(instrument, plans, Settings(**options), bins, offsets, walk=WalkQueue(lanes=0))
+    binned = tally(Settings(**options), WalkQueue(lanes=0), bins.layout()).bins
     assert np.count_nonzero(binned) > 4
-    _, queued = tally_gonio_readings(instrument, plans, Settings(chunk_size=1024, **options), bins, offsets,
-                                     walk=WalkQueue(prestart=True, lanes=100))
+    queued = tally(Settings(chunk_size=1024, **options), WalkQueue(prestart=True, lanes=100), bins.layout()).bins
     assert np.array_equal(queued, binned)

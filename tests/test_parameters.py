@@ -197,7 +197,7 @@ def test_an_interrupted_parameter_sweep_resumes_to_the_uninterrupted_result(soyb
                                                                             tmp_path):
     import virtspec_mi.engine.readings as engine
 
-    real, calls = engine.take_readings, []
+    real, calls = engine.trace_readings, []
 
     def flaky(*args, **kwargs):
         if len(calls) == 2:
@@ -206,7 +206,7 @@ def test_an_interrupted_parameter_sweep_resumes_to_the_uninterrupted_result(soyb
         return real(*args, **kwargs)
 
     checkpoint = tmp_path / "lut.partial.json"
-    monkeypatch.setattr(engine, "take_readings", flaky)
+    monkeypatch.setattr(engine, "trace_readings", flaky)
     with pytest.raises(KeyboardInterrupt):
         vm.sweep(soybean, parameters=GRID, checkpoint=checkpoint, chunk_size=3000, **SWEEP)
     monkeypatch.undo()
@@ -252,7 +252,7 @@ def test_a_parameter_sweep_round_trips_through_every_file_format(soybean, leaf_g
 def test_bad_parameters_are_refused_before_any_tracing(soybean, monkeypatch, parameters, points, message):
     import virtspec_mi.engine.readings as engine
 
-    monkeypatch.setattr(engine, "take_readings", lambda *a, **k: pytest.fail("traced before the check"))
+    monkeypatch.setattr(engine, "trace_readings", lambda *a, **k: pytest.fail("traced before the check"))
     with pytest.raises(ValueError, match=message):
         vm.sweep(soybean, parameters=parameters, points=points, theta_i=8, wavelengths=[550], rays=100)
 

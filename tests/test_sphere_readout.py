@@ -62,14 +62,14 @@ def test_readout_interval_and_result_files(tmp_path):
         back = SphereResult.read(result.write(tmp_path / f"r{suffix}"))
         assert np.array_equal(back.counts["standard"]["detected"], result.counts["standard"]["detected"])
         assert back.reading == pytest.approx(result.reading)
-    assert json.loads(json.dumps(result.as_dict(), allow_nan=False))["kind"] == "sphere_result"
+    assert json.loads(json.dumps(result.as_dict(), allow_nan=False))["format"] == "virtspec-mi sphere 1"
 
 
 def test_default_rays_certify_each_fraction_at_half_delta():
     from virtspec_mi.budgets.bounds import hoeffding_rays
 
     result = vm.sphere_measure(SCENE, mu=0.05)
-    assert result.rays == hoeffding_rays(0.05, 0.005)
+    assert np.all(result.rays == hoeffding_rays(0.05, 0.005))  # per reading and configuration
     assert result.fraction_mu[0] <= 0.05
 
 
@@ -124,7 +124,8 @@ def test_cli_sphere(capsys):
 
     assert main(["sphere", SCENE, "--rays", "2000", "--specular", "SCE", "--json"]) == 0
     data = json.loads(capsys.readouterr().out)
-    assert data["options"]["specular"] == "SCE" and data["rays"] == 2000
+    assert data["options"]["specular"] == "SCE"
+    assert data["counts"]["sample"]["rays"] == data["counts"]["standard"]["rays"] == [2000]
     assert main(["sphere", SCENE, "--theta-i", "40", "--rays", "100"]) == 1
     assert "entrance port" in capsys.readouterr().err
 

@@ -23,15 +23,23 @@ R = 75.0
 
 
 def walk_counts(sphere, bsdf, radius, rho_w, rays, *, actions, settings=None, max_bounces=100_000):
-    from virtspec_mi.kernel.sphere_walk import Holder, SphereWalk, holder_frame, tally_sphere
+    """One reading at 551 nm through :class:`SphereLayout` on the kernel's one tally path: its ``cross``
+    histogram (hemisphere, sphere fate) and wall reflections."""
 
-    mi = vm.mitsuba()
+    from dataclasses import replace
+
+    from virtspec_mi.engine.plan import kernel_options
+    from virtspec_mi.kernel.sphere_walk import SPECIMEN, Holder, holder_frame
+    from virtspec_mi.kernel.tracer import ReadingPlan, tally_readings
+
+    vm.mitsuba()
     instrument = find_bench(vm.instrument_scene(bsdf, specimen_radius=radius))
     settings = settings or Settings(theta_i=0, beam="collimated")
-    holder = Holder(0, instrument.bsdf, radius, holder_frame(sphere.ports[0].axis, False))
-    walk = SphereWalk(sphere, [holder], actions, max_bounces)
-    del mi
-    return tally_sphere(walk, instrument, [551.0], [rho_w], rays, settings)[0]
+    holder = Holder(0, SPECIMEN, radius, holder_frame(sphere.ports[0].axis, False))
+    layout = replace(sphere, wall_reflectance=rho_w).layout([holder], actions, max_bounces, [551.0])
+    tally = tally_readings(instrument, [ReadingPlan(551.0, settings.theta_i, settings.phi_i, rays)], hook=layout,
+                           **kernel_options(settings))
+    return {"cross": tally.bins[0].reshape(4, layout.codes), **{k: int(v[0]) for k, v in tally.sums.items()}}
 
 
 def ideal(detector_fraction_target=0.01, sample_radius=12.7):

@@ -162,8 +162,8 @@ def test_diffuse_beam_directions_are_cosine_distributed(mi):
 
     instrument = find_bench(vm.instrument_scene({"type": "simple_dielectric"}))
     for sampling in ("jittered", "random"):
-        settings = vm.Settings(beam="diffuse", sampling=sampling, rays=200_000)
-        rays = trace_rays(instrument, ReadingPlan(551.0, 0.0, 0.0, 200_000), settings, 200_000)
+        rays = trace_rays(instrument, ReadingPlan(551.0, 0.0, 0.0, 200_000), 200_000, seed=0, beam="diffuse",
+                          sampling=sampling)
         cos = rays["wi"][:, 2]
         assert np.all(cos >= 0.0)
         # cos θ has density 2μ on [0, 1]: E[μ] = 2/3 (sd 0.2357), E[μ²] = 1/2 (sd 0.2041); 5 sigma.

@@ -48,7 +48,9 @@ def _scene(path: Path, bsdf: str):
 def ideal_table() -> str:
     """Table 1: the ideal sphere's detector fraction, simulated and in three models."""
 
-    from virtspec_mi.kernel.sphere_walk import Holder, SphereWalk, holder_frame, tally_sphere
+    from virtspec_mi.engine.plan import kernel_options
+    from virtspec_mi.kernel.sphere_walk import SPECIMEN, Holder, holder_frame
+    from virtspec_mi.kernel.tracer import ReadingPlan, tally_readings
     from virtspec_mi.scene import find_bench
 
     mu = hoeffding_mu(RAYS, DELTA)
@@ -62,10 +64,11 @@ def ideal_table() -> str:
                                          Port("detector", "detector", 90, 90, radius)))
             instrument = find_bench(vm.instrument_scene({"type": "diffuse", "reflectance": 0.5},
                                                              specimen_radius=radius))
-            holder = Holder(0, instrument.bsdf, radius, holder_frame(sphere.ports[0].axis, False))
-            walk = SphereWalk(sphere, [holder], [6, 7, 0], 100_000)
-            counts = tally_sphere(walk, instrument, [551.0], [rho_w], RAYS, Settings(theta_i=0, beam="conical"))[0]
-            simulated = counts["cross"][:, 0].sum() / RAYS
+            holder = Holder(0, SPECIMEN, radius, holder_frame(sphere.ports[0].axis, False))
+            layout = sphere.layout([holder], [6, 7, 0], 100_000, [551.0])
+            tally = tally_readings(instrument, [ReadingPlan(551.0, 0.0, 0.0, RAYS)], hook=layout,
+                                   **kernel_options(Settings(theta_i=0, beam="conical")))
+            simulated = tally.bins[0].reshape(4, layout.codes)[:, 0].sum() / RAYS
             kw = theory_inputs(sphere, SphereSettings(), [551.0])
             fractions = {k: kw[k] for k in ("sample_fraction", "detector_fraction", "open_fraction")}
             projected = {k: v * (1 - v) for k, v in fractions.items()}

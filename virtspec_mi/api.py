@@ -328,15 +328,21 @@ gonio.__signature__ = _gonio_signature()  # type: ignore[attr-defined]
 
 
 def read_gonio(path: str | os.PathLike) -> GonioResult:
-    """A goniophotometer reading from a file written by :meth:`GonioResult.write`."""
+    """A goniophotometer reading from a file written by its ``write`` (any kind: :func:`read_result`)."""
 
     return GonioResult.read(path)
 
 
-def read_result(path: str | os.PathLike) -> Result:
-    """A result from a file written by ``Result.write`` or printed by ``virtspec measure --json``."""
+def read_result(path: str | os.PathLike) -> Any:
+    """
+    The result in a file, whatever its kind — a hemispherical reading or sweep, a
+    goniophotometer reading, a sphere reading — by its format tag
+    (:func:`virtspec_mi.results.kinds.read_result`).
+    """
 
-    return Result.read(path)
+    from virtspec_mi.results.kinds import read_result as read_any
+
+    return read_any(path)
 
 
 def fluctuation(a: Result | np.ndarray, b: Result | np.ndarray, quantity: str = "reflectance") -> float:

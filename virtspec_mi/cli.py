@@ -19,10 +19,15 @@ Command line: ``virtspec``
 - ``virtspec gonio SCENE [--theta-o-bins 18] [--phi-o-bins 36] [--binning] [--fold-phi]
   [--hemispheres] [--guarantee] [--relative-tolerance] [--brdf-floor] [--out FILE] [--plot FIG]
   [--json] [measure options]``: a goniophotometer reading (BRDF/BTDF per direction bin).
-- ``virtspec colour FILE [--theta-i] [--quantity] [--illuminant] [--observer] [--json]``: CIE
-  XYZ, L*a*b* and sRGB of a saved spectrum (a result file or a colour-science CSV).
+- ``virtspec colour FILE [--theta-i] [--quantity] [--sel NAME=VALUE] [--illuminant] [--observer]
+  [--json]``: CIE XYZ, L*a*b* and sRGB of a saved spectrum (a result file of any kind or a
+  colour-science CSV).
 - ``virtspec compare RESULT MEASURED [...]``: a result against a measured spectrum
   (:mod:`virtspec_mi.compare`); ``virtspec plot FILE [...]``: a figure of a result file.
+  ``plot``, ``colour`` and ``compare`` read every kind of result file (a hemispherical
+  reading or sweep, a goniophotometer reading: its R and T, or its lobes; a sphere
+  reading: its reading and hemispherical value) and take ``--sel NAME=VALUE``
+  (repeatable): the label of a dim nearest VALUE (a parameter point, θi, a wavelength).
 - ``virtspec sphere SCENE [--measurement] [--specular SCI|SCE] [--method] [--standard]
   [--max-bounces] [--out FILE(.json|.nc)] [--json] [measure options]``: the readout of a
   physical integrating sphere (:mod:`virtspec_mi.instruments.sphere`).
@@ -58,7 +63,9 @@ _EXAMPLES = {
     "gonio": "examples:\n  virtspec gonio scenes/diamond_collimated.xml --theta-i 30 --theta-o-bins 9 --phi-o-bins 12\n"
              "  virtspec gonio scene.xml --binning projected --fold-phi --out brdf.nc --plot brdf.png",
     "colour": "examples:\n  virtspec colour spectrum.csv\n"
-              "  virtspec colour fig5.nc --theta-i 30 --illuminant A --quantity transmittance",
+              "  virtspec colour fig5.nc --theta-i 30 --illuminant A --quantity transmittance\n"
+              "  virtspec colour lut.nc --sel specimen.thickness=1.6e-4 --sel theta_i=8\n"
+              "  virtspec colour sphere.json --quantity hemispherical",
     "llvm": "example: virtspec llvm check",
     "scenes": "examples:\n  virtspec scenes\n  virtspec measure soybean_abmb --wavelengths 400:2500:5",
     "sphere": "examples:\n  virtspec sphere scenes/sphere_150mm_8d.xml --specular SCE\n"
@@ -137,12 +144,14 @@ def build_parser() -> argparse.ArgumentParser:
     colour = command("colour", "CIE XYZ, L*a*b*, sRGB of a saved spectrum",
                      "Colorimetry (colour-science, ASTM E308) of one quantity of a result file at one theta_i, "
                      "or of a colour-science CSV spectrum.")
-    colour.add_argument("file", help="result file (.nc, .csv, .json; also `measure --json` output) or "
-                                     "colour-science CSV spectra")
+    colour.add_argument("file", help="result file of any kind (.nc, .csv, .json, .zarr; also `measure --json` "
+                                     "output) or colour-science CSV spectra")
     colour.add_argument("--theta-i", type=float, help="angle of the sweep to use (needed if it has several)")
-    colour.add_argument("--quantity", default="reflectance",
-                        help=f"the spectrum to use: {', '.join(QUANTITIES)} of a result file, or a column of "
-                             "a colour-science CSV (default reflectance)")
+    colour.add_argument("--quantity",
+                        help=f"the spectrum to use: {', '.join(QUANTITIES)} of a reading or goniophotometer "
+                             "file, reading, corrected or hemispherical of a sphere file, or a column of a "
+                             "colour-science CSV (default: the first: reflectance, a sphere's reading)")
+    _selection_option(colour)
     colour.add_argument("--illuminant", default="D65", help="colour.SDS_ILLUMINANTS name (default D65)")
     colour.add_argument("--observer", default="CIE 1931 2 Degree Standard Observer",
                         help="colour.MSDS_CMFS name (default CIE 1931 2 degree)")
@@ -166,22 +175,32 @@ def build_parser() -> argparse.ArgumentParser:
                       "residuals, RMSE, the share of points within the certified tolerance (+ the measurement "
                       "uncertainty) and Delta E 2000. MEASURED: a colour-science CSV spectral file, a plain "
                       "wavelength,value[,uncertainty] CSV, a NetCDF file or another result file.")
-    compare.add_argument("result", help="result file (.nc, .csv, .json; also `measure --json` output)")
+    compare.add_argument("result", help="result file of any kind (.nc, .csv, .json, .zarr; also `measure --json` "
+                                        "output)")
     compare.add_argument("measured", help="measured spectrum (.csv, .txt, .nc, or a result file)")
     _comparison_options(compare)
+    _selection_option(compare)
     compare.add_argument("--plot", help="figure .png or .svg: both spectra and the residuals")
     compare.add_argument("--json", action="store_true", help="print the comparison as one JSON object")
 
     _EXAMPLES["plot"] = ("examples:\n  virtspec plot fig5.nc --wavelengths 400 550 700 --out fig5.png\n"
                          "  virtspec plot spectrum.nc --quantity transmittance\n"
-                         "  virtspec plot spectrum.nc --against measured.csv --out compare.svg")
-    plot = command("plot", "figure of a result file (a sweep or a reading), optionally against a measured spectrum",
+                         "  virtspec plot spectrum.nc --against measured.csv --out compare.svg\n"
+                         "  virtspec plot brdf.nc --sel wavelength=550 --out lobes.png\n"
+                         "  virtspec plot lut.nc --sel specimen.thickness=1.6e-4 --sel theta_i=8")
+    plot = command("plot", "figure of a result file (a sweep, a reading, a goniophotometer or sphere reading), "
+                           "optionally against a measured spectrum",
                    "Plot one quantity of a result file against theta_i (a sweep over angles: one curve per "
                    "wavelength) or wavelength (one curve per theta_i), with the band of the certified tolerance; "
-                   "with --against, the result over a measured spectrum and the residuals (as compare --plot).")
-    plot.add_argument("file", help="result file (.nc, .csv, .json; also `measure --json` output)")
-    plot.add_argument("--quantity", choices=list(QUANTITIES), default="reflectance",
-                      help="quantity to draw (default reflectance)")
+                   "a goniophotometer file: its lobes (f in and across the plane of incidence, at one "
+                   "wavelength), or with --quantity its R, T or A; a sphere file: its reading and the "
+                   "hemispherical value of the same rays over wavelength. With --against, the result over a "
+                   "measured spectrum and the residuals (as compare --plot).")
+    plot.add_argument("file", help="result file of any kind (.nc, .csv, .json, .zarr; also `measure --json` output)")
+    plot.add_argument("--quantity",
+                      help=f"quantity to draw: {', '.join(QUANTITIES)} (default reflectance; a goniophotometer "
+                           "file: its lobes), or reading, corrected, hemispherical of a sphere file (default both "
+                           "reading and hemispherical)")
     plot.add_argument("--theta-i", nargs="+", help="angles of the result to draw (default all; one with --against)")
     plot.add_argument("--wavelengths", nargs="+", help="wavelengths of the result to draw, e.g. 400 550 700 or "
                                                        "400:700:50 (default all)")
@@ -189,6 +208,7 @@ def build_parser() -> argparse.ArgumentParser:
     plot.add_argument("--uncertainty", type=float,
                       help="measurement uncertainty of MEASURED (overrides its uncertainty column)")
     plot.add_argument("--out", help="figure .png or .svg (default: FILE with the suffix .png)")
+    _selection_option(plot)
     sphere = command("sphere", "the readout of a physical integrating sphere (sample over standard)",
                      "Simulate an integrating-sphere instrument reading the scene's specimen: the detector "
                      "fractions with the sample and with the reference standard, their certified ratio, the "
@@ -201,6 +221,38 @@ def build_parser() -> argparse.ArgumentParser:
     sphere.add_argument("--out", help="result file .json or .nc")
     sphere.add_argument("--json", action="store_true", help="print the result as one JSON object")
     return parser
+
+
+def _selection_option(parser: argparse.ArgumentParser) -> None:
+    """``--sel NAME=VALUE`` (repeatable): the label of a dim nearest VALUE, before anything is read from the result."""
+
+    parser.add_argument("--sel", dest="selections", action="append", default=[], metavar="NAME=VALUE",
+                        help="keep the label of dim NAME nearest VALUE (repeatable): a parameter point "
+                             "(e.g. specimen.thickness=1.6e-4, point=3), theta_i=8, wavelength=550")
+
+
+def _selected(path: Any, selections: Sequence[str]) -> Any:
+    """The result in ``path`` (any kind) at the labels nearest each ``--sel NAME=VALUE``; says which it took."""
+
+    import numpy as np
+
+    from virtspec_mi.results.kinds import read_result
+
+    result = read_result(path)
+    labels = {}
+    for name, text in _pairs(selections, "--sel").items():
+        try:
+            labels[name] = float(text)
+        except ValueError:
+            raise ValueError(f"--sel {name} takes a number (got {text!r})") from None
+    if not labels:
+        return result
+    chosen = result.sel(labels, method="nearest")
+    for name, value in labels.items():
+        taken = float(np.asarray(chosen.coords[name]))
+        if not np.isclose(taken, value, rtol=1e-9, atol=1e-12):
+            print(f"virtspec: note: --sel {name}={value:g} took the nearest label, {taken:g}", file=sys.stderr)
+    return chosen
 
 
 def _scene_options(parser: argparse.ArgumentParser, sweep: bool) -> None:
@@ -482,23 +534,28 @@ def _check_densities(densities: Sequence[float]) -> None:
 def _colour(args: argparse.Namespace) -> int:
     from pathlib import Path
 
-    from virtspec_mi.api import read_result
     from virtspec_mi.results.colorimetry import colorimetry
     from virtspec_mi.results.io import is_result_csv, read_spectra_csv
 
     path = Path(args.file)
     if path.suffix.lower() == ".csv" and path.is_file() and not is_result_csv(path):
+        if args.selections:
+            raise ValueError("--sel selects labels of a result file; a colour-science CSV holds one spectrum per "
+                             "column (pick it with --quantity)")
+        quantity = args.quantity or "reflectance"
         spectra = read_spectra_csv(path)
-        if args.quantity not in spectra:
-            raise ValueError(f"quantity must be one of the file's columns {sorted(spectra)} (got {args.quantity!r})")
-        sd = spectra[args.quantity]
-        heading = f"{args.quantity} of {path}"
+        if quantity not in spectra:
+            raise ValueError(f"quantity must be one of the file's columns {sorted(spectra)} (got {quantity!r})")
+        sd = spectra[quantity]
+        heading = f"{quantity} of {path}"
     else:
-        sd = read_result(path).to_sd(args.quantity, args.theta_i)
-        heading = f"{args.quantity} of {path} ({sd.name})"
+        result = _selected(path, args.selections)
+        quantity = result.check_quantity(args.quantity)
+        sd = result.to_sd(quantity, args.theta_i)
+        heading = f"{quantity} of {path} ({sd.name})"
     colour = colorimetry(sd, args.illuminant, args.observer)
     if args.json:
-        print(json.dumps({"file": str(path), "quantity": args.quantity, "spectrum": heading, **colour.as_dict()}))
+        print(json.dumps({"file": str(path), "quantity": quantity, "spectrum": heading, **colour.as_dict()}))
         return 0
     print(heading)
     print(colour.summary())
@@ -510,9 +567,11 @@ def _comparison_options(parser: argparse.ArgumentParser) -> None:
 
     from virtspec_mi.kernel.counts import QUANTITIES
 
-    parser.add_argument("--quantity", choices=list(QUANTITIES), default="reflectance",
-                        help="quantity compared: the result's and the measured column of that name "
-                             "(default reflectance)")
+    parser.add_argument("--quantity",
+                        help=f"quantity compared: {', '.join(QUANTITIES)} of a reading or goniophotometer file "
+                             "(the measured column of that name; default reflectance), or reading, corrected, "
+                             "hemispherical of a sphere file (default reading; the measured column of what the "
+                             "sphere measures)")
     parser.add_argument("--theta-i", type=float, help="angle of the result to use (needed if it has several)")
     parser.add_argument("--uncertainty", type=float,
                         help="measurement uncertainty, added to the certified tolerance (overrides the file's "
@@ -524,13 +583,18 @@ def _comparison_options(parser: argparse.ArgumentParser) -> None:
 
 
 def _compare(args: argparse.Namespace) -> int:
+    from dataclasses import replace
+    from pathlib import Path
+
     from virtspec_mi.compare import compare
     from virtspec_mi.results.plot import check_figure_path
 
     check_figure_path(args.plot)  # a bad suffix fails before any work
-    comparison = compare(args.result, args.measured, quantity=args.quantity, theta_i=args.theta_i,
+    result = _selected(args.result, args.selections)
+    comparison = compare(result, args.measured, quantity=args.quantity, theta_i=args.theta_i,
                          measurement_uncertainty=args.uncertainty, illuminant=args.illuminant,
                          observer=args.observer)
+    comparison = replace(comparison, result_name=Path(args.result).name)
     if args.plot:
         comparison.plot(args.plot)
     if args.json:
@@ -546,10 +610,12 @@ def _plot(args: argparse.Namespace) -> int:
     from dataclasses import replace
     from pathlib import Path
 
-    from virtspec_mi.api import read_result
+    import numpy as np
+
     from virtspec_mi.checks import parse_theta_i, parse_wavelengths
     from virtspec_mi.compare import compare
-    from virtspec_mi.results.plot import check_figure_path, plot_sweep, select
+    from virtspec_mi.results.goniophotometer import GonioResult
+    from virtspec_mi.results.plot import check_figure_path, select
 
     path = Path(args.file)
     against = Path(args.against) if args.against else None
@@ -557,10 +623,16 @@ def _plot(args: argparse.Namespace) -> int:
     out = check_figure_path(args.out or path.with_name(default))
     theta_i = parse_theta_i(" ".join(args.theta_i)) if args.theta_i else None
     wavelengths = parse_wavelengths(" ".join(args.wavelengths)) if args.wavelengths else None
-    result = read_result(path)
+    result = _selected(path, args.selections)
     if against is None:
-        plot_sweep(result, out, quantity=args.quantity, name=path.name, wavelengths=wavelengths, theta_i=theta_i)
+        if wavelengths is not None or theta_i is not None:
+            result = select(result, wavelengths, theta_i)
+        result.plot(out, quantity=args.quantity, name=path.name)
         print(f"plot: {out}")
+        drawn = np.atleast_1d(result.coords["wavelength"])
+        if isinstance(result, GonioResult) and args.quantity in (None, "brdf") and len(drawn) > 1:
+            print(f"drew the lobes at {drawn[0]:g} nm, the first of {len(drawn)} wavelengths "
+                  "(another: --sel wavelength=NM)")
         return 0
     if theta_i is not None and len(theta_i) != 1:
         raise ValueError(f"--theta-i must be one angle with --against (got {len(theta_i)})")

@@ -3,14 +3,15 @@ Simulated against measured spectra: :func:`compare`
 ==================================================
 
 The paper's first application: a virtual measurement of a material model set against
-a real measurement of the material. :func:`compare` takes a
-:class:`~virtspec_mi.results.hemispherical.Result` (or a result file) and a measured spectrum and
-reports, over their common wavelengths:
+a real measurement of the material. :func:`compare` takes a result of any kind (or a
+result file) and a measured spectrum and reports, over their common wavelengths:
 
 - the residuals (simulated − measured), their RMSE, mean and largest absolute value;
 - how many points lie within the **combined tolerance**: the result's
-  ``certified_mu`` μ' (each simulated point is within μ' of the model's true value
-  with probability ≥ 1 − δ) plus the measurement's own uncertainty when known. If
+  certified tolerance μ' (each simulated point is within μ' of the model's true value
+  with probability ≥ 1 − δ: a reading's ``certified_mu``; for a sphere reading the
+  half-width covering its certified interval) plus the measurement's own uncertainty
+  when known. If
   the model is the measured material, each point is within its tolerance with
   probability ≥ 1 − δ (less the measurement's own risk); a share well below that
   flags a model that differs from the measured material;
@@ -18,6 +19,14 @@ reports, over their common wavelengths:
   default), through :func:`virtspec_mi.results.colorimetry.colorimetry` on the common
   wavelengths (refused, with the reason, when they cover too little of the
   colour-matching weight, e.g. a sparse spectrum).
+
+What is compared is one quantity of the result over wavelength at one θi
+(:meth:`~virtspec_mi.results.base.ResultBase.spectrum`): a hemispherical reading's or a
+goniophotometer reading's reflectance, transmittance or absorptance; a sphere reading's
+``reading`` (default), ``corrected`` or ``hemispherical`` value, against a measured
+spectrum of what it measures (its reflectance or transmittance column). A result with
+parameter dims is compared at one parameter point (select it first:
+:meth:`~virtspec_mi.results.base.ResultBase.sel`).
 
 The measured spectrum is linearly interpolated onto the result's wavelengths inside
 the measured range only; result wavelengths outside it are left out (and listed),
@@ -30,8 +39,8 @@ never extrapolated. :func:`read_measured` reads it from
   uncertainty column is named ``uncertainty`` or ``<quantity>_uncertainty``);
 - a NetCDF (xarray) file with a variable named after the quantity (or its only
   variable) over one wavelength dimension, and optionally ``<quantity>_uncertainty``;
-- a virtspec-mi result file (another simulation: its ``certified_mu`` is the
-  uncertainty).
+- a virtspec-mi result file of any kind (another simulation: its certified tolerance
+  is the uncertainty).
 
 Wavelengths are in nm and values fractions in [0, 1] (percentages are refused with a
 hint).
@@ -52,9 +61,9 @@ from typing import Any
 
 import numpy as np
 
-from virtspec_mi.results.colorimetry import DEFAULT_ILLUMINANT, DEFAULT_OBSERVER, Colour, colorimetry
 from virtspec_mi.kernel.counts import QUANTITIES
-from virtspec_mi.results.hemispherical import Result, plain_data
+from virtspec_mi.results.base import ResultBase, plain_data, round_up
+from virtspec_mi.results.colorimetry import DEFAULT_ILLUMINANT, DEFAULT_OBSERVER, Colour, colorimetry
 
 __all__ = ["MeasuredSpectrum", "Comparison", "read_measured", "compare", "MEASURED_SUFFIXES"]
 
@@ -149,14 +158,14 @@ def read_measured(source: Any, quantity: str = "reflectance", theta_i: float | N
     """
     A measured spectrum of ``quantity`` from a file (see the module docstring for the
     formats), a ``colour.SpectralDistribution``, a ``(wavelengths, values[, uncertainty])``
-    tuple, a :class:`MeasuredSpectrum` or a :class:`~virtspec_mi.results.hemispherical.Result` (at
-    ``theta_i``; its ``certified_mu`` becomes the uncertainty).
+    tuple, a :class:`MeasuredSpectrum` or a result of any kind (at ``theta_i``; its
+    certified tolerance becomes the uncertainty).
     """
 
-    _check_quantity(quantity)
+    check_quantity(quantity)
     if isinstance(source, MeasuredSpectrum):
         return source
-    if isinstance(source, Result):
+    if isinstance(source, ResultBase):
         return _from_result(source, quantity, theta_i, "result")
     if isinstance(source, (str, os.PathLike)):
         return _read_file(Path(source), quantity, theta_i)
@@ -166,7 +175,7 @@ def read_measured(source: Any, quantity: str = "reflectance", theta_i: float | N
     if isinstance(source, (tuple, list)) and len(source) in (2, 3):
         return MeasuredSpectrum.of(*source, quantity=quantity)
     raise ValueError("measured must be a file path, a colour.SpectralDistribution, a (wavelengths, values"
-                     f"[, uncertainty]) tuple or a Result (got {type(source).__name__})")
+                     f"[, uncertainty]) tuple or a result (got {type(source).__name__})")
 
 
 def _read_file(path: Path, quantity: str, theta_i: float | None) -> MeasuredSpectrum:
@@ -176,7 +185,7 @@ def _read_file(path: Path, quantity: str, theta_i: float | None) -> MeasuredSpec
     if not path.is_file():
         raise ValueError(f"measured file not found: {path}")
     if suffix == ".json" or (suffix == ".csv" and _is_result_csv(path)):
-        from virtspec_mi.api import read_result
+        from virtspec_mi.results.kinds import read_result
 
         return _from_result(read_result(path), quantity, theta_i, path.name)
     if suffix == ".nc":
@@ -190,13 +199,17 @@ def _is_result_csv(path: Path) -> bool:
     return is_result_csv(path)
 
 
-def _from_result(result: Result, quantity: str, theta_i: float | None, source: str) -> MeasuredSpectrum:
-    grid = result.as_grid()
-    column = grid.angle_index(theta_i)
-    mu = grid.certified_mu[:, column]
-    if np.any(np.isnan(mu)):
+def _from_result(result: ResultBase, quantity: str, theta_i: float | None, source: str) -> MeasuredSpectrum:
+    """The spectrum of another result of what ``quantity`` names (its first quantity that measures it)."""
+
+    mine = [q for q in result.QUANTITIES if result.spectrum_measures(q) == quantity]
+    if not mine:
+        raise ValueError(f"measured result {source} holds no {quantity} (a {result.KIND} of "
+                         f"{result.spectrum_measures(result.QUANTITIES[0])})")
+    spectrum = result.spectrum(mine[0], theta_i)
+    if np.any(np.isnan(spectrum.tolerance)):
         raise ValueError(f"measured result {source} is not certified (NaN certified_mu): no uncertainty to use")
-    return MeasuredSpectrum.of(grid.wavelengths, grid.quantity(quantity)[:, column], mu, quantity=quantity,
+    return MeasuredSpectrum.of(spectrum.wavelengths, spectrum.values, spectrum.tolerance, quantity=quantity,
                                source=source)
 
 
@@ -269,8 +282,10 @@ def _read_netcdf(path: Path, quantity: str, theta_i: float | None) -> MeasuredSp
             dataset = dataset.load()
     except (OSError, ValueError) as error:
         raise ValueError(f"could not read NetCDF {path.name}: {error}") from None
-    if "result_json" in dataset.attrs:  # a virtspec-mi result file
-        return _from_result(Result.from_dataset(dataset), quantity, theta_i, path.name)
+    if "result_json" in dataset.attrs or "gonio_json" in dataset.attrs:  # a virtspec-mi result file
+        from virtspec_mi.results.kinds import result_from
+
+        return _from_result(result_from(("dataset", dataset)), quantity, theta_i, path.name)
     names = [name for name in dataset.data_vars if "uncertainty" not in str(name)]
     if quantity in dataset.data_vars:
         name = quantity
@@ -303,7 +318,7 @@ class Comparison:
     Attributes
     ----------
     quantity : str
-        The quantity compared.
+        The result's quantity compared (``reflectance``, a sphere's ``reading`` …).
     theta_i : float
         The result's incidence angle used (degrees).
     wavelengths : ndarray
@@ -311,7 +326,8 @@ class Comparison:
     simulated, measured : ndarray
         The result's values and the measured spectrum interpolated onto ``wavelengths``.
     certified_mu : ndarray
-        The result's certified tolerance per point (NaN: not certified).
+        The result's certified tolerance per point (NaN: not certified; :attr:`Spectrum.tolerance
+        <virtspec_mi.results.base.Spectrum>`).
     measurement_uncertainty : ndarray
         The measurement's uncertainty per point (zeros when not given).
     left_out : ndarray
@@ -326,8 +342,8 @@ class Comparison:
         The colours behind ``delta_E``.
     illuminant, observer : str
         The colorimetry's illuminant and observer.
-    result : Result
-        The result compared.
+    result : ResultBase
+        The result compared (any kind).
     spectrum : MeasuredSpectrum
         The measured spectrum as read.
     result_name : str
@@ -349,7 +365,7 @@ class Comparison:
     measured_colour: Colour | None
     illuminant: str
     observer: str
-    result: Result
+    result: ResultBase
     spectrum: MeasuredSpectrum
     result_name: str = "result"
 
@@ -417,16 +433,13 @@ class Comparison:
     def interval_delta(self) -> float:
         """δ of each certified point."""
 
-        return self.result.interval_delta
+        return self.result.spectrum(self.quantity, self.theta_i).delta
 
     def simulated_spectrum(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """The result's whole spectrum at θi, sorted: (wavelengths, values, certified_mu), left-out points included."""
 
-        grid = self.result.as_grid()
-        column = grid.angle_index(self.theta_i)
-        order = np.argsort(grid.wavelengths, kind="stable")
-        return (np.asarray(grid.wavelengths, dtype=np.float64)[order], grid.quantity(self.quantity)[order, column],
-                grid.certified_mu[order, column])
+        spectrum = self.result.spectrum(self.quantity, self.theta_i)
+        return spectrum.wavelengths, spectrum.values, spectrum.tolerance
 
     # -- reports -------------------------------------------------------------------
 
@@ -467,8 +480,8 @@ class Comparison:
         if not certified:
             return ("tolerance: the result is NOT CERTIFIED (weight violations or capped walks): no tolerance to "
                     "test the residuals against")
-        largest_mu = _round_up(float(np.nanmax(self.certified_mu)))
-        largest_u = _round_up(float(np.max(self.measurement_uncertainty)))
+        largest_mu = round_up(float(np.nanmax(self.certified_mu)))
+        largest_u = round_up(float(np.max(self.measurement_uncertainty)))
         uncertainty = (f" + measurement uncertainty (<= {largest_u:g})" if largest_u > 0
                        else " (no measurement uncertainty given)")
         text = (f"within the combined tolerance, certified mu' (<= {largest_mu:g}, "
@@ -528,10 +541,10 @@ class Comparison:
 
 
 def compare(
-    result: Result | str | os.PathLike,
+    result: ResultBase | str | os.PathLike,
     measured: Any,
     *,
-    quantity: str = "reflectance",
+    quantity: str | None = None,
     theta_i: float | None = None,
     measurement_uncertainty: Any = None,
     illuminant: str = DEFAULT_ILLUMINANT,
@@ -543,15 +556,18 @@ def compare(
     Parameters
     ----------
     result
-        A :class:`~virtspec_mi.results.hemispherical.Result` (a reading or a sweep) or a result file
-        (``.nc``, ``.csv``, ``.json``; also ``virtspec measure --json`` output).
+        A result of any kind (a reading or a sweep, a goniophotometer reading, a sphere
+        reading) or a result file (``.nc``, ``.csv``, ``.json``, ``.zarr``; also
+        ``virtspec measure --json`` output). A parameter sweep: select one point first.
     measured
         A measured spectrum: a file (colour-science CSV, plain ``wavelength,value[,
         uncertainty]`` CSV, NetCDF, a result file), a ``colour.SpectralDistribution``, a
         ``(wavelengths, values[, uncertainty])`` tuple or a :class:`MeasuredSpectrum`.
     quantity
-        ``reflectance`` (default), ``transmittance`` or ``absorptance``: the result's
-        quantity and the measured column read.
+        The result's quantity (its ``QUANTITIES``; default the first): ``reflectance``,
+        ``transmittance`` or ``absorptance`` of a reading (the measured column of that
+        name), or a sphere reading's ``reading``, ``corrected`` or ``hemispherical`` (the
+        measured column of what the sphere measures).
     theta_i
         The result's angle to use (needed for a sweep over several angles).
     measurement_uncertainty
@@ -566,16 +582,14 @@ def compare(
         Bad input, or no result wavelength inside the measured range (nothing to compare).
     """
 
-    _check_quantity(quantity)
-    _check_colour_names(illuminant, observer)
     result, result_name = _result_of(result)
-    spectrum = read_measured(measured, quantity, theta_i)
+    quantity = result.check_quantity(quantity)
+    _check_colour_names(illuminant, observer)
+    simulation = result.spectrum(quantity, theta_i)
+    spectrum = read_measured(measured, simulation.measures, theta_i)
     if measurement_uncertainty is not None:
         spectrum = spectrum.with_uncertainty(measurement_uncertainty)
-    grid = result.as_grid()
-    column = grid.angle_index(theta_i)
-    order = np.argsort(grid.wavelengths, kind="stable")
-    wavelengths = np.asarray(grid.wavelengths, dtype=np.float64)[order]
+    wavelengths = simulation.wavelengths
     low, high = spectrum.wavelengths[0], spectrum.wavelengths[-1]
     inside = (wavelengths >= low - _MATCH_NM) & (wavelengths <= high + _MATCH_NM)
     if not inside.any():
@@ -587,11 +601,11 @@ def compare(
     uncertainty = (np.zeros(len(compared)) if spectrum.uncertainty is None
                    else np.interp(at, spectrum.wavelengths, spectrum.uncertainty))
     nearest = np.min(np.abs(compared[:, None] - spectrum.wavelengths[None, :]), axis=1)
-    simulated = grid.quantity(quantity)[order, column][inside]
-    delta_e, note, colours = _delta_e(compared, simulated, measured_values, quantity, illuminant, observer)
+    simulated = simulation.values[inside]
+    delta_e, note, colours = _delta_e(compared, simulated, measured_values, simulation.measures, illuminant, observer)
     return Comparison(
-        quantity=quantity, theta_i=float(grid.theta_i[column]), wavelengths=compared, simulated=simulated,
-        measured=measured_values, certified_mu=grid.certified_mu[order, column][inside],
+        quantity=quantity, theta_i=simulation.theta_i, wavelengths=compared, simulated=simulated,
+        measured=measured_values, certified_mu=simulation.tolerance[inside],
         measurement_uncertainty=uncertainty, left_out=wavelengths[~inside],
         interpolated=int(np.sum(nearest > _MATCH_NM)), delta_E=delta_e, delta_E_note=note,
         simulated_colour=colours[0], measured_colour=colours[1], illuminant=illuminant, observer=observer,
@@ -621,7 +635,7 @@ def _delta_e(wavelengths: np.ndarray, simulated: np.ndarray, measured: np.ndarra
 # -- helpers -------------------------------------------------------------------------
 
 
-def _check_quantity(quantity: str) -> None:
+def check_quantity(quantity: str) -> None:
     if quantity not in QUANTITIES:
         raise ValueError(f"quantity must be one of {', '.join(QUANTITIES)} (got {quantity!r})")
 
@@ -635,23 +649,15 @@ def _check_colour_names(illuminant: str, observer: str) -> None:
         raise ValueError(f"observer must be a name of colour.MSDS_CMFS, e.g. {DEFAULT_OBSERVER!r} (got {observer!r})")
 
 
-def _result_of(result: Any) -> tuple[Result, str]:
-    if isinstance(result, Result):
+def _result_of(result: Any) -> tuple[ResultBase, str]:
+    if isinstance(result, ResultBase):
         return result, "result"
     if isinstance(result, (str, os.PathLike)):
-        from virtspec_mi.api import read_result
+        from virtspec_mi.results.kinds import read_result
 
         return read_result(result), Path(result).name
-    raise ValueError(f"result must be a virtspec_mi.Result or a result file (got {type(result).__name__})")
-
-
-def _round_up(value: float, digits: int = 3) -> float:
-    """``value`` rounded *up* to ``digits`` significant digits (as every printed tolerance; see ``result``)."""
-
-    if not np.isfinite(value) or value <= 0:
-        return value
-    scale = 10.0 ** (np.floor(np.log10(value)) - digits + 1)
-    return float(np.ceil(value / scale * (1 - 1e-12)) * scale)
+    raise ValueError("result must be a virtspec-mi result (a Result, GonioResult or SphereResult) or a result file "
+                     f"(got {type(result).__name__})")
 
 
 def _range(wavelengths: np.ndarray) -> str:

@@ -48,7 +48,7 @@ from typing import Any
 
 import numpy as np
 
-from virtspec_mi.budgets.bounds import exact_rays, miss_probability
+from virtspec_mi.budgets.bounds import exact_rays, hoeffding_rays, miss_probability
 from virtspec_mi.budgets.intervals import clopper_pearson
 from virtspec_mi.checks import check_delta, check_mu, check_rays, validated
 
@@ -58,6 +58,7 @@ __all__ = [
     "default_pilot_delta",
     "stage_two_seed",
     "stage_two_rays",
+    "most_second_rays",
     "TwoStageLaw",
     "two_stage_law",
 ]
@@ -124,6 +125,17 @@ def stage_two_rays(
     if np.any(counts < 0) or np.any(counts > n1):
         raise ValueError(f"pilot_counts must satisfy 0 <= count <= pilot_rays = {n1}")
     return _sizing(counts, n1, mu, delta, pilot_delta, bool(joint))
+
+
+def most_second_rays(mu: float, delta: float, pilot_delta: float, quantities: int = 1) -> int:
+    """
+    The most rays a second batch can get when ``quantities`` columns are certified together
+    (δ₁ and δ − δ₁ split evenly over them; 1: each column on its own): Hoeffding's N at
+    (δ − δ₁)/quantities — the exact rule over any interval of ρ never needs more. The key
+    range a keyed run reserves for a two-stage reading.
+    """
+
+    return hoeffding_rays(mu, (delta - pilot_delta) / quantities)
 
 
 def _sizing(counts: np.ndarray, n1: int, mu: float, delta: float, pilot_delta: float, joint: bool) -> np.ndarray:

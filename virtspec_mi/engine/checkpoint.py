@@ -2,20 +2,25 @@
 Checkpoints: finished readings of a long run, kept on disk
 ==========================================================
 
-A run keyed on reading indices (:func:`virtspec_mi.engine.readings.run`, e.g. a sweep) records
-every finished batch in a JSON file, atomically (an interruption leaves the old or the
+A run keyed on reading indices (:func:`virtspec_mi.engine.readings.run`: a sweep, a
+goniophotometer or a sphere reading) records every finished batch in a JSON file, atomically (an interruption leaves the old or the
 new file; saves are spaced out when they would take more than about a tenth of the
 run, and what is left is saved at the end and on an interruption); a later run of the
 same measurement picks the finished readings up and traces only the rest, ending with
 exactly the counts of an uninterrupted run. The file
 records what decides the counts (settings, grids, geometry, scene fingerprint): a
 mismatch or a corrupt file raises :class:`CheckpointError` (a ``ValueError``) rather
-than mixing results. Every count is kept by name, the pilot's too.
+than mixing results. Every count is kept by name, the pilot's too, and so are the kernel
+hook's bins and per-reading sums of an instrument that has them (a goniophotometer's bin
+counts, a sphere's fate histogram and wall reflections). A file of format 3 (before bins
+and sums were kept) is read for a run without them — a hemispherical sweep resumes from
+it — and refused, with the reason, for one with them.
 
 A checkpoint is read as strictly as user input: counts are whole numbers with
 0 ≤ count ≤ rays and reflected + transmitted + capped ≤ rays, each reading's rays are
 those its settings give, ``done`` holds distinct reading indices in range, ``seconds``
-is finite and ≥ 0, and readings traced together (a wavelength-independent specimen's
+is finite and ≥ 0, bins are whole numbers ≥ 0 adding up to at most the reading's rays,
+sums whole numbers ≥ 0, and readings traced together (a wavelength-independent specimen's
 wavelengths) are done together with equal counts. A file that breaks any of these is
 refused with the reason and left as it is: nothing here ever deletes a checkpoint that
 was not completed.
@@ -41,6 +46,7 @@ from typing import Any, Iterator
 import numpy as np
 
 from virtspec_mi import __version__
+from virtspec_mi.engine.tally import Tally
 from virtspec_mi.kernel.counts import Counts
 
 try:
@@ -50,7 +56,8 @@ except ImportError:  # not a POSIX system: checkpoints are not locked
 
 __all__ = ["CheckpointError", "Checkpoint", "checkpoint_for", "claim", "remove"]
 
-_FORMAT = "virtspec-mi sweep checkpoint 3"  # 3: invalid_directions counted
+_FORMAT = "virtspec-mi sweep checkpoint 4"  # 3: invalid_directions counted; 4: bins and sums kept
+_FORMAT_WITHOUT_BINS = "virtspec-mi sweep checkpoint 3"  # read for runs without bins or sums
 _SAVE_EVERY = 10.0  # save again once the time since the last save is this many times what it took
 _SUFFIX = ".partial.json"
 _LOCK_SUFFIX = ".lock"
@@ -158,12 +165,18 @@ class _Corrupt(Exception):
 
 
 class Checkpoint:
-    """Finished readings of a run (``done``, ``counts``, ``pilot``, ``seconds``), optionally mirrored in a file."""
+    """
+    Finished readings of a run (``done``, ``counts``, ``pilot``, ``bins``, ``sums``,
+    ``seconds``), optionally mirrored in a file.
+    """
 
-    def __init__(self, path: Path | None, identity: dict[str, Any], size: int) -> None:
+    def __init__(self, path: Path | None, identity: dict[str, Any], size: int, bins: int | None = None,
+                 sums: tuple[str, ...] = ()) -> None:
         self.path, self.identity = path, identity
         self.done = np.zeros(size, dtype=bool)
         self.counts, self.pilot = Counts.zeros(size), Counts.zeros(size)
+        self.bins = None if bins is None else np.zeros((size, bins), dtype=np.int64)
+        self.sums = {name: np.zeros(size, dtype=np.int64) for name in sums}
         self.seconds = 0.0
         self._unsaved, self._saved_at, self._save_seconds = False, time.perf_counter(), 0.0
 
@@ -177,17 +190,20 @@ class Checkpoint:
         rays: tuple[int, int],
         pilot_rays: tuple[int, int] = (0, 0),
         group: int = 1,
+        bins: int | None = None,
+        sums: tuple[str, ...] = (),
     ) -> "Checkpoint":
         """
         The state of a run of ``size`` readings, resumed from ``path`` when it exists.
 
         A finished reading has between ``rays[0]`` and ``rays[1]`` rays (its pilot
-        ``pilot_rays``); readings ``k·group`` to ``(k + 1)·group − 1`` are traced together
-        (done together, equal counts). A file that breaks these, or any rule of the
-        module docstring, raises :class:`CheckpointError` and is left as it is.
+        ``pilot_rays``), ``bins`` bin counts (or none) and the per-reading ``sums``;
+        readings ``k·group`` to ``(k + 1)·group − 1`` are traced together (done together,
+        equal tallies). A file that breaks these, or any rule of the module docstring,
+        raises :class:`CheckpointError` and is left as it is.
         """
 
-        state = cls(Path(path) if path is not None else None, identity, size)
+        state = cls(Path(path) if path is not None else None, identity, size, bins, sums)
         if state.path is not None and state.path.exists():
             state._load(rays, pilot_rays, group)
         return state
@@ -198,19 +214,28 @@ class Checkpoint:
 
         return int(self.done.sum())
 
-    def record(self, batch: np.ndarray, counts: Counts, pilot: Counts | None, seconds: float) -> None:
+    def tally(self, pilot: bool) -> Tally:
+        """Every reading's tallies (finished or not), with the pilot's counts when ``pilot``, and the seconds."""
+
+        return Tally(self.counts, self.pilot if pilot else None, self.bins, self.sums, self.seconds)
+
+    def record(self, batch: np.ndarray, tally: Tally) -> None:
         """
-        Keep the counts of readings ``batch`` and save the file — unless saving is slow
+        Keep the tallies of readings ``batch`` and save the file — unless saving is slow
         next to the batches (a file of many thousand readings): it is then saved once
         the time since the last save is ten times what that save took, so saving never
         costs more than about a tenth of the run. :meth:`flush` saves what is left.
         """
 
-        self.counts.put(batch, counts)
-        if pilot is not None:
-            self.pilot.put(batch, pilot)
+        self.counts.put(batch, tally.counts)
+        if tally.pilot is not None:
+            self.pilot.put(batch, tally.pilot)
+        if self.bins is not None:
+            self.bins[batch] = tally.bins
+        for name, value in self.sums.items():
+            value[batch] = tally.sums[name]
         self.done[batch] = True
-        self.seconds += seconds
+        self.seconds += tally.seconds
         self._unsaved = self.path is not None
         if self._unsaved and time.perf_counter() - self._saved_at >= _SAVE_EVERY * self._save_seconds:
             self.flush()
@@ -232,7 +257,12 @@ class Checkpoint:
             raise CheckpointError(
                 f"checkpoint {path} is corrupt ({type(error).__name__}: {error}); delete it to start the sweep over"
             ) from None
-        if not isinstance(data, dict) or data.get("format") != _FORMAT:
+        kept = self.bins is not None or bool(self.sums)
+        if isinstance(data, dict) and data.get("format") == _FORMAT_WITHOUT_BINS and kept:
+            raise CheckpointError(f"checkpoint {path} was written before bins and sums were kept "
+                                  f"({_FORMAT_WITHOUT_BINS!r}): it cannot resume a run with bins or sums; delete it "
+                                  "to start the sweep over")
+        if not isinstance(data, dict) or data.get("format") not in (_FORMAT, _FORMAT_WITHOUT_BINS):
             raise CheckpointError(f"checkpoint {path} is not a virtspec-mi sweep checkpoint of this version "
                                   f"({_FORMAT!r}); delete it to start the sweep over")
         try:
@@ -243,6 +273,12 @@ class Checkpoint:
             done = _indices(data.get("done"), self.done.size)
             counts = _counts(data.get("counts"), "counts", len(done), rays)
             pilot = _counts(data.get("pilot"), "pilot", len(done), pilot_rays)
+            bins = None if self.bins is None else _bins(data.get("bins"), len(done), self.bins.shape[1], counts.rays)
+            sums = {name: _whole_numbers(_entry(data.get("sums"), name), f"sums.{name}", 0, 2**63 - 1,
+                                         f"0 <= {name}") for name in self.sums}
+            for name, value in sums.items():
+                if len(value) != len(done):
+                    raise _Corrupt(f"sums.{name} must hold one value per done reading ({len(done)})")
             seconds = data.get("seconds")
             if type(seconds) not in (int, float) or not math.isfinite(seconds) or seconds < 0:
                 raise _Corrupt(f"seconds must be a finite number >= 0 (got {seconds!r})")
@@ -252,6 +288,10 @@ class Checkpoint:
         self.done[done] = True
         self.counts.put(done, counts)
         self.pilot.put(done, pilot)
+        if bins is not None:
+            self.bins[done] = bins
+        for name, value in sums.items():
+            self.sums[name][done] = value
         self.seconds = float(seconds)
         if group > 1:
             self._check_groups(group)
@@ -270,11 +310,12 @@ class Checkpoint:
 
         done = self.done.reshape(-1, group)
         equal = np.ones(done.shape[0], dtype=bool)
-        for counts in (self.counts, self.pilot):
-            for name in Counts.names():
-                values = getattr(counts, name).reshape(-1, group)
-                equal &= np.all((values == values[:, :1]) | (np.isnan(values) & np.isnan(values[:, :1]))
-                                if values.dtype.kind == "f" else values == values[:, :1], axis=1)
+        tallies = [getattr(counts, name) for counts in (self.counts, self.pilot) for name in Counts.names()]
+        tallies += [] if self.bins is None else list(self.bins.T)
+        for tally in [*tallies, *self.sums.values()]:
+            values = tally.reshape(-1, group)
+            equal &= np.all((values == values[:, :1]) | (np.isnan(values) & np.isnan(values[:, :1]))
+                            if values.dtype.kind == "f" else values == values[:, :1], axis=1)
         bad = np.flatnonzero((done.any(axis=1) & ~done.all(axis=1)) | (done.all(axis=1) & ~equal))
         if len(bad):
             first = int(bad[0]) * group
@@ -298,6 +339,10 @@ class Checkpoint:
             "counts": plain(self.counts),
             "pilot": plain(self.pilot),
         }
+        if self.bins is not None:
+            data["bins"] = self.bins[done].tolist()
+        if self.sums:
+            data["sums"] = {name: value[done].tolist() for name, value in self.sums.items()}
         temporary = self.path.with_name(self.path.name + ".tmp")
         try:
             temporary.write_text(json.dumps(data))
@@ -359,6 +404,32 @@ def _counts(values: Any, what: str, length: int, rays: tuple[int, int]) -> Count
     if np.any(counts.reflected + counts.transmitted + counts.capped > counts.rays):
         raise _Corrupt(f"{what} must satisfy reflected + transmitted + capped <= rays for every reading")
     return counts
+
+
+def _entry(values: Any, name: str) -> Any:
+    """``values[name]`` of the ``sums`` object (``_Corrupt`` when it is not one, or lacks it)."""
+
+    if not isinstance(values, dict):
+        raise _Corrupt(f"sums is {type(values).__name__}, not an object")
+    if name not in values:
+        raise _Corrupt(f"sums lacks {name}")
+    return values[name]
+
+
+def _bins(values: Any, length: int, size: int, rays: np.ndarray) -> np.ndarray:
+    """The bin counts of the ``length`` done readings: ``size`` whole numbers >= 0 each, adding up to <= rays."""
+
+    if not isinstance(values, list) or len(values) != length:
+        raise _Corrupt(f"bins must hold one row per done reading ({length})")
+    rows = []
+    for row in values:
+        if not isinstance(row, list) or len(row) != size:
+            raise _Corrupt(f"bins must hold {size} counts per reading")
+        rows.append(_whole_numbers(row, "bins", 0, 2**63 - 1, "0 <= count"))
+    bins = np.array(rows, dtype=np.int64).reshape(length, size)
+    if np.any(bins.sum(axis=1) > rays):
+        raise _Corrupt("bins must add up to at most the reading's rays for every reading")
+    return bins
 
 
 def _weights(values: list, what: str) -> np.ndarray:

@@ -36,7 +36,7 @@ Projected solid angle of bin (θ₁, θ₂) × (φ₁, φ₂), per hemisphere pa
 
 (× 2 when folded); Σ_k Ω_k = π per hemisphere.
 
-The kernel (:mod:`virtspec_mi.kernel.tracer`) finds a ray's bin by searching the
+The kernel (:mod:`virtspec_mi.kernel.bins`, from :meth:`GonioBins.layout`) finds a ray's bin by searching the
 float32 *keys* of the θo edges, key(θ) = sin²θ for θ ≤ 90° and 2 − sin²θ beyond (a
 monotone map of θ ∈ [0, 180] onto [0, 2] that is exact at the poles and at 90°); the
 hemisphere is the ray's fate (reflected or transmitted), so the bins of each
@@ -56,6 +56,7 @@ from typing import Any
 import numpy as np
 
 from virtspec_mi.checks import shown_value
+from virtspec_mi.kernel.bins import BinLayout
 
 __all__ = ["BINNINGS", "HEMISPHERES", "MAX_BINS", "GONIO_PARAMETERS", "GonioBins", "make_bins", "parse_edges",
            "gonio_options"]
@@ -192,6 +193,13 @@ class GonioBins:
         """The float32 search keys of the θo edges: sin²θ (θ ≤ 90°), 2 − sin²θ beyond (see the module)."""
 
         return _theta_keys(self.theta_edges)
+
+    def layout(self) -> BinLayout:
+        """The plain arrays the kernel bins rays with (:class:`~virtspec_mi.kernel.bins.BinLayout`)."""
+
+        return BinLayout(shape=self.shape, theta_keys=self.theta_keys(), regular_theta=self.regular_theta,
+                         projected=self.binning == "projected", phi_edges=self.phi_edges.astype(np.float32),
+                         regular_phi=self.regular_phi, fold_phi=self.fold_phi)
 
     def as_dict(self) -> dict[str, Any]:
         return {"theta_edges": self.theta_edges.tolist(), "phi_edges": self.phi_edges.tolist(),

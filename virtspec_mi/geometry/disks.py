@@ -14,7 +14,9 @@ the emitter disk goes to ``D·ω + x·e_u + y·e_v`` with
     e_u = (cos θ cos φ, cos θ sin φ, −sin θ)
     e_v = (−sin φ, cos φ, 0)
 
-i.e. the point (x, y, D) rotated by θ about y, then by φ about z.
+i.e. the point (x, y, D) rotated by θ about y, then by φ about z
+(:func:`~virtspec_mi.kernel.incidence.incidence_frame`, defined in the kernel, which
+computes it; re-exported here).
 
 Disk sampling (eqs. 3 and 4) runs in the kernel: :mod:`virtspec_mi.kernel.disk`.
 
@@ -30,6 +32,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from virtspec_mi.checks import check_positive
+from virtspec_mi.kernel.incidence import incidence_frame
 
 __all__ = [
     "PAPER_EMITTER_RADIUS",
@@ -65,17 +68,6 @@ class InstrumentGeometry:
         """θi (degrees) beyond which part of the emitter lies below the specimen plane: atan(D/r₁)."""
 
         return math.degrees(math.atan2(self.distance, self.emitter_radius))
-
-
-def incidence_frame(theta_i: float, phi_i: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """(ω, e_u, e_v) for incidence angles in degrees (see the module docstring)."""
-
-    t, p = math.radians(theta_i), math.radians(phi_i)
-    ct, st, cp, sp = math.cos(t), math.sin(t), math.cos(p), math.sin(p)
-    omega = np.array([st * cp, st * sp, ct])
-    e_u = np.array([ct * cp, ct * sp, -st])
-    e_v = np.array([-sp, cp, 0.0])
-    return omega, e_u, e_v
 
 
 def backlit_fraction(geometry: InstrumentGeometry, theta_i: float) -> float:

@@ -5,7 +5,8 @@ An integrating sphere: wall, ports, baffle (the description, validated)
 :class:`Sphere` describes a physical integrating sphere the way a data sheet does: an
 inner diameter, a diffuse wall of reflectance ρw (a constant or a spectrum), circular
 ports on the sphere surface each with a role, and optionally a baffle. Everything is
-exact geometry; :mod:`virtspec_mi.kernel.sphere_walk` walks rays through it.
+exact geometry; :mod:`virtspec_mi.kernel.sphere_walk` walks rays through it
+(:meth:`Sphere.layout` gives it the plain values it walks).
 
 Geometry and conventions
 ------------------------
@@ -302,6 +303,35 @@ class Sphere:
             out["baffle"] = (f"centre={','.join(repr(v) for v in b.centre)} normal={','.join(repr(v) for v in b.normal)} "
                              f"radius={b.radius!r}")
         return out
+
+    def layout(self, holders: Sequence[Any], caps: Sequence[int | None], max_bounces: int,
+               wavelengths: Sequence[float]) -> Any:
+        """
+        One configuration of this sphere as the kernel walks it
+        (:class:`~virtspec_mi.kernel.sphere_walk.SphereLayout`, plain values): the
+        ``holders`` (:class:`~virtspec_mi.kernel.sphere_walk.Holder`; holder 0 in the
+        beam), each port's cap fate (a :class:`~virtspec_mi.kernel.sphere_walk.SphereFate`
+        code, or ``None`` for a plugged port, which is wall), the step cap and ρw at
+        ``wavelengths`` (nm).
+        """
+
+        from virtspec_mi.kernel.sphere_walk import SphereLayout
+
+        radius = self.radius
+        grid = np.unique(np.asarray(wavelengths, dtype=np.float64))
+
+        def plane(port: Port) -> tuple:
+            return (tuple(float(v) for v in port.axis), radius * port.cos_half_angle(radius),
+                    tuple(float(v) for v in self.port_plane_centre(port)))
+
+        return SphereLayout(
+            radius=radius, ports=len(self.ports),
+            caps=tuple((tuple(float(v) for v in p.axis), radius * p.cos_half_angle(radius), int(action))
+                       for p, action in zip(self.ports, caps) if action is not None),
+            planes=tuple(plane(self.ports[h.port]) for h in holders), holders=tuple(holders),
+            baffle=None if self.baffle is None else (self.baffle.centre, self.baffle.normal, self.baffle.radius),
+            max_bounces=int(max_bounces),
+            wall=(tuple(float(w) for w in grid), tuple(float(r) for r in self.wall_reflectance_at(grid))))
 
     def describe(self) -> str:
         """A short description: diameter, ρw, ports with their cap fractions, baffle."""

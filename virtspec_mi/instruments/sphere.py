@@ -47,31 +47,33 @@ J. Kessel (1986), Appl. Opt. 25, 2752–2756 (transmittance in a one-port sphere
 from __future__ import annotations
 
 import math
-import time
-from dataclasses import replace
 from typing import Any
 
 import numpy as np
 
+from virtspec_mi.engine.plan import Plan
+from virtspec_mi.engine.readings import run
 from virtspec_mi.geometry.sphere import Sphere, SphereSettings
-from virtspec_mi.results.sphere import SphereResult
+from virtspec_mi.kernel.sphere_walk import FATES, HEMISPHERES, SPECIMEN, Holder, SphereFate, holder_frame
+from virtspec_mi.results.sphere import CONFIGURATIONS, SphereResult
 from virtspec_mi.settings import Settings
 
 __all__ = ["measure_sphere", "configurations"]
 
-_FATES = ("detected", "absorbed_wall", "absorbed_specimen", "absorbed_other", "capped", "invalid_directions")
 
-
-def configurations(sphere: Sphere, options: SphereSettings, specimen_bsdf: Any, specimen_radius: float,
-                   standard_bsdf: Any, open_bsdf: Any) -> dict[str, tuple[list, list]]:
+def configurations(sphere: Sphere, options: SphereSettings, specimen_radius: float,
+                   specimen_bsdf: Any = SPECIMEN) -> dict[str, tuple[list, list]]:
     """
     Per configuration: the holders (port index, BSDF, disk radius, frame) — holder 0 in
-    the beam — and each port's cap fate (a code of :mod:`virtspec_mi.kernel.sphere_walk`,
-    ``None`` for a plugged port).
+    the beam — and each port's cap fate (a :class:`~virtspec_mi.kernel.sphere_walk.SphereFate`
+    code, ``None`` for a plugged port). The specimen's BSDF is ``specimen_bsdf`` (by
+    default :data:`~virtspec_mi.kernel.sphere_walk.SPECIMEN`: the bench's), the standard
+    a Lambertian of reflectance ``options.standard`` and the open port a null BSDF, as
+    Mitsuba plugin dicts.
     """
 
-    from virtspec_mi.kernel.sphere_walk import Holder, holder_frame
-
+    standard_bsdf = {"type": "diffuse", "reflectance": options.standard}
+    open_bsdf = {"type": "null"}
     index = {p.role: i for i, p in enumerate(sphere.ports) if p.role not in ("detector", "open")}
     transmittance = options.measurement == "transmittance"
     beam_role = "entrance" if transmittance else "sample"
@@ -97,9 +99,9 @@ def configurations(sphere: Sphere, options: SphereSettings, specimen_bsdf: Any, 
                          "sits")
     actions: list[int | None] = []
     for j, port in enumerate(sphere.ports):
-        lost = 6 + j
+        lost = SphereFate.lost(j)
         if port.role == "detector":
-            actions.append(0)
+            actions.append(int(SphereFate.DETECTED))
         elif port.role == "specular":
             actions.append(lost if options.specular == "SCE" else None)
         elif port.role == "reference" and other_port is None:
@@ -150,53 +152,57 @@ def _check_beam(sphere: Sphere, options: SphereSettings, settings: Settings, fra
 def measure_sphere(instrument: Any, sphere: Sphere, settings: Settings, options: SphereSettings,
                    scene: str = "") -> "SphereResult":
     """
-    The sphere readings of ``instrument``'s specimen at every wavelength of ``settings``
-    (see the module docstring): both configurations, traced with the settings' seed,
-    each with the settings' rule's N at (μ, δ/2) (or ``settings.rays``).
+    *Transitional* (until the sphere instrument builds its plan): the sphere readings of
+    ``instrument``'s specimen at every wavelength of ``settings`` (see the module
+    docstring): both configurations, one keyed run of the engine
+    (:func:`virtspec_mi.engine.readings.run`; reading k of a configuration traces the
+    global rays [k·N, k·N + N) with the settings' seed, the same rays in both), each with
+    the settings' rule's N at (μ, δ/2) (or ``settings.rays``).
     """
-
-    import mitsuba as mi
-
-    from virtspec_mi.kernel.sphere_walk import SphereWalk, tally_sphere
 
     if settings.rays is None and settings.budget.adaptive:
         raise ValueError("bound='two-stage' is not available for sphere readings (each configuration is sized "
                          "in advance): use hoeffding, chebyshev or exact, or give rays")
     rays = settings.rays if settings.rays is not None else settings.updated(delta=settings.delta / 2).rays_per_reading
-    standard_bsdf = mi.load_dict({"type": "diffuse", "reflectance": options.standard})
-    open_bsdf = mi.load_dict({"type": "null"})
     radius = instrument.geometry.specimen_radius
-    setups = configurations(sphere, options, instrument.bsdf, radius, standard_bsdf, open_bsdf)
+    setups = configurations(sphere, options, radius)
     frame = setups["sample"][0][0].frame
     _check_beam(sphere, options, settings, frame)
     wavelengths = np.asarray(settings.wavelengths, dtype=np.float64)
+    layouts = tuple(sphere.layout(holders, actions, options.max_bounces, wavelengths)
+                    for holders, actions in (setups[name] for name in CONFIGURATIONS))
+    plan = Plan(settings.updated(rays=rays), (settings.theta_i,), groups=CONFIGURATIONS, hooks=layouts, scene=scene,
+                instrument="sphere", options={"sphere": sphere.parameters(), **options.as_dict()},
+                refusal="each configuration is sized in advance")
+    tally = run(instrument, plan, keyed=True)
+    n = len(wavelengths)
+    counts = {name: _named_counts(sphere, layouts[g], tally.bins[g * n:(g + 1) * n],
+                                  {key: value[g * n:(g + 1) * n] for key, value in tally.sums.items()})
+              for g, name in enumerate(CONFIGURATIONS)}
+    for named in counts.values():  # N per configuration and reading
+        named["rays"] = np.full(wavelengths.shape, int(rays), dtype=np.int64)
     rho_w = sphere.wall_reflectance_at(wavelengths)
-    counts: dict[str, dict[str, np.ndarray]] = {}
-    start = time.perf_counter()
-    for name, (holders, actions) in setups.items():
-        walk = SphereWalk(sphere, holders, actions, options.max_bounces)
-        traced = replace(instrument, bsdf=holders[0].bsdf)
-        tallies = tally_sphere(walk, traced, wavelengths, rho_w, rays, settings)
-        counts[name] = _named_counts(sphere, tallies)
-    seconds = time.perf_counter() - start
-    return SphereResult(wavelengths=wavelengths, rays=int(rays), counts=counts, sphere=sphere.describe(),
-                        cap_fractions=sphere.cap_fractions, wall_reflectance=rho_w, options=options.as_dict(),
-                        settings=settings.as_dict(), seconds=seconds, scene=scene,
-                        sphere_parameters=sphere.parameters(), specimen_radius=float(radius))
+    return SphereResult(dims=("wavelength",), coords={"wavelength": wavelengths,
+                                                      "theta_i": np.asarray(settings.theta_i, dtype=np.float64)},
+                        counts=counts, wall_reflectance=np.asarray(rho_w, dtype=np.float64), sphere=sphere.describe(),
+                        cap_fractions=sphere.cap_fractions, options=options.as_dict(), settings=settings,
+                        seconds=tally.seconds, scene=scene, sphere_parameters=sphere.parameters(),
+                        specimen_radius=float(radius))
 
 
-def _named_counts(sphere: Sphere, tallies: list[dict[str, Any]]) -> dict[str, np.ndarray]:
-    """Per-wavelength counts by name from the walk's histograms."""
+def _named_counts(sphere: Sphere, layout: Any, bins: np.ndarray, sums: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
+    """Per-wavelength counts by name from the walk's bins (readings, hemisphere · codes + fate) and sums."""
 
-    cross = np.stack([t["cross"] for t in tallies])  # (wavelength, hemisphere, code)
+    cross = bins.reshape(len(bins), len(HEMISPHERES), layout.codes)  # (wavelength, hemisphere, code)
     by_code = cross.sum(axis=1)
-    out = {name: by_code[:, k] for k, name in enumerate(_FATES)}
+    out = {name: by_code[:, k] for k, name in enumerate(FATES)}
     for j, port in enumerate(sphere.ports):
-        out[f"lost_{port.name}"] = by_code[:, 6 + j]
-    out["hemispherical_reflected"] = cross[:, 1, :].sum(axis=1) + cross[:, 3, :].sum(axis=1)
-    out["hemispherical_specular"] = cross[:, 3, :].sum(axis=1)  # reflected by a delta event (part of the above)
-    out["hemispherical_transmitted"] = cross[:, 2, :].sum(axis=1)
-    out["detected_from_upper"] = cross[:, 1, 0] + cross[:, 3, 0]
-    for name in ("wall_reflections", "weight_violations", "rounded_weights"):
-        out[name] = np.array([t[name] for t in tallies], dtype=np.int64)
+        out[f"lost_{port.name}"] = by_code[:, SphereFate.lost(j)]
+    upper, lower, specular = (HEMISPHERES.index(h) for h in ("upper", "lower", "specular"))
+    out["hemispherical_reflected"] = cross[:, upper, :].sum(axis=1) + cross[:, specular, :].sum(axis=1)
+    out["hemispherical_specular"] = cross[:, specular, :].sum(axis=1)  # reflected by a delta event (part of the above)
+    out["hemispherical_transmitted"] = cross[:, lower, :].sum(axis=1)
+    detected = int(SphereFate.DETECTED)
+    out["detected_from_upper"] = cross[:, upper, detected] + cross[:, specular, detected]
+    out.update(sums)
     return {k: np.asarray(v, dtype=np.int64) for k, v in out.items()}

@@ -42,13 +42,19 @@ Conventions
   0 by construction); weights beyond, or NaN, are ``weight_violations`` and the largest
   is kept.
 - Rays are traced in ``TransportMode.Importance`` (light travels from the emitter).
-- A goniophotometer reading (:func:`tally_gonio_readings`) also bins every reflected
-  or transmitted ray by its outgoing direction in the specimen frame
-  (:mod:`virtspec_mi.geometry.bins`), in the same fused kernel; the fate decides the
-  hemisphere (grazing exits included). A random walk on queued lanes bins each ray by
-  the same rule when its walk ends and keeps the bin in the ray's slot; the chunk's
-  bins are tallied after the walk loop. Without bins none of this is compiled: the
-  plain kernel and its counts are unchanged.
+- One tally path with an optional **exit hook** (:mod:`virtspec_mi.kernel.hooks`): a
+  call with a hook also gives every ray a bin code in [0, K) (K: not binned), tallied per
+  reading into an exact ``int64`` histogram of K bins, and per-ray values summed per
+  reading. A goniophotometer's :class:`~virtspec_mi.kernel.bins.BinLayout` bins every
+  reflected or transmitted ray by its outgoing direction in the same fused kernel (a
+  random walk on queued lanes: when its walk ends, the bin kept in the ray's slot and
+  tallied after the walk loop); an integrating sphere's
+  :class:`~virtspec_mi.kernel.sphere_walk.SphereLayout` continues every ray's first
+  interaction through the sphere. Without a hook none of this is compiled: the plain
+  kernel and its counts are unchanged.
+- The kernel takes plain values (the bench, the readings, seed, chunk size, beam,
+  sampling, offsets, a hook) and trusts them: the engine
+  (:mod:`virtspec_mi.engine.readings`) validates at the boundary.
 - The emitter disk neither occludes nor self-intersects its rays, and no general
   intersection is needed: each conical ray is aimed at a sampled specimen point and hits
   it by construction; a collimated ray hits the specimen centre.
@@ -60,24 +66,22 @@ Baranoski et al. (2001), eqs. (2)–(4), Sect. 3.2.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any, Callable
 
 import drjit as dr
 import mitsuba as mi
 import numpy as np
 
-from virtspec_mi.checks import check_rays
 from virtspec_mi.kernel.counts import DIRECTION_TOLERANCE, WEIGHT_ROUNDING, Counts, Fate
-from virtspec_mi.geometry.disks import incidence_frame
-from virtspec_mi.geometry.bins import GonioBins
 from virtspec_mi.kernel.disk import jittered_cell, sample_disk
+from virtspec_mi.kernel.hooks import ChunkRays, ExitHook
+from virtspec_mi.kernel.incidence import incidence_frame
 from virtspec_mi.kernel.rng import chunk_root, dimension_key, dimension_keys, hash32, to_unit
 from virtspec_mi.kernel.walk import CAPPED_COMPONENT, is_random_walk, walk_steps
-from virtspec_mi.settings import Settings
 
-__all__ = ["LONG_WALK_STEPS", "ReadingPlan", "WALK_GROUP", "WALK_QUEUES", "WalkQueue", "first_interactions",
-           "tally_gonio_readings", "tally_readings", "trace_rays", "walk_plan"]
+__all__ = ["KernelTally", "LONG_WALK_STEPS", "ReadingPlan", "WALK_GROUP", "WALK_QUEUES", "WalkQueue",
+           "first_interactions", "tally_readings", "trace_rays", "walk_plan"]
 
 _WORD = 1 << 32
 # Dimensions of the random numbers: 0–1 emitter, 2–3 specimen, 4–6 BSDF, 7 survival;
@@ -92,8 +96,6 @@ _RARE_COUNTS = (("weight_violations", _VIOLATION), ("capped", _CAPPED), ("rounde
                 ("invalid_directions", _INVALID))
 # Squared lengths of a valid outgoing direction.
 _LENGTH2 = ((1.0 - DIRECTION_TOLERANCE) ** 2, (1.0 + DIRECTION_TOLERANCE) ** 2)
-# The largest float32 below 1: the key sin²θo of a reflected ray stays below the 90° edge.
-_BELOW_ONE = float(np.nextafter(np.float32(1.0), np.float32(0.0)))
 
 
 WALK_GROUP: int = 16
@@ -188,86 +190,85 @@ class ReadingPlan:
     rays: int
 
 
-def tally_readings(
-    instrument: Any, plans: list[ReadingPlan], settings: Settings, offsets: Any = None,
-    on_chunk: Callable[[int], None] | None = None, walk: WalkQueue = WalkQueue(), walk_stats: dict | None = None,
-) -> Counts:
+@dataclass(frozen=True, eq=False)
+class KernelTally:
     """
-    Trace every reading of ``plans`` and return their exact :class:`~virtspec_mi.kernel.counts.Counts`
-    (one entry per plan).
+    What one :func:`tally_readings` call returns, per reading (in the order of its plans).
+
+    Attributes
+    ----------
+    counts : Counts
+        The exact fate counts of every reading.
+    bins : ndarray or None
+        With a hook: the exact ``int64`` histogram of its bin codes, shape (readings, K).
+    sums : dict
+        With a hook: each per-ray value it names (:attr:`ExitHook.sums`) summed per
+        reading, ``int64`` arrays of shape (readings,).
+    """
+
+    counts: Counts
+    bins: np.ndarray | None = None
+    sums: dict[str, np.ndarray] = field(default_factory=dict)
+
+
+def tally_readings(
+    bench: Any, plans: list[ReadingPlan], *, seed: int, chunk_size: int, beam: str, sampling: str,
+    offsets: Any = None, hook: ExitHook | None = None, on_chunk: Callable[[int], None] | None = None,
+    walk: WalkQueue = WalkQueue(), walk_stats: dict | None = None,
+) -> KernelTally:
+    """
+    Trace every reading of ``plans`` on ``bench`` (an object with ``bsdf``, ``geometry``
+    — ``emitter_radius``, ``specimen_radius``, ``distance`` — and ``to_world``, 4×4) and
+    return their exact tallies (:class:`KernelTally`, one entry per plan).
 
     Reading k's rays are the global ray indices [offsets[k], offsets[k] + rays_k);
     ``offsets`` defaults to consecutive ranges (0, rays_0, rays_0 + rays_1, …) and may
-    leave gaps (a sweep keys each reading on its index in the whole sweep, so a reading
-    gets the same rays whichever other readings share the call). Ranges must not
-    overlap. The readings' rays are packed into lanes in list order and cut into chunks
-    of at most ``settings.chunk_size`` rays (never straddling a 2³² boundary of the
-    global index); each chunk runs as one kernel, so memory stays bounded and counts do
-    not depend on chunking. ``on_chunk`` (optional) is called after every chunk with the
-    number of readings completed so far.
+    leave gaps (a keyed run numbers each reading by its key, so a reading gets the same
+    rays whichever other readings share the call). Ranges must not overlap; each reading
+    has 1 … 2³² − 1 rays (the engine sees to both). The readings' rays are packed into
+    lanes in list order and cut into chunks of at most ``chunk_size`` rays (never
+    straddling a 2³² boundary of the global index); each chunk runs as one kernel, so
+    memory stays bounded and counts do not depend on chunking. ``seed``, ``beam``
+    (``conical``, ``collimated``, ``diffuse``) and ``sampling`` (``jittered``,
+    ``random``, ``concentric``) are the settings of those names. ``on_chunk`` (optional)
+    is called after every chunk with the number of readings completed so far.
+
+    ``hook`` (optional, :mod:`virtspec_mi.kernel.hooks`): every ray also gets the hook's
+    bin code, tallied per reading into ``bins`` (readings, K) without atomics (32-bit
+    fields, two to a 64-bit word, in one copy of the table per CPU thread —
+    Dr.Jit's ``ReduceMode.Expand`` — summed into ``int64`` on the host: memory is
+    readings × K, × threads during a chunk, whatever the number of rays), and the hook's
+    per-ray values are summed per reading into ``sums``.
 
     A specimen that declares its random walk as steps
     (:class:`~virtspec_mi.kernel.walk.RandomWalk`) runs on queued lanes as ``walk`` says
-    (:class:`WalkQueue`; ``lanes = 0``: one ``sample()`` per ray, the walk as one loop); no
-    count depends on it. ``walk_stats`` (diagnostics, optional): a dict that receives, per
-    chunk, each lane's loop iterations (``iterations``) and those that stepped a walk
-    (``busy``).
+    (:class:`WalkQueue`; ``lanes = 0``: one ``sample()`` per ray, the walk as one loop),
+    unless the hook needs every ray's lanes (``needs_rays``); no count depends on it.
+    ``walk_stats`` (diagnostics, optional): a dict that receives, per chunk, each lane's
+    loop iterations (``iterations``) and those that stepped a walk (``busy``).
     """
 
-    return _tally(instrument, plans, settings, offsets, on_chunk, None, walk, walk_stats)[0]
-
-
-def tally_gonio_readings(
-    instrument: Any, plans: list[ReadingPlan], settings: Settings, bins: GonioBins, offsets: Any = None,
-    on_chunk: Callable[[int], None] | None = None, walk: WalkQueue = WalkQueue(),
-) -> tuple[Counts, np.ndarray]:
-    """
-    :func:`tally_readings` that also bins every escaping ray by its outgoing direction
-    (θo, φo) in the specimen frame (:class:`~virtspec_mi.geometry.bins.GonioBins`): the
-    same rays and the same counts, plus exact per-bin tallies, an ``int64`` array of
-    shape (readings, θo bins, φo bins). A reflected ray is binned among the bins with
-    θo ≤ 90°, a transmitted one among those with θo ≥ 90° (its fate decides the
-    hemisphere, grazing exits included), so the bins covering a hemisphere add up to
-    its count exactly. Each chunk adds its rays to per-bin 32-bit tallies (two to a
-    64-bit word; a chunk holds < 2³² rays) in the same fused kernel, without atomics
-    (one copy of the table per CPU thread, Dr.Jit's ``ReduceMode.Expand``), summed
-    into ``int64`` on the host: memory is readings × bins (× threads during a chunk),
-    whatever the number of rays. A random-walk specimen on queued lanes (``walk``, as in
-    :func:`tally_readings`) bins each ray when its walk ends, by the same rule
-    (:meth:`_Kernel._bin`), keeps the bin in the ray's slot and tallies the chunk's bins
-    after the walk loop: the bins never depend on ``walk``.
-    """
-
-    return _tally(instrument, plans, settings, offsets, on_chunk, bins, walk)
-
-
-def _tally(instrument: Any, plans: list[ReadingPlan], settings: Settings, offsets: Any,
-           on_chunk: Callable[[int], None] | None, bins: GonioBins | None, walk: WalkQueue,
-           walk_stats: dict | None = None) -> tuple[Counts, np.ndarray | None]:
-    """The chunk loop of :func:`tally_readings` and :func:`tally_gonio_readings`."""
-
-    for plan in plans:
-        check_rays(plan.rays)  # 1 ... 2³² − 1: a reading crosses at most one 2³² boundary below
     rays = np.array([plan.rays for plan in plans], dtype=np.int64)
     starts = np.concatenate([[0], np.cumsum(rays)])  # packed (lane) position of each reading
     offsets = starts[:-1].copy() if offsets is None else _check_offsets(offsets, rays)
     cuts = _cuts(starts, offsets, rays)
     counts = Counts.zeros(len(plans))
     counts.rays[:] = rays
-    kernel = _Kernel(instrument, plans, settings, bins, walk, walk_stats)
-    bin_counts = None if bins is None else np.zeros((len(plans), bins.size), dtype=np.int64)
+    kernel = _Kernel(bench, plans, seed, beam, sampling, hook, walk, walk_stats)
+    tally = KernelTally(counts, None if hook is None else np.zeros((len(plans), hook.size), dtype=np.int64),
+                        {name: np.zeros(len(plans), dtype=np.int64) for name in (hook.sums if hook else ())})
     first = 0
     while first < starts[-1]:
-        size = int(min(settings.chunk_size, cuts[np.searchsorted(cuts, first, side="right")] - first))
+        size = int(min(chunk_size, cuts[np.searchsorted(cuts, first, side="right")] - first))
         slots = np.arange(
             np.searchsorted(starts, first, side="right") - 1,
             np.searchsorted(starts, first + size, side="left"),
         )
-        kernel.run(first, size, slots, starts, offsets, counts, bin_counts)
+        kernel.run(_RaySource(kernel, first, size, slots, starts, offsets), tally)
         first += size
         if on_chunk is not None:  # how many readings are complete (for a progress bar)
             on_chunk(int(np.searchsorted(starts[1:], first, side="right")))
-    return counts, None if bins is None else bin_counts.reshape(len(plans), *bins.shape)
+    return tally
 
 
 def _cuts(starts: np.ndarray, offsets: np.ndarray, rays: np.ndarray) -> np.ndarray:
@@ -286,7 +287,10 @@ def _cuts(starts: np.ndarray, offsets: np.ndarray, rays: np.ndarray) -> np.ndarr
 
 
 def _check_offsets(offsets: Any, rays: np.ndarray) -> np.ndarray:
-    """Per-reading starts of the global ray index: whole numbers ≥ 0, ranges disjoint, < 2⁶³."""
+    """
+    Per-reading starts of the global ray index: whole numbers ≥ 0, ranges disjoint, < 2⁶³
+    (the engine's contract, asserted here: the kernel's random numbers rely on it).
+    """
 
     offsets = np.asarray(offsets)
     if offsets.shape != rays.shape or (offsets.size and not np.issubdtype(offsets.dtype, np.integer)):
@@ -299,66 +303,72 @@ def _check_offsets(offsets: Any, rays: np.ndarray) -> np.ndarray:
     return offsets
 
 
-def trace_rays(instrument: Any, plan: ReadingPlan, settings: Settings, count: int,
-               bins: GonioBins | None = None) -> dict:
+def trace_rays(bench: Any, plan: ReadingPlan, count: int, *, seed: int, beam: str, sampling: str,
+               hook: ExitHook | None = None) -> dict:
     """
     The first ``count`` rays of one reading, ray by ray, through the same kernel code
     as :func:`tally_readings` (for tests and diagnostics; a random walk runs as one
     ``sample()`` per ray, whose fates the queued lanes reproduce): NumPy arrays of emitter
     points ``origin`` (specimen frame), specimen points ``target``, incident
     directions ``wi`` (towards the emitter), outgoing ``wo``, ``fate`` (a
-    :class:`~virtspec_mi.kernel.counts.Fate` code) and the BSDF ``weight``; with ``bins``, also
-    each ray's flat ``bin`` (θo bin × φo bins + φo bin; the number of bins: not binned).
+    :class:`~virtspec_mi.kernel.counts.Fate` code) and the BSDF ``weight``; with a hook
+    whose :meth:`~virtspec_mi.kernel.hooks.ExitHook.bin` runs per ray (goniophotometer
+    bins), also each ray's ``bin`` (the hook's K: not binned).
     """
 
-    kernel = _Kernel(instrument, [plan], settings, bins)
-    lanes = kernel.trace(0, count, np.array([0]), np.array([0, plan.rays]), np.array([0]))
+    kernel = _Kernel(bench, [plan], seed, beam, sampling, hook)
+    source = _RaySource(kernel, 0, count, np.array([0]), np.array([0, plan.rays]), np.array([0]))
+    lanes = kernel.trace(source)
     dr.eval(lanes)
     return {name: np.array(value).T if np.ndim(value) > 1 else np.array(value)
             for name, value in lanes.items() if value is not None}
 
 
-def first_interactions(instrument: Any, plan: ReadingPlan, settings: Settings, first: int, size: int,
-                       offset: int) -> dict:
+def first_interactions(bench: Any, plan: ReadingPlan, first: int, size: int, offset: int, *, seed: int,
+                       beam: str, sampling: str) -> dict:
     """
     Symbolic per-lane first interactions (nothing evaluated) of rays [first, first + size) of
     one reading whose rays start at global index ``offset``: the same random numbers, beam
-    and specimen ``sample`` as :func:`tally_readings` gives that reading, so a walk that
-    continues them (:mod:`virtspec_mi.kernel.sphere_walk`) keeps the hemispherical fates of
-    the very same rays. The chunk must not cross a 2³² boundary of the global index.
-    Returns the lanes of :meth:`_Kernel.trace` (``wo``, ``target``, ``fate``, ``rare`` …):
-    a random-walk specimen runs here as one ``sample()`` per lane (its walk as one loop,
-    not on queued lanes), whose fates the queued lanes of :func:`tally_readings` reproduce.
+    and specimen ``sample`` as :func:`tally_readings` gives that reading (for tests and
+    diagnostics: a hook with ``needs_rays`` receives these very lanes). The chunk must not
+    cross a 2³² boundary of the global index. Returns the lanes of :meth:`_Kernel.trace`
+    (``wo``, ``target``, ``fate``, ``rare`` …): a random-walk specimen runs here as one
+    ``sample()`` per lane (its walk as one loop, not on queued lanes), whose fates the
+    queued lanes of :func:`tally_readings` reproduce.
     """
 
-    kernel = _Kernel(instrument, [plan], settings)
-    return kernel.trace(first, size, np.array([0]), np.array([0, plan.rays]), np.array([offset], dtype=np.int64))
+    kernel = _Kernel(bench, [plan], seed, beam, sampling)
+    source = _RaySource(kernel, first, size, np.array([0]), np.array([0, plan.rays]),
+                        np.array([offset], dtype=np.int64))
+    return kernel.trace(source)
 
 
 class _Kernel:
     """The per-chunk ray kernel of one :func:`tally_readings` call."""
 
-    def __init__(self, instrument: Any, plans: list[ReadingPlan], settings: Settings,
-                 bins: GonioBins | None = None, walk: WalkQueue = WalkQueue(lanes=0),
+    def __init__(self, bench: Any, plans: list[ReadingPlan], seed: int, beam: str, sampling: str,
+                 hook: ExitHook | None = None, walk: WalkQueue = WalkQueue(lanes=0),
                  walk_stats: dict | None = None) -> None:
-        self.bsdf = instrument.bsdf
-        self.bins = bins
-        if bins is not None:
-            self.phi_i = np.array([plan.phi_i for plan in plans], dtype=np.float64)
-        self.settings = settings
-        # A random-walk specimen's steps run on queued lanes (walk.lanes = 0: sample() per ray).
-        self.queued = walk.lanes > 0 and is_random_walk(self.bsdf)
+        self.hook = hook
+        self.specimen = bench.bsdf
+        self.bsdf = bench.bsdf if hook is None else hook.beam_bsdf(bench.bsdf)
+        self.seed, self.beam, self.sampling = seed, beam, sampling
+        self.phi_i = np.array([plan.phi_i for plan in plans], dtype=np.float64)
+        self.pairing = np.array([0 if hook is None else hook.pairing(phi) for phi in self.phi_i], dtype=np.uint32)
+        # A random-walk specimen's steps run on queued lanes (walk.lanes = 0: sample() per ray),
+        # unless the hook continues every ray's own lane.
+        self.queued = walk.lanes > 0 and is_random_walk(self.bsdf) and not (hook is not None and hook.needs_rays)
         self.walk_queue, self.walk_stats = walk.planned(walk_steps(self.bsdf)), walk_stats
         # Specular/regular counts: per ray only for a BSDF with both delta and other lobes.
         flags = self.bsdf.flags()
         delta = mi.has_flag(flags, mi.BSDFFlags.Delta)
         smooth = mi.has_flag(flags, mi.BSDFFlags.Smooth) or mi.has_flag(flags, mi.BSDFFlags.Null)
         self.delta_lobes = "mixed" if delta and smooth else "all" if delta else "none"
-        geometry = instrument.geometry
+        geometry = bench.geometry
         self.emitter_radius = dr.opaque(mi.Float, geometry.emitter_radius)
         self.specimen_radius = dr.opaque(mi.Float, geometry.specimen_radius)
         self.distance = dr.opaque(mi.Float, geometry.distance)
-        frame = instrument.to_world
+        frame = bench.to_world
         self.frame = mi.Frame3f(*(mi.Vector3f(*map(float, frame[:3, i])) for i in range(3)))
         self.centre = mi.Point3f(*map(float, frame[:3, 3]))
         # Per-reading parameters on the host, one row per reading; a chunk picks its rows.
@@ -371,14 +381,24 @@ class _Kernel:
 
     # -- one chunk ---------------------------------------------------------------------
 
-    def run(self, first: int, size: int, slots: np.ndarray, starts: np.ndarray,
-            offsets: np.ndarray, counts: Counts, bin_counts: np.ndarray | None = None) -> None:
+    def run(self, source: _RaySource, tally: KernelTally) -> None:
         """
-        Add the counts of the packed lanes [first, first + size) to readings ``slots`` of
-        ``counts`` (and, with bins, their per-bin tallies to rows ``slots`` of ``bin_counts``).
+        Add the tallies of the chunk's packed lanes (``source``) to its readings
+        (``source.slots``) of ``tally``: fate counts, and with a hook its bins and sums.
         """
 
-        lanes = (self.walk if self.queued else self.trace)(first, size, slots, starts, offsets)
+        hook, slots, counts = self.hook, source.slots, tally.counts
+        lanes = (self.walk if self.queued else self.trace)(source)
+        exits = None
+        if hook is not None and hook.needs_rays:
+            # The hook continues the traced lanes: evaluate them once (one kernel), then both
+            # the fate counts and the hook read them (a violating weight, rare, is traced again).
+            dr.eval(*(lanes[name] for name in ("wo", "target", "fate", "rare", "specular", "regular")))
+            slot = lanes["slot"]
+            exits = hook.exits(ChunkRays(lanes=lanes, slot=slot, root=source.root,
+                                         wavelengths=source.rows[:, _WAVELENGTH], specimen=self.specimen,
+                                         column=source.column, ray_index=source.ray_index))
+            lanes["bin"], sums = exits
         fate = lanes["fate"]
         # Two 32-bit counts per UInt64 lane: (reflected, transmitted), (specular, regular).
         code = dr.select(fate == int(Fate.REFLECTED), mi.UInt64(1), mi.UInt64(0)) | dr.select(
@@ -389,28 +409,19 @@ class _Kernel:
         if self.delta_lobes == "mixed":
             packed_codes[("specular_reflected", "regular_transmitted")] = dr.select(
                 lanes["specular"], mi.UInt64(1), mi.UInt64(0)) | dr.select(lanes["regular"], mi.UInt64(_WORD), mi.UInt64(0))
-        if self.bins is None:
+        if hook is None:
             dr.eval(*packed_codes.values(), rare)  # the one fused ray kernel
         else:
-            # The same kernel also adds each escaping ray to its reading's bin (a queued walk: the kernel
-            # after the walk loop, from each ray's kept bin): two bins per UInt64 word
-            # (32-bit fields: a chunk holds < 2^32 rays, so no field overflows), scatter-added into
-            # per-thread copies of the table (ReduceMode.Expand: no atomics; Dr.Jit sums the copies).
-            # Neighbouring bins (φo neighbours) share a word, so fewer distinct words per SIMD packet:
-            # measured the fastest of 32-bit/64-bit tallies × Local/Expand/Direct (benchmarks/gonio.py).
-            size_k = self.bins.size
-            flat = len(slots) * size_k
-            tally = dr.zeros(mi.UInt64, (flat + 1) // 2)
-            where = lanes["bin"] if len(slots) == 1 else lanes["slot"] * size_k + lanes["bin"]
-            value = dr.select((where & 1) != 0, mi.UInt64(_WORD), mi.UInt64(1))
-            dr.scatter_reduce(dr.ReduceOp.Add, tally, value, where >> 1, lanes["bin"] < size_k,
-                              mode=dr.ReduceMode.Expand)
-            dr.eval(*packed_codes.values(), rare, tally)
-            words = np.array(tally, dtype=np.uint64)
-            pairs = np.stack([words & np.uint64(_WORD - 1), words >> np.uint64(32)], axis=1).reshape(-1)[:flat]
-            bin_counts[slots] += pairs.astype(np.int64).reshape(len(slots), size_k)
-        bounds, _ = _lane_ranges(first, size, slots, starts)
-        ends = np.append(bounds[1:], size)
+            # The same kernel also adds each ray to its reading's bin (a queued walk: the kernel
+            # after the walk loop, from each ray's kept bin).
+            table = self._bin_table(source, lanes["bin"], lanes["slot"])
+            per_ray = {} if exits is None else {name: sums[name] for name in hook.sums}
+            totals = {name: self._per_reading(value, lanes["slot"], len(slots)) for name, value in per_ray.items()}
+            dr.eval(*packed_codes.values(), rare, table, *totals.values())
+            tally.bins[slots] += self._unpacked(table, slots)
+            for name, total in totals.items():
+                tally.sums[name][slots] += np.array(total, dtype=np.uint64).astype(np.int64)
+        bounds, ends = source.bounds, np.append(source.bounds[1:], source.size)
         for (low, high), packed_code in packed_codes.items():
             if len(slots) == 1:
                 packed = np.array([int(dr.sum(packed_code).numpy()[0])], dtype=np.uint64)
@@ -428,6 +439,45 @@ class _Kernel:
             getattr(counts, name)[slots] += _segment_sums(dr.cumsum(flags), bounds, ends).astype(np.int64)
         self._largest_weights(lanes["weight"], rare, bounds, slots, counts)
 
+    def _bin_table(self, source: _RaySource, code: Any, slot: Any) -> Any:
+        """
+        The chunk's histogram of the hook's codes (symbolic): two bins per UInt64 word
+        (32-bit fields: a chunk holds < 2³² rays, so no field overflows), scatter-added into
+        per-thread copies of the table (``ReduceMode.Expand``: no atomics; Dr.Jit sums the
+        copies). A SIMD packet costs one read-modify-write per distinct word its rays hit,
+        so neighbouring bins share a word, paired as the hook says for each reading
+        (:meth:`~virtspec_mi.kernel.hooks.ExitHook.pairing`: each reading's block holds
+        K + 1 fields, its bins from field ``pairing`` on). Measured the fastest of
+        32-bit/64-bit tallies × Local/Expand/Direct (benchmarks/gonio.py).
+        """
+
+        readings, block = len(source.slots), self.hook.size + 1
+        table = dr.zeros(mi.UInt64, (readings * block + 1) // 2)
+        shift = source.column(self.pairing[source.slots], mi.UInt32, slot)
+        where = code + shift if readings == 1 else slot * block + code + shift
+        value = dr.select((where & 1) != 0, mi.UInt64(_WORD), mi.UInt64(1))
+        dr.scatter_reduce(dr.ReduceOp.Add, table, value, where >> 1, code < self.hook.size,
+                          mode=dr.ReduceMode.Expand)
+        return table
+
+    def _unpacked(self, table: Any, slots: np.ndarray) -> np.ndarray:
+        """The evaluated :meth:`_bin_table` of readings ``slots`` as ``int64`` counts, shape (readings, K)."""
+
+        size = self.hook.size
+        words = np.array(table, dtype=np.uint64)
+        fields = np.stack([words & np.uint64(_WORD - 1), words >> np.uint64(32)], axis=1).reshape(-1)
+        blocks = fields[: len(slots) * (size + 1)].astype(np.int64).reshape(len(slots), size + 1)
+        first = self.pairing[slots].astype(np.int64)
+        return blocks[np.arange(len(slots))[:, None], first[:, None] + np.arange(size)[None, :]]
+
+    @staticmethod
+    def _per_reading(value: Any, slot: Any, readings: int) -> Any:
+        """Per-ray whole numbers summed per reading of the chunk (symbolic ``UInt64``, one per reading)."""
+
+        total = dr.zeros(mi.UInt64, readings)
+        dr.scatter_reduce(dr.ReduceOp.Add, total, mi.UInt64(value), mi.UInt32(0) if slot is None else slot)
+        return total
+
     @staticmethod
     def _largest_weights(weight: Any, rare: Any, bounds: np.ndarray, slots: np.ndarray, counts: Counts) -> None:
         """Keep the largest violating weight of each reading (rare: only lanes that violate)."""
@@ -439,24 +489,22 @@ class _Kernel:
         where = np.searchsorted(bounds.astype(np.int64), np.array(lanes, dtype=np.int64), side="right") - 1
         np.fmax.at(counts.largest_weight, slots[where], values)  # fmax skips NaN weights
 
-    def trace(self, first: int, size: int, slots: np.ndarray, starts: np.ndarray,
-              offsets: np.ndarray) -> dict:
-        """Symbolic per-lane quantities of the packed lanes [first, first + size) (nothing evaluated)."""
+    def trace(self, source: _RaySource) -> dict:
+        """Symbolic per-lane quantities of the chunk's packed lanes (nothing evaluated)."""
 
-        source = _RaySource(self, first, size, slots, starts, offsets)
+        size = source.size
         lane = dr.arange(mi.UInt32, size)
         slot = source.slot(lane)
         ray = source.incident(lane, slot)
         bs, weight = self._sample(ray["si"], ray["sample1"], ray["sample2"])
         wi = ray["si"].wi
         judged = self._judge(wi.z >= 0.0, bs, weight, ray["survival"], size)
-        lanes = {"origin": ray["origin"], "target": ray["target"], "wi": wi, **judged}
-        if self.bins is not None:
-            lanes["bin"], lanes["slot"] = self._reading_bin(source, slot, judged["wo"], judged["fate"]), slot
+        lanes = {"origin": ray["origin"], "target": ray["target"], "wi": wi, **judged, "slot": slot}
+        if self.hook is not None and not self.hook.needs_rays:
+            lanes["bin"] = self._reading_bin(source, slot, judged["wo"], judged["fate"])
         return lanes
 
-    def walk(self, first: int, size: int, slots: np.ndarray, starts: np.ndarray,
-             offsets: np.ndarray) -> dict:
+    def walk(self, source: _RaySource) -> dict:
         """
         The packed lanes [first, first + size) of a :class:`~virtspec_mi.kernel.walk.RandomWalk`
         specimen, with rays queued on SIMD lanes (see :class:`WalkQueue`).
@@ -472,13 +520,13 @@ class _Kernel:
         fate when its walk ended, kept in its slot) and its reading's ``slot`` (symbolic).
         """
 
-        source = _RaySource(self, first, size, slots, starts, offsets)
+        size = source.size
         bsdf = self.bsdf
         width, queue = min(size, self.walk_queue.lanes), self.walk_queue.queue
         codes = dr.zeros(mi.UInt32, size)  # fate | rare << 4 | delta << 8, per ray
         weights = dr.zeros(mi.Float, size)
         # A goniophotometer reading keeps each ray's bin (tallied after the loop).
-        ray_bins = dr.zeros(mi.UInt32, size) if self.bins is not None else None
+        ray_bins = dr.zeros(mi.UInt32, size) if self.hook is not None else None
         # Queues: "stride" — lane l runs positions l, l + L, …; "counter" — one shared counter
         # hands out the next position; "group" — each group of WALK_GROUP lanes (a SIMD packet,
         # run by one thread) shares a counter over its own contiguous range of positions.
@@ -586,9 +634,10 @@ class _Kernel:
         rare = (codes >> 4) & 15
         delta = (codes & 256) != 0
         lanes = {"fate": fate, "rare": rare, "weight": weights,
-                 "specular": (fate == int(Fate.REFLECTED)) & delta, "regular": (fate == int(Fate.TRANSMITTED)) & delta}
+                 "specular": (fate == int(Fate.REFLECTED)) & delta, "regular": (fate == int(Fate.TRANSMITTED)) & delta,
+                 "slot": source.slot(dr.arange(mi.UInt32, size))}
         if ray_bins is not None:
-            lanes["bin"], lanes["slot"] = ray_bins, source.slot(dr.arange(mi.UInt32, size))
+            lanes["bin"] = ray_bins
         return lanes
 
     def _walk_start(self, si: Any, sample1: Any, sample2: Any) -> Any:
@@ -632,53 +681,10 @@ class _Kernel:
                 "specular": specular, "regular": regular}
 
     def _reading_bin(self, source: _RaySource, slot: Any, wo: Any, fate: Any) -> Any:
-        """:meth:`_bin` of rays of readings ``slot`` of the chunk (``None``: a single reading), with their φi."""
+        """The hook's bin of rays of readings ``slot`` of the chunk (``None``: a single reading), with their φi."""
 
         phi_i = source.column(self.phi_i[source.slots].astype(np.float32), mi.Float, slot)
-        return self._bin(wo, fate, phi_i)
-
-    def _bin(self, wo: Any, fate: Any, phi_i: Any) -> Any:
-        """
-        Flat bin (θo bin · φo bins + φo bin) of each ray; the number of bins K for a ray
-        that is not binned (absorbed, no fate, or outside the bins' range). The hemisphere
-        is the fate's; θo is searched by its key sin²θo (reflected, below 1) or 2 − sin²θo
-        (transmitted) among the edges' keys (:meth:`GonioBins.theta_keys`), φo ∈ [0, 360)
-        (folded: |φo − φi| wrapped into [0, 180]) among the φo edges.
-        """
-
-        bins = self.bins
-        n_theta, n_phi = bins.shape
-        r2 = wo.x * wo.x + wo.y * wo.y
-        sin2 = r2 / (r2 + wo.z * wo.z)
-        reflected = fate == int(Fate.REFLECTED)
-        transmitted = fate == int(Fate.TRANSMITTED)
-        regular = bins.regular_theta
-        if regular is None:  # given edges: search the keys
-            key = dr.select(reflected, dr.minimum(sin2, _BELOW_ONE), 2.0 - sin2)
-            theta_bin = _search(bins.theta_keys(), key)
-        else:  # n bins per hemisphere, uniform in sin²θo or in θo: arithmetic, mirrored below
-            per, reflection, transmission = regular
-            if bins.binning == "projected":
-                position = sin2 * float(per)
-            else:
-                position = dr.atan2(dr.sqrt(r2), dr.abs(wo.z)) * (2.0 * per / dr.pi)
-            j = mi.UInt32(dr.clip(mi.Int32(dr.floor(position)), 0, per - 1))
-            outside = mi.UInt32(n_theta)
-            theta_bin = dr.select(reflected, j if reflection else outside,
-                                  (mi.UInt32(per * reflection + per - 1) - j) if transmission else outside)
-        phi = dr.atan2(wo.y, wo.x) * (180.0 / dr.pi)
-        phi = dr.select(phi < 0.0, phi + 360.0, phi)
-        if bins.fold_phi:
-            relative = phi - phi_i
-            relative = relative - 360.0 * dr.floor(relative / 360.0)
-            phi = dr.minimum(relative, 360.0 - relative)
-        if bins.regular_phi:
-            top = 180.0 if bins.fold_phi else 360.0
-            phi_bin = mi.UInt32(dr.clip(mi.Int32(dr.floor(phi * (n_phi / top))), 0, n_phi - 1))
-        else:
-            phi_bin = _search(bins.phi_edges.astype(np.float32), phi)
-        binned = (reflected | transmitted) & (theta_bin < n_theta) & (phi_bin < n_phi)
-        return dr.select(binned, theta_bin * n_phi + phi_bin, mi.UInt32(bins.size))
+        return self.hook.bin(wo, fate, phi_i)
 
     def _sample(self, si: Any, sample1: Any, sample2: Any) -> tuple[Any, Any]:
         """The specimen BSDF's ``sample`` (importance transport)."""
@@ -713,11 +719,11 @@ class _RaySource:
 
     def __init__(self, kernel: _Kernel, first: int, size: int, slots: np.ndarray, starts: np.ndarray,
                  offsets: np.ndarray) -> None:
-        self.kernel = kernel
+        self.kernel, self.size = kernel, size
         # Position p of reading k has global ray index g = offsets[k] + (first + p − starts[k]); the
         # chunk never crosses a 2³² boundary of g, so one root and a per-reading low-word shift.
         self.shift = (offsets[slots] - starts[slots] + first) % _WORD
-        self.root = chunk_root(kernel.settings.seed, int(offsets[slots[0]] + first - starts[slots[0]]) // _WORD)
+        self.root = chunk_root(kernel.seed, int(offsets[slots[0]] + first - starts[slots[0]]) // _WORD)
         # Per-reading parameters: width-1 opaque values for a single reading, else gathered.
         self.bounds, self.j0 = _lane_ranges(first, size, slots, starts)
         self.slots, self.rows = slots, kernel.readings[slots]
@@ -740,7 +746,7 @@ class _RaySource:
             return dr.opaque(kind, values[0].item())
         return dr.gather(kind, kind(values), slot)
 
-    def _ray_index(self, lane: Any, slot: Any) -> Any:
+    def ray_index(self, lane: Any, slot: Any) -> Any:
         """Low word of the global ray index of each position."""
 
         if np.all(self.shift == self.shift[0]):  # consecutive readings (the default layout): one scalar
@@ -752,7 +758,7 @@ class _RaySource:
         the BSDF's ``sample1``/``sample2`` and the roulette's ``survival`` uniform of the rays at
         positions ``lane`` (their readings ``slot``: found by a binary search when not given)."""
 
-        kernel, settings, rows, root = self.kernel, self.kernel.settings, self.rows, self.root
+        kernel, rows, root = self.kernel, self.rows, self.root
         slot = self.slot(lane) if slot is False else slot
 
         def column(values: np.ndarray, kind: Any) -> Any:
@@ -760,7 +766,7 @@ class _RaySource:
 
         ray = lane + column(self.j0, mi.UInt32) if slot is None else (
             lane - column(self.bounds, mi.UInt32) + column(self.j0, mi.UInt32))
-        ray_index = self._ray_index(lane, slot)
+        ray_index = self.ray_index(lane, slot)
 
         def uniform(dimension: int) -> mi.Float:
             return to_unit(hash32(ray_index ^ self.keys[dimension]), mi.Float)
@@ -770,25 +776,25 @@ class _RaySource:
 
         wavelength = column(rows[:, _WAVELENGTH], mi.Float)
 
-        if settings.beam == "diffuse":
+        if kernel.beam == "diffuse":
             u0, u1 = uniform(0), uniform(1)
-            if settings.sampling == "jittered":
+            if kernel.sampling == "jittered":
                 u0, u1 = jittered_cell(mi, u0, u1, ray, column(rows[:, _STRATA].astype(np.uint32), mi.UInt32))
             wi = mi.warp.square_to_cosine_hemisphere(mi.Point2f(u0, u1))
-            target = sample_disk(mi, settings.sampling, uniform(2), uniform(3), kernel.specimen_radius,
+            target = sample_disk(mi, kernel.sampling, uniform(2), uniform(3), kernel.specimen_radius,
                                  lambda r: _rejection(ray_index, root, r, 1))
             origin = mi.Point3f(target.x, target.y, 0.0) + wi * kernel.distance
-        elif settings.beam == "collimated":
+        elif kernel.beam == "collimated":
             wi = vector(_OMEGA)
             target = mi.Point2f(0.0, 0.0)
             origin = mi.Point3f(wi)
         else:
             u0, u1 = uniform(0), uniform(1)
-            if settings.sampling == "jittered":
+            if kernel.sampling == "jittered":
                 u0, u1 = jittered_cell(mi, u0, u1, ray, column(rows[:, _STRATA].astype(np.uint32), mi.UInt32))
-            emitter = sample_disk(mi, settings.sampling, u0, u1, kernel.emitter_radius,
+            emitter = sample_disk(mi, kernel.sampling, u0, u1, kernel.emitter_radius,
                                   lambda r: _rejection(ray_index, root, r, 0))
-            target = sample_disk(mi, settings.sampling, uniform(2), uniform(3), kernel.specimen_radius,
+            target = sample_disk(mi, kernel.sampling, uniform(2), uniform(3), kernel.specimen_radius,
                                  lambda r: _rejection(ray_index, root, r, 1))
             origin = mi.Point3f(vector(_CENTRE) + emitter.x * vector(_E_U) + emitter.y * vector(_E_V))
             wi = dr.normalize(origin - mi.Point3f(target.x, target.y, 0.0))
@@ -821,26 +827,6 @@ def _rejection(ray_index: mi.UInt32, root: int, radius: mi.Float, disk: int) -> 
         y = dr.fma(2.0, to_unit(hash32(ray_index ^ ky), mi.Float), -1.0)
         dimension += 4
     return mi.Point2f(x * radius, y * radius)
-
-
-def _search(edges: np.ndarray, key: Any) -> Any:
-    """
-    Bin of ``key`` among increasing float32 ``edges``: i with edges[i] <= key < edges[i + 1],
-    the last bin closed (key == edges[-1] is in it); ≥ the number of bins when outside
-    (binary lifting over a table padded with +inf to 2^k entries).
-    """
-
-    steps = max(1, int(np.ceil(np.log2(len(edges) + 1))))
-    padded = np.full(1 << steps, np.inf, dtype=np.float32)
-    padded[: len(edges)] = edges
-    table = mi.Float(padded)
-    below = mi.UInt32(0)  # how many edges are <= key
-    for step in reversed(range(steps)):
-        probe = below + (1 << step)
-        below = dr.select(dr.gather(mi.Float, table, probe - 1) <= key, probe, below)
-    last = len(edges) - 1
-    below = dr.select(key == float(edges[-1]), mi.UInt32(last), below)
-    return below - 1  # no edge <= key: wraps to 2^32 - 1, outside
 
 
 def _gather_tree(tree: Any, index: Any) -> Any:

@@ -55,10 +55,11 @@ def plane_bins(reading: Any, across: bool = False) -> tuple[int, int]:
 
 
 def plot_polar(reading: Any, path: str | os.PathLike | None = None, wavelength: float | None = None,
-               log: bool = False) -> Any:
+               log: bool = False, name: str | None = None) -> Any:
     """
     Polar plots of f in the plane of incidence and across it, one curve per θi with its
-    certified band, at ``wavelength`` (default: the first). Returns the ``Figure``.
+    certified band, at ``wavelength`` (default: the first; the title says which);
+    ``name`` (e.g. a file name) heads the title. Returns the ``Figure``.
     """
 
     from matplotlib.figure import Figure
@@ -99,7 +100,7 @@ def plot_polar(reading: Any, path: str | os.PathLike | None = None, wavelength: 
                             fontsize=7)
         if panel == 0:
             axes.legend(loc="lower left", fontsize=7, bbox_to_anchor=(-0.15, -0.12))
-    return _finish(figure, reading, w, "goniophotometer", "band: all bins", 10, path)
+    return _finish(figure, reading, w, f"{name + ': ' if name else ''}goniophotometer", "band: all bins", 10, path)
 
 
 def plot_hemisphere(reading: Any, path: str | os.PathLike | None = None, transmission: bool = False,

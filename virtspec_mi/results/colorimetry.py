@@ -2,10 +2,10 @@
 Colorimetry of measured spectra through colour-science
 ======================================================
 
-- :func:`spectral_distribution` / :func:`multi_spectral_distributions`: a
-  :class:`~virtspec_mi.results.hemispherical.Result` (one reading or a sweep) at one θi as ``colour.SpectralDistribution``
-  (one quantity) or ``colour.MultiSpectralDistributions`` (reflectance,
-  transmittance, absorptance).
+- :func:`spectral_distribution` / :func:`multi_spectral_distributions`: a result of
+  any kind (a reading or a sweep, a goniophotometer's R and T, a sphere's reading …) at
+  one θi as ``colour.SpectralDistribution`` (one quantity) or
+  ``colour.MultiSpectralDistributions`` (reflectance, transmittance, absorptance).
 - :func:`colorimetry`: CIE XYZ, CIE L*a*b* and sRGB of a reflectance or
   transmittance spectrum under an illuminant (CIE D65 by default) and an observer
   (CIE 1931 2° by default), as a :class:`Colour`.
@@ -121,20 +121,20 @@ class Colour:
         }
 
 
-def spectral_distribution(result: Any, quantity: str = "reflectance", theta_i: float | None = None) -> Any:
-    """One quantity of a sweep at one θi (optional for a one-angle sweep) as a ``colour.SpectralDistribution``."""
+def spectral_distribution(result: Any, quantity: str | None = None, theta_i: float | None = None) -> Any:
+    """
+    One quantity of a result of any kind at one θi (optional for a one-angle result) as a
+    ``colour.SpectralDistribution`` (:meth:`~virtspec_mi.results.base.ResultBase.spectrum`;
+    ``quantity`` ``None``: the kind's first, e.g. reflectance, a sphere's reading).
+    """
 
     import colour
 
-    result = result.as_grid()
-    column = result.angle_index(theta_i)
-    if len(result.wavelengths) < 2:
-        raise ValueError(f"a spectrum needs at least two wavelengths (the sweep has {len(result.wavelengths)})")
-    values = result.quantity(quantity)[:, column]
-    order = np.argsort(result.wavelengths)
+    spectrum = result.spectrum(quantity, theta_i)
+    if len(spectrum.wavelengths) < 2:
+        raise ValueError(f"a spectrum needs at least two wavelengths (the result has {len(spectrum.wavelengths)})")
     with colour.utilities.suppress_warnings(colour_runtime_warnings=True):  # "not uniform" is fine here
-        return colour.SpectralDistribution(values[order], np.asarray(result.wavelengths)[order],
-                                           name=f"{quantity} theta_i={result.theta_i[column]:g}")
+        return colour.SpectralDistribution(spectrum.values, spectrum.wavelengths, name=spectrum.name)
 
 
 def multi_spectral_distributions(result: Any, theta_i: float | None = None) -> Any:
@@ -142,12 +142,10 @@ def multi_spectral_distributions(result: Any, theta_i: float | None = None) -> A
 
     import colour
 
-    result = result.as_grid()
-    column = result.angle_index(theta_i)
-    order = np.argsort(result.wavelengths)
-    values = np.stack([result.quantity(q)[:, column][order] for q in QUANTITIES], axis=1)
-    return colour.MultiSpectralDistributions(values, np.asarray(result.wavelengths)[order], labels=QUANTITIES,
-                                             name=f"theta_i={result.theta_i[column]:g}")
+    spectra = [result.spectrum(q, theta_i) for q in QUANTITIES]
+    values = np.stack([spectrum.values for spectrum in spectra], axis=1)
+    return colour.MultiSpectralDistributions(values, spectra[0].wavelengths, labels=QUANTITIES,
+                                             name=f"theta_i={spectra[0].theta_i:g}")
 
 
 def colorimetry(sd: Any, illuminant: str = DEFAULT_ILLUMINANT, observer: str = DEFAULT_OBSERVER) -> Colour:
@@ -158,8 +156,8 @@ def colorimetry(sd: Any, illuminant: str = DEFAULT_ILLUMINANT, observer: str = D
     ----------
     sd
         A ``colour.SpectralDistribution`` (e.g. ``result.to_sd()``), at least two
-        wavelengths inside the observer's range, or a :class:`~virtspec_mi.results.hemispherical.Result`
-        at one θi (its reflectance spectrum).
+        wavelengths inside the observer's range, or a result at one θi (its first
+        quantity's spectrum: a reflectance, a sphere's reading).
     illuminant
         A name of ``colour.SDS_ILLUMINANTS`` (default ``"D65"``).
     observer

@@ -17,11 +17,19 @@ R/T certificate — whose escaping rays were also tallied by outgoing direction
   at once), ``cdf_mu`` (DKW), ``relative_tolerance`` above ``brdf_floor`` when asked —
   NaN ("not certified") where the reading's R/T are not certified or the bound is vacuous.
 
+It is a result like the others (:class:`~virtspec_mi.results.base.ResultBase`): its dims
+are its spectrophotometer reading's (``wavelength``, ``theta_i``, parameter dims) then
+``theta_o`` and ``phi_o``; ``sel`` / ``isel`` pick readings (the bins stay whole: the
+certificate is a union over all K of them); spectra, colours and comparisons go through
+its R and T (``spectrum``, ``to_sd``, ``colour``), or, with ``theta_o`` and ``phi_o``,
+``to_sd`` gives one bin's f over wavelength; :meth:`GonioResult.plot` draws the lobes.
+
 :meth:`GonioResult.to_dataset` gives the ``xarray.Dataset`` of the data contract
 (dims ``wavelength``, ``theta_i``, ``theta_o``, ``phi_o``; variables ``bin_counts``,
 ``rays``, ``brdf``; bin edges as coordinates ``theta_o_lower`` … ; attributes
 ``phi_folded``, ``phi_i``, ``mu``, ``delta``, ``guarantee``) that the ``tabulated`` BSDF
-loads; :meth:`write` / :meth:`read` store it as NetCDF, CSV or JSON.
+loads; ``write`` / ``read`` store it as NetCDF, CSV, JSON or Zarr (format
+``"virtspec-mi gonio 1"``; files written with the former ``gonio_json`` attribute read too).
 
 References
 ----------
@@ -30,27 +38,28 @@ Nicodemus et al. (1977), NBS Monograph 160; Baranoski et al. (2001), Sect. 6.
 
 from __future__ import annotations
 
-import json
 import os
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from functools import cached_property
-from pathlib import Path
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
 
 from virtspec_mi.budgets import bins as gonio_bounds
 from virtspec_mi.budgets.rules import guarantee_of
 from virtspec_mi.geometry.bins import GonioBins
-from virtspec_mi.results.hemispherical import Result, _round_up, plain_data
+from virtspec_mi.kernel.counts import QUANTITIES
+from virtspec_mi.results.base import ResultBase, plain_data, round_up
+from virtspec_mi.results.formats import annotate
+from virtspec_mi.results.hemispherical import Result
 
 __all__ = ["GonioResult"]
 
-_FORMAT = "virtspec-mi gonio 1"
+_BINS = ("theta_o", "phi_o")
 
 
 @dataclass(frozen=True, eq=False)
-class GonioResult:
+class GonioResult(ResultBase):
     """
     A goniophotometer reading over (wavelength, θi, θo, φo) (see the module docstring).
 
@@ -75,19 +84,67 @@ class GonioResult:
     relative_tolerance: float | None = None
     brdf_floor: float | None = None
 
+    FORMAT: ClassVar[str] = "virtspec-mi gonio 1"
+    KIND: ClassVar[str] = "goniophotometer reading"
+    KIND_DIMS: ClassVar[tuple[str, ...]] = _BINS
+    KIND_DIMS_REASON: ClassVar[str] = (
+        "its certificate is a union over all K bins; select bins in to_dataset() (xarray), e.g. "
+        "result.to_dataset().sel(theta_o=40, method='nearest')")
+    QUANTITIES: ClassVar[tuple[str, ...]] = QUANTITIES
+    _QUANTITY_NOTE: ClassVar[str] = ("a goniophotometer reading's spectra are its R, T and A; "
+                                     "to_sd(theta_o=..., phi_o=...) gives one bin's f")
+
     # -- labels and counts -------------------------------------------------------------
 
     @property
-    def wavelengths(self) -> np.ndarray:
-        return self.result.wavelengths
+    def dims(self) -> tuple[str, ...]:  # type: ignore[override]
+        """The reading's dims (``wavelength``, ``theta_i``, parameter dims), then ``theta_o`` and ``phi_o``."""
+
+        return (*self.result.dims, *_BINS)
+
+    @property
+    def coords(self) -> dict[str, np.ndarray]:  # type: ignore[override]
+        """The reading's coordinates and the bin centres ``theta_o``, ``phi_o`` (degrees)."""
+
+        return {**self.result.coords, "theta_o": self.bins.theta_centres, "phi_o": self.bins.phi_centres}
+
+    @property
+    def parameters(self) -> dict | None:  # type: ignore[override]
+        return self.result.parameters
+
+    @property
+    def settings(self) -> Any:
+        return self.result.settings
+
+    @property
+    def scene(self) -> str:
+        return self.result.scene
+
+    @property
+    def seconds(self) -> float:
+        return self.result.seconds
+
+    @property
+    def interval_delta(self) -> float:
+        return self.result.interval_delta
+
+    def _labelled(self) -> dict[str, tuple[tuple[str, ...], np.ndarray]]:
+        arrays = {f"result.{name}": value for name, value in self.result._labelled().items()}
+        arrays["bin_counts"] = (self.dims, self.bin_counts)
+        return arrays
+
+    def _relabelled(self, dims: tuple[str, ...], coords: dict[str, np.ndarray],
+                    arrays: dict[str, np.ndarray]) -> "GonioResult":
+        reading_dims = tuple(d for d in dims if d not in _BINS)
+        result = self.result._relabelled(reading_dims, {k: v for k, v in coords.items() if k not in _BINS},
+                                         {k[len("result."):]: v for k, v in arrays.items() if k.startswith("result.")})
+        return replace(self, result=result, bin_counts=arrays["bin_counts"])
 
     @property
     def theta_i(self) -> np.ndarray:
-        return np.atleast_1d(self.result.coords["theta_i"])
+        """Polar incidence in degrees, as an array (one element for a scalar label)."""
 
-    @property
-    def phi_i(self) -> float:
-        return self.result.phi_i
+        return np.atleast_1d(self.result.coords["theta_i"])
 
     @property
     def theta_o(self) -> np.ndarray:
@@ -106,10 +163,6 @@ class GonioResult:
         """Rays N per reading (wavelength, θi)."""
 
         return self.result.rays
-
-    @property
-    def delta(self) -> float:
-        return self.result.delta
 
     @property
     def size(self) -> int:
@@ -231,19 +284,19 @@ class GonioResult:
         if np.all(np.isnan(cdf_mu)):
             return f"{counted} ({rule}): NOT CERTIFIED (see the reading's warnings, or too few rays)"
         lines = [f"{counted} ({rule}), each statement with probability >= {1 - delta:g} per reading:"]
-        lines.append(f"  CDFs of theta_o and phi_o: sup |F - F_N| < {_round_up(float(np.nanmax(cdf_mu))):g} "
+        lines.append(f"  CDFs of theta_o and phi_o: sup |F - F_N| < {round_up(float(np.nanmax(cdf_mu))):g} "
                      "(DKW-Massart)")
         if np.all(np.isnan(bins_mu)):
             lines.append("  bin fractions: not certified (too few rays for K bins)")
         else:
-            lines.append(f"  every bin fraction at once: |m_k/N - p_k| < {_round_up(float(np.nanmax(bins_mu))):g} "
+            lines.append(f"  every bin fraction at once: |m_k/N - p_k| < {round_up(float(np.nanmax(bins_mu))):g} "
                          f"({guarantee_of(self.guarantee).union_words})")
         lines.append(f"  f_k: simultaneous Clopper-Pearson intervals, each at delta/K = {delta / k:.3g}")
         relative = self.relative_mu
         if relative is not None:
             lines.append(f"  f_k >= {self.brdf_floor:g}/sr: relative error < "
                          + ("not certified (too few rays)" if np.all(np.isnan(relative))
-                            else f"{_round_up(float(np.nanmax(relative))):g}") + " (Chernoff + union)")
+                            else f"{round_up(float(np.nanmax(relative))):g}") + " (Chernoff + union)")
         if np.any(np.isnan(cdf_mu)):
             lines.append("  some readings NOT CERTIFIED")
         return "\n".join(lines)
@@ -263,8 +316,8 @@ class GonioResult:
         return "\n".join(lines)
 
     def __repr__(self) -> str:
-        return (f"GonioResult({len(self.wavelengths)} wavelengths x {len(self.theta_i)} theta_i x "
-                f"{self.bins.shape[0]} theta_o x {self.bins.shape[1]} phi_o, N = {int(self.rays.max()):,})")
+        sizes = " x ".join(f"{n} {d}" for d, n in self.sizes.items())
+        return f"GonioResult({sizes}, N = {int(np.max(self.rays)):,})"
 
     # -- plain data, datasets and files ------------------------------------------------
 
@@ -272,7 +325,7 @@ class GonioResult:
         """Plain data (JSON-ready): the reading's result, the bins, counts and the certificate."""
 
         return {
-            "format": _FORMAT,
+            "format": self.FORMAT,
             "result": self.result.as_dict(),
             "bins": self.bins.as_dict(),
             "bin_counts": self.bin_counts.tolist(),
@@ -289,132 +342,117 @@ class GonioResult:
         """The reading of :meth:`as_dict` (``ValueError`` if ``data`` is not one)."""
 
         try:
-            if data.get("format") != _FORMAT:
+            if data.get("format") != cls.FORMAT:
                 raise KeyError("format")
-            return cls(result=Result.from_dict(data["result"]).as_grid(),
+            return cls(result=Result.from_dict(data["result"]),
                        bin_counts=np.asarray(data["bin_counts"], dtype=np.int64),
                        bins=GonioBins.from_dict(data["bins"]), guarantee=str(data["guarantee"]),
                        relative_tolerance=data.get("relative_tolerance"), brdf_floor=data.get("brdf_floor"))
-        except (KeyError, TypeError, AttributeError) as error:
+        except (KeyError, TypeError, AttributeError, ValueError) as error:
             raise ValueError(f"not a virtspec-mi goniophotometer result (missing or bad {error})") from None
 
     def to_dataset(self) -> Any:
         """
         The ``xarray.Dataset`` of the data contract (see the module docstring), plus the
-        spectrophotometer variables (reflectance …, over wavelength × θi), ``fraction``,
+        spectrophotometer variables (reflectance …, over the reading's dims), ``fraction``,
         ``brdf_lower`` / ``brdf_upper``, ``solid_angle``, ``cdf_theta_o`` / ``cdf_phi_o``
         (over the edges ``theta_o_edge`` / ``phi_o_edge``), ``outside``, ``bins_mu`` and
-        ``cdf_mu``; ``gonio_json`` rebuilds the reading (:meth:`from_dataset`).
+        ``cdf_mu``, each with ``units`` and ``long_name``; ``result_json`` rebuilds the
+        reading (:meth:`from_dataset`).
         """
 
         base = self.result.to_dataset()
-        base.attrs.pop("result_json", None)
         b = self.bins
-        grid = ("wavelength", "theta_i", "theta_o", "phi_o")
-        reading = ("wavelength", "theta_i")
+        grid, reading = self.dims, self.result.dims
+        band = {"clopper_pearson_delta": self.delta / self.size}
         dataset = base.assign({
-            "bin_counts": (grid, self.bin_counts.astype(np.int64), {"meaning": "exact count of rays into the bin"}),
-            "fraction": (grid, self.fraction, {"meaning": "bin_counts / rays"}),
-            "brdf": (grid, self.brdf, {"units": "1/sr", "meaning": "(bin_counts/rays) / solid_angle (BTDF beyond "
-                                                                  "theta_o = 90)"}),
-            "brdf_lower": (grid, self.brdf_lower, {"units": "1/sr", "clopper_pearson_delta": self.delta / self.size}),
-            "brdf_upper": (grid, self.brdf_upper, {"units": "1/sr", "clopper_pearson_delta": self.delta / self.size}),
-            "solid_angle": (("theta_o", "phi_o"), self.solid_angles,
-                            {"units": "sr", "meaning": "projected solid angle of the bin, integral of |cos theta_o|"
-                                                      + (" (both folded halves)" if b.fold_phi else "")}),
-            "cdf_theta_o": (("wavelength", "theta_i", "theta_o_edge"), self.cdf_theta_o),
-            "cdf_phi_o": (("wavelength", "theta_i", "phi_o_edge"), self.cdf_phi_o),
+            "bin_counts": (grid, self.bin_counts.astype(np.int64)),
+            "fraction": (grid, self.fraction),
+            "brdf": (grid, self.brdf),
+            "brdf_lower": (grid, self.brdf_lower, band),
+            "brdf_upper": (grid, self.brdf_upper, band),
+            "solid_angle": (_BINS, self.solid_angles,
+                            {"meaning": "both folded halves" if b.fold_phi else "one bin"}),
+            "cdf_theta_o": ((*reading, "theta_o_edge"), self.cdf_theta_o),
+            "cdf_phi_o": ((*reading, "phi_o_edge"), self.cdf_phi_o),
             "outside": (reading, self.outside.astype(np.int64)),
-            "bins_mu": (reading, self.bins_mu, {"meaning": "every bin fraction within bins_mu at delta; NaN: not "
-                                                           "certified"}),
-            "cdf_mu": (reading, self.cdf_mu, {"meaning": "DKW-Massart sup error of cdf_theta_o and cdf_phi_o at "
-                                                         "delta; NaN: not certified"}),
+            "bins_mu": (reading, self.bins_mu),
+            "cdf_mu": (reading, self.cdf_mu),
         })
         dataset = dataset.assign_coords({
-            "theta_o": ("theta_o", b.theta_centres, {"units": "degree"}),
-            "theta_o_lower": ("theta_o", b.theta_edges[:-1], {"units": "degree"}),
-            "theta_o_upper": ("theta_o", b.theta_edges[1:], {"units": "degree"}),
-            "phi_o": ("phi_o", b.phi_centres, {"units": "degree"}),
-            "phi_o_lower": ("phi_o", b.phi_edges[:-1], {"units": "degree"}),
-            "phi_o_upper": ("phi_o", b.phi_edges[1:], {"units": "degree"}),
-            "theta_o_edge": ("theta_o_edge", b.theta_edges, {"units": "degree"}),
-            "phi_o_edge": ("phi_o_edge", b.phi_edges, {"units": "degree"}),
+            "theta_o": ("theta_o", b.theta_centres),
+            "theta_o_lower": ("theta_o", b.theta_edges[:-1]),
+            "theta_o_upper": ("theta_o", b.theta_edges[1:]),
+            "phi_o": ("phi_o", b.phi_centres),
+            "phi_o_lower": ("phi_o", b.phi_edges[:-1]),
+            "phi_o_upper": ("phi_o", b.phi_edges[1:]),
+            "theta_o_edge": ("theta_o_edge", b.theta_edges),
+            "phi_o_edge": ("phi_o_edge", b.phi_edges),
         })
-        if "theta_i" not in dataset.dims:
-            dataset = dataset.expand_dims("theta_i")
         dataset.attrs.update({
             "phi_folded": int(b.fold_phi), "phi_i": self.phi_i, "binning": b.binning, "guarantee": self.guarantee,
-            "bins": self.size, "bins_delta": self.delta,
-            "gonio_json": json.dumps(self.as_dict()),
+            "bins": self.size, "bins_delta": self.delta, **self._dataset_attrs(),
         })
-        return dataset
+        return annotate(dataset, self._parameter_keys())
 
-    @classmethod
-    def from_dataset(cls, dataset: Any) -> "GonioResult":
-        """The reading of a dataset made by :meth:`to_dataset`."""
+    def csv_dataset(self) -> Any:
+        """What a ``.csv`` file holds, one row per bin: :meth:`to_dataset` without the CDFs over bin edges."""
 
-        if "gonio_json" not in dataset.attrs:
-            raise ValueError("not a virtspec-mi goniophotometer result (no gonio_json attribute)")
-        return cls.from_dict(json.loads(dataset.attrs["gonio_json"]))
+        return self.to_dataset().drop_vars(["cdf_theta_o", "cdf_phi_o", "theta_o_edge", "phi_o_edge"])
 
-    def write(self, path: str | os.PathLike) -> Path:
-        """Write to ``.nc`` (NetCDF-4), ``.csv`` or ``.json`` by suffix (:mod:`virtspec_mi.results.io`)."""
+    # -- spectra, colour and plots -----------------------------------------------------
 
-        from virtspec_mi.results import io as results_io
+    def _quantity(self, quantity: str) -> tuple[np.ndarray, np.ndarray, float]:
+        return self.result._quantity(quantity)
 
-        if Path(path).suffix.lower() == ".csv":  # one row per bin: the edge-indexed CDFs stay in gonio_json
-            return results_io.write(_CsvView(self), path)
-        return results_io.write(self, path)
-
-    @classmethod
-    def read(cls, path: str | os.PathLike) -> "GonioResult":
-        """Read a goniophotometer reading written by :meth:`write`."""
-
-        from virtspec_mi.results import io as results_io
-
-        kind, content = results_io.read(path)
-        return cls.from_dataset(content) if kind == "dataset" else cls.from_dict(content)
-
-    # -- colour and plots --------------------------------------------------------------
-
-    def to_sd(self, theta_o: float, phi_o: float, theta_i: float | None = None) -> Any:
+    def to_sd(self, quantity: str | None = None, theta_i: float | None = None, *, theta_o: float | None = None,
+              phi_o: float | None = None) -> Any:
         """
-        f over wavelength in the bin holding (θo, φo) at one θi (default: the first) as a
-        ``colour.SpectralDistribution`` (1/sr; needs several wavelengths).
+        A spectrum as a ``colour.SpectralDistribution``: R, T or A of the reading (as
+        :meth:`Result.to_sd <virtspec_mi.results.base.ResultBase.to_sd>`), or, given
+        ``theta_o`` and ``phi_o``, f over wavelength in the bin holding (θo, φo) at one θi
+        (default: the first; 1/sr; needs several wavelengths).
         """
 
+        if theta_o is None and phi_o is None:
+            return super().to_sd(quantity, theta_i)
+        if theta_o is None or phi_o is None or quantity not in (None, "brdf"):
+            raise ValueError("to_sd of one bin needs theta_o and phi_o (and quantity None or 'brdf'; got "
+                             f"quantity={quantity!r}, theta_o={theta_o!r}, phi_o={phi_o!r})")
         import colour
 
-        i = 0 if theta_i is None else int(np.argmin(np.abs(self.theta_i - theta_i)))
+        grid = self.as_grid()
+        i = 0 if theta_i is None else int(np.argmin(np.abs(grid.theta_i - theta_i)))
         t = int(np.clip(np.searchsorted(self.bins.theta_edges, theta_o, side="right") - 1, 0, self.bins.shape[0] - 1))
         p = int(np.clip(np.searchsorted(self.bins.phi_edges, phi_o, side="right") - 1, 0, self.bins.shape[1] - 1))
-        if len(self.wavelengths) < 2:
+        if len(grid.wavelengths) < 2:
             raise ValueError("to_sd needs a reading over several wavelengths (got 1)")
-        order = np.argsort(self.wavelengths)
-        name = f"f at theta_o {self.theta_o[t]:g}, phi_o {self.phi_o[p]:g} deg (theta_i {self.theta_i[i]:g})"
-        return colour.SpectralDistribution(dict(zip(self.wavelengths[order], self.brdf[order, i, t, p])), name=name)
+        order = np.argsort(grid.wavelengths)
+        name = f"f at theta_o {self.theta_o[t]:g}, phi_o {self.phi_o[p]:g} deg (theta_i {grid.theta_i[i]:g})"
+        return colour.SpectralDistribution(dict(zip(grid.wavelengths[order], grid.brdf[order, i, t, p])), name=name)
 
-    def plot(self, path: str | os.PathLike | None = None, **options: Any) -> Any:
-        """Polar plot of f in the plane of incidence and across it, with the certified band (:mod:`virtspec_mi.results.angular_plot`)."""
+    def to_msds(self, theta_i: float | None = None) -> Any:
+        """R, T and A of the reading at one θi as a ``colour.MultiSpectralDistributions``."""
 
+        return self.result.to_msds(theta_i)
+
+    def plot(self, path: str | os.PathLike | None = None, quantity: str | None = None, **options: Any) -> Any:
+        """
+        Polar plot of f in the plane of incidence and across it, with the certified band
+        (:func:`~virtspec_mi.results.angular_plot.plot_polar`; ``wavelength=``, ``log=``,
+        ``name=``); with ``quantity`` (reflectance, transmittance, absorptance) the reading's
+        R, T or A against θi or wavelength instead (:func:`~virtspec_mi.results.plot.plot_sweep`).
+        """
+
+        if quantity not in (None, "brdf"):
+            return self.result.plot(path, quantity=self.check_quantity(quantity), **options)
         from virtspec_mi.results.angular_plot import plot_polar
 
-        return plot_polar(self, path, **options)
+        return plot_polar(self.as_grid(), path, **options)
 
     def plot_series(self, path: str | os.PathLike | None = None, **options: Any) -> Any:
         """The angular distribution over θi as a series, with the certified bands (:func:`~virtspec_mi.results.angular_plot.plot_series`)."""
 
         from virtspec_mi.results.angular_plot import plot_series
 
-        return plot_series(self, path, **options)
-
-
-@dataclass(frozen=True)
-class _CsvView:
-    """A reading as its CSV table: the dataset without the CDF variables over bin edges."""
-
-    reading: GonioResult
-
-    def to_dataset(self) -> Any:
-        dataset = self.reading.to_dataset()
-        return dataset.drop_vars(["cdf_theta_o", "cdf_phi_o", "theta_o_edge", "phi_o_edge"])
+        return plot_series(self.as_grid(), path, **options)

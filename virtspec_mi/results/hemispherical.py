@@ -11,12 +11,13 @@ parts, the Clopper–Pearson intervals, the back-lit fraction and the **certifie
 tolerance** — the μ that the rays actually spent guarantee at δ under the rule used
 (:mod:`virtspec_mi.budgets.rules`), or "not certified" (NaN) where no rule applies.
 
-The same methods serve one reading or many: :meth:`Result.summary`,
-:meth:`Result.as_dict` (JSON), :meth:`Result.to_dataset` (``xarray.Dataset``),
-:meth:`Result.write` / :meth:`Result.read` (NetCDF, CSV, JSON;
-:mod:`virtspec_mi.results.io`), :meth:`Result.to_sd` / :meth:`Result.to_msds` /
-:meth:`Result.colour` (colour-science; :mod:`virtspec_mi.results.colorimetry`) and
-:meth:`Result.plot` (:mod:`virtspec_mi.results.plot`).
+The same methods serve one reading or many, and every result kind
+(:class:`~virtspec_mi.results.base.ResultBase`: ``sel`` / ``isel``, files, spectra):
+:meth:`Result.summary`, :meth:`Result.as_dict` (JSON, format ``"virtspec-mi result 1"``),
+:meth:`Result.to_dataset` (``xarray.Dataset``), ``write`` / ``read`` (NetCDF, CSV, JSON,
+Zarr; :mod:`virtspec_mi.results.io`), ``to_sd`` / :meth:`Result.to_msds` / ``colour``
+(colour-science; :mod:`virtspec_mi.results.colorimetry`) and :meth:`Result.plot`
+(:mod:`virtspec_mi.results.plot`).
 
 References
 ----------
@@ -30,8 +31,7 @@ import os
 import warnings
 from dataclasses import asdict, dataclass, field, replace
 from functools import cached_property
-from pathlib import Path
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
 
@@ -39,6 +39,8 @@ from virtspec_mi import __version__
 from virtspec_mi.kernel.counts import DIRECTION_TOLERANCE, QUANTITIES, WEIGHT_ROUNDING, Counts
 from virtspec_mi.geometry.disks import InstrumentGeometry, backlit_fraction
 from virtspec_mi.budgets.intervals import clopper_pearson
+from virtspec_mi.results.base import ResultBase, per_count, plain_data, round_up, span
+from virtspec_mi.results.formats import annotate
 from virtspec_mi.settings import Settings
 
 __all__ = ["Result", "plain_data"]
@@ -50,28 +52,10 @@ def _counts(name: str, doc: str) -> property:
     return property(lambda self: getattr(self.counts, name), doc=doc)
 
 
-def plain_data(values: Any) -> Any:
-    """An array as JSON-ready nested lists, NaN as ``None`` (JSON has no NaN)."""
-
-    values = np.asarray(values)
-    if values.dtype.kind == "f":
-        return np.where(np.isnan(values), None, values).tolist()
-    return values.tolist()
-
-
-def _round_up(value: float, digits: int = 3) -> float:
-    """``value`` rounded *up* to ``digits`` significant digits (a printed tolerance never shrinks)."""
-
-    if not np.isfinite(value) or value <= 0:
-        return value
-    scale = 10.0 ** (np.floor(np.log10(value)) - digits + 1)
-    return float(np.ceil(value / scale * (1 - 1e-12)) * scale)
-
-
 @dataclass(frozen=True, eq=False)
-class Result:
+class Result(ResultBase):
     """
-    Certified readings over labelled dimensions (see the module docstring).
+    Certified hemispherical readings over labelled dimensions (see the module docstring).
 
     Attributes
     ----------
@@ -120,38 +104,24 @@ class Result:
     version: str = field(default=__version__)
     parameters: dict | None = None
 
+    FORMAT: ClassVar[str] = "virtspec-mi result 1"
+    KIND: ClassVar[str] = "hemispherical reading"
+    QUANTITIES: ClassVar[tuple[str, ...]] = QUANTITIES
+
     # -- labels ------------------------------------------------------------------------
 
-    @property
-    def shape(self) -> tuple[int, ...]:
-        return tuple(len(self.coords[d]) for d in self.dims)
+    def _labelled(self) -> dict[str, tuple[tuple[str, ...], np.ndarray]]:
+        sources = {"counts": self.counts} if self.pilot is None else {"counts": self.counts, "pilot": self.pilot}
+        return {f"{prefix}.{name}": (self.dims, getattr(counts, name))
+                for prefix, counts in sources.items() for name in Counts.names()}
 
-    @property
-    def wavelengths(self) -> np.ndarray:
-        """Wavelengths in nm, in the order requested."""
+    def _relabelled(self, dims: tuple[str, ...], coords: dict[str, np.ndarray],
+                    arrays: dict[str, np.ndarray]) -> "Result":
+        def counts(prefix: str) -> Counts:
+            return Counts(**{name: arrays[f"{prefix}.{name}"] for name in Counts.names()})
 
-        return self.coords["wavelength"]
-
-    @property
-    def theta_i(self) -> Any:
-        """Polar incidence in degrees: a float for a single reading, an array for a θi dim."""
-
-        value = self.coords["theta_i"]
-        return float(value) if np.ndim(value) == 0 else value
-
-    @property
-    def phi_i(self) -> float:
-        return self.settings.phi_i
-
-    @property
-    def mu(self) -> float:
-        """The tolerance asked for (see :attr:`certified_mu` for the one the rays give)."""
-
-        return self.settings.mu
-
-    @property
-    def delta(self) -> float:
-        return self.settings.delta
+        return replace(self, dims=dims, coords=coords, counts=counts("counts"),
+                       pilot=None if self.pilot is None else counts("pilot"))
 
     # -- counts by name ----------------------------------------------------------------
 
@@ -289,9 +259,7 @@ class Result:
         if s.adaptive:
             tolerance = np.full(self.shape, s.mu)
         else:
-            unique, inverse = np.unique(self.rays, return_inverse=True)
-            values = np.array([s.budget.certified(int(n), self.interval_delta, s.mu) for n in unique])
-            tolerance = values[inverse].reshape(self.shape)
+            tolerance = per_count(self.rays, lambda n: s.budget.certified(n, self.interval_delta, s.mu))
         return np.where(self.certified, tolerance + self.rounding_bias, np.nan)
 
     def interval(self, quantity: str = "reflectance") -> tuple[np.ndarray, np.ndarray]:
@@ -348,123 +316,14 @@ class Result:
                          "invalid_directions and in none of reflectance, transmittance and absorptance (not certified)")
         return lines
 
-    # -- views -------------------------------------------------------------------------
-
-    def angle_index(self, theta_i: float | None = None) -> int:
-        """
-        The index of ``theta_i`` among the result's angles (``None``: the only one);
-        ``ValueError`` naming the angles otherwise.
-        """
-
-        angles = np.atleast_1d(np.asarray(self.coords["theta_i"], dtype=np.float64))
-        if theta_i is None:
-            if len(angles) != 1:
-                raise ValueError(f"theta_i must be given for a result over several angles (one of {angles.tolist()})")
-            return 0
-        matches = np.flatnonzero(np.isclose(angles, float(theta_i), rtol=0, atol=1e-9))
-        if not len(matches):
-            raise ValueError(f"theta_i must be one of the result's angles {angles.tolist()} (got {theta_i:g})")
-        return int(matches[0])
-
-    @property
-    def parameter_names(self) -> tuple[str, ...]:
-        """Names of the swept specimen parameters (empty without parameters)."""
-
-        return () if self.parameters is None else tuple(self.parameters["names"])
-
-    def coord_dims(self, name: str) -> tuple[str, ...]:
-        """The dims a coordinate lies along: its own, ``("point",)`` for a parameter of points, ``()`` if scalar."""
-
-        if name in self.dims:
-            return (name,)
-        return ("point",) if np.ndim(self.coords[name]) == 1 and "point" in self.dims else ()
-
-    def isel(self, **indices: int) -> "Result":
-        """The readings at one index of each given dim (``point=3``); the dim becomes a scalar coordinate."""
-
-        result = self
-        for dim, index in indices.items():
-            if dim not in result.dims:
-                raise ValueError(f"{dim!r} is not a dim of this result (dims: {', '.join(result.dims)})")
-            size = len(result.coords[dim])
-            if isinstance(index, bool) or not isinstance(index, (int, np.integer)) or not -size <= index < size:
-                raise ValueError(f"the index of {dim!r} must be an integer in [{-size}, {size}) (got {index!r})")
-            axis = result.dims.index(dim)
-            coords = {name: (np.asarray(value[index]) if result.coord_dims(name) == (dim,) else value)
-                      for name, value in result.coords.items()}
-            take = lambda v: np.take(v, int(index), axis=axis)  # noqa: E731
-            result = replace(result, dims=tuple(d for d in result.dims if d != dim), coords=coords,
-                             counts=result.counts.map(take), pilot=None if result.pilot is None else result.pilot.map(take))
-        return result
-
-    def sel(self, **labels: Any) -> "Result":
-        """
-        The readings at one label of each given dim, e.g. ``sel(**{"specimen.thickness": 2e-4})``,
-        ``sel(theta_i=8)`` or ``sel(wavelength=550)``; the dim becomes a scalar coordinate
-        (a result with dims ``(wavelength, theta_i)`` is a sweep again). ``ValueError``
-        naming the labels when none matches (to within 1e-9 relative).
-        """
-
-        indices = {}
-        for dim, label in labels.items():
-            if dim not in self.dims:
-                raise ValueError(f"{dim!r} is not a dim of this result (dims: {', '.join(self.dims)})")
-            values = np.asarray(self.coords[dim], dtype=np.float64)
-            matches = np.flatnonzero(np.isclose(values, float(label), rtol=1e-9, atol=1e-12))
-            if not len(matches):
-                raise ValueError(f"{dim} must be one of the result's labels {values.tolist()} (got {label!r})")
-            indices[dim] = int(matches[0])
-        return self.isel(**indices)
-
-    def as_grid(self) -> "Result":
-        """
-        The same result with θi as a dimension (a single reading becomes a one-angle grid):
-        what spectra, colours, comparisons and plots read. A result with parameter dims
-        raises ``ValueError``: select one parameter point first (:meth:`sel`, :meth:`isel`).
-        """
-
-        extra = [d for d in self.dims if d not in ("wavelength", "theta_i")]
-        if extra:
-            name = extra[0]
-            example = "isel(point=0)" if name == "point" else \
-                f"sel(**{{{name!r}: {float(np.asarray(self.coords[name])[0]):g}}})"
-            raise ValueError(f"this result also has the dims {', '.join(extra)} (a parameter sweep): select one "
-                             f"parameter point first, e.g. result.{example}")
-        if "theta_i" in self.dims:
-            return self
-        coords = {**self.coords, "theta_i": np.atleast_1d(self.coords["theta_i"])}
-        return replace(self, dims=(*self.dims, "theta_i"), coords=coords,
-                       counts=self.counts.map(lambda v: v[..., np.newaxis]),
-                       pilot=None if self.pilot is None else self.pilot.map(lambda v: v[..., np.newaxis]))
-
-    def squeeze(self) -> "Result":
-        """The same result without a θi dimension of length one (θi becomes a scalar label)."""
-
-        if "theta_i" not in self.dims or len(self.coords["theta_i"]) != 1:
-            return self
-        axis = self.dims.index("theta_i")
-        coords = {**self.coords, "theta_i": np.asarray(self.coords["theta_i"][0])}
-        return replace(self, dims=tuple(d for d in self.dims if d != "theta_i"), coords=coords,
-                       counts=self.counts.map(lambda v: np.take(v, 0, axis=axis)),
-                       pilot=None if self.pilot is None else self.pilot.map(lambda v: np.take(v, 0, axis=axis)))
+    # -- text --------------------------------------------------------------------------
 
     def __repr__(self) -> str:
         sizes = ", ".join(f"{d}: {n}" for d, n in zip(self.dims, self.shape))
         mu = self.certified_mu
-        certified = "not certified" if np.all(np.isnan(mu)) else f"certified mu <= {_round_up(float(np.nanmax(mu))):g}"
+        certified = "not certified" if np.all(np.isnan(mu)) else f"certified mu <= {round_up(float(np.nanmax(mu))):g}"
         return (f"<virtspec_mi.Result ({sizes}) {self.settings.beam}, {self.bound} bound, "
-                f"N = {_span(self.rays)}, {certified} at delta = {self.interval_delta:g}>")
-
-    def _repr_html_(self) -> str:
-        """Jupyter: the one-line description, then xarray's HTML view of :meth:`to_dataset`."""
-
-        import html
-
-        dataset = self.to_dataset()
-        del dataset.attrs["result_json"]  # the whole result as JSON: for files, not for reading
-        return f"<p><code>{html.escape(repr(self))}</code></p>" + dataset._repr_html_()
-
-    # -- text --------------------------------------------------------------------------
+                f"N = {span(self.rays)}, {certified} at delta = {self.interval_delta:g}>")
 
     def summary(self, sized_by: str | None = None) -> str:
         """
@@ -476,32 +335,33 @@ class Result:
         s = self.settings
         incidence = ("cosine-weighted over the hemisphere" if s.beam == "diffuse"
                      else f"theta_i = {self._angles()} deg, phi_i = {s.phi_i:g} deg")
-        if self.dims == ("wavelength",):
+        single = self.dims in ((), ("wavelength",))
+        if single:
             head = f"{s.beam} reading, {incidence}, sampling = {s.sampling}, seed = {s.seed}"
         else:
             sizes = " x ".join(f"{n} {'wavelengths' if d == 'wavelength' else d}"
                                for d, n in reversed(list(zip(self.dims, self.shape))))
             head = f"{s.beam} sweep: {sizes} (phi_i = {s.phi_i:g} deg, sampling = {s.sampling}, seed = {s.seed})"
         spent = f"; {self.seconds * 1e3:.1f} ms"
-        if self.dims != ("wavelength",):
+        if not single:
             spent += " of tracing summed over the batches (on Dask workers: worker time, not wall time)"
         lines = [head, self._certificate(sized_by) + spent]
         fixed = [f"{name} = {float(self.coords[name]):g}" for name in self.parameter_names
                  if not self.coord_dims(name)]
         if fixed:
             lines.insert(1, "specimen parameters: " + ", ".join(fixed))
-        if self.dims == ("wavelength",):
+        if single:
             lines += self._table()
-        if self.wavelength_independent and len(self.wavelengths) > 1:
+        if self.wavelength_independent and np.size(self.wavelengths) > 1:
             lines.append("note: wavelength-independent specimen: traced once"
-                         + ("" if self.dims == ("wavelength",) else " per theta_i") + ", the same rays for every wavelength")
+                         + ("" if single else " per theta_i") + ", the same rays for every wavelength")
         backlit = np.atleast_1d(self.backlit_fraction)
         if np.any(backlit > 0):
             lines.append(f"note: up to {backlit.max():.2%} of the emitter lies below the specimen plane "
                          f"(theta_i > {self.geometry.backlit_threshold:.2f} deg): those rays strike the back face")
         if np.any(self.rounded_weights):
             lines.append(f"note: {int(self.rounded_weights.sum())} BSDF weights within {WEIGHT_ROUNDING:g} of [0, 1] "
-                         f"were rounded (bias <= {_round_up(float(self.rounding_bias.max())):g}, in the tolerance)")
+                         f"were rounded (bias <= {round_up(float(self.rounding_bias.max())):g}, in the tolerance)")
         lines += [f"WARNING: {line}" for line in self._uncertified()]
         return "\n".join(lines)
 
@@ -513,11 +373,11 @@ class Result:
         s = self.settings
         unit = "wavelength" if self.dims == ("wavelength",) else "reading"
         pilot = "" if self.pilot is None else f" + {int(self.pilot.rays.max()):,} pilot"
-        counted = f"N = {_span(self.rays)}{pilot} rays per {unit}"
+        counted = f"N = {span(self.rays)}{pilot} rays per {unit}"
         mu = self.certified_mu
         if np.all(np.isnan(mu)):
             return f"{counted} ({'' if sized_by is None else sized_by + '; '}NOT CERTIFIED: see the warnings below)"
-        worst = _round_up(float(np.nanmax(mu)))
+        worst = round_up(float(np.nanmax(mu)))
         together = "R and T together" if s.joint else "|rho - m/N|"
         if sized_by is not None:
             rule = f"{sized_by}; at these N the {s.bound} bound gives"
@@ -531,6 +391,8 @@ class Result:
         return text + ")"
 
     def _table(self) -> list[str]:
+        if self.dims != ("wavelength",):  # one reading at one wavelength: a table of one row
+            return self.as_grid().squeeze()._table()
         rays = self.rays
         lines = [f"{'lambda/nm':>10} {'reflectance':>12} {'transmittance':>14} {'absorptance':>12}"
                  f"   Clopper-Pearson {1 - self.interval_delta:g} intervals (R; T)"]
@@ -561,10 +423,8 @@ class Result:
 
         plain = plain_data
         return {
-            "format": "virtspec-mi result 1",
-            "dims": list(self.dims),
-            "wavelengths": plain(self.wavelengths),
-            "theta_i": plain(self.coords["theta_i"]),
+            "format": self.FORMAT,
+            **self._labels_as_dict(),
             **{name: plain(values) for name, values in self.counts.as_dict().items()},
             **{name: plain(self.quantity(name)) for name in QUANTITIES},
             **{name: plain(getattr(self, name)) for name in _PARTS},
@@ -583,10 +443,7 @@ class Result:
             "scene": self.scene,
             "wavelength_independent": self.wavelength_independent,
             "version": self.version,
-            **({} if self.parameters is None else {
-                "parameters": self.parameters,
-                "parameter_coords": {name: plain(self.coords[name]) for name in (*self.parameter_names, "point")
-                                     if name in self.coords}}),
+            **self._parameters_as_dict(),
         }
 
     @classmethod
@@ -594,9 +451,8 @@ class Result:
         """The result of :meth:`as_dict` (``ValueError`` if ``data`` is not one)."""
 
         try:
-            if data.get("format") != "virtspec-mi result 1":
+            if data.get("format") != cls.FORMAT:
                 raise KeyError("format")
-            dims = tuple(data["dims"])
 
             def counts(source: dict[str, Any]) -> Counts:
                 # Results written before invalid directions were counted have none.
@@ -604,14 +460,8 @@ class Result:
                 return Counts(**{name: np.array(source[name], dtype=np.float64 if name == "largest_weight"
                                                 else np.int64) for name in Counts.names()})
 
-            parameters = data.get("parameters")
-            extra = {name: np.asarray(value, dtype=np.int64 if name == "point" else np.float64)
-                     for name, value in (data.get("parameter_coords") or {}).items()}
             return cls(
-                dims=dims,
-                coords={"wavelength": np.asarray(data["wavelengths"], dtype=np.float64),
-                        "theta_i": np.asarray(data["theta_i"], dtype=np.float64), **extra},
-                parameters=None if parameters is None else dict(parameters),
+                **cls.labels_from_dict(data),
                 counts=counts(data),
                 pilot=None if data["pilot"] is None else counts(data["pilot"]),
                 settings=Settings(**data["settings"]),
@@ -628,14 +478,14 @@ class Result:
         """
         An ``xarray.Dataset`` over :attr:`dims`: the estimates and parts (float64), every
         count (int64), each quantity's Clopper–Pearson bounds ``<quantity>_lower`` /
-        ``_upper`` and ``certified_mu``; attributes hold the settings, geometry and
-        provenance (``result_json``: the whole result, from which :meth:`from_dataset`
-        rebuilds it).
+        ``_upper`` and ``certified_mu``, each with ``units`` and ``long_name``
+        (:func:`~virtspec_mi.results.base.annotate`); attributes hold the settings,
+        geometry and provenance, the format tag (``format``) and the whole result
+        (``result_json``, from which :meth:`from_dataset` rebuilds it).
         """
 
         import xarray as xr
 
-        data = self.as_dict()
         variables: dict[str, Any] = {}
         for name in (*QUANTITIES, *_PARTS, *Counts.names(), "absorbed", "certified_mu", "rounding_bias"):
             values = np.asarray(getattr(self, name))
@@ -645,83 +495,37 @@ class Result:
             bound = {"clopper_pearson_delta": self.interval_delta}
             variables[f"{name}_lower"] = (self.dims, lower, bound)
             variables[f"{name}_upper"] = (self.dims, upper, bound)
-        coords = {"wavelength": ("wavelength", self.wavelengths),
-                  "theta_i": ("theta_i", self.coords["theta_i"]) if "theta_i" in self.dims else self.theta_i}
-        for name in (*self.parameter_names, "point"):
-            if name in self.coords:
-                coords[name] = (self.coord_dims(name), self.coords[name])
+        coords = {name: (self.coord_dims(name), values) for name, values in self.coords.items()}
         s = self.settings
         attrs = {"mu": s.mu, "delta": s.delta, "bound": s.bound, "joint": int(s.joint), "beam": s.beam,
                  "sampling": s.sampling, "seed": s.seed, "phi_i": s.phi_i, "interval_delta": self.interval_delta,
                  **asdict(self.geometry), "seconds": self.seconds, "scene": self.scene,
                  "wavelength_independent": int(self.wavelength_independent), "version": self.version,
                  **({} if self.parameters is None else {"parameters": json.dumps(self.parameters)}),
-                 "result_json": json.dumps(data)}
-        dataset = xr.Dataset(variables, coords=coords, attrs=attrs)
-        dataset["wavelength"].attrs["units"] = "nm"
-        dataset["theta_i"].attrs["units"] = "degree"
+                 **self._dataset_attrs()}
+        dataset = annotate(xr.Dataset(variables, coords=coords, attrs=attrs), self._parameter_keys())
         dataset["certified_mu"].attrs["meaning"] = ("tolerance the rays guarantee at interval_delta under the "
                                                     "rule used; NaN: not certified")
         return dataset
 
-    @classmethod
-    def from_dataset(cls, dataset: Any) -> "Result":
-        """The result of a dataset made by :meth:`to_dataset`."""
+    # -- spectra, colour and plots ------------------------------------------------------
 
-        if "result_json" not in dataset.attrs:
-            if "gonio_json" in dataset.attrs:
-                raise ValueError("this is a goniophotometer reading: read it with virtspec_mi.read_gonio "
-                                 "(GonioResult.read); its .result is the spectrophotometer reading")
-            raise ValueError("not a virtspec-mi result (no result_json attribute)")
-        return cls.from_dict(json.loads(dataset.attrs["result_json"]))
-
-    def write(self, path: str | os.PathLike) -> Path:
-        """Write to ``.nc`` (NetCDF-4), ``.csv`` or ``.json`` by suffix (:mod:`virtspec_mi.results.io`)."""
-
-        from virtspec_mi.results import io as results_io
-
-        return results_io.write(self, path)
-
-    @classmethod
-    def read(cls, path: str | os.PathLike) -> "Result":
-        """Read a result written by :meth:`write` (or printed by ``virtspec measure --json``)."""
-
-        from virtspec_mi.results import io as results_io
-
-        kind, content = results_io.read(path)
-        return cls.from_dataset(content) if kind == "dataset" else cls.from_dict(content)
-
-    # -- colour and plots --------------------------------------------------------------
-
-    def to_sd(self, quantity: str = "reflectance", theta_i: float | None = None) -> Any:
-        """One quantity at one θi as a ``colour.SpectralDistribution`` (:mod:`virtspec_mi.results.colorimetry`)."""
-
-        from virtspec_mi.results.colorimetry import spectral_distribution
-
-        return spectral_distribution(self.as_grid(), quantity, theta_i)
+    def _quantity(self, quantity: str) -> tuple[np.ndarray, np.ndarray, float]:
+        return self.quantity(quantity), self.certified_mu, self.interval_delta
 
     def to_msds(self, theta_i: float | None = None) -> Any:
         """R, T and A at one θi as a ``colour.MultiSpectralDistributions``."""
 
         from virtspec_mi.results.colorimetry import multi_spectral_distributions
 
-        return multi_spectral_distributions(self.as_grid(), theta_i)
+        return multi_spectral_distributions(self, theta_i)
 
-    def colour(self, quantity: str = "reflectance", theta_i: float | None = None, **options: Any) -> Any:
-        """CIE XYZ, L*a*b* and sRGB of one quantity at one θi (``illuminant=``, ``observer=``)."""
-
-        from virtspec_mi.results.colorimetry import colorimetry
-
-        return colorimetry(self.to_sd(quantity, theta_i), **options)
-
-    def plot(self, path: str | os.PathLike | None = None, **options: Any) -> Any:
-        """Plot against θi or wavelength with the certified band (:func:`virtspec_mi.results.plot.plot_sweep`)."""
+    def plot(self, path: str | os.PathLike | None = None, quantity: str | None = None, **options: Any) -> Any:
+        """
+        Plot ``quantity`` (default reflectance) against θi or wavelength with the certified
+        band (:func:`virtspec_mi.results.plot.plot_sweep`: ``wavelengths=``, ``theta_i=``, ``name=`` …).
+        """
 
         from virtspec_mi.results.plot import plot_sweep
 
-        return plot_sweep(self, path, **options)
-
-
-def _span(rays: np.ndarray) -> str:
-    low, high = int(np.min(rays)), int(np.max(rays))
-    return f"{low:,}" if low == high else f"{low:,} to {high:,}"
+        return plot_sweep(self, path, quantity=self.check_quantity(quantity), **options)

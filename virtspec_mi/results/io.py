@@ -2,22 +2,26 @@
 Result files: NetCDF, CSV and JSON, and colour-science CSV spectra
 ==================================================================
 
-The file formats of a :class:`~virtspec_mi.results.hemispherical.Result` (which builds the dataset
-and the plain data; this module only writes and reads them, by suffix):
+The file formats of every result kind (:class:`~virtspec_mi.results.base.ResultBase`: a
+:class:`~virtspec_mi.results.hemispherical.Result`, a goniophotometer or a sphere
+reading; each builds its dataset and its plain data, and carries its format tag; this
+module only writes and reads them, by suffix):
 
 - ``.nc`` — NetCDF-4 of ``result.to_dataset()``: an ``xarray.Dataset`` over the
   result's dims (``wavelength`` in nm, ``theta_i`` in degrees, a parameter sweep's
-  parameters or ``point``, …) with the estimates,
-  parts, every count, the Clopper–Pearson bounds and ``certified_mu`` as variables and
-  the settings, geometry and provenance as attributes;
-- ``.csv`` — one row per reading with the same variables as columns, after one
+  parameters or ``point``, the kind's own dims, …) with the estimates, every count and
+  the certificates as variables (each with ``units`` and ``long_name``) and the
+  settings, geometry, provenance, ``format`` and ``result_json`` as attributes;
+- ``.csv`` — one row per cell of ``result.csv_dataset()`` (a reading; a goniophotometer
+  bin; a sphere configuration) with its variables as columns, after one
   ``# virtspec-mi result {…}`` line holding the attributes as JSON;
 - ``.json`` — ``result.as_dict()``: one object (what ``virtspec measure --json``
   prints), arrays as nested lists over the dims;
-- ``.zarr`` — a Zarr store (a directory) of the same dataset, which a sweep fills region
-  by region as its batches finish (:mod:`virtspec_mi.results.zarr`).
+- ``.zarr`` — a Zarr store (a directory) of the same dataset, which a hemispherical
+  sweep fills region by region as its batches finish (:mod:`virtspec_mi.results.zarr`).
 
-Each round-trips exactly (the counts are the data; everything else is derived).
+Each round-trips exactly (the counts are the data; everything else is derived):
+:func:`virtspec_mi.results.kinds.read_result` reads any kind back by its format tag.
 :func:`write_spectra_csv` / :func:`read_spectra_csv` write and read R, T and A at one θi
 in colour-science's CSV spectral format.
 
@@ -63,8 +67,10 @@ _CSV_HEADER = "# virtspec-mi result "
 
 def write(result: Any, path: str | os.PathLike) -> Path:
     """
-    Write ``result`` to ``path``; the suffix picks the format, and only what it needs is
-    built: ``result.to_dataset()`` for ``.nc`` and ``.csv``, ``result.as_dict()`` for ``.json``.
+    Write ``result`` (any kind of :class:`~virtspec_mi.results.base.ResultBase`) to ``path``;
+    the suffix picks the format, and only what it needs is built: ``result.to_dataset()``
+    for ``.nc`` and ``.zarr``, ``result.csv_dataset()`` for ``.csv``, ``result.as_dict()``
+    for ``.json``.
     """
 
     path = Path(path)
@@ -79,7 +85,7 @@ def write(result: Any, path: str | os.PathLike) -> Path:
         elif suffix == ".json":
             temporary.write_text(json.dumps(result.as_dict(), indent=1))
         else:
-            temporary.write_text(csv_text(result.to_dataset()))
+            temporary.write_text(csv_text(result.csv_dataset()))
     return path
 
 
@@ -127,9 +133,10 @@ def read(path: str | os.PathLike) -> tuple[str, Any]:
     if suffix == ".zarr":
         if not path.is_dir():
             raise ValueError(f"Zarr result not found: {path}")
-        from virtspec_mi.results.zarr import as_plain, read as read_zarr
+        from virtspec_mi.results.zarr import as_plain, is_table, read as read_zarr
 
-        return "plain", as_plain(read_zarr(path))
+        dataset = read_zarr(path)
+        return ("plain", as_plain(dataset)) if is_table(dataset) else ("dataset", dataset)
     if not path.is_file():
         raise ValueError(f"result file not found: {path}")
     if suffix == ".nc":

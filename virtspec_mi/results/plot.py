@@ -6,6 +6,9 @@ Plots of results with matplotlib (PNG and SVG)
   wavelength (a spectrum), one curve per wavelength (resp. per θi) and per sweep,
   each with the band of its certified tolerance (the μ' its rays guarantee; none
   where a reading is not certified). ``wavelengths=`` / ``theta_i=`` pick readings.
+- :func:`plot_spectra`: quantities of a result of any kind over wavelength at one θi,
+  each with the band of its certified tolerance (a sphere's reading and the
+  hemispherical value of the same rays).
 - :func:`plot_densities`: sweeps at successive ray densities N = 10^d side by side
   (Fig. 5), their fluctuation Δ of eq. (24) (Fig. 6a) and their seconds (Fig. 6b).
 - :func:`plot_comparison`: a result over a measured spectrum (a
@@ -27,7 +30,6 @@ Baranoski et al. (2001), Figs. 5 and 6, eq. (24).
 from __future__ import annotations
 
 import os
-from dataclasses import replace
 from pathlib import Path
 from typing import Any, Sequence
 
@@ -41,6 +43,7 @@ __all__ = [
     "select",
     "curve_style",
     "plot_sweep",
+    "plot_spectra",
     "plot_densities",
     "plot_comparison",
 ]
@@ -83,8 +86,8 @@ def curve_style(index: int, points: int) -> dict[str, Any]:
 
 def describe(result: Any, quantity: str = "reflectance", name: str | None = None) -> str:
     """
-    A two-line title naming what was measured: ``name`` (e.g. a file name) and the
-    scene's fingerprint, then the quantity, beam, θi and rays per reading.
+    A two-line title naming what was measured (a result of any kind): ``name`` (e.g. a
+    file name) and the scene's fingerprint, then the quantity, beam, θi and rays per reading.
     """
 
     s = result.settings
@@ -103,20 +106,14 @@ def describe(result: Any, quantity: str = "reflectance", name: str | None = None
 
 def select(result: Any, wavelengths: Sequence[float] | None = None, theta_i: Sequence[float] | None = None) -> Any:
     """
-    The readings of ``result`` at the given wavelengths and/or θi (each must be one of
-    the result's; ``None`` keeps all), as a result with a θi dimension.
+    The readings of ``result`` (any kind) at the given wavelengths and/or θi (each must be
+    one of the result's; ``None`` keeps all), as a result with a θi dimension.
     """
 
     result = result.as_grid()
-    rows = _indices("wavelengths", result.wavelengths, wavelengths)
-    columns = _indices("theta_i", result.theta_i, theta_i)
-
-    def take(values: np.ndarray) -> np.ndarray:
-        return values[rows][:, columns]
-
-    coords = {**result.coords, "wavelength": result.wavelengths[rows], "theta_i": result.theta_i[columns]}
-    return replace(result, coords=coords, counts=result.counts.map(take),
-                   pilot=None if result.pilot is None else result.pilot.map(take))
+    rows = _indices("wavelengths", np.asarray(result.coords["wavelength"]), wavelengths)
+    columns = _indices("theta_i", np.asarray(result.coords["theta_i"]), theta_i)
+    return result.isel(wavelength=rows, theta_i=columns)
 
 
 def _indices(name: str, have: np.ndarray, wanted: Sequence[float] | None) -> np.ndarray:
@@ -200,6 +197,37 @@ def plot_sweep(results: Any, path: str | os.PathLike | None = None, *, quantity:
     _legend(axes, first.interval_delta, curves, note)
     axes.grid(alpha=0.3)
     axes.set_title(title or describe(first, quantity, name), fontsize="medium")
+    if path is not None:
+        figure.savefig(path, dpi=110)
+    return figure
+
+
+def plot_spectra(result: Any, path: str | os.PathLike | None = None, *, quantities: Sequence[str] | None = None,
+                 theta_i: float | None = None, title: str | None = None, name: str | None = None) -> Any:
+    """
+    Quantities of ``result`` (any kind; default its first) over wavelength at one θi
+    (``None``: the only one), one curve each with the band of its certified tolerance
+    (:meth:`~virtspec_mi.results.base.ResultBase.spectrum`), saved to ``path``
+    (``.png``/``.svg``) when given. Returns the ``matplotlib.figure.Figure``.
+    """
+
+    from matplotlib.figure import Figure
+
+    path = check_figure_path(path)
+    quantities = list(quantities) if quantities else [result.QUANTITIES[0]]
+    spectra = [result.spectrum(quantity, theta_i) for quantity in quantities]
+    figure = Figure(figsize=(6.4, 4.4), layout="constrained")
+    axes = figure.add_subplot()
+    for k, spectrum in enumerate(spectra):
+        x, y, band = spectrum.wavelengths, spectrum.values, spectrum.tolerance
+        line, = axes.plot(x, y, lw=1.2, label=spectrum.quantity, **curve_style(k, len(x)))
+        axes.fill_between(x, y - band, y + band, color=line.get_color(), alpha=0.2, lw=0)
+    axes.set_xlabel("wavelength (nm)")
+    axes.set_ylabel(spectra[0].measures)
+    _legend(axes, spectra[0].delta, len(spectra))
+    axes.grid(alpha=0.3)
+    shown = select(result, theta_i=[spectra[0].theta_i])
+    axes.set_title(title or describe(shown, ", ".join(quantities), name), fontsize="medium")
     if path is not None:
         figure.savefig(path, dpi=110)
     return figure

@@ -3,8 +3,11 @@ Sphere results: sample over standard, certified, beside the hemispherical readin
 ================================================================================
 
 :class:`SphereResult` holds the exact counts of both configurations of an integrating
-sphere reading (:mod:`virtspec_mi.instruments.sphere`) over wavelength and derives
-everything from them once.
+sphere reading (:mod:`virtspec_mi.instruments.sphere`) over labelled dims — ``wavelength``
+and, as for a hemispherical sweep, ``theta_i`` and specimen parameters — and derives
+everything from them once. Each configuration's rays are counted per reading
+(``counts[configuration]["rays"]``): the two configurations, and the readings, may
+trace different N (a budget sized per configuration, e.g. two-stage).
 
 The reading is R = ρ_std · p_sample / p_standard (p: detector fractions, each m/N of
 its own N rays, the same seed in both configurations). **Certificate:** each detector
@@ -19,6 +22,13 @@ invert the sphere theory's readout model (:mod:`virtspec_mi.references.sphere_th
 the inputs of :func:`virtspec_mi.references.sphere_model.theory_inputs`, from the sphere
 description the result keeps) to recover the hemispherical value from the reading.
 
+It is a result like the others (:class:`~virtspec_mi.results.base.ResultBase`): ``sel`` /
+``isel``, ``summary``, ``as_dict`` (format ``"virtspec-mi sphere 1"``), ``to_dataset``
+(the counts over the reading's dims and ``configuration``), ``write`` / ``read``
+(NetCDF, CSV, JSON, Zarr; files of the former ``"kind": "sphere_result"`` layout read
+too), spectra of ``reading``, ``corrected`` or ``hemispherical`` (``spectrum``, ``to_sd``,
+``colour``, :func:`virtspec_mi.compare.compare`) and :meth:`SphereResult.plot`.
+
 References
 ----------
 Baranoski et al. (2001), eqs. (2), (19), (23); Clopper & Pearson (1934); Goebel (1967).
@@ -27,52 +37,149 @@ Baranoski et al. (2001), eqs. (2), (19), (23); Clopper & Pearson (1934); Goebel 
 from __future__ import annotations
 
 import json
-import math
 import os
-from dataclasses import dataclass, field
-from pathlib import Path
-from typing import Any
+from dataclasses import asdict, dataclass, field, replace
+from functools import cached_property
+from types import SimpleNamespace
+from typing import Any, ClassVar
 
 import numpy as np
 
+from virtspec_mi import __version__
 from virtspec_mi.budgets.bounds import hoeffding_mu
 from virtspec_mi.budgets.intervals import clopper_pearson
-from virtspec_mi.geometry.sphere import SPHERE_SETTING_NAMES, SphereSettings, sphere_from_parameters
+from virtspec_mi.geometry.sphere import Sphere, sphere_from_parameters
 from virtspec_mi.references.sphere_model import correct_readings, theory_inputs
+from virtspec_mi.results.base import ResultBase, per_count, plain_data, round_up, span
+from virtspec_mi.results.formats import annotate
+from virtspec_mi.settings import Settings
 
 __all__ = ["CONFIGURATIONS", "SphereResult"]
 
 CONFIGURATIONS: tuple[str, ...] = ("sample", "standard")
 """The two simulated configurations of every reading."""
 
+_UNCERTIFIED = ("capped", "invalid_directions", "weight_violations")
 
-@dataclass
-class SphereResult:
+
+@dataclass(frozen=True, eq=False)
+class SphereResult(ResultBase):
     """
-    Sphere readings over wavelength: the exact counts of both configurations and
+    Sphere readings over labelled dims: the exact counts of both configurations and
     everything derived from them (see the module docstring).
+
+    Attributes
+    ----------
+    dims : tuple of str
+        The dims of the readings, e.g. ``("wavelength",)``, then ``configuration`` (added
+        when not given): the kind's own dim, which :meth:`sel` keeps whole.
+    coords : dict of str to ndarray
+        Labels: ``wavelength`` (nm), ``theta_i`` (degrees; a 0-d array for one angle),
+        parameters as for :class:`~virtspec_mi.results.hemispherical.Result`,
+        ``configuration`` (``sample``, ``standard``; added when not given).
+    counts : dict
+        Per configuration (``"sample"``, ``"standard"``): every count by name, ``int64``
+        over :attr:`dims` — ``rays`` (N of that configuration and reading), ``detected``,
+        ``absorbed_wall``, …, ``lost_<port>``, the hemispherical counts of the first
+        interaction, ``wall_reflections``, ``weight_violations``, ``rounded_weights``.
+    wall_reflectance : ndarray
+        ρw per reading (over :attr:`dims`).
+    sphere : str
+        The sphere in words.
+    cap_fractions : dict
+        Each port's cap area over the sphere's.
+    options : dict
+        How it was read (``measurement``, ``specular``, ``method``, ``standard``, ``max_bounces``).
+    settings : Settings
+        The settings used.
+    seconds : float
+        Time spent tracing.
+    scene : str
+        Fingerprint of the scene, or "".
+    sphere_parameters : dict
+        The sphere's description (:meth:`~virtspec_mi.geometry.sphere.Sphere.parameters`).
+    specimen_radius : float or None
+        Radius of the specimen disk (mm).
+    version : str
+        virtspec-mi version that made the result.
+    parameters : dict or None
+        Swept specimen parameters (as :class:`~virtspec_mi.results.hemispherical.Result`'s).
+    pilot : dict or None
+        Two-stage pilot counts per configuration (spent, not in the estimates); ``None``
+        for budgets sized in advance.
     """
 
-    wavelengths: np.ndarray
-    rays: int
+    dims: tuple[str, ...]
+    coords: dict[str, np.ndarray]
     counts: dict[str, dict[str, np.ndarray]]
+    wall_reflectance: np.ndarray
     sphere: str
     cap_fractions: dict[str, float]
-    wall_reflectance: np.ndarray
     options: dict[str, Any]
-    settings: dict[str, Any]
+    settings: Settings
     seconds: float = 0.0
     scene: str = ""
     sphere_parameters: dict[str, Any] = field(default_factory=dict)
     specimen_radius: float | None = None
-    _cache: dict = field(default_factory=dict, repr=False, compare=False)
+    version: str = __version__
+    parameters: dict | None = None
+    pilot: dict[str, dict[str, np.ndarray]] | None = None
+
+    FORMAT: ClassVar[str] = "virtspec-mi sphere 1"
+    LEGACY: ClassVar[tuple[str, ...]] = ("virtspec-mi sphere 0",)
+    KIND: ClassVar[str] = "integrating-sphere reading"
+    KIND_DIMS: ClassVar[tuple[str, ...]] = ("configuration",)
+    KIND_DIMS_REASON: ClassVar[str] = (
+        "a reading is the ratio of both configurations; each one's counts are counts['sample'] and "
+        "counts['standard'] (in to_dataset(): the dim configuration)")
+    QUANTITIES: ClassVar[tuple[str, ...]] = ("reading", "corrected", "hemispherical")
+    _QUANTITY_NOTE: ClassVar[str] = "a sphere reading has no R, T, A triple"
+
+    def __post_init__(self) -> None:
+        """The dim ``configuration`` (``sample``, ``standard``) after the readings' dims, and its labels."""
+
+        if "configuration" not in self.dims:
+            object.__setattr__(self, "dims", (*self.dims, "configuration"))
+        if "configuration" not in self.coords:
+            labels = np.array(CONFIGURATIONS, dtype=object)  # variable-length text (NetCDF, Zarr)
+            object.__setattr__(self, "coords", {**self.coords, "configuration": labels})
+
+    # -- labels -----------------------------------------------------------------------
+
+    def _labelled(self) -> dict[str, tuple[tuple[str, ...], np.ndarray]]:
+        arrays = {"wall_reflectance": (self.reading_dims, self.wall_reflectance)}
+        for prefix, groups in (("counts", self.counts), ("pilot", self.pilot or {})):
+            for configuration, named in groups.items():
+                arrays.update({f"{prefix}.{configuration}.{name}": (self.reading_dims, values)
+                               for name, values in named.items()})
+        return arrays
+
+    def _relabelled(self, dims: tuple[str, ...], coords: dict[str, np.ndarray],
+                    arrays: dict[str, np.ndarray]) -> "SphereResult":
+        def groups(prefix: str) -> dict[str, dict[str, np.ndarray]]:
+            out: dict[str, dict[str, np.ndarray]] = {}
+            for key, values in arrays.items():
+                head, _, rest = key.partition(".")
+                if head == prefix:
+                    configuration, _, name = rest.partition(".")
+                    out.setdefault(configuration, {})[name] = values
+            return out
+
+        return replace(self, dims=dims, coords=coords, counts=groups("counts"), wall_reflectance=arrays[
+            "wall_reflectance"], pilot=None if self.pilot is None else groups("pilot"))
+
+    @property
+    def rays(self) -> np.ndarray:
+        """N per reading and configuration, shape (…, 2) (``sample``, ``standard``)."""
+
+        return np.stack([self.counts[c]["rays"] for c in CONFIGURATIONS], axis=-1)
 
     # -- counts and fractions ---------------------------------------------------------
 
     def fraction(self, name: str, configuration: str = "sample") -> np.ndarray:
         """A count of ``configuration`` over its rays (e.g. ``fraction("lost_entrance")``)."""
 
-        return self.counts[configuration][name] / self.rays
+        return self.counts[configuration][name] / self.counts[configuration]["rays"]
 
     @property
     def detector_fraction(self) -> np.ndarray:
@@ -90,34 +197,46 @@ class SphereResult:
     def fraction_delta(self) -> float:
         """δ/2: the failure probability of each detector fraction's interval."""
 
-        return float(self.settings["delta"]) / 2.0
+        return self.delta / 2.0
 
     def fraction_interval(self, configuration: str = "sample") -> np.ndarray:
-        """Clopper–Pearson interval (n, 2) of a configuration's detector fraction at δ/2."""
+        """Clopper–Pearson interval (…, 2) of a configuration's detector fraction at δ/2."""
 
-        lower, upper = clopper_pearson(self.counts[configuration]["detected"], self.rays, self.fraction_delta)
-        return np.stack([lower, upper], axis=-1)
+        return self._intervals[f"fraction_{configuration}"]
+
+    @cached_property
+    def _intervals(self) -> dict[str, np.ndarray]:
+        """Every Clopper–Pearson interval, computed once (derived: the public state stays as built)."""
+
+        def interval(configuration: str, name: str, delta: float) -> np.ndarray:
+            counts = self.counts[configuration]
+            return np.stack(clopper_pearson(counts[name], counts["rays"], delta), axis=-1)
+
+        out = {f"fraction_{c}": interval(c, "detected", self.fraction_delta) for c in CONFIGURATIONS}
+        out["hemispherical"] = interval("sample", self._hemispherical_count, self.delta)
+        return out
 
     @property
     def certified(self) -> np.ndarray:
         """False where either configuration has capped walks, invalid directions or weight violations."""
 
-        bad = sum(self.counts[c][n] for c in CONFIGURATIONS for n in ("capped", "invalid_directions",
-                                                                       "weight_violations"))
+        bad = sum(self.counts[c][n] for c in CONFIGURATIONS for n in _UNCERTIFIED)
         return np.asarray(bad == 0)
 
     @property
     def fraction_mu(self) -> np.ndarray:
         """
-        Tolerance each detector fraction is certified to at δ/2: μ when its N was sized by
-        the rule at (μ, δ/2), else what the N spent guarantee under eq. (19) (Hoeffding's μ,
-        which holds for every N); NaN where not certified.
+        Tolerance each detector fraction is certified to at δ/2, per reading: μ for a
+        two-stage budget (each fraction sized to it), else what the N spent guarantee under
+        eq. (19) (Hoeffding's μ, which holds for every N; the larger of the two
+        configurations'); NaN where not certified.
         """
 
-        if self.settings.get("rays") is None:
-            mu = float(self.settings["mu"])
+        if self.settings.adaptive and self.settings.rays is None:
+            mu = np.full(self.certified.shape, float(self.settings.mu))
         else:
-            mu = hoeffding_mu(self.rays, self.fraction_delta)
+            mu = np.maximum(*(per_count(self.counts[c]["rays"], lambda n: hoeffding_mu(n, self.fraction_delta))
+                              for c in CONFIGURATIONS))
         return np.where(self.certified, mu, np.nan)
 
     # -- the readout ------------------------------------------------------------------
@@ -137,31 +256,30 @@ class SphereResult:
 
     @property
     def reading_interval(self) -> np.ndarray:
-        """[ρ_std·p_s⁻/p_r⁺, ρ_std·p_s⁺/p_r⁻] (n, 2): holds with probability ≥ 1 − δ; NaN if not certified."""
+        """[ρ_std·p_s⁻/p_r⁺, ρ_std·p_s⁺/p_r⁻], shape (…, 2): holds with probability ≥ 1 − δ (NaN: uncertified)."""
 
         sample, standard = self.fraction_interval("sample"), self.fraction_interval("standard")
         with np.errstate(divide="ignore", invalid="ignore"):
-            out = self.standard_value * np.stack([sample[:, 0] / standard[:, 1], sample[:, 1] / standard[:, 0]],
-                                                 axis=-1)
-        out[~self.certified] = np.nan
-        return out
+            out = self.standard_value * np.stack([sample[..., 0] / standard[..., 1],
+                                                  sample[..., 1] / standard[..., 0]], axis=-1)
+        return np.where(self.certified[..., None], out, np.nan)
+
+    @property
+    def _hemispherical_count(self) -> str:
+        transmittance = self.options["measurement"] == "transmittance"
+        return "hemispherical_transmitted" if transmittance else "hemispherical_reflected"
 
     @property
     def hemispherical(self) -> np.ndarray:
         """The hemispherical reading of the same rays (reflectance, or transmittance)."""
 
-        name = "hemispherical_transmitted" if self.options["measurement"] == "transmittance" \
-            else "hemispherical_reflected"
-        return self.fraction(name, "sample")
+        return self.fraction(self._hemispherical_count, "sample")
 
     @property
     def hemispherical_interval(self) -> np.ndarray:
-        """Clopper–Pearson interval of the hemispherical reading at δ."""
+        """Clopper–Pearson interval (…, 2) of the hemispherical reading at δ."""
 
-        name = "hemispherical_transmitted" if self.options["measurement"] == "transmittance" \
-            else "hemispherical_reflected"
-        lower, upper = clopper_pearson(self.counts["sample"][name], self.rays, float(self.settings["delta"]))
-        return np.stack([lower, upper], axis=-1)
+        return self._intervals["hemispherical"]
 
     @property
     def hemispherical_diffuse(self) -> np.ndarray:
@@ -181,6 +299,12 @@ class SphereResult:
 
         return self.reading - self.hemispherical
 
+    @property
+    def wall_reflections_per_ray(self) -> np.ndarray:
+        """Mean wall (and baffle) reflections per ray, sample configuration."""
+
+        return self.fraction("wall_reflections", "sample")
+
     # -- the correction (the theory's inverse of the readout) --------------------------
 
     @property
@@ -195,12 +319,14 @@ class SphereResult:
     def theory_inputs(self) -> dict[str, Any]:
         """
         The :mod:`virtspec_mi.references.sphere_theory` keywords of this reading
-        (:func:`virtspec_mi.references.sphere_model.theory_inputs` of its sphere, mode and specimen radius).
+        (:func:`virtspec_mi.references.sphere_model.theory_inputs` of its sphere, its reading
+        mode — the ``measurement``, ``specular``, ``method`` and ``standard`` it was read with,
+        as plain values — and its specimen radius).
         """
 
-        options = {k: v for k, v in self.options.items() if k in SPHERE_SETTING_NAMES}
-        return theory_inputs(self.sphere_description, SphereSettings(**options), self.wavelengths,
-                             self.specimen_radius)
+        self._check_spectrum("the sphere theory's inputs")
+        mode = SimpleNamespace(**{k: self.options[k] for k in ("measurement", "specular", "method", "standard")})
+        return theory_inputs(self.sphere_description, mode, np.atleast_1d(self.wavelengths), self.specimen_radius)
 
     def corrected(self, *, specular_reflectance: Any = 0.0, sample_reflectance: Any = None,
                   collimated_transmittance: Any = 0.0) -> np.ndarray:
@@ -211,156 +337,246 @@ class SphereResult:
         assumes the theory's sphere (flat disks, no baffle) and a Lambertian specimen
         (unless ``sample_reflectance``, its reflectance for diffuse light, is given; required
         for transmittance); the difference from :attr:`hemispherical` is the model's
-        residual for this specimen.
+        residual for this specimen. A result over more than wavelength: select one θi and
+        parameter point first (:meth:`sel`).
         """
 
-        return correct_readings(self.reading, self.theory_inputs(), specular_reflectance=specular_reflectance,
-                                sample_reflectance=sample_reflectance,
-                                collimated_transmittance=collimated_transmittance)
+        values = correct_readings(np.atleast_1d(self.reading), self.theory_inputs(),
+                                  specular_reflectance=specular_reflectance, sample_reflectance=sample_reflectance,
+                                  collimated_transmittance=collimated_transmittance)
+        return values.reshape(np.shape(self.reading))
 
     def corrected_interval(self, *, specular_reflectance: Any = 0.0, sample_reflectance: Any = None,
                            collimated_transmittance: Any = 0.0) -> np.ndarray:
         """
-        :attr:`reading_interval` through the (increasing) correction, (n, 2): holds the
+        :attr:`reading_interval` through the (increasing) correction, (…, 2): holds the
         corrected value of the expected reading with probability ≥ 1 − δ (NaN where not
         certified).
         """
 
-        return correct_readings(self.reading_interval, self.theory_inputs(),
-                                specular_reflectance=specular_reflectance, sample_reflectance=sample_reflectance,
-                                collimated_transmittance=collimated_transmittance)
+        interval = self.reading_interval
+        values = correct_readings(interval.reshape(-1, 2), self.theory_inputs(),
+                                  specular_reflectance=specular_reflectance, sample_reflectance=sample_reflectance,
+                                  collimated_transmittance=collimated_transmittance)
+        return values.reshape(interval.shape)
 
-    @property
-    def wall_reflections_per_ray(self) -> np.ndarray:
-        """Mean wall (and baffle) reflections per ray, sample configuration."""
+    def _check_spectrum(self, what: str) -> None:
+        other = [d for d in self.reading_dims if d != "wavelength"]
+        if other:
+            raise ValueError(f"{what} need a reading over wavelength only: select one label of "
+                             f"{', '.join(other)} first (sel)")
 
-        return self.counts["sample"]["wall_reflections"] / self.rays
+    # -- spectra and plots ------------------------------------------------------------
 
-    # -- output -----------------------------------------------------------------------
+    def _quantity(self, quantity: str) -> tuple[np.ndarray, np.ndarray, float]:
+        """A quantity with its tolerance: the half-width that covers its certified interval."""
+
+        if quantity == "reading":
+            values, interval = self.reading, self.reading_interval
+        elif quantity == "hemispherical":
+            values, interval = self.hemispherical, np.where(self.certified[..., None], self.hemispherical_interval,
+                                                            np.nan)
+        else:
+            squeezed = self.squeeze("theta_i")
+            values = squeezed.corrected().reshape(self.reading.shape)
+            interval = squeezed.corrected_interval().reshape(self.reading_interval.shape)
+        tolerance = np.maximum(values - interval[..., 0], interval[..., 1] - values)
+        return values, tolerance, self.delta
+
+    def spectrum_measures(self, quantity: str | None = None) -> str:
+        """What the sphere measures (``reflectance`` or ``transmittance``), whichever of its quantities."""
+
+        self.check_quantity(quantity)
+        return str(self.options["measurement"])
+
+    def plot(self, path: str | os.PathLike | None = None, quantity: str | None = None, **options: Any) -> Any:
+        """
+        The reading and the hemispherical value of the same rays over wavelength, each with
+        its certified band (or one ``quantity``: reading, corrected, hemispherical;
+        :func:`virtspec_mi.results.plot.plot_spectra`; ``theta_i=``, ``name=``, ``title=``).
+        """
+
+        from virtspec_mi.results.plot import plot_spectra
+
+        quantities = ("reading", "hemispherical") if quantity is None else (self.check_quantity(quantity),)
+        return plot_spectra(self, path, quantities=quantities, **options)
+
+    # -- text -------------------------------------------------------------------------
 
     def summary(self) -> str:
-        """A table: wavelength, detector fractions, reading with its interval, hemispherical, error."""
+        """A table: each reading's labels, detector fractions, reading with its interval, hemispherical, error."""
 
         options = self.options
         kind = "transmittance" if options["measurement"] == "transmittance" else f"reflectance ({options['specular']})"
         mu = self.fraction_mu
         lines = [f"integrating sphere {kind}, method = {options['method']}, standard = {self.standard_value:g}; "
                  f"{self.sphere}",
-                 f"N = {self.rays:,} rays per configuration and wavelength; "
-                 + (f"each detector fraction certified to {_up(float(np.nanmax(mu)))} at delta/2 = "
+                 f"N = {span(self.rays)} rays per configuration and reading; "
+                 + (f"each detector fraction certified to {round_up(float(np.nanmax(mu))):g} at delta/2 = "
                     f"{self.fraction_delta:g} (reading interval: both at once, probability >= "
-                    f"{1 - float(self.settings['delta']):g})" if np.any(self.certified) else
+                    f"{1 - self.delta:g})" if np.any(self.certified) else
                     "NOT CERTIFIED (capped walks, invalid directions or weight violations)")
-                 + f"; {self.seconds * 1e3:.1f} ms",
-                 " lambda/nm  rho_w   p_sample  p_standard   reading  [interval]            hemispherical    error"]
-        interval = self.reading_interval
-        for k, lam in enumerate(self.wavelengths):
-            certified = "" if self.certified[k] else "  NOT CERTIFIED"
-            lines.append(f"{lam:10g}  {self.wall_reflectance[k]:.4f}  {self.detector_fraction[k]:.5f}  "
-                         f"{self.standard_fraction[k]:.5f}    {self.reading[k]:.5f}  [{interval[k, 0]:.5f}, "
-                         f"{interval[k, 1]:.5f}]  {self.hemispherical[k]:.5f}     {self.instrument_error[k]:+.5f}"
-                         f"{certified}")
+                 + f"; {self.seconds * 1e3:.1f} ms"]
+        fixed = [f"{name} = {float(value):g}" for name, value in self.coords.items() if not self.coord_dims(name)]
+        if fixed:
+            lines.append("at " + ", ".join(fixed))
+        labels = list(self.reading_dims)
+        heads = ["lambda/nm" if d == "wavelength" else d for d in labels]
+        lines.append(" ".join(f"{h:>10}" for h in heads) + "  rho_w   p_sample  p_standard   reading  [interval]"
+                     "            hemispherical    error")
+        interval, certified = self.reading_interval, self.certified
+        for index in np.ndindex(*(self.sizes[d] for d in labels)):
+            at = " ".join(f"{float(self.coords[d][k]):>10g}" for d, k in zip(labels, index))
+            lines.append(f"{at}  {self.wall_reflectance[index]:.4f}  {self.detector_fraction[index]:.5f}  "
+                         f"{self.standard_fraction[index]:.5f}    {self.reading[index]:.5f}  "
+                         f"[{interval[index][0]:.5f}, {interval[index][1]:.5f}]  {self.hemispherical[index]:.5f}     "
+                         f"{self.instrument_error[index]:+.5f}" + ("" if certified[index] else "  NOT CERTIFIED"))
         return "\n".join(lines)
 
     def __repr__(self) -> str:
-        return f"<SphereResult {len(self.wavelengths)} wavelengths, N = {self.rays:,}, {self.options['measurement']}>"
+        sizes = ", ".join(f"{d}: {n}" for d, n in self.sizes.items())
+        return f"<SphereResult ({sizes}) N = {span(self.rays)}, {self.options['measurement']}>"
+
+    # -- plain data, datasets and files -------------------------------------------------
 
     def as_dict(self) -> dict[str, Any]:
-        """JSON-ready: counts of both configurations, derived values, options, settings."""
+        """
+        Every field as plain data (JSON-ready; NaN as ``None``): the counts of both
+        configurations, the labels, the sphere, options, settings and provenance, and the
+        derived values (``reading``, ``reading_interval`` (…, 2), ``hemispherical``,
+        ``hemispherical_interval``, ``instrument_error``, ``fraction_mu``).
+        :meth:`from_dict` reads it back.
+        """
 
-        def plain(value: Any) -> Any:
-            if isinstance(value, np.ndarray):
-                return plain(value.tolist())
-            if isinstance(value, dict):
-                return {k: plain(v) for k, v in value.items()}
-            if isinstance(value, (list, tuple)):
-                return [plain(v) for v in value]
-            if isinstance(value, float) and not math.isfinite(value):
-                return None  # NaN (not certified, 0/0): null in JSON
-            return value
+        def groups(source: dict[str, dict[str, np.ndarray]]) -> dict[str, dict[str, Any]]:
+            return {c: {name: plain_data(values) for name, values in named.items()} for c, named in source.items()}
 
-        return plain({
-            "kind": "sphere_result", "wavelengths": self.wavelengths, "rays": self.rays, "counts": self.counts,
-            "sphere": self.sphere, "cap_fractions": self.cap_fractions, "wall_reflectance": self.wall_reflectance,
-            "options": self.options, "settings": self.settings, "seconds": self.seconds, "scene": self.scene,
-            "sphere_parameters": self.sphere_parameters, "specimen_radius": self.specimen_radius,
-            "reading": self.reading, "reading_interval": self.reading_interval.T,
-            "hemispherical": self.hemispherical, "instrument_error": self.instrument_error,
-            "fraction_mu": self.fraction_mu,
-        })
+        return {
+            "format": self.FORMAT,
+            **self._labels_as_dict(),
+            **self._parameters_as_dict(),
+            "counts": groups(self.counts),
+            "pilot": None if self.pilot is None else groups(self.pilot),
+            "wall_reflectance": plain_data(self.wall_reflectance),
+            "sphere": self.sphere,
+            "cap_fractions": dict(self.cap_fractions),
+            "options": dict(self.options),
+            "settings": {**asdict(self.settings), "wavelengths": list(self.settings.wavelengths)},
+            "seconds": self.seconds,
+            "scene": self.scene,
+            "sphere_parameters": self.sphere_parameters,
+            "specimen_radius": self.specimen_radius,
+            "version": self.version,
+            "reading": plain_data(self.reading),
+            "reading_interval": plain_data(self.reading_interval),
+            "hemispherical": plain_data(self.hemispherical),
+            "hemispherical_interval": plain_data(self.hemispherical_interval),
+            "instrument_error": plain_data(self.instrument_error),
+            "fraction_mu": plain_data(self.fraction_mu),
+        }
 
     @classmethod
     def from_dict(cls, data: dict[str, Any]) -> "SphereResult":
-        if data.get("kind") != "sphere_result":
-            raise ValueError("not a sphere result (its 'kind' is not 'sphere_result')")
-        counts = {c: {k: np.asarray(v, dtype=np.int64) for k, v in d.items()} for c, d in data["counts"].items()}
-        settings = dict(data["settings"])
-        return cls(np.asarray(data["wavelengths"], float), int(data["rays"]), counts, data["sphere"],
-                   dict(data["cap_fractions"]), np.asarray(data["wall_reflectance"], float), dict(data["options"]),
-                   settings, float(data["seconds"]), data.get("scene", ""), dict(data.get("sphere_parameters") or {}),
-                   data.get("specimen_radius"))
+        """The result of :meth:`as_dict` (``ValueError`` if ``data`` is not one)."""
+
+        try:
+            if data.get("format") != cls.FORMAT:
+                raise KeyError("format")
+
+            def groups(source: dict[str, dict[str, Any]]) -> dict[str, dict[str, np.ndarray]]:
+                return {c: {name: np.asarray(values, dtype=np.int64) for name, values in named.items()}
+                        for c, named in source.items()}
+
+            return cls(
+                **cls.labels_from_dict(data),
+                counts=groups(data["counts"]),
+                pilot=None if data.get("pilot") is None else groups(data["pilot"]),
+                wall_reflectance=np.asarray(data["wall_reflectance"], dtype=np.float64),
+                sphere=str(data["sphere"]), cap_fractions=dict(data["cap_fractions"]), options=dict(data["options"]),
+                settings=Settings(**data["settings"]), seconds=float(data["seconds"]), scene=str(data["scene"]),
+                sphere_parameters=dict(data.get("sphere_parameters") or {}),
+                specimen_radius=data.get("specimen_radius"), version=str(data["version"]),
+            )
+        except (KeyError, TypeError, ValueError, AttributeError) as error:
+            raise ValueError(f"not a virtspec-mi sphere result (missing or bad {error})") from None
+
+    @classmethod
+    def _from_plain(cls, tag: str, data: Any) -> "SphereResult":
+        return cls.from_dict(data if tag == cls.FORMAT else _from_layout_0(data))
 
     def to_dataset(self) -> Any:
-        """An ``xarray.Dataset`` over ``wavelength``: every count (``<configuration>_<name>``) and derived value."""
+        """
+        An ``xarray.Dataset``: every count over the reading's dims and ``configuration``
+        (``sample``, ``standard``), the pilot's as ``pilot_<count>``, ``wall_reflectance``,
+        ``detector_fraction``, ``standard_fraction``, ``reading`` with ``reading_lower`` /
+        ``reading_upper``, ``hemispherical`` with its bounds, ``instrument_error`` and
+        ``fraction_mu`` over the reading's dims, each with ``units`` and ``long_name``;
+        ``result_json`` rebuilds the result (:meth:`from_dataset`).
+        """
 
         import xarray as xr
 
-        coords = {"wavelength": ("wavelength", self.wavelengths, {"units": "nm"})}
-        data = {f"{c}_{k}": ("wavelength", v) for c, d in self.counts.items() for k, v in d.items()}
-        data.update({
-            "wall_reflectance": ("wavelength", self.wall_reflectance),
-            "reading": ("wavelength", self.reading),
-            "reading_lower": ("wavelength", self.reading_interval[:, 0]),
-            "reading_upper": ("wavelength", self.reading_interval[:, 1]),
-            "hemispherical": ("wavelength", self.hemispherical),
-            "instrument_error": ("wavelength", self.instrument_error),
-            "fraction_mu": ("wavelength", self.fraction_mu),
+        per = self.dims  # the readings' dims, then configuration
+        variables: dict[str, Any] = {}
+        for prefix, groups in (("", self.counts), ("pilot_", self.pilot or {})):
+            for name in groups.get("sample", {}):
+                variables[prefix + name] = (per, np.stack([groups[c][name] for c in CONFIGURATIONS], axis=-1))
+        interval, hemispherical = self.reading_interval, self.hemispherical_interval
+        band = {"clopper_pearson_delta": self.delta}
+        variables.update({
+            "wall_reflectance": (self.reading_dims, self.wall_reflectance),
+            "detector_fraction": (self.reading_dims, self.detector_fraction),
+            "standard_fraction": (self.reading_dims, self.standard_fraction),
+            "reading": (self.reading_dims, self.reading),
+            "reading_lower": (self.reading_dims, interval[..., 0]),
+            "reading_upper": (self.reading_dims, interval[..., 1]),
+            "hemispherical": (self.reading_dims, self.hemispherical),
+            "hemispherical_lower": (self.reading_dims, hemispherical[..., 0], band),
+            "hemispherical_upper": (self.reading_dims, hemispherical[..., 1], band),
+            "instrument_error": (self.reading_dims, self.instrument_error),
+            "fraction_mu": (self.reading_dims, self.fraction_mu),
         })
-        attrs = {"rays": self.rays, "sphere": self.sphere, "scene": self.scene, "seconds": self.seconds,
-                 "json": json.dumps({k: v for k, v in self.as_dict().items() if k in (
-                     "cap_fractions", "options", "settings", "sphere_parameters", "specimen_radius")})}
-        return xr.Dataset(data, coords=coords, attrs=attrs)
-
-    def write(self, path: str | os.PathLike) -> Path:
-        """Write to ``.json`` (everything) or ``.nc`` (:meth:`to_dataset`)."""
-
-        path = Path(path)
-        if path.suffix == ".json":
-            path.write_text(json.dumps(self.as_dict(), indent=1))
-        elif path.suffix == ".nc":
-            self.to_dataset().to_netcdf(path)
-        else:
-            raise ValueError(f"path must end in .json or .nc (got {path.name!r})")
-        return path
-
-    @classmethod
-    def read(cls, path: str | os.PathLike) -> "SphereResult":
-        """A result written by :meth:`write`."""
-
-        path = Path(path)
-        if path.suffix == ".json":
-            return cls.from_dict(json.loads(path.read_text()))
-        if path.suffix == ".nc":
-            import xarray as xr
-
-            with xr.open_dataset(path) as ds:
-                extra = json.loads(ds.attrs["json"])
-                counts: dict[str, dict[str, np.ndarray]] = {c: {} for c in CONFIGURATIONS}
-                for name in ds.data_vars:
-                    config, _, key = str(name).partition("_")
-                    if config in counts:
-                        counts[config][key] = ds[name].values.astype(np.int64)
-                return cls(ds["wavelength"].values, int(ds.attrs["rays"]), counts, ds.attrs["sphere"],
-                           extra["cap_fractions"], ds["wall_reflectance"].values, extra["options"],
-                           extra["settings"], float(ds.attrs["seconds"]), ds.attrs["scene"],
-                           dict(extra.get("sphere_parameters") or {}), extra.get("specimen_radius"))
-        raise ValueError(f"path must end in .json or .nc (got {path.name!r})")
+        coords = {name: (self.coord_dims(name), values) for name, values in self.coords.items()}
+        s = self.settings
+        attrs = {"sphere": self.sphere, **{k: v for k, v in self.options.items() if k != "max_bounces"},
+                 "max_bounces": int(self.options.get("max_bounces", 0)), "mu": s.mu, "delta": s.delta,
+                 "beam": s.beam, "seed": s.seed, "phi_i": s.phi_i, "seconds": self.seconds, "scene": self.scene,
+                 "version": self.version, **({} if self.parameters is None else
+                                             {"parameters": json.dumps(self.parameters)}),
+                 **self._dataset_attrs()}
+        return annotate(xr.Dataset(variables, coords=coords, attrs=attrs), self._parameter_keys())
 
 
-def _up(value: float, digits: int = 3) -> str:
-    """Rounded up to ``digits`` significant digits (a printed tolerance never understates)."""
+def _from_layout_0(data: Any) -> dict[str, Any]:
+    """
+    The plain data (format 1) of a sphere result written before the result family:
+    its JSON object (``"kind": "sphere_result"``, one N for both configurations and every
+    wavelength) or its NetCDF dataset (``<configuration>_<count>`` variables, the rest in
+    the ``json`` attribute).
+    """
 
-    if not math.isfinite(value) or value <= 0:
-        return str(value)
-    scale = 10 ** (digits - 1 - math.floor(math.log10(value)))
-    return f"{math.ceil(value * scale) / scale:g}"
+    if isinstance(data, dict):
+        plain = dict(data)
+        wavelengths = np.asarray(plain["wavelengths"], dtype=np.float64)
+        counts = {c: {name: np.asarray(v, dtype=np.int64) for name, v in named.items()}
+                  for c, named in plain["counts"].items()}
+    else:
+        extra = json.loads(data.attrs["json"])
+        wavelengths = np.asarray(data["wavelength"].values, dtype=np.float64)
+        counts = {c: {} for c in CONFIGURATIONS}
+        for name in data.data_vars:
+            configuration, _, key = str(name).partition("_")
+            if configuration in counts:
+                counts[configuration][key] = np.asarray(data[name].values, dtype=np.int64)
+        plain = {**extra, "wall_reflectance": data["wall_reflectance"].values, "sphere": data.attrs["sphere"],
+                 "scene": data.attrs["scene"], "seconds": float(data.attrs["seconds"]), "rays": int(data.attrs["rays"])}
+    for named in counts.values():
+        named["rays"] = np.full(wavelengths.shape, int(plain["rays"]), dtype=np.int64)
+    settings = dict(plain["settings"])
+    return {"format": SphereResult.FORMAT, "dims": ["wavelength"], "wavelengths": wavelengths,
+            "theta_i": settings["theta_i"], "counts": counts, "pilot": None,
+            "wall_reflectance": np.asarray(plain["wall_reflectance"], dtype=np.float64),
+            "sphere": plain["sphere"], "cap_fractions": plain["cap_fractions"], "options": plain["options"],
+            "settings": settings, "seconds": plain["seconds"], "scene": plain.get("scene", ""),
+            "sphere_parameters": plain.get("sphere_parameters") or {},
+            "specimen_radius": plain.get("specimen_radius"), "version": "unknown (written before format 1)"}

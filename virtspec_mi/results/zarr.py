@@ -42,8 +42,10 @@ from typing import Any, Iterator, Sequence
 import numpy as np
 
 from virtspec_mi.kernel.counts import Counts
+from virtspec_mi.results.formats import annotate, format_parts
 
-__all__ = ["SUFFIX", "CHUNK_READINGS", "WRITE_EVERY", "ZarrTable", "regions", "write_result", "read", "as_plain"]
+__all__ = ["SUFFIX", "CHUNK_READINGS", "WRITE_EVERY", "ZarrTable", "regions", "write_result", "read", "is_table",
+           "as_plain"]
 
 SUFFIX: str = ".zarr"
 """The suffix of a Zarr result store."""
@@ -236,28 +238,35 @@ def _joined(parts: list[Counts]) -> Counts:
 
 def write_result(result: Any, path: str | os.PathLike) -> Path:
     """
-    Write ``result`` to the store ``path``: every variable of ``result.to_dataset()`` in
-    full (into the sweep's store when its dims and coordinates are the same, else a new
-    one), the pilot counts, ``done`` and the ``virtspec_table`` attribute. A result over
-    wavelength only (a reading) is written with θi as a dim of one.
+    Write ``result`` to the store ``path``. A hemispherical result: every variable of
+    ``result.to_dataset()`` in full (into the sweep's store when its dims and coordinates
+    are the same, else a new one), the pilot counts, ``done`` and the ``virtspec_table``
+    attribute; a result over wavelength only (a reading) is written with θi as a dim of
+    one. Any other kind: its dataset as it is (``result_json`` rebuilds it).
     """
 
     import xarray as xr
 
     path = Path(path)
-    if result.dims == ("wavelength",):
+    if format_parts(result.FORMAT)[0] != "result":  # a goniophotometer or sphere reading: written whole
+        result.to_dataset().to_zarr(path, mode="w", consolidated=False)
+        return path
+    own_dims = result.dims
+    if set(result.dims) <= {"wavelength", "theta_i"}:
         result = result.as_grid()
     dataset = result.to_dataset()
     dims = result.dims
     attrs = {k: v for k, v in dataset.attrs.items() if k != "result_json"}
     plain = result.as_dict()
-    attrs[_META] = json.dumps({k: plain[k] for k in ("format", "dims", "settings", "geometry", "seconds", "scene",
-                                                     "wavelength_independent", "version") + (
-                                   ("parameters",) if "parameters" in plain else ())})
+    attrs[_META] = json.dumps({**{k: plain[k] for k in ("format", "dims", "settings", "geometry", "seconds", "scene",
+                                                       "wavelength_independent", "version") + (
+                                     ("parameters",) if "parameters" in plain else ())},
+                               **({} if own_dims == dims else {"result_dims": list(own_dims)})})
     if result.pilot is not None:
         for name in Counts.names():
             dataset[f"pilot_{name}"] = (dims, np.asarray(getattr(result.pilot, name)))
     dataset["done"] = (dims, np.ones(result.shape, dtype=bool))
+    annotate(dataset, result._parameter_keys())
     same = False
     if path.is_dir():
         try:
@@ -270,6 +279,12 @@ def write_result(result: Any, path: str | os.PathLike) -> Path:
             same = False
     dataset.attrs = attrs
     dataset.to_zarr(path, mode="a" if same else "w", consolidated=False)
+    if same:  # written into the sweep's store: xarray keeps the attributes its arrays were made with
+        import zarr
+
+        group = zarr.open_group(str(path), mode="r+")
+        for name in dataset.variables:
+            group[str(name)].attrs.update({k: v for k, v in dataset[name].attrs.items() if k in ("units", "long_name")})
     return path
 
 
@@ -284,6 +299,8 @@ def read(path: str | os.PathLike) -> Any:
             dataset = store.load()
     except Exception as error:  # zarr and xarray raise many types for a store that is not one
         raise ValueError(f"could not read Zarr result {path}: {error}") from None
+    if "result_json" in dataset.attrs and _META not in dataset.attrs:  # a result written whole (not a sweep table)
+        return dataset
     if _META not in dataset.attrs or "done" not in dataset:
         raise ValueError(f"not a complete virtspec-mi Zarr result: {path} (no {_META} attribute: the sweep writing "
                          "it has not completed; re-run it to finish)")
@@ -293,16 +310,28 @@ def read(path: str | os.PathLike) -> Any:
     return dataset
 
 
+def is_table(dataset: Any) -> bool:
+    """True for a sweep's table (:class:`ZarrTable`, :func:`write_result` of a hemispherical result)."""
+
+    return _META in dataset.attrs
+
+
 def as_plain(dataset: Any) -> dict[str, Any]:
-    """A complete store's dataset as the plain data of :meth:`virtspec_mi.Result.from_dict`."""
+    """
+    A complete store's dataset as the plain data of :meth:`virtspec_mi.Result.from_dict`
+    (a reading stored as a grid of one θi gets its own dims back: ``result_dims``).
+    """
 
     meta = json.loads(dataset.attrs[_META])
     dims = tuple(meta.get("dims", _GRID))  # stores written before parameter sweeps: wavelength x theta_i
-    counts = {name: dataset[name].transpose(*dims).values for name in Counts.names()}
-    pilot = ({name: dataset[f"pilot_{name}"].transpose(*dims).values for name in Counts.names()}
+    own = tuple(meta.pop("result_dims", dims))
+    index = tuple(slice(None) if d in own else 0 for d in dims)
+    counts = {name: dataset[name].transpose(*dims).values[index] for name in Counts.names()}
+    pilot = ({name: dataset[f"pilot_{name}"].transpose(*dims).values[index] for name in Counts.names()}
              if f"pilot_{Counts.names()[0]}" in dataset else None)
-    plain = {**meta, "dims": list(dims), "wavelengths": dataset["wavelength"].values,
-             "theta_i": dataset["theta_i"].values, **counts, "pilot": pilot}
+    labels = {name: dataset[name].values if name in own else dataset[name].values[0] for name in _GRID}
+    plain = {**meta, "dims": list(own), "wavelengths": labels["wavelength"], "theta_i": labels["theta_i"], **counts,
+             "pilot": pilot}
     if meta.get("parameters") is not None:
         plain["parameter_coords"] = {name: dataset[name].values for name in (*meta["parameters"]["names"], "point")
                                      if name in dataset.coords}

@@ -1,0 +1,602 @@
+"""
+The result family: :class:`ResultBase`
+======================================
+
+Every result kind — the hemispherical reading (:class:`~virtspec_mi.results.hemispherical.Result`),
+the goniophotometer reading (:class:`~virtspec_mi.results.goniophotometer.GonioResult`) and the
+integrating-sphere reading (:class:`~virtspec_mi.results.sphere.SphereResult`) — is an
+immutable set of exact counts over labelled dimensions (xarray conventions) with
+everything else derived from them. This module holds what they share, written once:
+
+- **labels**: ``dims`` (``wavelength``, ``theta_i``, the parameter dims of a sweep, then
+  the kind's own dims, e.g. the goniophotometer's ``theta_o`` and ``phi_o`` bins) and
+  ``coords`` (a coordinate that is not a dim is a 0-d array: a scalar label). Each kind
+  declares its stored arrays with their dims (``_labelled``) and how it is rebuilt from
+  them (``_relabelled``); :meth:`ResultBase.isel`, :meth:`ResultBase.sel`,
+  :meth:`ResultBase.squeeze` and :meth:`ResultBase.as_grid` work on those, for every kind;
+- **files**: one format tag per kind (``"virtspec-mi result 1"``, ``"virtspec-mi gonio 1"``,
+  ``"virtspec-mi sphere 1"``: a word and a version; :mod:`virtspec_mi.results.formats`),
+  carried in the JSON object (``format``) and in every dataset (attributes ``format`` and
+  ``result_json``, the whole result as JSON); :meth:`ResultBase.write` /
+  :meth:`ResultBase.read` through :mod:`virtspec_mi.results.io` (NetCDF, CSV, JSON, Zarr;
+  atomic writes); every variable and coordinate of ``to_dataset()`` has its ``units``
+  and ``long_name`` (:func:`virtspec_mi.results.formats.annotate`);
+- **spectra**: :meth:`ResultBase.spectrum` — one quantity over wavelength at one θi with
+  its certified tolerance (:class:`Spectrum`) — is what ``to_sd``, ``colour``,
+  :func:`virtspec_mi.compare.compare` and the spectrum plots read, for every kind.
+
+References
+----------
+xarray documentation, "Indexing and selecting data" (``sel``, ``isel``, ``method="nearest"``);
+CF Conventions 1.11, Sect. 3 (``units``, ``long_name``).
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, ClassVar, Mapping
+
+import numpy as np
+
+from virtspec_mi.results.formats import format_parts, tagged
+
+__all__ = [
+    "ResultBase",
+    "Spectrum",
+    "NEAREST",
+    "plain_data",
+    "round_up",
+    "span",
+    "per_count",
+]
+
+NEAREST: str = "nearest"
+"""The one inexact ``method`` of :meth:`ResultBase.sel`: the label closest to the one asked."""
+
+_MATCH = {"rtol": 1e-9, "atol": 1e-12}  # labels this close are the same label
+_GRID = ("wavelength", "theta_i")  # the dims every reading has, in this order, first
+
+
+def plain_data(values: Any) -> Any:
+    """An array as JSON-ready nested lists, NaN as ``None`` (JSON has no NaN)."""
+
+    values = np.asarray(values)
+    if values.dtype.kind == "f":
+        return np.where(np.isnan(values), None, values).tolist()
+    return values.tolist()
+
+
+def round_up(value: float, digits: int = 3) -> float:
+    """``value`` rounded *up* to ``digits`` significant digits (a printed tolerance never shrinks)."""
+
+    if not np.isfinite(value) or value <= 0:
+        return value
+    scale = 10.0 ** (np.floor(np.log10(value)) - digits + 1)
+    return float(np.ceil(value / scale * (1 - 1e-12)) * scale)
+
+
+def per_count(counts: Any, function: Any) -> np.ndarray:
+    """``function(n)`` of every count n (e.g. a rule's tolerance of N rays), computed once per distinct n."""
+
+    counts = np.asarray(counts)
+    unique, inverse = np.unique(counts, return_inverse=True)
+    return np.array([function(int(n)) for n in unique], dtype=np.float64)[inverse].reshape(counts.shape)
+
+
+def span(counts: Any) -> str:
+    """``"1,000"`` or ``"1,000 to 2,000"``: the least and the most of some counts."""
+
+    low, high = int(np.min(counts)), int(np.max(counts))
+    return f"{low:,}" if low == high else f"{low:,} to {high:,}"
+
+
+# -- spectra --------------------------------------------------------------------------
+
+
+@dataclass(frozen=True, eq=False)
+class Spectrum:
+    """
+    One quantity of a result over wavelength at one θi, sorted by wavelength.
+
+    Attributes
+    ----------
+    quantity : str
+        The result's quantity (``reflectance``, a sphere's ``reading`` …).
+    measures : str
+        What it estimates: ``reflectance``, ``transmittance`` or ``absorptance`` (the
+        column of a measured spectrum it compares with).
+    wavelengths, values : ndarray
+        nm, increasing; the values.
+    tolerance : ndarray
+        Each value is within ``tolerance`` of what it estimates — the expected fraction
+        of the model (a reading's R, T, A), the ratio of the expected detector fractions
+        (a sphere's reading) — with probability ≥ 1 − ``delta``; NaN: not certified.
+    delta : float
+        The failure probability of each point's tolerance.
+    theta_i : float
+        The angle of incidence (degrees).
+    """
+
+    quantity: str
+    measures: str
+    wavelengths: np.ndarray
+    values: np.ndarray
+    tolerance: np.ndarray
+    delta: float
+    theta_i: float
+
+    @property
+    def name(self) -> str:
+        return f"{self.quantity} theta_i={self.theta_i:g}"
+
+
+# -- the base class -------------------------------------------------------------------
+
+
+class ResultBase:
+    """
+    What every result kind shares (see the module docstring). A kind is a frozen
+    dataclass that sets :attr:`FORMAT` (and :attr:`LEGACY`, tags it still reads),
+    :attr:`KIND`, :attr:`KIND_DIMS`, :attr:`QUANTITIES` and implements ``dims``,
+    ``coords``, ``parameters``, ``_labelled``, ``_relabelled``, ``_quantity``,
+    ``summary``, ``as_dict``, ``from_dict``, ``to_dataset`` and ``plot``.
+    """
+
+    FORMAT: ClassVar[str]
+    """The format tag of this kind's files: ``"virtspec-mi <word> <version>"``."""
+    LEGACY: ClassVar[tuple[str, ...]] = ()
+    """Older tags of this kind that :meth:`from_tagged` still reads."""
+    KIND: ClassVar[str]
+    """The kind in words, for messages (``"goniophotometer reading"``)."""
+    KIND_DIMS: ClassVar[tuple[str, ...]] = ()
+    """The kind's own dims, after the readings' (e.g. bins): kept whole by :meth:`isel`, with the reason."""
+    KIND_DIMS_REASON: ClassVar[str] = ""
+    QUANTITIES: ClassVar[tuple[str, ...]] = ()
+    """The quantities :meth:`spectrum` gives (the first is the default)."""
+
+    dims: tuple[str, ...]
+    coords: dict[str, np.ndarray]
+    parameters: dict | None
+
+    # -- what each kind declares ------------------------------------------------------
+
+    def _labelled(self) -> dict[str, tuple[tuple[str, ...], np.ndarray]]:
+        """Every stored array over the dims, by name: ``(its dims, values)``."""
+
+        raise NotImplementedError
+
+    def _relabelled(self, dims: tuple[str, ...], coords: dict[str, np.ndarray],
+                    arrays: dict[str, np.ndarray]) -> "ResultBase":
+        """The same kind with these dims, coordinates and arrays (names of :meth:`_labelled`)."""
+
+        raise NotImplementedError
+
+    def _quantity(self, quantity: str) -> tuple[np.ndarray, np.ndarray, float]:
+        """``(values, tolerance, delta)`` of a quantity over the readings' dims (see :class:`Spectrum`)."""
+
+        raise NotImplementedError
+
+    # -- labels -----------------------------------------------------------------------
+
+    @property
+    def wavelengths(self) -> np.ndarray:
+        """Wavelengths in nm, in the order requested (a 0-d array once one is selected)."""
+
+        return self.coords["wavelength"]
+
+    @property
+    def theta_i(self) -> Any:
+        """Polar incidence in degrees: a float for a single reading, an array for a θi dim."""
+
+        value = self.coords["theta_i"]
+        return float(value) if np.ndim(value) == 0 else value
+
+    @property
+    def phi_i(self) -> float:
+        """Azimuth of incidence in degrees (the settings')."""
+
+        return float(self.settings.phi_i)  # type: ignore[attr-defined]
+
+    @property
+    def mu(self) -> float:
+        """The tolerance asked for (the settings'; what the rays give is each kind's certificate)."""
+
+        return float(self.settings.mu)  # type: ignore[attr-defined]
+
+    @property
+    def delta(self) -> float:
+        """The failure probability δ asked for (the settings')."""
+
+        return float(self.settings.delta)  # type: ignore[attr-defined]
+
+    @property
+    def shape(self) -> tuple[int, ...]:
+        return tuple(len(self.coords[d]) for d in self.dims)
+
+    @property
+    def sizes(self) -> dict[str, int]:
+        """Length of every dim, by name (as ``xarray.Dataset.sizes``)."""
+
+        return dict(zip(self.dims, self.shape))
+
+    @property
+    def reading_dims(self) -> tuple[str, ...]:
+        """The dims of the readings: :attr:`dims` without the kind's own (:attr:`KIND_DIMS`)."""
+
+        return tuple(d for d in self.dims if d not in self.KIND_DIMS)
+
+    @property
+    def parameter_names(self) -> tuple[str, ...]:
+        """Names of the swept specimen parameters (empty without parameters)."""
+
+        return () if self.parameters is None else tuple(self.parameters["names"])
+
+    def coord_dims(self, name: str) -> tuple[str, ...]:
+        """The dims a coordinate lies along: its own, ``("point",)`` for a parameter of points, ``()`` if scalar."""
+
+        return _coord_dims(name, self.coords, self.dims)
+
+    def angle_index(self, theta_i: float | None = None) -> int:
+        """
+        The index of ``theta_i`` among the result's angles (``None``: the only one);
+        ``ValueError`` naming the angles otherwise.
+        """
+
+        angles = np.atleast_1d(np.asarray(self.coords["theta_i"], dtype=np.float64))
+        if theta_i is None:
+            if len(angles) != 1:
+                raise ValueError(f"theta_i must be given for a result over several angles (one of {angles.tolist()})")
+            return 0
+        matches = np.flatnonzero(np.isclose(angles, float(theta_i), rtol=0, atol=1e-9))
+        if not len(matches):
+            raise ValueError(f"theta_i must be one of the result's angles {angles.tolist()} (got {theta_i:g})")
+        return int(matches[0])
+
+    # -- selection: written once for every kind ----------------------------------------
+
+    def isel(self, indexers: Mapping[str, Any] | None = None, **more: Any) -> Any:
+        """
+        The readings at the given positions of each dim, as the same kind: an integer
+        (the dim becomes a scalar coordinate), a list of integers or a slice (the dim
+        stays, with those labels). ``ValueError`` naming the dim and the allowed range.
+        """
+
+        indexers = {**(indexers or {}), **more}
+        dims, coords, arrays = self.dims, dict(self.coords), self._labelled()
+        for dim, index in indexers.items():
+            self._check_selectable(dim, dims)
+            size = len(coords[dim])
+            key = _positions(dim, index, size)
+            along = [name for name in coords if _coord_dims(name, coords, dims) == (dim,)]
+            for name in along:
+                coords[name] = np.asarray(np.asarray(coords[name])[key])
+            for name, (array_dims, values) in arrays.items():
+                if dim in array_dims:
+                    axis = array_dims.index(dim)
+                    values = np.take(values, key, axis=axis)
+                    if np.ndim(key) == 0:
+                        array_dims = tuple(d for d in array_dims if d != dim)
+                    arrays[name] = (array_dims, values)
+            if np.ndim(key) == 0:
+                dims = tuple(d for d in dims if d != dim)
+        return self._relabelled(dims, coords, {name: values for name, (_, values) in arrays.items()})
+
+    def sel(self, labels: Mapping[str, Any] | None = None, method: str | None = None, **more: Any) -> Any:
+        """
+        The readings at the given labels of each dim, as the same kind (as ``xarray``'s
+        ``sel``): a number (the dim becomes a scalar coordinate), a list of numbers, or a
+        ``slice(start, stop)`` of labels (both ends included). ``method="nearest"`` takes
+        the nearest label to each number asked; without it a label must match (to within
+        1e-9 relative). A scalar coordinate (e.g. the θi of a single reading) may be
+        given its own label (nearest: any), which selects everything. E.g.
+        ``sel(theta_i=8)``, ``sel(wavelength=[450, 550], method="nearest")``,
+        ``sel(wavelength=slice(400, 700))``, ``sel(**{"specimen.thickness": 2e-4})``.
+        """
+
+        labels = {**(labels or {}), **more}
+        if method not in (None, NEAREST):
+            raise ValueError(f"method must be None or {NEAREST!r} (got {method!r})")
+        indexers = {}
+        for dim, label in labels.items():
+            if dim not in self.dims and dim in self.coords and not self.coord_dims(dim):
+                self._scalar_label(dim, label, method)
+                continue
+            self._check_selectable(dim, self.dims)
+            values = np.asarray(self.coords[dim], dtype=np.float64)
+            if isinstance(label, slice):
+                if method is not None:
+                    raise ValueError(f"method={method!r} does not apply to a slice of {dim} labels")
+                indexers[dim] = _label_slice(dim, values, label)
+            elif np.ndim(label) == 0:
+                indexers[dim] = _label_position(dim, values, label, method)
+            else:
+                indexers[dim] = [_label_position(dim, values, item, method) for item in np.asarray(label).ravel()]
+        return self.isel(indexers)
+
+    def squeeze(self, *dims: str) -> Any:
+        """
+        The same result without the given dims of length one (they become scalar
+        labels); no dims given: ``theta_i`` (a one-angle grid becomes a single reading).
+        """
+
+        dims = dims or ("theta_i",)
+        return self.isel({d: 0 for d in dims if d in self.dims and self.sizes[d] == 1})
+
+    def as_grid(self) -> Any:
+        """
+        The same result with ``wavelength`` and ``theta_i`` as its first dims (a scalar
+        label becomes a dim of one): what spectra, colours, comparisons and plots read.
+        A result with parameter dims raises ``ValueError``: select one parameter point
+        first (:meth:`sel`, :meth:`isel`).
+        """
+
+        extra = [d for d in self.reading_dims if d not in _GRID]
+        if extra:
+            name = extra[0]
+            example = "isel(point=0)" if name == "point" else \
+                f"sel(**{{{name!r}: {float(np.asarray(self.coords[name])[0]):g}}})"
+            line = "point=0" if name == "point" else f"{name}={float(np.asarray(self.coords[name])[0]):g}"
+            raise ValueError(f"this result also has the dims {', '.join(extra)} (a parameter sweep): select one "
+                             f"parameter point first, e.g. result.{example} (on the command line: --sel {line})")
+        result = self
+        for name in _GRID:
+            if name not in result.dims:
+                result = result._expanded(name)
+        return result
+
+    def _expanded(self, name: str) -> Any:
+        """The scalar coordinate ``name`` as a dim of one, at its place in ``(wavelength, theta_i, …)``."""
+
+        at = sum(1 for d in _GRID[:_GRID.index(name)] if d in self.dims)
+        dims = (*self.dims[:at], name, *self.dims[at:])
+        coords = {**self.coords, name: np.atleast_1d(self.coords[name])}
+        arrays = {key: np.expand_dims(values, at) for key, (_, values) in self._labelled().items()}
+        return self._relabelled(dims, coords, arrays)
+
+    def _check_selectable(self, dim: str, dims: tuple[str, ...]) -> None:
+        if dim in self.KIND_DIMS:
+            raise ValueError(f"{dim!r} is a dim a {self.KIND} keeps whole: {self.KIND_DIMS_REASON}")
+        if dim not in dims:
+            scalar = [f"{n} = {float(v):g}" for n, v in self.coords.items() if np.ndim(v) == 0 and n not in dims]
+            raise ValueError(f"{dim!r} is not a dim of this result (dims: {', '.join(dims) or 'none'}"
+                             + (f"; scalar labels: {', '.join(scalar)}" if scalar else "") + ")")
+
+    def _scalar_label(self, name: str, label: Any, method: str | None) -> None:
+        """A label given for a scalar coordinate: its own (or, nearest, any number) selects everything."""
+
+        own = float(np.asarray(self.coords[name]))
+        if isinstance(label, slice) or np.ndim(label) != 0:
+            raise ValueError(f"{name} is a scalar label of this result ({name} = {own:g}): give one number")
+        if method is None and not np.isclose(own, _number(name, label), **_MATCH):
+            raise ValueError(f"{name} must be the result's label {own:g} (got {label!r}; method='nearest' takes it)")
+
+    # -- spectra ----------------------------------------------------------------------
+
+    def spectrum(self, quantity: str | None = None, theta_i: float | None = None) -> Spectrum:
+        """
+        One quantity over wavelength at one θi (``None``: the only one) with its certified
+        tolerance, sorted by wavelength (:class:`Spectrum`); ``quantity`` one of
+        :attr:`QUANTITIES` (default the first). A result with parameter dims: select one
+        point first.
+        """
+
+        quantity = self.check_quantity(quantity)
+        grid = self.as_grid()
+        column = grid.angle_index(theta_i)
+        values, tolerance, delta = grid._quantity(quantity)
+        order = np.argsort(grid.coords["wavelength"], kind="stable")
+        return Spectrum(quantity, self.spectrum_measures(quantity),
+                        np.asarray(grid.coords["wavelength"], dtype=np.float64)[order],
+                        np.asarray(values)[order, column], np.asarray(tolerance, dtype=np.float64)[order, column],
+                        float(delta), float(np.atleast_1d(grid.coords["theta_i"])[column]))
+
+    def spectrum_measures(self, quantity: str | None = None) -> str:
+        """What a quantity estimates: ``reflectance``, ``transmittance`` or ``absorptance`` (a reading's own)."""
+
+        return self.check_quantity(quantity)
+
+    def check_quantity(self, quantity: str | None) -> str:
+        """``quantity`` if it is one of :attr:`QUANTITIES` (``None``: the first); else ``ValueError`` naming them."""
+
+        if quantity is None:
+            return self.QUANTITIES[0]
+        if quantity not in self.QUANTITIES:
+            raise ValueError(f"quantity must be one of {', '.join(self.QUANTITIES)} (got {quantity!r})"
+                             + ("" if not self._QUANTITY_NOTE else f": {self._QUANTITY_NOTE}"))
+        return quantity
+
+    _QUANTITY_NOTE: ClassVar[str] = ""
+
+    def to_sd(self, quantity: str | None = None, theta_i: float | None = None) -> Any:
+        """One quantity at one θi as a ``colour.SpectralDistribution`` (:mod:`virtspec_mi.results.colorimetry`)."""
+
+        from virtspec_mi.results.colorimetry import spectral_distribution
+
+        return spectral_distribution(self, quantity, theta_i)
+
+    def colour(self, quantity: str | None = None, theta_i: float | None = None, **options: Any) -> Any:
+        """CIE XYZ, L*a*b* and sRGB of one quantity at one θi (``illuminant=``, ``observer=``)."""
+
+        from virtspec_mi.results.colorimetry import colorimetry
+
+        return colorimetry(self.to_sd(quantity, theta_i), **options)
+
+    def to_msds(self, theta_i: float | None = None) -> Any:
+        """R, T and A at one θi as a ``colour.MultiSpectralDistributions`` (kinds that have all three)."""
+
+        raise ValueError(f"a {self.KIND} has no reflectance, transmittance and absorptance triple: use "
+                         f"to_sd(quantity) with one of {', '.join(self.QUANTITIES)}")
+
+    # -- files ------------------------------------------------------------------------
+
+    def write(self, path: str | os.PathLike) -> Path:
+        """Write to ``.nc`` (NetCDF-4), ``.csv``, ``.json`` or ``.zarr`` by suffix (:mod:`virtspec_mi.results.io`)."""
+
+        from virtspec_mi.results import io as results_io
+
+        return results_io.write(self, path)
+
+    @classmethod
+    def read(cls, path: str | os.PathLike) -> Any:
+        """A result of this kind from a file written by :meth:`write` (any kind: :func:`virtspec_mi.read_result`)."""
+
+        from virtspec_mi.results import io as results_io
+
+        return cls.from_tagged(*tagged(results_io.read(path)))
+
+    @classmethod
+    def from_dataset(cls, dataset: Any) -> Any:
+        """The result of a dataset made by ``to_dataset`` (or read from a file)."""
+
+        return cls.from_tagged(*tagged(("dataset", dataset)))
+
+    @classmethod
+    def from_tagged(cls, tag: str, data: Any) -> Any:
+        """The result of ``data`` carrying format ``tag`` (:func:`tagged`); ``ValueError`` if it is another kind's."""
+
+        word, version = format_parts(cls.FORMAT)
+        theirs, their_version = format_parts(tag)
+        if theirs != word:
+            raise ValueError(f"this file holds a {_WORDS.get(theirs, theirs)} (format {tag!r}), not a {cls.KIND}: "
+                             "read it with virtspec_mi.read_result, which reads every kind")
+        if their_version > version:
+            raise ValueError(f"this {cls.KIND} was written in format {tag!r} by a newer virtspec-mi; this version "
+                             f"reads up to {cls.FORMAT!r}: upgrade virtspec-mi")
+        if tag != cls.FORMAT and tag not in cls.LEGACY:
+            raise ValueError(f"format {tag!r} is not read by this version (it reads {cls.FORMAT!r} and "
+                             f"{', '.join(map(repr, cls.LEGACY)) or 'no older one'})")
+        return cls._from_plain(tag, data)
+
+    @classmethod
+    def _from_plain(cls, tag: str, data: Any) -> Any:
+        return cls.from_dict(data)
+
+    @classmethod
+    def from_dict(cls, data: dict[str, Any]) -> Any:
+        raise NotImplementedError
+
+    def csv_dataset(self) -> Any:
+        """What a ``.csv`` file holds (one row per cell of it): ``to_dataset()``, unless a kind leaves some out."""
+
+        return self.to_dataset()  # type: ignore[attr-defined]
+
+    def _dataset_attrs(self) -> dict[str, Any]:
+        """The attributes every kind's dataset carries: its format tag and the whole result as JSON."""
+
+        return {"format": self.FORMAT, "result_json": json.dumps(self.as_dict())}
+
+    def as_dict(self) -> dict[str, Any]:
+        raise NotImplementedError
+
+    def _labels_as_dict(self) -> dict[str, Any]:
+        """The labels as plain data: ``dims``, ``wavelengths``, ``theta_i`` (what :meth:`labels_from_dict` reads)."""
+
+        return {"dims": list(self.dims), "wavelengths": plain_data(self.coords["wavelength"]),
+                "theta_i": plain_data(self.coords["theta_i"])}
+
+    def _parameters_as_dict(self) -> dict[str, Any]:
+        """The swept parameters and their coordinates as plain data (none: nothing)."""
+
+        if self.parameters is None:
+            return {}
+        return {"parameters": self.parameters,
+                "parameter_coords": {name: plain_data(self.coords[name]) for name in (*self.parameter_names, "point")
+                                     if name in self.coords}}
+
+    @staticmethod
+    def labels_from_dict(data: dict[str, Any]) -> dict[str, Any]:
+        """``dims``, ``coords`` and ``parameters`` (constructor keywords) from a result's plain data."""
+
+        extra = {name: np.asarray(value, dtype=np.int64 if name == "point" else np.float64)
+                 for name, value in (data.get("parameter_coords") or {}).items()}
+        parameters = data.get("parameters")
+        return {"dims": tuple(data["dims"]),
+                "coords": {"wavelength": np.asarray(data["wavelengths"], dtype=np.float64),
+                           "theta_i": np.asarray(data["theta_i"], dtype=np.float64), **extra},
+                "parameters": None if parameters is None else dict(parameters)}
+
+    def _parameter_keys(self) -> dict[str, str] | None:
+        """Swept parameter names → their ``mi.traverse`` keys (for :func:`annotate`), or ``None``."""
+
+        if self.parameters is None:
+            return None
+        return dict(zip(self.parameters["names"], self.parameters["keys"]))
+
+    def _repr_html_(self) -> str:
+        """Jupyter: the one-line description, then xarray's HTML view of ``to_dataset()``."""
+
+        import html
+
+        dataset = self.to_dataset()  # type: ignore[attr-defined]
+        dataset.attrs.pop("result_json", None)  # the whole result as JSON: for files, not for reading
+        return f"<p><code>{html.escape(repr(self))}</code></p>" + dataset._repr_html_()
+
+
+_WORDS = {"result": "hemispherical reading (virtspec_mi.Result)",
+          "gonio": "goniophotometer reading (virtspec_mi.GonioResult)",
+          "sphere": "integrating-sphere reading (virtspec_mi.SphereResult)"}
+
+
+def _coord_dims(name: str, coords: dict[str, np.ndarray], dims: tuple[str, ...]) -> tuple[str, ...]:
+    if name in dims:
+        return (name,)
+    return ("point",) if np.ndim(coords[name]) == 1 and "point" in dims else ()
+
+
+def _number(dim: str, label: Any) -> float:
+    try:
+        return float(label)
+    except (TypeError, ValueError):
+        raise ValueError(f"a label of {dim} must be a number (got {label!r})") from None
+
+
+def _positions(dim: str, index: Any, size: int) -> Any:
+    """An integer (or integers) in [0, size) from an ``isel`` indexer: an integer, integers or a slice."""
+
+    def one(value: Any) -> int:
+        if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, np.integer)) or not -size <= value < size:
+            raise ValueError(f"the index of {dim!r} must be an integer in [{-size}, {size}) (got {value!r})")
+        return int(value) % size
+
+    if isinstance(index, slice):
+        positions = np.arange(size)[index]
+    elif np.ndim(index) == 0:
+        return one(index)
+    else:
+        positions = np.array([one(v) for v in list(index)], dtype=np.int64)
+    if not len(positions):
+        raise ValueError(f"the selection of {dim!r} holds no label (got {index!r})")
+    return positions
+
+
+def _label_position(dim: str, values: np.ndarray, label: Any, method: str | None) -> int:
+    wanted = _number(dim, label)
+    matches = np.flatnonzero(np.isclose(values, wanted, **_MATCH))
+    if len(matches):
+        return int(matches[0])
+    if method == NEAREST:
+        return int(np.argmin(np.abs(values - wanted)))
+    raise ValueError(f"{dim} must be one of the result's labels {values.tolist()} (got {label!r}; "
+                     "method='nearest' takes the nearest)")
+
+
+def _label_slice(dim: str, values: np.ndarray, label: slice) -> np.ndarray:
+    if label.step is not None:
+        raise ValueError(f"a slice of {dim} labels takes no step (got {label!r})")
+    ascending = bool(np.all(np.diff(values) >= 0))
+    if not ascending and not np.all(np.diff(values) <= 0):
+        raise ValueError(f"a slice of {dim} labels needs them sorted (got {values.tolist()}): give a list")
+    low, high = (label.start, label.stop) if ascending else (label.stop, label.start)
+    keep = np.ones(len(values), dtype=bool)
+    if low is not None:
+        keep &= values >= _number(dim, low) - np.abs(_number(dim, low)) * _MATCH["rtol"] - _MATCH["atol"]
+    if high is not None:
+        keep &= values <= _number(dim, high) + np.abs(_number(dim, high)) * _MATCH["rtol"] + _MATCH["atol"]
+    positions = np.flatnonzero(keep)
+    if not len(positions):
+        raise ValueError(f"the slice {label.start!r}..{label.stop!r} of {dim} holds none of the result's labels "
+                         f"{values.tolist()}")
+    return positions

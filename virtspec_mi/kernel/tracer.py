@@ -126,7 +126,7 @@ class WalkQueue:
       of two). A refill (the finished ray's tally, the next ray's start) runs for a whole
       SIMD packet when any of its lanes needs it; refilling every P-th iteration divides
       that cost by P for about (P − 1)/2 iterations of idling per ray.
-    - ``prestart``: every ray's start (incident ray and ``walk_start``: the PCG32 seeding,
+    - ``prestart``: every ray's start (incident ray and ``walk_start``: the generator's seeding,
       spectral look-ups …) computed in one kernel over the whole chunk before the walk
       loop, at full SIMD use; a refill then only gathers its ray's start state (a memory
       read per state array) instead of computing it for the whole packet.

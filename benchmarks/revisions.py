@@ -15,6 +15,8 @@ Shared helpers of the benchmark scripts: the machine, and older git revisions
   JSON requests line by line: the side-by-side runs of ``walk_queue.py`` and ``walk_ceiling.py``.
 - :func:`find_bench` — the bench of a scene under the running tree's name for the function
   (``find_instrument`` before the subpackage layout).
+- :func:`within_certificates` — whether two trees' readings agree within the sum of their
+  certified tolerances (when a change alters the random stream, the counts differ).
 - :func:`worktree` — a throwaway checkout of a revision in a temporary directory
   (``git worktree add --detach``, removed afterwards with ``git worktree remove
   --force``), importable with ``PYTHONPATH`` pointing at it (:func:`python_env`).
@@ -218,6 +220,29 @@ def find_bench(scene: Any) -> Any:
     except ImportError:
         from virtspec_mi.scene import find_instrument as find
     return find(scene)
+
+
+def within_certificates(old: dict, new: dict) -> tuple[bool, float, float]:
+    """
+    Whether two trees' readings agree within their certificates: ``old`` and ``new`` map a
+    quantity's name to (values, μ) flattened over the readings; every |x_old − x_new| must
+    be ≤ μ_old + μ_new (each certificate holds with probability ≥ 1 − δ), and a quantity
+    with no certificate (μ = NaN: weight violations, capped walks or invalid directions)
+    identical. Returns (whether all agree, the largest |Δx|, the smallest μ_old + μ_new).
+    """
+
+    import numpy as np
+
+    inside, largest, smallest = True, 0.0, np.inf
+    for name, (values, mu) in old.items():
+        new_values, new_mu = new[name]
+        allowed = np.asarray(mu) + np.asarray(new_mu)
+        difference = np.abs(np.asarray(values) - np.asarray(new_values))
+        certified = ~np.isnan(allowed)
+        inside &= bool(np.all((difference <= allowed) | (~certified & (difference == 0.0))))
+        largest = max(largest, float(difference.max()))
+        smallest = min(smallest, float(allowed[certified].min()) if certified.any() else np.inf)
+    return inside, largest, smallest if np.isfinite(smallest) else np.nan
 
 
 def serve(root: Path, answer: Callable[[dict], dict], warm: Callable[[], dict] | None = None) -> None:

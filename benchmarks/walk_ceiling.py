@@ -111,14 +111,31 @@ def ceiling(bsdf: Any, wavelengths: list[float], theta_i: float, lanes: int, ite
     return int(dr.sum(ended).numpy()[0])
 
 
+def _tally(bench: Any, plans: list, walk_stats: dict) -> Any:
+    """
+    The counts of ``plans`` (collimated, the default settings otherwise) from the ray kernel
+    with its ``walk_stats``, by the running tree's kernel interface: plain values since issue 21
+    (``engine.plan.kernel_options``), a ``Settings`` before.
+    """
+
+    from virtspec_mi.kernel.tracer import WalkQueue, tally_readings
+    from virtspec_mi.settings import Settings
+
+    settings = Settings(beam="collimated")
+    try:
+        from virtspec_mi.engine.plan import kernel_options
+    except ImportError:
+        return tally_readings(bench, plans, settings, walk=WalkQueue(), walk_stats=walk_stats)
+    return tally_readings(bench, plans, walk=WalkQueue(), walk_stats=walk_stats, **kernel_options(settings)).counts
+
+
 def worker(root: str) -> None:
     """Answer requests (JSON lines): the events of a case, one queued reading or one ceiling run."""
 
     import virtspec_mi as vm
 
     mi = vm.mitsuba()
-    from virtspec_mi.kernel.tracer import ReadingPlan, WalkQueue, tally_readings
-    from virtspec_mi.settings import Settings
+    from virtspec_mi.kernel.tracer import ReadingPlan
 
     scenes: dict[str, Any] = {}
 
@@ -133,8 +150,7 @@ def worker(root: str) -> None:
         if request["what"] == "events":  # the events of the reading, and whether tally_readings gave its rays
             plans = [ReadingPlan(float(w), theta_i, 0.0, rays) for w in wavelengths]
             stats: dict = {}
-            counts = tally_readings(find_bench(scene), plans, Settings(beam="collimated"), walk=WalkQueue(),
-                                    walk_stats=stats)
+            counts = _tally(find_bench(scene), plans, stats)
             reading = vm.measure(scene, wavelengths=wavelengths, theta_i=theta_i, beam="collimated", rays=rays)
             same = np.array_equal(counts.reflected, reading.reflected)
             events = sum(int(np.sum(busy)) for busy in stats["busy"])

@@ -46,9 +46,9 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "benchmarks"))
 
-from revisions import Worker, describe_worktree, serve, worktree  # noqa: E402
+from revisions import Worker, describe_worktree, serve, within_certificates, worktree  # noqa: E402
 
-__all__ = ["PINNED_TESTS", "reading", "compare", "main"]
+__all__ = ["PINNED_TESTS", "reading", "main"]
 
 
 PINNED_TESTS = ("test_pinned_counts.py", "test_pinned_instruments.py")
@@ -122,25 +122,6 @@ def worker(root: str) -> None:
     serve(Path(root), lambda request: reading(*cases[request["case"]]))
 
 
-def compare(old: dict, new: dict) -> tuple[bool, float, float]:
-    """
-    Whether every certified quantity agrees within μ_old + μ_new; the largest |Δx| and the
-    smallest allowance. A quantity with no certificate (μ = NaN: weight violations, capped
-    walks or invalid directions) must be identical in both trees.
-    """
-
-    inside, largest, smallest = True, 0.0, np.inf
-    for name, (values, mu) in old["values"].items():
-        new_values, new_mu = new["values"][name]
-        allowed = np.asarray(mu) + np.asarray(new_mu)
-        difference = np.abs(np.asarray(values) - np.asarray(new_values))
-        certified = ~np.isnan(allowed)
-        inside &= bool(np.all((difference <= allowed) | (~certified & (difference == 0.0))))
-        largest = max(largest, float(difference.max()))
-        smallest = min(smallest, float(allowed[certified].min()) if certified.any() else np.inf)
-    return inside, largest, smallest if np.isfinite(smallest) else np.nan
-
-
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[1])
     parser.add_argument("--against", default="main", metavar="REV", help="the revision to compare with")
@@ -158,7 +139,7 @@ def main(argv: list[str] | None = None) -> int:
                 tree.start()
             for case in sorted(cases):
                 old, new = (trees[label].ask(case=case) for label in ("old", "new"))
-                inside, largest, allowance = compare(old, new)
+                inside, largest, allowance = within_certificates(old["values"], new["values"])
                 same = old["counts"] == new["counts"]
                 if not inside:
                     failed.append(case)

@@ -174,8 +174,8 @@ def walk_plan(walk_steps: float | None) -> tuple[int, bool]:
     MCML slab (3.2 events) refill 4 loses 5–7 %. Precomputed starts (``prestart``) saved
     8–11 % on the leaf while its walk generator was a TEA-seeded PCG32; with the hashed Weyl
     sequence of :func:`~virtspec_mi.kernel.walk.walk_rng` a start costs little more than
-    gathering it, and the soybean and corn spectra run 6–7 % faster without (800 nm alone:
-    8 % slower), so no walk length gets it by default.
+    gathering it: the soybean two-stage and corn spectra run 5 % and 11 % faster without, 800 nm
+    4 % (issue 25), so no walk length gets it by default.
     """
 
     return (4 if walk_steps is not None and walk_steps >= LONG_WALK_STEPS else 2), False

@@ -44,6 +44,7 @@ __all__ = [
     "BUDGETS",
     "mitsuba",
     "scenes",
+    "albedo_table",
 ]
 
 _LAZY = {
@@ -73,6 +74,7 @@ _LAZY = {
     "chebyshev_mu": "virtspec_mi.budgets.bounds",
     "BUDGETS": "virtspec_mi.budgets.rules",
     "mitsuba": "virtspec_mi.runtime",
+    "albedo_table": "virtspec_mi.exchange.albedo",
 }
 
 

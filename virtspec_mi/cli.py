@@ -33,6 +33,10 @@ Command line: ``virtspec``
   physical integrating sphere (:mod:`virtspec_mi.instruments.sphere`).
 - ``virtspec scenes``: the shipped scenes, one line each; every ``SCENE`` argument takes a
   shipped scene's name as well as a path (:mod:`virtspec_mi.scenes`).
+- ``virtspec gonio SCENE --klems FILE.xml [--klems-basis full|half|quarter] [--isotropic]``: the
+  Klems matrices (WINDOW 6 XML + NetCDF sidecar, :mod:`virtspec_mi.exchange.klems`).
+- ``virtspec albedo-table [--model] [--distribution] [--engine] [--epsilon] [--delta] [--out FILE …]
+  [--compare PUBLISHED]``: a certified energy-compensation table (:mod:`virtspec_mi.exchange.albedo`).
 - ``virtspec llvm {find,check}``: the libLLVM Dr.Jit uses (``make setup`` calls it).
 
 Errors in the input (bad ranges, unreadable scenes, a bad libLLVM) print one line
@@ -68,6 +72,9 @@ _EXAMPLES = {
               "  virtspec colour sphere.json --quantity hemispherical",
     "llvm": "example: virtspec llvm check",
     "scenes": "examples:\n  virtspec scenes\n  virtspec measure soybean_abmb --wavelengths 400:2500:5",
+    "albedo-table": "examples:\n  virtspec albedo-table --engine cycles --epsilon 1e-3 --out ggx_E.nc ggx_E.h\n"
+                    "  virtspec albedo-table --model glass --engine cycles --out glass.nc --checkpoint glass.parts\n"
+                    "  virtspec albedo-table --from ggx_E.nc --compare published_tables.h --rounding 5e-7",
     "sphere": "examples:\n  virtspec sphere scenes/sphere_150mm_8d.xml --specular SCE\n"
               "  virtspec sphere scenes/sphere_150mm_8d.xml --method comparison --wavelengths 400:700:100 --out r.json",
 }
@@ -140,6 +147,20 @@ def build_parser() -> argparse.ArgumentParser:
     gonio.add_argument("--plot-series", help="figure .png or .svg: the distribution over theta_i as a series (f in "
                                              "the plane of incidence and the CDF of theta_o, certified bands)")
     gonio.add_argument("--json", action="store_true", help="print the reading as one JSON object")
+    gonio.add_argument("--klems", metavar="FILE", help="measure the Klems matrices instead (incidence at every patch "
+                       "centre, front and back; --mu is the certified tolerance of every patch fraction) and write "
+                       "WINDOW 6 XML FILE with its NetCDF sidecar FILE.nc")
+    gonio.add_argument("--klems-basis", choices=("full", "half", "quarter"), default="full",
+                       help="Klems basis of --klems (145, 77 or 41 patches; default full)")
+    gonio.add_argument("--isotropic", action="store_true",
+                       help="--klems: one reading per ring, rotated onto its other patches (rotation-invariant specimens)")
+
+    albedo = command("albedo-table", "certified directional-albedo tables E(mu, alpha) for energy compensation",
+                     "Measure Mitsuba's rough conductor (Fresnel = 1) or rough glass on an engine's grid (or "
+                     "your own): every E(mu, alpha[, eta]) and E_avg within --epsilon of the model's value, the "
+                     "whole table at once with probability >= 1 - delta; NetCDF, .npy and a C header in Cycles' "
+                     "layout; --compare lists every cell of a published table outside the certified interval.")
+    _albedo_options(albedo)
 
     colour = command("colour", "CIE XYZ, L*a*b*, sRGB of a saved spectrum",
                      "Colorimetry (colour-science, ASTM E308) of one quantity of a result file at one theta_i, "
@@ -378,7 +399,7 @@ def main(argv: Sequence[str] | None = None) -> int:
 
             return llvm_main([args.action])
         handlers = {"measure": _measure, "sweep": _sweep, "gonio": _gonio, "sphere": _sphere, "colour": _colour,
-                    "compare": _compare, "plot": _plot}
+                    "compare": _compare, "plot": _plot, "albedo-table": _albedo_table}
         return handlers[args.command](args)
     except (ValueError, RuntimeError, OSError) as error:
         print(f"virtspec: error: {error}", file=sys.stderr)
@@ -498,6 +519,8 @@ def _gonio(args: argparse.Namespace) -> int:
 
     check_figure_path(args.plot)  # a bad suffix fails before any tracing
     check_figure_path(args.plot_series)
+    if args.klems:
+        return _klems(args)
     options = {name: getattr(args, name) for name in GONIO_PARAMETERS}
     options = {name: " ".join(v) if isinstance(v, list) else v for name, v in options.items()}
     settings = _settings(args)
@@ -644,6 +667,79 @@ def _plot(args: argparse.Namespace) -> int:
     comparison.plot(out)
     print(comparison.summary())
     print(f"plot: {out}")
+    return 0
+
+
+def _klems(args: argparse.Namespace) -> int:
+    """``virtspec gonio SCENE --klems FILE``: the Klems matrices (:func:`virtspec_mi.exchange.klems_gonio.klems_measure`)."""
+
+    from virtspec_mi.exchange.klems import sidecar_path
+    from virtspec_mi.exchange.klems_gonio import klems_measure
+
+    settings = {k: v for k, v in _settings(args).items() if v is not None}
+    measured = klems_measure(args.scene, basis=args.klems_basis, wavelengths=settings.get("wavelengths", 551.0),
+                             epsilon=float(settings.get("mu", 0.01)), delta=float(settings.get("delta", 0.01)),
+                             rays=None if "rays" not in settings else int(settings["rays"]),
+                             seed=int(settings.get("seed", 0)), isotropic=args.isotropic, out=args.klems)
+    print(measured.statement())
+    print(f"written: {args.klems} (certified bounds per patch: {sidecar_path(args.klems)})")
+    return 0
+
+
+def _albedo_options(parser: argparse.ArgumentParser) -> None:
+    """The flags of ``virtspec albedo-table`` (:func:`virtspec_mi.exchange.albedo.albedo_table`)."""
+
+    parser.add_argument("--model", choices=("conductor", "glass"), default="conductor",
+                        help="roughconductor with Fresnel = 1, or roughdielectric (default conductor)")
+    parser.add_argument("--distribution", choices=("ggx", "beckmann"), default="ggx", help="(default ggx)")
+    parser.add_argument("--engine", choices=("cycles", "filament", "unreal", "none"), default=None,
+                        help="grid and memory order of that engine (default cycles, or none with --mu/--alpha)")
+    for name, text in (("mu", "cosines of incidence"), ("alpha", "roughness alpha"),
+                       ("roughness", "roughness r (alpha = r^2)"), ("eta", "glass indices >= 1 (inside: 1/eta)")):
+        parser.add_argument(f"--{name}", nargs="+", help=f"{text}: numbers or start:stop:step")
+    parser.add_argument("--epsilon", type=float, default=1e-3, help="tolerance of every value (default 0.001)")
+    parser.add_argument("--delta", type=float, default=0.01, help="failure probability of the whole table (default 0.01)")
+    parser.add_argument("--bound", choices=("two-stage", "hoeffding"), default="two-stage", help="(default two-stage)")
+    parser.add_argument("--no-average", action="store_true", help="do not measure E_avg (diffuse beam)")
+    parser.add_argument("--parts", action="store_true", help="glass: certify E_R and E_T too")
+    parser.add_argument("--seed", type=int, default=0, help="seed of the run (default 0)")
+    parser.add_argument("--out", nargs="+", default=[], help="files to write: .nc, .npy, .h")
+    parser.add_argument("--checkpoint", help="directory keeping finished groups (resume; default OUT.parts)")
+    parser.add_argument("--from", dest="source", metavar="TABLE", help="a table .nc to read instead of measuring")
+    parser.add_argument("--compare", metavar="PUBLISHED", help="published table (.npy, .nc, .csv, C header) to hold "
+                                                               "to the certified intervals")
+    parser.add_argument("--array", help="--compare: the array (header) or variable (.nc) to read")
+    parser.add_argument("--side", choices=("outside", "inside"), default="outside", help="--compare, glass")
+    parser.add_argument("--average", action="store_true", help="--compare E_avg instead of E")
+    parser.add_argument("--rounding", type=float, default=0.0, help="--compare: the published values' rounding")
+    parser.add_argument("--quiet", action="store_true", help="no progress bar")
+
+
+def _albedo_table(args: argparse.Namespace) -> int:
+    from virtspec_mi.checks import parse_values
+    from virtspec_mi.exchange.albedo import albedo_table, read_albedo_table
+
+    if args.source:
+        table = read_albedo_table(args.source)
+        for path in args.out:
+            table.write(path)
+    else:
+        grid = {name: None if getattr(args, name) is None else list(parse_values(name, " ".join(getattr(args, name))))
+                for name in ("mu", "alpha", "roughness", "eta")}
+        engine = args.engine if args.engine is not None else (None if grid["mu"] is not None else "cycles")
+        table = albedo_table(args.model, distribution=args.distribution, engine=None if engine == "none" else engine,
+                             epsilon=args.epsilon, delta=args.delta, bound=args.bound, average=not args.no_average,
+                             parts=args.parts, seed=args.seed, out=args.out or None, checkpoint=args.checkpoint,
+                             progress=False if args.quiet else None, **grid)
+    print(table.statement())
+    print(f"rays {table.rays:,}; {table.provenance.get('seconds_wall', 0):g} s; grid {table.engine} "
+          f"({' x '.join(f'{d} {len(getattr(table, d))}' for d in table.dims if d != 'side')})")
+    for path in args.out:
+        print(f"written: {path}")
+    if args.compare:
+        comparison = table.compare(args.compare, average=args.average, side=args.side, array=args.array,
+                                   rounding=args.rounding)
+        print(comparison.summary())
     return 0
 
 

@@ -183,7 +183,7 @@ def run(trees: dict[str, Worker], cases: list[str], rounds: int, scale: int) -> 
                     answer = tree.ask(case=case, what=what, scale=scale, iterations=iterations)
                     key = (label, what)
                     previous = best.get(key, {"cpu": np.inf, "wall": np.inf})
-                    best[key] = {"cpu": min(previous["cpu"], answer["cpu"]), "wall": min(previous["wall"], answer["wall"])}
+                    best[key] = {kind: min(previous[kind], answer[kind]) for kind in ("cpu", "wall")}
         for label in trees:
             events, rays = info[label]["events"], info[label]["rays"]
             ceiling_events = -(-events // CEILING_LANES) * CEILING_LANES

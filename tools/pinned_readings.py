@@ -143,8 +143,8 @@ def main(argv: list[str] | None = None) -> int:
                 same = old["counts"] == new["counts"]
                 if not inside:
                     failed.append(case)
-                rows.append(f"| {case} | {len(next(iter(old['values'].values()))[0])} | {'identical' if same else 'changed'} | "
-                            f"{largest:.5f} | "
+                readings = len(next(iter(old["values"].values()))[0])
+                rows.append(f"| {case} | {readings} | {'identical' if same else 'changed'} | {largest:.5f} | "
                             f"{'none certified' if np.isnan(allowance) else f'{allowance:.5f}'} | "
                             f"{'yes' if inside else 'NO'} |")
         finally:

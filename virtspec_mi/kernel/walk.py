@@ -123,7 +123,9 @@ class WalkRNG(metaclass=_VariantStruct):
     with a per-ray odd stride s, each term hashed by the bijective ``hash32`` ("triple32") of
     :mod:`virtspec_mi.kernel.rng`:
 
-        u_i = hash32(x_0 + i·s) / 2³²,  i = 1, 2, …  (24-bit resolution, as :func:`~virtspec_mi.kernel.rng.to_unit`).
+        u_i = hash32(x_0 + i·s) / 2³²,  i = 1, 2, …
+
+    (24-bit resolution, as :func:`~virtspec_mi.kernel.rng.to_unit`).
 
     Two 32-bit words of state per lane and one 32-bit hash per number: no 64-bit
     multiply (PCG32's, emulated on AVX2), so a draw costs a few SIMD instructions. Within a

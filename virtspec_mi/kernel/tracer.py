@@ -1,6 +1,6 @@
 """
 The ray kernel: rays → specimen BSDF → fate → exact integer counts
-=================================================================
+==================================================================
 
 One reading = one (wavelength, θi, φi) with its own N independent rays. All readings
 of a call run in chunks of one fused Dr.Jit kernel each: counter-based random numbers

@@ -23,7 +23,7 @@ A ray that hits the back face (wi·n < 0, e.g. back-lit conical rays) runs the s
 walk from the bottom face, with the two outer media swapped.
 
 Quantities (as the ``spectrophotometer`` counts them)
-----------------------------------------------------
+-----------------------------------------------------
 - **Total reflectance** R (MCML's Rsp + Rd; iadpython's UR1 / URU) includes the
   specular reflection at the top face.
 - The sampled event type tells the parts apart: a ray that leaves without any
@@ -63,6 +63,8 @@ max_steps : integer, default 1000000
     reports ``CAPPED_COMPONENT`` (weight 0) and the instrument counts it in
     ``Result.capped``, in none of R, T and A.
 
+Notes
+-----
 A spectral parameter is any Mitsuba spectrum/texture (``<spectrum name="mu_a"
 value="400:12, 700:3"/>`` in XML, or ``{"type": "regular", ...}`` in a dict), read
 unbounded and evaluated per ray at the ray's wavelength (channel 0 of

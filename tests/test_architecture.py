@@ -67,6 +67,7 @@ LAYERS: list[tuple[str, tuple[str, ...]]] = [
         "virtspec_mi.settings",
         "virtspec_mi.budgets.rules",
         "virtspec_mi.checks",
+        "virtspec_mi.files",
         "virtspec_mi.leaf_data",
         "virtspec_mi.plugins.bsdfs.bsdf_table",
         "virtspec_mi.references.sphere_theory",

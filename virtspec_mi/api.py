@@ -38,7 +38,8 @@ from typing import Any, Iterator
 
 import numpy as np
 
-from virtspec_mi.engine.checkpoint import checkpoint_for, claim, remove
+from virtspec_mi.engine.checkpoint import checkpoint_for, claim, kept_in, remove
+from virtspec_mi.files import WriteError
 from virtspec_mi.checks import parse_theta_i
 from virtspec_mi.engine.readings import gonio_reading, in_process_runner, measure_reading, run
 from virtspec_mi.geometry.bins import GONIO_PARAMETERS
@@ -257,11 +258,8 @@ def _write(result: Result, out: Path, checkpoint: Path) -> None:
 
     try:
         result.write(out)
-    except (OSError, RuntimeError) as error:  # netCDF reports some failures as RuntimeError
-        failure = OSError(f"could not write {out} ({getattr(error, 'strerror', None) or error}); every finished "
-                          f"reading is kept in {checkpoint}: re-run the same sweep to write it")
-        failure.errno = getattr(error, "errno", None)  # e.g. errno.ENOSPC, for callers that check it
-        raise failure from error
+    except WriteError as error:  # names out and the cause, carries the result; the checkpoint's state added
+        raise error.keeping(kept_in(checkpoint), result) from None
 
 
 measure.__signature__ = settings_keywords(measure)  # type: ignore[attr-defined]

@@ -381,7 +381,7 @@ def main(argv: Sequence[str] | None = None) -> int:
                     "compare": _compare, "plot": _plot}
         return handlers[args.command](args)
     except (ValueError, RuntimeError, OSError) as error:
-        print(f"virtspec: error: {error}", file=sys.stderr)
+        print(f"virtspec: error: {_rescued(error)}", file=sys.stderr)
         return 1
     except KeyboardInterrupt:
         partial = getattr(args, "checkpoint", None)  # the checkpoint of the sweep under way (set by _sweep)
@@ -392,12 +392,23 @@ def main(argv: Sequence[str] | None = None) -> int:
         return 130
 
 
+def _rescued(error: BaseException) -> Any:
+    """The error, and where the result it carries (its file could not be written) was written instead."""
+
+    if getattr(error, "result", None) is None:
+        return error
+    from virtspec_mi.results.io import IN_MEMORY, rescue
+
+    where = rescue(error.result, error.path)  # type: ignore[attr-defined]
+    return error.keeping(where) if error.kept == IN_MEMORY else f"{error}; {where}"  # type: ignore[attr-defined]
+
+
 def _measure(args: argparse.Namespace) -> int:
     from virtspec_mi.api import measure
 
     reading = measure(args.scene, parameters=_pairs(args.params, "--param"), defines=_pairs(args.defines, "-D"),
                       **_settings(args))
-    print(json.dumps(reading.as_dict()) if args.json else reading.summary())
+    print(json.dumps(reading.as_sealed_dict()) if args.json else reading.summary())
     return 0
 
 
@@ -409,7 +420,7 @@ def _sphere(args: argparse.Namespace) -> int:
     result = sphere_measure(args.scene, **_settings(args), **own)
     if args.out:
         result.write(args.out)
-    print(json.dumps(result.as_dict()) if args.json else result.summary())
+    print(json.dumps(result.as_sealed_dict()) if args.json else result.summary())
     return 0
 
 
@@ -508,7 +519,7 @@ def _gonio(args: argparse.Namespace) -> int:
     if args.plot_series:
         reading.plot_series(args.plot_series)
     if args.json:
-        print(json.dumps(reading.as_dict()))
+        print(json.dumps(reading.as_sealed_dict()))
         return 0
     print(reading.summary())
     for label, path in (("written", args.out), ("plot", args.plot), ("plot", args.plot_series)):

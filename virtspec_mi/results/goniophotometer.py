@@ -41,7 +41,7 @@ from __future__ import annotations
 import os
 from dataclasses import dataclass, replace
 from functools import cached_property
-from typing import Any, ClassVar
+from typing import Any, ClassVar, Mapping
 
 import numpy as np
 
@@ -51,11 +51,17 @@ from virtspec_mi.geometry.bins import GonioBins
 from virtspec_mi.kernel.counts import QUANTITIES
 from virtspec_mi.results.base import ResultBase, plain_data, round_up
 from virtspec_mi.results.formats import annotate
+from virtspec_mi.results.integrity import CountRules, whole_counts
 from virtspec_mi.results.hemispherical import Result
 
 __all__ = ["GonioResult"]
 
 _BINS = ("theta_o", "phi_o")
+_REFLECTION_BINS = "bin_counts (theta_o < 90)"
+_TRANSMISSION_BINS = "bin_counts (theta_o > 90)"
+_BIN_RULES = CountRules(None, parts={_REFLECTION_BINS: "reflected", _TRANSMISSION_BINS: "transmitted"})
+"""A reading's bins of each hemisphere add up to at most its reflected (θo < 90°) or transmitted rays (the rest
+is ``outside``: escaping rays in no bin)."""
 
 
 @dataclass(frozen=True, eq=False)
@@ -338,18 +344,23 @@ class GonioResult(ResultBase):
         }
 
     @classmethod
-    def from_dict(cls, data: dict[str, Any]) -> "GonioResult":
-        """The reading of :meth:`as_dict` (``ValueError`` if ``data`` is not one)."""
+    def _from_dict(cls, data: Mapping[str, Any]) -> "GonioResult":
+        """The reading of :meth:`as_dict` (checked by :meth:`from_dict <virtspec_mi.results.base.ResultBase.from_dict>`)."""
 
-        try:
-            if data.get("format") != cls.FORMAT:
-                raise KeyError("format")
-            return cls(result=Result.from_dict(data["result"]),
-                       bin_counts=np.asarray(data["bin_counts"], dtype=np.int64),
-                       bins=GonioBins.from_dict(data["bins"]), guarantee=str(data["guarantee"]),
-                       relative_tolerance=data.get("relative_tolerance"), brdf_floor=data.get("brdf_floor"))
-        except (KeyError, TypeError, AttributeError, ValueError) as error:
-            raise ValueError(f"not a virtspec-mi goniophotometer result (missing or bad {error})") from None
+        relative, floor = data.get("relative_tolerance"), data.get("brdf_floor")
+        return cls(result=Result.from_dict(data["result"]), bin_counts=whole_counts(data["bin_counts"], "bin_counts"),
+                   bins=GonioBins.from_dict(data["bins"]), guarantee=str(data["guarantee"]),
+                   relative_tolerance=None if relative is None else float(relative),
+                   brdf_floor=None if floor is None else float(floor))
+
+    def _count_groups(self) -> list[tuple[str, Mapping[str, np.ndarray], CountRules, tuple[str, ...]]]:
+        """The reading's counts, and its bins of each hemisphere against its reflected and transmitted rays."""
+
+        transmission = self.bins.transmitted
+        hemispheres = {"reflected": self.result.reflected, "transmitted": self.result.transmitted,
+                       _REFLECTION_BINS: self.bin_counts[..., ~transmission, :].sum(axis=(-2, -1)),
+                       _TRANSMISSION_BINS: self.bin_counts[..., transmission, :].sum(axis=(-2, -1))}
+        return [*self.result._count_groups(), ("", hemispheres, _BIN_RULES, self.result.dims)]
 
     def to_dataset(self) -> Any:
         """

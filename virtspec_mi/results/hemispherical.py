@@ -31,7 +31,7 @@ import os
 import warnings
 from dataclasses import asdict, dataclass, field, replace
 from functools import cached_property
-from typing import Any, ClassVar
+from typing import Any, ClassVar, Mapping
 
 import numpy as np
 
@@ -41,9 +41,20 @@ from virtspec_mi.geometry.disks import InstrumentGeometry, backlit_fraction
 from virtspec_mi.budgets.intervals import clopper_pearson
 from virtspec_mi.results.base import ResultBase, per_count, plain_data, round_up, span
 from virtspec_mi.results.formats import annotate
+from virtspec_mi.results.integrity import CountRules, optional_numbers, whole_counts
 from virtspec_mi.settings import Settings
 
-__all__ = ["Result", "plain_data"]
+__all__ = ["Result", "plain_data", "COUNT_RULES"]
+
+COUNT_RULES = CountRules(
+    "rays",
+    parts={"reflected": "rays", "transmitted": "rays", "capped": "rays", "invalid_directions": "rays",
+           "weight_violations": "rays", "rounded_weights": "rays", "specular_reflected": "reflected",
+           "regular_transmitted": "transmitted"},
+    sums=((("reflected", "transmitted", "capped", "invalid_directions"), "rays", False),),
+)
+"""How a reading's counts add up: each a share of its rays, the delta events a share of their fate, and
+reflected + transmitted + capped + invalid_directions <= rays (absorbed, the rest, is never negative)."""
 
 _PARTS = ("specular_reflectance", "diffuse_reflectance", "regular_transmittance", "diffuse_transmittance")
 
@@ -447,32 +458,43 @@ class Result(ResultBase):
         }
 
     @classmethod
-    def from_dict(cls, data: dict[str, Any]) -> "Result":
-        """The result of :meth:`as_dict` (``ValueError`` if ``data`` is not one)."""
+    def _from_plain(cls, tag: str, data: Any) -> "Result":
+        if hasattr(data, "data_vars"):  # a sweep's Zarr table (a dataset): its counts are its variables
+            from virtspec_mi.results.zarr import as_plain
 
-        try:
-            if data.get("format") != cls.FORMAT:
-                raise KeyError("format")
+            data = as_plain(data)
+        return cls.from_dict(data)
 
-            def counts(source: dict[str, Any]) -> Counts:
-                # Results written before invalid directions were counted have none.
-                source = {"invalid_directions": np.zeros_like(np.asarray(source["rays"]), dtype=np.int64), **source}
-                return Counts(**{name: np.array(source[name], dtype=np.float64 if name == "largest_weight"
-                                                else np.int64) for name in Counts.names()})
+    @classmethod
+    def _from_dict(cls, data: Mapping[str, Any]) -> "Result":
+        """The result of :meth:`as_dict` (checked by :meth:`from_dict <virtspec_mi.results.base.ResultBase.from_dict>`)."""
 
-            return cls(
-                **cls.labels_from_dict(data),
-                counts=counts(data),
-                pilot=None if data["pilot"] is None else counts(data["pilot"]),
-                settings=Settings(**data["settings"]),
-                geometry=InstrumentGeometry(**data["geometry"]),
-                seconds=float(data["seconds"]),
-                scene=str(data["scene"]),
-                wavelength_independent=bool(data["wavelength_independent"]),
-                version=str(data["version"]),
-            )
-        except (KeyError, TypeError, ValueError, AttributeError) as error:
-            raise ValueError(f"not a virtspec-mi result (missing or bad {error})") from None
+        def counts(source: Mapping[str, Any], group: str) -> Counts:
+            # Results written before invalid directions were counted have none.
+            if not isinstance(source, Mapping):
+                raise ValueError(f"'{group}' must be an object of counts (got {type(source).__name__})")
+            fields = {name: whole_counts(source[name], name) for name in Counts.names()
+                      if name != "largest_weight" and (name != "invalid_directions" or name in source)}
+            fields.setdefault("invalid_directions", np.zeros_like(fields["rays"]))
+            return Counts(**fields, largest_weight=optional_numbers(source["largest_weight"], "largest_weight"))
+
+        return cls(
+            **cls.labels_from_dict(data),
+            counts=counts(data, "counts"),
+            pilot=None if data["pilot"] is None else counts(data["pilot"], "pilot"),
+            settings=Settings(**data["settings"]),
+            geometry=InstrumentGeometry(**data["geometry"]),
+            seconds=float(data["seconds"]),
+            scene=str(data["scene"]),
+            wavelength_independent=bool(data["wavelength_independent"]),
+            version=str(data["version"]),
+        )
+
+    def _count_groups(self) -> list[tuple[str, Mapping[str, np.ndarray], CountRules, tuple[str, ...]]]:
+        groups = [("", self.counts.as_dict(), COUNT_RULES, self.dims)]
+        if self.pilot is not None:
+            groups.append(("pilot", self.pilot.as_dict(), COUNT_RULES, self.dims))
+        return groups
 
     def to_dataset(self) -> Any:
         """

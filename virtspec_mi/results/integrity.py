@@ -1,0 +1,550 @@
+"""
+What a result file must hold: the rules checked when one is read
+================================================================
+
+Every result file — any kind (hemispherical, goniophotometer, sphere), any format
+(NetCDF, CSV, JSON, Zarr, ``virtspec measure --json`` output) — is read as strictly as
+user input: one rule is written once, here, and every kind and format goes through it.
+A file that breaks one raises a one-line ``ValueError`` naming the file and the field,
+e.g. ``result file x.nc: 'reflected' holds a count above 'rays' (reading
+wavelength=551, theta_i=30)``. The rules:
+
+1. **Counts are whole numbers** ≥ 0 (:func:`whole_counts`): not fractions, text,
+   booleans, NaN or infinities, and within ``int64``.
+2. **Labels are finite numbers** (:func:`finite_labels`); a dim's labels are one per
+   position; wavelengths lie in :data:`~virtspec_mi.checks.WAVELENGTH_RANGE` and θi in
+   [0°, 90°]; the labels of θi and of a parameter grid are distinct, a list of points
+   is numbered 0 … n − 1 (:func:`check_labels`). Labels are kept in the order they
+   were asked for (a reading's wavelengths need not be sorted, nor distinct: a
+   reading may repeat one).
+3. **Shapes match the dims**: every stored array has one entry per label of each of its
+   dims (:func:`check_shapes`).
+4. **Counts add up as the kind says** (:func:`check_counts`, with each kind's
+   :class:`CountRules`): every part between 0 and its whole (reflected ≤ rays, specular
+   reflected ≤ reflected, a goniophotometer's bins of each hemisphere ≤ its reflected
+   or transmitted rays …), parts that must sum to the rays do (a sphere
+   configuration's fates), rays ≥ 1.
+5. **The format tag and version** are the kind's (:meth:`~virtspec_mi.results.base.ResultBase.from_tagged`).
+6. **What the file shows agrees with what it rebuilds** (:func:`check_agreement`): every
+   count a file holds besides the data it is rebuilt from — a JSON object's derived
+   ``absorbed``, a dataset's count variables and coordinates, a CSV file's rows — equals
+   the rebuilt result's, so an edited variable is refused rather than silently ignored.
+7. **The checksum** (:func:`checksum`): files written by this version carry the SHA-256
+   of their content (``checksum``); content changed after writing (an edit, a damaged
+   file) no longer matches and is refused — checked last, so a broken rule is named
+   first. Files without one (written before, or by hand) are read by the rules alone.
+
+:func:`read_file` applies them to a file (and names it in every message).
+
+References
+----------
+xarray / NetCDF conventions; FIPS 180-4 (SHA-256).
+"""
+
+from __future__ import annotations
+
+import errno
+import fnmatch
+import hashlib
+import json
+import os
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Callable, Mapping
+
+import numpy as np
+
+from virtspec_mi.checks import WAVELENGTH_RANGE
+
+__all__ = [
+    "CountRules",
+    "whole_counts",
+    "finite_labels",
+    "optional_numbers",
+    "check_labels",
+    "check_shapes",
+    "check_counts",
+    "check_result",
+    "checksum",
+    "check_checksum",
+    "check_agreement",
+    "read_file",
+    "MissingFile",
+]
+
+_INT64 = np.iinfo(np.int64).max
+_EXACT = 2.0**53  # floats hold every whole number up to here
+
+
+# -- 1. counts ------------------------------------------------------------------------
+
+
+def whole_counts(values: Any, field_name: str) -> np.ndarray:
+    """
+    ``values`` (nested lists, an array of any dtype) as an ``int64`` array when every
+    entry is a whole number ≥ 0 (an integral float, e.g. 3.0, is one); else
+    ``ValueError`` naming ``field_name``, the entry and its position.
+    """
+
+    try:
+        array = np.asarray(values)
+    except (ValueError, TypeError):
+        raise ValueError(f"{_quoted(field_name)} is not an array of counts (ragged or not numbers)") from None
+    kind = array.dtype.kind
+    if kind == "b":
+        raise ValueError(f"{_quoted(field_name)} holds true/false values, not counts")
+    if kind in "US":
+        raise ValueError(f"{_quoted(field_name)} holds text{_first(array, np.ones(array.shape, bool))}, not counts")
+    if kind == "O":
+        return _whole_objects(array, field_name)
+    if kind == "u":
+        bad = array > _INT64
+        if np.any(bad):
+            raise ValueError(f"{_quoted(field_name)} holds a count beyond int64{_first(array, bad)}")
+        return array.astype(np.int64)
+    if kind == "i":
+        bad = array < 0
+        if np.any(bad):
+            raise ValueError(f"{_quoted(field_name)} holds a negative count{_first(array, bad)}")
+        return array.astype(np.int64)
+    if kind != "f":
+        raise ValueError(f"{_quoted(field_name)} holds {array.dtype} values, not counts")
+    with np.errstate(invalid="ignore"):
+        rules = ((~np.isfinite(array), "a value that is not a finite number"),
+                 (array < 0, "a negative count"),
+                 (array != np.floor(array), "a fractional count"),
+                 (array > _EXACT, "a count beyond 2**53 (not exact as a float)"))
+    for bad, what in rules:
+        if np.any(bad):
+            raise ValueError(f"{_quoted(field_name)} holds {what}{_first(array, bad)}")
+    return array.astype(np.int64)
+
+
+def _whole_objects(array: np.ndarray, field_name: str) -> np.ndarray:
+    """Counts of mixed Python values (JSON lists): each an int (not a bool) or an integral float."""
+
+    out = np.empty(array.shape, dtype=np.int64)
+    for index, value in np.ndenumerate(array):
+        at = f" at index {list(index)}" if array.ndim else ""
+        if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, float, np.integer, np.floating)):
+            raise ValueError(f"{_quoted(field_name)} holds {value!r}{at}, not a count")
+        if isinstance(value, (float, np.floating)):
+            if not np.isfinite(value) or value != int(value) or abs(value) > _EXACT:
+                raise ValueError(f"{_quoted(field_name)} holds {value!r}{at}, not a whole number")
+        if value < 0:
+            raise ValueError(f"{_quoted(field_name)} holds a negative count ({value!r}){at}")
+        if int(value) > _INT64:
+            raise ValueError(f"{_quoted(field_name)} holds a count beyond int64{at}")
+        out[index] = int(value)
+    return out
+
+
+def _first(array: np.ndarray, bad: np.ndarray) -> str:
+    """`` (… at index […])`` of the first flagged entry."""
+
+    index = tuple(int(i) for i in np.argwhere(bad)[0]) if array.ndim else ()
+    value = array[index] if array.ndim else array[()]
+    shown = repr(value.item() if hasattr(value, "item") else value)
+    return f" ({shown}" + (f" at index {list(index)})" if index else ")")
+
+
+def _quoted(name: str) -> str:
+    return name if name.startswith(("'", "the ", "counts[", "pilot")) else f"'{name}'"
+
+
+# -- 2. labels ------------------------------------------------------------------------
+
+
+def finite_labels(values: Any, field_name: str) -> np.ndarray:
+    """``values`` as a ``float64`` array of finite numbers; else ``ValueError`` naming ``field_name``."""
+
+    try:
+        array = np.asarray(values, dtype=np.float64)
+    except (ValueError, TypeError, OverflowError):
+        raise ValueError(f"{_quoted(field_name)} must hold numbers (got {_short(values)})") from None
+    bad = ~np.isfinite(array)
+    if np.any(bad):
+        raise ValueError(f"{_quoted(field_name)} holds a value that is not a finite number{_first(array, bad)}")
+    return array
+
+
+def optional_numbers(values: Any, field_name: str) -> np.ndarray:
+    """``values`` as a ``float64`` array of real numbers, ``None`` (JSON's null) and NaN as NaN; else ``ValueError``."""
+
+    try:
+        array = np.asarray(values)
+    except (ValueError, TypeError):
+        raise ValueError(f"{_quoted(field_name)} must hold numbers or null (got {_short(values)})") from None
+    if array.dtype.kind in "iuf":
+        return array.astype(np.float64)
+    if array.dtype.kind != "O":
+        raise ValueError(f"{_quoted(field_name)} must hold numbers or null (got {array.dtype} values)")
+    out = np.empty(array.shape, dtype=np.float64)
+    for index, value in np.ndenumerate(array):
+        if value is None:
+            out[index] = np.nan
+        elif isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, float, np.integer, np.floating)):
+            raise ValueError(f"{_quoted(field_name)} holds {value!r}, not a number or null")
+        else:
+            out[index] = float(value)
+    return out
+
+
+def _short(values: Any) -> str:
+    text = repr(values)
+    return text if len(text) <= 60 else text[:57] + "..."
+
+
+_LABEL_RANGES: dict[str, tuple[float, float, str]] = {
+    "wavelength": (*WAVELENGTH_RANGE, "nm"),
+    "theta_i": (0.0, 90.0, "degrees"),
+}
+
+
+def check_labels(dims: tuple[str, ...], coords: Mapping[str, Any], parameters: Mapping[str, Any] | None,
+                 kind_dims: tuple[str, ...] = ()) -> None:
+    """
+    The labels of a result (rule 2 of the module docstring): every dim has a 1-d
+    coordinate of at least one label, every other coordinate is a scalar (or lies along
+    ``point``), wavelengths and θi in range, θi and parameter grid labels distinct,
+    points numbered 0 … n − 1. ``kind_dims``: the kind's own dims (checked by the kind).
+    """
+
+    if len(set(dims)) != len(dims) or not all(isinstance(d, str) for d in dims):
+        raise ValueError(f"'dims' must be distinct names (got {list(dims)})")
+    names = set(() if parameters is None else parameters.get("names", ()))
+    for dim in dims:
+        if dim not in coords:
+            raise ValueError(f"dim {dim!r} has no coordinate")
+    for name, values in coords.items():
+        if name in kind_dims:
+            continue
+        array = np.asarray(values)
+        along = (name,) if name in dims else ("point",) if "point" in dims and name in names else ()
+        if array.ndim != len(along):
+            expected = f"one label per position of {along[0]!r}" if along else "one number (a scalar label)"
+            raise ValueError(f"coordinate {name!r} must be {expected} (got an array of shape {array.shape})")
+        if along and not len(array):
+            raise ValueError(f"coordinate {name!r} holds no label")
+        if name in _LABEL_RANGES:
+            low, high, unit = _LABEL_RANGES[name]
+            bad = (array < low) | (array > high)
+            if np.any(bad):
+                raise ValueError(f"coordinate {name!r} must satisfy {low:g} <= {name} <= {high:g} {unit}"
+                                 f"{_first(array, bad)}")
+        if name == "point" and name in dims:
+            if not np.array_equal(array, np.arange(len(array))):
+                raise ValueError(f"coordinate 'point' must number the points 0 ... {len(array) - 1} "
+                                 f"(got {_short(array.tolist())})")
+        elif name in dims and name != "wavelength" and len(np.unique(array)) != len(array):
+            raise ValueError(f"coordinate {name!r} must hold distinct labels (got {_short(array.tolist())})")
+
+
+# -- 3. shapes ------------------------------------------------------------------------
+
+
+def check_shapes(arrays: Mapping[str, tuple[tuple[str, ...], Any]], sizes: Mapping[str, int]) -> None:
+    """Every array (name → (its dims, values)) has one entry per label of each of its dims."""
+
+    for name, (array_dims, values) in arrays.items():
+        expected = tuple(sizes[d] for d in array_dims)
+        shape = np.shape(values)
+        if shape != expected:
+            over = " x ".join(f"{d} ({n})" for d, n in zip(array_dims, expected)) or "no dim (a scalar)"
+            raise ValueError(f"{_field(name)} has shape {shape}; its dims {over} give {expected}")
+
+
+def _field(name: str) -> str:
+    """``counts.sample.rays`` → ``counts['sample'] 'rays'``; ``counts.reflected`` → ``'reflected'``."""
+
+    head, _, rest = name.partition(".")
+    if not rest:
+        return f"'{name}'"
+    if head == "counts" and "." not in rest:
+        return f"'{rest}'"
+    if head == "result":
+        return _field(rest)
+    group, _, leaf = rest.rpartition(".")
+    return f"{head}[{group!r}] '{leaf}'" if group else f"{head} '{leaf}'"
+
+
+# -- 4. counts add up -----------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class CountRules:
+    """
+    How a group of counts (name → array over the readings' dims) adds up, as a kind says.
+
+    Attributes
+    ----------
+    total : str or None
+        The count every part is a share of (``rays``): it must be ≥ 1 (``None``: no such count).
+    parts : dict
+        part → whole: 0 ≤ part ≤ whole (another count of the group) per reading.
+    sums : tuple
+        ``(parts, whole, exact)``: the parts (names; ``fnmatch`` patterns such as
+        ``lost_*``) add up to the whole (``exact``) or to at most it, per reading.
+    fractions : tuple of str
+        Values of the group (not counts) that lie in [0, 1] per reading (a wall reflectance).
+    """
+
+    total: str | None = "rays"
+    parts: Mapping[str, str] = field(default_factory=dict)
+    sums: tuple[tuple[tuple[str, ...], str, bool], ...] = ()
+    fractions: tuple[str, ...] = ()
+
+
+def check_counts(group: str, counts: Mapping[str, np.ndarray], rules: CountRules,
+                 where: Callable[[tuple[int, ...]], str]) -> None:
+    """
+    ``ValueError`` for the first rule of ``rules`` that ``counts`` break (naming the
+    ``group`` — ``""``, ``"pilot"``, ``"counts['standard']"`` —, the fields and the
+    reading, ``where(index)``), or for a count the rules name that the group lacks.
+    """
+
+    prefix = f"{group} " if group else ""
+
+    def get(name: str) -> np.ndarray:
+        if name not in counts:
+            raise ValueError(f"{prefix}lacks the count '{name}'")
+        return np.asarray(counts[name])
+
+    if rules.total is not None:
+        _fail(prefix, get(rules.total) < 1, f"'{rules.total}' must be at least 1", where)
+    for part, whole in rules.parts.items():
+        _fail(prefix, get(part) > get(whole), f"'{part}' holds a count above '{whole}'", where)
+    for patterns, whole, exact in rules.sums:
+        names = [n for p in patterns for n in (fnmatch.filter(counts, p) if "*" in p else [p])]
+        added = sum((get(n) for n in names), np.zeros_like(get(whole)))
+        words = " + ".join(f"'{n}'" for n in names)
+        if exact:
+            _fail(prefix, added != get(whole), f"{words} must add up to '{whole}'", where)
+        else:
+            _fail(prefix, added > get(whole), f"{words} add up to more than '{whole}'", where)
+    for name in rules.fractions:
+        _fail(prefix, ~((get(name) >= 0) & (get(name) <= 1)), f"'{name}' must satisfy 0 <= {name} <= 1", where)
+
+
+def _fail(prefix: str, bad: np.ndarray, what: str, where: Callable[[tuple[int, ...]], str]) -> None:
+    if np.any(bad):
+        index = tuple(int(i) for i in np.argwhere(np.atleast_1d(bad))[0]) if np.ndim(bad) else ()
+        raise ValueError(f"{prefix}{what} ({where(index)})")
+
+
+def reading_at(dims: tuple[str, ...], coords: Mapping[str, Any]) -> Callable[[tuple[int, ...]], str]:
+    """``where(index)``: the labels of the reading at ``index`` over ``dims`` (``"reading wavelength=551, …"``)."""
+
+    def where(index: tuple[int, ...]) -> str:
+        labels = [f"{d}={_label(np.asarray(coords[d])[k])}" for d, k in zip(dims, index)]
+        labels += [f"{n}={_label(v)}" for n, v in coords.items() if n not in dims and np.ndim(v) == 0]
+        return "reading " + ", ".join(labels) if labels else "the reading"
+
+    return where
+
+
+def _label(value: Any) -> str:
+    value = value.item() if hasattr(value, "item") else value
+    return f"{value:g}" if isinstance(value, float) else str(value)
+
+
+def check_result(result: Any) -> None:
+    """
+    Rules 2 to 4 for a result of any kind: its labels (:func:`check_labels`), the shapes of
+    its arrays (:func:`check_shapes`) and its counts (:func:`check_counts` of every group
+    the kind declares, ``result._count_groups()``).
+    """
+
+    check_labels(result.dims, result.coords, result.parameters, result.KIND_DIMS)
+    sizes = {d: len(np.atleast_1d(result.coords[d])) for d in result.dims}
+    check_shapes(result._labelled(), sizes)
+    for group, counts, rules, dims in result._count_groups():
+        check_counts(group, counts, rules, reading_at(dims, result.coords))
+
+
+# -- 6. agreement ---------------------------------------------------------------------
+
+
+def check_agreement(content: tuple[str, Any], result: Any) -> None:
+    """
+    Rule 6: the counts a file holds besides the data its result is rebuilt from equal the
+    rebuilt result's — the whole-number leaves of a JSON object (``"plain"``: e.g. its
+    derived ``absorbed``), the integer variables and the coordinates of a dataset
+    (``"dataset"``: NetCDF, Zarr; ``"table"``: a sweep's Zarr table, over its grid), the
+    integer and coordinate columns of a CSV file's rows (``"rows"``).
+    """
+
+    kind, value = content
+    if kind == "plain":
+        _agree_plain(value, result.as_dict(), "")
+        return
+    if kind == "rows":
+        _agree_rows(value, result.csv_dataset())
+        return
+    rebuilt = result.as_grid() if kind == "table" and set(result.dims) <= {"wavelength", "theta_i"} else result
+    expected = rebuilt.to_dataset()
+    for name in (*expected.coords, *expected.data_vars):
+        values = expected[name]
+        if name not in value.variables or (name in expected.data_vars and values.dtype.kind not in "iu"):
+            continue
+        theirs = value[name]
+        if tuple(theirs.dims) != tuple(values.dims) or theirs.shape != values.shape:
+            raise ValueError(f"variable {name!r} has dims {tuple(theirs.dims)} and shape {theirs.shape}; the result "
+                             f"it holds gives {tuple(values.dims)} and {values.shape}")
+        _agree_values(str(name), theirs.values, values.values, "variable")
+
+
+def _agree_values(name: str, theirs: np.ndarray, ours: np.ndarray, what: str) -> None:
+    if ours.dtype.kind in "iuf":
+        try:
+            theirs_f = np.asarray(theirs, dtype=np.float64)
+        except (ValueError, TypeError):
+            raise ValueError(f"{what} {name!r} must hold numbers") from None
+        if np.any(~np.isfinite(theirs_f)) and ours.dtype.kind != "f":
+            bad = ~np.isfinite(theirs_f)
+            raise ValueError(f"{what} {name!r} holds a value that is not a finite number{_first(theirs_f, bad)}")
+        same = (theirs_f == ours) | (np.isnan(theirs_f) & np.isnan(np.asarray(ours, dtype=np.float64)))
+    else:
+        same = _texts(theirs) == _texts(ours)
+    if not np.all(same):
+        index = tuple(int(i) for i in np.argwhere(~np.atleast_1d(same))[0])
+        shown = np.atleast_1d(theirs)[index].item() if np.ndim(theirs) else np.asarray(theirs).item()
+        expected = np.atleast_1d(ours)[index].item() if np.ndim(ours) else np.asarray(ours).item()
+        raise ValueError(f"{what} {name!r} holds {shown!r} at index {list(index)} where the result the file holds "
+                         f"gives {expected!r} (the file was changed after it was written)")
+
+
+def _texts(values: Any) -> np.ndarray:
+    """Labels as Python strings (numpy's fixed and variable-width string dtypes, objects)."""
+
+    array = np.asarray(values, dtype=object)
+    return np.array([str(v) for v in array.ravel()], dtype=object).reshape(array.shape)
+
+
+def _agree_plain(theirs: Any, ours: Any, path: str) -> None:
+    """Every whole-number leaf of ``ours`` (a rebuilt ``as_dict()``) equals ``theirs`` at the same key, where present."""
+
+    if isinstance(ours, dict):
+        if not isinstance(theirs, dict):
+            raise ValueError(f"{_quoted(path)} must be an object")
+        for key, value in ours.items():
+            if key in theirs:
+                _agree_plain(theirs[key], value, f"{path}.{key}" if path else key)
+        return
+    if not _whole_tree(ours):
+        return
+    try:
+        theirs_array, ours_array = np.asarray(theirs), np.asarray(ours)
+    except (ValueError, TypeError):
+        raise ValueError(f"{_quoted(path)} is not an array of counts") from None
+    if theirs_array.shape != ours_array.shape:
+        raise ValueError(f"{_quoted(path)} has shape {theirs_array.shape}; the result the file holds gives "
+                         f"{ours_array.shape}")
+    if ours_array.size and theirs_array.dtype.kind not in "iufO":
+        raise ValueError(f"{_quoted(path)} holds {theirs_array.dtype} values, not counts")
+    counts = whole_counts(theirs_array, path) if ours_array.size else ours_array
+    if not np.array_equal(counts, ours_array):
+        index = tuple(int(i) for i in np.argwhere(np.atleast_1d(counts != ours_array))[0])
+        at = f" at index {list(index)}" if np.ndim(ours_array) else ""
+        raise ValueError(f"{_quoted(path)} holds {np.atleast_1d(counts)[index].item()}{at} where the result the file "
+                         f"holds gives {np.atleast_1d(ours_array)[index].item()} (the counts must add up: the file "
+                         "was changed after it was written)")
+
+
+def _whole_tree(value: Any) -> bool:
+    """True for an int (not a bool) or a non-empty nested list of them."""
+
+    if isinstance(value, list):
+        return bool(value) and all(_whole_tree(v) for v in value)
+    return isinstance(value, int) and not isinstance(value, bool)
+
+
+def _agree_rows(rows: Any, expected: Any) -> None:
+    frame = expected.to_dataframe().reset_index()
+    if rows.sizes.get("row", 0) != len(frame):
+        raise ValueError(f"holds {rows.sizes.get('row', 0)} rows; the result in its header gives {len(frame)} "
+                         "(a truncated or edited file)")
+    for name in frame.columns:
+        column = frame[name].to_numpy()
+        if name not in rows.variables:
+            continue
+        integer = column.dtype.kind in "iu"
+        if integer or str(name) in expected.coords:
+            _agree_values(str(name), rows[name].values, column, "column")
+
+
+# -- 7. checksums ---------------------------------------------------------------------
+
+CHECKSUM: str = "checksum"
+"""The key of a file's checksum in its JSON object (``"sha256:…"``)."""
+
+
+def checksum(data: Mapping[str, Any]) -> str:
+    """``"sha256:<hex>"`` of ``data`` without its :data:`CHECKSUM`, in canonical JSON (sorted keys, NaN as null)."""
+
+    text = json.dumps({k: v for k, v in data.items() if k != CHECKSUM}, sort_keys=True, separators=(",", ":"),
+                      default=_plain, allow_nan=True)
+    return "sha256:" + hashlib.sha256(text.encode("utf-8")).hexdigest()
+
+
+def _plain(value: Any) -> Any:
+    """numpy values as JSON (arrays as nested lists, NaN as ``None``) for :func:`checksum`."""
+
+    if isinstance(value, np.ndarray):
+        if value.dtype.kind == "f":
+            return np.where(np.isnan(value), None, value).tolist()
+        return value.tolist()
+    if isinstance(value, np.generic):
+        return value.item()
+    raise TypeError(f"not JSON: {type(value).__name__}")
+
+
+def check_checksum(data: Mapping[str, Any]) -> None:
+    """Rule 7: ``data``'s :data:`CHECKSUM`, when it has one, is :func:`checksum` of the rest."""
+
+    if not isinstance(data, Mapping) or CHECKSUM not in data:
+        return
+    stored = data[CHECKSUM]
+    try:
+        computed = checksum(data)
+    except (TypeError, ValueError):
+        raise ValueError("its content is not plain JSON data") from None
+    if stored != computed:
+        raise ValueError(f"its content does not match its checksum ({_short(stored)}): the file was changed after "
+                         "virtspec-mi wrote it (an edit, or damage); its counts cannot be trusted")
+
+
+# -- reading a file -------------------------------------------------------------------
+
+
+def read_file(path: str | os.PathLike, read: Callable[[Path], tuple[str, Any]],
+              build: Callable[[tuple[str, Any]], Any]) -> Any:
+    """
+    The result in ``path``: ``read(path)`` gives its content (``("plain" | "dataset" |
+    "rows" | "table", …)``), ``build(content)`` the result (checked by rules 1 to 5 and 7
+    as it is built), then rule 6. Every ``ValueError`` becomes one line naming the file:
+    ``result file PATH: …``; a missing file raises ``FileNotFoundError``.
+    """
+
+    path = Path(path)
+    try:
+        content = read(path)
+        result = build(content)
+        check_agreement(content, result)
+    except FileNotFoundError:
+        raise MissingFile(f"result file {path}: not found") from None
+    except ValueError as error:
+        raise ValueError(f"result file {path}: {_one_line(error)}") from None
+    return result
+
+
+class MissingFile(FileNotFoundError, ValueError):
+    """A result file that is not there: a ``FileNotFoundError`` and, as every bad file, a ``ValueError``."""
+
+    def __init__(self, message: str) -> None:
+        super().__init__(message)
+        self.errno = errno.ENOENT
+
+
+def _one_line(error: BaseException) -> str:
+    return " ".join(str(error).split())

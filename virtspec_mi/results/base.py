@@ -43,7 +43,7 @@ import numpy as np
 
 from virtspec_mi.results.formats import format_parts, tagged
 from virtspec_mi.results.integrity import (CHECKSUM, CountRules, check_agreement, check_checksum, check_result,
-                                           checksum, finite_labels, read_file, whole_counts)
+                                           checksum, finite_labels, parameters_of, read_file, whole_counts)
 
 __all__ = [
     "ResultBase",
@@ -564,7 +564,7 @@ class ResultBase:
         return {"dims": tuple(dims),
                 "coords": {"wavelength": finite_labels(data["wavelengths"], "wavelengths"),
                            "theta_i": finite_labels(data["theta_i"], "theta_i"), **extra},
-                "parameters": None if parameters is None else dict(parameters)}
+                "parameters": parameters_of(parameters)}
 
     def _parameter_keys(self) -> dict[str, str] | None:
         """Swept parameter names → their ``mi.traverse`` keys (for :func:`annotate`), or ``None``."""

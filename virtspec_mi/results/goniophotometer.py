@@ -51,7 +51,7 @@ from virtspec_mi.geometry.bins import GonioBins
 from virtspec_mi.kernel.counts import QUANTITIES
 from virtspec_mi.results.base import ResultBase, plain_data, round_up
 from virtspec_mi.results.formats import annotate
-from virtspec_mi.results.integrity import CountRules, whole_counts
+from virtspec_mi.results.integrity import CountRules, field_value, whole_counts
 from virtspec_mi.results.hemispherical import Result
 
 __all__ = ["GonioResult"]
@@ -347,9 +347,12 @@ class GonioResult(ResultBase):
     def _from_dict(cls, data: Mapping[str, Any]) -> "GonioResult":
         """The reading of :meth:`as_dict` (checked by :meth:`from_dict <virtspec_mi.results.base.ResultBase.from_dict>`)."""
 
-        relative, floor = data.get("relative_tolerance"), data.get("brdf_floor")
-        return cls(result=Result.from_dict(data["result"]), bin_counts=whole_counts(data["bin_counts"], "bin_counts"),
-                   bins=GonioBins.from_dict(data["bins"]), guarantee=str(data["guarantee"]),
+        relative, floor = (field_value(data, key, "number or null") if key in data else None
+                           for key in ("relative_tolerance", "brdf_floor"))
+        return cls(result=Result.from_dict(field_value(data, "result", "object")),
+                   bin_counts=whole_counts(data["bin_counts"], "bin_counts"),
+                   bins=GonioBins.from_dict(field_value(data, "bins", "object")),
+                   guarantee=field_value(data, "guarantee", "text"),
                    relative_tolerance=None if relative is None else float(relative),
                    brdf_floor=None if floor is None else float(floor))
 

@@ -41,7 +41,7 @@ from virtspec_mi.geometry.disks import InstrumentGeometry, backlit_fraction
 from virtspec_mi.budgets.intervals import clopper_pearson
 from virtspec_mi.results.base import ResultBase, per_count, plain_data, round_up, span
 from virtspec_mi.results.formats import annotate
-from virtspec_mi.results.integrity import CountRules, optional_numbers, whole_counts
+from virtspec_mi.results.integrity import CountRules, field_value, optional_numbers, whole_counts
 from virtspec_mi.settings import Settings
 
 __all__ = ["Result", "plain_data", "COUNT_RULES"]
@@ -482,12 +482,12 @@ class Result(ResultBase):
             **cls.labels_from_dict(data),
             counts=counts(data, "counts"),
             pilot=None if data["pilot"] is None else counts(data["pilot"], "pilot"),
-            settings=Settings(**data["settings"]),
-            geometry=InstrumentGeometry(**data["geometry"]),
-            seconds=float(data["seconds"]),
-            scene=str(data["scene"]),
-            wavelength_independent=bool(data["wavelength_independent"]),
-            version=str(data["version"]),
+            settings=Settings(**field_value(data, "settings", "object")),
+            geometry=InstrumentGeometry(**field_value(data, "geometry", "object")),
+            seconds=float(field_value(data, "seconds", "seconds")),
+            scene=field_value(data, "scene", "text"),
+            wavelength_independent=bool(field_value(data, "wavelength_independent", "flag")),
+            version=field_value(data, "version", "text"),
         )
 
     def _count_groups(self) -> list[tuple[str, Mapping[str, np.ndarray], CountRules, tuple[str, ...]]]:

@@ -61,6 +61,8 @@ __all__ = [
     "whole_counts",
     "finite_labels",
     "optional_numbers",
+    "parameters_of",
+    "field_value",
     "check_labels",
     "check_shapes",
     "check_counts",
@@ -190,9 +192,47 @@ def optional_numbers(values: Any, field_name: str) -> np.ndarray:
     return out
 
 
+_KINDS: dict[str, tuple[str, Callable[[Any], bool]]] = {
+    "text": ("text", lambda v: isinstance(v, str)),
+    "flag": ("true or false", lambda v: isinstance(v, (bool, np.bool_))),
+    "object": ("an object", lambda v: isinstance(v, Mapping)),
+    "seconds": ("a finite number >= 0", lambda v: _real(v) and np.isfinite(v) and v >= 0),
+    "number or null": ("a finite number or null", lambda v: v is None or (_real(v) and np.isfinite(v))),
+}
+
+
+def _real(value: Any) -> bool:
+    return isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, (bool, np.bool_))
+
+
+def field_value(data: Mapping[str, Any], key: str, kind: str) -> Any:
+    """
+    ``data[key]`` when it is of ``kind`` — ``text``, ``flag``, ``object``, ``seconds`` (a
+    finite number ≥ 0), ``number or null`` —; ``KeyError`` if missing, else ``ValueError``
+    naming the field.
+    """
+
+    value = data[key]
+    words, test = _KINDS[kind]
+    if not test(value):
+        raise ValueError(f"'{key}' must be {words} (got {_short(value)})")
+    return dict(value) if kind == "object" else value
+
+
 def _short(values: Any) -> str:
     text = repr(values)
     return text if len(text) <= 60 else text[:57] + "..."
+
+
+def parameters_of(parameters: Any) -> dict | None:
+    """A result's swept parameters (``None``, or an object with distinct ``names``); else ``ValueError``."""
+
+    if parameters is None:
+        return None
+    names = parameters.get("names") if isinstance(parameters, Mapping) else None
+    if not isinstance(names, list) or not all(isinstance(n, str) for n in names) or len(set(names)) != len(names):
+        raise ValueError(f"'parameters' must be null or an object with distinct 'names' (got {_short(parameters)})")
+    return dict(parameters)
 
 
 _LABEL_RANGES: dict[str, tuple[float, float, str]] = {

@@ -52,7 +52,7 @@ from virtspec_mi.geometry.sphere import Sphere, sphere_from_parameters
 from virtspec_mi.references.sphere_model import correct_readings, theory_inputs
 from virtspec_mi.results.base import ResultBase, per_count, plain_data, round_up, span
 from virtspec_mi.results.formats import annotate
-from virtspec_mi.results.integrity import CountRules, finite_labels, whole_counts
+from virtspec_mi.results.integrity import CountRules, field_value, finite_labels, whole_counts
 from virtspec_mi.kernel.sphere_walk import FATES
 from virtspec_mi.settings import Settings
 
@@ -514,10 +514,12 @@ class SphereResult(ResultBase):
             counts=groups(data["counts"], "counts"),
             pilot=None if data.get("pilot") is None else groups(data["pilot"], "pilot"),
             wall_reflectance=finite_labels(data["wall_reflectance"], "wall_reflectance"),
-            sphere=str(data["sphere"]), cap_fractions=dict(data["cap_fractions"]), options=dict(data["options"]),
-            settings=Settings(**data["settings"]), seconds=float(data["seconds"]), scene=str(data["scene"]),
+            sphere=field_value(data, "sphere", "text"), cap_fractions=field_value(data, "cap_fractions", "object"),
+            options=field_value(data, "options", "object"), settings=Settings(**field_value(data, "settings", "object")),
+            seconds=float(field_value(data, "seconds", "seconds")), scene=field_value(data, "scene", "text"),
             sphere_parameters=dict(data.get("sphere_parameters") or {}),
-            specimen_radius=data.get("specimen_radius"), version=str(data["version"]),
+            specimen_radius=field_value(data, "specimen_radius", "number or null") if "specimen_radius" in data else None,
+            version=field_value(data, "version", "text"),
         )
 
     def _count_groups(self) -> list[tuple[str, Mapping[str, np.ndarray], CountRules, tuple[str, ...]]]:
@@ -529,7 +531,15 @@ class SphereResult(ResultBase):
 
     @classmethod
     def _from_plain(cls, tag: str, data: Any) -> "SphereResult":
-        return cls.from_dict(data if tag == cls.FORMAT else _from_layout_0(data))
+        if tag == cls.FORMAT:
+            return cls.from_dict(data)
+        try:
+            return cls.from_dict(_from_layout_0(data))
+        except KeyError as error:
+            raise ValueError(f"lacks the field {error} of a sphere result of layout 0") from None
+        except (TypeError, AttributeError) as error:
+            raise ValueError(f"a field of the sphere result of layout 0 has the wrong type "
+                             f"({' '.join(str(error).split())})") from None
 
     def to_dataset(self) -> Any:
         """
@@ -595,7 +605,7 @@ def _from_layout_0(data: Any) -> dict[str, Any]:
             if configuration in counts:
                 counts[configuration][key] = data[name].values
         plain = {**extra, "wall_reflectance": data["wall_reflectance"].values, "sphere": data.attrs["sphere"],
-                 "scene": data.attrs["scene"], "seconds": float(data.attrs["seconds"]), "rays": int(data.attrs["rays"])}
+                 "scene": data.attrs["scene"], "seconds": data.attrs["seconds"], "rays": data.attrs["rays"]}
     rays = whole_counts(plain["rays"], "rays")
     if rays.ndim:
         raise ValueError(f"'rays' of a sphere result of layout 0 is one number (got shape {rays.shape})")

@@ -308,7 +308,7 @@ def read(path: str | os.PathLike) -> Any:
 
     path = Path(path)
     try:
-        with xr.open_zarr(path, consolidated=False) as store:
+        with xr.open_zarr(path, consolidated=False, chunks=None) as store:  # no Dask graph: read at once
             dataset = store.load()
     except Exception as error:  # zarr and xarray raise many types for a store that is not one
         raise ValueError(f"could not be read as a Zarr store ({type(error).__name__}: "

@@ -85,7 +85,8 @@ def whole_counts(values: Any, field_name: str) -> np.ndarray:
     """
     ``values`` (nested lists, an array of any dtype) as an ``int64`` array when every
     entry is a whole number ≥ 0 (an integral float, e.g. 3.0, is one); else
-    ``ValueError`` naming ``field_name``, the entry and its position.
+    ``ValueError`` naming ``field_name``, the entry and its position, e.g. ``'reflected'
+    holds 18.5 at index [1, 2, 0], not a whole number``.
     """
 
     try:
@@ -93,33 +94,26 @@ def whole_counts(values: Any, field_name: str) -> np.ndarray:
     except (ValueError, TypeError):
         raise ValueError(f"{_quoted(field_name)} is not an array of counts (ragged or not numbers)") from None
     kind = array.dtype.kind
-    if kind == "b":
-        raise ValueError(f"{_quoted(field_name)} holds true/false values, not counts")
-    if kind in "US":
-        raise ValueError(f"{_quoted(field_name)} holds text{_first(array, np.ones(array.shape, bool))}, not counts")
-    if kind == "O":
-        return _whole_objects(array, field_name)
-    if kind == "u":
-        bad = array > _INT64
-        if np.any(bad):
-            raise ValueError(f"{_quoted(field_name)} holds a count beyond int64{_first(array, bad)}")
-        return array.astype(np.int64)
-    if kind == "i":
-        bad = array < 0
-        if np.any(bad):
-            raise ValueError(f"{_quoted(field_name)} holds a negative count{_first(array, bad)}")
-        return array.astype(np.int64)
-    if kind != "f":
+    listed = isinstance(values, (list, tuple))
+    if kind in "USOb" or (listed and _holds_bool(values)):  # text, null, true/false or mixed: entry by entry
+        return _whole_objects(np.array(values, dtype=object) if listed else array.astype(object), field_name)
+    if kind not in "iuf":
         raise ValueError(f"{_quoted(field_name)} holds {array.dtype} values, not counts")
     with np.errstate(invalid="ignore"):
-        rules = ((~np.isfinite(array), "a value that is not a finite number"),
-                 (array < 0, "a negative count"),
-                 (array != np.floor(array), "a fractional count"),
-                 (array > _EXACT, "a count beyond 2**53 (not exact as a float)"))
-    for bad, what in rules:
+        finite = np.isfinite(array) if kind == "f" else np.ones(array.shape, dtype=bool)
+        rules = ((~finite, "not a whole number"), (array < 0, "a negative count"),
+                 (finite & (array != np.floor(array)) if kind == "f" else ~finite, "not a whole number"),
+                 (array > (_EXACT if kind == "f" else _INT64), "beyond the counts a file holds exactly"))
+    for bad, why in rules:
         if np.any(bad):
-            raise ValueError(f"{_quoted(field_name)} holds {what}{_first(array, bad)}")
+            raise ValueError(_entry(field_name, array, bad, why))
     return array.astype(np.int64)
+
+
+def _holds_bool(values: Any) -> bool:
+    """Whether nested lists hold a ``bool`` (numpy would take ``True`` for 1)."""
+
+    return any(_holds_bool(v) if isinstance(v, (list, tuple)) else isinstance(v, bool) for v in values)
 
 
 def _whole_objects(array: np.ndarray, field_name: str) -> np.ndarray:
@@ -127,18 +121,32 @@ def _whole_objects(array: np.ndarray, field_name: str) -> np.ndarray:
 
     out = np.empty(array.shape, dtype=np.int64)
     for index, value in np.ndenumerate(array):
-        at = f" at index {list(index)}" if array.ndim else ""
+        why = None
         if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, float, np.integer, np.floating)):
-            raise ValueError(f"{_quoted(field_name)} holds {value!r}{at}, not a count")
-        if isinstance(value, (float, np.floating)):
-            if not np.isfinite(value) or value != int(value) or abs(value) > _EXACT:
-                raise ValueError(f"{_quoted(field_name)} holds {value!r}{at}, not a whole number")
-        if value < 0:
-            raise ValueError(f"{_quoted(field_name)} holds a negative count ({value!r}){at}")
-        if int(value) > _INT64:
-            raise ValueError(f"{_quoted(field_name)} holds a count beyond int64{at}")
+            why = "not a count"
+        elif isinstance(value, (float, np.floating)) and (not np.isfinite(value) or value != int(value)):
+            why = "not a whole number"
+        elif value < 0:
+            why = "a negative count"
+        elif value > (_EXACT if isinstance(value, (float, np.floating)) else _INT64):
+            why = "beyond the counts a file holds exactly"
+        if why is not None:
+            raise ValueError(_entry(field_name, array, index, why))
         out[index] = int(value)
     return out
+
+
+def _entry(field_name: str, array: np.ndarray, where: Any, why: str) -> str:
+    """``'name' holds VALUE at index [i, j], WHY`` of the entry at ``where`` (an index, or the first of a mask)."""
+
+    if isinstance(where, np.ndarray):
+        where = tuple(int(i) for i in np.argwhere(np.atleast_1d(where))[0]) if array.ndim else ()
+    value = array[where] if array.ndim else array[()]
+    value = value.item() if hasattr(value, "item") else value
+    shown = _short(value) if not isinstance(value, int) or abs(value) < 10**30 else "a number of " \
+        f"{len(str(abs(value)))} digits"
+    at = f" at index {list(where)}" if where else ""
+    return f"{_quoted(field_name)} holds {shown}{at}, {why}"
 
 
 def _first(array: np.ndarray, bad: np.ndarray) -> str:
@@ -158,15 +166,25 @@ def _quoted(name: str) -> str:
 
 
 def finite_labels(values: Any, field_name: str) -> np.ndarray:
-    """``values`` as a ``float64`` array of finite numbers; else ``ValueError`` naming ``field_name``."""
+    """``values`` as a ``float64`` array of finite numbers (not text, not true/false); else ``ValueError`` naming ``field_name``."""
 
     try:
-        array = np.asarray(values, dtype=np.float64)
-    except (ValueError, TypeError, OverflowError):
+        array = np.asarray(values)
+    except (ValueError, TypeError):
         raise ValueError(f"{_quoted(field_name)} must hold numbers (got {_short(values)})") from None
+    listed = isinstance(values, (list, tuple))
+    if array.dtype.kind in "USOb" or (listed and _holds_bool(values)):
+        objects = np.array(values, dtype=object) if listed else array.astype(object)
+        for index, value in np.ndenumerate(objects):
+            if isinstance(value, (bool, np.bool_)) or not _real(value) and value is not None:
+                raise ValueError(_entry(field_name, objects, index, "not a number"))
+        array = np.array([np.nan if v is None else float(v) for v in objects.ravel()]).reshape(objects.shape)
+    elif array.dtype.kind not in "iuf":
+        raise ValueError(f"{_quoted(field_name)} must hold numbers (got {array.dtype} values)")
+    array = array.astype(np.float64)
     bad = ~np.isfinite(array)
     if np.any(bad):
-        raise ValueError(f"{_quoted(field_name)} holds a value that is not a finite number{_first(array, bad)}")
+        raise ValueError(_entry(field_name, array, bad, "not a finite number"))
     return array
 
 
@@ -448,10 +466,17 @@ def _agree_values(name: str, theirs: np.ndarray, ours: np.ndarray, what: str) ->
         same = _texts(theirs) == _texts(ours)
     if not np.all(same):
         index = tuple(int(i) for i in np.argwhere(~np.atleast_1d(same))[0])
-        shown = np.atleast_1d(theirs)[index].item() if np.ndim(theirs) else np.asarray(theirs).item()
-        expected = np.atleast_1d(ours)[index].item() if np.ndim(ours) else np.asarray(ours).item()
+        shown = _plain_number(np.atleast_1d(theirs)[index])
+        expected = _plain_number(np.atleast_1d(ours)[index])
         raise ValueError(f"{what} {name!r} holds {shown!r} at index {list(index)} where the result the file holds "
                          f"gives {expected!r} (the file was changed after it was written)")
+
+
+def _plain_number(value: Any) -> Any:
+    """A numpy value as Python's, a whole float as an int (a CSV file's counts are read as floats)."""
+
+    value = value.item() if hasattr(value, "item") else value
+    return int(value) if isinstance(value, float) and value.is_integer() and abs(value) < 2**63 else value
 
 
 def _texts(values: Any) -> np.ndarray:

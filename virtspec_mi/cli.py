@@ -393,14 +393,16 @@ def main(argv: Sequence[str] | None = None) -> int:
 
 
 def _rescued(error: BaseException) -> Any:
-    """The error, and where the result it carries (its file could not be written) was written instead."""
+    """The error; for a result kept only in memory (its file could not be written), where it was written instead."""
 
-    if getattr(error, "result", None) is None:
+    from virtspec_mi.files import IN_MEMORY
+
+    if getattr(error, "result", None) is None or not error.kept.endswith(IN_MEMORY):  # type: ignore[attr-defined]
         return error
-    from virtspec_mi.results.io import IN_MEMORY, rescue
+    from virtspec_mi.results.io import rescue
 
-    where = rescue(error.result, error.path)  # type: ignore[attr-defined]
-    return error.keeping(where) if error.kept == IN_MEMORY else f"{error}; {where}"  # type: ignore[attr-defined]
+    kept = error.kept[:-len(IN_MEMORY)] + rescue(error.result, error.path)  # type: ignore[attr-defined]
+    return error.keeping(kept)  # type: ignore[attr-defined]
 
 
 def _measure(args: argparse.Namespace) -> int:

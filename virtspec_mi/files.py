@@ -36,9 +36,12 @@ from contextlib import contextmanager
 from pathlib import Path
 from typing import Any, Iterator
 
-__all__ = ["WriteError", "atomic_file", "cause_of", "temporary_name", "flush_directory"]
+__all__ = ["WriteError", "IN_MEMORY", "atomic_file", "cause_of", "temporary_name", "flush_directory"]
 
 _FULL = 1 << 20  # a write failing with less free space than this is reported as a full disk
+
+IN_MEMORY: str = "the readings are kept in memory only (error.result)"
+"""The end of :attr:`WriteError.kept` when what was being written is nowhere else (the command line then saves it)."""
 
 
 class WriteError(OSError):
@@ -79,15 +82,25 @@ def cause_of(error: BaseException, path: str | os.PathLike) -> tuple[str, int | 
     reason = getattr(error, "strerror", None) or str(error) or type(error).__name__
     reason = " ".join(str(reason).split())
     free = _free_bytes(Path(path))
-    if code is None and free is not None and free < _FULL:
-        code = errno.ENOSPC
-    if free is not None and free < _FULL and code in (errno.ENOSPC, errno.EDQUOT):
-        if "space" not in reason and "quota" not in reason:
-            reason = f"{reason}: the disk is full"
-        reason += f" ({_size(free)} free)"
-    elif code == errno.EFBIG and "limit" not in reason:
-        reason += " (a file size limit: ulimit -f)"
+    if free is not None and free < _FULL:  # some libraries report a full disk as another error (HDF5: EACCES)
+        code = errno.ENOSPC if code is None else code
+        full = "space" in reason or "quota" in reason
+        reason = f"{reason} ({_size(free)} free)" if full else f"{reason} (the disk is full: {_size(free)} free)"
+    elif code in (errno.EFBIG, None) and _size_limit() is not None:  # HDF5 reports EFBIG as another error
+        reason += f" (this process may write files of at most {_size(_size_limit())}: ulimit -f)"
+        code = errno.EFBIG
     return reason, code
+
+
+def _size_limit() -> int | None:
+    """The largest file this process may write (``RLIMIT_FSIZE``), ``None`` without a limit."""
+
+    try:
+        import resource
+    except ImportError:  # not a POSIX system
+        return None
+    soft = resource.getrlimit(resource.RLIMIT_FSIZE)[0]
+    return None if soft == resource.RLIM_INFINITY else int(soft)
 
 
 def _free_bytes(path: Path) -> int | None:

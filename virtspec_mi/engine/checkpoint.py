@@ -47,7 +47,7 @@ from typing import Any, Iterator
 import numpy as np
 
 from virtspec_mi import __version__
-from virtspec_mi.files import WriteError, atomic_file
+from virtspec_mi.files import IN_MEMORY, WriteError, atomic_file
 from virtspec_mi.engine.tally import Tally
 from virtspec_mi.kernel.counts import Counts
 
@@ -83,8 +83,7 @@ def kept_in(path: str | os.PathLike) -> str:
     cause = _UNSAVED.get(path)
     if cause is None:
         return f"every finished reading is kept in {path}: re-run the same sweep to write it"
-    return (f"the checkpoint {path} could not be saved either ({cause}): the finished readings are kept in memory "
-            "only (error.result): write them elsewhere, e.g. error.result.write(...)")
+    return f"the checkpoint {path} could not be saved either ({cause}); {IN_MEMORY}"
 
 
 def checkpoint_for(out: str | os.PathLike) -> Path:

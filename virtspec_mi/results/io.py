@@ -46,7 +46,7 @@ from typing import Any
 
 import numpy as np
 
-from virtspec_mi.files import WriteError, atomic_file
+from virtspec_mi.files import IN_MEMORY, WriteError, atomic_file
 
 __all__ = [
     "SUFFIXES",
@@ -58,7 +58,6 @@ __all__ = [
     "write_spectra_csv",
     "read_spectra_csv",
     "is_result_csv",
-    "IN_MEMORY",
     "rescue",
 ]
 
@@ -95,10 +94,6 @@ def write(result: Any, path: str | os.PathLike) -> Path:
     except WriteError as error:
         raise error.keeping(error.kept or IN_MEMORY, result) from None
     return path
-
-
-IN_MEMORY: str = "the result is kept in memory (error.result)"
-"""Where a result is when :func:`write` fails (and no caller knows better)."""
 
 
 def rescue(result: Any, path: str | os.PathLike) -> str:

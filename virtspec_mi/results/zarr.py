@@ -266,8 +266,8 @@ def write_result(result: Any, path: str | os.PathLike) -> Path:
     it, then swapped in; a store of this project's there is replaced, anything else is
     refused). A hemispherical result: every variable of ``result.to_dataset()``, the
     pilot counts, ``done`` and the :data:`~virtspec_mi.results.formats.TABLE_ATTRIBUTE`
-    (with the counts' checksum); a result over wavelength only (a reading) is written with
-    θi as a dim of one. Any other kind: its dataset as it is (``result_json`` rebuilds it).
+    (with the counts' checksum); a result without the dim ``wavelength`` or ``theta_i`` (a
+    reading, a selection) is written with it as a dim of one. Any other kind: its dataset as it is (``result_json`` rebuilds it).
     """
 
     path = Path(path)
@@ -281,8 +281,9 @@ def _table(result: Any, identity: str) -> Any:
     """The dataset of a hemispherical result's table (see :func:`write_result`)."""
 
     own_dims = result.dims
-    if set(result.dims) <= set(_GRID):
-        result = result.as_grid()
+    for name in _GRID:  # a reading (or a parameter point's) is stored over the grid, its own dims kept in the table
+        if name not in result.dims:
+            result = result._expanded(name)
     dataset = result.to_dataset()
     dims = result.dims
     plain = result.as_dict()

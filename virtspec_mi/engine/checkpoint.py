@@ -3,9 +3,13 @@ Checkpoints: finished readings of a long run, kept on disk
 ==========================================================
 
 A run keyed on reading indices (:func:`virtspec_mi.engine.readings.run`: a sweep, a
-goniophotometer or a sphere reading) records every finished batch in a JSON file, atomically (an interruption leaves the old or the
-new file; saves are spaced out when they would take more than about a tenth of the
-run, and what is left is saved at the end and on an interruption); a later run of the
+goniophotometer or a sphere reading) records every finished batch in a JSON file,
+atomically (:func:`virtspec_mi.files.atomic_file`: an interruption leaves the old or the
+new file, and only a temporary of its own is ever removed; saves are spaced out when they
+would take more than about a tenth of the run, and what is left is saved at the end and
+on an interruption). A save that fails (a full disk) does not stop the run: it is warned
+about once, retried at the next save, and :func:`kept_in` says afterwards where the
+readings are (the file, or memory only); a later run of the
 same measurement picks the finished readings up and traces only the rest, ending with
 exactly the counts of an uninterrupted run. The file
 records what decides the counts (settings, grids, geometry, scene fingerprint): a

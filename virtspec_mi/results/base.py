@@ -19,8 +19,11 @@ everything else derived from them. This module holds what they share, written on
   carried in the JSON object (``format``) and in every dataset (attributes ``format`` and
   ``result_json``, the whole result as JSON); :meth:`ResultBase.write` /
   :meth:`ResultBase.read` through :mod:`virtspec_mi.results.io` (NetCDF, CSV, JSON, Zarr;
-  atomic writes); every variable and coordinate of ``to_dataset()`` has its ``units``
-  and ``long_name`` (:func:`virtspec_mi.results.formats.annotate`);
+  atomic writes); every file read — and every dict given to :meth:`ResultBase.from_dict` —
+  is checked by the rules of :mod:`virtspec_mi.results.integrity` (whole counts that add
+  up as the kind says, :meth:`ResultBase._count_groups`; finite labels; shapes; tags;
+  the checksum of :meth:`ResultBase.as_sealed_dict`); every variable and coordinate of
+  ``to_dataset()`` has its ``units`` and ``long_name`` (:func:`virtspec_mi.results.formats.annotate`);
 - **spectra**: :meth:`ResultBase.spectrum` — one quantity over wavelength at one θi with
   its certified tolerance (:class:`Spectrum`) — is what ``to_sd``, ``colour``,
   :func:`virtspec_mi.compare.compare` and the spectrum plots read, for every kind.
@@ -144,7 +147,7 @@ class ResultBase:
     dataclass that sets :attr:`FORMAT` (and :attr:`LEGACY`, tags it still reads),
     :attr:`KIND`, :attr:`KIND_DIMS`, :attr:`QUANTITIES` and implements ``dims``,
     ``coords``, ``parameters``, ``_labelled``, ``_relabelled``, ``_quantity``,
-    ``summary``, ``as_dict``, ``from_dict``, ``to_dataset`` and ``plot``.
+    ``_count_groups``, ``summary``, ``as_dict``, ``_from_dict``, ``to_dataset`` and ``plot``.
     """
 
     FORMAT: ClassVar[str]

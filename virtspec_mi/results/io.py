@@ -25,11 +25,18 @@ Each round-trips exactly (the counts are the data; everything else is derived):
 :func:`write_spectra_csv` / :func:`read_spectra_csv` write and read R, T and A at one θi
 in colour-science's CSV spectral format.
 
-Every file (not a Zarr store) is written atomically: into a temporary file beside it (``.NAME.*.tmp``),
-flushed to disk, then renamed onto the name. A failed or interrupted write (a full
-disk, a directory of that name, Ctrl-C) leaves the old file — or none — and no
-temporary; readers and concurrent writers never see a partial file.
-:func:`check_output` refuses, before any work, a path that cannot become a file.
+Every file (not a Zarr store) is written atomically (:func:`virtspec_mi.files.atomic_file`):
+into a temporary file beside it (``.NAME.*.tmp``, created here), flushed to disk, then
+renamed onto the name. A failed or interrupted write (a full disk, a directory of that
+name, Ctrl-C) leaves the old file — or none — and no temporary; readers and concurrent
+writers never see a partial file. A failed write raises
+:class:`~virtspec_mi.files.WriteError` naming the path and the cause, with the result
+attached (``error.result``); :func:`rescue` writes it elsewhere (the command line does).
+A Zarr store is written beside and swapped in, never over a directory holding anything
+this project did not write (:func:`virtspec_mi.results.zarr.replace_store`).
+:func:`check_output` refuses, before any work, a path that cannot become a result.
+:func:`read` hands what it read to :func:`virtspec_mi.results.integrity.read_file`, which
+checks every rule of a result file.
 
 References
 ----------

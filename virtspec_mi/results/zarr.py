@@ -22,9 +22,14 @@ parts, Clopper–Pearson bounds, ``certified_mu``) and the attributes; :func:`re
 :meth:`virtspec_mi.Result.read` give the one result type back (the attribute
 ``virtspec_table`` holds the dims, settings, geometry, parameters and provenance as
 JSON; the counts are the variables). A store whose ``done`` is not all true is refused as
-incomplete. Unlike the ``.nc``/``.csv``/``.json`` files, a store is a directory and is
-not replaced atomically; the sweep's checkpoint (``OUT.partial.json``) stays the record
-for resuming.
+incomplete. A store is a directory: it is written into a new directory beside its name
+and swapped in (:func:`replace_store`), and only over a new path, an empty directory or a
+store this project wrote that holds nothing else (:func:`check_store`: a directory holding
+a file of anyone else's is refused before any tracing, and nothing in it is removed).
+While a sweep runs, the store is filled in place; if it cannot be written (a full disk)
+the sweep goes on without it, with a warning, and writes it whole when it completes; the
+sweep's checkpoint (``OUT.partial.json``) stays the record for resuming. A complete
+table carries the checksum of its counts (:mod:`virtspec_mi.results.integrity`).
 
 References
 ----------

@@ -253,8 +253,6 @@ def _dumps(doc: Any) -> str:
 def mutate_dataset(data: st.DataObject, dataset: Any) -> Any:
     """One mutation of a dataset's variables, coordinates or attributes (a new dataset)."""
 
-    import xarray as xr
-
     names = sorted(map(str, dataset.data_vars))
     integers = [n for n in names if dataset[n].dtype.kind in "iu"]
     what = data.draw(st.sampled_from(["count", "count", "drop", "add", "reshape", "coordinate", "attribute", "swap"]),

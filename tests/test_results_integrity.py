@@ -28,7 +28,7 @@ KINDS = {"sweep": hemispherical_grid, "gonio": gonio_from_counts, "sphere": sphe
 def _written(result, path: Path, edit=None, sealed: bool = False) -> Path:
     """``result`` as a JSON file, edited by ``edit(data)``; without its checksum unless ``sealed`` (a hand-made file)."""
 
-    data = result.as_sealed_dict() if sealed else result.as_dict()
+    data = json.loads(result.sealed_json()) if sealed else result.as_dict()
     if edit is not None:
         edit(data)
     path.write_text(json.dumps(data))
@@ -121,8 +121,9 @@ def test_labels_in_the_order_asked_for_are_kept(tmp_path):
      r"'reflected' \+ 'transmitted' \+ 'capped' \+ 'invalid_directions' add up to more than 'rays' \(reading "
      r"wavelength=400, theta_i=0, specimen\.thickness=0\.0001\)"),
     ("sweep", _set("rays", 0, 0, 0, 0), r"'rays' must be at least 1"),
-    ("sweep", _set("absorbed", 0, 0, 0, 1), r"'absorbed' holds 1 at index \[0, 0, 0\] where the result the file holds "
-                                            r"gives \d+ \(the counts must add up"),
+    ("sweep", _set("absorbed", 0, 0, 0, 1),
+     r"'reflected' \+ 'transmitted' \+ 'absorbed' \+ 'capped' \+ 'invalid_directions' must add up to 'rays' \(reading "
+     r"wavelength=400, theta_i=0, specimen\.thickness=0\.0001\)"),
     ("gonio", _set("bin_counts", 0, 1, 0, 2, 10**4),
      r"'bin_counts \(theta_o < 90\)' holds a count above 'reflected' \(reading wavelength=400, theta_i=50\)"),
     ("gonio", _set("bin_counts", 0, 0, 1, 0, 10**4), r"'bin_counts \(theta_o > 90\)' holds a count above 'transmitted'"),
@@ -169,7 +170,7 @@ def test_a_sealed_file_changed_after_writing_is_refused(tmp_path, kind):
     result = KINDS[kind]()
     path = result.write(tmp_path / f"{kind}.json")
     data = json.loads(path.read_text())
-    assert data["checksum"] == checksum(data) == result.as_sealed_dict()["checksum"]
+    assert data["checksum"] == checksum(data) == json.loads(result.sealed_json())["checksum"]
     data.get("result", data)["seconds"] = 99.0  # a field no rule checks: only the checksum sees the change
     path.write_text(json.dumps(data))
     _refused(path, r"its content does not match its checksum \('sha256:[0-9a-f]+\.\.\.\): the file was changed after "

@@ -410,7 +410,7 @@ def _measure(args: argparse.Namespace) -> int:
 
     reading = measure(args.scene, parameters=_pairs(args.params, "--param"), defines=_pairs(args.defines, "-D"),
                       **_settings(args))
-    print(json.dumps(reading.as_sealed_dict()) if args.json else reading.summary())
+    print(reading.sealed_json() if args.json else reading.summary())
     return 0
 
 
@@ -422,7 +422,7 @@ def _sphere(args: argparse.Namespace) -> int:
     result = sphere_measure(args.scene, **_settings(args), **own)
     if args.out:
         result.write(args.out)
-    print(json.dumps(result.as_sealed_dict()) if args.json else result.summary())
+    print(result.sealed_json() if args.json else result.summary())
     return 0
 
 
@@ -521,7 +521,7 @@ def _gonio(args: argparse.Namespace) -> int:
     if args.plot_series:
         reading.plot_series(args.plot_series)
     if args.json:
-        print(json.dumps(reading.as_sealed_dict()))
+        print(reading.sealed_json())
         return 0
     print(reading.summary())
     for label, path in (("written", args.out), ("plot", args.plot), ("plot", args.plot_series)):

@@ -293,7 +293,7 @@ class Checkpoint:
         path = self.path
         try:
             data = json.loads(path.read_text())
-        except (OSError, ValueError) as error:  # ValueError: JSON and UTF-8 decoding
+        except (OSError, ValueError, RecursionError) as error:  # ValueError: JSON and UTF-8 decoding
             raise CheckpointError(
                 f"checkpoint {path} is corrupt ({type(error).__name__}: {error}); delete it to start the sweep over"
             ) from None

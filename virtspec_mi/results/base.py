@@ -22,7 +22,7 @@ everything else derived from them. This module holds what they share, written on
   atomic writes); every file read — and every dict given to :meth:`ResultBase.from_dict` —
   is checked by the rules of :mod:`virtspec_mi.results.integrity` (whole counts that add
   up as the kind says, :meth:`ResultBase._count_groups`; finite labels; shapes; tags;
-  the checksum of :meth:`ResultBase.as_sealed_dict`); every variable and coordinate of
+  the checksum of :meth:`ResultBase.sealed_json`); every variable and coordinate of
   ``to_dataset()`` has its ``units`` and ``long_name`` (:func:`virtspec_mi.results.formats.annotate`);
 - **spectra**: :meth:`ResultBase.spectrum` — one quantity over wavelength at one θi with
   its certified tolerance (:class:`Spectrum`) — is what ``to_sd``, ``colour``,
@@ -36,7 +36,6 @@ CF Conventions 1.11, Sect. 3 (``units``, ``long_name``).
 
 from __future__ import annotations
 
-import json
 import os
 from dataclasses import dataclass
 from pathlib import Path
@@ -45,8 +44,8 @@ from typing import Any, ClassVar, Mapping
 import numpy as np
 
 from virtspec_mi.results.formats import format_parts, tagged
-from virtspec_mi.results.integrity import (CHECKSUM, CountRules, check_agreement, check_checksum, check_result,
-                                           checksum, finite_labels, parameters_of, read_file, whole_counts)
+from virtspec_mi.results.integrity import (CountRules, check_agreement, check_checksum, check_result, finite_labels,
+                                           parameters_of, read_file, sealed_text, whole_counts)
 
 __all__ = [
     "ResultBase",
@@ -505,7 +504,7 @@ class ResultBase:
         except (TypeError, AttributeError) as error:
             raise ValueError(f"a field of the {cls.KIND} has the wrong type ({' '.join(str(error).split())})") from None
         check_result(result)
-        check_agreement(("plain", data), result)
+        result._check_stored(data)
         check_checksum(data)
         return result
 
@@ -520,11 +519,21 @@ class ResultBase:
 
         raise NotImplementedError
 
-    def as_sealed_dict(self) -> dict[str, Any]:
-        """:meth:`as_dict` with its ``checksum`` (what the files and ``--json`` output hold; :mod:`~virtspec_mi.results.integrity`)."""
+    def _count_variables(self) -> dict[str, tuple[tuple[str, ...], np.ndarray]]:
+        """The integer variables of ``to_dataset()`` by name: ``(dims, values)`` (what :func:`check_agreement` compares)."""
 
-        data = self.as_dict()
-        return {**data, CHECKSUM: checksum(data)}
+        raise NotImplementedError
+
+    def _check_stored(self, data: Mapping[str, Any]) -> None:
+        """Derived counts a JSON object of this kind also holds agree with the result built from it (none: nothing)."""
+
+    def sealed_json(self) -> str:
+        """
+        :meth:`as_dict` as JSON with its ``checksum`` (:func:`~virtspec_mi.results.integrity.sealed_text`):
+        what a ``.json`` file, a dataset's ``result_json`` and ``virtspec … --json`` hold.
+        """
+
+        return sealed_text(self.as_dict())
 
     def csv_dataset(self) -> Any:
         """What a ``.csv`` file holds (one row per cell of it): ``to_dataset()``, unless a kind leaves some out."""
@@ -534,7 +543,7 @@ class ResultBase:
     def _dataset_attrs(self) -> dict[str, Any]:
         """The attributes every kind's dataset carries: its format tag and the whole result as JSON."""
 
-        return {"format": self.FORMAT, "result_json": json.dumps(self.as_sealed_dict())}
+        return {"format": self.FORMAT, "result_json": self.sealed_json()}
 
     def as_dict(self) -> dict[str, Any]:
         raise NotImplementedError

@@ -24,6 +24,8 @@ import json
 import re
 from typing import Any, Mapping
 
+from virtspec_mi.results.integrity import unsealed
+
 __all__ = ["VARIABLES", "TABLE_ATTRIBUTE", "describe_variable", "annotate", "format_parts", "tagged"]
 
 _TAG = re.compile(r"^virtspec-mi (?P<word>[a-z]+) (?P<version>\d+)$")
@@ -183,7 +185,7 @@ def tagged(content: tuple[str, Any]) -> tuple[str, Any]:
                 raise ValueError(f"not a virtspec-mi result (its {name} attribute is not JSON: {error})") from None
             if not isinstance(data, dict):
                 raise ValueError(f"not a virtspec-mi result (its {name} attribute is not a JSON object)")
-            return str(data.get("format")), (value if kind == "table" else data)
+            return str(data.get("format")), (value if kind == "table" else unsealed(attrs[name], data))
     if "json" in attrs and "rays" in attrs and "sphere" in attrs:
         return "virtspec-mi sphere 0", value
     raise ValueError("not a virtspec-mi result (no result_json attribute)")

@@ -356,6 +356,10 @@ class GonioResult(ResultBase):
                    relative_tolerance=None if relative is None else float(relative),
                    brdf_floor=None if floor is None else float(floor))
 
+    def _count_variables(self) -> dict[str, tuple[tuple[str, ...], np.ndarray]]:
+        return {**self.result._count_variables(), "bin_counts": (self.dims, self.bin_counts.astype(np.int64)),
+                "outside": (self.result.dims, self.outside.astype(np.int64))}
+
     def _count_groups(self) -> list[tuple[str, Mapping[str, np.ndarray], CountRules, tuple[str, ...]]]:
         """The reading's counts, and its bins of each hemisphere against its reflected and transmitted rays."""
 
@@ -379,8 +383,9 @@ class GonioResult(ResultBase):
         b = self.bins
         grid, reading = self.dims, self.result.dims
         band = {"clopper_pearson_delta": self.delta / self.size}
+        counted = self._count_variables()
         dataset = base.assign({
-            "bin_counts": (grid, self.bin_counts.astype(np.int64)),
+            "bin_counts": counted["bin_counts"],
             "fraction": (grid, self.fraction),
             "brdf": (grid, self.brdf),
             "brdf_lower": (grid, self.brdf_lower, band),
@@ -389,7 +394,7 @@ class GonioResult(ResultBase):
                             {"meaning": "both folded halves" if b.fold_phi else "one bin"}),
             "cdf_theta_o": ((*reading, "theta_o_edge"), self.cdf_theta_o),
             "cdf_phi_o": ((*reading, "phi_o_edge"), self.cdf_phi_o),
-            "outside": (reading, self.outside.astype(np.int64)),
+            "outside": counted["outside"],
             "bins_mu": (reading, self.bins_mu),
             "cdf_mu": (reading, self.cdf_mu),
         })

@@ -41,7 +41,8 @@ from virtspec_mi.geometry.disks import InstrumentGeometry, backlit_fraction
 from virtspec_mi.budgets.intervals import clopper_pearson
 from virtspec_mi.results.base import ResultBase, per_count, plain_data, round_up, span
 from virtspec_mi.results.formats import annotate
-from virtspec_mi.results.integrity import CountRules, field_value, optional_numbers, whole_counts
+from virtspec_mi.results.integrity import (CountRules, check_counts, check_shapes, field_value, optional_numbers,
+                                           reading_at, whole_counts)
 from virtspec_mi.settings import Settings
 
 __all__ = ["Result", "plain_data", "COUNT_RULES"]
@@ -55,6 +56,10 @@ COUNT_RULES = CountRules(
 )
 """How a reading's counts add up: each a share of its rays, the delta events a share of their fate, and
 reflected + transmitted + capped + invalid_directions <= rays (absorbed, the rest, is never negative)."""
+
+_STORED = CountRules(None, sums=((("reflected", "transmitted", "absorbed", "capped", "invalid_directions"), "rays",
+                                  True),))
+"""A file's own ``absorbed`` (derived, yet written): the five fates add up to the rays."""
 
 _PARTS = ("specular_reflectance", "diffuse_reflectance", "regular_transmittance", "diffuse_transmittance")
 
@@ -490,6 +495,19 @@ class Result(ResultBase):
             version=field_value(data, "version", "text"),
         )
 
+    def _count_variables(self) -> dict[str, tuple[tuple[str, ...], np.ndarray]]:
+        return {name: (self.dims, np.asarray(values, dtype=np.int64)) for name, values in self.counts.as_dict().items()
+                if name != "largest_weight"}
+
+    def _check_stored(self, data: Mapping[str, Any]) -> None:
+        """The ``absorbed`` counts a JSON object holds (its own, and its pilot's) are the rest of the rays."""
+
+        for group, counts, source in (("", self.counts, data), ("pilot", self.pilot, data.get("pilot"))):
+            if counts is not None and isinstance(source, Mapping) and "absorbed" in source:
+                stored = whole_counts(source["absorbed"], "absorbed")
+                check_shapes({"absorbed": (self.dims, stored)}, self.sizes)
+                check_counts(group, {**counts.as_dict(), "absorbed": stored}, _STORED, reading_at(self.dims, self.coords))
+
     def _count_groups(self) -> list[tuple[str, Mapping[str, np.ndarray], CountRules, tuple[str, ...]]]:
         groups = [("", self.counts.as_dict(), COUNT_RULES, self.dims)]
         if self.pilot is not None:
@@ -509,9 +527,9 @@ class Result(ResultBase):
         import xarray as xr
 
         variables: dict[str, Any] = {}
+        counted = self._count_variables()
         for name in (*QUANTITIES, *_PARTS, *Counts.names(), "absorbed", "certified_mu", "rounding_bias"):
-            values = np.asarray(getattr(self, name))
-            variables[name] = (self.dims, values.astype(np.int64 if values.dtype.kind in "iu" else np.float64))
+            variables[name] = counted.get(name) or (self.dims, np.asarray(getattr(self, name), dtype=np.float64))
         for name in QUANTITIES:
             lower, upper = self.interval(name)
             bound = {"clopper_pearson_delta": self.interval_delta}

@@ -26,9 +26,10 @@ wavelength=551, theta_i=30)``. The rules:
    configuration's fates), rays ≥ 1.
 5. **The format tag and version** are the kind's (:meth:`~virtspec_mi.results.base.ResultBase.from_tagged`).
 6. **What the file shows agrees with what it rebuilds** (:func:`check_agreement`): every
-   count a file holds besides the data it is rebuilt from — a JSON object's derived
-   ``absorbed``, a dataset's count variables and coordinates, a CSV file's rows — equals
-   the rebuilt result's, so an edited variable is refused rather than silently ignored.
+   count a file holds besides the data it is rebuilt from — a dataset's count variables
+   and coordinates, a CSV file's rows, a JSON object's derived ``absorbed`` (each kind's
+   ``_check_stored``) — equals the rebuilt result's, so an edited variable is refused
+   rather than silently ignored.
 7. **The checksum** (:func:`checksum`): files written by this version carry the SHA-256
    of their content (``checksum``); content changed after writing (an edit, a damaged
    file) no longer matches and is refused — checked last, so a broken rule is named
@@ -48,6 +49,8 @@ import fnmatch
 import hashlib
 import json
 import os
+import re
+import sys
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Callable, Mapping
@@ -68,6 +71,8 @@ __all__ = [
     "check_counts",
     "check_result",
     "checksum",
+    "sealed_text",
+    "unsealed",
     "check_checksum",
     "check_agreement",
     "read_file",
@@ -111,9 +116,13 @@ def whole_counts(values: Any, field_name: str) -> np.ndarray:
 
 
 def _holds_bool(values: Any) -> bool:
-    """Whether nested lists hold a ``bool`` (numpy would take ``True`` for 1)."""
+    """Whether nested lists hold a ``bool`` (numpy would take ``True`` for 1): one pass over their entries' types."""
 
-    return any(_holds_bool(v) if isinstance(v, (list, tuple)) else isinstance(v, bool) for v in values)
+    try:
+        objects = np.array(values, dtype=object)
+    except (ValueError, TypeError):
+        return False
+    return bool({bool, np.bool_} & set(map(type, objects.ravel().tolist())))
 
 
 def _whole_objects(array: np.ndarray, field_name: str) -> np.ndarray:
@@ -168,20 +177,7 @@ def _quoted(name: str) -> str:
 def finite_labels(values: Any, field_name: str) -> np.ndarray:
     """``values`` as a ``float64`` array of finite numbers (not text, not true/false); else ``ValueError`` naming ``field_name``."""
 
-    try:
-        array = np.asarray(values)
-    except (ValueError, TypeError):
-        raise ValueError(f"{_quoted(field_name)} must hold numbers (got {_short(values)})") from None
-    listed = isinstance(values, (list, tuple))
-    if array.dtype.kind in "USOb" or (listed and _holds_bool(values)):
-        objects = np.array(values, dtype=object) if listed else array.astype(object)
-        for index, value in np.ndenumerate(objects):
-            if isinstance(value, (bool, np.bool_)) or not _real(value) and value is not None:
-                raise ValueError(_entry(field_name, objects, index, "not a number"))
-        array = np.array([np.nan if v is None else float(v) for v in objects.ravel()]).reshape(objects.shape)
-    elif array.dtype.kind not in "iuf":
-        raise ValueError(f"{_quoted(field_name)} must hold numbers (got {array.dtype} values)")
-    array = array.astype(np.float64)
+    array = optional_numbers(values, field_name)
     bad = ~np.isfinite(array)
     if np.any(bad):
         raise ValueError(_entry(field_name, array, bad, "not a finite number"))
@@ -195,19 +191,21 @@ def optional_numbers(values: Any, field_name: str) -> np.ndarray:
         array = np.asarray(values)
     except (ValueError, TypeError):
         raise ValueError(f"{_quoted(field_name)} must hold numbers or null (got {_short(values)})") from None
-    if array.dtype.kind in "iuf":
+    listed = isinstance(values, (list, tuple))
+    if array.dtype.kind in "iuf" and not (listed and _holds_bool(values)):
         return array.astype(np.float64)
-    if array.dtype.kind != "O":
-        raise ValueError(f"{_quoted(field_name)} must hold numbers or null (got {array.dtype} values)")
-    out = np.empty(array.shape, dtype=np.float64)
-    for index, value in np.ndenumerate(array):
+    objects = np.array(values, dtype=object) if listed else array.astype(object)
+    if set(map(type, objects.ravel().tolist())) <= {int, float, type(None)}:  # JSON's numbers and nulls
+        try:
+            return np.where(np.equal(objects, None), np.nan, objects).astype(np.float64)
+        except OverflowError:  # an int beyond the float range: named below
+            pass
+    for index, value in np.ndenumerate(objects):
         if value is None:
-            out[index] = np.nan
-        elif isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, float, np.integer, np.floating)):
-            raise ValueError(f"{_quoted(field_name)} holds {value!r}, not a number or null")
-        else:
-            out[index] = float(value)
-    return out
+            continue
+        if isinstance(value, (bool, np.bool_)) or not _real(value) or not abs(value) <= sys.float_info.max:
+            raise ValueError(_entry(field_name, objects, index, "not a number or null"))
+    raise ValueError(f"{_quoted(field_name)} must hold numbers or null")
 
 
 _KINDS: dict[str, tuple[str, Callable[[Any], bool]]] = {
@@ -425,33 +423,38 @@ def check_result(result: Any) -> None:
 
 def check_agreement(content: tuple[str, Any], result: Any) -> None:
     """
-    Rule 6: the counts a file holds besides the data its result is rebuilt from equal the
-    rebuilt result's — the whole-number leaves of a JSON object (``"plain"``: e.g. its
-    derived ``absorbed``), the integer variables and the coordinates of a dataset
-    (``"dataset"``: NetCDF, Zarr; ``"table"``: a sweep's Zarr table, over its grid), the
-    integer and coordinate columns of a CSV file's rows (``"rows"``).
+    Rule 6 for a dataset: the count variables and the coordinates a file holds besides the
+    data its result is rebuilt from equal the rebuilt result's (``result._count_variables()``,
+    what its ``to_dataset`` writes): a NetCDF file's or a Zarr store's (``"dataset"``; a
+    sweep's Zarr table, ``"table"``, over its grid), a CSV file's rows (``"rows"``). A
+    JSON object's own derived counts are checked as it is read
+    (:meth:`~virtspec_mi.results.base.ResultBase.from_dict`).
     """
 
     kind, value = content
-    if kind == "plain":
-        _agree_plain(value, result.as_dict(), "")
-        return
-    if kind == "rows":
-        _agree_rows(value, result.csv_dataset())
+    if kind not in ("dataset", "table", "rows"):
         return
     rebuilt = result
     for name in ("wavelength", "theta_i") if kind == "table" else ():  # a table holds a reading over the grid
         rebuilt = rebuilt if name in rebuilt.dims else rebuilt._expanded(name)
-    expected = rebuilt.to_dataset()
-    for name in (*expected.coords, *expected.data_vars):
-        values = expected[name]
-        if name not in value.variables or (name in expected.data_vars and values.dtype.kind not in "iu"):
-            continue
-        theirs = value[name]
-        if tuple(theirs.dims) != tuple(values.dims) or theirs.shape != values.shape:
-            raise ValueError(f"variable {name!r} has dims {tuple(theirs.dims)} and shape {theirs.shape}; the result "
-                             f"it holds gives {tuple(values.dims)} and {values.shape}")
-        _agree_values(str(name), theirs.values, values.values, "variable")
+    counts = rebuilt._count_variables()
+    if kind == "rows":
+        _agree_rows(value, counts, rebuilt)
+        return
+    for name, (dims, values) in counts.items():
+        if name in value.variables:
+            theirs = value[name]
+            if tuple(theirs.dims) != tuple(dims) or theirs.shape != np.shape(values):
+                raise ValueError(f"variable {name!r} has dims {tuple(theirs.dims)} and shape {theirs.shape}; the result "
+                                 f"it holds gives {tuple(dims)} and {np.shape(values)}")
+            _agree_values(name, theirs.values, np.asarray(values), "variable")
+    for name, values in rebuilt.coords.items():
+        if name in value.variables:
+            theirs = value[name]
+            if theirs.shape != np.shape(values):
+                raise ValueError(f"coordinate {name!r} has shape {theirs.shape}; the result it holds gives "
+                                 f"{np.shape(values)}")
+            _agree_values(str(name), theirs.values, np.asarray(values), "variable")
 
 
 def _agree_values(name: str, theirs: np.ndarray, ours: np.ndarray, what: str) -> None:
@@ -488,56 +491,19 @@ def _texts(values: Any) -> np.ndarray:
     return np.array([str(v) for v in array.ravel()], dtype=object).reshape(array.shape)
 
 
-def _agree_plain(theirs: Any, ours: Any, path: str) -> None:
-    """Every whole-number leaf of ``ours`` (a rebuilt ``as_dict()``) equals ``theirs`` at the same key, where present."""
+def _agree_rows(rows: Any, counts: Mapping[str, tuple[tuple[str, ...], Any]], result: Any) -> None:
+    """A CSV file's rows (one per cell of the result's dims, in their order) against the result's counts and labels."""
 
-    if isinstance(ours, dict):
-        if not isinstance(theirs, dict):
-            raise ValueError(f"{_quoted(path)} must be an object")
-        for key, value in ours.items():
-            if key in theirs:
-                _agree_plain(theirs[key], value, f"{path}.{key}" if path else key)
-        return
-    if not _whole_tree(ours):
-        return
-    try:
-        theirs_array, ours_array = np.asarray(theirs), np.asarray(ours)
-    except (ValueError, TypeError):
-        raise ValueError(f"{_quoted(path)} is not an array of counts") from None
-    if theirs_array.shape != ours_array.shape:
-        raise ValueError(f"{_quoted(path)} has shape {theirs_array.shape}; the result the file holds gives "
-                         f"{ours_array.shape}")
-    if ours_array.size and theirs_array.dtype.kind not in "iufO":
-        raise ValueError(f"{_quoted(path)} holds {theirs_array.dtype} values, not counts")
-    counts = whole_counts(theirs_array, path) if ours_array.size else ours_array
-    if not np.array_equal(counts, ours_array):
-        index = tuple(int(i) for i in np.argwhere(np.atleast_1d(counts != ours_array))[0])
-        at = f" at index {list(index)}" if np.ndim(ours_array) else ""
-        raise ValueError(f"{_quoted(path)} holds {np.atleast_1d(counts)[index].item()}{at} where the result the file "
-                         f"holds gives {np.atleast_1d(ours_array)[index].item()} (the counts must add up: the file "
-                         "was changed after it was written)")
+    import xarray as xr
 
-
-def _whole_tree(value: Any) -> bool:
-    """True for an int (not a bool) or a non-empty nested list of them."""
-
-    if isinstance(value, list):
-        return bool(value) and all(_whole_tree(v) for v in value)
-    return isinstance(value, int) and not isinstance(value, bool)
-
-
-def _agree_rows(rows: Any, expected: Any) -> None:
-    frame = expected.to_dataframe().reset_index()
+    coords = {name: (result.coord_dims(name), values) for name, values in result.coords.items()}
+    frame = xr.Dataset(dict(counts), coords=coords).to_dataframe(dim_order=list(result.dims)).reset_index()
     if rows.sizes.get("row", 0) != len(frame):
         raise ValueError(f"holds {rows.sizes.get('row', 0)} rows; the result in its header gives {len(frame)} "
                          "(a truncated or edited file)")
     for name in frame.columns:
-        column = frame[name].to_numpy()
-        if name not in rows.variables:
-            continue
-        integer = column.dtype.kind in "iu"
-        if integer or str(name) in expected.coords:
-            _agree_values(str(name), rows[name].values, column, "column")
+        if name in rows.variables:
+            _agree_values(str(name), rows[name].values, frame[name].to_numpy(), "column")
 
 
 # -- 7. checksums ---------------------------------------------------------------------
@@ -547,10 +513,39 @@ CHECKSUM: str = "checksum"
 
 
 def checksum(data: Mapping[str, Any]) -> str:
-    """``"sha256:<hex>"`` of ``data`` without its :data:`CHECKSUM`, in canonical JSON (sorted keys, NaN as null)."""
+    """``"sha256:<hex>"`` of ``data`` without its :data:`CHECKSUM`, in canonical JSON (sorted keys, compact)."""
 
-    text = json.dumps({k: v for k, v in data.items() if k != CHECKSUM}, sort_keys=True, separators=(",", ":"),
-                      default=_plain, allow_nan=True)
+    return _digest(_canonical({k: v for k, v in data.items() if k != CHECKSUM}))
+
+
+def sealed_text(data: Mapping[str, Any]) -> str:
+    """``data`` (without a :data:`CHECKSUM`) as compact JSON with its checksum added, encoded once."""
+
+    text = _canonical(data)
+    return text[:-1] + ("," if len(text) > 2 else "") + f'"{CHECKSUM}":"{_digest(text)}"}}'
+
+
+_SEAL = re.compile(r',"checksum":"(sha256:[0-9a-f]{64})"\}\s*$')
+
+
+def unsealed(text: str, data: dict[str, Any]) -> dict[str, Any]:
+    """
+    ``data`` (parsed from ``text``) without its :data:`CHECKSUM` when ``text`` is exactly
+    what :func:`sealed_text` wrote — its checksum verified on the text itself, without
+    encoding ``data`` again —, else ``data`` as it is (:func:`check_checksum` then checks it).
+    """
+
+    match = _SEAL.search(text, max(len(text) - 200, 0)) if CHECKSUM in data else None
+    if match is not None and _digest(text[:match.start()] + "}") == match.group(1) == data[CHECKSUM]:
+        return {k: v for k, v in data.items() if k != CHECKSUM}
+    return data
+
+
+def _canonical(data: Mapping[str, Any]) -> str:
+    return json.dumps(data, sort_keys=True, separators=(",", ":"), default=_plain, allow_nan=True)
+
+
+def _digest(text: str) -> str:
     return "sha256:" + hashlib.sha256(text.encode("utf-8")).hexdigest()
 
 

@@ -54,6 +54,7 @@ from typing import Any
 import numpy as np
 
 from virtspec_mi.files import IN_MEMORY, WriteError, atomic_file
+from virtspec_mi.results.integrity import unsealed
 
 __all__ = [
     "SUFFIXES",
@@ -78,7 +79,7 @@ def write(result: Any, path: str | os.PathLike) -> Path:
     """
     Write ``result`` (any kind of :class:`~virtspec_mi.results.base.ResultBase`) to ``path``;
     the suffix picks the format, and only what it needs is built: ``result.to_dataset()``
-    for ``.nc`` and ``.zarr``, ``result.csv_dataset()`` for ``.csv``, ``result.as_sealed_dict()``
+    for ``.nc`` and ``.zarr``, ``result.csv_dataset()`` for ``.csv``, ``result.sealed_json()``
     for ``.json``. A failed write (a full disk …) raises :class:`~virtspec_mi.files.WriteError`
     naming the path and the cause, with the result attached (``error.result``): nothing
     traced is lost with the file.
@@ -95,7 +96,7 @@ def write(result: Any, path: str | os.PathLike) -> Path:
             if suffix == ".nc":
                 result.to_dataset().to_netcdf(temporary, engine="netcdf4")
             elif suffix == ".json":
-                temporary.write_text(json.dumps(result.as_sealed_dict(), indent=1))
+                temporary.write_text(result.sealed_json() + "\n")
             else:
                 temporary.write_text(csv_text(result.csv_dataset()))
     except WriteError as error:
@@ -198,7 +199,7 @@ def read(path: str | os.PathLike) -> tuple[str, Any]:
             raise ValueError(f"is not valid JSON ({type(error).__name__}: {error})") from None
         if not isinstance(data, dict):
             raise ValueError(f"is not a virtspec-mi result (a JSON {type(data).__name__}, not an object)")
-        return "plain", data
+        return "plain", unsealed(text, data)
     first, _, body = text.partition("\n")
     if not first.startswith(_CSV_HEADER):
         raise ValueError(f"is not a virtspec-mi result CSV (its first line must start with {_CSV_HEADER.strip()!r})")

@@ -522,6 +522,13 @@ class SphereResult(ResultBase):
             version=field_value(data, "version", "text"),
         )
 
+    def _count_variables(self) -> dict[str, tuple[tuple[str, ...], np.ndarray]]:
+        """Every count over the reading's dims and ``configuration``, the pilot's as ``pilot_<count>``."""
+
+        return {prefix + name: (self.dims, np.stack([groups[c][name] for c in CONFIGURATIONS], axis=-1))
+                for prefix, groups in (("", self.counts), ("pilot_", self.pilot or {}))
+                for name in groups.get("sample", {})}
+
     def _count_groups(self) -> list[tuple[str, Mapping[str, np.ndarray], CountRules, tuple[str, ...]]]:
         """Each configuration's counts (and its pilot's), and the wall reflectance of every reading."""
 
@@ -553,11 +560,7 @@ class SphereResult(ResultBase):
 
         import xarray as xr
 
-        per = self.dims  # the readings' dims, then configuration
-        variables: dict[str, Any] = {}
-        for prefix, groups in (("", self.counts), ("pilot_", self.pilot or {})):
-            for name in groups.get("sample", {}):
-                variables[prefix + name] = (per, np.stack([groups[c][name] for c in CONFIGURATIONS], axis=-1))
+        variables: dict[str, Any] = self._count_variables()  # over the readings' dims, then configuration
         interval, hemispherical = self.reading_interval, self.hemispherical_interval
         band = {"clopper_pearson_delta": self.delta}
         variables.update({

@@ -71,7 +71,7 @@ LAYERS: list[tuple[str, tuple[str, ...]]] = [
     ("kernel", ("virtspec_mi.kernel",)),
     # the root package imports llvm and scenes (its public names load lazily: not counted);
     # virtspec_mi.scenes (the shipped scene files by name) imports nothing of the package
-    ("base", ("virtspec_mi.checks", "virtspec_mi.llvm", "virtspec_mi.scenes", "=virtspec_mi")),
+    ("base", ("virtspec_mi.checks", "virtspec_mi.files", "virtspec_mi.llvm", "virtspec_mi.scenes", "=virtspec_mi")),
 ]
 """
 The layers of the package, top to bottom (issue 21). An entry names a module and everything

@@ -213,6 +213,33 @@ def test_bad_measured_files_are_refused_with_the_reason(tmp_path, text, message)
         read_measured(tmp_path / "bad.csv")
 
 
+@pytest.mark.parametrize("text, message", [
+    ("wavelength,reflectance\n400,0.2\n550,-0.02\n600,-0.1\n",
+     r"measured reflectance must lie in \[0, 1\] \(spectrum.csv, column 'reflectance': -0.02 at 550 nm is below 0; 2 "
+     r"such points\): a reflectance is a fraction — give the measurement's uncertainty if these are measurement noise"),
+    ("400,0.2\n700,1.2\n", r"\(spectrum.csv, column 'column 2': 1.2 at 700 nm is above 1; 1 such point\)"),
+    ("wavelength,reflectance,uncertainty\n400,-0.02,0.01\n",
+     r"-0.02 at 400 nm is below 0 by more than its uncertainty 0.01"),
+])
+def test_measured_values_a_fraction_cannot_take_are_refused_by_file_column_and_wavelength(tmp_path, text, message):
+    (tmp_path / "spectrum.csv").write_text(text)
+    with pytest.raises(ValueError, match=message):
+        compare(synthetic([0.2, 0.3], [400, 500]), tmp_path / "spectrum.csv")
+
+
+def test_measurement_noise_within_its_uncertainty_is_compared(tmp_path):
+    (tmp_path / "spectrum.csv").write_text("wavelength,reflectance,uncertainty\n400,-0.005,0.01\n500,1.004,0.01\n")
+    spectrum = read_measured(tmp_path / "spectrum.csv")
+    np.testing.assert_array_equal(spectrum.values, [-0.005, 1.004])
+    import xarray as xr
+
+    xr.Dataset({"transmittance": ("wavelength", [0.1, 1.3 / 1.2])}, coords={"wavelength": [400.0, 500.0]}).to_netcdf(
+        tmp_path / "t.nc")
+    with pytest.raises(ValueError, match=r"measured transmittance must lie in \[0, 1\] \(t.nc, column "
+                                         r"'transmittance': 1.08333 at 500 nm is above 1"):
+        read_measured(tmp_path / "t.nc", quantity="transmittance")
+
+
 def test_bad_comparisons_are_refused_with_the_reason(tmp_path):
     result = synthetic([0.2, 0.3], [400, 500])
     with pytest.raises(ValueError, match=r"lie outside the measured range 600-700 nm.*nothing to compare"):

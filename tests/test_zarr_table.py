@@ -170,3 +170,78 @@ def test_an_interrupted_parameter_sweep_into_zarr_resumes_and_equals_the_nc_resu
     assert back.sel(theta_i=40).isel(**{whole.dims[2]: 1}).reflectance.shape == (3,) + whole.shape[3:]
     with xr.open_zarr(out, consolidated=False) as table:
         assert np.allclose(table["reflectance"].transpose(*whole.dims).values, whole.reflectance)
+
+
+# --- nothing the project did not write is ever removed (issue 22: a user's file was lost) -------------------------
+
+
+def _tree(path):
+    return sorted((str(p.relative_to(path)), p.read_bytes() if p.is_file() else None) for p in path.rglob("*"))
+
+
+@pytest.mark.parametrize("where", ["beside", "inside a store of ours"])
+def test_a_directory_holding_a_file_of_someone_elses_is_refused_and_kept(dielectric, tmp_path, where):
+    from result_kinds import hemispherical_grid, sphere_grid
+
+    out = tmp_path / "table.zarr"
+    if where == "beside":
+        out.mkdir()
+        (out / "notes.txt").write_text("a user's notes")
+        stranger = "notes.txt"
+    else:
+        sphere_grid().write(out)
+        (out / "wall_reflections" / "mine.csv").write_text("1,2")
+        stranger = "wall_reflections/mine.csv"
+    before = _tree(out)
+    message = f"out {out} is a directory holding '{stranger}', which virtspec-mi did not write"
+    with pytest.raises(ValueError, match=message):
+        vm.sweep(dielectric, out=out, **SMALL)  # refused before any tracing
+    for result in (hemispherical_grid(), sphere_grid()):
+        with pytest.raises(ValueError, match=message):
+            result.write(out)
+    assert _tree(out) == before
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["table.zarr"]  # no store, no temporary beside it
+
+
+def test_a_store_of_ours_and_an_empty_directory_are_replaced_whole(tmp_path):
+    from result_kinds import hemispherical_grid, sphere_grid
+
+    out = tmp_path / "result.zarr"
+    out.mkdir()
+    sphere_grid().write(out)  # an empty directory: written
+    grid = hemispherical_grid()
+    grid.write(out)  # a store of ours (another kind): replaced, nothing of the sphere's left
+    assert vm.read_result(out).as_dict() == grid.as_dict()
+    assert not (out / "wall_reflections").exists()
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["result.zarr"]
+
+
+def test_a_zarr_table_that_cannot_be_written_leaves_the_sweep_its_readings(dielectric, tmp_path, monkeypatch):
+    import errno
+
+    from virtspec_mi.files import WriteError
+    from virtspec_mi.results.zarr import ZarrTable
+
+    whole = vm.sweep(dielectric, **SMALL)
+
+    def full(self):
+        raise OSError(errno.ENOSPC, "No space left on device")
+
+    monkeypatch.setattr(ZarrTable, "_write_kept", full)
+    out = tmp_path / "table.zarr"
+    with pytest.warns(RuntimeWarning, match=f"could not write {out}: No space left on device.*: the sweep goes on "
+                                            "without its Zarr table"):
+        swept = vm.sweep(dielectric, out=out, **SMALL)
+    same_counts(swept, whole)
+    same_counts(vm.read_result(out), whole)  # written whole when the sweep completed
+    monkeypatch.setattr("virtspec_mi.results.zarr.write_result",  # the table streams; its final write fails
+                        lambda result, path: (_ for _ in ()).throw(WriteError(path, "No space left on device")))
+    with pytest.raises(WriteError, match=f"could not write {out}: No space left on device; every finished reading is "
+                                         f"kept in {out}.partial.json") as caught, pytest.warns(RuntimeWarning):
+        vm.sweep(dielectric, out=out, **{**SMALL, "seed": 2})
+    assert caught.value.result.rays.shape == whole.rays.shape
+    with pytest.raises(ValueError, match="is not a complete virtspec-mi Zarr result"):  # never read as complete
+        vm.read_result(out)
+    monkeypatch.undo()
+    caught.value.result.write(tmp_path / "elsewhere.zarr")
+    same_counts(vm.read_result(tmp_path / "elsewhere.zarr"), caught.value.result)

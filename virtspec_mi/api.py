@@ -44,8 +44,9 @@ import numpy as np
 
 from virtspec_mi.checks import parse_theta_i
 from virtspec_mi.engine.bench import Bench
-from virtspec_mi.engine.checkpoint import checkpoint_for, claim, remove
+from virtspec_mi.engine.checkpoint import checkpoint_for, claim, kept_in, remove
 from virtspec_mi.engine.parameters import parameter_space
+from virtspec_mi.files import WriteError
 from virtspec_mi.engine.plan import Plan
 from virtspec_mi.engine.readings import in_process_runner
 from virtspec_mi.instruments import INSTRUMENTS
@@ -270,11 +271,8 @@ def _write(result: Result, out: Path, checkpoint: Path) -> None:
 
     try:
         result.write(out)
-    except (OSError, RuntimeError) as error:  # netCDF reports some failures as RuntimeError
-        failure = OSError(f"could not write {out} ({getattr(error, 'strerror', None) or error}); every finished "
-                          f"reading is kept in {checkpoint}: re-run the same call to write it")
-        failure.errno = getattr(error, "errno", None)  # e.g. errno.ENOSPC, for callers that check it
-        raise failure from error
+    except WriteError as error:  # names out and the cause, carries the result; the checkpoint's state added
+        raise error.keeping(kept_in(checkpoint), result) from None
 
 
 def _angles(settings: Settings, theta_i: Any, what: str) -> np.ndarray:

@@ -381,7 +381,7 @@ def main(argv: Sequence[str] | None = None) -> int:
                     "compare": _compare, "plot": _plot, "albedo-table": _albedo_table}
         return handlers[args.command](args)
     except (ValueError, RuntimeError, OSError) as error:
-        print(f"virtspec: error: {error}", file=sys.stderr)
+        print(f"virtspec: error: {_rescued(error)}", file=sys.stderr)
         return 1
     except KeyboardInterrupt:
         partial = getattr(args, "checkpoint", None)  # the checkpoint of the sweep under way (set by _sweep)
@@ -392,12 +392,25 @@ def main(argv: Sequence[str] | None = None) -> int:
         return 130
 
 
+def _rescued(error: BaseException) -> Any:
+    """The error; for a result kept only in memory (its file could not be written), where it was written instead."""
+
+    from virtspec_mi.files import IN_MEMORY
+
+    if getattr(error, "result", None) is None or not error.kept.endswith(IN_MEMORY):  # type: ignore[attr-defined]
+        return error
+    from virtspec_mi.results.io import rescue
+
+    kept = error.kept[:-len(IN_MEMORY)] + rescue(error.result, error.path)  # type: ignore[attr-defined]
+    return error.keeping(kept)  # type: ignore[attr-defined]
+
+
 def _measure(args: argparse.Namespace) -> int:
     from virtspec_mi.api import measure
 
     reading = measure(args.scene, parameters=_pairs(args.params, "--param"), defines=_pairs(args.defines, "-D"),
                       **_given(args, _kind("settings")))
-    print(json.dumps(reading.as_dict()) if args.json else reading.summary())
+    print(reading.sealed_json() if args.json else reading.summary())
     return 0
 
 
@@ -407,7 +420,7 @@ def _sphere(args: argparse.Namespace) -> int:
     result = sphere_measure(args.scene, **_given(args, _kind("settings")), **_given(args, _kind("sphere")))
     if args.out:
         result.write(args.out)
-    print(json.dumps(result.as_dict()) if args.json else result.summary())
+    print(result.sealed_json() if args.json else result.summary())
     return 0
 
 
@@ -506,7 +519,7 @@ def _gonio(args: argparse.Namespace) -> int:
     if args.plot_series:
         reading.plot_series(args.plot_series)
     if args.json:
-        print(json.dumps(reading.as_dict()))
+        print(reading.sealed_json())
         return 0
     print(reading.summary())
     for label, path in (("written", args.out), ("plot", args.plot), ("plot", args.plot_series)):

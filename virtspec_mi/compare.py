@@ -42,8 +42,11 @@ never extrapolated. :func:`read_measured` reads it from
 - a virtspec-mi result file of any kind (another simulation: its certified tolerance
   is the uncertainty).
 
-Wavelengths are in nm and values fractions in [0, 1] (percentages are refused with a
-hint).
+Wavelengths are in nm (values below 100 are refused with the hint "micrometres? multiply by
+1000") and values fractions in [0, 1] (percentages are refused with a hint). A measured
+value outside [0, 1] by more than its own measurement uncertainty (none given: at all) is
+refused, naming the file, the column and the wavelength: a reflectance below 0 or above 1
+is no reflectance, and compared as one it would count against (or for) the model.
 
 References
 ----------
@@ -104,8 +107,13 @@ class MeasuredSpectrum:
 
     @classmethod
     def of(cls, wavelengths: Any, values: Any, uncertainty: Any = None, *, quantity: str = "reflectance",
-           source: str = "measured", note: str = "") -> "MeasuredSpectrum":
-        """A checked spectrum from arrays (any order; sorted here); ``ValueError`` naming the problem."""
+           source: str = "measured", note: str = "", column: str = "", fractions: bool = True) -> "MeasuredSpectrum":
+        """
+        A checked spectrum from arrays (any order; sorted here); ``ValueError`` naming the
+        problem — and, for a value a fraction cannot take (``fractions``: a measured
+        reflectance, transmittance or absorptance lies in [0, 1], up to its own
+        measurement uncertainty), the ``source``, the ``column`` and the wavelength.
+        """
 
         wavelengths = np.asarray(wavelengths, dtype=np.float64).ravel()
         values = np.asarray(values, dtype=np.float64).ravel()
@@ -121,7 +129,7 @@ class MeasuredSpectrum:
                              f"in {source}: micrometres? multiply by 1000)")
         if not np.all(np.isfinite(values)):
             raise ValueError(f"measured values must be finite ({source})")
-        if values.max() > _PERCENT:
+        if fractions and values.max() > _PERCENT:
             raise ValueError(f"measured values must be fractions in [0, 1] (got up to {values.max():g} in {source}: "
                              "percentages? divide by 100)")
         order = np.argsort(wavelengths, kind="stable")
@@ -130,6 +138,8 @@ class MeasuredSpectrum:
             raise ValueError(f"measured wavelengths must be distinct (repeated in {source})")
         if uncertainty is not None:
             uncertainty = _check_uncertainty(uncertainty, len(order), source)[order]
+        if fractions:
+            _check_fractions(wavelengths, values, uncertainty, quantity, source, column)
         return cls(wavelengths, values, uncertainty, quantity, source, note)
 
     def with_uncertainty(self, uncertainty: Any) -> "MeasuredSpectrum":
@@ -137,6 +147,25 @@ class MeasuredSpectrum:
 
         values = _check_uncertainty(uncertainty, len(self.wavelengths), self.source)
         return MeasuredSpectrum(self.wavelengths, self.values, values, self.quantity, self.source, self.note)
+
+
+def _check_fractions(wavelengths: np.ndarray, values: np.ndarray, uncertainty: np.ndarray | None, quantity: str,
+                     source: str, column: str) -> None:
+    """
+    A measured fraction lies in [0, 1] up to its own uncertainty (none given: exactly);
+    ``ValueError`` naming the source, the column and the first wavelength beyond.
+    """
+
+    slack = np.zeros_like(values) if uncertainty is None else uncertainty
+    for bad, side in ((values < -slack, "below 0"), (values > 1 + slack, "above 1")):
+        if np.any(bad):
+            k = int(np.flatnonzero(bad)[0])
+            where = f"{source}, column {column!r}" if column else source
+            allowed = "" if uncertainty is None else f" by more than its uncertainty {uncertainty[k]:g}"
+            raise ValueError(
+                f"measured {quantity} must lie in [0, 1] ({where}: {values[k]:g} at {wavelengths[k]:g} nm is {side}"
+                f"{allowed}; {int(bad.sum())} such point{'s' if bad.sum() > 1 else ''}): a {quantity} is a fraction — "
+                "give the measurement's uncertainty if these are measurement noise, or correct the data")
 
 
 def _check_uncertainty(uncertainty: Any, size: int, source: str) -> np.ndarray:
@@ -170,8 +199,8 @@ def read_measured(source: Any, quantity: str = "reflectance", theta_i: float | N
     if isinstance(source, (str, os.PathLike)):
         return _read_file(Path(source), quantity, theta_i)
     if hasattr(source, "wavelengths") and hasattr(source, "values"):  # colour.SpectralDistribution
-        return MeasuredSpectrum.of(source.wavelengths, source.values, quantity=quantity,
-                                   source=str(getattr(source, "name", "") or "measured"))
+        name = str(getattr(source, "name", "") or "measured")
+        return MeasuredSpectrum.of(source.wavelengths, source.values, quantity=quantity, source=name)
     if isinstance(source, (tuple, list)) and len(source) in (2, 3):
         return MeasuredSpectrum.of(*source, quantity=quantity)
     raise ValueError("measured must be a file path, a colour.SpectralDistribution, a (wavelengths, values"
@@ -210,7 +239,7 @@ def _from_result(result: ResultBase, quantity: str, theta_i: float | None, sourc
     if np.any(np.isnan(spectrum.tolerance)):
         raise ValueError(f"measured result {source} is not certified (NaN certified_mu): no uncertainty to use")
     return MeasuredSpectrum.of(spectrum.wavelengths, spectrum.values, spectrum.tolerance, quantity=quantity,
-                               source=source)
+                               source=source, fractions=False)  # a reading (a sphere's ratio may pass 1): its rules
 
 
 def _split(line: str) -> list[str]:
@@ -253,7 +282,8 @@ def _read_table(path: Path, quantity: str) -> MeasuredSpectrum:
     note = "" if keep.all() else f"{int((~keep).sum())} rows without a {quantity} value skipped"
     return MeasuredSpectrum.of(table[keep, 0], table[keep, value],
                                None if uncertainty is None else table[keep, uncertainty],
-                               quantity=quantity, source=path.name, note=note)
+                               quantity=quantity, source=path.name, note=note,
+                               column=header[value] if header is not None else f"column {value + 1}")
 
 
 def _columns(header: list[str] | None, width: int, quantity: str, name: str) -> tuple[int, int | None]:
@@ -282,10 +312,10 @@ def _read_netcdf(path: Path, quantity: str, theta_i: float | None) -> MeasuredSp
             dataset = dataset.load()
     except (OSError, ValueError) as error:
         raise ValueError(f"could not read NetCDF {path.name}: {error}") from None
-    if "result_json" in dataset.attrs or "gonio_json" in dataset.attrs:  # a virtspec-mi result file
-        from virtspec_mi.results.kinds import result_from
+    if "result_json" in dataset.attrs or "gonio_json" in dataset.attrs:  # a virtspec-mi result file: its rules
+        from virtspec_mi.results.kinds import read_result
 
-        return _from_result(result_from(("dataset", dataset)), quantity, theta_i, path.name)
+        return _from_result(read_result(path), quantity, theta_i, path.name)
     names = [name for name in dataset.data_vars if "uncertainty" not in str(name)]
     if quantity in dataset.data_vars:
         name = quantity
@@ -304,7 +334,7 @@ def _read_netcdf(path: Path, quantity: str, theta_i: float | None) -> MeasuredSp
     keep = ~np.isnan(values.values)
     return MeasuredSpectrum.of(wavelengths[keep], values.values[keep],
                                None if uncertainty is None else uncertainty[keep], quantity=quantity,
-                               source=path.name)
+                               source=path.name, column=str(name))
 
 
 # -- the comparison ------------------------------------------------------------------

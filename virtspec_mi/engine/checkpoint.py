@@ -3,9 +3,13 @@ Checkpoints: finished readings of a long run, kept on disk
 ==========================================================
 
 A run keyed on reading indices (:func:`virtspec_mi.engine.readings.run`: a sweep, a
-goniophotometer or a sphere reading) records every finished batch in a JSON file, atomically (an interruption leaves the old or the
-new file; saves are spaced out when they would take more than about a tenth of the
-run, and what is left is saved at the end and on an interruption); a later run of the
+goniophotometer or a sphere reading) records every finished batch in a JSON file,
+atomically (:func:`virtspec_mi.files.atomic_file`: an interruption leaves the old or the
+new file, and only a temporary of its own is ever removed; saves are spaced out when they
+would take more than about a tenth of the run, and what is left is saved at the end and
+on an interruption). A save that fails (a full disk) does not stop the run: it is warned
+about once, retried at the next save, and :func:`kept_in` says afterwards where the
+readings are (the file, or memory only); a later run of the
 same measurement picks the finished readings up and traces only the rest, ending with
 exactly the counts of an uninterrupted run. The file
 records what decides the counts (settings, grids, geometry, scene fingerprint): a
@@ -39,6 +43,7 @@ import json
 import math
 import os
 import time
+import warnings
 from contextlib import contextmanager
 from pathlib import Path
 from typing import Any, Iterator
@@ -46,6 +51,7 @@ from typing import Any, Iterator
 import numpy as np
 
 from virtspec_mi import __version__
+from virtspec_mi.files import IN_MEMORY, WriteError, atomic_file
 from virtspec_mi.engine.tally import Tally
 from virtspec_mi.kernel.counts import Counts
 
@@ -54,7 +60,7 @@ try:
 except ImportError:  # not a POSIX system: checkpoints are not locked
     fcntl = None  # type: ignore[assignment]
 
-__all__ = ["CheckpointError", "Checkpoint", "checkpoint_for", "claim", "remove"]
+__all__ = ["CheckpointError", "Checkpoint", "checkpoint_for", "claim", "remove", "kept_in"]
 
 _FORMAT = "virtspec-mi sweep checkpoint 4"  # 3: invalid_directions counted; 4: bins and sums kept
 _FORMAT_WITHOUT_BINS = "virtspec-mi sweep checkpoint 3"  # read for runs without bins or sums
@@ -65,6 +71,23 @@ _LOCK_SUFFIX = ".lock"
 
 class CheckpointError(ValueError):
     """A checkpoint file is corrupt, belongs to another measurement, cannot be written or is in use."""
+
+
+_UNSAVED: dict[Path, str] = {}  # checkpoints whose last save failed in this process, with the cause
+
+
+def kept_in(path: str | os.PathLike) -> str:
+    """
+    Where the finished readings of a run with checkpoint ``path`` are, in words, for a
+    message after a failure: in the checkpoint, or — when its last save failed — in
+    memory only (the error's ``result``).
+    """
+
+    path = Path(path)
+    cause = _UNSAVED.get(path)
+    if cause is None:
+        return f"every finished reading is kept in {path}: re-run the same sweep to write it"
+    return f"the checkpoint {path} could not be saved either ({cause}); {IN_MEMORY}"
 
 
 def checkpoint_for(out: str | os.PathLike) -> Path:
@@ -241,11 +264,28 @@ class Checkpoint:
             self.flush()
 
     def flush(self) -> None:
-        """Save every finished reading not saved yet (at the end of a run, or when it is interrupted)."""
+        """
+        Save every finished reading not saved yet (at the end of a run, or when it is
+        interrupted). A save that fails (a full disk, a file size limit …) does not stop
+        the run: the old file stays whole, the failure is warned about once
+        (``RuntimeWarning`` naming the file and the cause), the readings stay in memory —
+        the run returns them — and the next save tries again (:func:`kept_in` says where
+        they are, for a later message).
+        """
 
         if self._unsaved:
             start = time.perf_counter()
-            self._save()
+            try:
+                self._save()
+            except WriteError as error:
+                if self.path not in _UNSAVED:
+                    warnings.warn(f"checkpoint {self.path} could not be saved ({error.cause}): the run goes on, "
+                                  "its finished readings kept in memory (an interruption now loses those not saved)",
+                                  RuntimeWarning, stacklevel=2)
+                _UNSAVED[self.path] = error.cause
+                self._saved_at = time.perf_counter()
+                return
+            _UNSAVED.pop(self.path, None)
             self._unsaved, self._saved_at = False, time.perf_counter()
             self._save_seconds = self._saved_at - start
 
@@ -253,7 +293,7 @@ class Checkpoint:
         path = self.path
         try:
             data = json.loads(path.read_text())
-        except (OSError, ValueError) as error:  # ValueError: JSON and UTF-8 decoding
+        except (OSError, ValueError, RecursionError) as error:  # ValueError: JSON and UTF-8 decoding
             raise CheckpointError(
                 f"checkpoint {path} is corrupt ({type(error).__name__}: {error}); delete it to start the sweep over"
             ) from None
@@ -343,13 +383,8 @@ class Checkpoint:
             data["bins"] = self.bins[done].tolist()
         if self.sums:
             data["sums"] = {name: value[done].tolist() for name, value in self.sums.items()}
-        temporary = self.path.with_name(self.path.name + ".tmp")
-        try:
+        with atomic_file(self.path) as temporary:  # an interruption or a full disk leaves the old file
             temporary.write_text(json.dumps(data))
-            os.replace(temporary, self.path)  # atomic: an interruption leaves the old or the new file
-        except BaseException:
-            temporary.unlink(missing_ok=True)
-            raise
 
 
 def _whole_numbers(values: Any, what: str, low: int, high: int, rule: str) -> np.ndarray:

@@ -19,8 +19,11 @@ everything else derived from them. This module holds what they share, written on
   carried in the JSON object (``format``) and in every dataset (attributes ``format`` and
   ``result_json``, the whole result as JSON); :meth:`ResultBase.write` /
   :meth:`ResultBase.read` through :mod:`virtspec_mi.results.io` (NetCDF, CSV, JSON, Zarr;
-  atomic writes); every variable and coordinate of ``to_dataset()`` has its ``units``
-  and ``long_name`` (:func:`virtspec_mi.results.formats.annotate`);
+  atomic writes); every file read — and every dict given to :meth:`ResultBase.from_dict` —
+  is checked by the rules of :mod:`virtspec_mi.results.integrity` (whole counts that add
+  up as the kind says, :meth:`ResultBase._count_groups`; finite labels; shapes; tags;
+  the checksum of :meth:`ResultBase.sealed_json`); every variable and coordinate of
+  ``to_dataset()`` has its ``units`` and ``long_name`` (:func:`virtspec_mi.results.formats.annotate`);
 - **spectra**: :meth:`ResultBase.spectrum` — one quantity over wavelength at one θi with
   its certified tolerance (:class:`Spectrum`) — is what ``to_sd``, ``colour``,
   :func:`virtspec_mi.compare.compare` and the spectrum plots read, for every kind.
@@ -33,7 +36,6 @@ CF Conventions 1.11, Sect. 3 (``units``, ``long_name``).
 
 from __future__ import annotations
 
-import json
 import os
 from dataclasses import dataclass
 from pathlib import Path
@@ -42,6 +44,8 @@ from typing import Any, ClassVar, Mapping
 import numpy as np
 
 from virtspec_mi.results.formats import format_parts, tagged
+from virtspec_mi.results.integrity import (CountRules, check_agreement, check_checksum, check_result, finite_labels,
+                                           parameters_of, read_file, sealed_text, whole_counts)
 
 __all__ = [
     "ResultBase",
@@ -142,7 +146,7 @@ class ResultBase:
     dataclass that sets :attr:`FORMAT` (and :attr:`LEGACY`, tags it still reads),
     :attr:`KIND`, :attr:`KIND_DIMS`, :attr:`QUANTITIES` and implements ``dims``,
     ``coords``, ``parameters``, ``_labelled``, ``_relabelled``, ``_quantity``,
-    ``summary``, ``as_dict``, ``from_dict``, ``to_dataset`` and ``plot``.
+    ``_count_groups``, ``summary``, ``as_dict``, ``_from_dict``, ``to_dataset`` and ``plot``.
     """
 
     FORMAT: ClassVar[str]
@@ -441,17 +445,24 @@ class ResultBase:
 
     @classmethod
     def read(cls, path: str | os.PathLike) -> Any:
-        """A result of this kind from a file written by :meth:`write` (any kind: :func:`virtspec_mi.read_result`)."""
+        """
+        A result of this kind from a file written by :meth:`write` (any kind:
+        :func:`virtspec_mi.read_result`), checked by every rule of
+        :mod:`virtspec_mi.results.integrity` (``ValueError`` naming the file and the field).
+        """
 
         from virtspec_mi.results import io as results_io
 
-        return cls.from_tagged(*tagged(results_io.read(path)))
+        return read_file(path, results_io.read, lambda content: cls.from_tagged(*tagged(content)))
 
     @classmethod
     def from_dataset(cls, dataset: Any) -> Any:
-        """The result of a dataset made by ``to_dataset`` (or read from a file)."""
+        """The result of a dataset made by ``to_dataset`` (or read from a file), checked as a file is."""
 
-        return cls.from_tagged(*tagged(("dataset", dataset)))
+        content = ("dataset", dataset)
+        result = cls.from_tagged(*tagged(content))
+        check_agreement(content, result)
+        return result
 
     @classmethod
     def from_tagged(cls, tag: str, data: Any) -> Any:
@@ -475,8 +486,54 @@ class ResultBase:
         return cls.from_dict(data)
 
     @classmethod
-    def from_dict(cls, data: dict[str, Any]) -> Any:
+    def from_dict(cls, data: Mapping[str, Any]) -> Any:
+        """
+        The result of :meth:`as_dict` (a JSON object), checked by every rule of
+        :mod:`virtspec_mi.results.integrity`: ``ValueError`` naming the field that is
+        missing, of the wrong type or breaks a rule.
+        """
+
+        if not isinstance(data, Mapping):
+            raise ValueError(f"a {cls.KIND} is a JSON object (got {type(data).__name__})")
+        if data.get("format") != cls.FORMAT:
+            raise ValueError(f"'format' must be {cls.FORMAT!r} for a {cls.KIND} (got {data.get('format')!r})")
+        try:
+            result = cls._from_dict(data)
+        except KeyError as error:
+            raise ValueError(f"lacks the field {error} of a {cls.KIND}") from None
+        except (TypeError, AttributeError) as error:
+            raise ValueError(f"a field of the {cls.KIND} has the wrong type ({' '.join(str(error).split())})") from None
+        check_result(result)
+        result._check_stored(data)
+        check_checksum(data)
+        return result
+
+    @classmethod
+    def _from_dict(cls, data: Mapping[str, Any]) -> Any:
+        """The result of ``data`` (a kind's own fields; :meth:`from_dict` checks it)."""
+
         raise NotImplementedError
+
+    def _count_groups(self) -> list[tuple[str, Mapping[str, np.ndarray], CountRules, tuple[str, ...]]]:
+        """Every group of counts with how it adds up and its dims (:func:`~virtspec_mi.results.integrity.check_counts`)."""
+
+        raise NotImplementedError
+
+    def _count_variables(self) -> dict[str, tuple[tuple[str, ...], np.ndarray]]:
+        """The integer variables of ``to_dataset()`` by name: ``(dims, values)`` (what :func:`check_agreement` compares)."""
+
+        raise NotImplementedError
+
+    def _check_stored(self, data: Mapping[str, Any]) -> None:
+        """Derived counts a JSON object of this kind also holds agree with the result built from it (none: nothing)."""
+
+    def sealed_json(self) -> str:
+        """
+        :meth:`as_dict` as JSON with its ``checksum`` (:func:`~virtspec_mi.results.integrity.sealed_text`):
+        what a ``.json`` file, a dataset's ``result_json`` and ``virtspec … --json`` hold.
+        """
+
+        return sealed_text(self.as_dict())
 
     def csv_dataset(self) -> Any:
         """What a ``.csv`` file holds (one row per cell of it): ``to_dataset()``, unless a kind leaves some out."""
@@ -486,7 +543,7 @@ class ResultBase:
     def _dataset_attrs(self) -> dict[str, Any]:
         """The attributes every kind's dataset carries: its format tag and the whole result as JSON."""
 
-        return {"format": self.FORMAT, "result_json": json.dumps(self.as_dict())}
+        return {"format": self.FORMAT, "result_json": self.sealed_json()}
 
     def as_dict(self) -> dict[str, Any]:
         raise NotImplementedError
@@ -510,13 +567,16 @@ class ResultBase:
     def labels_from_dict(data: dict[str, Any]) -> dict[str, Any]:
         """``dims``, ``coords`` and ``parameters`` (constructor keywords) from a result's plain data."""
 
-        extra = {name: np.asarray(value, dtype=np.int64 if name == "point" else np.float64)
+        extra = {name: whole_counts(value, name) if name == "point" else finite_labels(value, name)
                  for name, value in (data.get("parameter_coords") or {}).items()}
         parameters = data.get("parameters")
-        return {"dims": tuple(data["dims"]),
-                "coords": {"wavelength": np.asarray(data["wavelengths"], dtype=np.float64),
-                           "theta_i": np.asarray(data["theta_i"], dtype=np.float64), **extra},
-                "parameters": None if parameters is None else dict(parameters)}
+        dims = data["dims"]
+        if not isinstance(dims, (list, tuple)) or not all(isinstance(d, str) for d in dims):
+            raise ValueError(f"'dims' must be a list of names (got {dims!r})")
+        return {"dims": tuple(dims),
+                "coords": {"wavelength": finite_labels(data["wavelengths"], "wavelengths"),
+                           "theta_i": finite_labels(data["theta_i"], "theta_i"), **extra},
+                "parameters": parameters_of(parameters)}
 
     def _parameter_keys(self) -> dict[str, str] | None:
         """Swept parameter names → their ``mi.traverse`` keys (for :func:`annotate`), or ``None``."""

@@ -24,7 +24,9 @@ import json
 import re
 from typing import Any, Mapping
 
-__all__ = ["VARIABLES", "describe_variable", "annotate", "format_parts", "tagged"]
+from virtspec_mi.results.integrity import unsealed
+
+__all__ = ["VARIABLES", "TABLE_ATTRIBUTE", "describe_variable", "annotate", "format_parts", "tagged"]
 
 _TAG = re.compile(r"^virtspec-mi (?P<word>[a-z]+) (?P<version>\d+)$")
 
@@ -152,11 +154,17 @@ def format_parts(tag: Any) -> tuple[str, int]:
     return match["word"], int(match["version"])
 
 
+TABLE_ATTRIBUTE: str = "virtspec_table"
+"""The attribute of a sweep's Zarr table that holds its labels, settings and format (JSON; :mod:`virtspec_mi.results.zarr`)."""
+
+
 def tagged(content: tuple[str, Any]) -> tuple[str, Any]:
     """
     ``(format tag, data)`` of what :func:`virtspec_mi.results.io.read` read: the JSON
-    object (``"plain"``), or a dataset's ``result_json`` attribute. Files written before
-    the tags of every kind: a goniophotometer dataset's ``gonio_json``; a sphere result's
+    object (``"plain"``), a dataset's (``"dataset"``; a CSV file's, ``"rows"``)
+    ``result_json`` attribute, or a sweep's Zarr table (``"table"``: the dataset itself
+    is the data, tagged by its :data:`TABLE_ATTRIBUTE`). Files written before the tags
+    of every kind: a goniophotometer dataset's ``gonio_json``; a sphere result's
     ``"kind": "sphere_result"`` JSON object or its NetCDF dataset (``json`` attribute and
     the counts as variables) are tagged ``"virtspec-mi sphere 0"`` (the dataset itself is
     the data). ``ValueError`` if it is no result.
@@ -168,13 +176,16 @@ def tagged(content: tuple[str, Any]) -> tuple[str, Any]:
             return "virtspec-mi sphere 0", value
         return str(value.get("format")), value
     attrs = value.attrs
-    for name in ("result_json", "gonio_json"):
+    names = (TABLE_ATTRIBUTE,) if kind == "table" else ("result_json", "gonio_json")
+    for name in names:
         if name in attrs:
             try:
                 data = json.loads(attrs[name])
-            except (TypeError, json.JSONDecodeError) as error:
+            except (TypeError, json.JSONDecodeError, RecursionError) as error:
                 raise ValueError(f"not a virtspec-mi result (its {name} attribute is not JSON: {error})") from None
-            return str(data.get("format")), data
+            if not isinstance(data, dict):
+                raise ValueError(f"not a virtspec-mi result (its {name} attribute is not a JSON object)")
+            return str(data.get("format")), (value if kind == "table" else unsealed(attrs[name], data))
     if "json" in attrs and "rays" in attrs and "sphere" in attrs:
         return "virtspec-mi sphere 0", value
     raise ValueError("not a virtspec-mi result (no result_json attribute)")

@@ -42,7 +42,7 @@ import os
 from pathlib import Path
 from dataclasses import dataclass, replace
 from functools import cached_property
-from typing import Any, ClassVar
+from typing import Any, ClassVar, Mapping
 
 import numpy as np
 
@@ -52,11 +52,17 @@ from virtspec_mi.geometry.bins import GonioBins
 from virtspec_mi.kernel.counts import QUANTITIES
 from virtspec_mi.results.base import ResultBase, plain_data, round_up
 from virtspec_mi.results.formats import annotate
+from virtspec_mi.results.integrity import CountRules, field_value, whole_counts
 from virtspec_mi.results.hemispherical import Result
 
 __all__ = ["GonioResult"]
 
 _BINS = ("theta_o", "phi_o")
+_REFLECTION_BINS = "bin_counts (theta_o < 90)"
+_TRANSMISSION_BINS = "bin_counts (theta_o > 90)"
+_BIN_RULES = CountRules(None, parts={_REFLECTION_BINS: "reflected", _TRANSMISSION_BINS: "transmitted"})
+"""A reading's bins of each hemisphere add up to at most its reflected (θo < 90°) or transmitted rays (the rest
+is ``outside``: escaping rays in no bin)."""
 
 
 @dataclass(frozen=True, eq=False)
@@ -339,18 +345,30 @@ class GonioResult(ResultBase):
         }
 
     @classmethod
-    def from_dict(cls, data: dict[str, Any]) -> "GonioResult":
-        """The reading of :meth:`as_dict` (``ValueError`` if ``data`` is not one)."""
+    def _from_dict(cls, data: Mapping[str, Any]) -> "GonioResult":
+        """The reading of :meth:`as_dict` (checked by :meth:`from_dict <virtspec_mi.results.base.ResultBase.from_dict>`)."""
 
-        try:
-            if data.get("format") != cls.FORMAT:
-                raise KeyError("format")
-            return cls(result=Result.from_dict(data["result"]),
-                       bin_counts=np.asarray(data["bin_counts"], dtype=np.int64),
-                       bins=GonioBins.from_dict(data["bins"]), guarantee=str(data["guarantee"]),
-                       relative_tolerance=data.get("relative_tolerance"), brdf_floor=data.get("brdf_floor"))
-        except (KeyError, TypeError, AttributeError, ValueError) as error:
-            raise ValueError(f"not a virtspec-mi goniophotometer result (missing or bad {error})") from None
+        relative, floor = (field_value(data, key, "number or null") if key in data else None
+                           for key in ("relative_tolerance", "brdf_floor"))
+        return cls(result=Result.from_dict(field_value(data, "result", "object")),
+                   bin_counts=whole_counts(data["bin_counts"], "bin_counts"),
+                   bins=GonioBins.from_dict(field_value(data, "bins", "object")),
+                   guarantee=field_value(data, "guarantee", "text"),
+                   relative_tolerance=None if relative is None else float(relative),
+                   brdf_floor=None if floor is None else float(floor))
+
+    def _count_variables(self) -> dict[str, tuple[tuple[str, ...], np.ndarray]]:
+        return {**self.result._count_variables(), "bin_counts": (self.dims, self.bin_counts.astype(np.int64)),
+                "outside": (self.result.dims, self.outside.astype(np.int64))}
+
+    def _count_groups(self) -> list[tuple[str, Mapping[str, np.ndarray], CountRules, tuple[str, ...]]]:
+        """The reading's counts, and its bins of each hemisphere against its reflected and transmitted rays."""
+
+        transmission = self.bins.transmitted
+        hemispheres = {"reflected": self.result.reflected, "transmitted": self.result.transmitted,
+                       _REFLECTION_BINS: self.bin_counts[..., ~transmission, :].sum(axis=(-2, -1)),
+                       _TRANSMISSION_BINS: self.bin_counts[..., transmission, :].sum(axis=(-2, -1))}
+        return [*self.result._count_groups(), ("", hemispheres, _BIN_RULES, self.result.dims)]
 
     def to_dataset(self) -> Any:
         """
@@ -366,8 +384,9 @@ class GonioResult(ResultBase):
         b = self.bins
         grid, reading = self.dims, self.result.dims
         band = {"clopper_pearson_delta": self.delta / self.size}
+        counted = self._count_variables()
         dataset = base.assign({
-            "bin_counts": (grid, self.bin_counts.astype(np.int64)),
+            "bin_counts": counted["bin_counts"],
             "fraction": (grid, self.fraction),
             "brdf": (grid, self.brdf),
             "brdf_lower": (grid, self.brdf_lower, band),
@@ -376,7 +395,7 @@ class GonioResult(ResultBase):
                             {"meaning": "both folded halves" if b.fold_phi else "one bin"}),
             "cdf_theta_o": ((*reading, "theta_o_edge"), self.cdf_theta_o),
             "cdf_phi_o": ((*reading, "phi_o_edge"), self.cdf_phi_o),
-            "outside": (reading, self.outside.astype(np.int64)),
+            "outside": counted["outside"],
             "bins_mu": (reading, self.bins_mu),
             "cdf_mu": (reading, self.cdf_mu),
         })

@@ -31,7 +31,7 @@ import os
 import warnings
 from dataclasses import asdict, dataclass, field, replace
 from functools import cached_property
-from typing import Any, ClassVar
+from typing import Any, ClassVar, Mapping
 
 import numpy as np
 
@@ -41,9 +41,25 @@ from virtspec_mi.geometry.disks import InstrumentGeometry, backlit_fraction
 from virtspec_mi.budgets.intervals import clopper_pearson
 from virtspec_mi.results.base import ResultBase, per_count, plain_data, round_up, span
 from virtspec_mi.results.formats import annotate
+from virtspec_mi.results.integrity import (CountRules, check_counts, check_shapes, field_value, optional_numbers,
+                                           reading_at, whole_counts)
 from virtspec_mi.settings import Settings
 
-__all__ = ["Result", "plain_data"]
+__all__ = ["Result", "plain_data", "COUNT_RULES"]
+
+COUNT_RULES = CountRules(
+    "rays",
+    parts={"reflected": "rays", "transmitted": "rays", "capped": "rays", "invalid_directions": "rays",
+           "weight_violations": "rays", "rounded_weights": "rays", "specular_reflected": "reflected",
+           "regular_transmitted": "transmitted"},
+    sums=((("reflected", "transmitted", "capped", "invalid_directions"), "rays", False),),
+)
+"""How a reading's counts add up: each a share of its rays, the delta events a share of their fate, and
+reflected + transmitted + capped + invalid_directions <= rays (absorbed, the rest, is never negative)."""
+
+_STORED = CountRules(None, sums=((("reflected", "transmitted", "absorbed", "capped", "invalid_directions"), "rays",
+                                  True),))
+"""A file's own ``absorbed`` (derived, yet written): the five fates add up to the rays."""
 
 _PARTS = ("specular_reflectance", "diffuse_reflectance", "regular_transmittance", "diffuse_transmittance")
 
@@ -447,32 +463,56 @@ class Result(ResultBase):
         }
 
     @classmethod
-    def from_dict(cls, data: dict[str, Any]) -> "Result":
-        """The result of :meth:`as_dict` (``ValueError`` if ``data`` is not one)."""
+    def _from_plain(cls, tag: str, data: Any) -> "Result":
+        if hasattr(data, "data_vars"):  # a sweep's Zarr table (a dataset): its counts are its variables
+            from virtspec_mi.results.zarr import as_plain
 
-        try:
-            if data.get("format") != cls.FORMAT:
-                raise KeyError("format")
+            data = as_plain(data)
+        return cls.from_dict(data)
 
-            def counts(source: dict[str, Any]) -> Counts:
-                # Results written before invalid directions were counted have none.
-                source = {"invalid_directions": np.zeros_like(np.asarray(source["rays"]), dtype=np.int64), **source}
-                return Counts(**{name: np.array(source[name], dtype=np.float64 if name == "largest_weight"
-                                                else np.int64) for name in Counts.names()})
+    @classmethod
+    def _from_dict(cls, data: Mapping[str, Any]) -> "Result":
+        """The result of :meth:`as_dict` (checked by :meth:`from_dict <virtspec_mi.results.base.ResultBase.from_dict>`)."""
 
-            return cls(
-                **cls.labels_from_dict(data),
-                counts=counts(data),
-                pilot=None if data["pilot"] is None else counts(data["pilot"]),
-                settings=Settings(**data["settings"]),
-                geometry=InstrumentGeometry(**data["geometry"]),
-                seconds=float(data["seconds"]),
-                scene=str(data["scene"]),
-                wavelength_independent=bool(data["wavelength_independent"]),
-                version=str(data["version"]),
-            )
-        except (KeyError, TypeError, ValueError, AttributeError) as error:
-            raise ValueError(f"not a virtspec-mi result (missing or bad {error})") from None
+        def counts(source: Mapping[str, Any], group: str) -> Counts:
+            # Results written before invalid directions were counted have none.
+            if not isinstance(source, Mapping):
+                raise ValueError(f"'{group}' must be an object of counts (got {type(source).__name__})")
+            fields = {name: whole_counts(source[name], name) for name in Counts.names()
+                      if name != "largest_weight" and (name != "invalid_directions" or name in source)}
+            fields.setdefault("invalid_directions", np.zeros_like(fields["rays"]))
+            return Counts(**fields, largest_weight=optional_numbers(source["largest_weight"], "largest_weight"))
+
+        return cls(
+            **cls.labels_from_dict(data),
+            counts=counts(data, "counts"),
+            pilot=None if data["pilot"] is None else counts(data["pilot"], "pilot"),
+            settings=Settings(**field_value(data, "settings", "object")),
+            geometry=InstrumentGeometry(**field_value(data, "geometry", "object")),
+            seconds=float(field_value(data, "seconds", "seconds")),
+            scene=field_value(data, "scene", "text"),
+            wavelength_independent=bool(field_value(data, "wavelength_independent", "flag")),
+            version=field_value(data, "version", "text"),
+        )
+
+    def _count_variables(self) -> dict[str, tuple[tuple[str, ...], np.ndarray]]:
+        return {name: (self.dims, np.asarray(values, dtype=np.int64)) for name, values in self.counts.as_dict().items()
+                if name != "largest_weight"}
+
+    def _check_stored(self, data: Mapping[str, Any]) -> None:
+        """The ``absorbed`` counts a JSON object holds (its own, and its pilot's) are the rest of the rays."""
+
+        for group, counts, source in (("", self.counts, data), ("pilot", self.pilot, data.get("pilot"))):
+            if counts is not None and isinstance(source, Mapping) and "absorbed" in source:
+                stored = whole_counts(source["absorbed"], "absorbed")
+                check_shapes({"absorbed": (self.dims, stored)}, self.sizes)
+                check_counts(group, {**counts.as_dict(), "absorbed": stored}, _STORED, reading_at(self.dims, self.coords))
+
+    def _count_groups(self) -> list[tuple[str, Mapping[str, np.ndarray], CountRules, tuple[str, ...]]]:
+        groups = [("", self.counts.as_dict(), COUNT_RULES, self.dims)]
+        if self.pilot is not None:
+            groups.append(("pilot", self.pilot.as_dict(), COUNT_RULES, self.dims))
+        return groups
 
     def to_dataset(self) -> Any:
         """
@@ -487,9 +527,9 @@ class Result(ResultBase):
         import xarray as xr
 
         variables: dict[str, Any] = {}
+        counted = self._count_variables()
         for name in (*QUANTITIES, *_PARTS, *Counts.names(), "absorbed", "certified_mu", "rounding_bias"):
-            values = np.asarray(getattr(self, name))
-            variables[name] = (self.dims, values.astype(np.int64 if values.dtype.kind in "iu" else np.float64))
+            variables[name] = counted.get(name) or (self.dims, np.asarray(getattr(self, name), dtype=np.float64))
         for name in QUANTITIES:
             lower, upper = self.interval(name)
             bound = {"clopper_pearson_delta": self.interval_delta}

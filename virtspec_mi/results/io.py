@@ -25,11 +25,18 @@ Each round-trips exactly (the counts are the data; everything else is derived):
 :func:`write_spectra_csv` / :func:`read_spectra_csv` write and read R, T and A at one θi
 in colour-science's CSV spectral format.
 
-Every file (not a Zarr store) is written atomically: into a temporary file beside it (``.NAME.*.tmp``),
-flushed to disk, then renamed onto the name. A failed or interrupted write (a full
-disk, a directory of that name, Ctrl-C) leaves the old file — or none — and no
-temporary; readers and concurrent writers never see a partial file.
-:func:`check_output` refuses, before any work, a path that cannot become a file.
+Every file (not a Zarr store) is written atomically (:func:`virtspec_mi.files.atomic_file`):
+into a temporary file beside it (``.NAME.*.tmp``, created here), flushed to disk, then
+renamed onto the name. A failed or interrupted write (a full disk, a directory of that
+name, Ctrl-C) leaves the old file — or none — and no temporary; readers and concurrent
+writers never see a partial file. A failed write raises
+:class:`~virtspec_mi.files.WriteError` naming the path and the cause, with the result
+attached (``error.result``); :func:`rescue` writes it elsewhere (the command line does).
+A Zarr store is written beside and swapped in, never over a directory holding anything
+this project did not write (:func:`virtspec_mi.results.zarr.replace_store`).
+:func:`check_output` refuses, before any work, a path that cannot become a result.
+:func:`read` hands what it read to :func:`virtspec_mi.results.integrity.read_file`, which
+checks every rule of a result file.
 
 References
 ----------
@@ -40,12 +47,14 @@ from __future__ import annotations
 
 import json
 import os
-import uuid
-from contextlib import contextmanager
+import tempfile
 from pathlib import Path
-from typing import Any, Iterator
+from typing import Any
 
 import numpy as np
+
+from virtspec_mi.files import IN_MEMORY, WriteError, atomic_file
+from virtspec_mi.results.integrity import unsealed
 
 __all__ = [
     "SUFFIXES",
@@ -57,6 +66,7 @@ __all__ = [
     "write_spectra_csv",
     "read_spectra_csv",
     "is_result_csv",
+    "rescue",
 ]
 
 SUFFIXES: tuple[str, ...] = (".nc", ".csv", ".json", ".zarr")
@@ -69,38 +79,62 @@ def write(result: Any, path: str | os.PathLike) -> Path:
     """
     Write ``result`` (any kind of :class:`~virtspec_mi.results.base.ResultBase`) to ``path``;
     the suffix picks the format, and only what it needs is built: ``result.to_dataset()``
-    for ``.nc`` and ``.zarr``, ``result.csv_dataset()`` for ``.csv``, ``result.as_dict()``
-    for ``.json``.
+    for ``.nc`` and ``.zarr``, ``result.csv_dataset()`` for ``.csv``, ``result.sealed_json()``
+    for ``.json``. A failed write (a full disk …) raises :class:`~virtspec_mi.files.WriteError`
+    naming the path and the cause, with the result attached (``error.result``): nothing
+    traced is lost with the file.
     """
 
     path = Path(path)
     suffix = result_format(path)
-    if suffix == ".zarr":
-        from virtspec_mi.results.zarr import write_result
+    try:
+        if suffix == ".zarr":
+            from virtspec_mi.results.zarr import write_result
 
-        return write_result(result, path)
-    with _atomic(path) as temporary:
-        if suffix == ".nc":
-            result.to_dataset().to_netcdf(temporary, engine="netcdf4")
-        elif suffix == ".json":
-            temporary.write_text(json.dumps(result.as_dict(), indent=1))
-        else:
-            temporary.write_text(csv_text(result.csv_dataset()))
+            return write_result(result, path)
+        with atomic_file(path) as temporary:
+            if suffix == ".nc":
+                result.to_dataset().to_netcdf(temporary, engine="netcdf4")
+            elif suffix == ".json":
+                temporary.write_text(result.sealed_json() + "\n")
+            else:
+                temporary.write_text(csv_text(result.csv_dataset()))
+    except WriteError as error:
+        raise error.keeping(error.kept or IN_MEMORY, result) from None
     return path
+
+
+def rescue(result: Any, path: str | os.PathLike) -> str:
+    """
+    Write ``result`` as JSON into the system's temporary directory, after its file
+    ``path`` could not be written (the command line does, before its process ends);
+    where it went — or why not —, in words.
+    """
+
+    target = Path(tempfile.gettempdir()) / f"virtspec-rescued-{Path(path).stem}-{os.getpid()}.json"
+    try:
+        write(result, target)
+    except WriteError as error:
+        return f"a copy could not be written to {target} either ({error.cause}): the result is lost with this process"
+    return f"the result was written to {target} instead (virtspec_mi.read_result reads it)"
 
 
 def check_output(path: str | os.PathLike, name: str = "out") -> Path:
     """
     ``path`` as a ``Path`` when a result file can be written there (a known suffix, an
-    existing directory, not itself a directory), else ``ValueError`` naming ``name``.
+    existing directory, not itself a directory; a Zarr store: nothing there, an empty
+    directory or a store of this project's, :func:`virtspec_mi.results.zarr.check_store`),
+    else ``ValueError`` naming ``name``.
     """
 
     path = Path(path)
     zarr = result_format(path) == ".zarr"
     if path.is_dir() and not zarr:
         raise ValueError(f"{name} {path} is a directory; give a file path")
-    if zarr and path.exists() and not path.is_dir():
-        raise ValueError(f"{name} {path} is a file; a Zarr store is a directory")
+    if zarr:
+        from virtspec_mi.results.zarr import check_store
+
+        check_store(path, name)
     if not path.parent.exists():
         raise ValueError(f"{name} {path} cannot be written: directory {path.parent} does not exist")
     if not path.parent.is_dir():
@@ -123,49 +157,79 @@ def csv_text(dataset: Any) -> str:
 
 def read(path: str | os.PathLike) -> tuple[str, Any]:
     """
-    What a result file holds: ``("dataset", xarray.Dataset)`` for ``.nc`` and ``.csv``
-    (the CSV's attributes), ``("plain", dict)`` for ``.json``; ``ValueError`` if it is
-    missing or not a virtspec-mi result.
+    What a result file holds: ``("dataset", xarray.Dataset)`` for ``.nc`` and a Zarr
+    store of a whole result, ``("table", xarray.Dataset)`` for a sweep's Zarr table,
+    ``("rows", xarray.Dataset)`` for ``.csv`` (its attributes, and its rows over the dim
+    ``row``), ``("plain", dict)`` for ``.json``; ``FileNotFoundError`` if it is missing,
+    ``ValueError`` if it is not a virtspec-mi result (messages without the path:
+    :func:`virtspec_mi.results.integrity.read_file` names it).
     """
 
     path = Path(path)
     suffix = result_format(path, "file")
     if suffix == ".zarr":
+        if not path.exists():
+            raise FileNotFoundError(f"Zarr result not found: {path}")
         if not path.is_dir():
-            raise ValueError(f"Zarr result not found: {path}")
-        from virtspec_mi.results.zarr import as_plain, is_table, read as read_zarr
+            raise ValueError("is not a Zarr store (a directory)")
+        from virtspec_mi.results.zarr import is_table, read as read_zarr
 
         dataset = read_zarr(path)
-        return ("plain", as_plain(dataset)) if is_table(dataset) else ("dataset", dataset)
+        return ("table", dataset) if is_table(dataset) else ("dataset", dataset)
     if not path.is_file():
-        raise ValueError(f"result file not found: {path}")
+        if path.exists():
+            raise ValueError("is not a file")
+        raise FileNotFoundError(f"result file not found: {path}")
     if suffix == ".nc":
         import xarray as xr
 
         try:
             with xr.open_dataset(path, engine="netcdf4") as dataset:
                 return "dataset", dataset.load()
-        except (OSError, ValueError) as error:
-            raise ValueError(f"could not read NetCDF result {path}: {error}") from None
-    text = path.read_text()
+        except (OSError, ValueError, RuntimeError, KeyError, IndexError, TypeError) as error:
+            raise ValueError(f"could not be read as NetCDF ({type(error).__name__}: {error})") from None
+    try:
+        text = path.read_text(encoding="utf-8")
+    except UnicodeDecodeError as error:
+        raise ValueError(f"is not UTF-8 text ({error})") from None
     if suffix == ".json":
         try:
             data = json.loads(text)
-        except json.JSONDecodeError as error:
-            raise ValueError(f"result file {path} is not valid JSON: {error}") from None
+        except (json.JSONDecodeError, RecursionError) as error:
+            raise ValueError(f"is not valid JSON ({type(error).__name__}: {error})") from None
         if not isinstance(data, dict):
-            raise ValueError(f"not a virtspec-mi result file: {path}")
-        return "plain", data
-    first = text.split("\n", 1)[0]
+            raise ValueError(f"is not a virtspec-mi result (a JSON {type(data).__name__}, not an object)")
+        return "plain", unsealed(text, data)
+    first, _, body = text.partition("\n")
     if not first.startswith(_CSV_HEADER):
-        raise ValueError(f"not a virtspec-mi result CSV (first line must start with {_CSV_HEADER.strip()!r}): {path}")
+        raise ValueError(f"is not a virtspec-mi result CSV (its first line must start with {_CSV_HEADER.strip()!r})")
+    try:
+        attrs = json.loads(first[len(_CSV_HEADER):])
+    except (json.JSONDecodeError, RecursionError) as error:
+        raise ValueError(f"has a bad header line ({error})") from None
+    if not isinstance(attrs, dict):
+        raise ValueError("has a bad header line (not a JSON object)")
+    return "rows", _rows(body, attrs)
+
+
+def _rows(body: str, attrs: dict[str, Any]) -> Any:
+    """A CSV file's rows (after the header line) as a dataset over the dim ``row``, with ``attrs``."""
+
+    import io as text_io
+
+    import pandas as pd
     import xarray as xr
 
     try:
-        attrs = json.loads(first[len(_CSV_HEADER):])
-    except json.JSONDecodeError as error:
-        raise ValueError(f"result CSV {path} has a bad header line: {error}") from None
-    return "dataset", xr.Dataset(attrs=attrs)
+        frame = pd.read_csv(text_io.StringIO(body), keep_default_na=False, na_values=[""])
+    except (ValueError, pd.errors.ParserError, pd.errors.EmptyDataError) as error:
+        raise ValueError(f"has rows that are not CSV ({' '.join(str(error).split())})") from None
+    columns = {}
+    for name in frame.columns:
+        values = frame[name].to_numpy()
+        numeric = values.dtype.kind in "iuf" and (values.dtype.kind != "u" or not len(values) or values.max() < 2**63)
+        columns[str(name)] = ("row", values.astype(np.float64) if numeric else values.astype(str))
+    return xr.Dataset(columns, attrs=attrs)
 
 
 def is_result_csv(path: str | os.PathLike) -> bool:
@@ -186,7 +250,7 @@ def write_spectra_csv(result: Any, path: str | os.PathLike, theta_i: float | Non
     msds = result.to_msds(theta_i)
     sds = {label: colour.SpectralDistribution(msds.values[:, k], msds.wavelengths, name=label)
            for k, label in enumerate(msds.labels)}
-    with _atomic(Path(path)) as temporary:
+    with atomic_file(path) as temporary:
         colour.write_sds_to_csv_file(sds, str(temporary))
     return Path(path)
 
@@ -234,39 +298,3 @@ def _csv_fields(values: np.ndarray) -> list[str]:
     return fields
 
 
-@contextmanager
-def _atomic(path: Path) -> Iterator[Path]:
-    """
-    A fresh temporary path beside ``path`` to write; when the block ends the file is
-    flushed to disk and renamed onto ``path`` (one step), or, if the block fails, removed.
-    """
-
-    temporary = path.with_name(f".{path.name}.{uuid.uuid4().hex[:12]}.tmp")
-    os.close(os.open(temporary, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666))  # the umask's permissions
-    try:
-        yield temporary
-        _flush(temporary)
-        os.replace(temporary, path)
-    except BaseException:
-        temporary.unlink(missing_ok=True)
-        raise
-    _flush_directory(path.parent)
-
-
-def _flush(path: Path) -> None:
-    """Flush a written file to disk (a failure, e.g. a full disk, raises ``OSError``)."""
-
-    handle = os.open(path, os.O_RDONLY)
-    try:
-        os.fsync(handle)
-    finally:
-        os.close(handle)
-
-
-def _flush_directory(path: Path) -> None:
-    """Flush a directory's entries (a rename in it) to disk, where the system allows it."""
-
-    try:
-        _flush(path)
-    except OSError:  # not every system opens or syncs directories
-        pass

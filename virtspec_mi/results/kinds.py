@@ -27,6 +27,7 @@ from virtspec_mi.results.base import ResultBase
 from virtspec_mi.results.formats import format_parts, tagged
 from virtspec_mi.results.goniophotometer import GonioResult
 from virtspec_mi.results.hemispherical import Result
+from virtspec_mi.results.integrity import read_file
 from virtspec_mi.results.sphere import SphereResult
 
 __all__ = ["KINDS", "kind_of", "read_result", "result_from"]
@@ -57,8 +58,10 @@ def read_result(path: str | os.PathLike) -> Any:
     """
     The result in ``path``, whatever its kind (a hemispherical reading or sweep, a
     goniophotometer reading, a sphere reading): ``.nc``, ``.csv``, ``.json`` or ``.zarr``
-    as written by its ``write`` (or printed by ``virtspec measure --json``);
-    ``ValueError`` if it is missing or not a result.
+    as written by its ``write`` (or printed by ``virtspec measure --json``), checked by
+    every rule of :mod:`virtspec_mi.results.integrity`: ``FileNotFoundError`` if it is
+    missing, a one-line ``ValueError`` naming the file and the field if it is not a result
+    or breaks a rule.
     """
 
-    return result_from(results_io.read(path))
+    return read_file(path, results_io.read, result_from)

@@ -41,7 +41,7 @@ import os
 from dataclasses import asdict, dataclass, field, replace
 from functools import cached_property
 from types import SimpleNamespace
-from typing import Any, ClassVar
+from typing import Any, ClassVar, Mapping
 
 import numpy as np
 
@@ -52,14 +52,30 @@ from virtspec_mi.geometry.sphere import Sphere, sphere_from_parameters
 from virtspec_mi.references.sphere_model import correct_readings, theory_inputs
 from virtspec_mi.results.base import ResultBase, per_count, plain_data, round_up, span
 from virtspec_mi.results.formats import annotate
+from virtspec_mi.results.integrity import CountRules, field_value, finite_labels, whole_counts
+from virtspec_mi.kernel.sphere_walk import FATES
 from virtspec_mi.settings import Settings
 
-__all__ = ["CONFIGURATIONS", "SphereResult"]
+__all__ = ["CONFIGURATIONS", "COUNT_RULES", "SphereResult"]
 
 CONFIGURATIONS: tuple[str, ...] = ("sample", "standard")
 """The two simulated configurations of every reading."""
 
 _UNCERTIFIED = ("capped", "invalid_directions", "weight_violations")
+
+COUNT_RULES = CountRules(
+    "rays",
+    parts={"hemispherical_reflected": "rays", "hemispherical_transmitted": "rays",
+           "hemispherical_specular": "hemispherical_reflected", "detected_from_upper": "detected"},
+    sums=(((*FATES, "lost_*"), "rays", True),
+          (("hemispherical_reflected", "hemispherical_transmitted"), "rays", False)),
+)
+"""How a configuration's counts add up per reading: its rays each end in one fate (detected, absorbed by the
+wall, the specimen or another holder, capped, invalid, or lost through a port), and the first interaction's
+hemispheres hold at most its rays. Sums over the walk (``wall_reflections``, ``weight_violations``,
+``rounded_weights``) may exceed the rays."""
+
+_FRACTION_RULES = CountRules(None, fractions=("wall_reflectance",))
 
 
 @dataclass(frozen=True, eq=False)
@@ -476,33 +492,61 @@ class SphereResult(ResultBase):
         }
 
     @classmethod
-    def from_dict(cls, data: dict[str, Any]) -> "SphereResult":
-        """The result of :meth:`as_dict` (``ValueError`` if ``data`` is not one)."""
+    def _from_dict(cls, data: Mapping[str, Any]) -> "SphereResult":
+        """The result of :meth:`as_dict` (checked by :meth:`from_dict <virtspec_mi.results.base.ResultBase.from_dict>`)."""
 
-        try:
-            if data.get("format") != cls.FORMAT:
-                raise KeyError("format")
+        def groups(source: Mapping[str, Any], what: str) -> dict[str, dict[str, np.ndarray]]:
+            if not isinstance(source, Mapping) or set(source) != set(CONFIGURATIONS):
+                shown = sorted(source) if isinstance(source, Mapping) else type(source).__name__
+                raise ValueError(f"'{what}' must hold the counts of the configurations {', '.join(CONFIGURATIONS)} "
+                                 f"(got {shown})")
+            out = {}
+            for configuration in CONFIGURATIONS:
+                named = source[configuration]
+                if not isinstance(named, Mapping):
+                    raise ValueError(f"{what}[{configuration!r}] must be an object of counts")
+                out[configuration] = {str(name): whole_counts(values, f"{what}[{configuration!r}] '{name}'")
+                                      for name, values in named.items()}
+            return out
 
-            def groups(source: dict[str, dict[str, Any]]) -> dict[str, dict[str, np.ndarray]]:
-                return {c: {name: np.asarray(values, dtype=np.int64) for name, values in named.items()}
-                        for c, named in source.items()}
+        return cls(
+            **cls.labels_from_dict(data),
+            counts=groups(data["counts"], "counts"),
+            pilot=None if data.get("pilot") is None else groups(data["pilot"], "pilot"),
+            wall_reflectance=finite_labels(data["wall_reflectance"], "wall_reflectance"),
+            sphere=field_value(data, "sphere", "text"), cap_fractions=field_value(data, "cap_fractions", "object"),
+            options=field_value(data, "options", "object"), settings=Settings(**field_value(data, "settings", "object")),
+            seconds=float(field_value(data, "seconds", "seconds")), scene=field_value(data, "scene", "text"),
+            sphere_parameters=dict(data.get("sphere_parameters") or {}),
+            specimen_radius=field_value(data, "specimen_radius", "number or null") if "specimen_radius" in data else None,
+            version=field_value(data, "version", "text"),
+        )
 
-            return cls(
-                **cls.labels_from_dict(data),
-                counts=groups(data["counts"]),
-                pilot=None if data.get("pilot") is None else groups(data["pilot"]),
-                wall_reflectance=np.asarray(data["wall_reflectance"], dtype=np.float64),
-                sphere=str(data["sphere"]), cap_fractions=dict(data["cap_fractions"]), options=dict(data["options"]),
-                settings=Settings(**data["settings"]), seconds=float(data["seconds"]), scene=str(data["scene"]),
-                sphere_parameters=dict(data.get("sphere_parameters") or {}),
-                specimen_radius=data.get("specimen_radius"), version=str(data["version"]),
-            )
-        except (KeyError, TypeError, ValueError, AttributeError) as error:
-            raise ValueError(f"not a virtspec-mi sphere result (missing or bad {error})") from None
+    def _count_variables(self) -> dict[str, tuple[tuple[str, ...], np.ndarray]]:
+        """Every count over the reading's dims and ``configuration``, the pilot's as ``pilot_<count>``."""
+
+        return {prefix + name: (self.dims, np.stack([groups[c][name] for c in CONFIGURATIONS], axis=-1))
+                for prefix, groups in (("", self.counts), ("pilot_", self.pilot or {}))
+                for name in groups.get("sample", {})}
+
+    def _count_groups(self) -> list[tuple[str, Mapping[str, np.ndarray], CountRules, tuple[str, ...]]]:
+        """Each configuration's counts (and its pilot's), and the wall reflectance of every reading."""
+
+        groups = [(f"{prefix}[{c!r}]", named[c], COUNT_RULES, self.reading_dims)
+                  for prefix, named in (("counts", self.counts), ("pilot", self.pilot or {})) for c in named]
+        return [*groups, ("", {"wall_reflectance": self.wall_reflectance}, _FRACTION_RULES, self.reading_dims)]
 
     @classmethod
     def _from_plain(cls, tag: str, data: Any) -> "SphereResult":
-        return cls.from_dict(data if tag == cls.FORMAT else _from_layout_0(data))
+        if tag == cls.FORMAT:
+            return cls.from_dict(data)
+        try:
+            return cls.from_dict(_from_layout_0(data))
+        except KeyError as error:
+            raise ValueError(f"lacks the field {error} of a sphere result of layout 0") from None
+        except (TypeError, AttributeError) as error:
+            raise ValueError(f"a field of the sphere result of layout 0 has the wrong type "
+                             f"({' '.join(str(error).split())})") from None
 
     def to_dataset(self) -> Any:
         """
@@ -516,11 +560,7 @@ class SphereResult(ResultBase):
 
         import xarray as xr
 
-        per = self.dims  # the readings' dims, then configuration
-        variables: dict[str, Any] = {}
-        for prefix, groups in (("", self.counts), ("pilot_", self.pilot or {})):
-            for name in groups.get("sample", {}):
-                variables[prefix + name] = (per, np.stack([groups[c][name] for c in CONFIGURATIONS], axis=-1))
+        variables: dict[str, Any] = self._count_variables()  # over the readings' dims, then configuration
         interval, hemispherical = self.reading_interval, self.hemispherical_interval
         band = {"clopper_pearson_delta": self.delta}
         variables.update({
@@ -557,21 +597,23 @@ def _from_layout_0(data: Any) -> dict[str, Any]:
 
     if isinstance(data, dict):
         plain = dict(data)
-        wavelengths = np.asarray(plain["wavelengths"], dtype=np.float64)
-        counts = {c: {name: np.asarray(v, dtype=np.int64) for name, v in named.items()}
-                  for c, named in plain["counts"].items()}
+        wavelengths = finite_labels(plain["wavelengths"], "wavelengths")
+        counts = {c: dict(named) for c, named in plain["counts"].items()}
     else:
         extra = json.loads(data.attrs["json"])
-        wavelengths = np.asarray(data["wavelength"].values, dtype=np.float64)
+        wavelengths = finite_labels(data["wavelength"].values, "wavelength")
         counts = {c: {} for c in CONFIGURATIONS}
         for name in data.data_vars:
             configuration, _, key = str(name).partition("_")
             if configuration in counts:
-                counts[configuration][key] = np.asarray(data[name].values, dtype=np.int64)
+                counts[configuration][key] = data[name].values
         plain = {**extra, "wall_reflectance": data["wall_reflectance"].values, "sphere": data.attrs["sphere"],
-                 "scene": data.attrs["scene"], "seconds": float(data.attrs["seconds"]), "rays": int(data.attrs["rays"])}
+                 "scene": data.attrs["scene"], "seconds": data.attrs["seconds"], "rays": data.attrs["rays"]}
+    rays = whole_counts(plain["rays"], "rays")
+    if rays.ndim:
+        raise ValueError(f"'rays' of a sphere result of layout 0 is one number (got shape {rays.shape})")
     for named in counts.values():
-        named["rays"] = np.full(wavelengths.shape, int(plain["rays"]), dtype=np.int64)
+        named["rays"] = np.full(wavelengths.shape, int(rays), dtype=np.int64)
     settings = dict(plain["settings"])
     return {"format": SphereResult.FORMAT, "dims": ["wavelength"], "wavelengths": wavelengths,
             "theta_i": settings["theta_i"], "counts": counts, "pilot": None,

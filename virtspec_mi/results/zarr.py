@@ -22,9 +22,14 @@ parts, Clopper–Pearson bounds, ``certified_mu``) and the attributes; :func:`re
 :meth:`virtspec_mi.Result.read` give the one result type back (the attribute
 ``virtspec_table`` holds the dims, settings, geometry, parameters and provenance as
 JSON; the counts are the variables). A store whose ``done`` is not all true is refused as
-incomplete. Unlike the ``.nc``/``.csv``/``.json`` files, a store is a directory and is
-not replaced atomically; the sweep's checkpoint (``OUT.partial.json``) stays the record
-for resuming.
+incomplete. A store is a directory: it is written into a new directory beside its name
+and swapped in (:func:`replace_store`), and only over a new path, an empty directory or a
+store this project wrote that holds nothing else (:func:`check_store`: a directory holding
+a file of anyone else's is refused before any tracing, and nothing in it is removed).
+While a sweep runs, the store is filled in place; if it cannot be written (a full disk)
+the sweep goes on without it, with a warning, and writes it whole when it completes; the
+sweep's checkpoint (``OUT.partial.json``) stays the record for resuming. A complete
+table carries the checksum of its counts (:mod:`virtspec_mi.results.integrity`).
 
 References
 ----------
@@ -35,17 +40,22 @@ from __future__ import annotations
 
 import json
 import os
+import re
+import shutil
 import time
+import warnings
 from pathlib import Path
-from typing import Any, Iterator, Sequence
+from typing import Any, Callable, Iterator, Sequence
 
 import numpy as np
 
+from virtspec_mi.files import WriteError, cause_of, flush_directory, temporary_name
 from virtspec_mi.kernel.counts import Counts
-from virtspec_mi.results.formats import annotate, format_parts
+from virtspec_mi.results.formats import TABLE_ATTRIBUTE, annotate, format_parts
+from virtspec_mi.results.integrity import CHECKSUM, checksum
 
 __all__ = ["SUFFIX", "CHUNK_READINGS", "WRITE_EVERY", "ZarrTable", "regions", "write_result", "read", "is_table",
-           "as_plain"]
+           "as_plain", "check_store", "replace_store"]
 
 SUFFIX: str = ".zarr"
 """The suffix of a Zarr result store."""
@@ -57,7 +67,6 @@ WRITE_EVERY: float = 10.0
 """Write kept batches again once the time since the last write is this many times what it took."""
 
 _GRID = ("wavelength", "theta_i")
-_META = "virtspec_table"
 _IDENTITY = "virtspec_sweep"
 
 
@@ -111,6 +120,8 @@ class ZarrTable:
         # reading k in C order over (*parameter dims, theta_i, wavelength): the store's axes reversed for the grid
         self.keyed_shape = (*(() if parameters is None else parameters.shape), len(theta_i), len(wavelengths))
         self._kept: list[tuple[np.ndarray, Counts, Counts | None]] = []
+        self.failure: WriteError | None = None
+        """Why the store could not be written (it is then written no more), or ``None``."""
         self._written_at, self._write_seconds = time.perf_counter(), 0.0
         identity_text = json.dumps(identity, sort_keys=True)
         if self._identity() != identity_text:
@@ -155,7 +166,8 @@ class ZarrTable:
                                                 chunks=chunks)) for name in names}
         variables["done"] = (self.dims, da.zeros(self.shape, dtype=bool, chunks=chunks))
         template = xr.Dataset(variables, coords=coords, attrs={_IDENTITY: identity})
-        template.to_zarr(self.path, mode="w", compute=False, consolidated=False)
+        replace_store(self.path, lambda target: template.to_zarr(target, mode="w", compute=False,
+                                                                 consolidated=False))
 
     def write(self, batch: np.ndarray, counts: Counts, pilot: Counts | None) -> None:
         """
@@ -166,15 +178,32 @@ class ZarrTable:
         :meth:`flush` writes what is left.
         """
 
+        if self.failure is not None:  # the store cannot be written: the run goes on without it
+            return
         self._kept.append((np.asarray(batch, dtype=np.int64), counts, pilot))
         if time.perf_counter() - self._written_at >= WRITE_EVERY * self._write_seconds:
             self.flush()
 
     def flush(self) -> None:
-        """Write every kept batch: one region per hyper-rectangle of its runs of consecutive readings."""
+        """
+        Write every kept batch: one region per hyper-rectangle of its runs of consecutive
+        readings. A failure (a full disk …) does not stop the sweep: it is warned about once
+        (``RuntimeWarning`` naming the store and the cause), kept in :attr:`failure`, and
+        the store is written no more; the readings stay in the sweep's result and checkpoint.
+        """
 
-        if not self._kept:
+        if not self._kept or self.failure is not None:
             return
+        try:
+            self._write_kept()
+        except (OSError, RuntimeError, ValueError) as error:
+            cause, code = cause_of(error, self.path)
+            self.failure = WriteError(self.path, cause, code=code)
+            self._kept = []
+            warnings.warn(f"{self.failure}: the sweep goes on without its Zarr table; its readings are kept in "
+                          "memory and in its checkpoint, and written when it completes", RuntimeWarning, stacklevel=2)
+
+    def _write_kept(self) -> None:
         import xarray as xr
 
         start = time.perf_counter()
@@ -238,54 +267,44 @@ def _joined(parts: list[Counts]) -> Counts:
 
 def write_result(result: Any, path: str | os.PathLike) -> Path:
     """
-    Write ``result`` to the store ``path``. A hemispherical result: every variable of
-    ``result.to_dataset()`` in full (into the sweep's store when its dims and coordinates
-    are the same, else a new one), the pilot counts, ``done`` and the ``virtspec_table``
-    attribute; a result over wavelength only (a reading) is written with θi as a dim of
-    one. Any other kind: its dataset as it is (``result_json`` rebuilds it).
+    Write ``result`` to the store ``path`` (:func:`replace_store`: into a new store beside
+    it, then swapped in; a store of this project's there is replaced, anything else is
+    refused). A hemispherical result: every variable of ``result.to_dataset()``, the
+    pilot counts, ``done`` and the :data:`~virtspec_mi.results.formats.TABLE_ATTRIBUTE`
+    (with the counts' checksum); a result without the dim ``wavelength`` or ``theta_i`` (a
+    reading, a selection) is written with it as a dim of one. Any other kind: its dataset as it is (``result_json`` rebuilds it).
     """
 
-    import xarray as xr
-
     path = Path(path)
-    if format_parts(result.FORMAT)[0] != "result":  # a goniophotometer or sphere reading: written whole
-        result.to_dataset().to_zarr(path, mode="w", consolidated=False)
-        return path
+    whole = format_parts(result.FORMAT)[0] != "result"  # a goniophotometer or sphere reading: written whole
+    dataset = result.to_dataset() if whole else _table(result, _root_attributes(path).get(_IDENTITY, ""))
+    replace_store(path, lambda target: dataset.to_zarr(target, mode="w", consolidated=False))
+    return path
+
+
+def _table(result: Any, identity: str) -> Any:
+    """The dataset of a hemispherical result's table (see :func:`write_result`)."""
+
     own_dims = result.dims
-    if set(result.dims) <= {"wavelength", "theta_i"}:
-        result = result.as_grid()
+    for name in _GRID:  # a reading (or a parameter point's) is stored over the grid, its own dims kept in the table
+        if name not in result.dims:
+            result = result._expanded(name)
     dataset = result.to_dataset()
     dims = result.dims
-    attrs = {k: v for k, v in dataset.attrs.items() if k != "result_json"}
     plain = result.as_dict()
-    attrs[_META] = json.dumps({**{k: plain[k] for k in ("format", "dims", "settings", "geometry", "seconds", "scene",
-                                                       "wavelength_independent", "version") + (
-                                     ("parameters",) if "parameters" in plain else ())},
-                               **({} if own_dims == dims else {"result_dims": list(own_dims)})})
+    meta = {**{k: plain[k] for k in ("format", "dims", "settings", "geometry", "seconds", "scene",
+                                      "wavelength_independent", "version") + (
+                ("parameters",) if "parameters" in plain else ())},
+            **({} if own_dims == dims else {"result_dims": list(own_dims)})}
     if result.pilot is not None:
         for name in Counts.names():
             dataset[f"pilot_{name}"] = (dims, np.asarray(getattr(result.pilot, name)))
     dataset["done"] = (dims, np.ones(result.shape, dtype=bool))
     annotate(dataset, result._parameter_keys())
-    same = False
-    if path.is_dir():
-        try:
-            with xr.open_zarr(path, consolidated=False) as old:
-                same = (tuple(old["done"].dims) == dims
-                        and all(np.array_equal(old[c].values, dataset[c].values) for c in dataset.coords)
-                        and set(old.data_vars) <= set(dataset.data_vars))
-                attrs[_IDENTITY] = old.attrs.get(_IDENTITY, "")
-        except Exception:
-            same = False
-    dataset.attrs = attrs
-    dataset.to_zarr(path, mode="a" if same else "w", consolidated=False)
-    if same:  # written into the sweep's store: xarray keeps the attributes its arrays were made with
-        import zarr
-
-        group = zarr.open_group(str(path), mode="r+")
-        for name in dataset.variables:
-            group[str(name)].attrs.update({k: v for k, v in dataset[name].attrs.items() if k in ("units", "long_name")})
-    return path
+    attrs = {k: v for k, v in dataset.attrs.items() if k != "result_json"}
+    dataset.attrs = {**attrs, TABLE_ATTRIBUTE: json.dumps(meta), **({_IDENTITY: identity} if identity else {})}
+    dataset.attrs[TABLE_ATTRIBUTE] = json.dumps({**meta, CHECKSUM: checksum(as_plain(dataset))})
+    return dataset
 
 
 def read(path: str | os.PathLike) -> Any:
@@ -295,44 +314,180 @@ def read(path: str | os.PathLike) -> Any:
 
     path = Path(path)
     try:
-        with xr.open_zarr(path, consolidated=False) as store:
+        with xr.open_zarr(path, consolidated=False, chunks=None) as store:  # no Dask graph: read at once
             dataset = store.load()
     except Exception as error:  # zarr and xarray raise many types for a store that is not one
-        raise ValueError(f"could not read Zarr result {path}: {error}") from None
-    if "result_json" in dataset.attrs and _META not in dataset.attrs:  # a result written whole (not a sweep table)
+        raise ValueError(f"could not be read as a Zarr store ({type(error).__name__}: "
+                         f"{' '.join(str(error).split())})") from None
+    if "result_json" in dataset.attrs and TABLE_ATTRIBUTE not in dataset.attrs:  # a result written whole
         return dataset
-    if _META not in dataset.attrs or "done" not in dataset:
-        raise ValueError(f"not a complete virtspec-mi Zarr result: {path} (no {_META} attribute: the sweep writing "
-                         "it has not completed; re-run it to finish)")
+    if TABLE_ATTRIBUTE not in dataset.attrs or "done" not in dataset:
+        raise ValueError(f"is not a complete virtspec-mi Zarr result (no {TABLE_ATTRIBUTE} attribute: the sweep "
+                         "writing it has not completed; re-run it to finish)")
     done = dataset["done"].values
-    if not done.all():
-        raise ValueError(f"Zarr result {path} is incomplete: {int(done.sum())} of {done.size} readings done")
+    if done.dtype.kind != "b" or not done.all():
+        raise ValueError(f"is incomplete: {int(np.sum(done == 1))} of {done.size} readings done")
     return dataset
 
 
 def is_table(dataset: Any) -> bool:
     """True for a sweep's table (:class:`ZarrTable`, :func:`write_result` of a hemispherical result)."""
 
-    return _META in dataset.attrs
+    return TABLE_ATTRIBUTE in dataset.attrs
 
 
 def as_plain(dataset: Any) -> dict[str, Any]:
     """
     A complete store's dataset as the plain data of :meth:`virtspec_mi.Result.from_dict`
-    (a reading stored as a grid of one θi gets its own dims back: ``result_dims``).
+    (a reading stored as a grid of one θi gets its own dims back: ``result_dims``);
+    ``ValueError`` naming what is missing or misshapen.
     """
 
-    meta = json.loads(dataset.attrs[_META])
-    dims = tuple(meta.get("dims", _GRID))  # stores written before parameter sweeps: wavelength x theta_i
-    own = tuple(meta.pop("result_dims", dims))
+    try:
+        meta = json.loads(dataset.attrs[TABLE_ATTRIBUTE])
+    except (TypeError, ValueError, RecursionError) as error:
+        raise ValueError(f"its {TABLE_ATTRIBUTE} attribute is not JSON ({error})") from None
+    if not isinstance(meta, dict):
+        raise ValueError(f"its {TABLE_ATTRIBUTE} attribute is not a JSON object")
+    dims = meta.get("dims", list(_GRID))  # stores written before parameter sweeps: wavelength x theta_i
+    own = meta.pop("result_dims", dims)
+    if (not isinstance(dims, list) or not all(isinstance(d, str) for d in dims) or not isinstance(own, list)
+            or not set(own) <= set(dims) or not set(_GRID) <= set(dims)):
+        raise ValueError(f"its {TABLE_ATTRIBUTE} attribute has bad dims ({dims!r}; the reading's: {own!r})")
+    dims, own = tuple(dims), tuple(own)
+
+    def variable(name: str) -> np.ndarray:
+        if name not in dataset.variables:
+            raise ValueError(f"lacks the variable {name!r}")
+        values = dataset[name]
+        if set(values.dims) != set(dims):
+            raise ValueError(f"variable {name!r} has the dims {tuple(values.dims)}, not {dims}")
+        return values.transpose(*dims).values[index]
+
     index = tuple(slice(None) if d in own else 0 for d in dims)
-    counts = {name: dataset[name].transpose(*dims).values[index] for name in Counts.names()}
-    pilot = ({name: dataset[f"pilot_{name}"].transpose(*dims).values[index] for name in Counts.names()}
+    for name in _GRID:
+        if name not in dataset.coords or dataset[name].dims != (name,):
+            raise ValueError(f"lacks the coordinate {name!r}")
+    counts = {name: variable(name) for name in Counts.names()}
+    pilot = ({name: variable(f"pilot_{name}") for name in Counts.names()}
              if f"pilot_{Counts.names()[0]}" in dataset else None)
     labels = {name: dataset[name].values if name in own else dataset[name].values[0] for name in _GRID}
     plain = {**meta, "dims": list(own), "wavelengths": labels["wavelength"], "theta_i": labels["theta_i"], **counts,
              "pilot": pilot}
-    if meta.get("parameters") is not None:
-        plain["parameter_coords"] = {name: dataset[name].values for name in (*meta["parameters"]["names"], "point")
-                                     if name in dataset.coords}
+    parameters = meta.get("parameters")
+    if parameters is not None:
+        names = parameters.get("names") if isinstance(parameters, dict) else None
+        if not isinstance(names, list) or not all(isinstance(n, str) for n in names):
+            raise ValueError(f"its {TABLE_ATTRIBUTE} attribute has bad parameters ({parameters!r})")
+        plain["parameter_coords"] = {name: dataset[name].values for name in (*names, "point") if name in dataset.coords}
     return plain
+
+
+# -- stores of this project only --------------------------------------------------------
+
+_MARKERS = ("result_json", TABLE_ATTRIBUTE, _IDENTITY)  # a group attribute only this project's stores carry
+_METADATA = frozenset({"zarr.json", ".zgroup", ".zattrs", ".zarray", ".zmetadata"})
+_CHUNK = re.compile(r"^\d+(\.\d+)*$")
+
+
+def check_store(path: str | os.PathLike, name: str = "out") -> Path:
+    """
+    ``path`` as a ``Path`` when a store may be written there: nothing there, an empty
+    directory, or a store this project wrote holding nothing else; else ``ValueError``
+    naming ``name``, the path and the first entry that is not this project's (it is
+    never removed: :func:`replace_store`).
+    """
+
+    path = Path(path)
+    if path.is_symlink() or (path.exists() and not path.is_dir()):
+        raise ValueError(f"{name} {path} is a file; a Zarr store is a directory")
+    stranger = _stranger(path) if path.exists() else None
+    if stranger is not None:
+        raise ValueError(f"{name} {path} is a directory holding {stranger!r}, which virtspec-mi did not write: a Zarr "
+                         "result is written only to a new path, an empty directory or a store of its own (which it "
+                         "replaces); give another path")
+    return path
+
+
+def _stranger(path: Path) -> str | None:
+    """The first entry under ``path`` that is not part of a store this project wrote, or ``None``."""
+
+    entries = sorted(path.iterdir())
+    if not entries:
+        return None
+    if not any(marker in _root_attributes(path) for marker in _MARKERS):
+        return entries[0].name
+    for entry in sorted(path.rglob("*")):
+        parts = entry.relative_to(path).parts
+        if entry.is_symlink() or not _store_entry(path, parts, entry.is_dir()):
+            return "/".join(parts)
+    return None
+
+
+def _store_entry(root: Path, parts: tuple[str, ...], is_dir: bool) -> bool:
+    """Whether ``root/parts`` is a Zarr store's own: metadata, an array's directory, chunks (v2 and v3 layouts)."""
+
+    if len(parts) == 1:
+        if is_dir:
+            return any((root / parts[0] / meta).is_file() for meta in ("zarr.json", ".zarray"))
+        return parts[0] in _METADATA
+    if len(parts) == 2 and not is_dir and (parts[1] in _METADATA or _CHUNK.match(parts[1])):
+        return True
+    return parts[1] == "c" and all(_CHUNK.match(p) and "." not in p for p in parts[2:])
+
+
+def _root_attributes(path: Path) -> dict[str, Any]:
+    """The group attributes of the store at ``path`` (v3 ``zarr.json``, v2 ``.zattrs``), ``{}`` if none."""
+
+    for name, key in (("zarr.json", "attributes"), (".zattrs", None)):
+        try:
+            data = json.loads((path / name).read_text(encoding="utf-8"))
+        except (OSError, ValueError, RecursionError):
+            continue
+        data = data.get(key, {}) if key and isinstance(data, dict) else data
+        return data if isinstance(data, dict) else {}
+    return {}
+
+
+def replace_store(path: str | os.PathLike, write: Callable[[Path], Any]) -> None:
+    """
+    ``write(directory)`` a store into a new directory beside ``path`` (made here, under a
+    fresh name), then put it in place of whatever :func:`check_store` allows there: the old
+    store (this project's) is moved aside and removed, and nothing else ever is. A failed
+    write removes the new directory (its own) and raises :class:`~virtspec_mi.files.WriteError`
+    naming ``path`` and the cause; ``path`` keeps its old store.
+    """
+
+    path = check_store(path)
+    temporary = temporary_name(path, ".zarr")
+    try:
+        temporary.mkdir()
+    except OSError as error:
+        cause, code = cause_of(error, path)
+        raise WriteError(path, cause, code=code) from None
+    try:
+        write(temporary)
+        old = None
+        if path.exists():
+            check_store(path)  # again, just before the swap
+            old = temporary_name(path, ".old.zarr")
+            os.rename(path, old)
+        try:
+            os.rename(temporary, path)
+        except BaseException:
+            if old is not None:
+                os.rename(old, path)
+            raise
+    except BaseException as error:
+        shutil.rmtree(temporary, ignore_errors=True)  # ours: made above under a fresh name
+        if isinstance(error, (OSError, RuntimeError)):
+            cause, code = cause_of(error, path)
+            raise WriteError(path, cause, code=code) from error
+        raise
+    flush_directory(path.parent)
+    if old is not None:
+        if _stranger(old) is None:
+            shutil.rmtree(old, ignore_errors=True)
+        else:  # something appeared in the old store meanwhile: it is left, with a word
+            warnings.warn(f"the former store {path} was moved to {old}, not removed: it holds "
+                          f"{_stranger(old)!r}, which virtspec-mi did not write", RuntimeWarning, stacklevel=2)

@@ -1,0 +1,177 @@
+"""
+Files the project writes: atomic replacement, its own temporaries, write errors
+===============================================================================
+
+The bottom of the package (it imports nothing of it): how every file virtspec-mi
+writes — a result file (:mod:`virtspec_mi.results.io`), a checkpoint
+(:mod:`virtspec_mi.engine.checkpoint`), a Zarr store (:mod:`virtspec_mi.results.zarr`) —
+reaches the disk, written once:
+
+- :func:`atomic_file`: a new file is written into a temporary beside its name, created
+  here (``O_EXCL``: never a file that was already there), flushed to disk and renamed
+  onto the name in one step. A failure or an interruption leaves the old file (or none)
+  and removes the temporary — the only file it removes, since it created it;
+- :class:`WriteError`: what a failed write raises, an ``OSError`` whose one-line message
+  names the path and the cause (:func:`cause_of`: "No space left on device (12.0 kB
+  free)", "File too large", "Permission denied" …) and, when the caller knows it, where
+  the readings that were being written are kept (:attr:`WriteError.kept`), with the
+  object itself attached (:attr:`WriteError.result`: a result whose file could not be
+  written is not lost with the file).
+
+Nothing here removes a file or a directory it did not create.
+
+References
+----------
+POSIX ``rename(2)`` (atomic replacement within a file system), ``open(2)`` (``O_EXCL``),
+``fsync(2)``.
+"""
+
+from __future__ import annotations
+
+import errno
+import os
+import shutil
+import uuid
+from contextlib import contextmanager
+from pathlib import Path
+from typing import Any, Iterator
+
+__all__ = ["WriteError", "IN_MEMORY", "atomic_file", "cause_of", "temporary_name", "flush_directory"]
+
+_FULL = 1 << 20  # a write failing with less free space than this is reported as a full disk
+
+IN_MEMORY: str = "the readings are kept in memory only (error.result)"
+"""The end of :attr:`WriteError.kept` when what was being written is nowhere else (the command line then saves it)."""
+
+
+class WriteError(OSError):
+    """
+    A file could not be written: ``path``, ``cause`` (in words) and, when known, where
+    the readings being written are kept (``kept``) and the object that was being written
+    (``result``: e.g. the :class:`~virtspec_mi.results.hemispherical.Result` whose file
+    failed, still whole in memory). ``errno`` is the cause's (e.g. ``errno.ENOSPC``).
+    """
+
+    def __init__(self, path: str | os.PathLike, cause: str, *, code: int | None = None, kept: str = "",
+                 result: Any = None) -> None:
+        self.path, self.cause, self.kept, self.result = Path(path), cause, kept, result
+        super().__init__(code, self._message())
+        self.filename = str(path)
+
+    def _message(self) -> str:
+        return f"could not write {self.path}: {self.cause}" + (f"; {self.kept}" if self.kept else "")
+
+    def __str__(self) -> str:
+        return self._message()
+
+    def keeping(self, kept: str, result: Any = None) -> "WriteError":
+        """The same error saying where the readings are kept (and holding ``result``, if given)."""
+
+        return WriteError(self.path, self.cause, code=self.errno, kept=kept,
+                          result=self.result if result is None else result)
+
+
+def cause_of(error: BaseException, path: str | os.PathLike) -> tuple[str, int | None]:
+    """
+    ``(cause in words, errno or None)`` of a failed write of ``path``: the system's reason
+    (lower case), and, when the disk holding ``path`` is nearly full, that too (some
+    writers, e.g. the NetCDF library, report a full disk as a generic error).
+    """
+
+    code = getattr(error, "errno", None)
+    reason = getattr(error, "strerror", None) or str(error) or type(error).__name__
+    reason = " ".join(str(reason).split())
+    free = _free_bytes(Path(path))
+    if free is not None and free < _FULL:  # some libraries report a full disk as another error (HDF5: EACCES)
+        code = errno.ENOSPC if code is None else code
+        full = "space" in reason or "quota" in reason
+        reason = f"{reason} ({_size(free)} free)" if full else f"{reason} (the disk is full: {_size(free)} free)"
+    elif code in (errno.EFBIG, None) and _size_limit() is not None:  # HDF5 reports EFBIG as another error
+        reason += f" (this process may write files of at most {_size(_size_limit())}: ulimit -f)"
+        code = errno.EFBIG
+    return reason, code
+
+
+def _size_limit() -> int | None:
+    """The largest file this process may write (``RLIMIT_FSIZE``), ``None`` without a limit."""
+
+    try:
+        import resource
+    except ImportError:  # not a POSIX system
+        return None
+    soft = resource.getrlimit(resource.RLIMIT_FSIZE)[0]
+    return None if soft == resource.RLIM_INFINITY else int(soft)
+
+
+def _free_bytes(path: Path) -> int | None:
+    for folder in (path.parent, *path.parents):
+        try:
+            return shutil.disk_usage(folder).free
+        except OSError:
+            continue
+    return None
+
+
+def _size(count: int) -> str:
+    for unit, scale in (("GB", 1e9), ("MB", 1e6), ("kB", 1e3)):
+        if count >= scale:
+            return f"{count / scale:.1f} {unit}"
+    return f"{count} bytes"
+
+
+def temporary_name(path: Path, suffix: str = ".tmp") -> Path:
+    """A fresh hidden name beside ``path`` for a temporary of it: ``.NAME.<random>.tmp``."""
+
+    return path.with_name(f".{path.name}.{uuid.uuid4().hex[:12]}{suffix}")
+
+
+@contextmanager
+def atomic_file(path: str | os.PathLike) -> Iterator[Path]:
+    """
+    A temporary file beside ``path`` (created here, empty, with the umask's permissions)
+    for the block to write; when the block ends it is flushed to disk and renamed onto
+    ``path`` in one step. If anything fails (the block, the flush, the rename — a full
+    disk, a file size limit, Ctrl-C), the temporary is removed and ``path`` keeps its old
+    content (or stays absent); an ``OSError`` or a writer's ``RuntimeError`` (the NetCDF
+    library's) becomes a :class:`WriteError` naming ``path`` and the cause.
+    """
+
+    path = Path(path)
+    temporary = temporary_name(path)
+    try:
+        os.close(os.open(temporary, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666))
+    except OSError as error:
+        cause, code = cause_of(error, path)
+        raise WriteError(path, cause, code=code) from None
+    try:
+        yield temporary
+        _flush(temporary)
+        os.replace(temporary, path)
+    except BaseException as error:
+        temporary.unlink(missing_ok=True)  # ours: created above with O_EXCL
+        if isinstance(error, WriteError):
+            raise
+        if isinstance(error, (OSError, RuntimeError)):
+            cause, code = cause_of(error, path)
+            raise WriteError(path, cause, code=code) from error
+        raise
+    flush_directory(path.parent)
+
+
+def _flush(path: Path) -> None:
+    """Flush a written file to disk (a failure, e.g. a full disk, raises ``OSError``)."""
+
+    handle = os.open(path, os.O_RDONLY)
+    try:
+        os.fsync(handle)
+    finally:
+        os.close(handle)
+
+
+def flush_directory(path: Path) -> None:
+    """Flush a directory's entries (a rename in it) to disk, where the system allows it."""
+
+    try:
+        _flush(path)
+    except OSError:  # not every system opens or syncs directories
+        pass

@@ -136,7 +136,7 @@ MEASURING: dict[str, Measuring] = {row.name: row for row in (
          "virtspec sweep scenes/soybean_abmb.xml -D side=abaxial --theta-i 8",
          "virtspec sweep scenes/soybean_abmb.xml --theta-i 8 --wavelengths 400:2500:5 --workers 2 --out leaf.nc")),
     Measuring(
-        "gonio", "goniophotometer", "goniophotometer: certified BRDF/BTDF per outgoing direction",
+        "gonio", "goniophotometer", "goniophotometer: certified BRDF/BTDF by outgoing direction",
         "Measure the specimen of a scene as the spectrophotometer does, and bin every escaping ray by its outgoing "
         "direction (theta_o, phi_o) in the specimen frame: exact counts, fractions and BRDF/BTDF per bin with their "
         "certificate (DKW for the CDFs, union bound for the bins, Clopper-Pearson intervals for f). Prints R and T "
@@ -152,7 +152,7 @@ MEASURING: dict[str, Measuring] = {row.name: row for row in (
          "virtspec gonio scenes/soybean_abmb.xml --wavelengths 550 650 --theta-o-bins 9 --phi-o-bins 12 "
          "--fold-phi --mu 0.02 --plot leaf.png")),
     Measuring(
-        "sphere", "sphere", "the readout of a physical integrating sphere (sample/standard)",
+        "sphere", "sphere", "an integrating sphere's readout (sample over standard)",
         "Simulate an integrating-sphere instrument reading the scene's specimen: the detector fractions with the "
         "sample and with the reference standard, their certified ratio (the reading), the hemispherical reading of "
         "the same rays and the instrument error; with --correct also the reading corrected by the sphere theory, "
@@ -162,7 +162,7 @@ MEASURING: dict[str, Measuring] = {row.name: row for row in (
          "virtspec sphere scenes/sphere_150mm_8d.xml --method comparison --wavelengths 400:700:100 --rays 20000 "
          "--correct --out r.json")),
 )}
-"""The measuring subcommands, one row each: every one takes the settings' flags, its instrument's and :data:`COMMON_FLAGS`."""
+"""The measuring subcommands: each takes the settings' flags, its instrument's and :data:`COMMON_FLAGS`."""
 
 
 @dataclass(frozen=True)
@@ -209,7 +209,18 @@ COMMON_FLAGS: tuple[Flag, ...] = (
 """The flags every measuring subcommand takes, defined once (:func:`common_flags` adds them)."""
 
 _SEVERAL = {"theta_i": "parse_theta_i"}
-"""Settings the measuring subcommands take as several values (a grid), and the parser of :mod:`virtspec_mi.checks` that reads them."""
+"""Settings a grid subcommand takes as several values, and the parser of :mod:`virtspec_mi.checks` that reads them."""
+
+
+class _Listing(argparse.HelpFormatter):
+    """``virtspec --help``: every subcommand with its summary on one line (``albedo-table`` included)."""
+
+    def __init__(self, prog: str) -> None:
+        super().__init__(prog, max_help_position=30)
+
+    def _format_action(self, action: argparse.Action) -> str:
+        self._action_max_length = max(self._action_max_length, 18)  # the longest subcommand, indented
+        return super()._format_action(action)
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -222,7 +233,7 @@ def build_parser() -> argparse.ArgumentParser:
         prog="virtspec", description="Virtual spectrophotometer: certified reflectance, transmittance and "
                                      "absorptance readings of Mitsuba BSDFs (Baranoski, Rokne & Xu 2001).",
         epilog="virtspec COMMAND --help: its flags and examples.",
-        formatter_class=lambda prog: argparse.HelpFormatter(prog, max_help_position=18, width=100))
+        formatter_class=_Listing)
     parser.add_argument("--version", action="version", version=f"virtspec-mi {__version__}")
     commands = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
 
@@ -231,7 +242,7 @@ def build_parser() -> argparse.ArgumentParser:
                                    epilog=_EXAMPLES[name] if examples is None else examples,
                                    formatter_class=argparse.RawDescriptionHelpFormatter)
 
-    bounds = command("bounds", "rays per reading under every ray budget (the paper's Table 1)",
+    bounds = command("bounds", "rays per reading under every ray budget (Table 1)",
                      "Rays per reading that certify |m/N - rho| < mu with probability >= 1 - delta: the "
                      "paper's Table 1 (eqs. 15 and 23), then every rule of bound=.")
     bounds.add_argument("--mu", type=float, default=0.005, help="certified tolerance (default 0.005)")
@@ -273,7 +284,7 @@ def build_parser() -> argparse.ArgumentParser:
     colour.add_argument("--json", action="store_true",
                         help="print one JSON object: XYZ, Lab, sRGB and its hex, coverage, note")
 
-    compare = command("compare", "a result against a measured spectrum: residuals, Delta E 2000",
+    compare = command("compare", "a result against a measured spectrum (residuals, Delta E)",
                       "Compare one quantity of a result file at one theta_i with a measured spectrum over their "
                       "common wavelengths (the measured one interpolated onto the result's, never extrapolated): "
                       "residuals, RMSE, the share of points within the certified tolerance (+ the measurement "
@@ -287,7 +298,7 @@ def build_parser() -> argparse.ArgumentParser:
     compare.add_argument("--plot", help="figure .png or .svg: both spectra and the residuals")
     compare.add_argument("--json", action="store_true", help="print the comparison as one JSON object")
 
-    plot = command("plot", "a figure of a result file of any kind, or against a measured one",
+    plot = command("plot", "a figure of any result file (or against a measured one)",
                    "Plot one quantity of a result file against theta_i (a sweep over angles: one curve per "
                    "wavelength) or wavelength (one curve per theta_i), with the band of the certified tolerance; "
                    "a goniophotometer file: its lobes (f in and across the plane of incidence, at one "
@@ -315,7 +326,7 @@ def build_parser() -> argparse.ArgumentParser:
                      "layout; --compare lists every cell of a published table outside the certified interval.")
     _albedo_options(albedo)
 
-    command("scenes", "the shipped scenes, one line each (SCENE takes their names)",
+    command("scenes", "the shipped scenes (every SCENE argument takes their names)",
             "List the scenes shipped with virtspec-mi. Every subcommand that takes a SCENE takes a shipped "
             "scene's name as well as a file path (e.g. virtspec measure soybean_abmb).")
 
@@ -353,7 +364,8 @@ def _gonio_flags(parser: argparse.ArgumentParser) -> None:
     group.add_argument("--klems-basis", choices=("full", "half", "quarter"), default="full",
                        help="Klems basis of --klems (145, 77 or 41 patches; default full)")
     group.add_argument("--isotropic", action="store_true",
-                       help="--klems: one reading per ring, rotated onto its other patches (rotation-invariant specimens)")
+                       help="--klems: one reading per ring, rotated onto its other patches (rotation-invariant "
+                            "specimens)")
 
 
 _CORRECTION = {
@@ -364,7 +376,7 @@ _CORRECTION = {
                           "a Lambertian specimen)",
     "collimated_transmittance": "the unscattered part of a transmittance reading, 0 ... 1 (default 0)",
 }
-"""What the sphere theory's correction assumes (:meth:`virtspec_mi.results.sphere.SphereResult.corrected`'s keywords)."""
+"""What the sphere theory's correction assumes: :meth:`~virtspec_mi.results.sphere.SphereResult.corrected`."""
 
 
 def _correction_flags(parser: argparse.ArgumentParser) -> None:
@@ -564,10 +576,10 @@ def _keywords(args: argparse.Namespace, command: Measuring) -> dict[str, Any]:
     from virtspec_mi.results.io import check_output
     from virtspec_mi.results.plot import check_figure_path
 
-    out = check_output(args.out) if args.out else None
+    out = _flagged("--out", check_output, args.out) if args.out else None
     figures = {flag: getattr(args, flag.lstrip("-").replace("-", "_"), None) for flag in ("--plot", "--plot-series")}
-    for path in figures.values():
-        check_figure_path(path)
+    for flag, path in figures.items():
+        _flagged(flag, check_figure_path, path)
     settings = _given(args, _settings(), several=_several(command))
     options = _instrument_options(command)
     parameters = _pairs(args.params, "--param")
@@ -598,14 +610,40 @@ def _check_one_reading(command: Measuring, parameters: dict[str, str]) -> None:
                              "sweep takes several)")
 
 
+def _flagged(flag: str, check: Callable[[Any], Any], value: Any) -> Any:
+    """``check(value)``; its ``ValueError`` names ``flag`` (``--out: out must end in …``)."""
+
+    try:
+        return check(value)
+    except ValueError as error:
+        raise ValueError(f"{flag}: {error}") from None
+
+
+_KEYWORD_FLAGS = {"parameters": "--param", "defines": "-D", "progress": None}
+"""The API keywords whose flag is not their name with dashes (``None``: no flag)."""
+
+
 def _run(args: argparse.Namespace, function: Callable[..., Any], keywords: dict[str, Any]) -> Any:
-    """``function(args.scene, **keywords)``; the checkpoint of its ``out`` is named if it is interrupted (:func:`main`)."""
+    """
+    ``function(args.scene, **keywords)``; the checkpoint of its ``out`` is named if it is
+    interrupted (:func:`main`). A ``ValueError`` whose message starts with the name of a
+    keyword given (a rule between options that needs the scene's values, e.g.
+    ``pilot_delta must satisfy 0 < pilot_delta < delta``) names that keyword's flag.
+    """
 
     from virtspec_mi.engine.checkpoint import checkpoint_for
 
     out = keywords["out"]
     args.checkpoint = checkpoint_for(out) if out is not None else None
-    return function(args.scene, **keywords)
+    try:
+        return function(args.scene, **keywords)
+    except ValueError as error:
+        named = [name for name, value in keywords.items()
+                 if not (value is None or value is False or value == {}) and str(error).startswith(name + " ")]
+        flag = _KEYWORD_FLAGS.get(named[0], _flag(named[0])) if named else None
+        if flag is None:
+            raise
+        raise ValueError(f"{flag}: {error}") from error
 
 
 def _drawn(path: str | None, draw: Callable[..., Any], wavelengths: Sequence[float] = ()) -> list[Any]:

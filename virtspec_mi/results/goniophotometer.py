@@ -241,7 +241,7 @@ class GonioResult(ResultBase):
 
     @property
     def two_stage(self) -> bool:
-        """True when each reading's N was sized from its own pilot (``bound="two-stage"``; the pilot's rays are spent)."""
+        """True when each reading's N was sized from its own pilot (``bound="two-stage"``; its rays are spent)."""
 
         return self.result.pilot is not None
 
@@ -323,7 +323,7 @@ class GonioResult(ResultBase):
         return "\n".join(lines)
 
     def summary(self) -> str:
-        """The spectrophotometer summary (R and T's certificate), the bins, their certificate and :meth:`theta_o_table`."""
+        """The spectrophotometer summary (R and T certified), the bins, their certificate and :meth:`theta_o_table`."""
 
         b = self.bins
         folded = ", phi_o folded to |phi_o - phi_i|" if b.fold_phi else ""

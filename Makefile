@@ -59,6 +59,7 @@ bench: setup
 	$(PY) benchmarks/tabulated.py
 	$(PY) benchmarks/sphere.py
 	$(PY) benchmarks/gonio.py
+	$(PY) benchmarks/walk_ceiling.py
 
 clean:
 	rm -rf $(VENV) build *.egg-info .pytest_cache docs/_build docs/_generated

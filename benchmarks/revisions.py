@@ -10,6 +10,13 @@ Shared helpers of the benchmark scripts: the machine, and older git revisions
 - :func:`load_average` — the 1-minute load average (other work skews every figure).
 - :func:`resolve`, :func:`show`, :func:`describe` — read-only git look-ups of the
   checkout (never the index or the branch).
+- :class:`Worker` / :func:`serve` — a worker process of a benchmark script running another
+  tree's code (``PYTHONPATH`` at the tree, checked with :func:`foreign_modules`), answering
+  JSON requests line by line: the side-by-side runs of ``walk_queue.py`` and ``walk_ceiling.py``.
+- :func:`find_bench` — the bench of a scene under the running tree's name for the function
+  (``find_instrument`` before the subpackage layout).
+- :func:`within_certificates` — whether two trees' readings agree within the sum of their
+  certified tolerances (when a change alters the random stream, the counts differ).
 - :func:`worktree` — a throwaway checkout of a revision in a temporary directory
   (``git worktree add --detach``, removed afterwards with ``git worktree remove
   --force``), importable with ``PYTHONPATH`` pointing at it (:func:`python_env`).
@@ -19,14 +26,15 @@ Shared helpers of the benchmark scripts: the machine, and older git revisions
   Without it, the editable install's finder would quietly supply the *current*
   tree's plugins: check with :func:`foreign_modules`.
 
-Used by ``throughput.py`` (``--against``), ``abm_spectrum.py`` (``--against``) and
-``sweeps.py``.
+Used by ``throughput.py`` (``--against``), ``abm_spectrum.py`` (``--against``),
+``walk_queue.py``, ``walk_ceiling.py`` and ``sweeps.py``.
 """
 
 from __future__ import annotations
 
 import contextlib
 import datetime
+import json
 import os
 import platform
 import shutil
@@ -34,7 +42,7 @@ import subprocess
 import sys
 import tempfile
 from pathlib import Path
-from typing import Iterator
+from typing import Any, Callable, Iterator
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -195,3 +203,118 @@ def foreign_modules(root: Path, package: str = "virtspec_mi") -> list[str]:
             if file is None or not os.path.realpath(file).startswith(top):
                 found.append(f"{name} ({file})")
     return sorted(found)
+
+
+# --- worker processes running another tree's code ------------------------------------------
+
+
+def find_bench(scene: Any) -> Any:
+    """
+    The bench (specimen BSDF, geometry, frame) of a loaded ``scene``, by the running tree's
+    name for it: ``virtspec_mi.scene.find_bench`` (``find_instrument`` before the subpackage
+    layout of cff7fea), so a worker runs older trees too.
+    """
+
+    try:
+        from virtspec_mi.scene import find_bench as find
+    except ImportError:
+        from virtspec_mi.scene import find_instrument as find
+    return find(scene)
+
+
+def within_certificates(old: dict, new: dict) -> tuple[bool, float, float]:
+    """
+    Whether two trees' readings agree within their certificates: ``old`` and ``new`` map a
+    quantity's name to (values, μ) flattened over the readings; every |x_old − x_new| must
+    be ≤ μ_old + μ_new (each certificate holds with probability ≥ 1 − δ), and a quantity
+    with no certificate (μ = NaN: weight violations, capped walks or invalid directions)
+    identical. Returns (whether all agree, the largest |Δx|, the smallest μ_old + μ_new).
+    """
+
+    import numpy as np
+
+    inside, largest, smallest = True, 0.0, np.inf
+    for name, (values, mu) in old.items():
+        new_values, new_mu = new[name]
+        allowed = np.asarray(mu) + np.asarray(new_mu)
+        difference = np.abs(np.asarray(values) - np.asarray(new_values))
+        certified = ~np.isnan(allowed)
+        inside &= bool(np.all((difference <= allowed) | (~certified & (difference == 0.0))))
+        largest = max(largest, float(difference.max()))
+        smallest = min(smallest, float(allowed[certified].min()) if certified.any() else np.inf)
+    return inside, largest, smallest if np.isfinite(smallest) else np.nan
+
+
+def serve(root: Path, answer: Callable[[dict], dict], warm: Callable[[], dict] | None = None) -> None:
+    """
+    The worker side of :class:`Worker`: send stray output of Python or of native code to
+    stderr (never into the replies), run ``warm()`` (optional: compile, warm up; its dict
+    joins the hello), say hello (``virtspec_mi``'s file, how many of its modules are loaded and
+    which of them come from outside ``root``), then ``answer`` each JSON request line on stdin
+    with one JSON line.
+    """
+
+    replies = os.fdopen(os.dup(1), "w", buffering=1)
+    os.dup2(2, 1)
+    sys.stdout = sys.stderr
+    import virtspec_mi
+
+    virtspec_mi.mitsuba()
+    extra = warm() if warm is not None else {}
+    modules = [name for name in sys.modules if name == "virtspec_mi" or name.startswith("virtspec_mi.")]
+    hello = {"virtspec_mi": virtspec_mi.__file__, "modules": len(modules), "foreign": foreign_modules(root), **extra}
+    print(json.dumps(hello), file=replies)
+    for line in sys.stdin:
+        print(json.dumps(answer(json.loads(line))), file=replies)
+
+
+class Worker:
+    """
+    A worker process of ``script`` (``script --worker ROOT *arguments``, which calls
+    :func:`serve`) importing ``virtspec_mi`` from ``root``. :meth:`start` waits for its hello
+    (so several workers warm up at once) and refuses a worker that imported code from outside
+    ``root``; :meth:`ask` sends one request and returns the reply.
+    """
+
+    def __init__(self, label: str, root: Path, script: Path, arguments: tuple[str, ...] = ()) -> None:
+        self.label, self.root = label, root
+        self.log = tempfile.TemporaryFile("w+")
+        self.process = subprocess.Popen(
+            [sys.executable, str(script), "--worker", str(root), *arguments], cwd=str(root), env=python_env(root),
+            stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=self.log, text=True, bufsize=1)
+        self.hello: dict = {}
+
+    def start(self) -> Worker:
+        """Wait for the worker's hello and check that it runs ``root``'s virtspec_mi."""
+
+        self.hello = self.receive()
+        top = os.path.realpath(self.root) + os.sep
+        if not os.path.realpath(self.hello["virtspec_mi"]).startswith(top) or self.hello["foreign"]:
+            raise RuntimeError(f"{self.label}: the worker imported code from outside {self.root}: "
+                               f"virtspec_mi from {self.hello['virtspec_mi']}; {self.hello['foreign']}")
+        return self
+
+    def receive(self) -> dict:
+        line = self.process.stdout.readline()
+        if not line:
+            self.process.wait()
+            self.log.seek(0)
+            tail = "".join(self.log.readlines()[-30:])
+            raise RuntimeError(f"{self.label}: the worker stopped (exit {self.process.returncode}):\n{tail}")
+        return json.loads(line)
+
+    def ask(self, **request: Any) -> dict:
+        print(json.dumps(request), file=self.process.stdin, flush=True)
+        return self.receive()
+
+    def close(self) -> None:
+        """End the worker (EOF on its stdin; killed if it has not exited within a minute)."""
+
+        self.process.stdin.close()
+        try:
+            self.process.wait(timeout=60)
+        except subprocess.TimeoutExpired:
+            self.process.kill()
+            self.process.wait()
+        self.process.stdout.close()
+        self.log.close()

@@ -9,9 +9,13 @@ the same specimen, in one run.
   per configuration: one configuration (the sample's detector fraction) and the whole
   readout (sample and standard);
 - the cost of correcting that reading by the sphere theory (``SphereResult.corrected`` and
-  ``corrected_interval``: closed-form NumPy, no rays).
+  ``corrected_interval``: closed-form NumPy, no rays);
+- ``--spectrum``: the certified SCI spectrum 400–2500 nm / 5 nm (421 wavelengths) of that
+  grey sample, both configurations, under each ray budget (``hoeffding`` at δ/2 per
+  configuration, ``two-stage`` on each configuration's detector fraction): wall time,
+  rays traced, rays/s (issue 21's target: ≤ 3 s on 2 cores).
 
-Run: python benchmarks/sphere.py [--repeat K]
+Run: python benchmarks/sphere.py [--repeat K] [--spectrum]
 """
 
 from __future__ import annotations
@@ -37,7 +41,11 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--repeat", type=int, default=5)
     parser.add_argument("--rays", type=int, default=105_967)
+    parser.add_argument("--spectrum", action="store_true", help="the certified SCI spectrum 400-2500/5 nm only")
     args = parser.parse_args()
+    if args.spectrum:
+        spectrum(args.repeat)
+        return
     from virtspec_mi.engine.plan import kernel_options
     from virtspec_mi.instruments.sphere import configurations
     from virtspec_mi.kernel.tracer import ReadingPlan, tally_readings
@@ -86,6 +94,27 @@ def main() -> None:
           f"hemispherical {result.hemispherical[0]:.4f})")
     print(f"  detector fraction {counts['cross'][:, 0].sum() / args.rays:.5f}; "
           f"hemispherical {(counts['cross'][1].sum() + counts['cross'][3].sum()) / args.rays:.5f}")
+
+
+def spectrum(repeat: int) -> None:
+    """The certified SCI spectrum 400–2500 nm / 5 nm of the grey sample under each ray budget (warm, best of ``repeat``)."""
+
+    from revisions import load_average, machine, machine_lines
+
+    print("\n".join(machine_lines({**machine(), "load": load_average()})))
+    scene = vm.mitsuba().load_file(SCENE)
+    print("certified 8/d SCI spectrum of the grey sample (rho = 0.5, rho_w = 0.98), 400-2500 nm / 5 nm, "
+          f"mu = 0.005, delta = 0.01, both configurations; best of {repeat} (warm)")
+    for bound in ("hoeffding", "two-stage"):
+        def run():
+            return vm.sphere_measure(scene, wavelengths="400:2500:5", bound=bound, progress=False)
+
+        result = run()  # warm-up: compile the kernels
+        seconds = best(run, repeat)
+        rays = sum(int(counts["rays"].sum()) for counts in result.counts.values())
+        rays += sum(int(counts["rays"].sum()) for counts in (result.pilot or {}).values())  # two-stage pilots
+        print(f"  {bound:9s}: {seconds:7.2f} s  {rays / 1e6:7.2f} M rays  {rays / seconds / 1e6:6.2f} Mray/s  "
+              f"certified {bool(result.certified.all())}, reading at 550 nm {result.reading[30]:.4f}")
 
 
 if __name__ == "__main__":

@@ -90,7 +90,6 @@ import resource
 import statistics
 import subprocess
 import sys
-import tempfile
 import time
 from dataclasses import dataclass
 from functools import partial
@@ -394,78 +393,25 @@ def mitsuba_reflected(scene: dict, rays: int) -> int:
 def worker(root: Path, rays: int) -> int:
     """``--worker ROOT``: measure on request with ROOT's virtspec_mi (see the section comment)."""
 
-    replies = os.fdopen(os.dup(1), "w", buffering=1)
-    os.dup2(2, 1)  # stray output of Python or of native code must not corrupt the replies
-    sys.stdout = sys.stderr
-
     import virtspec_mi
 
-    virtspec_mi.mitsuba()
-    scene = virtspec_mi.instrument_scene(BSDF)
-    calls = {"Mitsuba": partial(mitsuba_reflected, scene), "bare Dr.Jit": lambda n: drjit_counts(n)[0]}
-    for call in calls.values():
-        call(1000)  # compile
-        call(rays)  # and one untimed call at full size
-    modules = [name for name in sys.modules if name == "virtspec_mi" or name.startswith("virtspec_mi.")]
-    hello = {"virtspec_mi": virtspec_mi.__file__, "modules": len(modules),
-             "foreign": revisions.foreign_modules(root), "runtime": revisions.runtime()}
-    print(json.dumps(hello), file=replies)
-    for line in sys.stdin:
-        request = json.loads(line)
+    calls: dict = {}
+
+    def warm() -> dict:
+        scene = virtspec_mi.instrument_scene(BSDF)
+        calls.update({"Mitsuba": partial(mitsuba_reflected, scene), "bare Dr.Jit": lambda n: drjit_counts(n)[0]})
+        for call in calls.values():
+            call(1000)  # compile
+            call(rays)  # and one untimed call at full size
+        return {"runtime": revisions.runtime()}
+
+    def answer(request: dict) -> dict:
         start = time.perf_counter()
         reflected = calls[request["method"]](request["rays"])
-        seconds = time.perf_counter() - start
-        print(json.dumps({"seconds": seconds, "reflected": reflected}), file=replies)
+        return {"seconds": time.perf_counter() - start, "reflected": reflected}
+
+    revisions.serve(root, answer, warm)
     return 0
-
-
-class Side:
-    """One revision under test: a worker process of this script importing virtspec_mi from ``root``."""
-
-    def __init__(self, label: str, root: Path, rays: int):
-        self.label, self.root = label, root
-        self.log = tempfile.TemporaryFile("w+")
-        self.process = subprocess.Popen(
-            [sys.executable, str(Path(__file__).resolve()), "--worker", str(root), "--rays", str(rays)],
-            cwd=root, env=revisions.python_env(root), stdin=subprocess.PIPE, stdout=subprocess.PIPE,
-            stderr=self.log, text=True, bufsize=1)
-        self.hello: dict = {}
-
-    def receive(self) -> dict:
-        line = self.process.stdout.readline()
-        if not line:
-            self.process.wait()
-            self.log.seek(0)
-            tail = "".join(self.log.readlines()[-30:])
-            raise RuntimeError(f"the worker for {self.label} stopped (exit {self.process.returncode}):\n{tail}")
-        return json.loads(line)
-
-    def start(self) -> None:
-        """Wait for the worker to be warm, and check that it runs ``root``'s virtspec_mi."""
-
-        self.hello = self.receive()
-        top = os.path.realpath(self.root) + os.sep
-        if not os.path.realpath(self.hello["virtspec_mi"]).startswith(top) or self.hello["foreign"]:
-            raise RuntimeError(f"the worker for {self.label} imported code from outside {self.root}: "
-                               f"virtspec_mi from {self.hello['virtspec_mi']}; {self.hello['foreign']}")
-
-    def measure(self, method: str, rays: int) -> dict:
-        """One timed call in the worker: its wall ``seconds`` and its ``reflected`` count."""
-
-        print(json.dumps({"method": method, "rays": rays}), file=self.process.stdin, flush=True)
-        return self.receive()
-
-    def close(self) -> None:
-        """End the worker (EOF on its stdin; killed if it has not exited within a minute)."""
-
-        self.process.stdin.close()
-        try:
-            self.process.wait(timeout=60)
-        except subprocess.TimeoutExpired:
-            self.process.kill()
-            self.process.wait()
-        self.process.stdout.close()
-        self.log.close()
 
 
 def against(revision: str, rays: int, rounds: int, markdown: bool) -> int:
@@ -478,15 +424,17 @@ def against(revision: str, rays: int, rounds: int, markdown: bool) -> int:
     seconds: dict[tuple[str, str], list[float]] = {}
     reflected: dict[tuple[str, str], set[int]] = {}
     with revisions.worktree(commit) as checkout:
-        sides: list[Side] = []
+        sides: list[revisions.Worker] = []
         try:
-            sides += [Side(current, ROOT, rays), Side(older, checkout, rays)]  # both warm up at once
+            arguments = ("--rays", str(rays))
+            sides += [revisions.Worker(current, ROOT, Path(__file__).resolve(), arguments),
+                      revisions.Worker(older, checkout, Path(__file__).resolve(), arguments)]  # both warm up at once
             for side in sides:
                 side.start()
             for _ in range(rounds):  # A B A B ...: a slow spell of the machine hits both revisions
                 for side in sides:
                     for method in AGAINST_METHODS:
-                        reply = side.measure(method, rays)
+                        reply = side.ask(method=method, rays=rays)
                         seconds.setdefault((side.label, method), []).append(reply["seconds"])
                         reflected.setdefault((side.label, method), set()).add(reply["reflected"])
         finally:

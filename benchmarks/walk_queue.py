@@ -9,13 +9,18 @@ Three parts, printed as one report:
    of their own (``PYTHONPATH`` set to the tree, checked with
    :func:`revisions.foreign_modules`), called alternately case by case, best wall time of
    ``--repeats`` each, with the CPU time (all threads) of that call — the robust figure on
-   a shared machine — and whether the two trees gave identical counts:
+   a shared machine — and whether the two trees gave identical counts (when a change alters
+   the random stream, as issue 25's generator did, whether every R and T agrees within the
+   sum of the two readings' certified tolerances, :func:`revisions.within_certificates`):
 
    - ``abm_b`` soybean, collimated, θi = 8°: 800 nm (the longest walks) and 551 nm,
      2·10⁶ rays each; the whole spectrum 400–2500 nm every 5 nm at the certified
-     Hoeffding N (μ = 0.005, δ = 0.01) and under ``two-stage``;
+     Hoeffding N (μ = 0.005, δ = 0.01), under ``two-stage`` and under ``exact``;
+   - ``abm_u`` corn, the same spectrum at the Hoeffding N;
    - the MCML benchmark slab (``turbid_slab`` μa = 10, μs = 90, g = 0.75, d = 0.02),
      collimated and diffuse beams, 4·10⁶ rays.
+
+   ``--case NAME`` (repeatable) runs only those cases.
 
 2. **Occupancy** (working tree only, ``tally_readings`` with its ``walk_stats``): for a
    grid of :class:`~virtspec_mi.kernel.tracer.WalkQueue` settings (lanes, queue, refill,
@@ -36,6 +41,7 @@ Run::
     .venv/bin/python benchmarks/walk_queue.py                     # both parts, ~5 min
     .venv/bin/python benchmarks/walk_queue.py --quick             # 10x fewer rays
     .venv/bin/python benchmarks/walk_queue.py --skip-against      # occupancy grid and gonio only
+    .venv/bin/python benchmarks/walk_queue.py --against main --skip-occupancy --skip-gonio --repeats 3
 
 Needs the NPSG leaf data (``VIRTSPEC_LEAF_DATA``, default this checkout's shipped copy,
 which older trees read too). Other work on the machine slows every figure; the load average is printed.
@@ -46,7 +52,6 @@ from __future__ import annotations
 import argparse
 import json
 import os
-import subprocess
 import sys
 import time
 from pathlib import Path
@@ -57,7 +62,8 @@ ROOT = Path(__file__).resolve().parents[1]
 os.environ.setdefault("VIRTSPEC_LEAF_DATA", str(ROOT / "virtspec_mi" / "data" / "abm-npsg"))  # older trees too
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from revisions import describe_worktree, load_average, machine, machine_lines, python_env, worktree  # noqa: E402
+from revisions import (Worker, describe_worktree, load_average, machine, machine_lines, serve,  # noqa: E402
+                       within_certificates, worktree)
 
 SLAB = {"type": "turbid_slab", "mu_a": 10.0, "mu_s": 90.0, "g": 0.75, "thickness": 0.02}
 SOYBEAN = {"type": "abm_b"}
@@ -68,6 +74,10 @@ CASES: dict[str, tuple[dict, dict, int | None]] = {
     "abm_b spectrum, hoeffding": (SOYBEAN, {"theta_i": 8, "beam": "collimated", "wavelengths": "400:2500:5"}, None),
     "abm_b spectrum, two-stage": (SOYBEAN, {"theta_i": 8, "beam": "collimated", "wavelengths": "400:2500:5",
                                             "bound": "two-stage"}, None),
+    "abm_b spectrum, exact": (SOYBEAN, {"theta_i": 8, "beam": "collimated", "wavelengths": "400:2500:5",
+                                        "bound": "exact"}, None),
+    "abm_u spectrum, hoeffding": ({"type": "abm_u"}, {"theta_i": 8, "beam": "collimated",
+                                                      "wavelengths": "400:2500:5"}, None),
     "MCML slab, collimated": (SLAB, {"beam": "collimated"}, 4_000_000),
     "MCML slab, diffuse": (SLAB, {"beam": "diffuse"}, 4_000_000),
 }
@@ -78,17 +88,14 @@ NPSG_FULL_SECONDS, NPSG_FULL_RAYS = 58.0, 100_000  # NPSG C++, 421 wavelengths, 
 
 
 def worker(root: str) -> None:
-    """Answer case requests on stdin (JSON lines) with timings and counts on stdout."""
+    """Answer case requests (JSON lines on stdin) with timings and counts (:func:`revisions.serve`)."""
 
     import virtspec_mi as vm
 
     mi = vm.mitsuba()
-    from revisions import foreign_modules
-
     scenes = {}
-    print(json.dumps({"ready": True, "foreign": foreign_modules(Path(root))}), flush=True)
-    for line in sys.stdin:
-        request = json.loads(line)
+
+    def answer(request: dict) -> dict:
         specimen, options, rays = CASES[request["case"]]
         key = json.dumps(specimen, sort_keys=True)
         if key not in scenes:
@@ -100,53 +107,34 @@ def worker(root: str) -> None:
         if request.get("warm"):  # the same call, 100x fewer rays: every kernel compiled
             small = {"rays": max(1000, rays // 100)} if rays else {"mu": 0.05}
             vm.measure(scenes[key], **options, **small)
-            print(json.dumps({}), flush=True)
-            continue
+            return {}
         start, start_cpu = time.perf_counter(), time.process_time()
         result = vm.measure(scenes[key], **options, **extra)
         wall, cpu = time.perf_counter() - start, time.process_time() - start_cpu
-        rays_spent = int(np.sum(result.rays))
-        print(json.dumps({"wall": wall, "cpu": cpu, "rays": rays_spent,
-                          "counts": [np.asarray(result.reflected).tolist(), np.asarray(result.transmitted).tolist(),
-                                     np.asarray(result.capped).tolist()]}), flush=True)
+        flat = lambda values: np.asarray(values, dtype=np.float64).reshape(-1).tolist()  # noqa: E731
+        mu = flat(result.certified_mu)
+        return {"wall": wall, "cpu": cpu, "rays": int(np.sum(result.rays)),
+                "counts": [np.asarray(result.reflected).tolist(), np.asarray(result.transmitted).tolist(),
+                           np.asarray(result.capped).tolist()],
+                "values": {"R": (flat(result.reflectance), mu), "T": (flat(result.transmittance), mu)}}
+
+    serve(Path(root), answer)
 
 
-class Worker:
-    """A worker process running ``root``'s code."""
-
-    def __init__(self, label: str, root: Path) -> None:
-        self.label = label
-        self.process = subprocess.Popen(
-            [sys.executable, __file__, "--worker", str(root)], stdin=subprocess.PIPE, stdout=subprocess.PIPE,
-            text=True, env=python_env(root), cwd=str(root))
-        hello = self.receive()
-        if hello.get("foreign"):
-            raise RuntimeError(f"{label}: modules from another tree: {hello['foreign']}")
-
-    def receive(self) -> dict:
-        line = self.process.stdout.readline()
-        if not line:
-            raise RuntimeError(f"{self.label}: the worker ended")
-        return json.loads(line)
-
-    def ask(self, **request) -> dict:
-        self.process.stdin.write(json.dumps(request) + "\n")
-        self.process.stdin.flush()
-        return self.receive()
-
-    def close(self) -> None:
-        self.process.stdin.close()
-        self.process.wait(timeout=60)
+# --- side by side ------------------------------------------------------------------------------
 
 
-def against(revision: str, repeats: int, scale: int) -> tuple[list[list[str]], list[str]]:
+def against(revision: str, repeats: int, scale: int, cases: list[str]) -> tuple[list[list[str]], list[str]]:
     """Every case on both trees, alternately; rows of the table and notes."""
 
     rows, notes = [], []
     with worktree(revision) as old_root:
-        trees = {"before": Worker(revision, old_root), "after": Worker(describe_worktree(), ROOT)}
+        script = Path(__file__).resolve()
+        trees = {"before": Worker(revision, old_root, script), "after": Worker(describe_worktree(), ROOT, script)}
+        for tree in trees.values():
+            tree.start()
         try:
-            for case in CASES:
+            for case in cases:
                 for tree in trees.values():
                     tree.ask(case=case, scale=scale, warm=True)
                 best = {name: None for name in trees}
@@ -156,14 +144,16 @@ def against(revision: str, repeats: int, scale: int) -> tuple[list[list[str]], l
                         if best[name] is None or answer["wall"] < best[name]["wall"]:
                             best[name] = answer
                 before, after = best["before"], best["after"]
-                same = before["counts"] == after["counts"]
+                inside, largest, allowance = within_certificates(before["values"], after["values"])
+                same = "identical" if before["counts"] == after["counts"] else (
+                    f"changed, within certificates (max |dR|, |dT| {largest:.4f} <= {allowance:.4f})" if inside
+                    else f"OUTSIDE the certificates (max |dR|, |dT| {largest:.4f} > {allowance:.4f})")
                 rows.append([case, f"{after['rays']:,}",
                              f"{before['wall']:.3f} / {after['wall']:.3f}",
                              f"{before['rays'] / before['wall'] / 1e6:.2f} / {after['rays'] / after['wall'] / 1e6:.2f}",
                              f"{before['wall'] / after['wall']:.2f}x",
                              f"{before['cpu']:.3f} / {after['cpu']:.3f}",
-                             f"{before['cpu'] / after['cpu']:.2f}x",
-                             "identical" if same else "DIFFER"])
+                             f"{before['cpu'] / after['cpu']:.2f}x", same])
                 if "spectrum" in case:
                     npsg = NPSG_FULL_RAYS * 421 / NPSG_FULL_SECONDS
                     rate = after["rays"] / after["wall"]
@@ -305,6 +295,8 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--against", default="b0f95e7", metavar="REV", help="the revision to compare with")
     parser.add_argument("--repeats", type=int, default=2, help="calls per tree and case (best wall time)")
     parser.add_argument("--quick", action="store_true", help="10x fewer rays")
+    parser.add_argument("--case", action="append", choices=list(CASES), help="a side-by-side case (repeatable; "
+                                                                             "default all)")
     parser.add_argument("--skip-against", action="store_true", help="only the occupancy grid")
     parser.add_argument("--skip-occupancy", action="store_true", help="no occupancy grid")
     parser.add_argument("--skip-gonio", action="store_true", help="no goniophotometer readings")
@@ -316,7 +308,7 @@ def main(argv: list[str] | None = None) -> int:
     scale = 10 if args.quick else 1
     out, load = [], [load_average()]
     if not args.skip_against:
-        rows, notes = against(args.against, args.repeats, scale)
+        rows, notes = against(args.against, args.repeats, scale, args.case or list(CASES))
         load.append(load_average())
         out += [f"Side by side: {args.against} (before) / {describe_worktree()} (after), best wall of {args.repeats}",
                 "", table(["case", "rays", "wall s", "Mray/s", "speed-up (wall)", "CPU s", "speed-up (CPU)", "counts"],

@@ -40,6 +40,7 @@ autosummary_generate = True
 autodoc_default_options = {"members": True, "show-inheritance": True}
 autodoc_typehints = "description"
 autodoc_member_order = "bysource"
+autodoc_inherit_docstrings = False  # Mitsuba base classes carry their own (C++-style) docstrings
 napoleon_google_docstring = False
 napoleon_numpy_docstring = True
 napoleon_use_rtype = False
@@ -56,8 +57,9 @@ _LITERAL = re.compile(r"(``.*?``)")
 
 def _escape_bars(app, what, name, obj, options, lines: list[str]) -> None:
     for i, line in enumerate(lines):
-        if "|" not in line or line.lstrip().startswith(("|", "+")):
-            continue
+        stripped = line.strip()
+        if "|" not in line or stripped.startswith("+") or (stripped.startswith("|") and stripped.endswith("|")):
+            continue  # a table's row or border
         parts = _LITERAL.split(line)
         lines[i] = "".join(part if part.startswith("``") else part.replace("|", r"\|") for part in parts)
 

@@ -13,14 +13,14 @@ def mi():
 
 
 def test_walk_plan_rule(mi):
-    """Long declared walks: refill every 4th iteration, starts precomputed; short or undeclared: 2, computed."""
+    """Long declared walks: refill every 4th iteration; short or undeclared: 2; starts computed in the refill."""
 
     from virtspec_mi.kernel.tracer import LONG_WALK_STEPS, WalkQueue, walk_plan
 
     assert walk_plan(None) == (2, False)
     assert walk_plan(LONG_WALK_STEPS - 0.5) == (2, False)
-    assert walk_plan(LONG_WALK_STEPS) == (4, True)
-    assert WalkQueue().planned(LONG_WALK_STEPS * 2) == WalkQueue(refill=4, prestart=True)
+    assert walk_plan(LONG_WALK_STEPS) == (4, False)
+    assert WalkQueue().planned(LONG_WALK_STEPS * 2) == WalkQueue(refill=4, prestart=False)
     assert WalkQueue().planned(None) == WalkQueue(refill=2, prestart=False)
     explicit = WalkQueue(lanes=64, queue="group", refill=8, prestart=False)
     assert explicit.planned(LONG_WALK_STEPS * 2) == explicit  # given values are kept

@@ -227,12 +227,15 @@ def test_corrected_leaf_readings_match_the_hemispherical_readings():
     reflectance = vm.sphere_measure(scene, rays=RAYS, delta=DELTA, wavelengths="550, 850")
     residual = check_corrected(reflectance)
     # the leaf is not Lambertian: it reflects the sphere's diffuse light with more than its 8° reflectance
-    # (0.53 against 0.49 at 850 nm); told so, the correction's residual there shrinks
+    # (0.53 against 0.49 at 850 nm); told so, the correction lowers its value there (the Lambertian
+    # one is biased high). The shift is a function of this reading and u (not of the noise both
+    # residuals share): 0.0043-0.0095 over seeds 0-11 with either walk generator (issue 25), so > 0.003.
+    # (Whether |told| < |Lambertian residual| / 2 in one reading is chance: 4 of those 12 seeds each.)
     adaxial = np.ravel(vm.measure(vm.instrument_scene({"type": "abm_b"}), beam="diffuse", rays=RAYS,
                                   wavelengths="550, 850").reflectance)
     assert adaxial[1] > reflectance.hemispherical[1] + 0.02
     told = check_corrected(reflectance, sample_reflectance=adaxial)
-    assert abs(told[1]) < abs(residual[1]) / 2
+    assert told[1] < residual[1] - 0.003
     transmittance = vm.sphere_measure(scene, measurement="transmittance", theta_i=0, rays=RAYS, delta=DELTA,
                                       wavelengths="550, 850")
     check_corrected(transmittance, sample_reflectance=abaxial_diffuse_reflectance("550, 850"))

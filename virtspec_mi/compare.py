@@ -1,6 +1,6 @@
 """
 Simulated against measured spectra: :func:`compare`
-==================================================
+===================================================
 
 The paper's first application: a virtual measurement of a material model set against
 a real measurement of the material. :func:`compare` takes a result of any kind (or a

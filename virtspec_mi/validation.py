@@ -1,6 +1,6 @@
 """
 Coverage harness: do certified readings miss as often as the binomial law says?
-==============================================================================
+===============================================================================
 
 For specimens whose reflectance ρ is known exactly, :func:`coverage` takes K
 independent readings in **one** :func:`virtspec_mi.engine.readings.take_readings` call (at

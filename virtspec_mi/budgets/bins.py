@@ -1,6 +1,6 @@
 """
 Certificates of a goniophotometer reading: CDFs, bin fractions, BRDF values
-==========================================================================
+===========================================================================
 
 A goniophotometer reading of N rays tallies the escaping rays in K direction bins
 (:mod:`virtspec_mi.geometry.bins`): m_k rays in bin k, an estimate m_k/N of the bin's

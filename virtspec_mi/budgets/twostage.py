@@ -1,6 +1,6 @@
 """
 Two-stage certified readings: a pilot batch sizes a fresh second batch
-=====================================================================
+======================================================================
 
 The fixed rules of :mod:`virtspec_mi.budgets.bounds` size every reading for the worst case
 ρ = ½. The ``"two-stage"`` rule spends a small pilot batch per reading to learn where

@@ -1,6 +1,6 @@
 """
 Exchange formats renderers and simulation tools read: certified tables and BSDF files
-====================================================================================
+=====================================================================================
 
 - :mod:`~virtspec_mi.exchange.albedo`: certified directional-albedo tables E(μ, α),
   E_avg(α) (and E(μ, α, η) of rough glass) for energy compensation, on the grids of

@@ -89,7 +89,7 @@ from virtspec_mi.exchange.conventions import Convention, convention
 from virtspec_mi.exchange.sizing import (binomial_rays, clopper_pearson_each, pilot_intervals, stage_two_shares,
                                          union_hoeffding_rays, union_hoeffding_rays_array)
 
-__all__ = ["MODELS", "DISTRIBUTIONS", "BOUNDS", "AlbedoTable", "TableComparison", "albedo_table",
+__all__ = ["MODELS", "DISTRIBUTIONS", "BOUNDS", "TableBudget", "AlbedoTable", "TableComparison", "albedo_table",
            "read_albedo_table"]
 
 MODELS: dict[str, str] = {
@@ -101,12 +101,28 @@ MODELS: dict[str, str] = {
 DISTRIBUTIONS: tuple[str, ...] = ("ggx", "beckmann")
 """Microfacet distributions (Mitsuba's ``distribution``)."""
 
-BOUNDS: dict[str, str] = {
-    "two-stage": "a pilot per cell, then a fresh batch sized by the Zubkov-Serov binomial bound over the pilot's "
-                 "interval",
-    "hoeffding": "every cell N = ceil(ln(2 C |Q| / delta) / (2 epsilon^2)) rays",
+@dataclass(frozen=True)
+class TableBudget:
+    """A table's ray budget: what it does, whether a pilot sizes each cell, how it splits δ (``split``)."""
+
+    description: str
+    adaptive: bool
+    split: str
+
+    def split_words(self, cells: int, quantities: int) -> str:
+        """How δ is split over this table's cells and quantities, for its certificate."""
+
+        return self.split.format(cells=cells, quantities=quantities)
+
+
+BOUNDS: dict[str, TableBudget] = {
+    "two-stage": TableBudget("a pilot per cell, then a fresh batch sized by the Zubkov-Serov binomial bound over the "
+                             "pilot's interval", True,
+                             "delta/10 over the {cells:,} pilots, 9 delta/10 over the second batches by pilot variance"),
+    "hoeffding": TableBudget("every cell N = ceil(ln(2 C |Q| / delta) / (2 epsilon^2)) rays", False,
+                             "delta split evenly over {cells:,} cells x {quantities} quantities"),
 }
-"""Ray budgets of a table (:mod:`virtspec_mi.exchange.sizing`)."""
+"""Ray budgets of a table, by name (:mod:`virtspec_mi.exchange.sizing`)."""
 
 SIDES: tuple[str, ...] = ("outside", "inside")
 """Glass: light arriving from outside (relative index η) or from inside (1/η)."""
@@ -308,9 +324,7 @@ class AlbedoTable:
                 bad += int(np.isnan(self.certified_epsilon(average=True)).sum())
             return (f"NOT CERTIFIED: {bad:,} of {self.cells:,} values had weight violations, invalid directions or "
                     f"capped walks (certified_epsilon is NaN there); the others: |value - true| < {worst:.4g}")
-        split = (f"delta split evenly over {self.cells:,} cells x {len(self.quantities)} quantities"
-                 if self.bound == "hoeffding" else
-                 f"delta/10 over the {self.cells:,} pilots, 9 delta/10 over the second batches by pilot variance")
+        split = BOUNDS[self.bound].split_words(self.cells, len(self.quantities))
         return (f"every value ({what}; {self.cells:,} cells) within {worst:.4g} of the model's true value at once "
                 f"with probability >= {1 - self.delta:g} (bound {self.bound}: {split}; union bound)")
 
@@ -874,7 +888,8 @@ def albedo_table(
     started = time.perf_counter()
     traced_seconds = 0.0
     groups = 0
-    bar = Progress(progress, n_cells * (1 if bound == "hoeffding" else 2), desc="albedo table")
+    adaptive = BOUNDS[bound].adaptive
+    bar = Progress(progress, n_cells * (2 if adaptive else 1), desc="albedo table")
 
     def run(label: str, beam: str, angles: Sequence[float], pts: np.ndarray, rays: int) -> Any:
         nonlocal traced_seconds, groups
@@ -905,7 +920,7 @@ def albedo_table(
             totals["pilot_rays"] = np.zeros(shape, dtype=np.int64)
             totals["pilot_violations"] = np.zeros(shape, dtype=np.int64)
             totals["interval_delta"] = np.full(shape, delta / (n_cells * q))
-            if bound == "hoeffding":
+            if not adaptive:
                 rays = union_hoeffding_rays(epsilon, delta, n_cells * q)
                 found = counts_of(run(f"hoeffding:{beam}", beam, angles, points, rays))
                 for k in found:
@@ -920,7 +935,7 @@ def albedo_table(
                     hits += [pilot["reflected"], pilot["transmitted"]]
                 pilots[beam] = [pilot_intervals(h, n1, delta / 10.0 / (n_cells * q)) for h in hits]
             assembled[beam] = totals
-        if bound == "two-stage":
+        if adaptive:
             shares = stage_two_shares({beam: intervals for beam, intervals in pilots.items()}, delta * 0.9)
             for beam, angles, rows in beams:
                 totals = assembled[beam]
@@ -957,7 +972,7 @@ def albedo_table(
     if average:
         averaged = {k: grid.canonical_average(v[0]) for k, v in assembled["diffuse"].items()}
     provenance = {"seed": int(seed), "wavelength_nm": float(wavelength), "mitsuba": _mitsuba_module.__version__,
-                  "variant": mi.variant(), "virtspec_mi": __version__, "pilot_rays": n1 if bound != "hoeffding" else 0,
+                  "variant": mi.variant(), "virtspec_mi": __version__, "pilot_rays": n1 if adaptive else 0,
                   "seconds_wall": round(time.perf_counter() - started, 3), "seconds_traced": round(traced_seconds, 3),
                   "groups": groups,
                   "created": datetime.now(timezone.utc).isoformat(timespec="seconds"),

@@ -1,6 +1,6 @@
 """
 Small pieces the exchange modules share: atomic file writes and derived seeds
-============================================================================
+=============================================================================
 
 - :func:`atomic_write`: a file written through a temporary file beside it and renamed
   onto its name in one step, so a reader never sees half a file and an interrupted

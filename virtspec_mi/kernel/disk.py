@@ -1,6 +1,6 @@
 """
 Disk sampling in the kernel: eqs. (3) and (4) and Shirley–Chiu
-=============================================================
+==============================================================
 
 Disk sampling (all uniform by area; the tests check it statistically):
 

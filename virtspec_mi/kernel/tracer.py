@@ -1,6 +1,6 @@
 """
 The ray kernel: rays → specimen BSDF → fate → exact integer counts
-=================================================================
+==================================================================
 
 One reading = one (wavelength, θi, φi) with its own N independent rays. All readings
 of a call run in chunks of one fused Dr.Jit kernel each: counter-based random numbers
@@ -126,7 +126,7 @@ class WalkQueue:
       of two). A refill (the finished ray's tally, the next ray's start) runs for a whole
       SIMD packet when any of its lanes needs it; refilling every P-th iteration divides
       that cost by P for about (P − 1)/2 iterations of idling per ray.
-    - ``prestart``: every ray's start (incident ray and ``walk_start``: the PCG32 seeding,
+    - ``prestart``: every ray's start (incident ray and ``walk_start``: the generator's seeding,
       spectral look-ups …) computed in one kernel over the whole chunk before the walk
       loop, at full SIMD use; a refill then only gathers its ray's start state (a memory
       read per state array) instead of computing it for the whole packet.
@@ -167,17 +167,18 @@ def walk_plan(walk_steps: float | None) -> tuple[int, bool]:
     """
     The queue's ``refill`` period and ``prestart`` for a specimen whose walks take
     ``walk_steps`` events on average (:func:`virtspec_mi.kernel.walk.walk_steps`; ``None``:
-    not declared). Long walks (≥ :data:`LONG_WALK_STEPS`): refill every 4th iteration, starts
-    computed before the loop; short or undeclared: every 2nd iteration, starts computed in the
-    refill. Chosen by measurement (benchmarks/RESULTS.md, issue 14): on the ABM leaf (10.2
-    events per ray over the soybean spectrum, 15.7 at 800 nm) precomputed starts save
-    8–11 % of the CPU time and refill 4 up to 8 % more; on the MCML slab (3.2 events)
-    gathering a start costs more than computing it (7–10 % slower) and refill 4 loses 5–7 %.
+    not declared). Long walks (≥ :data:`LONG_WALK_STEPS`): refill every 4th iteration;
+    short or undeclared: every 2nd; starts computed in the refill for both. Chosen by
+    measurement (benchmarks/RESULTS.md, issues 14 and 25): on the ABM leaf (10.2 events per
+    ray over the soybean spectrum, 15.7 at 800 nm) refill 4 saves up to 8 % against 2; on the
+    MCML slab (3.2 events) refill 4 loses 5–7 %. Precomputed starts (``prestart``) saved
+    8–11 % on the leaf while its walk generator was a TEA-seeded PCG32; with the hashed Weyl
+    sequence of :func:`~virtspec_mi.kernel.walk.walk_rng` a start costs little more than
+    gathering it: the soybean two-stage and corn spectra run 5 % and 11 % faster without, 800 nm
+    4 % (issue 25), so no walk length gets it by default.
     """
 
-    if walk_steps is not None and walk_steps >= LONG_WALK_STEPS:
-        return 4, True
-    return 2, False
+    return (4 if walk_steps is not None and walk_steps >= LONG_WALK_STEPS else 2), False
 
 
 @dataclass(frozen=True)

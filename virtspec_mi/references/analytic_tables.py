@@ -1,6 +1,6 @@
 """
 Analytic BSDF tables: goniophotometer tables of known models, by NumPy quadrature
-================================================================================
+=================================================================================
 
 Independent references for the ``tabulated`` BSDF (kept apart from the code they
 check, like :mod:`virtspec_mi.references.quadrature`): the bin fractions
@@ -136,7 +136,7 @@ def quadrature_table(model: Model, *, wavelength: Sequence[float] = (551.0,), th
                      phi_i: float = 0.0, folded: bool = False, nodes: int = 8) -> BSDFTable:
     """
     The table of an analytic BSDF ``model`` (see :data:`Model`; φ relative to the
-    incidence azimuth): p_k by ``nodes``² Gauss–Legendre points per bin in (sin²θo, φo).
+    incidence azimuth): p_k by ``nodes`` × ``nodes`` Gauss–Legendre points per bin in (sin²θo, φo).
     A folded table integrates both mirror halves.
     """
 

@@ -46,7 +46,7 @@ So a back-lit ray
 - that the interface *refracts* (probability ``1 − F_back``) crosses to the upper
   hemisphere: it counts as *reflected*.
 
-The expected reading's reflectance is therefore the pair average of
+The expected reading's reflectance is therefore the pair average of::
 
     F(γ, η)              when cos γ ≥ 0 (front face; the integrator sends
                           cos γ = 0 to the front face too),

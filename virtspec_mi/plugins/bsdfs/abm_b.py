@@ -12,16 +12,16 @@ and conventions). Each ray is reflected, transmitted or absorbed with unit weigh
 Interface table (NPSG reference C++ ``abmb_interfaces.cpp``; exponents: reflected going down / refracted going
 down / reflected going up / refracted going up; ∞ = specular):
 
-==  ==============================  =====  =====  =====  =====  ==============
-k   interface                       e_DA   e_DB   e_UB   e_UA   absorbing slab
-==  ==============================  =====  =====  =====  =====  ==============
-0   air / adaxial epidermis         σ_cu   σ_ep   σ_ep   ∞      –
-1   adaxial epidermis / mesophyll   σ_ep   σ_pa   σ_pa   σ_ep   below: d_m
-2   mesophyll / air                 σ_pa   σ_sp   σ_sp   σ_pa   above: d_m
-3   air / antidermal wall           ∞      ∞      ∞      ∞      –
-4   antidermal wall / abaxial epid. ∞      σ_ep   σ_ep   ∞      –
-5   abaxial epidermis / air         σ_ep   ∞      σ_cu   σ_ep   –
-==  ==============================  =====  =====  =====  =====  ==============
+==  ===============================  =====  =====  =====  =====  ==============
+k   interface                        e_DA   e_DB   e_UB   e_UA   absorbing slab
+==  ===============================  =====  =====  =====  =====  ==============
+0   air / adaxial epidermis          σ_cu   σ_ep   σ_ep   ∞      –
+1   adaxial epidermis / mesophyll    σ_ep   σ_pa   σ_pa   σ_ep   below: d_m
+2   mesophyll / air                  σ_pa   σ_sp   σ_sp   σ_pa   above: d_m
+3   air / antidermal wall            ∞      ∞      ∞      ∞      –
+4   antidermal wall / abaxial epid.  ∞      σ_ep   σ_ep   ∞      –
+5   abaxial epidermis / air          σ_ep   ∞      σ_cu   σ_ep   –
+==  ===============================  =====  =====  =====  =====  ==============
 
 Parameters
 ----------

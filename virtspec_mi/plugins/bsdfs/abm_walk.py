@@ -24,9 +24,9 @@ whose walk ends starts its next ray; random numbers from
 :func:`virtspec_mi.kernel.walk.walk_rng`. Wavelength-dependent quantities (α·d_m and the three
 refractive indices) are Dr.Jit arrays on the data grid gathered per lane from
 ``si.wavelengths[0]``: many wavelengths share one compiled kernel. The per-(interface,
-direction) table (media, slab, lobe exponents) is read by a tree of selects rather than a
-per-step ``dr.gather`` (cheaper on AVX2), its exponents as opaque values (one kernel for
-every leaf), and the lobe's rejection loop carries only the local sample and its world z.
+direction) table (media, slab, the Warn lobes' powers 1/(e + 1)) is read by a tree of selects
+rather than a per-step ``dr.gather`` (cheaper on AVX2), its powers as opaque values (one kernel
+for every leaf); a lobe sample on the wrong side is retried in a step of its own.
 
 Conventions
 -----------
@@ -47,7 +47,7 @@ Conventions
   :data:`LEAF_DEFAULTS` (``thickness`` … the aspect ratios) shows as
   ``specimen.bsdf.NAME`` (an opaque ``Float64``); setting it and calling ``update()``
   checks it as at load time (``ValueError``; the leaf is left as it was) and rebuilds the
-  α·d_m table (an evaluated array) and the lobe exponents (opaque): one compiled walk
+  α·d_m table (an evaluated array) and the lobe powers (opaque): one compiled walk
   serves every value. ``sieve_detour``, ``side``, ``lookup`` and ``max_steps`` are code
   (a new value compiles a new kernel) and are not exposed.
 
@@ -62,7 +62,6 @@ follow the NPSG reference C++ implementation (BSD-3), https://github.com/turtles
 
 from __future__ import annotations
 
-import math
 import textwrap
 from typing import Any, NamedTuple
 
@@ -79,7 +78,7 @@ from virtspec_mi.leaf_data import (
     load_leaf_data,
     mesophyll_absorption,
 )
-from virtspec_mi.checks import FLOAT32_MAX, check_float32
+from virtspec_mi.checks import FLOAT32_MAX, FLOAT32_MIN_NORMAL, check_float32
 from virtspec_mi.plugins.bsdfs.sampled_only import SampledOnlyBSDF
 from virtspec_mi.kernel.walk import CAPPED_COMPONENT, walk_rng, walk_to_end
 
@@ -310,7 +309,7 @@ class ABMLeaf(SampledOnlyBSDF):
     def set_parameters(self, values: dict[str, float]) -> None:
         """
         New numeric parameters (each checked as at load time; ``ValueError`` leaves the leaf
-        as it was), then the spectral table α·d_m and the lobe exponents rebuilt as data:
+        as it was), then the spectral table α·d_m and the lobe powers rebuilt as data:
         evaluated arrays and opaque scalars, so the walk's kernel is not recompiled.
         """
 
@@ -360,18 +359,23 @@ class ABMLeaf(SampledOnlyBSDF):
         # ray that enters the mesophyll, as the largest float32 does: no overflow to inf.
         tau = np.minimum(self.absorption_coefficient() * self.mesophyll_thickness, FLOAT32_MAX)
         self._tau = mi.Float(tau)
-        exponent = {None: math.inf, **{name: self.params[name] for name in self.params if name.endswith("_aspect_ratio")}}
-        codes, exponents = [], []  # row 2k: moving down at interface k; row 2k + 1: moving up
+        # The Warn lobe cos θp = ξ^(1/(e + 1)) takes its power p = 1/(e + 1) from the table (a
+        # multiply per event, not a division); e = ∞ (no perturbation) is p = 0. A finite e so
+        # large that p falls below the smallest normal float32 keeps that smallest power: ξ^p
+        # is the same either way (1 for ξ ≥ 2⁻²⁴, 0 for ξ = 0), and the lobe is still sampled (p > 0).
+        power = {None: 0.0, **{name: max(1.0 / (self.params[name] + 1.0), FLOAT32_MIN_NORMAL)
+                               for name in self.params if name.endswith("_aspect_ratio")}}
+        codes, powers = [], []  # row 2k: moving down at interface k; row 2k + 1: moving up
         for face in self.INTERFACES:
             for n1, n2, e_refl, e_refr, slab in (
                 (face.above, face.below, face.e_da, face.e_db, face.slab_above),
                 (face.below, face.above, face.e_ub, face.e_ua, face.slab_below),
             ):
                 codes.append(n1 | n2 << 2 | _SLAB_BITS[slab])
-                exponents += [exponent[e_refl], exponent[e_refr]]
-        # Row codes are structural (literals); exponents are opaque: one kernel for every leaf.
+                powers += [power[e_refl], power[e_refr]]
+        # Row codes are structural (literals); lobe powers are opaque: one kernel for every leaf.
         self._row_code = [mi.UInt32(c) for c in codes]
-        self._row_exponent = [dr.opaque(mi.Float, e) for e in exponents]
+        self._row_power = [dr.opaque(mi.Float, p) for p in powers]
 
     # -- sampling ---------------------------------------------------------------------
 
@@ -393,7 +397,7 @@ class ABMLeaf(SampledOnlyBSDF):
 
     # -- the walk as resumable steps (virtspec_mi.kernel.walk.RandomWalk) ----------------
     # State: (rng, status, w, k, steps, tau_u, tau, n_c, n_m, n_a, from_top) per lane —
-    # the PCG32, walk status, direction of travel (leaf frame), interface index, events so
+    # the generator (WalkRNG), walk status, direction of travel (leaf frame), interface index, events so
     # far, the two slab thicknesses, the three refractive indices and whether light came in
     # through the top.
 
@@ -442,7 +446,8 @@ class ABMLeaf(SampledOnlyBSDF):
         absorption test, Fresnel choice and one Warn-lobe sample — or, for a lane whose
         lobe sample fell on the wrong side, the next lobe sample of that event. The lobe's
         retries are steps of their own (no loop inside a step), so a packet of lanes never
-        waits for one lane's retries; each ray draws the same numbers in the same order.
+        waits for one lane's retries; each step draws four numbers of its ray's stream, so a
+        ray's walk is the same whichever lane runs it.
         """
 
         rng, status, w, k, steps, tau_u, tau, n_c, n_m, n_a, from_top, retry, reflect_before, tries = state
@@ -455,28 +460,31 @@ class ABMLeaf(SampledOnlyBSDF):
         slab = dr.select((code & 16) != 0, tau, 0.0) + dr.select(
             (code & 32) != 0, tau_u, dr.select((code & 64) != 0, -tau_u, 0.0))
         cos_i = dr.abs(w.z)
+        # Four numbers per step, drawn first and unmasked (a retry uses the last two): all four
+        # hashes run in parallel, none waits for the absorption test or the Fresnel choice.
+        u_absorb, u_fresnel, u_cos, u_phi = (rng.next_float32() for _ in range(4))
         # 1. absorption in the slab just crossed: p = -ln ξ / α · g(cos θ) < t, ξ ∈ (0, 1]
         g = _cos_unit(cos_i) if self.sieve_detour else cos_i
-        absorbed = fresh & (-dr.log(1.0 - rng.next_float32(fresh)) * g < slab)
+        absorbed = fresh & (-dr.log(1.0 - u_absorb) * g < slab)
         # 2. Fresnel choice (a retry keeps its event's choice)
         n1 = dr.select(m1 == CUTICLE, n_c, dr.select(m1 == MESOPHYLL, n_m, dr.select(m1 == ANTIDERMAL, n_a, 1.0)))
         n2 = dr.select(m2 == CUTICLE, n_c, dr.select(m2 == MESOPHYLL, n_m, dr.select(m2 == ANTIDERMAL, n_a, 1.0)))
         fresnel, cos_t, _, eta_ti = mi.fresnel(cos_i, n2 / n1)
-        reflect = dr.select(fresh, rng.next_float32(fresh) < fresnel, reflect_before)
+        reflect = dr.select(fresh, u_fresnel < fresnel, reflect_before)
         # 3. new direction: mirror, or refraction (tangential part scaled by n1/n2)
         specular = dr.select(
             reflect,
             mi.Vector3f(w.x, w.y, -w.z),
             mi.Vector3f(eta_ti * w.x, eta_ti * w.y, dr.select(down, -1.0, 1.0) * dr.abs(cos_t)),
         )
-        exponent = _pick(self._row_exponent, row * 2 + dr.select(reflect, mi.UInt32(0), mi.UInt32(1)))
+        power = _pick(self._row_power, row * 2 + dr.select(reflect, mi.UInt32(0), mi.UInt32(1)))
         go_down = down ^ reflect
         # 4. one Warn-lobe sample about the specular direction; wrong side: retried next step
         frame = mi.Frame3f(specular)
-        perturb = ~absorbed & (exponent < math.inf)
-        cos_p = dr.exp2(dr.log2(rng.next_float32(perturb)) / (exponent + 1.0))
+        perturb = ~absorbed & (power > 0.0)
+        cos_p = dr.exp2(dr.log2(u_cos) * power)  # ξ^(1/(e + 1))
         sin_p = dr.safe_sqrt(1.0 - cos_p * cos_p)
-        sin_phi, cos_phi = dr.sincos(dr.two_pi * rng.next_float32(perturb))
+        sin_phi, cos_phi = dr.sincos(dr.two_pi * u_phi)
         local = mi.Vector3f(sin_p * cos_phi, sin_p * sin_phi, cos_p)
         z = dr.fma(frame.n.z, local.z, dr.fma(frame.t.z, local.y, frame.s.z * local.x))  # as Frame3f.to_world
         tries = dr.select(fresh, mi.UInt32(0), tries) + dr.select(perturb, mi.UInt32(1), mi.UInt32(0))

@@ -24,6 +24,8 @@ eta : float, default 2.419
     the compiled kernel, except a change to or from η = 1 or across
     :data:`NEAR_ONE`, branches of their own).
 
+Notes
+-----
 Near η = 1 Mitsuba's float32 ``mi.fresnel`` cancels catastrophically (1 − sin²θi/η² and
 cos θi − η cos θt lose every digit of η − 1): at η = 1 ± 10⁻⁶ it gives F wrong by up to
 0.68 near grazing incidence, and float32 cannot even hold η − 1 below 6·10⁻⁸. For

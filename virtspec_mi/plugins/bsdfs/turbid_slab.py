@@ -23,7 +23,7 @@ A ray that hits the back face (wi·n < 0, e.g. back-lit conical rays) runs the s
 walk from the bottom face, with the two outer media swapped.
 
 Quantities (as the ``spectrophotometer`` counts them)
-----------------------------------------------------
+-----------------------------------------------------
 - **Total reflectance** R (MCML's Rsp + Rd; iadpython's UR1 / URU) includes the
   specular reflection at the top face.
 - The sampled event type tells the parts apart: a ray that leaves without any
@@ -63,6 +63,8 @@ max_steps : integer, default 1000000
     reports ``CAPPED_COMPONENT`` (weight 0) and the instrument counts it in
     ``Result.capped``, in none of R, T and A.
 
+Notes
+-----
 A spectral parameter is any Mitsuba spectrum/texture (``<spectrum name="mu_a"
 value="400:12, 700:3"/>`` in XML, or ``{"type": "regular", ...}`` in a dict), read
 unbounded and evaluated per ray at the ray's wavelength (channel 0 of
@@ -281,7 +283,7 @@ class TurbidSlab(SampledOnlyBSDF):
 
     # -- the walk as resumable steps (virtspec_mi.kernel.walk.RandomWalk) -------------------
     # State: (rng, status, direction, depth, scattered, steps, front, optics) per lane — the
-    # PCG32, walk status, propagation direction and depth (−z) in the mirrored slab, whether
+    # generator (WalkRNG), walk status, propagation direction and depth (−z) in the mirrored slab, whether
     # it scattered, free flights so far, whether light came from the front, and the optics
     # (μt, albedo, g, the faces' relative indices η_top and η_bottom, and the outer media's
     # index ratio, ``bs.eta`` of a transmission): per lane for a spectral slab, () for a slab
@@ -354,7 +356,6 @@ class TurbidSlab(SampledOnlyBSDF):
         weight = dr.select(exited, mi.Spectrum(1.0), mi.Spectrum(0.0))
         return bs, weight
 
-    @dr.syntax
     def walk_step(self, state):
         """
         One free flight of the lanes the caller runs, in the slab −d ≤ z ≤ 0 (entered
@@ -368,26 +369,26 @@ class TurbidSlab(SampledOnlyBSDF):
         rng, status, direction, depth, scattered, steps, front, optics = state
         mu_t, albedo, g, eta_top, eta_bottom, _ = self._state_optics(state)
         thickness = self._thickness
-        path = free_path(rng.next_float32(), mu_t)
+        # Four numbers per flight, drawn first (unmasked): the free path, the event's coin (the
+        # face's Fresnel choice, or absorption against scattering) and HG's two.
+        u_path, u_event, u_cos, u_phi = rng.next_float32(), rng.next_float32(), rng.next_float32(), rng.next_float32()
+        path = free_path(u_path, mu_t)
+        direction_z = direction.z
         down = direction.z < 0.0
         to_face = dr.select(down, (thickness - depth) / -direction.z, depth / direction.z)
         to_face = dr.select(direction.z == 0.0, dr.inf, to_face)
-        if path >= to_face:
-            eta_face = dr.select(down, eta_bottom, eta_top)
-            depth = dr.select(down, thickness, 0.0)
-            direction, reflected = cross_interface(direction, eta_face, rng.next_float32())
-            if ~reflected:
-                status = dr.select(down, mi.UInt32(_BOTTOM), mi.UInt32(_TOP))
-        else:
-            depth = dr.fma(path, -direction.z, depth)
-            if rng.next_float32() < albedo:
-                direction = sample_hg(direction, g, rng.next_float32(), rng.next_float32())
-                scattered = mi.Bool(True)
-            else:
-                status = mi.UInt32(_ABSORBED)
+        # Both outcomes for every lane, then a select (straight-line: no branch per packet).
+        hit = path >= to_face
+        at_face, reflected = cross_interface(direction, dr.select(down, eta_bottom, eta_top), u_event)
+        absorbed = ~hit & (u_event >= albedo)
+        turned = sample_hg(direction, g, u_cos, u_phi)
+        direction = dr.select(hit, at_face, dr.select(absorbed, direction, turned))
+        depth = dr.select(hit, dr.select(down, thickness, 0.0), dr.fma(path, -direction_z, depth))
+        status = dr.select(hit & ~reflected, dr.select(down, mi.UInt32(_BOTTOM), mi.UInt32(_TOP)),
+                           dr.select(absorbed, mi.UInt32(_ABSORBED), status))
+        scattered = scattered | (~hit & ~absorbed)
         steps = steps + 1
-        if (status == _INSIDE) & (steps >= self._max_steps):
-            status = mi.UInt32(_CAPPED)
+        status = dr.select((status == _INSIDE) & (steps >= self._max_steps), mi.UInt32(_CAPPED), status)
         return (rng, status, direction, depth, scattered, steps, front, optics)
 
     def to_string(self) -> str:

@@ -9,11 +9,11 @@ A thin adapter: it reads its parameters with the one reader
 (:meth:`virtspec_mi.settings.Options.from_parameters`), :func:`virtspec_mi.sphere_measure`
 takes them from a scene as its defaults, and ``mi.render`` takes the sphere readings with
 the ``sphere`` instrument of the registry (:data:`virtspec_mi.instruments.INSTRUMENTS`).
+It takes every parameter of ``spectrophotometer`` (theta_i, phi_i, wavelengths, mu, delta,
+rays, bound, joint, pilot_rays, pilot_delta, beam, sampling, seed, chunk_size) and these:
 
 Parameters
 ----------
-(every parameter of ``spectrophotometer``: theta_i, phi_i, wavelengths, mu, delta, rays,
-bound, joint, pilot_rays, pilot_delta, beam, sampling, seed, chunk_size)
 diameter : float, required
     Inner diameter of the sphere, mm (> 0).
 wall_reflectance : float or string, default 0.98
@@ -35,6 +35,8 @@ standard : float, default 0.99
 max_bounces : integer, default 100000
     Step cap of a sphere walk (capped walks are counted, the reading then not certified).
 
+Notes
+-----
 ``mi.render(scene)`` returns a ``TensorXf`` of shape ``(len(wavelengths), 4)``: per
 wavelength the reading, the hemispherical reading of the same rays, and the detector
 fractions with the sample and with the standard; the full

@@ -48,6 +48,8 @@ chunk_size : integer, default 4194304
     Rays per kernel launch, 1024 ≤ chunk_size ≤ 2²⁵ (bounds memory; results do not
     depend on it).
 
+Notes
+-----
 These are the fields of :class:`virtspec_mi.settings.Settings` (the one definition;
 this list is checked against it by the tests).
 

@@ -640,7 +640,8 @@ def _run(args: argparse.Namespace, function: Callable[..., Any], keywords: dict[
     except ValueError as error:
         named = [name for name, value in keywords.items()
                  if not (value is None or value is False or value == {}) and str(error).startswith(name + " ")]
-        flag = _KEYWORD_FLAGS.get(named[0], _flag(named[0])) if named else None
+        flags = {**_KEYWORD_FLAGS, "workers": "--workers" if args.scheduler is None else "--scheduler"}
+        flag = flags.get(named[0], _flag(named[0])) if named else None
         if flag is None:
             raise
         raise ValueError(f"{flag}: {error}") from error

@@ -1,6 +1,6 @@
 """
 Goniophotometer readings: :class:`GonioResult`
-=============================================
+==============================================
 
 A goniophotometer reading (:func:`virtspec_mi.gonio`) is a spectrophotometer reading
 — a :class:`~virtspec_mi.results.hemispherical.Result` over (wavelength, θi) with its exact counts and
@@ -216,7 +216,7 @@ class GonioResult(ResultBase):
     @property
     def cdf_theta_o(self) -> np.ndarray:
         """
-        F̂(θ) = #(escaped with θo < θ)/N at the θo edges, shape (…, θo bins + 1): the
+        F̂(θ) = #(escaped with θo < θ)/N at the θo edges, shape (…, θo bins + 1) — the
         empirical CDF of X = θo for a ray that escaped into a bin, +∞ otherwise (absorbed,
         or outside the bins), certified by DKW (:attr:`cdf_mu`).
         """

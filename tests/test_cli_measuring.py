@@ -329,6 +329,14 @@ def test_sphere_correct_prints_the_corrected_reading_and_its_interval_beside_the
     assert "corrected" not in json.loads(out)
 
 
+def test_a_sphere_reading_over_several_angles_is_drawn_one_figure_per_angle(tmp_path, capsys):
+    figure = tmp_path / "sphere.png"
+    status, out, _ = run(capsys, "sphere", SPHERE, "--theta-i", "6", "10", "--rays", "500", "--plot", figure)
+    drawn = [tmp_path / "sphere_6deg.png", tmp_path / "sphere_10deg.png"]
+    assert status == 0 and out.splitlines()[-2:] == [f"plot: {path}" for path in drawn]
+    assert all(path.read_bytes()[:4] == b"\x89PNG" for path in drawn) and not figure.exists()
+
+
 def test_sphere_correct_of_a_transmittance_reading_asks_for_the_sample_reflectance(capsys):
     status, _, err = run(capsys, "sphere", SPHERE, "--measurement", "transmittance", "--theta-i", "0", "--rays", "500",
                          "--correct")

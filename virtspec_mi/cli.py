@@ -157,7 +157,8 @@ MEASURING: dict[str, Measuring] = {row.name: row for row in (
         "sample and with the reference standard, their certified ratio (the reading), the hemispherical reading of "
         "the same rays and the instrument error; with --correct also the reading corrected by the sphere theory, "
         "with its interval. The sphere comes from the scene's integrating_sphere integrator.",
-        "the reading and the hemispherical value of the same rays over wavelength, with their certified bands",
+        "the reading and the hemispherical value of the same rays over wavelength, with their certified bands; "
+        "several theta_i: one figure per angle, FIG_<deg>deg.png",
         ("virtspec sphere scenes/sphere_150mm_8d.xml --specular SCE --rays 20000",
          "virtspec sphere scenes/sphere_150mm_8d.xml --method comparison --wavelengths 400:700:100 --rays 20000 "
          "--correct --out r.json")),
@@ -647,11 +648,16 @@ def _run(args: argparse.Namespace, function: Callable[..., Any], keywords: dict[
         raise ValueError(f"{flag}: {error}") from error
 
 
-def _drawn(path: str | None, draw: Callable[..., Any], wavelengths: Sequence[float] = ()) -> list[Any]:
+_UNITS = {"wavelength": "nm", "theta_i": "deg"}
+"""The dims a figure is drawn for one label at a time, and the unit in its file name."""
+
+
+def _drawn(path: str | None, draw: Callable[..., Any], dim: str = "", labels: Sequence[float] = ()) -> list[Any]:
     """
     The figure ``path`` drawn by ``draw(path)`` (nothing without a path); with several
-    ``wavelengths``, one figure per wavelength, ``FIG_<nm>nm.png``, each by
-    ``draw(path, wavelength=nm)``. The paths drawn.
+    ``labels`` of ``dim`` (a figure shows one: the goniophotometer's lobes one wavelength,
+    a sphere spectrum one θi), one figure per label, ``FIG_550nm.png`` / ``FIG_8deg.png``,
+    each by ``draw(path, dim=label)``. The paths drawn.
     """
 
     from pathlib import Path
@@ -659,13 +665,13 @@ def _drawn(path: str | None, draw: Callable[..., Any], wavelengths: Sequence[flo
     if not path:
         return []
     path = Path(path)
-    if len(wavelengths) <= 1:
+    if len(labels) <= 1:
         draw(path)
         return [path]
     drawn = []
-    for wavelength in wavelengths:
-        each = path.with_name(f"{path.stem}_{float(wavelength):g}nm{path.suffix}")
-        draw(each, wavelength=float(wavelength))
+    for label in labels:
+        each = path.with_name(f"{path.stem}_{float(label):g}{_UNITS[dim]}{path.suffix}")
+        draw(each, **{dim: float(label)})
         drawn.append(each)
     return drawn
 
@@ -771,13 +777,15 @@ def _gonio(args: argparse.Namespace) -> int:
     if args.klems:
         return _klems(args)
     reading = _run(args, gonio, _keywords(args, MEASURING["gonio"]))
-    figures = (_drawn(args.plot, reading.plot, reading.wavelengths)
-               + _drawn(args.plot_series, reading.plot_series, reading.wavelengths))
+    figures = (_drawn(args.plot, reading.plot, "wavelength", reading.wavelengths)
+               + _drawn(args.plot_series, reading.plot_series, "wavelength", reading.wavelengths))
     return _report(args, reading, reading.summary(), figures)
 
 
 def _sphere(args: argparse.Namespace) -> int:
     """``virtspec sphere``: the summary, and with ``--correct`` the corrected readings beside the readings."""
+
+    import numpy as np
 
     from virtspec_mi.api import sphere_measure
     from virtspec_mi.results.base import plain_data
@@ -790,7 +798,8 @@ def _sphere(args: argparse.Namespace) -> int:
         text += "\n" + _correction_table(result, corrected, interval, assumptions)
         data = {**result.as_dict(), "corrected": plain_data(corrected), "corrected_interval": plain_data(interval),
                 "correction": assumptions}
-    return _report(args, result, text, _drawn(args.plot, result.plot), data)
+    angles = np.atleast_1d(result.coords["theta_i"])
+    return _report(args, result, text, _drawn(args.plot, result.plot, "theta_i", angles), data)
 
 
 def _assumptions(args: argparse.Namespace) -> dict[str, float] | None:

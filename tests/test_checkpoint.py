@@ -365,7 +365,7 @@ def test_sweep_out_that_is_a_directory_fails_before_tracing(scenes_dir, tmp_path
     assert main(["sweep", str(scenes_dir / "diamond_collimated.xml"), "--theta-i", "0", "--rays", "100",
                  "--out", str(tmp_path / "taken.nc")]) == 1
     err = capsys.readouterr().err
-    assert err.startswith("virtspec: error: out ") and "is a directory" in err
+    assert err.startswith("virtspec: error: --out: out ") and "is a directory" in err
 
 
 # --- a goniophotometer reading and a sphere spectrum resume after SIGKILL ------------------

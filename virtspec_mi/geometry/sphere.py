@@ -158,10 +158,12 @@ class Baffle:
         return float(math.sqrt(c @ c + self.radius ** 2 + 2.0 * self.radius * np.linalg.norm(tangential)))
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class Sphere:
     """
-    An integrating sphere (see the module docstring).
+    An integrating sphere (see the module docstring). Two spheres are equal when they have
+    the same diameter, wall, baffle and ports, whatever order the ports are listed in (a
+    result file's sorted keys, an XML scene or a dict may list them differently).
 
     Parameters
     ----------
@@ -180,6 +182,17 @@ class Sphere:
     ports: tuple[Port, ...] = ()
     baffle: Baffle | None = None
     name: str = field(default="", compare=False)
+
+    def _identity(self) -> tuple:
+        wall = self.wall_reflectance
+        return (self.diameter, wall if isinstance(wall, float) else tuple(map(tuple, wall)), self.baffle,
+                tuple(sorted(self.ports, key=lambda port: port.name)))
+
+    def __eq__(self, other: object) -> bool:
+        return isinstance(other, Sphere) and self._identity() == other._identity()
+
+    def __hash__(self) -> int:
+        return hash(self._identity())
 
     def __post_init__(self) -> None:
         diameter = _finite("diameter", self.diameter)

@@ -1,6 +1,6 @@
 """
 Goniophotometer readings: :class:`GonioResult`
-=============================================
+==============================================
 
 A goniophotometer reading (:func:`virtspec_mi.gonio`) is a spectrophotometer reading
 — a :class:`~virtspec_mi.results.hemispherical.Result` over (wavelength, θi) with its exact counts and
@@ -50,7 +50,7 @@ from virtspec_mi.budgets import bins as gonio_bounds
 from virtspec_mi.budgets.rules import guarantee_of
 from virtspec_mi.geometry.bins import GonioBins
 from virtspec_mi.kernel.counts import QUANTITIES
-from virtspec_mi.results.base import ResultBase, plain_data, round_up
+from virtspec_mi.results.base import ResultBase, plain_data, round_up, span
 from virtspec_mi.results.formats import annotate
 from virtspec_mi.results.integrity import CountRules, field_value, whole_counts
 from virtspec_mi.results.hemispherical import Result
@@ -222,7 +222,7 @@ class GonioResult(ResultBase):
     @property
     def cdf_theta_o(self) -> np.ndarray:
         """
-        F̂(θ) = #(escaped with θo < θ)/N at the θo edges, shape (…, θo bins + 1): the
+        F̂(θ) = #(escaped with θo < θ)/N at the θo edges, shape (…, θo bins + 1) — the
         empirical CDF of X = θo for a ray that escaped into a bin, +∞ otherwise (absorbed,
         or outside the bins), certified by DKW (:attr:`cdf_mu`).
         """
@@ -246,9 +246,22 @@ class GonioResult(ResultBase):
         return np.where(self.result.certified & (values < 1.0), values, np.nan)
 
     @property
-    def bins_mu(self) -> np.ndarray:
-        """μ with |m_k/N − p_k| < μ for every bin at once at δ (per reading; NaN: not certified)."""
+    def two_stage(self) -> bool:
+        """True when each reading's N was sized from its own pilot (``bound="two-stage"``; its rays are spent)."""
 
+        return self.result.pilot is not None
+
+    @property
+    def bins_mu(self) -> np.ndarray:
+        """
+        μ with |m_k/N − p_k| < μ for every bin at once at δ (per reading; NaN: not
+        certified): the guarantee's μ for the N spent, or, for a :attr:`two_stage`
+        reading, μ itself — what the pilot sized N for (each bin fraction a column of
+        the two-stage rule at δ/K over both stages, so all K at once at δ).
+        """
+
+        if self.two_stage:
+            return self._certified(np.full(np.shape(self.rays), float(self.result.mu)))
         return self._certified(guarantee_of(self.guarantee).certified(self.rays, self.delta, self.result.mu,
                                                                       self.size))
 
@@ -272,11 +285,16 @@ class GonioResult(ResultBase):
     def sized_by(self) -> str | None:
         """
         The guarantee N was sized for, in words (``None`` when ``rays`` was given): the
-        rule, its μ (or relative ε above the floor), δ and K. Whether these rays deliver
-        it is :meth:`certificate`'s to say.
+        rule, its μ (or relative ε above the floor), δ and K; for a :attr:`two_stage`
+        reading, its pilot and what the pilot sized N for. Whether these rays deliver it
+        is :meth:`certificate`'s to say.
         """
 
         s, rule = self.result.settings, guarantee_of(self.guarantee)
+        if self.two_stage:
+            return (f"sized by two-stage: a pilot of {span(self.result.pilot.rays)} rays, then N per reading from the "
+                    f"pilot's {self.size} bin fractions and R, T, A, for every bin fraction within mu = {s.mu:g} at "
+                    f"once (the exact rule at delta/K per bin over both stages, K = {self.size}), delta = {s.delta:g}")
         target = rule.target(s.mu, self.size, self.relative_tolerance, self.brdf_floor)
         return None if target is None else f"{rule.sized} for {target}, delta = {s.delta:g}"
 
@@ -284,9 +302,9 @@ class GonioResult(ResultBase):
         """What the reading's rays guarantee, in words (worst reading), or "not certified"."""
 
         k, delta = self.size, self.delta
-        counted = f"N = {int(self.rays.min()):,}" + (f" to {int(self.rays.max()):,}" if self.rays.min() != self.rays.max()
-                                                      else "") + f" rays per reading, K = {k} bins"
-        rule = guarantee_of(self.guarantee).sized
+        pilot = "" if not self.two_stage else f" + {span(self.result.pilot.rays)} pilot"
+        counted = f"N = {span(self.rays)}{pilot} rays per reading, K = {k} bins"
+        rule = "sized by two-stage" if self.two_stage else guarantee_of(self.guarantee).sized
         bins_mu, cdf_mu = self.bins_mu, self.cdf_mu
         if np.all(np.isnan(cdf_mu)):
             return f"{counted} ({rule}): NOT CERTIFIED (see the reading's warnings, or too few rays)"
@@ -296,8 +314,10 @@ class GonioResult(ResultBase):
         if np.all(np.isnan(bins_mu)):
             lines.append("  bin fractions: not certified (too few rays for K bins)")
         else:
+            union = ("two-stage: what the pilot sized N for, each bin at delta/K" if self.two_stage
+                     else guarantee_of(self.guarantee).union_words)
             lines.append(f"  every bin fraction at once: |m_k/N - p_k| < {round_up(float(np.nanmax(bins_mu))):g} "
-                         f"({guarantee_of(self.guarantee).union_words})")
+                         f"({union})")
         lines.append(f"  f_k: simultaneous Clopper-Pearson intervals, each at delta/K = {delta / k:.3g}")
         relative = self.relative_mu
         if relative is not None:
@@ -309,7 +329,7 @@ class GonioResult(ResultBase):
         return "\n".join(lines)
 
     def summary(self) -> str:
-        """The spectrophotometer summary, the bins and the certificate."""
+        """The spectrophotometer summary (R and T certified), the bins, their certificate and :meth:`theta_o_table`."""
 
         b = self.bins
         folded = ", phi_o folded to |phi_o - phi_i|" if b.fold_phi else ""
@@ -320,6 +340,51 @@ class GonioResult(ResultBase):
                  self.certificate()]
         if np.any(self.outside):
             lines.append(f"  {int(self.outside.sum()):,} escaping rays fell outside the bins")
+        return "\n".join([*lines, "", self.theta_o_table()])
+
+    def theta_o_table(self, most: int = 8) -> str:
+        """
+        The readings per θo bin, compactly: one row per θo bin (its centre, degrees), one
+        column per reading (the first ``most`` of them), the fraction of the incident rays
+        that left into the bin, summed over φo; then each reading's R and T. A row is the
+        difference of the empirical CDF of θo (:attr:`cdf_theta_o`) at the bin's edges, so
+        every row of a reading lies within 2·:attr:`cdf_mu` of its expectation at once
+        (DKW–Massart, probability ≥ 1 − δ); the reflection rows add up to R, the
+        transmission rows to T (less the rays outside the bins).
+
+        References
+        ----------
+        Massart (1990), Ann. Probab. 18, 1269–1283 (the DKW constant).
+        """
+
+        rings = (self.bin_counts.sum(axis=-1) / self.rays[..., None]).reshape(-1, self.bins.shape[0])
+        reading = self.result
+        shape = tuple(reading.sizes[d] for d in reading.dims)
+        varying = [d for d in reading.dims if reading.sizes[d] > 1]
+        units = {"wavelength": " nm", "theta_i": " deg"}
+        labels = []
+        for index in np.ndindex(*shape):
+            at = dict(zip(reading.dims, index))
+            labels.append(", ".join(f"{np.atleast_1d(reading.coords[d])[at[d]]:g}{units.get(d, '')}" if d in units
+                                    else f"{d} {np.atleast_1d(reading.coords[d])[at[d]]:g}" for d in varying)
+                          or "fraction")
+        shown = min(len(labels), most)
+        widths = [max(9, len(label)) for label in labels[:shown]]
+        cdf_mu = self.cdf_mu
+        certified = ("not certified" if np.all(np.isnan(cdf_mu)) else
+                     f"every row of a reading within {round_up(2 * float(np.nanmax(cdf_mu))):g} at once (2 x the DKW "
+                     f"tolerance of the CDF of theta_o, probability >= {1 - self.delta:g})")
+        lines = [f"Per theta_o bin (rows: bin centres, degrees): the fraction of the incident rays leaving into it, "
+                 f"summed over phi_o; {certified}",
+                 f"{'theta_o':>8}  " + "  ".join(f"{label:>{w}}" for label, w in zip(labels, widths))]
+        for row, centre in enumerate(self.bins.theta_centres):
+            lines.append(f"{centre:>8g}  " + "  ".join(f"{rings[k, row]:>{w}.5f}" for k, w in enumerate(widths)))
+        for name, values in (("R", reading.reflectance), ("T", reading.transmittance)):
+            flat = np.ravel(values)
+            lines.append(f"{name:>8}  " + "  ".join(f"{flat[k]:>{w}.5f}" for k, w in enumerate(widths)))
+        if shown < len(labels):
+            lines.append(f"(the first {shown} of {len(labels)} readings; every one in to_dataset(), write() and "
+                         "as_dict())")
         return "\n".join(lines)
 
     def __repr__(self) -> str:

@@ -281,11 +281,14 @@ def test_two_stage_reading_spends_pilot_and_sized_second_batch(traced_diamond):
     assert np.all(reading.rays < 50_000) and len(set(reading.rays.tolist())) > 1
     assert np.all(np.abs(reading.reflectance - 0.172253) < MU)
     assert np.all(reading.reflected + reading.transmitted + reading.absorbed == reading.rays)
-    # the pilot is the ordinary stream of the seed; the second batch a fresh stream
-    pilot = collimated(traced_diamond, 0, rays=2000, wavelengths=wavelengths, seed=7)
+    # each reading's N2 from its own pilot's counts; the pilot is the ordinary stream of the seed (the
+    # first reading's rays start at index 0 whatever the layout), the second batch a fresh stream
+    pilot = reading.pilot
     n2 = twostage.stage_two_rays(np.stack([pilot.reflected, pilot.transmitted, pilot.absorbed], axis=1),
                                  2000, MU, DELTA, DELTA / 10)
     assert reading.rays.tolist() == n2.tolist()
+    first = collimated(traced_diamond, 0, rays=2000, wavelengths=[450], seed=7)
+    assert first.reflected[0] == pilot.reflected[0]
     second = collimated(traced_diamond, 0, rays=int(reading.rays[0]), wavelengths=[450],
                         seed=twostage.stage_two_seed(7))
     assert second.reflected[0] == reading.reflected[0]

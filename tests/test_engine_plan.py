@@ -98,7 +98,7 @@ def test_a_plan_pickles_and_traces_the_same_on_the_other_side(rough, bins, spher
 
 def test_groups_share_rays(rough, bins):
     plan = Plan(Settings(rays=4000), (20.0, 40.0), groups=("first", "second"), hooks=(bins.layout(),) * 2)
-    tally = run(rough, plan, keyed=True)
+    tally = run(rough, plan)
     same(tally.take(np.arange(2)), tally.take(np.arange(2, 4)))
     assert tally.bins.sum() > 0
 
@@ -107,14 +107,14 @@ def test_tallies_depend_on_the_key_only(rough, bins, sphere):
     """Any batch, any chunk size, any reading order: the same tallies for every reading."""
 
     plan = gonio_plan(Settings(rays=3000, wavelengths=(500, 600)), bins)
-    whole = run(rough, plan, keyed=True)
-    small = run(rough, gonio_plan(Settings(rays=3000, wavelengths=(500, 600), chunk_size=1024), bins), keyed=True)
+    whole = run(rough, plan)
+    small = run(rough, gonio_plan(Settings(rays=3000, wavelengths=(500, 600), chunk_size=1024), bins))
     same(whole, small)
     order = np.array([3, 1, 0, 2])
     same(take_keyed_readings(rough, plan, order), whole.take(order))
     np.testing.assert_array_equal(whole.bins.sum(axis=1), whole.counts.reflected + whole.counts.transmitted)
-    spheres = run(sphere[0], sphere_plan(sphere, rays=3000), keyed=True)
-    same(spheres, run(sphere[0], sphere_plan(sphere, rays=3000, chunk_size=1024), keyed=True))
+    spheres = run(sphere[0], sphere_plan(sphere, rays=3000))
+    same(spheres, run(sphere[0], sphere_plan(sphere, rays=3000, chunk_size=1024)))
     np.testing.assert_array_equal(spheres.bins.sum(axis=1), spheres.counts.rays)  # every ray one sphere fate
     assert set(spheres.sums) == {"wall_reflections", "weight_violations", "rounded_weights"}
 
@@ -123,7 +123,7 @@ def test_a_keyed_sphere_run_is_the_sphere_measurement(sphere):
     """The sphere instrument's reading is this keyed run: its counts come from the same tallies."""
 
     bench, layouts, settings = sphere
-    tally = run(bench, sphere_plan(sphere, rays=3000), keyed=True)
+    tally = run(bench, sphere_plan(sphere, rays=3000))
     reading = vm.sphere_measure(SPHERE, rays=3000, wavelengths="450, 550, 650")
     detected = tally.bins[:, list(layouts[0].codes_of(SphereFate.DETECTED))].sum(axis=1)
     np.testing.assert_array_equal(detected[:3], reading.counts["sample"]["detected"])
@@ -148,7 +148,7 @@ def _interrupted(bench, plan, path, after, monkeypatch):
     with monkeypatch.context() as patch:
         patch.setattr(engine, "take_keyed_readings", flaky)
         with pytest.raises(KeyboardInterrupt):
-            run(bench, plan, keyed=True, checkpoint=path)
+            run(bench, plan, checkpoint=path)
     return json.loads(path.read_text())
 
 
@@ -159,13 +159,13 @@ def test_an_interrupted_run_resumes_to_the_uninterrupted_tallies(rough, bins, sp
         bench, plan = rough, gonio_plan(Settings(rays=2000, wavelengths=(500, 600), chunk_size=2048), bins)
     else:
         bench, plan = sphere[0], sphere_plan(sphere, rays=2000, chunk_size=2048)
-    whole = run(bench, plan, keyed=True)
+    whole = run(bench, plan)
     path = tmp_path / "run.partial.json"
     saved = _interrupted(bench, plan, path, 2, monkeypatch)
     assert len(saved["done"]) == 2 and len(saved["bins"]) == 2
     assert all(len(row) == plan.bins for row in saved["bins"])
     assert set(saved.get("sums", {})) == set(plan.sums) and saved["identity"]["instrument"] == plan.instrument
-    resumed = run(bench, plan, keyed=True, checkpoint=path)
+    resumed = run(bench, plan, checkpoint=path)
     same(resumed, whole)
 
 
@@ -174,7 +174,7 @@ def test_a_checkpoint_of_other_bins_is_refused(rough, bins, tmp_path, monkeypatc
     path = tmp_path / "run.partial.json"
     _interrupted(rough, plan, path, 1, monkeypatch)
     with pytest.raises(CheckpointError, match="differs in: hooks, options"):
-        run(rough, gonio_plan(Settings(rays=2000, chunk_size=2048), make_bins(5, 6)), keyed=True, checkpoint=path)
+        run(rough, gonio_plan(Settings(rays=2000, chunk_size=2048), make_bins(5, 6)), checkpoint=path)
 
 
 def test_tampered_bins_are_refused_with_the_reason(rough, bins, tmp_path, monkeypatch):
@@ -184,7 +184,7 @@ def test_tampered_bins_are_refused_with_the_reason(rough, bins, tmp_path, monkey
     saved["bins"][0][0] += 5000  # more binned rays than the reading traced
     path.write_text(json.dumps(saved))
     with pytest.raises(CheckpointError, match="bins must add up to at most the reading's rays"):
-        run(rough, plan, keyed=True, checkpoint=path)
+        run(rough, plan, checkpoint=path)
     assert json.loads(path.read_text())["bins"][0][0] == saved["bins"][0][0]  # left as it is
 
 
@@ -194,19 +194,19 @@ def test_a_checkpoint_of_format_3_resumes_a_hemispherical_run_and_is_refused_for
 
     settings = Settings(rays=2000, chunk_size=2048, wavelengths=(500, 600))
     plain = Plan(settings, (10.0, 50.0), columns=PlanColumns.fates(False))
-    whole = run(rough, plain, keyed=True)
+    whole = run(rough, plain)
     path = tmp_path / "old.partial.json"
     saved = _interrupted(rough, plain, path, 2, monkeypatch)
     assert "bins" not in saved and "sums" not in saved
     path.write_text(json.dumps({**saved, "format": "virtspec-mi sweep checkpoint 3"}))
-    same(run(rough, plain, keyed=True, checkpoint=path), whole)
+    same(run(rough, plain, checkpoint=path), whole)
 
     binned = gonio_plan(settings, bins)
     other = tmp_path / "old_gonio.partial.json"
     saved = _interrupted(rough, binned, other, 1, monkeypatch)
     other.write_text(json.dumps({**saved, "format": "virtspec-mi sweep checkpoint 3"}))
     with pytest.raises(CheckpointError, match="written before bins and sums were kept"):
-        run(rough, binned, keyed=True, checkpoint=other)
+        run(rough, binned, checkpoint=other)
 
 
 # --- two-stage from each instrument's columns ----------------------------------------------------
@@ -220,7 +220,7 @@ def _pilot_and_second(bench, plan):
     from virtspec_mi.kernel.counts import Counts
     from virtspec_mi.kernel.tracer import ReadingPlan, tally_readings
 
-    tally = run(bench, plan, keyed=True)
+    tally = run(bench, plan)
     settings = plan.settings
     group, _, theta, lam = plan.split(np.arange(plan.size))
     pilot = [tally_readings(bench, [ReadingPlan(float(plan.wavelengths[lam[k]]), plan.theta_i[theta[k]], settings.phi_i,
@@ -263,4 +263,4 @@ def test_two_stage_is_refused_with_the_reason_where_it_cannot_size_the_readings(
         rules.GUARANTEES["dkw"].stage_two(bins.size)
     plan = gonio_plan(settings, bins, refusal="it certifies the CDFs, which no pilot bounds")
     with pytest.raises(ValueError, match="cannot size these readings: it certifies the CDFs"):
-        run(rough, plan, keyed=True)
+        run(rough, plan)

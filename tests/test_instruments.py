@@ -23,7 +23,7 @@ def test_take_runs_init_process_postprocess_and_gives_the_apis_counts(mi):
     scene = vm.instrument_scene({"type": "roughdielectric", "alpha": 0.3, "int_ior": 1.5})
     bench = vm.find_bench(scene)
     settings = Settings(theta_i=30, rays=3000, seed=4)
-    reading = take(INSTRUMENTS["hemispherical"](), bench, settings, keyed=False).squeeze()
+    reading = take(INSTRUMENTS["hemispherical"](), bench, settings).squeeze()
     assert isinstance(reading, INSTRUMENTS["hemispherical"].result)
     assert np.array_equal(reading.reflected, vm.measure(scene, theta_i=30, rays=3000, seed=4).reflected)
     gonio = INSTRUMENTS["goniophotometer"]

@@ -102,7 +102,8 @@ def measure(scene: Any, *, parameters: dict[str, Any] | None = None, defines: di
     if space is not None and space.size != 1:
         raise ValueError("measure takes one value per parameter (a sweep takes several: use sweep)")
     instrument = INSTRUMENTS["hemispherical"]()
-    result = take(instrument, bench, settings, parameters=space, keyed=False, progress=progress).squeeze()
+    result = take(instrument, bench, settings, parameters=space, progress=progress)
+    result = result.squeeze("theta_i", *([] if space is None else space.dims))  # one reading: scalar labels
     instrument.warn_if_uncertified(result)
     return result
 
@@ -226,7 +227,7 @@ def _keyed(name: str, what: str, scene: Any, bench: Bench, settings: Settings, o
                         **({} if space is None else {"parameters": space.as_dict()})}
             table = ZarrTable(out, plan.settings.wavelengths, angles, identity, pilot=plan.adaptive, parameters=space)
             runner = table.stream(runner or in_process_runner(bench, plan))
-        result = instrument.postprocess(instrument.process(plan, keyed=True, checkpoint=checkpoint, progress=progress,
+        result = instrument.postprocess(instrument.process(plan, checkpoint=checkpoint, progress=progress,
                                                            runner=runner))
         if checkpoint is not None:
             if out is not None:

@@ -10,10 +10,9 @@ instrument of the registry (:data:`virtspec_mi.instruments.INSTRUMENTS`) through
 function:
 
 - ``virtspec measure SCENE``: one certified reading at one θi, over the scene's
-  wavelengths (a spectrum) — the keyed readings of :func:`virtspec_mi.sweep` at that θi
-  and one specimen parameter point, printed as one reading (``vm.measure`` in Python
-  traces consecutive ray ranges instead: the same counts for a fixed budget, other rays
-  for a two-stage reading of a wavelength-dependent specimen);
+  wavelengths (a spectrum) — :func:`virtspec_mi.measure`: the keyed readings of
+  :func:`virtspec_mi.sweep` at that θi and one specimen parameter point, printed as one
+  reading;
 - ``virtspec sweep SCENE``: readings over θi × wavelength (× specimen parameters),
   :func:`virtspec_mi.sweep`; ``--densities`` (the paper's Fig. 6);
 - ``virtspec gonio SCENE``: the goniophotometer, :func:`virtspec_mi.gonio` (R and T with

@@ -21,7 +21,7 @@ _PROGRESS_AFTER_S = 2.0  # show a progress bar only when the run is expected to 
 class Progress:
     """A tqdm bar on stderr, shown per the ``progress`` rule (see the module docstring)."""
 
-    def __init__(self, progress: bool | None, total: int, desc: str = "sweep") -> None:
+    def __init__(self, progress: bool | None, total: int, desc: str = "readings") -> None:
         self.mode, self.total, self.bar, self.done, self.desc = progress, total, None, 0, desc
         self.elapsed = 0.0
         self._last = time.perf_counter()

@@ -11,16 +11,13 @@ sphere: each builds its plan, each turns the tally into its result); the engine 
 looks at what a hook's bins mean and decides nothing by rule names (it asks the plan and
 its budget rule).
 
-- ``keyed=True``: reading k traces the global ray indices [key·stride, key·stride + N_k)
-  (key = k mod n_p·n_θ·n_λ: groups share rays; stride = :attr:`Plan.stride`), so its
-  counts depend on (seed, key) only. Readings run in batches of about ``chunk_size``
-  rays (several readings per kernel chunk), each traced by :func:`take_keyed_readings` —
-  the one batch function, here (:func:`in_process_runner`) or on a Dask worker
-  (:mod:`virtspec_mi.scaleout`) — recorded in a checkpoint (bins and sums too:
-  :mod:`virtspec_mi.engine.checkpoint`) and shown by a progress bar
-  (:mod:`virtspec_mi.engine.progress`).
-- ``keyed=False``: one call with consecutive ray ranges — how ``measure`` has always
-  numbered its rays (one group, no parameter points).
+Reading k traces the global ray indices [key·stride, key·stride + N_k) (key = k mod
+n_p·n_θ·n_λ: groups share rays; stride = :attr:`Plan.stride`), so its counts depend on
+(seed, key) only. Readings run in batches of about ``chunk_size`` rays (several readings
+per kernel chunk), each traced by :func:`take_keyed_readings` — the one batch function,
+here (:func:`in_process_runner`) or on a Dask worker (:mod:`virtspec_mi.scaleout`) —
+recorded in a checkpoint (bins and sums too: :mod:`virtspec_mi.engine.checkpoint`) and
+shown by a progress bar (:mod:`virtspec_mi.engine.progress`).
 
 Model only what is needed: a specimen whose BSDF declares ``wavelength_independent =
 True`` (e.g. ``simple_dielectric``) is traced once per incidence (θi, φi) and readings
@@ -78,33 +75,25 @@ runs them on Dask workers.
 # -- one plan, one path ---------------------------------------------------------------------
 
 
-def run(bench: Any, plan: Plan, *, keyed: bool, checkpoint: Any = None, progress: bool | None = False,
+def run(bench: Any, plan: Plan, *, checkpoint: Any = None, progress: bool | None = False,
         runner: BatchRunner | None = None) -> Tally:
     """
     Every reading of ``plan`` on ``bench`` as one :class:`~virtspec_mi.engine.tally.Tally`
     over the flat readings (see the module docstring).
 
-    ``keyed=True``: batches of about ``chunk_size`` rays, each recorded in ``checkpoint``
+    Keyed on the reading indices: batches of about ``chunk_size`` rays, each recorded in ``checkpoint``
     (a path, or ``None``; a run that resumes from it says so on stderr unless ``progress``
     is ``False``; the checkpoint is left in place when the run completes: the caller
     removes it once the result is safe, :func:`virtspec_mi.engine.checkpoint.remove`, and
     holds it meanwhile, :func:`virtspec_mi.engine.checkpoint.claim`) and shown by
     ``progress``; ``runner`` (a :data:`BatchRunner`) runs the batches left to do elsewhere
     (Dask workers); the default runs them here. The batches, the checkpoint and the
-    tallies are the same either way. ``keyed=False``: one call over consecutive ray
-    ranges (one group, no parameter points), its bar updated per chunk.
+    tallies are the same either way.
     """
 
     shared = _shares(bench, plan)
     size = plan.size
     check_readings(size, (size // len(plan.wavelengths) if shared else size) * plan.most_rays_spent)
-    if not keyed:
-        if plan.parameters is not None or len(plan.groups) != 1:
-            raise ValueError("a run over parameters or reading groups must be keyed on reading indices (keyed=True)")
-        _, _, theta, lam = plan.split(np.arange(size))
-        start = time.perf_counter()
-        tally = trace_readings(bench, plan, 0, _readings(plan, theta, lam), progress=progress)
-        return tally.with_seconds(time.perf_counter() - start)
     return _run_keyed(bench, plan, shared, checkpoint, progress, runner or in_process_runner(bench, plan))
 
 

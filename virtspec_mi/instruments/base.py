@@ -74,15 +74,14 @@ class Instrument(ABC):
         parameter points, or ``None``.
         """
 
-    def process(self, plan: Plan, *, keyed: bool = True, checkpoint: Any = None, progress: bool | None = False,
+    def process(self, plan: Plan, *, checkpoint: Any = None, progress: bool | None = False,
                 runner: BatchRunner | None = None) -> Tally:
         """
-        Trace ``plan`` on the bench through the engine (:func:`virtspec_mi.engine.readings.run`):
-        keyed on the reading indices (``checkpoint``, ``progress``, ``runner``: Dask
-        workers), or over consecutive ray ranges (``keyed=False``).
+        Trace ``plan`` on the bench through the engine (:func:`virtspec_mi.engine.readings.run`),
+        keyed on the reading indices (``checkpoint``, ``progress``, ``runner``: Dask workers).
         """
 
-        return run(self.bench, plan, keyed=keyed, checkpoint=checkpoint, progress=progress, runner=runner)
+        return run(self.bench, plan, checkpoint=checkpoint, progress=progress, runner=runner)
 
     @abstractmethod
     def postprocess(self, tally: Tally) -> Any:
@@ -101,7 +100,7 @@ def take(instrument: Instrument, bench: Any, settings: Settings, options: Option
          theta_i: Any = None, parameters: ParameterSpace | None = None, **run: Any) -> Any:
     """
     One measurement with ``instrument``: :meth:`~Instrument.init`,
-    :meth:`~Instrument.process` (``run``: ``keyed``, ``checkpoint``, ``progress``,
+    :meth:`~Instrument.process` (``run``: ``checkpoint``, ``progress``,
     ``runner``) and :meth:`~Instrument.postprocess`. ``theta_i``: the incidence angles
     (default: ``settings.theta_i``); ``options``: the instrument's (default: their defaults).
     """

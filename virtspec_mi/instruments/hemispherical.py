@@ -13,11 +13,9 @@ it tallies); the result is a :class:`~virtspec_mi.results.hemispherical.Result` 
 (wavelength, θi, parameter dims). A two-stage rule sizes each reading from its pilot's
 R, T and A (or R and T together, ``joint``).
 
-A measurement is keyed (a sweep: reading k owns the global ray indices
-[k·stride, k·stride + N), resumable, on Dask workers) or not (``measure``: consecutive
-ray ranges, as it has always numbered its rays). An unkeyed measurement of one specimen
-parameter point sets the point on the scene for the reading and gives the scene its
-own values back afterwards.
+Every measurement is keyed (reading k owns the global ray indices [k·stride,
+k·stride + N): its counts depend on (seed, k) only; resumable, on Dask workers):
+``measure`` is a sweep's reading at one θi.
 
 References
 ----------
@@ -26,14 +24,13 @@ Baranoski et al. (2001), eqs. (2), (23); Figs. 5 and 6.
 
 from __future__ import annotations
 
-from dataclasses import replace
 from typing import Any, ClassVar
 
 import numpy as np
 
-from virtspec_mi.engine.parameters import ParameterSpace, apply_point, current_values
+from virtspec_mi.engine.parameters import ParameterSpace
 from virtspec_mi.engine.plan import Columns, Plan
-from virtspec_mi.engine.readings import BatchRunner, shares_wavelengths
+from virtspec_mi.engine.readings import shares_wavelengths
 from virtspec_mi.engine.tally import Tally
 from virtspec_mi.instruments.base import Instrument, reading_grid, reading_labels
 from virtspec_mi.results.hemispherical import Result
@@ -51,47 +48,26 @@ class Hemispherical(Instrument):
 
     def init(self, bench: Any, settings: Settings, options: Options | None, theta_i: np.ndarray,
              parameters: ParameterSpace | None) -> Plan:
-        self.bench, self.point = bench, None
+        self.bench = bench
         self.plan = Plan(settings.updated(theta_i=float(theta_i[0])), theta_i, parameters,
                          columns=Columns.fates(settings.joint), scene=self.scene, instrument=self.name)
         return self.plan
 
-    def process(self, plan: Plan, *, keyed: bool = True, checkpoint: Any = None, progress: bool | None = False,
-                runner: BatchRunner | None = None) -> Tally:
-        """The engine's run; unkeyed with one parameter point: the point set on the scene for the run."""
-
-        space = plan.parameters
-        if keyed or space is None:
-            return super().process(plan, keyed=keyed, checkpoint=checkpoint, progress=progress, runner=runner)
-        if space.size != 1:
-            raise ValueError("an unkeyed measurement takes one value per parameter (a sweep takes several)")
-        original = current_values(self.bench, space.keys)
-        self.plan, self.point = replace(plan, parameters=None), space  # the point: a scalar label of the result
-        try:
-            apply_point(self.bench, space.keys, space.point(0))
-            return super().process(self.plan, keyed=False, progress=progress)
-        finally:
-            apply_point(self.bench, space.keys, original)
-
     def postprocess(self, tally: Tally) -> Result:
-        return hemispherical_result(self.bench, self.plan, tally, self.scene, self.point)
+        return hemispherical_result(self.bench, self.plan, tally, self.scene)
 
     def warn_if_uncertified(self, result: Result, stacklevel: int = 2) -> None:
         result.warn_if_uncertified(stacklevel=stacklevel + 2)
 
 
-def hemispherical_result(bench: Any, plan: Plan, tally: Tally, scene: str = "",
-                         point: ParameterSpace | None = None) -> Result:
+def hemispherical_result(bench: Any, plan: Plan, tally: Tally, scene: str = "") -> Result:
     """
     The hemispherical reading of ``plan``'s readings (one group) from their tallies: a
-    :class:`~virtspec_mi.results.hemispherical.Result` over (wavelength, θi, parameter
-    dims); ``point``: the one parameter point an unkeyed reading was taken at (scalar labels).
+    :class:`~virtspec_mi.results.hemispherical.Result` over (wavelength, θi, parameter dims).
     """
 
-    space = plan.parameters if point is None else point
+    space = plan.parameters
     dims, coords = reading_labels(plan)
-    if point is not None:
-        coords.update({name: np.asarray(values[0]) for name, values in point.coords().items()})
     return Result(
         dims=dims, coords=coords,
         counts=tally.counts.map(lambda v: reading_grid(plan, v)),

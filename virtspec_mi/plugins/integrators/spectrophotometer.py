@@ -120,7 +120,7 @@ class Spectrophotometer(mi.SamplingIntegrator):
             self.last_reading = take(INSTRUMENTS["goniophotometer"](), bench, settings, self.gonio_options)
             reading = self.last_reading.result.squeeze()
         else:
-            reading = take(INSTRUMENTS["hemispherical"](), bench, settings, keyed=False).squeeze()
+            reading = take(INSTRUMENTS["hemispherical"](), bench, settings).squeeze()
             self.last_reading = reading
         reading.warn_if_uncertified(stacklevel=2)
         table = np.stack([reading.reflectance, reading.transmittance, reading.absorptance], axis=1)

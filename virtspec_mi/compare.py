@@ -61,6 +61,7 @@ from typing import Any
 
 import numpy as np
 
+from virtspec_mi.checks import check_nanometres
 from virtspec_mi.kernel.counts import QUANTITIES
 from virtspec_mi.results.base import ResultBase, plain_data, round_up
 from virtspec_mi.results.colorimetry import DEFAULT_ILLUMINANT, DEFAULT_OBSERVER, Colour, colorimetry
@@ -116,9 +117,7 @@ class MeasuredSpectrum:
             raise ValueError(f"measured spectrum {source} holds no points")
         if not np.all(np.isfinite(wavelengths) & (wavelengths > 0)):
             raise ValueError(f"measured wavelengths must be finite and > 0 nm ({source})")
-        if wavelengths.max() < 100:
-            raise ValueError(f"measured wavelengths must be in nm (got {wavelengths.min():g}-{wavelengths.max():g} "
-                             f"in {source}: micrometres? multiply by 1000)")
+        check_nanometres(wavelengths, "measured wavelengths", source)
         if not np.all(np.isfinite(values)):
             raise ValueError(f"measured values must be finite ({source})")
         if values.max() > _PERCENT:

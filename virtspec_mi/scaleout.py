@@ -15,7 +15,7 @@ in-process run.
 ``workers``
     ``None``: in this process (no Dask). An int N: a ``LocalCluster`` of N worker
     processes (``processes=True``, one thread each, the ``spawn`` start method), closed
-    when the sweep ends. A scheduler address (``"tcp://host:8786"``) or an existing
+    when the sweep ends; at most :data:`WORKERS_PER_CORE` per core of this machine. A scheduler address (``"tcp://host:8786"``) or an existing
     ``distributed.Client``: that cluster (left running).
 
 Per worker process, :class:`WorkerSetup` (a ``distributed.WorkerPlugin``, also run on a
@@ -71,6 +71,7 @@ from typing import Any, Iterator
 import numpy as np
 from distributed import WorkerPlugin
 
+from virtspec_mi.checks import shown_value
 from virtspec_mi.engine.plan import Plan
 from virtspec_mi.engine.readings import BatchRunner, take_keyed_readings
 from virtspec_mi.engine.tally import Tally
@@ -84,6 +85,8 @@ __all__ = [
     "WORKER_TIMEOUT",
     "WorkerSetup",
     "wait_for_a_worker",
+    "WORKERS_PER_CORE",
+    "local_worker_limit",
     "check_workers",
     "check_task_readings",
     "connect",
@@ -102,6 +105,13 @@ DRJIT_THREADS: int = 1
 
 RETRIES: int = 2
 """Times Dask retries a task that raised (a worker that died is handled by the scheduler)."""
+
+WORKERS_PER_CORE: int = 4
+"""
+Most local worker processes per core (``workers=N`` ≤ 4 × ``os.cpu_count()``): every worker
+is a process with its own Mitsuba and Dr.Jit, so more only compete for the cores and the
+memory (a scheduler address is not limited: its cluster's workers are its own).
+"""
 
 WORKER_TIMEOUT: float = 60.0
 """Seconds a sweep waits for a first worker (or, once none finishes a task, for any worker) before ``TimeoutError``."""
@@ -148,19 +158,61 @@ def worker_state() -> dict[str, Any]:
             "set_up_here": threading.get_ident() in _setup_threads, "expected_variant": variant()}
 
 
-def check_workers(workers: Any) -> Any:
-    """``workers`` when it is ``None``, an int >= 1, a scheduler address or a ``Client``; else ``ValueError``."""
+def local_worker_limit() -> int:
+    """
+    Most worker processes a local cluster (``workers=N``) may start on this machine:
+    :data:`WORKERS_PER_CORE` × ``os.cpu_count()``.
+    """
 
-    if workers is None or (isinstance(workers, str) and workers.strip()):
-        return workers
-    if isinstance(workers, int) and not isinstance(workers, bool):
+    return WORKERS_PER_CORE * (os.cpu_count() or 1)
+
+
+def check_workers(workers: Any) -> Any:
+    """
+    ``workers`` as a run takes it — ``None``; a whole number N (an int or a numeric string),
+    1 ≤ N ≤ :func:`local_worker_limit` (each local worker is a process of its own); a
+    scheduler address (``"tcp://host:8786"``, not limited: that cluster's workers are its
+    own); or a ``distributed.Client`` — else ``ValueError`` naming the value and the range.
+    """
+
+    if workers is None:
+        return None
+    if isinstance(workers, str) and workers.strip().isdigit():
+        workers = int(workers.strip())  # "2": a number, as everywhere
+    if isinstance(workers, str) and workers.strip():
+        return _scheduler_address(workers.strip())
+    if isinstance(workers, (int, np.integer)) and not isinstance(workers, (bool, np.bool_)):
+        limit = local_worker_limit()
         if workers < 1:
             raise ValueError(f"workers must be >= 1 worker processes (got {workers})")
-        return workers
+        if workers > limit:
+            raise ValueError(
+                f"workers must be at most {limit} worker processes of a local cluster (got {shown_value(workers)}): "
+                f"at most {WORKERS_PER_CORE} per core of the {os.cpu_count() or 1} of this machine, as each is a "
+                "process with its own Mitsuba and more only compete for the cores and the memory; for a larger "
+                "cluster give its scheduler address (--scheduler)")
+        return int(workers)
     if type(workers).__name__ == "Client" and type(workers).__module__.startswith("distributed"):
         return workers
-    raise ValueError("workers must be None (in this process), an int >= 1 (a local cluster of that many processes), "
-                     f"a scheduler address such as 'tcp://host:8786' or a distributed.Client (got {workers!r})")
+    raise ValueError("workers must be None (in this process), a whole number >= 1 (a local cluster of that many "
+                     "processes), a scheduler address such as 'tcp://host:8786' or a distributed.Client (got "
+                     f"{workers!r})")
+
+
+def _scheduler_address(address: str) -> str:
+    """A scheduler address Dask can connect to (``scheme://host:port``; a TCP/TLS one needs its port)."""
+
+    from distributed.comm import parse_address
+    from distributed.comm.addressing import parse_host_port
+
+    try:
+        scheme, location = parse_address(address)
+        if scheme in ("tcp", "tls", "ws", "wss"):
+            parse_host_port(location)
+    except ValueError as error:
+        raise ValueError(f"workers must be a whole number of local worker processes or a scheduler address such as "
+                         f"'tcp://host:8786' (got {address!r}: {error})") from None
+    return address
 
 
 def check_task_readings(task_readings: Any) -> int | None:

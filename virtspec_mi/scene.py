@@ -67,10 +67,14 @@ def load_scene(scene: Any, defines: dict[str, Any] | None = None) -> Any:
             if not path.is_file():
                 raise SceneError(f"scene file not found: {path}")
             _check_defined(path, defines)
-            return mi.load_file(str(path), **defines)
+            loaded = mi.load_file(str(path), **defines)
+            _check_specimen_xml(path)
+            return loaded
         if isinstance(scene, dict):
             _check_dict(scene)
-            return mi.load_dict(scene)
+            loaded = mi.load_dict(scene)
+            _check_specimen_dict(scene)
+            return loaded
     except SceneError:
         raise
     except Exception as error:  # Mitsuba raises RuntimeError/ValueError with its parser text
@@ -130,6 +134,55 @@ def _check_dict(scene: dict, path: str = "") -> None:
             raise SceneError(f"could not load scene (dict): [{where}] has no value (None)")
         if isinstance(value, dict):
             _check_dict(value, where)
+
+
+_NO_BSDF = (f"the specimen disk (shape id '{SPECIMEN_ID}') has no BSDF: Mitsuba would give it a default diffuse "
+            "BSDF of reflectance 0.5 and measure that; give the specimen's BSDF ")
+
+
+def _check_specimen_xml(path: Path) -> None:
+    """
+    Refuse an XML scene whose ``specimen`` shape holds no ``<bsdf>`` (nor a ``<ref>`` to
+    one): Mitsuba gives such a shape a default diffuse BSDF. A file Python's XML parser
+    cannot read, or whose specimen is not written out in it, Mitsuba has loaded already.
+    """
+
+    from xml.etree import ElementTree
+
+    try:
+        root = ElementTree.parse(path).getroot()
+    except (ElementTree.ParseError, OSError):
+        return
+    for shape in root.iter("shape"):
+        if shape.get("id") == SPECIMEN_ID and not any(child.tag in ("bsdf", "ref") for child in shape):
+            raise SceneError(f"{_NO_BSDF}inside it (<bsdf type=\"...\">) in {path}")
+
+
+def _check_specimen_dict(scene: dict) -> None:
+    """
+    Refuse a scene dict whose ``specimen`` entry holds no BSDF (a dict of a BSDF plugin,
+    a ``ref``, or a loaded ``mi.BSDF``): Mitsuba gives such a shape a default diffuse BSDF.
+    """
+
+    from virtspec_mi.runtime import PLUGINS
+
+    mi = mitsuba()
+    specimen = scene.get(SPECIMEN_ID)
+    if not isinstance(specimen, dict):
+        return  # not an instrument scene: read_bench names what is missing
+
+    def is_bsdf(value: Any) -> bool:
+        if isinstance(value, mi.BSDF):
+            return True
+        if not isinstance(value, dict) or not isinstance(value.get("type"), str):
+            return False
+        kind = value["type"]
+        project = PLUGINS.get(kind)
+        return kind == "ref" or (project is not None and project[0] == "bsdf") or \
+            mi.PluginManager.instance().plugin_type(kind) == mi.ObjectType.BSDF
+
+    if not any(is_bsdf(value) for key, value in specimen.items() if key != "type"):
+        raise SceneError(f"{_NO_BSDF}in its dict entry (e.g. 'bsdf': {{'type': 'diffuse'}})")
 
 
 def find_bench(scene: Any, defines: dict[str, Any] | None = None) -> Bench:

@@ -256,12 +256,17 @@ def _traced_readings(bench: Any, readings: Sequence[tuple[float, float, float]],
 def _check_specimen(bsdf: Any, wavelengths: list[float]) -> None:
     """
     Refuse, before tracing, wavelengths the specimen does not take: outside its
-    ``wavelength_range`` (the ABM leaves' data), or where its ``check_wavelengths``
-    finds a spectral parameter out of range (``turbid_slab``'s spectra).
+    ``wavelength_range`` (the ABM leaves' data, a measured table's), outside the data of
+    any Mitsuba spectrum it holds (:func:`virtspec_mi.kernel.spectra.check_covered`: a
+    ``regular``/``irregular`` spectrum's range, an RGB colour's CIE range), or where its
+    ``check_wavelengths`` finds a spectral parameter out of range (``turbid_slab``'s spectra).
     """
 
-    check_wavelength_range(wavelengths, getattr(bsdf, "wavelength_range", None),
-                           getattr(bsdf, "PLUGIN", "") or type(bsdf).__name__)
+    from virtspec_mi.kernel.spectra import check_covered  # Mitsuba is set up by now (a bench is loaded)
+
+    name = getattr(bsdf, "PLUGIN", "") or (bsdf.class_name() if hasattr(bsdf, "class_name") else type(bsdf).__name__)
+    check_wavelength_range(wavelengths, getattr(bsdf, "wavelength_range", None), name)
+    check_covered(bsdf, wavelengths, f"the specimen {name}")
     check = getattr(bsdf, "check_wavelengths", None)
     if check is not None:
         check(wavelengths)

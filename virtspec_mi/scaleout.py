@@ -63,6 +63,7 @@ import logging
 import math
 import os
 import pickle
+import signal
 import threading
 import time
 from contextlib import contextmanager
@@ -72,6 +73,7 @@ import numpy as np
 from distributed import WorkerPlugin
 
 from virtspec_mi.checks import shown_value
+from virtspec_mi.engine import interrupts
 from virtspec_mi.engine.plan import Plan
 from virtspec_mi.engine.readings import BatchRunner, take_keyed_readings
 from virtspec_mi.engine.tally import Tally
@@ -117,6 +119,7 @@ WORKER_TIMEOUT: float = 60.0
 """Seconds a sweep waits for a first worker (or, once none finishes a task, for any worker) before ``TimeoutError``."""
 
 _POLL_SECONDS = 0.1  # as distributed.as_completed's own wait
+_WAIT_STEP = 0.5  # seconds of one wait for a worker between two interrupt checks
 _TRANSFORM = "__virtspec_transform4f__"
 _setup_threads: set[int] = set()
 _benches: dict[str, Any] = {}
@@ -144,7 +147,15 @@ class WorkerSetup(WorkerPlugin):
 
     name = "virtspec-mi-setup"
 
+    def __init__(self, local: bool = False) -> None:
+        self.local = local
+        """Workers of a local cluster started for the run: they ignore SIGINT (see :meth:`setup`)."""
+
     async def setup(self, worker: Any) -> None:
+        if self.local and threading.current_thread() is threading.main_thread():
+            # Ctrl-C reaches the whole process group: the driver stops the run (its checkpoint saved) and
+            # closes the cluster; a worker killed by it would only print a traceback and be restarted.
+            signal.signal(signal.SIGINT, signal.SIG_IGN)
         await asyncio.wrap_future(worker.executor.submit(_initialise))
 
 
@@ -250,7 +261,7 @@ def connect(workers: Any) -> Iterator[Any]:
         raise ValueError("workers=None runs in this process: there is no cluster to connect to")
     if isinstance(workers, int):
         with local_cluster(workers) as client:
-            _register(client)
+            _register(client, local=True)
             yield client
         return
     if isinstance(workers, str):
@@ -264,11 +275,14 @@ def connect(workers: Any) -> Iterator[Any]:
     yield workers
 
 
-def _register(client: Any) -> None:
-    """Register :class:`WorkerSetup` on every worker of ``client``'s cluster (and on those that join later)."""
+def _register(client: Any, local: bool = False) -> None:
+    """
+    Register :class:`WorkerSetup` on every worker of ``client``'s cluster (and on those
+    that join later); ``local``: a cluster started for the run (its workers ignore SIGINT).
+    """
 
     register = getattr(client, "register_plugin", None) or client.register_worker_plugin
-    register(WorkerSetup(), name=WorkerSetup.name)
+    register(WorkerSetup(local), name=WorkerSetup.name)
 
 
 def portable_scene(scene: Any) -> Any:
@@ -316,9 +330,15 @@ def wait_for_a_worker(client: Any) -> int:
     :data:`WORKER_TIMEOUT` seconds; ``TimeoutError`` naming the scheduler otherwise.
     """
 
-    try:
-        client.wait_for_workers(1, timeout=WORKER_TIMEOUT)
-    except TimeoutError:  # distributed's WorkerStartTimeoutError is one
+    deadline = time.monotonic() + WORKER_TIMEOUT
+    while True:  # in steps, each a safe point for an interrupt
+        try:
+            client.wait_for_workers(1, timeout=max(0.01, min(_WAIT_STEP, deadline - time.monotonic())))
+            break
+        except TimeoutError:  # distributed's WorkerStartTimeoutError is one
+            interrupts.check()
+            if time.monotonic() < deadline:
+                continue
         address = getattr(getattr(client, "scheduler", None), "address", "?")
         raise TimeoutError(f"no Dask worker is connected to the scheduler {address} (waited WORKER_TIMEOUT = "
                            f"{WORKER_TIMEOUT:g} s): start workers for it (`dask worker {address}`), or check the "
@@ -338,6 +358,7 @@ def _as_finished(client: Any, finished: Any) -> Iterator[Any]:
 
     quiet_since = time.monotonic()
     while not finished.is_empty():
+        interrupts.check()  # a safe point every poll: Ctrl-C or SIGTERM stops the run within 0.1 s
         ready = finished.next_batch(block=False)
         if ready:
             yield from ready

@@ -171,15 +171,17 @@ def _check_specimen_dict(scene: dict) -> None:
     if not isinstance(specimen, dict):
         return  # not an instrument scene: read_bench names what is missing
 
-    def is_bsdf(value: Any) -> bool:
+    def is_bsdf(value: Any) -> bool:  # or may be one: a plugin registered from Python is of no known type
         if isinstance(value, mi.BSDF):
             return True
         if not isinstance(value, dict) or not isinstance(value.get("type"), str):
             return False
         kind = value["type"]
         project = PLUGINS.get(kind)
-        return kind == "ref" or (project is not None and project[0] == "bsdf") or \
-            mi.PluginManager.instance().plugin_type(kind) == mi.ObjectType.BSDF
+        if project is not None:
+            return project[0] == "bsdf"
+        return kind == "ref" or mi.PluginManager.instance().plugin_type(kind) in (mi.ObjectType.BSDF,
+                                                                                mi.ObjectType.Unknown)
 
     if not any(is_bsdf(value) for key, value in specimen.items() if key != "type"):
         raise SceneError(f"{_NO_BSDF}in its dict entry (e.g. 'bsdf': {{'type': 'diffuse'}})")

@@ -48,12 +48,14 @@ Baranoski et al. (2001), eqs. (2) and (23).
 from __future__ import annotations
 
 import time
+from pathlib import Path
 from typing import Any, Callable, Iterable, Iterator, Sequence
 
 import numpy as np
 
 from virtspec_mi.budgets import twostage
 from virtspec_mi.checks import check_readings, check_rays_needed, check_wavelength_range, shown_value
+from virtspec_mi.engine import interrupts
 from virtspec_mi.engine.checkpoint import Checkpoint
 from virtspec_mi.engine.parameters import ParameterSpace, apply_point, current_values
 from virtspec_mi.engine.plan import Columns, Plan, kernel_options
@@ -93,19 +95,27 @@ def run(bench: Any, plan: Plan, *, keyed: bool, checkpoint: Any = None, progress
     (Dask workers); the default runs them here. The batches, the checkpoint and the
     tallies are the same either way. ``keyed=False``: one call over consecutive ray
     ranges (one group, no parameter points), its bar updated per chunk.
+
+    SIGINT and SIGTERM stop the run at its next safe point — after a kernel chunk (each
+    lasts about :data:`~virtspec_mi.kernel.tracer.CHUNK_SECONDS` at most) or a batch,
+    or while it waits for Dask workers — with the checkpoint saved:
+    :class:`~virtspec_mi.engine.interrupts.Interrupted` names the signal and the
+    checkpoint (:mod:`virtspec_mi.engine.interrupts`).
     """
 
     shared = _shares(bench, plan)
     size = plan.size
     check_readings(size, (size // len(plan.wavelengths) if shared else size) * plan.most_rays_spent)
-    if not keyed:
-        if plan.parameters is not None or len(plan.groups) != 1:
-            raise ValueError("a run over parameters or reading groups must be keyed on reading indices (keyed=True)")
-        _, _, theta, lam = plan.split(np.arange(size))
-        start = time.perf_counter()
-        tally = trace_readings(bench, plan, 0, _readings(plan, theta, lam), progress=progress)
-        return tally.with_seconds(time.perf_counter() - start)
-    return _run_keyed(bench, plan, shared, checkpoint, progress, runner or in_process_runner(bench, plan))
+    with interrupts.deferred():  # SIGINT/SIGTERM stop the run at its next safe point (between kernel chunks)
+        if not keyed:
+            if plan.parameters is not None or len(plan.groups) != 1:
+                raise ValueError("a run over parameters or reading groups must be keyed on reading indices "
+                                 "(keyed=True)")
+            _, _, theta, lam = plan.split(np.arange(size))
+            start = time.perf_counter()
+            tally = trace_readings(bench, plan, 0, _readings(plan, theta, lam), progress=progress)
+            return tally.with_seconds(time.perf_counter() - start)
+        return _run_keyed(bench, plan, shared, checkpoint, progress, runner or in_process_runner(bench, plan))
 
 
 def take_keyed_readings(bench: Any, plan: Any, batch: Any = None, *transitional: Any, **keywords: Any) -> Any:
@@ -281,7 +291,13 @@ def _fixed(bench: Any, readings: Sequence[tuple[float, float, float]], settings:
     from virtspec_mi.kernel import tracer
 
     plans = [tracer.ReadingPlan(w, t, p, int(n)) for (w, t, p), n in zip(readings, rays)]
-    return tracer.tally_readings(bench, plans, offsets=offsets, hook=hook, on_chunk=on_chunk,
+
+    def chunk_done(readings_done: int) -> None:  # a safe point: an interrupt stops the run here
+        interrupts.check()
+        if on_chunk is not None:
+            on_chunk(readings_done)
+
+    return tracer.tally_readings(bench, plans, offsets=offsets, hook=hook, on_chunk=chunk_done,
                                  **kernel_options(settings))
 
 
@@ -330,6 +346,10 @@ def _run_keyed(bench: Any, plan: Plan, shared: bool, checkpoint: Any, progress: 
         for batch, tally in finished:
             state.record(batch, tally)
             bar.update(len(batch) // per_unit, tally.seconds)
+            interrupts.check()
+    except interrupts.Interrupted as stop:  # the message names the file to resume from
+        stop.checkpoint = None if checkpoint is None else Path(checkpoint)
+        raise
     finally:
         close = getattr(finished, "close", None)
         if close is not None:

@@ -61,7 +61,7 @@ from typing import Any
 
 import numpy as np
 
-from virtspec_mi.checks import check_nanometres
+from virtspec_mi.checks import check_nanometres, number
 from virtspec_mi.kernel.counts import QUANTITIES
 from virtspec_mi.results.base import ResultBase, plain_data, round_up
 from virtspec_mi.results.colorimetry import DEFAULT_ILLUMINANT, DEFAULT_OBSERVER, Colour, colorimetry
@@ -139,7 +139,13 @@ class MeasuredSpectrum:
 
 
 def _check_uncertainty(uncertainty: Any, size: int, source: str) -> np.ndarray:
-    values = np.asarray(uncertainty, dtype=np.float64)
+    try:
+        if isinstance(uncertainty, (bool, np.bool_, str)):
+            raise TypeError
+        values = np.asarray(uncertainty, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise ValueError(f"measurement_uncertainty must be a number or one value per measured point "
+                         f"(got {uncertainty!r})") from None
     if values.ndim == 0:
         values = np.full(size, float(values))
     if values.shape != (size,):
@@ -583,6 +589,7 @@ def compare(
 
     result, result_name = _result_of(result)
     quantity = result.check_quantity(quantity)
+    theta_i = None if theta_i is None else number("theta_i", theta_i)  # one of the result's angles: checked there
     _check_colour_names(illuminant, observer)
     simulation = result.spectrum(quantity, theta_i)
     spectrum = read_measured(measured, simulation.measures, theta_i)

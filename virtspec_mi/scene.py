@@ -67,14 +67,10 @@ def load_scene(scene: Any, defines: dict[str, Any] | None = None) -> Any:
             if not path.is_file():
                 raise SceneError(f"scene file not found: {path}")
             _check_defined(path, defines)
-            loaded = mi.load_file(str(path), **defines)
-            _check_specimen_xml(path)
-            return loaded
+            return mi.load_file(str(path), **defines)
         if isinstance(scene, dict):
             _check_dict(scene)
-            loaded = mi.load_dict(scene)
-            _check_specimen_dict(scene)
-            return loaded
+            return mi.load_dict(scene)
     except SceneError:
         raise
     except Exception as error:  # Mitsuba raises RuntimeError/ValueError with its parser text
@@ -188,9 +184,19 @@ def _check_specimen_dict(scene: dict) -> None:
 
 
 def find_bench(scene: Any, defines: dict[str, Any] | None = None) -> Bench:
-    """Load ``scene`` (XML path, dict or ``mi.Scene``; ``defines`` for an XML file) and read its bench (the disks)."""
+    """
+    Load ``scene`` (XML path, dict or ``mi.Scene``; ``defines`` for an XML file) and read
+    its bench (the disks); a specimen disk given no BSDF is refused (Mitsuba would give it
+    its default diffuse BSDF).
+    """
 
-    return read_bench(load_scene(scene, defines))
+    bench = read_bench(load_scene(scene, defines))
+    scene = scenes.resolve(scene)
+    if isinstance(scene, (str, os.PathLike)):
+        _check_specimen_xml(Path(scene))
+    elif isinstance(scene, dict):
+        _check_specimen_dict(scene)
+    return bench
 
 
 def instrument_scene(

@@ -28,6 +28,8 @@ from virtspec_mi.engine.checkpoint import checkpoint_for
 from virtspec_mi.engine.interrupts import Interrupted
 from virtspec_mi.kernel import tracer
 
+from killed_runs import ROUGH_XML, signal_when_kept
+
 ROOT = Path(__file__).resolve().parents[1]
 LATENCY_S = 3.0
 """How soon a signalled run must have stopped tracing (about a second on a quiet machine; room for a busy one)."""
@@ -210,27 +212,6 @@ def test_a_long_sphere_walk_keeps_its_kernel_launches_within_the_chunk_seconds(m
 # --- real processes: virtspec sweep, gonio --out, sphere --out, --workers 2 -------------------------------
 
 
-def _signal_when_kept(command: list[str], out: Path, signum: int, cwd: Path, ignore_sigint: bool = False,
-                      wait: float = 0.5) -> tuple[subprocess.CompletedProcess, float]:
-    """
-    Run ``command``; once its checkpoint holds a finished reading, wait ``wait`` s (a kernel under way) and send
-    ``signum``; returns the finished process (stderr text) and the seconds it took to exit after the signal.
-    """
-
-    partial = checkpoint_for(out)
-    setup = (lambda: signal.signal(signal.SIGINT, signal.SIG_IGN)) if ignore_sigint else None
-    process = subprocess.Popen(command, cwd=cwd, stderr=subprocess.PIPE, text=True, preexec_fn=setup)
-    deadline = time.monotonic() + 300
-    while not partial.exists() and process.poll() is None and time.monotonic() < deadline:
-        time.sleep(0.01)
-    time.sleep(wait)
-    assert process.poll() is None, f"the run ended before it could be interrupted: {process.stderr.read()}"
-    sent = time.monotonic()
-    process.send_signal(signum)
-    _, stderr = process.communicate(timeout=120)
-    return subprocess.CompletedProcess(command, process.returncode, "", stderr), time.monotonic() - sent
-
-
 def _cli(*arguments: str) -> list[str]:
     return [sys.executable, "-m", "virtspec_mi.cli", *arguments]
 
@@ -254,7 +235,7 @@ def test_virtspec_sweep_stops_on_a_signal_within_about_a_second(tmp_path, signum
     """SIGINT (also when the shell started it with SIGINT ignored, as in the background) and SIGTERM."""
 
     out = tmp_path / "leaf.nc"
-    run, seconds = _signal_when_kept(_cli("sweep", str(ROOT / "scenes" / "soybean_abmb.xml"), *LEAF, "--out",
+    run, seconds = signal_when_kept(_cli("sweep", str(ROOT / "scenes" / "soybean_abmb.xml"), *LEAF, "--out",
                                           str(out)), out, signum, tmp_path, ignore_sigint=ignored)
     _stopped(run, signum, out)
     assert seconds < LATENCY_S
@@ -263,11 +244,11 @@ def test_virtspec_sweep_stops_on_a_signal_within_about_a_second(tmp_path, signum
 @pytest.mark.slow
 def test_virtspec_gonio_out_stops_on_sigint_and_the_rerun_resumes(tmp_path):
     scene = tmp_path / "rough.xml"
-    scene.write_text(_ROUGH_XML)
+    scene.write_text(ROUGH_XML)
     out = tmp_path / "gonio.nc"
     command = _cli("gonio", str(scene), "--theta-i", "0:80:2", "--wavelengths", "400:700:50", "--rays", "400000",
                    "--theta-o-bins", "6", "--phi-o-bins", "8", "--json", "--out", str(out))
-    run, seconds = _signal_when_kept(command, out, signal.SIGINT, tmp_path)
+    run, seconds = signal_when_kept(command, out, signal.SIGINT, tmp_path)
     _stopped(run, signal.SIGINT, out)
     assert seconds < LATENCY_S
     again = subprocess.run(command, cwd=tmp_path, capture_output=True, text=True)
@@ -281,7 +262,7 @@ def test_virtspec_sphere_out_stops_on_sigterm_during_a_long_walk(tmp_path):
     out = tmp_path / "sphere.json"
     command = _cli("sphere", str(ROOT / "scenes" / "sphere_150mm_8d.xml"), "--rays", str(1 << 22), "--wavelengths",
                    "450", "550", "650", "750", "--out", str(out))
-    run, seconds = _signal_when_kept(command, out, signal.SIGTERM, tmp_path, wait=1.0)
+    run, seconds = signal_when_kept(command, out, signal.SIGTERM, tmp_path, wait=1.0)
     _stopped(run, signal.SIGTERM, out)
     assert seconds < LATENCY_S
 
@@ -313,15 +294,7 @@ def test_the_api_saves_the_checkpoint_then_ends_as_sigterm_would(tmp_path):
     code = ("import sys, virtspec_mi as vm; "
             f"vm.sweep({str(ROOT / 'scenes' / 'soybean_abmb.xml')!r}, theta_i=8, wavelengths='400:2500:10', "
             "rays=100000, out=sys.argv[1], progress=False)")
-    run, seconds = _signal_when_kept([sys.executable, "-c", code, str(out)], out, signal.SIGTERM, tmp_path)
+    run, seconds = signal_when_kept([sys.executable, "-c", code, str(out)], out, signal.SIGTERM, tmp_path)
     assert run.returncode == -signal.SIGTERM  # as before: the default SIGTERM, once the readings are saved
     assert f"every finished reading is kept in {checkpoint_for(out)}" in run.stderr
     assert json.loads(checkpoint_for(out).read_text())["done"] and seconds < LATENCY_S
-
-
-_ROUGH_XML = """<scene version="3.0.0">
-    <shape type="disk" id="emitter"><transform name="to_world"><rotate x="1" angle="180"/><scale value="8"/>
-        <translate z="100"/></transform></shape>
-    <shape type="disk" id="specimen"><transform name="to_world"><scale value="12.5"/></transform>
-        <bsdf type="roughdielectric"><float name="alpha" value="0.3"/><float name="int_ior" value="1.5"/></bsdf></shape>
-</scene>"""

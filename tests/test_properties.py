@@ -82,12 +82,18 @@ ODD_VALUES = {
     "seed": odd_or(st.integers(), st.sampled_from([2**32, -1, 1.5, "x"])),
     "chunk_size": odd_or(st.integers(-5, 2**31), st.sampled_from([10, 1023, 2**25 + 1, 2**30, 1e4, 4096.5])),
 }
-# A measurement: mostly valid settings, and sometimes one given something odd.
-MEASURE_SETTINGS = st.tuples(
-    st.fixed_dictionaries({}, optional=VALID),
-    st.one_of(st.none(), st.sampled_from(sorted(ODD_VALUES)).flatmap(
-        lambda name: st.tuples(st.just(name), ODD_VALUES[name])))).map(
-    lambda pair: {**pair[0], **({pair[1][0]: pair[1][1]} if pair[1] else {})})
+def mostly_valid(valid: dict, odd: dict) -> st.SearchStrategy:
+    """Keywords: any of ``valid``'s names with valid values, and sometimes one of ``odd``'s given something odd."""
+
+    return st.tuples(
+        st.fixed_dictionaries({}, optional=valid),
+        st.one_of(st.none(), st.sampled_from(sorted(odd)).flatmap(
+            lambda name: st.tuples(st.just(name), odd[name])))).map(
+        lambda pair: {**pair[0], **({pair[1][0]: pair[1][1]} if pair[1] else {})})
+
+
+MEASURE_SETTINGS = mostly_valid(VALID, ODD_VALUES)
+"""A measurement: mostly valid settings, and sometimes one given something odd."""
 
 
 def _small_enough(kwargs: dict) -> bool:
@@ -229,10 +235,7 @@ ODD_GONIO = {
     "relative_tolerance": odd_or(st.floats(), st.sampled_from([0, 5, -0.1, 1.0000001, "0.1"])),
     "brdf_floor": odd_or(st.floats(), st.sampled_from([0, -1, "1"])),
 }
-GONIO = st.tuples(st.fixed_dictionaries({}, optional=VALID_GONIO),
-                  st.one_of(st.none(), st.sampled_from(sorted(ODD_GONIO)).flatmap(
-                      lambda name: st.tuples(st.just(name), ODD_GONIO[name])))).map(
-    lambda pair: {**pair[0], **({pair[1][0]: pair[1][1]} if pair[1] else {})})
+GONIO = mostly_valid(VALID_GONIO, ODD_GONIO)
 
 
 @settings(PROFILE, max_examples=80)
@@ -274,10 +277,7 @@ ODD_SPHERE = {
     "specular": odd_or(st.sampled_from(["both"])), "measurement": odd_or(st.sampled_from(["absorptance"])),
     "method": odd_or(st.sampled_from(["comparison", "twice"])),
 }
-SPHERE = st.tuples(st.fixed_dictionaries({}, optional=VALID_SPHERE),
-                   st.one_of(st.none(), st.sampled_from(sorted(ODD_SPHERE)).flatmap(
-                       lambda name: st.tuples(st.just(name), ODD_SPHERE[name])))).map(
-    lambda pair: {**pair[0], **({pair[1][0]: pair[1][1]} if pair[1] else {})})
+SPHERE = mostly_valid(VALID_SPHERE, ODD_SPHERE)
 
 
 @settings(PROFILE, max_examples=40)

@@ -216,7 +216,8 @@ def test_the_properties_stayed_within_the_memory_budget():
 
 # --- issue 22: the new instruments' options, specimen parameters and workers ------------------------------
 
-BIN_VALUES = st.one_of(st.integers(1, 12), st.sampled_from(["6", "0:90:30", "0 30 90 120 180", "0:360:90", [0, 45, 90]]),
+BIN_VALUES = st.one_of(st.integers(1, 12),
+                       st.sampled_from(["6", "0:90:30", "0 30 90 120 180", "0:360:90", [0, 45, 90]]),
                        st.floats(), st.integers(-3, 2**70), st.sampled_from(
                            ["18.5", "1e400", "0:inf:1", "0:180:1e-9", "nan", "0,90,,180", "", "90:0:10",
                             [0, float("nan"), 90], [[0, 90], [90, 180]], [0, 200], 18.5]), st.sampled_from(ODD))
@@ -269,7 +270,8 @@ ODD_SPHERE = {
     "entrance_polar": odd_or(st.floats(), st.sampled_from([170, 179, "x"])),  # overlapping the sample port
     "detector_radius": odd_or(st.floats(), st.sampled_from([0, 1e-30, 75])),
     "wall": odd_or(st.floats(), st.sampled_from([1.5, -0.1, "400:0.9, 700:1.2", "0.9,,0.8"])),
-    "baffle": odd_or(st.sampled_from(["junk", 5, "centre=0,0,-72.5 normal=0,1,0 radius=2", "centre=0,0 normal=0,0,1 radius=1",
+    "baffle": odd_or(st.sampled_from(["junk", 5, "centre=0,0,-72.5 normal=0,1,0 radius=2",
+                                      "centre=0,0 normal=0,0,1 radius=1",
                                       "centre=0,0,0 normal=0,0,0 radius=3", "centre=nan,0,0 normal=0,0,1 radius=3",
                                       "centre=0,0,0 normal=0,0,1 radius=80"])),
     "standard": odd_or(st.floats(), st.sampled_from([0, 1.5, "0.9"])),

@@ -418,7 +418,8 @@ def _sphere(args: argparse.Namespace) -> int:
     from virtspec_mi.api import sphere_measure
 
     # with --out: written by the run, resumable from OUT.partial.json when interrupted
-    result = sphere_measure(args.scene, out=args.out, **_given(args, _kind("settings")), **_given(args, _kind("sphere")))
+    result = sphere_measure(args.scene, out=args.out, **_given(args, _kind("settings")),
+                            **_given(args, _kind("sphere")))
     print(json.dumps(result.as_dict()) if args.json else result.summary())
     return 0
 

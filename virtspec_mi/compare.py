@@ -139,13 +139,13 @@ class MeasuredSpectrum:
 
 
 def _check_uncertainty(uncertainty: Any, size: int, source: str) -> np.ndarray:
+    refusal = f"measurement_uncertainty must be a number or one value per measured point (got {uncertainty!r})"
+    if isinstance(uncertainty, (bool, np.bool_, str)):
+        raise ValueError(refusal)
     try:
-        if isinstance(uncertainty, (bool, np.bool_, str)):
-            raise TypeError
         values = np.asarray(uncertainty, dtype=np.float64)
     except (TypeError, ValueError):
-        raise ValueError(f"measurement_uncertainty must be a number or one value per measured point "
-                         f"(got {uncertainty!r})") from None
+        raise ValueError(refusal) from None
     if values.ndim == 0:
         values = np.full(size, float(values))
     if values.shape != (size,):

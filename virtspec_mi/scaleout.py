@@ -15,8 +15,10 @@ in-process run.
 ``workers``
     ``None``: in this process (no Dask). An int N: a ``LocalCluster`` of N worker
     processes (``processes=True``, one thread each, the ``spawn`` start method), closed
-    when the sweep ends; at most :data:`WORKERS_PER_CORE` per core of this machine. A scheduler address (``"tcp://host:8786"``) or an existing
-    ``distributed.Client``: that cluster (left running).
+    when the sweep ends; at most :data:`WORKERS_PER_CORE` per core of this machine, and
+    they ignore SIGINT (the driver stops the run: :mod:`virtspec_mi.engine.interrupts`).
+    A scheduler address (``"tcp://host:8786"``) or an existing ``distributed.Client``:
+    that cluster (left running, not limited).
 
 Per worker process, :class:`WorkerSetup` (a ``distributed.WorkerPlugin``, also run on a
 worker that restarts) selects libLLVM and the Mitsuba variant, registers the project's
@@ -331,20 +333,26 @@ def wait_for_a_worker(client: Any) -> int:
     """
 
     deadline = time.monotonic() + WORKER_TIMEOUT
-    while True:  # in steps, each a safe point for an interrupt
-        try:
-            client.wait_for_workers(1, timeout=max(0.01, min(_WAIT_STEP, deadline - time.monotonic())))
-            break
-        except TimeoutError:  # distributed's WorkerStartTimeoutError is one
-            interrupts.check()
-            if time.monotonic() < deadline:
-                continue
+    while not _a_worker_within(client, max(0.01, min(_WAIT_STEP, deadline - time.monotonic()))):
+        interrupts.check()  # waited in steps, each a safe point for an interrupt
+        if time.monotonic() < deadline:
+            continue
         address = getattr(getattr(client, "scheduler", None), "address", "?")
         raise TimeoutError(f"no Dask worker is connected to the scheduler {address} (waited WORKER_TIMEOUT = "
                            f"{WORKER_TIMEOUT:g} s): start workers for it (`dask worker {address}`), or check the "
                            "address; readings already finished are kept in the sweep's checkpoint, if it has one"
                            ) from None
     return max(1, len(client.scheduler_info().get("workers", {})))
+
+
+def _a_worker_within(client: Any, seconds: float) -> bool:
+    """True once ``client``'s cluster has a worker, False if none came within ``seconds``."""
+
+    try:
+        client.wait_for_workers(1, timeout=seconds)
+    except TimeoutError:  # distributed's WorkerStartTimeoutError is one
+        return False
+    return True
 
 
 def _as_finished(client: Any, finished: Any) -> Iterator[Any]:

@@ -36,7 +36,7 @@ from contextlib import contextmanager
 from pathlib import Path
 from typing import Any, Iterator
 
-__all__ = ["Interrupted", "catching", "deferred", "check", "exit_status"]
+__all__ = ["SIGNALS", "Interrupted", "catching", "deferred", "check", "exit_status"]
 
 SIGNALS: tuple[int, ...] = (signal.SIGINT, signal.SIGTERM)
 """The signals that stop a run."""

@@ -164,7 +164,7 @@ class Baffle:
         object.__setattr__(self, "radius", radius)
 
     def reach(self, axis: Any) -> float:
-        """The farthest any point of the disk lies along the unit vector ``axis`` (mm): c·a + r·√(1 − (n·a)²)."""
+        """The farthest a point of the disk lies along the unit vector ``axis`` (mm): c·a + r·√(1 − (n·a)²)."""
 
         c, n, a = np.array(self.centre), np.array(self.normal), np.asarray(axis, dtype=np.float64)
         return float(c @ a + self.radius * math.sqrt(max(0.0, 1.0 - float(n @ a) ** 2)))

@@ -276,7 +276,6 @@ class IntegratingSphere(Instrument):
                             specimen_radius=float(self.bench.geometry.specimen_radius),
                             parameters=None if plan.parameters is None else plan.parameters.as_dict())
 
-
     def warn_if_uncertified(self, result: SphereResult, stacklevel: int = 2) -> None:
         """
         A ``RuntimeWarning`` where no light reached the detector in the standard

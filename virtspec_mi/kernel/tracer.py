@@ -101,9 +101,9 @@ _LENGTH2 = ((1.0 - DIRECTION_TOLERANCE) ** 2, (1.0 + DIRECTION_TOLERANCE) ** 2)
 
 CHUNK_SECONDS: float = 0.5
 """
-Longest a kernel launch (one chunk) should last, seconds: a Dr.Jit kernel cannot be
-stopped, so a signal (Ctrl-C, SIGTERM) waits for the chunk under way, and chunks are sized
-from the measured ray rate to end within this (see :class:`_Pace`).
+The longest a kernel launch (one chunk) should last, in seconds. A Dr.Jit kernel cannot
+be stopped, so a signal (Ctrl-C, SIGTERM) waits for the chunk under way; chunks are
+sized from the measured ray rate to end within this (see :class:`_Pace`).
 """
 
 FIRST_CHUNK: int = 1 << 14

@@ -53,6 +53,10 @@ thickness : float, default 1.0
     medium (then μa + μs must be > 0). Optical thickness is (μa + μs)·d, albedo μs/(μa + μs).
 eta : float or spectrum, default 1.0
     Refractive index n > 0 of the slab, 10⁻⁶ … 10⁶ (:data:`INDEX_RANGE`, as the other two).
+    A face whose relative index is within :data:`~virtspec_mi.kernel.walk_optics.NEAR_ONE`
+    of 1 (but not 1) gets Fresnel's equations from η − 1, computed without cancellation
+    (in float64 for numbers; exact for the float32 values of a spectrum):
+    :func:`~virtspec_mi.kernel.walk_optics.cross_interface`.
 eta_above : float or spectrum, default 1.0
     Refractive index > 0 of the medium above the slab (the side of the normal, where
     light comes from).
@@ -68,8 +72,9 @@ value="400:12, 700:3"/>`` in XML, or ``{"type": "regular", ...}`` in a dict), re
 unbounded and evaluated per ray at the ray's wavelength (channel 0 of
 ``si.wavelengths``). Wavelengths outside a spectrum's data (a ``regular`` spectrum's
 range, an ``irregular`` one's wavelengths, an RGB colour's CIE range 360–830 nm:
-:mod:`virtspec_mi.kernel.spectra`) are refused before tracing, naming the parameter. Numbers are checked here (``ValueError`` naming the parameter and the
-allowed range; booleans, non-finite values and values float32 cannot hold are refused);
+:mod:`virtspec_mi.kernel.spectra`) are refused before tracing, naming the parameter.
+Numbers are checked here (``ValueError`` naming the parameter and the allowed range;
+booleans, non-finite values and values float32 cannot hold are refused);
 spectra are checked at the wavelengths of a measurement before it is traced
 (:meth:`TurbidSlab.check_wavelengths`). When every parameter is a number the slab
 declares :attr:`TurbidSlab.wavelength_independent` ``True``.

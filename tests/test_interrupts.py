@@ -206,7 +206,8 @@ def test_a_long_sphere_walk_keeps_its_kernel_launches_within_the_chunk_seconds(m
     monkeypatch.setattr(tracer._Pace, "update", update)
     vm.sphere_measure(str(ROOT / "scenes" / "sphere_150mm_8d.xml"), rays=1 << 22, wavelengths=551, progress=False)
     steady = [elapsed for size, elapsed in times[3:]]  # after the first chunks (compilation, the rate found)
-    assert len(times) > 8 and max(steady) < 2 * tracer.CHUNK_SECONDS, times
+    assert len(times) > 8 and np.median(steady) <= tracer.CHUNK_SECONDS, times
+    assert max(steady) < LATENCY_S, times  # a busy machine may slow one chunk: still about a second
 
 
 # --- real processes: virtspec sweep, gonio --out, sphere --out, --workers 2 -------------------------------
@@ -257,10 +258,17 @@ def test_virtspec_gonio_out_stops_on_sigint_and_the_rerun_resumes(tmp_path):
 
 @pytest.mark.slow
 def test_virtspec_sphere_out_stops_on_sigterm_during_a_long_walk(tmp_path):
-    """A sphere reading of 2**22 rays per configuration: one kernel of seconds before, now chunks of <= ~0.5 s."""
+    """
+    A sphere of wall reflectance 0.999 (about 100 bounces a ray), 2**21 rays per configuration in chunks of as
+    many: one kernel of about 7 s here before (the adversarial pass saw 68 s on a slower sphere), which the signal
+    had to wait for; now chunks of <= ~0.5 s.
+    """
 
+    scene = tmp_path / "sphere.xml"
+    scene.write_text((ROOT / "scenes" / "sphere_150mm_8d.xml").read_text().replace(
+        '<default name="wall_reflectance" value="0.98"/>', '<default name="wall_reflectance" value="0.999"/>'))
     out = tmp_path / "sphere.json"
-    command = _cli("sphere", str(ROOT / "scenes" / "sphere_150mm_8d.xml"), "--rays", str(1 << 22), "--wavelengths",
+    command = _cli("sphere", str(scene), "--rays", str(1 << 21), "--chunk-size", str(1 << 21), "--wavelengths",
                    "450", "550", "650", "750", "--out", str(out))
     run, seconds = signal_when_kept(command, out, signal.SIGTERM, tmp_path, wait=1.0)
     _stopped(run, signal.SIGTERM, out)

@@ -306,3 +306,19 @@ def test_the_api_saves_the_checkpoint_then_ends_as_sigterm_would(tmp_path):
     assert run.returncode == -signal.SIGTERM  # as before: the default SIGTERM, once the readings are saved
     assert f"every finished reading is kept in {checkpoint_for(out)}" in run.stderr
     assert json.loads(checkpoint_for(out).read_text())["done"] and seconds < LATENCY_S
+
+
+def test_an_interrupted_mi_render_raises_the_interrupt_not_drjits_runtime_error(mi, monkeypatch):
+    """mi.render runs the integrator inside a Dr.Jit custom operation, which wraps what it raises."""
+
+    scene = mi.load_dict(vm.instrument_scene({"type": "simple_dielectric"}, integrator={"rays": 100_000}))
+    monkeypatch.setattr(tracer, "FIRST_CHUNK", 4096)
+    paced = tracer._Pace.update
+
+    def update(self, size, elapsed):
+        paced(self, size, elapsed)
+        os.kill(os.getpid(), signal.SIGINT)
+
+    monkeypatch.setattr(tracer._Pace, "update", update)
+    with interrupts.catching(), pytest.raises(Interrupted):
+        mi.render(scene)

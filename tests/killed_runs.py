@@ -1,5 +1,6 @@
 """
-A real measuring process killed with SIGKILL mid-run, then run again (tests of checkpoints).
+A real measuring process killed with SIGKILL mid-run, then run again (tests of checkpoints),
+or signalled with SIGINT/SIGTERM (tests of interrupts); a scene of a rough dielectric.
 """
 
 from __future__ import annotations
@@ -33,3 +34,33 @@ def kill_then_resume(command: list[str], out: Path, readings: int, cwd: Path) ->
     assert 0 < done < readings and not out.exists()
     subprocess.run(command, cwd=cwd, check=True)
     assert out.is_file() and not partial.exists()
+
+
+def signal_when_kept(command: list[str], out: Path, signum: int, cwd: Path, ignore_sigint: bool = False,
+                     wait: float = 0.5) -> tuple[subprocess.CompletedProcess, float]:
+    """
+    Run ``command``; once its checkpoint holds a finished reading, wait ``wait`` s (a kernel under way) and send
+    ``signum``; returns the finished process (stderr text) and the seconds it took to exit after the signal.
+    """
+
+    partial = checkpoint_for(out)
+    setup = (lambda: signal.signal(signal.SIGINT, signal.SIG_IGN)) if ignore_sigint else None
+    process = subprocess.Popen(command, cwd=cwd, stderr=subprocess.PIPE, text=True, preexec_fn=setup)
+    deadline = time.monotonic() + 300
+    while not partial.exists() and process.poll() is None and time.monotonic() < deadline:
+        time.sleep(0.01)
+    time.sleep(wait)
+    assert process.poll() is None, f"the run ended before it could be interrupted: {process.stderr.read()}"
+    sent = time.monotonic()
+    process.send_signal(signum)
+    _, stderr = process.communicate(timeout=120)
+    return subprocess.CompletedProcess(command, process.returncode, "", stderr), time.monotonic() - sent
+
+
+ROUGH_XML = """<scene version="3.0.0">
+    <shape type="disk" id="emitter"><transform name="to_world"><rotate x="1" angle="180"/><scale value="8"/>
+        <translate z="100"/></transform></shape>
+    <shape type="disk" id="specimen"><transform name="to_world"><scale value="12.5"/></transform>
+        <bsdf type="roughdielectric"><float name="alpha" value="0.3"/><float name="int_ior" value="1.5"/></bsdf></shape>
+</scene>"""
+"""A scene of Mitsuba's rough dielectric (alpha = 0.3, eta = 1.5) in the paper's instrument, as an XML file's text."""

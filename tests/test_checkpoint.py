@@ -19,7 +19,7 @@ import numpy as np
 import pytest
 
 import virtspec_mi as vm
-from killed_runs import kill_then_resume
+from killed_runs import ROUGH_XML, kill_then_resume
 from virtspec_mi.engine.checkpoint import CheckpointError, checkpoint_for, claim
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -370,18 +370,12 @@ def test_sweep_out_that_is_a_directory_fails_before_tracing(scenes_dir, tmp_path
 
 # --- a goniophotometer reading and a sphere spectrum resume after SIGKILL ------------------
 
-_ROUGH_XML = """<scene version="3.0.0">
-    <shape type="disk" id="emitter"><transform name="to_world"><rotate x="1" angle="180"/><scale value="8"/>
-        <translate z="100"/></transform></shape>
-    <shape type="disk" id="specimen"><transform name="to_world"><scale value="12.5"/></transform>
-        <bsdf type="roughdielectric"><float name="alpha" value="0.3"/><float name="int_ior" value="1.5"/></bsdf></shape>
-</scene>"""
 
 
 @pytest.mark.slow
 def test_killing_a_real_goniophotometer_process_and_rerunning_gives_the_uninterrupted_reading(tmp_path):
     scene = tmp_path / "rough.xml"
-    scene.write_text(_ROUGH_XML)
+    scene.write_text(ROUGH_XML)
     options = ["--theta-i", "0:80:2", "--wavelengths", "400:700:50", "--rays", "200000", "--theta-o-bins", "6",
                "--phi-o-bins", "8", "--json"]
     out = tmp_path / "gonio.nc"

@@ -39,10 +39,16 @@ def virtspec(*args: str) -> subprocess.CompletedProcess:
 
 
 def patch_scene(name: str) -> dict:
+    """The patch as a specimen over 360-800 nm: its 380-780 nm data, the end values held 20 nm beyond (the
+    instrument refuses wavelengths outside a specimen's spectrum; the measured file keeps 380-780 nm)."""
+
     sd = CHART[name]
+    step = float(sd.wavelengths[1] - sd.wavelengths[0])
+    pad = int(round(20 / step))
+    values = [sd.values[0]] * pad + list(sd.values) + [sd.values[-1]] * pad
     return vm.instrument_scene({"type": "diffuse", "reflectance": {
-        "type": "regular", "wavelength_min": float(sd.wavelengths[0]), "wavelength_max": float(sd.wavelengths[-1]),
-        "values": ", ".join(f"{v:.6g}" for v in sd.values)}})
+        "type": "regular", "wavelength_min": float(sd.wavelengths[0]) - pad * step,
+        "wavelength_max": float(sd.wavelengths[-1]) + pad * step, "values": ", ".join(f"{v:.6g}" for v in values)}})
 
 
 def write_patch(name: str, path) -> str:

@@ -6,9 +6,14 @@ Every input to ``measure``, ``sweep`` and the parameters of ``simple_dielectric`
 ``turbid_slab`` — valid values, values at and beyond their ranges, huge integers,
 booleans, NaN, infinities, strings, sub-normal floats — either gives a reading whose
 counts add up (reflected + transmitted + absorbed + capped + invalid = rays) and whose
-values are finite, or raises ``ValueError``/``TypeError`` naming a parameter. Each
-example must finish within the deadline; the whole run within a memory budget.
-Derandomized with fixed example counts: the same examples on every run (~10 s here).
+values are finite, or raises ``ValueError``/``TypeError`` naming a parameter. So do the
+options of issue 22: the goniophotometer's bins and guarantees (bin counts within the
+escaping rays), the sphere, its ports, baffle and options (every fate of both
+configurations adds up to the rays; never certified without light on the detector),
+specimen parameter lists and ``workers`` (a cluster size within the machine, an address,
+or a one-line refusal). Each example must finish within the deadline; the whole run
+within a memory budget. Derandomized with fixed example counts: the same examples on
+every run (~13 s here).
 """
 
 from __future__ import annotations
@@ -16,6 +21,7 @@ from __future__ import annotations
 import math
 import resource
 import warnings
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -76,12 +82,18 @@ ODD_VALUES = {
     "seed": odd_or(st.integers(), st.sampled_from([2**32, -1, 1.5, "x"])),
     "chunk_size": odd_or(st.integers(-5, 2**31), st.sampled_from([10, 1023, 2**25 + 1, 2**30, 1e4, 4096.5])),
 }
-# A measurement: mostly valid settings, and sometimes one given something odd.
-MEASURE_SETTINGS = st.tuples(
-    st.fixed_dictionaries({}, optional=VALID),
-    st.one_of(st.none(), st.sampled_from(sorted(ODD_VALUES)).flatmap(
-        lambda name: st.tuples(st.just(name), ODD_VALUES[name])))).map(
-    lambda pair: {**pair[0], **({pair[1][0]: pair[1][1]} if pair[1] else {})})
+def mostly_valid(valid: dict, odd: dict) -> st.SearchStrategy:
+    """Keywords: any of ``valid``'s names with valid values, and sometimes one of ``odd``'s given something odd."""
+
+    return st.tuples(
+        st.fixed_dictionaries({}, optional=valid),
+        st.one_of(st.none(), st.sampled_from(sorted(odd)).flatmap(
+            lambda name: st.tuples(st.just(name), odd[name])))).map(
+        lambda pair: {**pair[0], **({pair[1][0]: pair[1][1]} if pair[1] else {})})
+
+
+MEASURE_SETTINGS = mostly_valid(VALID, ODD_VALUES)
+"""A measurement: mostly valid settings, and sometimes one given something odd."""
 
 
 def _small_enough(kwargs: dict) -> bool:
@@ -200,3 +212,125 @@ def test_turbid_slab_parameters(mi, params, wavelengths):
 def test_the_properties_stayed_within_the_memory_budget():
     assert resource.getrusage(resource.RUSAGE_SELF).ru_maxrss < MEMORY_BUDGET_KIB
     assert math.isfinite(MEMORY_BUDGET_KIB)
+
+
+# --- issue 22: the new instruments' options, specimen parameters and workers ------------------------------
+
+BIN_VALUES = st.one_of(st.integers(1, 12),
+                       st.sampled_from(["6", "0:90:30", "0 30 90 120 180", "0:360:90", [0, 45, 90]]),
+                       st.floats(), st.integers(-3, 2**70), st.sampled_from(
+                           ["18.5", "1e400", "0:inf:1", "0:180:1e-9", "nan", "0,90,,180", "", "90:0:10",
+                            [0, float("nan"), 90], [[0, 90], [90, 180]], [0, 200], 18.5]), st.sampled_from(ODD))
+VALID_GONIO = {
+    "theta_o_bins": st.one_of(st.integers(1, 9), st.just("0 30 90 120 180")),
+    "phi_o_bins": st.one_of(st.integers(1, 12), st.just("0:360:90")),
+    "binning": st.sampled_from(["uniform", "projected"]),
+    "fold_phi": st.sampled_from([True, False, "true"]),
+    "hemispheres": st.sampled_from(["both", "reflection", "transmission"]),
+    "guarantee": st.sampled_from(["union", "union-exact", "dkw"]),
+}
+ODD_GONIO = {
+    "theta_o_bins": BIN_VALUES, "phi_o_bins": BIN_VALUES,
+    "binning": odd_or(st.sampled_from(["log", "Uniform"])), "fold_phi": odd_or(st.sampled_from(["maybe", 2])),
+    "hemispheres": odd_or(st.sampled_from(["upper"])), "guarantee": odd_or(st.sampled_from(["foo", "Union"])),
+    "relative_tolerance": odd_or(st.floats(), st.sampled_from([0, 5, -0.1, 1.0000001, "0.1"])),
+    "brdf_floor": odd_or(st.floats(), st.sampled_from([0, -1, "1"])),
+}
+GONIO = mostly_valid(VALID_GONIO, ODD_GONIO)
+
+
+@settings(PROFILE, max_examples=80)
+@given(options=GONIO)
+def test_goniophotometer_options_give_consistent_bins_or_name_an_option(scenes, options):
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", RuntimeWarning)
+            reading = vm.gonio(scenes["diamond"], theta_i=30, rays=300, mu=0.2, progress=False, **options)
+    except (ValueError, TypeError) as error:
+        assert "\n" not in str(error) and any(name in str(error) for name in {*options, "delta/K"}), str(error)
+        event("refused")
+        return
+    counts = reading.bin_counts
+    assert counts.dtype == np.int64 and np.all(counts >= 0)
+    escaped = reading.result.reflected + reading.result.transmitted
+    assert np.all(counts.sum(axis=(-2, -1)) <= escaped)
+    event("reading")
+
+
+SPHERE_XML = str(Path(__file__).resolve().parents[1] / "scenes" / "sphere_150mm_8d.xml")
+VALID_SPHERE = {
+    "sample_polar": st.floats(176, 180), "sample_radius": st.floats(12.7, 16), "entrance_polar": st.floats(14, 18),
+    "detector_radius": st.floats(0.01, 10), "wall": st.floats(0, 1),
+    "baffle": st.sampled_from([None, "centre=0,37.45,-36.96 normal=0,0.7118,0.7025 radius=12"]),
+    "standard": st.floats(0.5, 1), "max_bounces": st.integers(1, 1000), "specular": st.sampled_from(["SCI", "sce"]),
+}
+ODD_SPHERE = {
+    "sample_polar": odd_or(st.floats(), st.sampled_from([181, -1, "180"])),
+    "sample_radius": odd_or(st.floats(), st.sampled_from([0.5, 80, -1])),
+    "entrance_polar": odd_or(st.floats(), st.sampled_from([170, 179, "x"])),  # overlapping the sample port
+    "detector_radius": odd_or(st.floats(), st.sampled_from([0, 1e-30, 75])),
+    "wall": odd_or(st.floats(), st.sampled_from([1.5, -0.1, "400:0.9, 700:1.2", "0.9,,0.8"])),
+    "baffle": odd_or(st.sampled_from(["junk", 5, "centre=0,0,-72.5 normal=0,1,0 radius=2",
+                                      "centre=0,0 normal=0,0,1 radius=1",
+                                      "centre=0,0,0 normal=0,0,0 radius=3", "centre=nan,0,0 normal=0,0,1 radius=3",
+                                      "centre=0,0,0 normal=0,0,1 radius=80"])),
+    "standard": odd_or(st.floats(), st.sampled_from([0, 1.5, "0.9"])),
+    "max_bounces": odd_or(st.sampled_from([0, 10**8, 18.5, "100"])),
+    "specular": odd_or(st.sampled_from(["both"])), "measurement": odd_or(st.sampled_from(["absorptance"])),
+    "method": odd_or(st.sampled_from(["comparison", "twice"])),
+}
+SPHERE = mostly_valid(VALID_SPHERE, ODD_SPHERE)
+
+
+@settings(PROFILE, max_examples=40)
+@given(spec=SPHERE)
+def test_a_sphere_gives_readings_whose_fates_add_up_or_names_what_is_wrong(spec):
+    from virtspec_mi.geometry.sphere import Port, Sphere
+    from virtspec_mi.kernel.sphere_walk import FATES
+
+    geometry = {name: spec.pop(name) for name in list(spec) if name in ODD_SPHERE and name not in (
+        "standard", "max_bounces", "specular", "measurement", "method")}
+    try:
+        sphere = Sphere(150, geometry.get("wall", 0.98), (
+            Port("sample", "sample", geometry.get("sample_polar", 180), 0, geometry.get("sample_radius", 12.7)),
+            Port("entrance", "entrance", geometry.get("entrance_polar", 15.88), 0, 12.7),
+            Port("detector", "detector", 90, 90, geometry.get("detector_radius", 6.35))), geometry.get("baffle"))
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", RuntimeWarning)  # no light on the detector: said, not certified
+            result = vm.sphere_measure(SPHERE_XML, sphere=sphere, rays=200, wavelengths=551, progress=False, **spec)
+    except (ValueError, TypeError) as error:
+        assert "\n" not in str(error) and "Traceback" not in str(error), str(error)
+        event("refused")
+        return
+    for configuration in ("sample", "standard"):
+        counts = result.counts[configuration]
+        lost = sum(counts[f"lost_{port.name}"] for port in sphere.ports)
+        np.testing.assert_array_equal(sum(counts[name] for name in FATES) + lost, counts["rays"])
+    assert not np.any(result.certified & result.no_light)  # never certified without light on the detector
+    event("reading" if result.certified.all() else "reading, not certified")
+
+
+@settings(PROFILE, max_examples=40)
+@given(values=odd_or(st.lists(st.floats(1.1, 2.5), min_size=1, max_size=3), st.floats(), st.sampled_from(
+    ["1.2,1.5", "1.2:1.6:0.2", "1,2,,3", ",1.5", "1.5,", "1.4:inf:0.1", "1.5 x", [1.5, float("nan")], "1e400"])))
+def test_specimen_parameter_lists_give_readings_or_name_the_parameter(scenes, values):
+    check_outcome(lambda: vm.sweep(scenes["diamond"], parameters={"specimen.eta": values}, rays=200, progress=False),
+                  {"eta"})
+
+
+@settings(PROFILE, max_examples=60)
+@given(workers=odd_or(st.integers(-5, 10**7), st.sampled_from(["2", " 3 ", "2x", "tcp://host", "tcp://10.0.0.1:8786",
+                                                              "inproc://x", 2.5, np.int64(2)])))
+def test_workers_are_a_cluster_size_within_the_machine_an_address_or_named(workers):
+    import os
+
+    from virtspec_mi.scaleout import check_workers
+
+    try:
+        checked = check_workers(workers)
+    except ValueError as error:
+        assert "workers" in str(error) and "\n" not in str(error)
+        event("refused")
+        return
+    assert checked is None or isinstance(checked, str) or 1 <= checked <= 4 * (os.cpu_count() or 1)
+    event("accepted")

@@ -88,7 +88,7 @@ def _fresnel64(cos_i: np.ndarray, eta: float) -> np.ndarray:
 def test_fresnel_near_one_against_float64_over_eta_and_theta(mi):
     """The bound of the module docstring: < 1e-4 off float64 away from critical angles, |eta-1| down to 1e-12."""
 
-    from virtspec_mi.plugins.bsdfs.simple_dielectric import NEAR_ONE, fresnel_near_one
+    from virtspec_mi.kernel.walk_optics import NEAR_ONE, fresnel_near_one
 
     theta = np.linspace(0.0, 90.0, 1_000_001)
     cos = np.cos(np.radians(theta)).astype(np.float32).astype(np.float64)

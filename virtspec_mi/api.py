@@ -219,6 +219,7 @@ def _keyed(name: str, what: str, scene: Any, bench: Bench, settings: Settings, o
     instrument = INSTRUMENTS[name](scene_fingerprint(scene, bench, defines))
     plan = instrument.init(bench, settings, options, angles, space)
     with ExitStack() as held:
+        held.enter_context(_naming(checkpoint))  # an interrupt (SIGINT/SIGTERM) names the file to resume from
         if checkpoint is not None:  # one run per checkpoint, writable: checked before any cluster or tracing
             held.enter_context(claim(checkpoint))
         runner = held.enter_context(_runner(scene, defines, workers, task_readings, instrument.scene, plan))
@@ -235,6 +236,18 @@ def _keyed(name: str, what: str, scene: Any, bench: Bench, settings: Settings, o
             remove(checkpoint)  # the readings are safe: returned, and written to out when given
     instrument.warn_if_uncertified(result, stacklevel=3)  # at the caller of sweep, gonio, sphere_measure
     return result
+
+
+@contextmanager
+def _naming(checkpoint: Path | None) -> Iterator[None]:
+    """An interrupt (``KeyboardInterrupt``: :mod:`virtspec_mi.engine.interrupts`) raised inside names ``checkpoint``."""
+
+    try:
+        yield
+    except KeyboardInterrupt as stop:
+        if getattr(stop, "checkpoint", None) is None:
+            stop.checkpoint = checkpoint  # type: ignore[attr-defined]
+        raise
 
 
 @contextmanager

@@ -26,6 +26,7 @@ built (lists, kernels), so a request beyond them is refused in milliseconds:
 - :data:`MAX_READINGS` readings (wavelength × θi) per call and :data:`MAX_TOTAL_RAYS`
   rays per call;
 - :data:`WAVELENGTH_RANGE`: wavelengths the kernel's float32 arithmetic holds;
+  :data:`NANOMETRE_FLOOR`: a set of wavelengths all below it looks like micrometres;
 - :data:`MAX_CHUNK_SIZE` rays per kernel launch (memory).
 """
 
@@ -43,6 +44,7 @@ __all__ = [
     "MAX_RAYS",
     "MAX_VALUES",
     "parse_values",
+    "value_tokens",
     "MAX_READINGS",
     "MAX_TOTAL_RAYS",
     "MAX_CHUNK_SIZE",
@@ -66,6 +68,8 @@ __all__ = [
     "parse_wavelengths",
     "parse_theta_i",
     "check_wavelength_range",
+    "NANOMETRE_FLOOR",
+    "check_nanometres",
 ]
 
 MAX_RAYS: int = 2**32 - 1
@@ -109,6 +113,16 @@ WAVELENGTH_RANGE: tuple[float, float] = (1e-3, 1e6)
 """
 Wavelengths (nm) a reading may ask for, ends included: 1 pm to 1 mm. The kernel traces
 float32 wavelengths; values far outside (``1e-300``, ``1e39``) would become 0 or inf.
+"""
+
+NANOMETRE_FLOOR: float = 100.0
+"""
+Wavelengths (nm) below which *every* wavelength of a call, or of a measured spectrum,
+looks like micrometres (``0.4:0.7:0.1``: 400–700 nm typed in µm) rather than far-UV
+nanometres: such a set is refused with the hint "micrometres? multiply by 1000"
+(:func:`check_nanometres`, the one rule of the instruments and of
+:mod:`virtspec_mi.compare`). A set that reaches :data:`NANOMETRE_FLOOR` nm or beyond
+is read as nanometres.
 """
 
 FLOAT32_MIN_NORMAL: float = 1.1754943508222875e-38
@@ -359,7 +373,24 @@ def parse_wavelengths(wavelengths: Any) -> tuple[float, ...]:
         if not low <= value <= high:
             raise ValueError(f"wavelengths must be finite and > 0 nm, {low:g} <= wavelength <= {high:g} nm "
                              f"(got {shown_value(value)})")
+    check_nanometres(values, "wavelengths")
     return tuple(values)
+
+
+def check_nanometres(wavelengths: Iterable[float], what: str, where: str = "") -> None:
+    """
+    Refuse wavelengths that look like micrometres — every one below
+    :data:`NANOMETRE_FLOOR` nm — with the hint to multiply by 1000. ``what`` names them in
+    the message (``"wavelengths"``, ``"measured wavelengths"``), ``where`` says where they
+    came from (a file), if anywhere.
+    """
+
+    values = [float(w) for w in wavelengths]
+    if values and max(values) < NANOMETRE_FLOOR:
+        low, high = min(values), max(values)
+        shown = f"{low:g}-{high:g}" if low != high else f"{low:g}"
+        raise ValueError(f"{what} must be in nm (got {shown}{f' in {where}' if where else ''}: all below "
+                         f"{NANOMETRE_FLOOR:g} nm, micrometres? multiply by 1000)")
 
 
 def check_wavelength_range(wavelengths: Iterable[float], span: tuple[float, float] | None, specimen: str) -> None:
@@ -406,7 +437,7 @@ def parse_values(name: str, values: Any) -> tuple[float, ...]:
 
     if isinstance(values, str) and ":" in values:
         numbers: list[float] = []
-        for token in values.replace(",", " ").split():
+        for token in value_tokens(f"parameter {name!r}", values):
             numbers.extend([float(f"{v:.15g}") for v in _parse_range(token, name, MAX_VALUES - len(numbers))]
                            if ":" in token else [number(name, token)])
             _check_count(name, len(numbers))
@@ -420,6 +451,20 @@ def parse_values(name: str, values: Any) -> tuple[float, ...]:
     return tuple(numbers)
 
 
+def value_tokens(name: str, text: str) -> list[str]:
+    """
+    The items of a written list of values: separated by commas and/or spaces
+    (``"400, 500 600"``); an empty item between commas (``"1,2,,3"``, a leading or
+    trailing comma) is a ``ValueError`` naming ``name`` — a value was left out.
+    """
+
+    items = [item.strip() for item in text.split(",")]
+    if len(items) > 1 and not all(items):
+        raise ValueError(f"{name} must be values separated by commas or spaces, with no empty item between commas "
+                         f"(got {text!r})")
+    return [token for item in items for token in item.split()]
+
+
 def _parse_numbers(name: str, value: Any, unit: str) -> list[float]:
     """
     Numbers from a number, a sequence or a string of numbers and start:stop:step ranges;
@@ -428,7 +473,7 @@ def _parse_numbers(name: str, value: Any, unit: str) -> list[float]:
 
     if isinstance(value, str):
         values: list[float] = []
-        for token in value.replace(",", " ").split():
+        for token in value_tokens(name, value):
             values.extend(_parse_range(token, name, MAX_VALUES - len(values)) if ":" in token
                           else [number(name, token)])
             _check_count(name, len(values))

@@ -59,6 +59,7 @@ import argparse
 import json
 import signal
 import sys
+from pathlib import Path
 import textwrap
 from dataclasses import dataclass
 from typing import Any, Callable, Sequence
@@ -529,6 +530,15 @@ def main(argv: Sequence[str] | None = None) -> int:
     signal.signal(signal.SIGPIPE, signal.SIG_DFL)  # a closed pipe (virtspec bounds | head) ends us quietly
     parser = build_parser()
     args = parser.parse_args(argv)
+    from virtspec_mi.engine.interrupts import catching, exit_status
+
+    with catching():  # SIGINT and SIGTERM stop a run at its next safe point, its checkpoint saved
+        return _command(args, exit_status)
+
+
+def _command(args: argparse.Namespace, exit_status: Any) -> int:
+    """Run the command of ``args``; an error or an interrupt becomes a one-line message and the exit status."""
+
     try:
         if args.command == "bounds":
             from virtspec_mi.budgets.bounds import format_table_1
@@ -553,13 +563,16 @@ def main(argv: Sequence[str] | None = None) -> int:
     except (ValueError, RuntimeError, OSError) as error:
         print(f"virtspec: error: {_rescued(error)}", file=sys.stderr)
         return 1
-    except KeyboardInterrupt:
-        partial = getattr(args, "checkpoint", None)  # the checkpoint of the sweep under way (set by _sweep)
+    except KeyboardInterrupt as stop:  # Ctrl-C (SIGINT) or SIGTERM: virtspec_mi.engine.interrupts.Interrupted
+        signum = getattr(stop, "signum", signal.SIGINT)
+        # the checkpoint of the run under way: named by the run, else the one the command set (_sweep)
+        partial = getattr(stop, "checkpoint", None) or getattr(args, "checkpoint", None)
         kept = "" if partial is None else (
-            f" (finished readings are kept in {partial}: re-run the same command to resume)" if partial.exists()
+            f" (finished readings are kept in {partial}: re-run the same command to resume)" if Path(partial).exists()
             else " (no reading had finished: nothing to resume)")
-        print(f"virtspec: interrupted{kept}", file=sys.stderr)
-        return 130
+        word = "interrupted" if signum == signal.SIGINT else f"terminated by {signal.Signals(signum).name}"
+        print(f"virtspec: {word}{kept}", file=sys.stderr)
+        return exit_status(signum)
 
 
 def _rescued(error: BaseException) -> Any:

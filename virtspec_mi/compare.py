@@ -64,6 +64,7 @@ from typing import Any
 
 import numpy as np
 
+from virtspec_mi.checks import check_nanometres, number
 from virtspec_mi.kernel.counts import QUANTITIES
 from virtspec_mi.results.base import ResultBase, plain_data, round_up
 from virtspec_mi.results.colorimetry import DEFAULT_ILLUMINANT, DEFAULT_OBSERVER, Colour, colorimetry
@@ -124,9 +125,7 @@ class MeasuredSpectrum:
             raise ValueError(f"measured spectrum {source} holds no points")
         if not np.all(np.isfinite(wavelengths) & (wavelengths > 0)):
             raise ValueError(f"measured wavelengths must be finite and > 0 nm ({source})")
-        if wavelengths.max() < 100:
-            raise ValueError(f"measured wavelengths must be in nm (got {wavelengths.min():g}-{wavelengths.max():g} "
-                             f"in {source}: micrometres? multiply by 1000)")
+        check_nanometres(wavelengths, "measured wavelengths", source)
         if not np.all(np.isfinite(values)):
             raise ValueError(f"measured values must be finite ({source})")
         if fractions and values.max() > _PERCENT:
@@ -169,7 +168,13 @@ def _check_fractions(wavelengths: np.ndarray, values: np.ndarray, uncertainty: n
 
 
 def _check_uncertainty(uncertainty: Any, size: int, source: str) -> np.ndarray:
-    values = np.asarray(uncertainty, dtype=np.float64)
+    refusal = f"measurement_uncertainty must be a number or one value per measured point (got {uncertainty!r})"
+    if isinstance(uncertainty, (bool, np.bool_, str)):
+        raise ValueError(refusal)
+    try:
+        values = np.asarray(uncertainty, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise ValueError(refusal) from None
     if values.ndim == 0:
         values = np.full(size, float(values))
     if values.shape != (size,):
@@ -614,6 +619,7 @@ def compare(
 
     result, result_name = _result_of(result)
     quantity = result.check_quantity(quantity)
+    theta_i = None if theta_i is None else number("theta_i", theta_i)  # one of the result's angles: checked there
     _check_colour_names(illuminant, observer)
     simulation = result.spectrum(quantity, theta_i)
     spectrum = read_measured(measured, simulation.measures, theta_i)

@@ -15,8 +15,10 @@ in-process run.
 ``workers``
     ``None``: in this process (no Dask). An int N: a ``LocalCluster`` of N worker
     processes (``processes=True``, one thread each, the ``spawn`` start method), closed
-    when the sweep ends. A scheduler address (``"tcp://host:8786"``) or an existing
-    ``distributed.Client``: that cluster (left running).
+    when the sweep ends; at most :data:`WORKERS_PER_CORE` per core of this machine, and
+    they ignore SIGINT (the driver stops the run: :mod:`virtspec_mi.engine.interrupts`).
+    A scheduler address (``"tcp://host:8786"``) or an existing ``distributed.Client``:
+    that cluster (left running, not limited).
 
 Per worker process, :class:`WorkerSetup` (a ``distributed.WorkerPlugin``, also run on a
 worker that restarts) selects libLLVM and the Mitsuba variant, registers the project's
@@ -63,6 +65,7 @@ import logging
 import math
 import os
 import pickle
+import signal
 import threading
 import time
 from contextlib import contextmanager
@@ -71,6 +74,8 @@ from typing import Any, Iterator
 import numpy as np
 from distributed import WorkerPlugin
 
+from virtspec_mi.checks import shown_value
+from virtspec_mi.engine import interrupts
 from virtspec_mi.engine.plan import Plan
 from virtspec_mi.engine.readings import BatchRunner, take_keyed_readings
 from virtspec_mi.engine.tally import Tally
@@ -84,6 +89,8 @@ __all__ = [
     "WORKER_TIMEOUT",
     "WorkerSetup",
     "wait_for_a_worker",
+    "WORKERS_PER_CORE",
+    "local_worker_limit",
     "check_workers",
     "check_task_readings",
     "connect",
@@ -103,10 +110,18 @@ DRJIT_THREADS: int = 1
 RETRIES: int = 2
 """Times Dask retries a task that raised (a worker that died is handled by the scheduler)."""
 
+WORKERS_PER_CORE: int = 4
+"""
+Most local worker processes per core (``workers=N`` ≤ 4 × ``os.cpu_count()``): every worker
+is a process with its own Mitsuba and Dr.Jit, so more only compete for the cores and the
+memory (a scheduler address is not limited: its cluster's workers are its own).
+"""
+
 WORKER_TIMEOUT: float = 60.0
 """Seconds a sweep waits for a first worker (or, once none finishes a task, for any worker) before ``TimeoutError``."""
 
 _POLL_SECONDS = 0.1  # as distributed.as_completed's own wait
+_WAIT_STEP = 0.5  # seconds of one wait for a worker between two interrupt checks
 _TRANSFORM = "__virtspec_transform4f__"
 _setup_threads: set[int] = set()
 _benches: dict[str, Any] = {}
@@ -134,7 +149,15 @@ class WorkerSetup(WorkerPlugin):
 
     name = "virtspec-mi-setup"
 
+    def __init__(self, local: bool = False) -> None:
+        self.local = local
+        """Workers of a local cluster started for the run: they ignore SIGINT (see :meth:`setup`)."""
+
     async def setup(self, worker: Any) -> None:
+        if self.local and threading.current_thread() is threading.main_thread():
+            # Ctrl-C reaches the whole process group: the driver stops the run (its checkpoint saved) and
+            # closes the cluster; a worker killed by it would only print a traceback and be restarted.
+            signal.signal(signal.SIGINT, signal.SIG_IGN)
         await asyncio.wrap_future(worker.executor.submit(_initialise))
 
 
@@ -148,19 +171,61 @@ def worker_state() -> dict[str, Any]:
             "set_up_here": threading.get_ident() in _setup_threads, "expected_variant": variant()}
 
 
-def check_workers(workers: Any) -> Any:
-    """``workers`` when it is ``None``, an int >= 1, a scheduler address or a ``Client``; else ``ValueError``."""
+def local_worker_limit() -> int:
+    """
+    Most worker processes a local cluster (``workers=N``) may start on this machine:
+    :data:`WORKERS_PER_CORE` × ``os.cpu_count()``.
+    """
 
-    if workers is None or (isinstance(workers, str) and workers.strip()):
-        return workers
-    if isinstance(workers, int) and not isinstance(workers, bool):
+    return WORKERS_PER_CORE * (os.cpu_count() or 1)
+
+
+def check_workers(workers: Any) -> Any:
+    """
+    ``workers`` as a run takes it — ``None``; a whole number N (an int or a numeric string),
+    1 ≤ N ≤ :func:`local_worker_limit` (each local worker is a process of its own); a
+    scheduler address (``"tcp://host:8786"``, not limited: that cluster's workers are its
+    own); or a ``distributed.Client`` — else ``ValueError`` naming the value and the range.
+    """
+
+    if workers is None:
+        return None
+    if isinstance(workers, str) and workers.strip().isdigit():
+        workers = int(workers.strip())  # "2": a number, as everywhere
+    if isinstance(workers, str) and workers.strip():
+        return _scheduler_address(workers.strip())
+    if isinstance(workers, (int, np.integer)) and not isinstance(workers, (bool, np.bool_)):
+        limit = local_worker_limit()
         if workers < 1:
             raise ValueError(f"workers must be >= 1 worker processes (got {workers})")
-        return workers
+        if workers > limit:
+            raise ValueError(
+                f"workers must be at most {limit} worker processes of a local cluster (got {shown_value(workers)}): "
+                f"at most {WORKERS_PER_CORE} per core of the {os.cpu_count() or 1} of this machine, as each is a "
+                "process with its own Mitsuba and more only compete for the cores and the memory; for a larger "
+                "cluster give its scheduler address (--scheduler)")
+        return int(workers)
     if type(workers).__name__ == "Client" and type(workers).__module__.startswith("distributed"):
         return workers
-    raise ValueError("workers must be None (in this process), an int >= 1 (a local cluster of that many processes), "
-                     f"a scheduler address such as 'tcp://host:8786' or a distributed.Client (got {workers!r})")
+    raise ValueError("workers must be None (in this process), a whole number >= 1 (a local cluster of that many "
+                     "processes), a scheduler address such as 'tcp://host:8786' or a distributed.Client (got "
+                     f"{workers!r})")
+
+
+def _scheduler_address(address: str) -> str:
+    """A scheduler address Dask can connect to (``scheme://host:port``; a TCP/TLS one needs its port)."""
+
+    from distributed.comm import parse_address
+    from distributed.comm.addressing import parse_host_port
+
+    try:
+        scheme, location = parse_address(address)
+        if scheme in ("tcp", "tls", "ws", "wss"):
+            parse_host_port(location)
+    except ValueError as error:
+        raise ValueError(f"workers must be a whole number of local worker processes or a scheduler address such as "
+                         f"'tcp://host:8786' (got {address!r}: {error})") from None
+    return address
 
 
 def check_task_readings(task_readings: Any) -> int | None:
@@ -198,7 +263,7 @@ def connect(workers: Any) -> Iterator[Any]:
         raise ValueError("workers=None runs in this process: there is no cluster to connect to")
     if isinstance(workers, int):
         with local_cluster(workers) as client:
-            _register(client)
+            _register(client, local=True)
             yield client
         return
     if isinstance(workers, str):
@@ -212,11 +277,14 @@ def connect(workers: Any) -> Iterator[Any]:
     yield workers
 
 
-def _register(client: Any) -> None:
-    """Register :class:`WorkerSetup` on every worker of ``client``'s cluster (and on those that join later)."""
+def _register(client: Any, local: bool = False) -> None:
+    """
+    Register :class:`WorkerSetup` on every worker of ``client``'s cluster (and on those
+    that join later); ``local``: a cluster started for the run (its workers ignore SIGINT).
+    """
 
     register = getattr(client, "register_plugin", None) or client.register_worker_plugin
-    register(WorkerSetup(), name=WorkerSetup.name)
+    register(WorkerSetup(local), name=WorkerSetup.name)
 
 
 def portable_scene(scene: Any) -> Any:
@@ -264,15 +332,27 @@ def wait_for_a_worker(client: Any) -> int:
     :data:`WORKER_TIMEOUT` seconds; ``TimeoutError`` naming the scheduler otherwise.
     """
 
-    try:
-        client.wait_for_workers(1, timeout=WORKER_TIMEOUT)
-    except TimeoutError:  # distributed's WorkerStartTimeoutError is one
+    deadline = time.monotonic() + WORKER_TIMEOUT
+    while not _a_worker_within(client, max(0.01, min(_WAIT_STEP, deadline - time.monotonic()))):
+        interrupts.check()  # waited in steps, each a safe point for an interrupt
+        if time.monotonic() < deadline:
+            continue
         address = getattr(getattr(client, "scheduler", None), "address", "?")
         raise TimeoutError(f"no Dask worker is connected to the scheduler {address} (waited WORKER_TIMEOUT = "
                            f"{WORKER_TIMEOUT:g} s): start workers for it (`dask worker {address}`), or check the "
                            "address; readings already finished are kept in the sweep's checkpoint, if it has one"
                            ) from None
     return max(1, len(client.scheduler_info().get("workers", {})))
+
+
+def _a_worker_within(client: Any, seconds: float) -> bool:
+    """True once ``client``'s cluster has a worker, False if none came within ``seconds``."""
+
+    try:
+        client.wait_for_workers(1, timeout=seconds)
+    except TimeoutError:  # distributed's WorkerStartTimeoutError is one
+        return False
+    return True
 
 
 def _as_finished(client: Any, finished: Any) -> Iterator[Any]:
@@ -286,6 +366,7 @@ def _as_finished(client: Any, finished: Any) -> Iterator[Any]:
 
     quiet_since = time.monotonic()
     while not finished.is_empty():
+        interrupts.check()  # a safe point every poll: Ctrl-C or SIGTERM stops the run within 0.1 s
         ready = finished.next_batch(block=False)
         if ready:
             yield from ready

@@ -132,10 +132,71 @@ def _check_dict(scene: dict, path: str = "") -> None:
             _check_dict(value, where)
 
 
-def find_bench(scene: Any, defines: dict[str, Any] | None = None) -> Bench:
-    """Load ``scene`` (XML path, dict or ``mi.Scene``; ``defines`` for an XML file) and read its bench (the disks)."""
+_NO_BSDF = (f"the specimen disk (shape id '{SPECIMEN_ID}') has no BSDF: Mitsuba would give it a default diffuse "
+            "BSDF of reflectance 0.5 and measure that; give the specimen's BSDF ")
 
-    return read_bench(load_scene(scene, defines))
+
+def _check_specimen_xml(path: Path) -> None:
+    """
+    Refuse an XML scene whose ``specimen`` shape holds no ``<bsdf>`` (nor a ``<ref>`` to
+    one): Mitsuba gives such a shape a default diffuse BSDF. A file Python's XML parser
+    cannot read, or whose specimen is not written out in it, Mitsuba has loaded already.
+    """
+
+    from xml.etree import ElementTree
+
+    try:
+        root = ElementTree.parse(path).getroot()
+    except (ElementTree.ParseError, OSError):
+        return
+    for shape in root.iter("shape"):
+        if shape.get("id") == SPECIMEN_ID and not any(child.tag in ("bsdf", "ref") for child in shape):
+            raise SceneError(f"{_NO_BSDF}inside it (<bsdf type=\"...\">) in {path}")
+
+
+def _check_specimen_dict(scene: dict) -> None:
+    """
+    Refuse a scene dict whose ``specimen`` entry holds no BSDF (a dict of a BSDF plugin,
+    a ``ref``, or a loaded ``mi.BSDF``): Mitsuba gives such a shape a default diffuse BSDF.
+    """
+
+    from virtspec_mi.runtime import PLUGINS
+
+    mi = mitsuba()
+    specimen = scene.get(SPECIMEN_ID)
+    if not isinstance(specimen, dict):
+        return  # not an instrument scene: read_bench names what is missing
+
+    def is_bsdf(value: Any) -> bool:  # or may be one: a plugin registered from Python is of no known type
+        if isinstance(value, mi.BSDF):
+            return True
+        if not isinstance(value, dict) or not isinstance(value.get("type"), str):
+            return False
+        kind = value["type"]
+        project = PLUGINS.get(kind)
+        if project is not None:
+            return project[0] == "bsdf"
+        return kind == "ref" or mi.PluginManager.instance().plugin_type(kind) in (mi.ObjectType.BSDF,
+                                                                                mi.ObjectType.Unknown)
+
+    if not any(is_bsdf(value) for key, value in specimen.items() if key != "type"):
+        raise SceneError(f"{_NO_BSDF}in its dict entry (e.g. 'bsdf': {{'type': 'diffuse'}})")
+
+
+def find_bench(scene: Any, defines: dict[str, Any] | None = None) -> Bench:
+    """
+    Load ``scene`` (XML path, dict or ``mi.Scene``; ``defines`` for an XML file) and read
+    its bench (the disks); a specimen disk given no BSDF is refused (Mitsuba would give it
+    its default diffuse BSDF).
+    """
+
+    bench = read_bench(load_scene(scene, defines))
+    scene = scenes.resolve(scene)
+    if isinstance(scene, (str, os.PathLike)):
+        _check_specimen_xml(Path(scene))
+    elif isinstance(scene, dict):
+        _check_specimen_dict(scene)
+    return bench
 
 
 def instrument_scene(

@@ -45,12 +45,14 @@ Baranoski et al. (2001), eqs. (2) and (23).
 from __future__ import annotations
 
 import time
+from pathlib import Path
 from typing import Any, Callable, Iterable, Iterator, Sequence
 
 import numpy as np
 
 from virtspec_mi.budgets import twostage
 from virtspec_mi.checks import check_readings, check_rays_needed, check_wavelength_range, shown_value
+from virtspec_mi.engine import interrupts
 from virtspec_mi.engine.checkpoint import Checkpoint
 from virtspec_mi.engine.parameters import ParameterSpace, apply_point, current_values
 from virtspec_mi.engine.plan import Columns, Plan, kernel_options
@@ -89,12 +91,19 @@ def run(bench: Any, plan: Plan, *, checkpoint: Any = None, progress: bool | None
     ``progress``; ``runner`` (a :data:`BatchRunner`) runs the batches left to do elsewhere
     (Dask workers); the default runs them here. The batches, the checkpoint and the
     tallies are the same either way.
+
+    SIGINT and SIGTERM stop the run at its next safe point — after a kernel chunk (each
+    lasts about :data:`~virtspec_mi.kernel.tracer.CHUNK_SECONDS` at most) or a batch,
+    or while it waits for Dask workers — with the checkpoint saved:
+    :class:`~virtspec_mi.engine.interrupts.Interrupted` names the signal and the
+    checkpoint (:mod:`virtspec_mi.engine.interrupts`).
     """
 
     shared = _shares(bench, plan)
     size = plan.size
     check_readings(size, (size // len(plan.wavelengths) if shared else size) * plan.most_rays_spent)
-    return _run_keyed(bench, plan, shared, checkpoint, progress, runner or in_process_runner(bench, plan))
+    with interrupts.deferred():  # SIGINT/SIGTERM stop the run at its next safe point (between kernel chunks)
+        return _run_keyed(bench, plan, shared, checkpoint, progress, runner or in_process_runner(bench, plan))
 
 
 def take_keyed_readings(bench: Any, plan: Any, batch: Any = None, *transitional: Any, **keywords: Any) -> Any:
@@ -245,12 +254,17 @@ def _traced_readings(bench: Any, readings: Sequence[tuple[float, float, float]],
 def _check_specimen(bsdf: Any, wavelengths: list[float]) -> None:
     """
     Refuse, before tracing, wavelengths the specimen does not take: outside its
-    ``wavelength_range`` (the ABM leaves' data), or where its ``check_wavelengths``
-    finds a spectral parameter out of range (``turbid_slab``'s spectra).
+    ``wavelength_range`` (the ABM leaves' data, a measured table's), outside the data of
+    any Mitsuba spectrum it holds (:func:`virtspec_mi.kernel.spectra.check_covered`: a
+    ``regular``/``irregular`` spectrum's range, an RGB colour's CIE range), or where its
+    ``check_wavelengths`` finds a spectral parameter out of range (``turbid_slab``'s spectra).
     """
 
-    check_wavelength_range(wavelengths, getattr(bsdf, "wavelength_range", None),
-                           getattr(bsdf, "PLUGIN", "") or type(bsdf).__name__)
+    from virtspec_mi.kernel.spectra import check_covered  # Mitsuba is set up by now (a bench is loaded)
+
+    name = getattr(bsdf, "PLUGIN", "") or (bsdf.class_name() if hasattr(bsdf, "class_name") else type(bsdf).__name__)
+    check_wavelength_range(wavelengths, getattr(bsdf, "wavelength_range", None), name)
+    check_covered(bsdf, wavelengths, f"the specimen {name}")
     check = getattr(bsdf, "check_wavelengths", None)
     if check is not None:
         check(wavelengths)
@@ -265,7 +279,13 @@ def _fixed(bench: Any, readings: Sequence[tuple[float, float, float]], settings:
     from virtspec_mi.kernel import tracer
 
     plans = [tracer.ReadingPlan(w, t, p, int(n)) for (w, t, p), n in zip(readings, rays)]
-    return tracer.tally_readings(bench, plans, offsets=offsets, hook=hook, on_chunk=on_chunk,
+
+    def chunk_done(readings_done: int) -> None:  # a safe point: an interrupt stops the run here
+        interrupts.check()
+        if on_chunk is not None:
+            on_chunk(readings_done)
+
+    return tracer.tally_readings(bench, plans, offsets=offsets, hook=hook, on_chunk=chunk_done,
                                  **kernel_options(settings))
 
 
@@ -314,6 +334,10 @@ def _run_keyed(bench: Any, plan: Plan, shared: bool, checkpoint: Any, progress: 
         for batch, tally in finished:
             state.record(batch, tally)
             bar.update(len(batch) // per_unit, tally.seconds)
+            interrupts.check()
+    except interrupts.Interrupted as stop:  # the message names the file to resume from
+        stop.checkpoint = None if checkpoint is None else Path(checkpoint)
+        raise
     finally:
         close = getattr(finished, "close", None)
         if close is not None:

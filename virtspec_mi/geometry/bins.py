@@ -50,12 +50,13 @@ reflectance. NBS Monograph 160 (BRDF, projected solid angle).
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
-from virtspec_mi.checks import shown_value
+from virtspec_mi.checks import shown_value, value_tokens
 from virtspec_mi.kernel.bins import BinLayout
 
 __all__ = ["BINNINGS", "HEMISPHERES", "MAX_BINS", "GonioBins", "make_bins", "parse_edges"]
@@ -193,46 +194,72 @@ def _theta_keys(edges: np.ndarray) -> np.ndarray:
 
 def parse_edges(name: str, value: Any) -> int | np.ndarray:
     """
-    A bin specification as written: a whole number of bins (``18``, ``"18"``) or edges
-    in degrees (a sequence, or a string of numbers separated by commas or spaces, or a
-    ``start:stop:step`` range with the stop included).
+    A bin specification as written: a whole number of bins (``18``, ``"18"``, ``18.0``) or
+    edges in degrees (a sequence, or a string of numbers separated by commas or spaces, or
+    a ``start:stop:step`` range with the stop included). Anything else — a fraction, NaN,
+    an infinity, a number beyond the float range, a word, an empty list — is a
+    ``ValueError`` naming ``name`` and the value as given.
     """
 
-    if isinstance(value, bool):
-        raise ValueError(f"{name} must be a whole number of bins or a list of edges in degrees (got {value!r})")
+    shape = f"{name} must be a whole number of bins or edges in degrees (numbers, or start:stop:step)"
+    if isinstance(value, (bool, np.bool_)):
+        raise ValueError(f"{shape} (got {value!r})")
+    if isinstance(value, str):
+        tokens = value_tokens(name, value)
+        if len(tokens) == 1 and ":" in tokens[0]:
+            return _edge_range(name, tokens[0], value)
+        numbers = [_edge_number(shape, token, value) for token in tokens]
+        if len(numbers) == 1:
+            return _whole(shape, numbers[0], value)
+        if not numbers or ":" in value:
+            raise ValueError(f"{shape} (got {value!r})")
+        return np.array(numbers)
     if isinstance(value, (int, np.integer)):
         return int(value)
-    if isinstance(value, float) and value.is_integer():
-        return int(value)
-    if isinstance(value, str):
-        text = value.replace(",", " ").split()
-        if len(text) == 1 and ":" in text[0]:
-            parts = text[0].split(":")
-            try:
-                start, stop, step = (float(p) for p in parts)
-            except ValueError:
-                raise ValueError(f"{name} must be start:stop:step in degrees (got {value!r})") from None
-            if not step > 0 or not stop > start:
-                raise ValueError(f"{name} range must have stop > start and step > 0 (got {value!r})")
-            count = int(round((stop - start) / step))
-            if count > _MAX_PER_AXIS or not np.isclose(start + count * step, stop):
-                raise ValueError(f"{name} range must reach its stop in at most {_MAX_PER_AXIS} steps (got {value!r})")
-            return start + step * np.arange(count + 1)
-        try:
-            numbers = [float(t) for t in text]
-        except ValueError:
-            raise ValueError(f"{name} must be a whole number of bins or edges in degrees (got {value!r})") from None
-        if len(numbers) == 1:
-            return parse_edges(name, numbers[0])
-        return np.array(numbers)
+    if isinstance(value, (float, np.floating)):
+        return _whole(shape, float(value), value)
     try:
         edges = np.asarray(value, dtype=np.float64)
-    except (TypeError, ValueError):
-        raise ValueError(f"{name} must be a whole number of bins or a list of edges in degrees (got {value!r})") \
-            from None
+    except (TypeError, ValueError, OverflowError):
+        raise ValueError(f"{shape} (got {value!r})") from None
     if edges.ndim == 0:
-        return parse_edges(name, float(edges))
+        return _whole(shape, float(edges), value)
     return edges
+
+
+def _edge_number(shape: str, token: str, value: Any) -> float:
+    """One number of a written specification (``ValueError`` with the whole value as given)."""
+
+    try:
+        return float(token)
+    except ValueError:
+        raise ValueError(f"{shape} (got {value!r})") from None
+
+
+def _whole(shape: str, number: float, value: Any) -> int:
+    """A number of bins: finite and whole (the range is checked with the layout)."""
+
+    if not (math.isfinite(number) and number.is_integer()):
+        raise ValueError(f"{shape} (got {value!r})")
+    return int(number)
+
+
+def _edge_range(name: str, token: str, value: Any) -> np.ndarray:
+    """The edges of ``start:stop:step`` (stop included), counted before they are built."""
+
+    parts = token.split(":")
+    try:
+        start, stop, step = (float(p) for p in parts)
+    except ValueError:
+        raise ValueError(f"{name} must be start:stop:step in degrees (got {value!r})") from None
+    if not all(math.isfinite(v) for v in (start, stop, step)):
+        raise ValueError(f"{name} range must be finite numbers of degrees start:stop:step (got {value!r})")
+    if not step > 0 or not stop > start:
+        raise ValueError(f"{name} range must have stop > start and step > 0 (got {value!r})")
+    span = (stop - start) / step  # finite or inf (a tiny step): compared before any list is built
+    if not span <= _MAX_PER_AXIS + 0.5 or not np.isclose(start + round(span) * step, stop):
+        raise ValueError(f"{name} range must reach its stop in at most {_MAX_PER_AXIS} steps (got {value!r})")
+    return start + step * np.arange(round(span) + 1)
 
 
 def _count(name: str, value: int, limit: int) -> int:
@@ -245,9 +272,11 @@ def _count(name: str, value: int, limit: int) -> int:
 def _check_edges(name: str, edges: np.ndarray, low: float, high: float) -> np.ndarray:
     if edges.ndim != 1 or len(edges) < 2 or len(edges) > _MAX_PER_AXIS + 1:
         raise ValueError(f"{name} edges must be 2 ... {_MAX_PER_AXIS + 1} numbers (got {edges.size})")
-    if not np.all(np.isfinite(edges)) or edges.min() < low or edges.max() > high:
+    if not np.all(np.isfinite(edges)):
+        raise ValueError(f"{name} edges must be finite degrees in [{low:g}, {high:g}] (got {_shown(edges)})")
+    if edges.min() < low or edges.max() > high:
         raise ValueError(f"{name} edges must be degrees in [{low:g}, {high:g}] (got "
-                         f"{shown_value(float(np.nanmin(edges)))} ... {shown_value(float(np.nanmax(edges)))})")
+                         f"{shown_value(float(edges.min()))} ... {shown_value(float(edges.max()))})")
     if np.any(np.diff(edges) <= 0):
         raise ValueError(f"{name} edges must be strictly increasing (got {_shown(edges)})")
     return edges

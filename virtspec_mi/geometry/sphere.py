@@ -28,7 +28,10 @@ Geometry and conventions
   ``detector`` (a ray reaching its cap is detected), ``specular`` (open to a light trap
   in SCE, closed by a wall plug in SCI), ``open`` (any other hole: lost).
 - **The baffle** is a flat disk (centre, unit normal, radius) inside the sphere, coated
-  like the wall (reflectance ρw on both faces, Lambertian).
+  like the wall (reflectance ρw on both faces, Lambertian). It must lie wholly inside
+  the sphere and on the sphere's side of the plane of every port that may hold a disk
+  (``sample``, ``entrance``, ``reference``): a baffle through the specimen's plane is
+  refused.
 - **Wall reflectance** ρw: a number in [0, 1] or a spectrum (wavelengths in nm and
   values, linearly interpolated, held constant beyond its ends).
 
@@ -47,7 +50,7 @@ from typing import Any, Sequence
 
 import numpy as np
 
-from virtspec_mi.checks import number
+from virtspec_mi.checks import number, value_tokens
 
 __all__ = ["ROLES", "HOLDER_ROLES", "Port", "Baffle", "Sphere", "SPHERE_PARAMETERS", "is_sphere_parameter",
            "sphere_from_parameters", "parse_port", "parse_baffle", "parse_wall_reflectance"]
@@ -62,6 +65,16 @@ HOLDER_ROLES: tuple[str, ...] = ("sample", "entrance", "reference")
 def _direction(polar: float, azimuth: float) -> np.ndarray:
     theta, phi = math.radians(polar), math.radians(azimuth)
     return np.array([math.sin(theta) * math.cos(phi), math.sin(theta) * math.sin(phi), math.cos(theta)])
+
+
+def _three(name: str, value: Any) -> tuple:
+    """Three values (x, y, z): a sequence of three, or a string ``"x,y,z"``; ``ValueError`` naming ``name`` else."""
+
+    if isinstance(value, str):
+        value = tuple(value_tokens(name, value))
+    if isinstance(value, (str, bytes)) or not hasattr(value, "__len__") or len(value) != 3:
+        raise ValueError(f"{name} must be three numbers x, y, z in mm (got {value!r})")
+    return tuple(value)
 
 
 def _finite(name: str, value: Any) -> float:
@@ -97,7 +110,9 @@ class Port:
     radius: float
 
     def __post_init__(self) -> None:
-        if self.role not in ROLES:
+        if not isinstance(self.name, str) or not self.name or any(c.isspace() for c in self.name):
+            raise ValueError(f"port name must be a non-empty string without spaces (got {self.name!r})")
+        if not isinstance(self.role, str) or self.role not in ROLES:
             raise ValueError(f"port {self.name!r}: role must be one of {', '.join(ROLES)} (got {self.role!r})")
         polar = _finite(f"port {self.name!r} polar", self.polar)
         if not 0.0 <= polar <= 180.0:
@@ -135,10 +150,8 @@ class Baffle:
     radius: float
 
     def __post_init__(self) -> None:
-        centre = tuple(_finite("baffle centre", c) for c in self.centre)
-        normal = np.array([_finite("baffle normal", c) for c in self.normal])
-        if len(centre) != 3 or normal.shape != (3,):
-            raise ValueError("baffle centre and normal must be three numbers each")
+        centre = tuple(_finite("baffle centre", c) for c in _three("baffle centre", self.centre))
+        normal = np.array([_finite("baffle normal", c) for c in _three("baffle normal", self.normal)])
         length = float(np.linalg.norm(normal))
         if not length > 0.0:
             raise ValueError("baffle normal must be a non-zero vector")
@@ -149,6 +162,12 @@ class Baffle:
         unit = normal if abs(length - 1.0) < 1e-12 else normal / length  # a unit normal is kept bit for bit
         object.__setattr__(self, "normal", tuple(float(v) for v in unit))
         object.__setattr__(self, "radius", radius)
+
+    def reach(self, axis: Any) -> float:
+        """The farthest a point of the disk lies along the unit vector ``axis`` (mm): c·a + r·√(1 − (n·a)²)."""
+
+        c, n, a = np.array(self.centre), np.array(self.normal), np.asarray(axis, dtype=np.float64)
+        return float(c @ a + self.radius * math.sqrt(max(0.0, 1.0 - float(n @ a) ** 2)))
 
     def farthest_rim_distance(self) -> float:
         """Largest distance of a baffle rim point from the sphere centre."""
@@ -174,7 +193,8 @@ class Sphere:
     ports
         The ports (:class:`Port`), names unique, caps not overlapping.
     baffle
-        Optional :class:`Baffle`, wholly inside the sphere.
+        Optional :class:`Baffle` (or its text ``"centre=x,y,z normal=x,y,z radius=r"``),
+        wholly inside the sphere and clear of the holder ports' planes.
     """
 
     diameter: float
@@ -200,8 +220,18 @@ class Sphere:
             raise ValueError(f"diameter must be > 0 mm (got {diameter:g})")
         object.__setattr__(self, "diameter", diameter)
         object.__setattr__(self, "wall_reflectance", parse_wall_reflectance(self.wall_reflectance))
+        if isinstance(self.ports, (str, bytes, Port)) or not hasattr(self.ports, "__iter__"):
+            raise ValueError(f"ports must be a sequence of virtspec_mi.Port (got {self.ports!r})")
         ports = tuple(self.ports)
+        for port in ports:
+            if not isinstance(port, Port):
+                raise ValueError(f"ports must be virtspec_mi.Port objects (got {type(port).__name__} {port!r})")
         object.__setattr__(self, "ports", ports)
+        if isinstance(self.baffle, str):  # as the integrator's XML writes it: "centre=x,y,z normal=x,y,z radius=r"
+            object.__setattr__(self, "baffle", parse_baffle(self.baffle))
+        elif self.baffle is not None and not isinstance(self.baffle, Baffle):
+            raise ValueError("baffle must be a virtspec_mi.Baffle, its text 'centre=x,y,z normal=x,y,z radius=r' "
+                             f"(mm) or None (got {type(self.baffle).__name__} {self.baffle!r})")
         radius = diameter / 2.0
         names = [p.name for p in ports]
         if len(set(names)) != len(names):
@@ -223,6 +253,13 @@ class Sphere:
         if self.baffle is not None and not self.baffle.farthest_rim_distance() < radius:
             raise ValueError(f"baffle must lie inside the sphere: its rim reaches "
                              f"{self.baffle.farthest_rim_distance():g} mm from the centre (radius {radius:g} mm)")
+        for port in ports if self.baffle is not None else ():
+            plane = radius * port.cos_half_angle(radius)
+            reach = self.baffle.reach(port.axis)
+            if port.role in HOLDER_ROLES and not reach < plane:
+                raise ValueError(f"baffle must not cross the plane of port {port.name!r} (role {port.role}: where the "
+                                 f"specimen or a standard sits): its rim reaches {reach:g} mm along the port's axis, "
+                                 f"the plane lies at {plane:g} mm from the centre; move or shrink the baffle")
 
     @property
     def radius(self) -> float:

@@ -47,6 +47,7 @@ J. Kessel (1986), Appl. Opt. 25, 2752–2756 (transmittance in a one-port sphere
 from __future__ import annotations
 
 import math
+import warnings
 from dataclasses import dataclass
 from typing import Any, ClassVar
 
@@ -274,6 +275,23 @@ class IntegratingSphere(Instrument):
                             scene=self.scene, sphere_parameters=sphere.parameters(),
                             specimen_radius=float(self.bench.geometry.specimen_radius),
                             parameters=None if plan.parameters is None else plan.parameters.as_dict())
+
+    def warn_if_uncertified(self, result: SphereResult, stacklevel: int = 2) -> None:
+        """
+        A ``RuntimeWarning`` where no light reached the detector in the standard
+        configuration: the reading ρ_std·p_sample/p_standard is undefined there, never a
+        silent NaN (those readings are not certified).
+        """
+
+        dark = result.no_light
+        if np.any(dark):
+            at = [float(w) for w in np.asarray(result.coords["wavelength"]).reshape(-1)[
+                np.unique(np.nonzero(dark)[0])]]
+            warnings.warn(f"not certified: no light reached the detector in {int(np.sum(dark))} of {dark.size} "
+                          f"readings (the standard configuration's detector count is 0, at wavelength "
+                          f"{', '.join(f'{w:g}' for w in at[:5])}{' ...' if len(at) > 5 else ''} nm): their reading "
+                          "sample/standard is undefined; check the sphere (wall reflectance, ports, baffle) or trace "
+                          "more rays", RuntimeWarning, stacklevel=stacklevel + 1)
 
 
 def _named_counts(sphere: Sphere, layout: Any, bins: np.ndarray, sums: dict[str, np.ndarray]) -> dict[str, np.ndarray]:

@@ -66,6 +66,7 @@ Baranoski et al. (2001), eqs. (2)–(4), Sect. 3.2.
 
 from __future__ import annotations
 
+import time
 from dataclasses import dataclass, field
 from typing import Any, Callable
 
@@ -80,8 +81,8 @@ from virtspec_mi.kernel.incidence import incidence_frame
 from virtspec_mi.kernel.rng import chunk_root, dimension_key, dimension_keys, hash32, to_unit
 from virtspec_mi.kernel.walk import CAPPED_COMPONENT, is_random_walk, walk_steps
 
-__all__ = ["KernelTally", "LONG_WALK_STEPS", "ReadingPlan", "WALK_GROUP", "WALK_QUEUES", "WalkQueue",
-           "first_interactions", "tally_readings", "trace_rays", "walk_plan"]
+__all__ = ["CHUNK_SECONDS", "FIRST_CHUNK", "KernelTally", "LONG_WALK_STEPS", "ReadingPlan", "WALK_GROUP",
+           "WALK_QUEUES", "WalkQueue", "first_interactions", "tally_readings", "trace_rays", "walk_plan"]
 
 _WORD = 1 << 32
 # Dimensions of the random numbers: 0–1 emitter, 2–3 specimen, 4–6 BSDF, 7 survival;
@@ -97,6 +98,16 @@ _RARE_COUNTS = (("weight_violations", _VIOLATION), ("capped", _CAPPED), ("rounde
 # Squared lengths of a valid outgoing direction.
 _LENGTH2 = ((1.0 - DIRECTION_TOLERANCE) ** 2, (1.0 + DIRECTION_TOLERANCE) ** 2)
 
+
+CHUNK_SECONDS: float = 0.5
+"""
+The longest a kernel launch (one chunk) should last, in seconds. A Dr.Jit kernel cannot
+be stopped, so a signal (Ctrl-C, SIGTERM) waits for the chunk under way; chunks are
+sized from the measured ray rate to end within this (see :class:`_Pace`).
+"""
+
+FIRST_CHUNK: int = 1 << 14
+"""Rays of a call's first chunk, before any rate is measured (and the smallest a chunk is made)."""
 
 WALK_GROUP: int = 16
 """Lanes that share one queue under ``queue = "group"`` (the widest SIMD packet, AVX-512)."""
@@ -215,7 +226,7 @@ class KernelTally:
 def tally_readings(
     bench: Any, plans: list[ReadingPlan], *, seed: int, chunk_size: int, beam: str, sampling: str,
     offsets: Any = None, hook: ExitHook | None = None, on_chunk: Callable[[int], None] | None = None,
-    walk: WalkQueue = WalkQueue(), walk_stats: dict | None = None,
+    walk: WalkQueue = WalkQueue(), walk_stats: dict | None = None, chunk_seconds: float | None = CHUNK_SECONDS,
 ) -> KernelTally:
     """
     Trace every reading of ``plans`` on ``bench`` (an object with ``bsdf``, ``geometry``
@@ -229,7 +240,11 @@ def tally_readings(
     has 1 … 2³² − 1 rays (the engine sees to both). The readings' rays are packed into
     lanes in list order and cut into chunks of at most ``chunk_size`` rays (never
     straddling a 2³² boundary of the global index); each chunk runs as one kernel, so
-    memory stays bounded and counts do not depend on chunking. ``seed``, ``beam``
+    memory stays bounded and counts do not depend on chunking. Chunks are also bounded
+    in time: sized from the ray rate of the previous chunk to last at most about
+    ``chunk_seconds`` (default :data:`CHUNK_SECONDS`; ``None``: every chunk
+    ``chunk_size``), so that ``on_chunk`` — where the engine honours an interrupt — is
+    reached within about a second even for slow walks. ``seed``, ``beam``
     (``conical``, ``collimated``, ``diffuse``) and ``sampling`` (``jittered``,
     ``random``, ``concentric``) are the settings of those names. ``on_chunk`` (optional)
     is called after every chunk with the number of readings completed so far.
@@ -258,18 +273,52 @@ def tally_readings(
     kernel = _Kernel(bench, plans, seed, beam, sampling, hook, walk, walk_stats)
     tally = KernelTally(counts, None if hook is None else np.zeros((len(plans), hook.size), dtype=np.int64),
                         {name: np.zeros(len(plans), dtype=np.int64) for name in (hook.sums if hook else ())})
+    pace = _Pace(chunk_size, chunk_seconds, (id(bench.bsdf), type(hook).__name__, beam, sampling, kernel.queued))
     first = 0
     while first < starts[-1]:
-        size = int(min(chunk_size, cuts[np.searchsorted(cuts, first, side="right")] - first))
+        size = int(min(pace.size, cuts[np.searchsorted(cuts, first, side="right")] - first))
         slots = np.arange(
             np.searchsorted(starts, first, side="right") - 1,
             np.searchsorted(starts, first + size, side="left"),
         )
+        began = time.perf_counter()
         kernel.run(_RaySource(kernel, first, size, slots, starts, offsets), tally)
+        pace.update(size, time.perf_counter() - began)
         first += size
         if on_chunk is not None:  # how many readings are complete (for a progress bar)
             on_chunk(int(np.searchsorted(starts[1:], first, side="right")))
     return tally
+
+
+_PACES: dict[tuple, int] = {}
+"""The chunk size last reached by each kind of kernel (specimen, hook, beam, sampling): the next call's start."""
+
+
+class _Pace:
+    """
+    Chunk sizes bounded in time (:data:`CHUNK_SECONDS`): powers of two (a queued walk
+    compiles its kernel once per chunk size) from :data:`FIRST_CHUNK` — or a quarter of
+    what the same kind of kernel last reached — growing ×4 while a chunk takes less than
+    a quarter of the time, shrinking to the measured rate when one takes longer, never
+    above ``chunk_size``. Counts do not depend on it (rays are keyed on their index).
+    """
+
+    def __init__(self, cap: int, seconds: float | None, key: tuple) -> None:
+        self.cap, self.seconds, self.key = cap, seconds, key
+        learned = _PACES.get(key, 0) // 4
+        self.size = cap if seconds is None else min(cap, max(FIRST_CHUNK, learned))
+
+    def update(self, size: int, elapsed: float) -> None:
+        """After a chunk of ``size`` rays took ``elapsed`` seconds: the next chunk's size."""
+
+        if self.seconds is None or size < self.size:  # fixed, or a tail chunk (says little)
+            return
+        if elapsed < self.seconds / 4:
+            self.size = min(self.cap, 4 * size)
+        elif elapsed > self.seconds:
+            rate_size = size * self.seconds / elapsed
+            self.size = min(self.cap, max(FIRST_CHUNK, 1 << max(0, int(rate_size).bit_length() - 1)))
+        _PACES[self.key] = self.size
 
 
 def _cuts(starts: np.ndarray, offsets: np.ndarray, rays: np.ndarray) -> np.ndarray:

@@ -234,10 +234,20 @@ class SphereResult(ResultBase):
 
     @property
     def certified(self) -> np.ndarray:
-        """False where either configuration has capped walks, invalid directions or weight violations."""
+        """
+        False where either configuration has capped walks, invalid directions or weight
+        violations, or where no light reached the detector in the standard configuration
+        (p_standard = 0: the reading ρ_std·p_sample/p_standard is undefined).
+        """
 
         bad = sum(self.counts[c][n] for c in CONFIGURATIONS for n in _UNCERTIFIED)
-        return np.asarray(bad == 0)
+        return np.asarray((bad == 0) & (self.counts["standard"]["detected"] > 0))
+
+    @property
+    def no_light(self) -> np.ndarray:
+        """True where no ray of the standard configuration reached the detector (the reading is undefined)."""
+
+        return np.asarray(self.counts["standard"]["detected"] == 0)
 
     @property
     def fraction_mu(self) -> np.ndarray:
@@ -431,6 +441,7 @@ class SphereResult(ResultBase):
                  + (f"each detector fraction certified to {round_up(float(np.nanmax(mu))):g} at delta/2 = "
                     f"{self.fraction_delta:g} (reading interval: both at once, probability >= "
                     f"{1 - self.delta:g})" if np.any(self.certified) else
+                    "NOT CERTIFIED: no light reached the detector" if np.all(self.no_light) else
                     "NOT CERTIFIED (capped walks, invalid directions or weight violations)")
                  + f"; {self.seconds * 1e3:.1f} ms"]
         fixed = [f"{name} = {float(value):g}" for name, value in self.coords.items() if not self.coord_dims(name)]
@@ -446,7 +457,9 @@ class SphereResult(ResultBase):
             lines.append(f"{at}  {self.wall_reflectance[index]:.4f}  {self.detector_fraction[index]:.5f}  "
                          f"{self.standard_fraction[index]:.5f}    {self.reading[index]:.5f}  "
                          f"[{interval[index][0]:.5f}, {interval[index][1]:.5f}]  {self.hemispherical[index]:.5f}     "
-                         f"{self.instrument_error[index]:+.5f}" + ("" if certified[index] else "  NOT CERTIFIED"))
+                         f"{self.instrument_error[index]:+.5f}" + ("" if certified[index] else "  NOT CERTIFIED"
+                                                             + (": no light reached the detector"
+                                                                if self.no_light[index] else "")))
         return "\n".join(lines)
 
     def __repr__(self) -> str:

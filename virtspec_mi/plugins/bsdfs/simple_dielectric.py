@@ -29,8 +29,10 @@ Notes
 Near η = 1 Mitsuba's float32 ``mi.fresnel`` cancels catastrophically (1 − sin²θi/η² and
 cos θi − η cos θt lose every digit of η − 1): at η = 1 ± 10⁻⁶ it gives F wrong by up to
 0.68 near grazing incidence, and float32 cannot even hold η − 1 below 6·10⁻⁸. For
-0 < |η − 1| < :data:`NEAR_ONE` the plugin therefore evaluates the same Fresnel equations
-in a cancellation-free form from η − 1 (kept apart, computed in float64 on the host):
+0 < |η − 1| < :data:`~virtspec_mi.kernel.walk_optics.NEAR_ONE` the plugin therefore
+evaluates the same Fresnel equations in a cancellation-free form from η − 1 (kept apart,
+computed in float64 on the host; :func:`virtspec_mi.kernel.walk_optics.fresnel_near_one`,
+which the random walks' interfaces use too):
 with n the index seen by the ray, a = n² − 1 = (n − 1)(n + 1) and c = |cos θi|,
 cos²θt = (a + c²)/n², r_s = −a/(c + n cos θt)², r_p = a(c²(n² + 1) − 1)/(n²(n c + cos θt)²).
 Compared with a float64 Fresnel over a grid of η (|η − 1| from 10⁻¹² to 0.1) and θ
@@ -53,9 +55,10 @@ import drjit as dr
 import mitsuba as mi
 
 from virtspec_mi.checks import check_float32
+from virtspec_mi.kernel.walk_optics import NEAR_ONE, fresnel_near_one
 from virtspec_mi.plugins.bsdfs.sampled_only import SampledOnlyBSDF
 
-__all__ = ["SimpleDielectric", "ETA_RANGE", "NEAR_ONE", "fresnel_near_one"]
+__all__ = ["SimpleDielectric", "ETA_RANGE"]
 
 ETA_RANGE: tuple[float, float] = (1e-6, 1e6)
 """
@@ -63,39 +66,6 @@ Relative indices η accepted. Mitsuba's float32 Fresnel arithmetic (η², 1/η²
 enough here (tested at both ends, θi = 0, 30, 89, 90°); beyond it gives NaN directions
 (η ≤ 10⁻²⁰) or wrong grazing reflectances (η ≥ 10¹⁴).
 """
-
-NEAR_ONE: float = 0.1
-"""
-For 0 < |η − 1| below this, Fresnel's equations are evaluated in the cancellation-free
-form of :func:`fresnel_near_one` (``mi.fresnel`` loses the digits of η − 1 there).
-"""
-
-
-def fresnel_near_one(cos_theta_i: mi.Float, eta_minus_one: float) -> tuple[mi.Float, mi.Float]:
-    """
-    Unpolarised Fresnel reflectance F and cos θt (signed as ``mi.fresnel`` signs it) of a
-    smooth interface of relative index η = 1 + ``eta_minus_one``, in a form free of
-    cancellation for η near 1 (see the module docstring). ``eta_minus_one`` is exact on
-    the host (float64); the ray sees n = η from outside (cos θi ≥ 0), n = 1/η from inside.
-    """
-
-    d_out = eta_minus_one
-    d_in = -eta_minus_one / (1.0 + eta_minus_one)  # 1/η − 1, without cancellation
-    outside = cos_theta_i >= 0.0
-    d = dr.select(outside, mi.Float(d_out), mi.Float(d_in))
-    n = 1.0 + d
-    a = d * (d + 2.0)  # n² − 1
-    c = dr.abs(cos_theta_i)
-    n2 = n * n
-    cos2_t = (a + c * c) / n2
-    total = cos2_t <= 0.0  # total internal reflection
-    ct = dr.safe_sqrt(cos2_t)
-    s_den = c + n * ct
-    p_den = n * c + ct
-    r_s = -a / (s_den * s_den)
-    r_p = a * (c * c * (n2 + 1.0) - 1.0) / (n2 * p_den * p_den)
-    fresnel = dr.select(total, 1.0, 0.5 * (r_s * r_s + r_p * r_p))
-    return fresnel, dr.select(outside, -ct, ct)
 
 
 class SimpleDielectric(SampledOnlyBSDF):

@@ -25,7 +25,9 @@ fractions exactly:
 
 Between table rows
     θi (from |cos| of ωi) and λ are interpolated **linearly** between the two
-    neighbouring tabulated values and clamped at the ends of the table: the BSDF is
+    neighbouring tabulated values and clamped at the ends of the table (the instrument
+    refuses wavelengths beyond the table's, :attr:`Tabulated.wavelength_range`: it holds
+    no data there): the BSDF is
     the bilinear mixture Σ_r c_r p_{r,k}/Ω_k of up to four rows r, and ``sample`` draws
     from the mixture exactly (a row with probability c_r P_r / Σ c P, then a bin of
     it). At a tabulated (λ, θi) the table's row is used unmixed.
@@ -130,6 +132,9 @@ class Tabulated(mi.BSDF):
         table = _table_from_props(props)
         self.table = table
         self.wavelength_independent = table.shape[0] == 1
+        # The wavelengths the table holds data for (the instrument refuses others); one row holds for all.
+        self.wavelength_range = None if self.wavelength_independent else (
+            float(np.min(table.wavelength)), float(np.max(table.wavelength)))
         n_wavelength, n_theta_i, n_theta_o, n_phi_o = table.shape
         self.n_wavelength, self.n_theta_i, self.n_theta_o, self.n_phi_o = table.shape
         self.bins = n_theta_o * n_phi_o

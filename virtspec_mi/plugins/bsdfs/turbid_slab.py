@@ -53,6 +53,10 @@ thickness : float, default 1.0
     medium (then μa + μs must be > 0). Optical thickness is (μa + μs)·d, albedo μs/(μa + μs).
 eta : float or spectrum, default 1.0
     Refractive index n > 0 of the slab, 10⁻⁶ … 10⁶ (:data:`INDEX_RANGE`, as the other two).
+    A face whose relative index is within :data:`~virtspec_mi.kernel.walk_optics.NEAR_ONE`
+    of 1 (but not 1) gets Fresnel's equations from η − 1, computed without cancellation
+    (in float64 for numbers; exact for the float32 values of a spectrum):
+    :func:`~virtspec_mi.kernel.walk_optics.cross_interface`.
 eta_above : float or spectrum, default 1.0
     Refractive index > 0 of the medium above the slab (the side of the normal, where
     light comes from).
@@ -68,9 +72,11 @@ Notes
 A spectral parameter is any Mitsuba spectrum/texture (``<spectrum name="mu_a"
 value="400:12, 700:3"/>`` in XML, or ``{"type": "regular", ...}`` in a dict), read
 unbounded and evaluated per ray at the ray's wavelength (channel 0 of
-``si.wavelengths``; outside a spectrum's range Mitsuba's own extrapolation applies,
-usually 0). Numbers are checked here (``ValueError`` naming the parameter and the
-allowed range; booleans, non-finite values and values float32 cannot hold are refused);
+``si.wavelengths``). Wavelengths outside a spectrum's data (a ``regular`` spectrum's
+range, an ``irregular`` one's wavelengths, an RGB colour's CIE range 360–830 nm:
+:mod:`virtspec_mi.kernel.spectra`) are refused before tracing, naming the parameter.
+Numbers are checked here (``ValueError`` naming the parameter and the allowed range;
+booleans, non-finite values and values float32 cannot hold are refused);
 spectra are checked at the wavelengths of a measurement before it is traced
 (:meth:`TurbidSlab.check_wavelengths`). When every parameter is a number the slab
 declares :attr:`TurbidSlab.wavelength_independent` ``True``.
@@ -102,8 +108,9 @@ import numpy as np
 from virtspec_mi.checks import check_float32
 from virtspec_mi.plugins.bsdfs.sampled_only import SampledOnlyBSDF
 
+from virtspec_mi.kernel.spectra import check_covered
 from virtspec_mi.kernel.walk import CAPPED_COMPONENT, walk_rng, walk_to_end
-from virtspec_mi.kernel.walk_optics import cross_interface, free_path, sample_hg
+from virtspec_mi.kernel.walk_optics import NEAR_ONE, cross_interface, free_path, sample_hg
 
 __all__ = ["TurbidSlab", "SLAB_COMPONENTS", "COEFFICIENT_RANGE", "INDEX_RANGE"]
 
@@ -210,6 +217,14 @@ class TurbidSlab(SampledOnlyBSDF):
         # Opaque scalars: one compiled kernel serves every slab with the same parameter kinds.
         self._opaque = {name: dr.opaque(mi.Float, value) for name, value in self.constants.items()}
         self._thickness = dr.opaque(mi.Float, self.thickness)
+        self._near_one = None
+        if self.wavelength_independent:
+            # η − 1 of each face, lit from the front and from the back, in float64 on the host: exact
+            # near 1, where float32 quotients lose its digits (kernel.walk_optics, NEAR_ONE).
+            eta, above, below = (self.constants[name] for name in ("eta", "eta_above", "eta_below"))
+            faces = ((eta - above) / above, (eta - below) / below, (below - eta) / eta, (above - eta) / eta)
+            if any(0.0 < abs(d) < NEAR_ONE for d in faces):
+                self._near_one = tuple(dr.opaque(mi.Float, d) for d in faces)
 
     def _check_semi_infinite(self, constants: dict[str, float], thickness: float) -> None:
         mu_t = constants.get("mu_a", 1.0) + constants.get("mu_s", 1.0)
@@ -247,8 +262,10 @@ class TurbidSlab(SampledOnlyBSDF):
     def check_wavelengths(self, wavelengths: Sequence[float]) -> None:
         """
         Refuse (``ValueError`` naming the parameter, its range and the wavelength) a
-        spectral parameter out of its range at a wavelength about to be traced, e.g. ``g``
-        given as a spectrum of 1.5; called by the engine before tracing.
+        wavelength about to be traced outside a spectral parameter's data
+        (:func:`virtspec_mi.kernel.spectra.check_covered`), or a spectral parameter out of
+        its range there, e.g. ``g`` given as a spectrum of 1.5; called by the engine
+        before tracing.
         """
 
         if not self.textures:
@@ -270,6 +287,8 @@ class TurbidSlab(SampledOnlyBSDF):
             if empty.size:
                 raise ValueError(f"turbid_slab: a semi-infinite slab (thickness = inf) needs mu_a + mu_s > 0 "
                                  f"(got 0 at {float(lams[empty[0]])!r} nm)")
+        for name, texture in self.textures.items():  # outside a spectrum's data it reads 0, in range or not
+            check_covered(texture, wavelengths, "the specimen turbid_slab", name)
 
     def _value(self, name: str, si: mi.SurfaceInteraction3f) -> mi.Float:
         if name in self._opaque:
@@ -290,7 +309,12 @@ class TurbidSlab(SampledOnlyBSDF):
     # of numbers (then computed from the numbers and ``front``: a smaller state).
 
     def _optics(self, si: Any, front: Any) -> tuple:
-        """(μt, albedo, g, η_top, η_bottom, η_out/η_in) of each lane."""
+        """
+        (μt, albedo, g, η_top, η_bottom, η_out/η_in, η_top − 1, η_bottom − 1) of each lane;
+        the last two computed without cancellation (:func:`~virtspec_mi.kernel.walk_optics.cross_interface`
+        then treats a face near η = 1 exactly), ``None`` for a slab of numbers with no face
+        near 1 (nothing more is compiled: counts as before).
+        """
 
         mu_a, mu_s, g, eta = (self._value(name, si) for name in ("mu_a", "mu_s", "g", "eta"))
         above, below = self._value("eta_above", si), self._value("eta_below", si)
@@ -299,12 +323,16 @@ class TurbidSlab(SampledOnlyBSDF):
             eta_top = dr.select(front, eta / above, eta / below)
             eta_bottom = dr.select(front, below / eta, above / eta)
             ratio = dr.select(front, below / above, above / below)
+            near = self._near_one
+            d_top = None if near is None else dr.select(front, near[0], near[1])
+            d_bottom = None if near is None else dr.select(front, near[2], near[3])
         else:
             outer_in = dr.select(front, above, below)
             outer_out = dr.select(front, below, above)
             eta_top, eta_bottom, ratio = eta / outer_in, outer_out / eta, outer_out / outer_in
+            d_top, d_bottom = (eta - outer_in) / outer_in, (outer_out - eta) / eta  # differences: exact near 1
         mu_t = mu_a + mu_s
-        return mu_t, mu_s / mu_t, g, eta_top, eta_bottom, ratio
+        return mu_t, mu_s / mu_t, g, eta_top, eta_bottom, ratio, d_top, d_bottom
 
     def _state_optics(self, state: tuple) -> tuple:
         return state[7] if state[7] else self._optics(None, state[6])
@@ -320,7 +348,7 @@ class TurbidSlab(SampledOnlyBSDF):
         wi = mi.Vector3f(si.wi.x, si.wi.y, dr.abs(si.wi.z))
         rng = walk_rng(sample1, sample2)
         # Entry: Fresnel at the top face (specular reflection leaves at once).
-        direction, reflected = cross_interface(-wi, optics[3], rng.next_float32())
+        direction, reflected = cross_interface(-wi, optics[3], rng.next_float32(), optics[6])
         status = dr.select(reflected, mi.UInt32(_TOP), mi.UInt32(_INSIDE))
         status = dr.select(mi.Bool(active), status, mi.UInt32(_ABSORBED))
         status = status + dr.zeros(mi.UInt32, dr.width(sample1))
@@ -367,7 +395,7 @@ class TurbidSlab(SampledOnlyBSDF):
         """
 
         rng, status, direction, depth, scattered, steps, front, optics = state
-        mu_t, albedo, g, eta_top, eta_bottom, _ = self._state_optics(state)
+        mu_t, albedo, g, eta_top, eta_bottom, _, d_top, d_bottom = self._state_optics(state)
         thickness = self._thickness
         # Four numbers per flight, drawn first (unmasked): the free path, the event's coin (the
         # face's Fresnel choice, or absorption against scattering) and HG's two.
@@ -379,7 +407,8 @@ class TurbidSlab(SampledOnlyBSDF):
         to_face = dr.select(direction.z == 0.0, dr.inf, to_face)
         # Both outcomes for every lane, then a select (straight-line: no branch per packet).
         hit = path >= to_face
-        at_face, reflected = cross_interface(direction, dr.select(down, eta_bottom, eta_top), u_event)
+        d_face = None if d_top is None else dr.select(down, d_bottom, d_top)  # η − 1 of the face ahead
+        at_face, reflected = cross_interface(direction, dr.select(down, eta_bottom, eta_top), u_event, d_face)
         absorbed = ~hit & (u_event >= albedo)
         turned = sample_hg(direction, g, u_cos, u_phi)
         direction = dr.select(hit, at_face, dr.select(absorbed, direction, turned))

@@ -145,8 +145,9 @@ def check_spp(spp: Any) -> int:
 def clear_render_errors(render: Callable) -> Callable:
     """
     ``mi.render`` that re-raises this integrator's ``ValueError`` (bad ``spp``, settings,
-    wavelengths …) as itself, not as the ``RuntimeError`` Dr.Jit's custom operation makes
-    of it; everything else as ``render`` does.
+    wavelengths …) and an interrupt (``KeyboardInterrupt``: Ctrl-C, or SIGTERM under
+    :mod:`virtspec_mi.engine.interrupts`) as themselves, not as the ``RuntimeError``
+    Dr.Jit's custom operation makes of them; everything else as ``render`` does.
     """
 
     if getattr(render, "clears_spectrophotometer_errors", False):
@@ -160,7 +161,8 @@ def clear_render_errors(render: Callable) -> Callable:
             integrator = kwargs.get("integrator") or (args[2] if len(args) > 2 else None)
             if integrator is None and isinstance(scene, mi.Scene):
                 integrator = scene.integrator()
-            if isinstance(integrator, Spectrophotometer) and isinstance(error.__cause__, ValueError):
+            if isinstance(integrator, Spectrophotometer) and isinstance(error.__cause__,
+                                                                        (ValueError, KeyboardInterrupt)):
                 raise error.__cause__ from None
             raise
 

@@ -1,5 +1,5 @@
 """
-Reference values of the NPSG C++ ABM implementation (abm.md §4) and the tolerance
+Reference values of the NPSG C++ ABM implementation (its runs of the soybean and corn leaves) and the tolerance
 used to compare a reading with them.
 
 Both sides are Monte Carlo estimates: the reference with ``ref_rays`` rays per entry,
@@ -20,7 +20,7 @@ ROUNDING = 0.0005
 SOYBEAN_WAVELENGTHS = (465, 551, 608, 680, 800, 1450, 2200)
 SOYBEAN_COLUMNS = ("0", "8", "45", "60", "abax 8")  # incidence; "abax 8" = abaxial side, 8 deg
 SOYBEAN_RAYS = 1_000_000
-# abm.md §4.1, R / T per wavelength (rows) and column, sieve & detour ON / OFF.
+# the NPSG C++ reference runs (soybean), R / T per wavelength (rows) and column, sieve & detour ON / OFF.
 SOYBEAN = {
     True: [
         [(0.045, 0.007), (0.045, 0.007), (0.061, 0.006), (0.104, 0.006), (0.216, 0.011)],
@@ -44,7 +44,7 @@ SOYBEAN = {
 
 CORN_WAVELENGTHS = (450, 550, 600, 680, 700, 800, 1200, 1450, 1650, 1940, 2200)
 CORN_RAYS = 100_000
-# abm.md §4.2, C++ reference at 8 deg, R / T, sieve & detour ON / OFF.
+# the NPSG C++ reference runs (corn), C++ reference at 8 deg, R / T, sieve & detour ON / OFF.
 CORN = {
     True: [(0.069, 0.002), (0.135, 0.087), (0.106, 0.044), (0.071, 0.006), (0.130, 0.086), (0.451, 0.502),
            (0.424, 0.475), (0.163, 0.149), (0.327, 0.377), (0.070, 0.014), (0.189, 0.210)],

@@ -1,4 +1,4 @@
-"""``abm_b`` (soybean) against the NPSG C++ reference (abm.md §4.1)."""
+"""``abm_b`` (soybean) against the NPSG C++ reference (its runs of the soybean leaf)."""
 
 from __future__ import annotations
 
@@ -45,7 +45,7 @@ def test_soybean_8deg_sieve_on_matches_reference(mi):
 @pytest.mark.slow
 @pytest.mark.parametrize("sieve", [True, False], ids=["sieve_on", "sieve_off"])
 def test_soybean_full_table_matches_reference(mi, sieve):
-    """abm.md §4.1 in full: 7 wavelengths × (0, 8, 45, 60 deg, abaxial 8 deg), R and T."""
+    """the NPSG C++ reference runs (soybean) in full: 7 wavelengths × (0, 8, 45, 60 deg, abaxial 8 deg), R and T."""
 
     rays = 200_000
     ours = soybean_table(sieve, rays, seed=1)

@@ -1,4 +1,4 @@
-"""``abm_u`` (corn) against the NPSG C++ reference (abm.md §4.2)."""
+"""``abm_u`` (corn) against the NPSG C++ reference (its runs of the corn leaf)."""
 
 from __future__ import annotations
 

@@ -105,7 +105,7 @@ def test_miss_count_agrees_with_exact_binomial(traced_diamond):
     """
     K independent readings (one per wavelength: each has its own rays) of a specimen
     whose rho is known exactly (Mitsuba's smooth dielectric: traced per wavelength); the number of misses |m/N - rho| >= mu must be
-    consistent with Binomial(K, q), q = miss_probability(N, rho, mu) (anchors.md §2e:
+    consistent with Binomial(K, q), q = miss_probability(N, rho, mu) (Hoeffding 1963; the exact binomial law:
     a plain "misses <= delta K" check has no power). Two-sided test at level 1e-4.
     """
 
@@ -298,7 +298,7 @@ def test_two_stage_reading_spends_pilot_and_sized_second_batch(traced_diamond):
 
 def test_joint_certification_splits_delta(diamond):
     reading = collimated(diamond, 30, joint=True, rays=None, wavelengths=[500])
-    assert reading.rays.tolist() == [119_830]  # Hoeffding at delta/2 (anchors.md section 3)
+    assert reading.rays.tolist() == [119_830]  # Hoeffding at delta/2 (eq. 23 at delta/2)
     assert reading.interval_delta == DELTA / 2
     assert "R and T together" in reading.summary()
 

@@ -4,7 +4,7 @@ Tests of virtspec_mi.compare: a simulated spectrum against a measured one.
 Measured data that ship with an installed package: colour-science's ColorChecker N
 Ohta patches (written to CSV files here), measured through a Mitsuba ``diffuse``
 specimen whose reflectance is the patch spectrum; and the NPSG C++ reference values of
-the soybean leaf (abm.md §4.1, ``tests/abm_reference.py``) against an ABM-B
+the soybean leaf (the NPSG C++ reference runs (soybean), ``tests/abm_reference.py``) against an ABM-B
 measurement.
 
 Tolerances come from the certificate: each simulated point is within its
@@ -152,7 +152,7 @@ def test_a_result_file_is_compared_and_plotted(dark_skin, patch_csv, tmp_path):
 
 def test_soybean_abm_b_against_the_npsg_reference_values(mi, tmp_path):
     """
-    abm.md §4.1, 8 deg adaxial, sieve and detour on: R and T at 7 wavelengths, each the
+    the NPSG C++ reference runs (soybean), 8 deg adaxial, sieve and detour on: R and T at 7 wavelengths, each the
     C++ reference's estimate from 10^6 rays printed to 3 decimals. Its uncertainty is its
     own Hoeffding tolerance plus the rounding; ours is certified. 28 events (7 wavelengths
     x R, T x both sides), each at RISK / 28: all points within with probability >= 1 - RISK.

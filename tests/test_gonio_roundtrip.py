@@ -118,18 +118,18 @@ def test_leaf_round_trip_large():
     _check(*_round_trip([450.0, 551.0, 650.0, 800.0], [0.0, 20.0, 40.0, 60.0, 80.0], bins, mu=0.01))
 
 
-def test_the_readme_round_trip_block_prints_what_the_readme_says():
-    """The README's round-trip block runs, and prints the numbers written below it."""
+def test_the_manual_round_trip_block_prints_what_the_manual_says():
+    """The goniophotometer page's round-trip block runs, and prints the numbers written below it."""
 
     import contextlib
     import io
     import re
     from pathlib import Path
 
-    text = (Path(__file__).resolve().parents[1] / "README.md").read_text()
+    text = (Path(__file__).resolve().parents[1] / "docs" / "guide" / "goniophotometer.md").read_text()
     section = text[text.index("**Round trip**"):]
     code, printed = re.findall(r"^```(?:python)?\n(.*?)^```", section, re.M | re.S)[:2]
     output = io.StringIO()
     with contextlib.redirect_stdout(output):
-        exec(compile(code, "README.md round-trip block", "exec"), {"__name__": "__readme__"})
+        exec(compile(code, "goniophotometer.md round-trip block", "exec"), {"__name__": "__docs__"})
     assert output.getvalue().strip() == printed.strip()

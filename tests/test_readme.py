@@ -44,7 +44,7 @@ def workdir(tmp_path_factory):
 
 
 def test_the_readme_has_code_to_run():
-    assert len(blocks("python")) >= 6 and len(shell_commands()) >= 10
+    assert len(blocks("python")) >= 1 and len(shell_commands()) >= 5  # a front door; the manual holds the rest
 
 
 @pytest.mark.slow

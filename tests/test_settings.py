@@ -79,7 +79,7 @@ def test_check_wavelength_range():
 
 def test_budget_settings():
     assert Settings(bound="exact").rays_per_reading == 66_501
-    # joint: each of R and T at delta/2 (Hoeffding 119,830, anchors.md section 3)
+    # joint: each of R and T at delta/2 (Hoeffding 119,830, the project's exact computations (virtspec_mi/budgets/bounds.py) 3)
     assert Settings(joint=True).rays_per_reading == 119_830
     assert Settings(joint=True).quantity_delta == 0.005 and Settings().quantity_delta == 0.01
     two = Settings(bound="two-stage")

@@ -269,16 +269,16 @@ def test_the_correction_travels_with_the_result_file(tmp_path):
 
 
 @pytest.mark.slow
-def test_readme_validation_tables_are_the_tool_output():
+def test_the_manuals_validation_tables_are_the_tool_output():
     import importlib.util
 
     spec = importlib.util.spec_from_file_location("sphere_validation", ROOT / "tools" / "sphere_validation.py")
     tool = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(tool)
-    readme = (ROOT / "README.md").read_text().splitlines()
+    readme = (ROOT / "docs" / "guide" / "sphere.md").read_text().splitlines()  # the manual's sphere page
     for table in (tool.ideal_table(), tool.grey_table(), tool.correction_table()):
         rows = table.splitlines()
-        assert rows[0] in readme, "the table's header is not in the README"
+        assert rows[0] in readme, "the table's header is not in the manual's sphere page"
         start = readme.index(rows[0])
         for made, shown in zip(rows, readme[start:start + len(rows)], strict=True):
             _same_row(made, shown)

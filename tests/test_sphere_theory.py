@@ -213,13 +213,13 @@ def test_projected_convention_equals_iadpython_with_projected_fractions():
         assert got == pytest.approx(projected * sphere.multiplier(0.5, 0.5), rel=1e-12)
 
 
-def test_convention_table_in_readme_is_the_tool_output():
+def test_convention_table_in_the_manual_is_the_tool_output():
     spec = importlib.util.spec_from_file_location("sphere_conventions", ROOT / "tools" / "sphere_conventions.py")
     tool = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(tool)
     table = tool.markdown_table()
-    readme = (ROOT / "README.md").read_text()
-    assert table in readme and tool.error_table() in readme
+    page = (ROOT / "docs" / "guide" / "sphere.md").read_text()
+    assert table in page and tool.error_table() in page
     assert len(table.splitlines()) == 2 + len(WALLS) * len(FRACTIONS)
     # the convention shift is negative (projected ports are smaller) and shrinks with ρw → 1 at fixed f
     shifts = [float(line.split("|")[6].strip().rstrip("%")) for line in table.splitlines()[2:]]
@@ -356,16 +356,16 @@ def test_transmittance_round_trip_and_unscattered_light():
         st.correct_transmittance(1.5, **kw)
 
 
-def test_readme_block_prints_what_the_readme_shows():
+def test_the_manual_block_prints_what_the_manual_shows():
     import contextlib
     import io
 
-    readme = (ROOT / "README.md").read_text()
-    section = readme[readme.index("### Sphere theory and correction"):readme.index("## Conventions for hard cases")]
+    page = (ROOT / "docs" / "guide" / "sphere.md").read_text()
+    section = page[page.index("### Sphere theory and correction"):]
     code, shown = re.findall(r"^```python\n(.*?)^```\n\nprints\n\n```\n(.*?)^```", section, re.M | re.S)[0]
     out = io.StringIO()
     with contextlib.redirect_stdout(out):
-        exec(compile(code, "README sphere_theory block", "exec"), {"__name__": "__readme__"})
+        exec(compile(code, "sphere.md sphere_theory block", "exec"), {"__name__": "__docs__"})
     assert out.getvalue() == shown
 
 

@@ -1,5 +1,5 @@
 """
-Print the README's port-fraction convention table (``virtspec_mi.references.sphere_theory``).
+Print the manual's port-fraction convention table (docs/guide/sphere.md) (``virtspec_mi.references.sphere_theory``).
 
 Grid: wall reflectance ρw ∈ {0.90, 0.95, 0.98, 0.99} × port fraction f ∈ {1 %, 5 %, 10 %},
 where the sphere has three ports (entrance, sample, detector) whose exact cap fraction is
@@ -15,7 +15,7 @@ A second table gives the single-beam substitution error and the comparison metho
 residual for grey Lambertian specimens (SCE, standard 0.99) on two illustrative spheres
 (:data:`EXAMPLE_SPHERES`; dimensions for illustration, not a particular instrument).
 
-The README tables must equal this script's output (``tests/test_sphere_theory.py``).
+The manual's tables (docs/guide/sphere.md) must equal this script's output (``tests/test_sphere_theory.py``).
 Run: ``.venv/bin/python tools/sphere_conventions.py``.
 """
 

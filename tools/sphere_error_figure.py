@@ -1,5 +1,5 @@
 """
-The figure docs/sphere_error.png: the instrument error (reading − hemispherical reading of
+The figure docs/figures/sphere_error.png: the instrument error (reading − hemispherical reading of
 the same rays) of the shipped spheres against the reflectance of a grey Lambertian sample,
 single-beam substitution and (150 mm sphere) comparison method, with each reading's
 certified interval (105,967 rays per configuration, δ = 0.01), and the sphere theory's
@@ -7,7 +7,7 @@ curve for the same sphere (``virtspec_mi.references.sphere_theory.instrument_rea
 inputs of ``virtspec_mi.references.sphere_model.theory_inputs``: flat model, exact cap fractions;
 the theory models no baffle, the 150 mm sphere has one).
 
-Run: python tools/sphere_error_figure.py [--rays N] [--out docs/sphere_error.png]
+Run: python tools/sphere_error_figure.py [--rays N] [--out docs/figures/sphere_error.png]
 """
 
 from __future__ import annotations
@@ -37,7 +37,7 @@ def grey_scene(path: str, rho: float):
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--rays", type=int, default=105_967)
-    parser.add_argument("--out", default=str(ROOT / "docs/sphere_error.png"))
+    parser.add_argument("--out", default=str(ROOT / "docs/figures/sphere_error.png"))
     args = parser.parse_args()
     import matplotlib
     matplotlib.use("Agg")

@@ -1,7 +1,7 @@
 """
-Print the README's sphere validation tables: the simulation against ``virtspec_mi.references.sphere_theory``
+Print the manual's sphere validation tables (docs/guide/sphere.md): the simulation against ``virtspec_mi.references.sphere_theory``
 (through the one mapping, ``virtspec_mi.references.sphere_model.theory_inputs``) and the correction of
-instrument readings. The README tables must equal this script's output
+instrument readings. The manual's tables (docs/guide/sphere.md) must equal this script's output
 (``tests/test_sphere_model.py``, a slow test). The same cases are asserted, one by one,
 by ``tests/test_sphere_walk.py`` and ``tests/test_sphere_model.py``.
 

@@ -5,7 +5,7 @@ Small pieces the exchange modules share: atomic file writes and derived seeds
 - :func:`atomic_write`: a file written through a temporary file beside it and renamed
   onto its name in one step, so a reader never sees half a file and an interrupted
   write leaves the old file (or none) — the rule every result file of the project
-  follows (README *Files*).
+  follows (the manual, docs/guide/files.md).
 - :func:`derived_seed`: the seed of one group of readings of a larger run (a table's
   group of cells, a Klems file's incidence azimuth), a hash of the run's seed and the
   group's label, so every group has its own random numbers and a resumed run traces the

@@ -1,6 +1,6 @@
 """
 Sphere results: sample over standard, certified, beside the hemispherical reading
-================================================================================
+=================================================================================
 
 :class:`SphereResult` holds the exact counts of both configurations of an integrating
 sphere reading (:mod:`virtspec_mi.instruments.sphere`) over labelled dims — ``wavelength``
@@ -269,7 +269,7 @@ class SphereResult(ResultBase):
 
     @property
     def standard_value(self) -> float:
-        """ρ_std (reflectance) or 1 (transmittance: the open port)."""
+        """The standard's value: ρ_std for a reflectance reading, 1 for a transmittance one (the open port)."""
 
         return 1.0 if self.options["measurement"] == "transmittance" else float(self.options["standard"])
 
@@ -282,7 +282,8 @@ class SphereResult(ResultBase):
 
     @property
     def reading_interval(self) -> np.ndarray:
-        """[ρ_std·p_s⁻/p_r⁺, ρ_std·p_s⁺/p_r⁻], shape (…, 2): holds with probability ≥ 1 − δ (NaN: uncertified)."""
+        """The reading's certified interval [ρ_std·p_s⁻/p_r⁺, ρ_std·p_s⁺/p_r⁻], last axis of length 2: it holds
+        with probability ≥ 1 − δ (NaN where uncertified)."""
 
         sample, standard = self.fraction_interval("sample"), self.fraction_interval("standard")
         with np.errstate(divide="ignore", invalid="ignore"):

@@ -2,7 +2,7 @@
 BSDF tables: a goniophotometer reading as the ``tabulated`` BSDF reads it
 =========================================================================
 
-A goniophotometer reading (helper contract, README "Goniophotometer") is an
+A goniophotometer reading (docs/guide/goniophotometer.md) is an
 ``xarray.Dataset`` with dims ``wavelength`` (nm), ``theta_i`` (deg), ``theta_o`` and
 ``phi_o`` (bins), bin edges ``theta_o_lower/upper`` and ``phi_o_lower/upper`` (deg),
 exact counts ``bin_counts`` (wavelength, theta_i, theta_o, phi_o), rays ``rays``

@@ -54,7 +54,7 @@ def test_python_block_runs(item, workdir, monkeypatch):
     page, index = item
     monkeypatch.chdir(workdir)
     source = code_blocks.blocks(page, "python")[index]
-    exec(compile(source, f"{page.name} python block {index}", "exec"), {"__name__": "__docs__"})
+    exec(compile(source, f"{page.name} python block {index}", "exec"), {"__name__": "__main__"})  # each block a script
 
 
 @pytest.mark.slow

@@ -12,6 +12,15 @@ and the engine ran every instrument (issue 21) and must never change: a refactor
 every ray's random numbers and fate. (A goniophotometer reading of a wavelength-
 independent specimen at several wavelengths *and* several θi is not pinned: keyed
 readings number those rays differently, as the issue allows.)
+
+Counts are bit-identical on one SIMD instruction set, whatever the chunks, threads and
+workers; across instruction sets a ray may move to a neighbouring bin. Mitsuba's direction
+arithmetic (``dr.normalize``, ``dr.rsqrt``) uses the processor's approximate reciprocal
+square root refined by one Newton step, whose last bit differs between AVX2 (``vrsqrtps``)
+and AVX-512 (``vrsqrt14ps``); a direction within an ulp of a bin edge is then binned
+differently (one ray of 80,000 in ``gonio_rough_projected_folded``). The pins were recorded
+on AVX2; :data:`PINNED_BY_ISA` holds, per instruction set, the counts that differ from
+them, recorded by ``python tests/test_pinned_instruments.py --write-isa``.
 """
 
 from __future__ import annotations
@@ -28,6 +37,7 @@ import virtspec_mi as vm
 
 ROOT = Path(__file__).resolve().parents[1]
 PINNED = Path(__file__).with_name("data") / "pinned_instruments.json"
+PINNED_BY_ISA = Path(__file__).with_name("data") / "pinned_instruments_by_isa.json"
 SCENES = ROOT / "scenes"
 
 _ROUGH = {"type": "roughconductor", "alpha": 0.3}
@@ -74,9 +84,34 @@ def run_case(kind: str, spec: dict) -> dict[str, list]:
     return counts
 
 
+def simd_isa() -> str:
+    """The widest SIMD instruction set Dr.Jit's LLVM backend uses here: ``"avx512"`` or ``"avx2"``."""
+
+    flags = Path("/proc/cpuinfo").read_text() if Path("/proc/cpuinfo").exists() else ""
+    return "avx512" if "avx512f" in flags.split() else "avx2"
+
+
+def pinned_counts(case: str) -> dict[str, list]:
+    """The pinned counts of ``case`` on this machine's instruction set (:data:`PINNED_BY_ISA` over :data:`PINNED`)."""
+
+    by_isa = json.loads(PINNED_BY_ISA.read_text()).get(simd_isa(), {}) if PINNED_BY_ISA.exists() else {}
+    return {**json.loads(PINNED.read_text())[case], **by_isa.get(case, {})}
+
+
+def test_instruction_set_pins_differ_from_the_recorded_pins_by_a_few_rays_only() -> None:
+    """An instruction set's own pins move at most a few rays between bins: the same rays, the same fates."""
+
+    pinned = json.loads(PINNED.read_text())
+    for isa, cases in json.loads(PINNED_BY_ISA.read_text()).items():
+        for case, counts in cases.items():
+            assert set(counts) == {"bin_counts"}, f"{isa} {case}: only bins may differ between instruction sets"
+            own, base = np.asarray(counts["bin_counts"]), np.asarray(pinned[case]["bin_counts"])
+            assert own.sum() == base.sum() and 0 < np.abs(own - base).sum() <= 10, f"{isa} {case}"
+
+
 @pytest.mark.parametrize("case", sorted(CASES))
 def test_instrument_counts_are_pinned(case: str) -> None:
-    pinned = json.loads(PINNED.read_text())[case]
+    pinned = pinned_counts(case)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         counts = run_case(*CASES[case])
@@ -88,12 +123,21 @@ def test_instrument_counts_are_pinned(case: str) -> None:
 
 
 if __name__ == "__main__":
-    if sys.argv[1:] != ["--write"]:
-        sys.exit("usage: python tests/test_pinned_instruments.py --write   (records the current counts)")
-    import os
-
-    os.environ.setdefault("VIRTSPEC_LEAF_DATA", str(ROOT.parent / "shared" / "data" / "abm-npsg"))
+    if sys.argv[1:] not in (["--write"], ["--write-isa"]):
+        sys.exit("usage: python tests/test_pinned_instruments.py --write       (records the current counts)\n"
+                 "       python tests/test_pinned_instruments.py --write-isa   (records this instruction set's "
+                 "differences)")
     warnings.simplefilter("ignore")
-    PINNED.parent.mkdir(exist_ok=True)
-    PINNED.write_text(json.dumps({case: run_case(*CASES[case]) for case in sorted(CASES)}) + "\n")
-    print(f"wrote {PINNED}")
+    current = {case: run_case(*CASES[case]) for case in sorted(CASES)}
+    if sys.argv[1] == "--write":
+        PINNED.parent.mkdir(exist_ok=True)
+        PINNED.write_text(json.dumps(current) + "\n")
+        print(f"wrote {PINNED}")
+    else:
+        recorded = json.loads(PINNED.read_text())
+        differences = {case: {name: value for name, value in counts.items() if recorded[case].get(name) != value}
+                       for case, counts in current.items()}
+        by_isa = json.loads(PINNED_BY_ISA.read_text()) if PINNED_BY_ISA.exists() else {}
+        by_isa[simd_isa()] = {case: names for case, names in differences.items() if names}
+        PINNED_BY_ISA.write_text(json.dumps(by_isa, sort_keys=True) + "\n")
+        print(f"wrote {PINNED_BY_ISA} ({simd_isa()}: {sorted(by_isa[simd_isa()])})")

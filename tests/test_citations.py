@@ -1,4 +1,7 @@
-"""Docstrings and comments of the package and its tools cite only files in the checkout or published references."""
+"""
+Docstrings, comments, pages and notebooks cite only files in the checkout or published references:
+the package, its tools, scenes, tests, benchmarks, docs, notebooks and the README.
+"""
 
 from __future__ import annotations
 
@@ -10,10 +13,11 @@ OUTSIDE = re.compile(r"abm\.md|anchors\.md|\.\./shared|shared/research")
 
 
 def test_no_citation_of_files_outside_the_checkout():
+    folders = ("virtspec_mi", "tools", "tests", "benchmarks", "docs", "notebooks")
+    paths = [ROOT / "README.md", *(path for folder in folders for path in sorted((ROOT / folder).rglob("*"))
+                                   if path.suffix in (".py", ".xml", ".md", ".ipynb") and "_build" not in path.parts)]
     found = [f"{path.relative_to(ROOT)}:{number}: {line.strip()}"
-             for folder in ("virtspec_mi", "tools")
-             for path in sorted((ROOT / folder).rglob("*"))
-             if path.suffix in (".py", ".xml", ".md")
+             for path in paths if path != Path(__file__).resolve()
              for number, line in enumerate(path.read_text(encoding="utf-8").splitlines(), 1)
              if OUTSIDE.search(line)]
     assert found == []

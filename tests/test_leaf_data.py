@@ -24,7 +24,8 @@ SOYBEAN_CONCENTRATIONS = dict(chlorophyll_a=3.9775, chlorophyll_b=1.1613, carote
 D_M = 0.5 * 1.66e-4
 ROOT = Path(__file__).resolve().parents[1]
 
-# abm.md §2: mesophyll absorption of the soybean defaults (C++ step lookup), m^-1:
+# Mesophyll absorption of the soybean defaults (the NPSG C++ reference's step lookup over the shipped
+# NPSG data, Baranoski & Eng 2007, eqs. 1-3), m^-1:
 # λ, α_chl, α_car, α_prot, α_cel+lig, μ_w, α total, α·d_m (values printed to 3-4 digits).
 ALPHA_TABLE = [
     (400, 37720, 2960, 78.4, 21.2, 0.0066, 40778, 3.385),
@@ -55,7 +56,7 @@ def test_files_load_on_the_5nm_grid(data):
     for quantity in LEAF_DATA_FILES:
         values = getattr(data, quantity)
         assert values.shape == (421,) and np.all(np.isfinite(values)) and np.all(values >= 0)
-    # refractive indices (abm.md §2): cuticle 1.540 @400, mesophyll 1.424 @400, antidermal 1.371 @2500
+    # refractive indices of the shipped NPSG data: cuticle 1.540 @400, mesophyll 1.424 @400, antidermal 1.371 @2500
     assert abs(data.n_cuticle[0] - 1.540) < 5e-4
     assert abs(data.n_mesophyll[0] - 1.424) < 5e-4
     assert abs(data.n_antidermal[-1] - 1.371) < 5e-4

@@ -54,7 +54,7 @@ def test_the_installed_wheel_measures_a_leaf_sweeps_and_runs_the_cli(built, tmp_
     python, virtspec = venv / "bin" / "python", venv / "bin" / "virtspec"
     subprocess.run([str(python), "-m", "pip", "install", "--quiet", str(built["wheel"])], check=True,
                    capture_output=True)
-    away = tmp_path / "elsewhere"  # no source tree, no ../shared: only the installed package
+    away = tmp_path / "elsewhere"  # no source tree, no shared folder beside it: only the installed package
     away.mkdir()
     env = {k: v for k, v in os.environ.items() if k not in ("VIRTSPEC_LEAF_DATA", "PYTHONPATH")}
     script = (

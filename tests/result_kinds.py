@@ -33,7 +33,8 @@ def hemispherical_grid(seed: int = 0) -> vm.Result:
                      {"wavelength": np.array(WAVELENGTHS), "theta_i": np.array(ANGLES),
                       "specimen.thickness": np.array(THICKNESS)},
                      counts, None, vm.Settings(wavelengths=WAVELENGTHS), vm.InstrumentGeometry(8, 12.5, 100), 1.0,
-                     scene="sha256:0123456789abcdef", parameters=parameters)
+                     scene="sha256:0123456789abcdef", parameters=parameters,
+                     source={"scene": "soybean_abmb", "defines": {"seed": "3", "side": "abaxial"}})
 
 
 def sphere_grid(seed: int = 0) -> vm.SphereResult:
@@ -67,7 +68,8 @@ def sphere_grid(seed: int = 0) -> vm.SphereResult:
         options={"measurement": "reflectance", "specular": "SCI", "method": "substitution", "standard": 0.99,
                  "max_bounces": 100_000},
         settings=vm.Settings(wavelengths=WAVELENGTHS, theta_i=8, beam="collimated"), seconds=0.5,
-        scene="sha256:fedcba9876543210", specimen_radius=12.7, parameters=parameters)
+        scene="sha256:fedcba9876543210", specimen_radius=12.7, parameters=parameters,
+        source={"scene": "my_sphere.xml", "defines": {}})
 
 
 def gonio_reading() -> vm.GonioResult:

@@ -194,7 +194,7 @@ def test_wavelengths_in_micrometres_are_refused_with_compares_hint(dielectric, w
 
 def test_the_micrometre_rule_is_the_one_compare_uses(tmp_path):
     from virtspec_mi.checks import NANOMETRE_FLOOR
-    from virtspec_mi.compare import read_measured
+    from virtspec_mi.comparison import read_measured
 
     path = tmp_path / "um.csv"
     path.write_text("0.4,0.2\n0.5,0.3\n")
@@ -246,7 +246,7 @@ def test_a_turbid_slab_spectrum_and_a_measured_table_hold_their_data_range(mi):
                    "450 <= wavelength <= 650 nm", "(got 700)")
 
 
-# --- compare's options (the measured files' contents: tests/test_compare.py) ------------------------------
+# --- compare's options (the measured files' contents: tests/test_comparison.py) ------------------------------
 
 
 @pytest.mark.parametrize("options, words", [
@@ -258,7 +258,7 @@ def test_a_turbid_slab_spectrum_and_a_measured_table_hold_their_data_range(mi):
     ({"illuminant": 5}, ("illuminant",)),
 ])
 def test_compare_options_are_one_line_errors_naming_the_option(dielectric, options, words):
-    from virtspec_mi.compare import compare
+    from virtspec_mi.comparison import compare
 
     reading = vm.sweep(dielectric, theta_i=8, wavelengths="400, 500, 600", rays=1000, progress=False)
     measured = ([400.0, 500.0, 600.0], [0.04, 0.04, 0.04])

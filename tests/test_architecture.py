@@ -54,7 +54,7 @@ ROOT = Path(__file__).resolve().parents[1]
 # ---------------------------------------------------------------------------------------
 LAYERS: list[tuple[str, tuple[str, ...]]] = [
     ("cli", ("virtspec_mi.cli", "virtspec_mi.__main__")),
-    ("api", ("virtspec_mi.api", "virtspec_mi.compare", "virtspec_mi.scaleout", "virtspec_mi.validation",
+    ("api", ("virtspec_mi.api", "virtspec_mi.comparison", "virtspec_mi.scaleout", "virtspec_mi.validation",
              "virtspec_mi.scene", "virtspec_mi.runtime",
              # the exchange formats that take their readings through the API
              "virtspec_mi.exchange.albedo", "virtspec_mi.exchange.klems_gonio", "virtspec_mi.exchange.flip")),

@@ -70,10 +70,18 @@ def legend_texts(axes) -> list[str]:
 
 def test_the_title_names_the_scene_beam_angles_and_rays(angular):
     title = plot_sweep(angular, name="diamond.nc").axes[0].get_title()
-    assert title.startswith("diamond.nc — scene sha256:") and "reflectance, collimated beam, θi = 0–90°" in title
-    assert "N = 2,000 rays per reading" in title
+    assert title.startswith("diamond.nc — scene dict, specimen SimpleDielectric\n")
+    assert "reflectance, collimated beam, θi = 0–90°" in title and "N = 2,000 rays per reading" in title
+    assert "sha256" not in title  # the specimen by name, never by its fingerprint
     spectrum = plot_sweep(grid_result([0.5, 0.4], [500, 600], [8]), quantity="absorptance").axes[0].get_title()
-    assert "scene sha256:0123456789ab…" in spectrum and "absorptance, collimated beam, θi = 8°" in spectrum
+    assert spectrum.startswith("virtspec-mi result\n") and "absorptance, collimated beam, θi = 8°" in spectrum
+
+
+def test_the_title_names_a_scene_file_its_defines_and_the_parameter_point(mi, scenes_dir):
+    table = vm.sweep(str(scenes_dir / "diamond_conical.xml"), defines={"seed": 3}, wavelengths=[551], rays=500,
+                     parameters={"specimen.eta": [2.0, 2.4]}, progress=False)
+    title = plot_sweep(table.sel({"specimen.eta": 2.4})).axes[0].get_title()
+    assert title.startswith("diamond_conical -D seed=3, specimen.eta = 2.4\n")
 
 
 def test_the_certified_band_has_a_legend_entry(angular):
@@ -114,13 +122,13 @@ def test_readings_are_selected_by_wavelength_and_angle(angular):
 
 
 def test_the_comparison_figure_overlays_and_shows_the_residuals(tmp_path):
-    from virtspec_mi.compare import compare
+    from virtspec_mi.comparison import compare
 
     result = grid_result([0.1, 0.2, 0.3, 0.4, 0.5], [380, 400, 500, 600, 700], [8])
     comparison = compare(result, ([400, 500, 600], [0.21, 0.3, 0.41], [0.01, 0.02, 0.01]))
     figure = plot_comparison(comparison, tmp_path / "compare.svg", name="grey wedge")
     top, bottom = figure.axes
-    assert top.get_title().startswith("grey wedge — scene sha256:") and "θi = 8°" in top.get_title()
+    assert top.get_title().startswith("grey wedge\n") and "θi = 8°" in top.get_title()
     texts = legend_texts(top)
     assert "certified ±μ' (δ = 0.01 per point)" in texts and "measured: measured (± its uncertainty)" in texts
     assert "not compared (outside the measured range)" in texts

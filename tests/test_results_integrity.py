@@ -95,6 +95,8 @@ def test_whole_counts_takes_integral_floats_and_refuses_the_rest():
                                           r"specimen\.thickness \(2\) give \(3, 3, 2\)"),
     (_set("dims", ["wavelength", "wavelength", "theta_i"]), r"'dims' must be distinct names"),
     (_set("parameters", "names", True), r"'parameters' must be null or an object with distinct 'names'"),
+    (_set("source", "defines", "seed", 3), r"'source' must be null or an object of a 'scene' name and its 'defines'"),
+    (_set("source", "scene", None), r"'source' must be null or an object of a 'scene' name"),
 ])
 def test_labels_and_shapes_are_checked(tmp_path, edit, message):
     _refused(_written(hemispherical_grid(), tmp_path / "sweep.json", edit), message)

@@ -33,6 +33,15 @@ def results(mi):
         "sphere point": sphere.sel(point=1, wavelength=550)}
 
 
+def test_every_kind_measured_through_the_api_records_its_scene_and_defines(results, tmp_path):
+    assert results["gonio"].source == {"scene": "mi.Scene, specimen RoughDielectric", "defines": {}}
+    assert results["sphere"].source == {"scene": "sphere_150mm_8d", "defines": {}}  # a shipped scene by its path
+    reading = vm.measure("diamond_conical", defines={"theta_i": 30}, rays=300)  # a shipped scene by name
+    assert reading.source == {"scene": "diamond_conical", "defines": {"theta_i": "30"}}
+    attrs = vm.read_result(reading.write(tmp_path / "reading.nc")).to_dataset().attrs
+    assert attrs["scene_name"] == "diamond_conical" and json.loads(attrs["defines"]) == {"theta_i": "30"}
+
+
 @pytest.mark.parametrize("suffix", SUFFIXES)
 @pytest.mark.parametrize("name", ["hemispherical sweep", "hemispherical reading", "gonio", "sphere", "sphere grid",
                                   "sphere point"])

@@ -48,6 +48,15 @@ __all__ = [
     "mitsuba",
     "scenes",
     "albedo_table",
+    "read_albedo_table",
+    "AlbedoTable",
+    "TableComparison",
+    "KlemsMeasurement",
+    "compare",
+    "read_measured",
+    "Comparison",
+    "MeasuredSpectrum",
+    "GlossResult",
 ]
 
 _LAZY = {
@@ -81,6 +90,15 @@ _LAZY = {
     "BUDGETS": "virtspec_mi.budgets.rules",
     "mitsuba": "virtspec_mi.runtime",
     "albedo_table": "virtspec_mi.exchange.albedo",
+    "read_albedo_table": "virtspec_mi.exchange.albedo",
+    "AlbedoTable": "virtspec_mi.exchange.albedo",
+    "TableComparison": "virtspec_mi.exchange.albedo",
+    "KlemsMeasurement": "virtspec_mi.exchange.klems",
+    "compare": "virtspec_mi.comparison",
+    "read_measured": "virtspec_mi.comparison",
+    "Comparison": "virtspec_mi.comparison",
+    "MeasuredSpectrum": "virtspec_mi.comparison",
+    "GlossResult": "virtspec_mi.instruments.gloss",
 }
 
 

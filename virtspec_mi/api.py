@@ -59,7 +59,7 @@ from virtspec_mi.results.io import check_output
 from virtspec_mi.results.sphere import SphereResult
 from virtspec_mi.results.zarr import SUFFIX as ZARR_SUFFIX
 from virtspec_mi.results.zarr import ZarrTable
-from virtspec_mi.scene import find_bench, scene_fingerprint
+from virtspec_mi.scene import find_bench, scene_fingerprint, scene_source
 from virtspec_mi.settings import Settings, keywords, resolve
 
 __all__ = ["measure", "sweep", "gonio", "read_result", "read_gonio", "fluctuation", "sphere_measure"]
@@ -101,7 +101,7 @@ def measure(scene: Any, *, parameters: dict[str, Any] | None = None, defines: di
     space = parameter_space(bench, parameters or {})
     if space is not None and space.size != 1:
         raise ValueError("measure takes one value per parameter (a sweep takes several: use sweep)")
-    instrument = INSTRUMENTS["hemispherical"]()
+    instrument = _instrument("hemispherical", scene, bench, defines)
     result = take(instrument, bench, settings, parameters=space, progress=progress)
     result = result.squeeze("theta_i", *([] if space is None else space.dims))  # one reading: scalar labels
     instrument.warn_if_uncertified(result)
@@ -216,7 +216,7 @@ def _keyed(name: str, what: str, scene: Any, bench: Bench, settings: Settings, o
     angles = _angles(settings, theta_i, what)
     if len(np.unique(settings.wavelengths)) != len(settings.wavelengths):
         raise ValueError(f"wavelengths of {what} must be distinct (got repeated values)")
-    instrument = INSTRUMENTS[name](scene_fingerprint(scene, bench, defines))
+    instrument = _instrument(name, scene, bench, defines)
     plan = instrument.init(bench, settings, options, angles, space)
     with ExitStack() as held:
         held.enter_context(_naming(checkpoint))  # an interrupt (SIGINT/SIGTERM) names the file to resume from
@@ -236,6 +236,12 @@ def _keyed(name: str, what: str, scene: Any, bench: Bench, settings: Settings, o
             remove(checkpoint)  # the readings are safe: returned, and written to out when given
     instrument.warn_if_uncertified(result, stacklevel=3)  # at the caller of sweep, gonio, sphere_measure
     return result
+
+
+def _instrument(name: str, scene: Any, bench: Bench, defines: dict[str, Any] | None) -> Any:
+    """The instrument ``name`` of the registry for ``scene``: its fingerprint and its source recorded."""
+
+    return INSTRUMENTS[name](scene_fingerprint(scene, bench, defines), scene_source(scene, bench, defines))
 
 
 @contextmanager

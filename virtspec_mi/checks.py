@@ -121,7 +121,7 @@ Wavelengths (nm) below which *every* wavelength of a call, or of a measured spec
 looks like micrometres (``0.4:0.7:0.1``: 400–700 nm typed in µm) rather than far-UV
 nanometres: such a set is refused with the hint "micrometres? multiply by 1000"
 (:func:`check_nanometres`, the one rule of the instruments and of
-:mod:`virtspec_mi.compare`). A set that reaches :data:`NANOMETRE_FLOOR` nm or beyond
+:mod:`virtspec_mi.comparison`). A set that reaches :data:`NANOMETRE_FLOOR` nm or beyond
 is read as nanometres.
 """
 

@@ -970,7 +970,7 @@ def _compare(args: argparse.Namespace) -> int:
     from dataclasses import replace
     from pathlib import Path
 
-    from virtspec_mi.compare import compare
+    from virtspec_mi.comparison import compare
     from virtspec_mi.results.plot import check_figure_path
 
     check_figure_path(args.plot)  # a bad suffix fails before any work
@@ -997,7 +997,7 @@ def _plot(args: argparse.Namespace) -> int:
     import numpy as np
 
     from virtspec_mi.checks import parse_theta_i, parse_wavelengths
-    from virtspec_mi.compare import compare
+    from virtspec_mi.comparison import compare
     from virtspec_mi.results.goniophotometer import GonioResult
     from virtspec_mi.results.plot import check_figure_path, select
 

@@ -12,7 +12,9 @@ Scenes: loading, building and fingerprinting instrument scenes
   (:func:`virtspec_mi.engine.bench.read_bench`);
 - :func:`instrument_scene` builds the paper's instrument (r₁ = 8, r₂ = 12.5, D = 100, in
   mm) around any BSDF dict;
-- :func:`scene_fingerprint` names a scene in result files and checkpoints.
+- :func:`scene_fingerprint` identifies a scene in result files and checkpoints;
+  :func:`scene_source` names it for people (the scene file or shipped scene, the
+  ``-D`` defines), in files and figure titles.
 
 References
 ----------
@@ -44,7 +46,7 @@ from virtspec_mi.settings import SETTING_NAMES
 
 __all__ = [
     "load_scene", "check_defines", "find_bench", "instrument_scene", "placeholder_sensor", "scene_fingerprint",
-    "tabulated_bsdf",
+    "scene_source", "tabulated_bsdf",
 ]
 
 
@@ -262,6 +264,26 @@ def scene_fingerprint(scene: Any, bench: Bench, defines: dict[str, Any] | None =
     digest.update(np.asarray(bench.to_world, dtype=np.float64).round(9).tobytes())
     digest.update(repr(asdict(bench.geometry)).encode())
     return f"sha256:{digest.hexdigest()[:16]}"
+
+
+def scene_source(scene: Any, bench: Bench, defines: dict[str, Any] | None = None) -> dict[str, Any]:
+    """
+    What a result records of the scene it measured, for people: ``{"scene": name,
+    "defines": {name: value}}``. The name is a shipped scene's name (``"soybean_abmb"``),
+    an XML file's name (``"my_leaf.xml"``), else what was given and the specimen's BSDF
+    (``"scene dict, specimen RoughConductor"``); ``defines`` are the XML parameters set
+    (``-D``), as strings.
+    """
+
+    scene = scenes.resolve(scene)
+    if isinstance(scene, (str, os.PathLike)):
+        path = Path(scene).resolve()
+        name = path.stem if path.parent == scenes.FOLDER else path.name
+    else:
+        bsdf = type(bench.bsdf).__name__  # a Python plugin's class; Mitsuba's own: the class behind mi.BSDF
+        bsdf = bench.bsdf.class_name() if bsdf == "BSDF" and hasattr(bench.bsdf, "class_name") else bsdf
+        name = f"{'scene dict' if isinstance(scene, dict) else 'mi.Scene'}, specimen {bsdf}"
+    return {"scene": name, "defines": check_defines(defines)}
 
 
 def _describe(scene: Any) -> str:

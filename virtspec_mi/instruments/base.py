@@ -57,9 +57,11 @@ class Instrument(ABC):
     result: ClassVar[type]
     """The result class the instrument returns."""
 
-    def __init__(self, scene: str = "") -> None:
+    def __init__(self, scene: str = "", source: dict | None = None) -> None:
         self.scene = scene
         """Fingerprint of the scene, recorded in the plan (a checkpoint's identity) and the result."""
+        self.source = source
+        """The scene's name and ``-D`` defines (:func:`virtspec_mi.scene.scene_source`), recorded in the result."""
         self.bench: Any = None
         self.plan: Plan | None = None
 

@@ -182,5 +182,5 @@ class GlossMeter(Instrument):
         return self.plan
 
     def postprocess(self, tally: Tally) -> GlossResult:
-        return GlossResult(hemispherical_result(self.bench, self.plan, tally, self.scene),
+        return GlossResult(hemispherical_result(self.bench, self.plan, tally, self.scene, self.source),
                            reading_grid(self.plan, tally.bins[:, 0]), self.gloss_options.cone)

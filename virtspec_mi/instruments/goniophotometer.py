@@ -149,7 +149,7 @@ class Goniophotometer(Instrument):
         """The hemispherical reading of the same rays and its per-bin counts over the readings' dims."""
 
         plan, options = self.plan, self.gonio_options
-        result = hemispherical_result(self.bench, plan, tally, self.scene)
+        result = hemispherical_result(self.bench, plan, tally, self.scene, self.source)
         bin_counts = reading_grid(plan, tally.bins.reshape(-1, *options.bins.shape))
         return GonioResult(result=result, bin_counts=bin_counts, bins=options.bins, guarantee=self.guarantee,
                            relative_tolerance=options.relative_tolerance, brdf_floor=options.brdf_floor)

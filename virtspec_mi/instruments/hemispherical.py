@@ -54,16 +54,18 @@ class Hemispherical(Instrument):
         return self.plan
 
     def postprocess(self, tally: Tally) -> Result:
-        return hemispherical_result(self.bench, self.plan, tally, self.scene)
+        return hemispherical_result(self.bench, self.plan, tally, self.scene, self.source)
 
     def warn_if_uncertified(self, result: Result, stacklevel: int = 2) -> None:
         result.warn_if_uncertified(stacklevel=stacklevel + 2)
 
 
-def hemispherical_result(bench: Any, plan: Plan, tally: Tally, scene: str = "") -> Result:
+def hemispherical_result(bench: Any, plan: Plan, tally: Tally, scene: str = "", source: dict | None = None
+                         ) -> Result:
     """
     The hemispherical reading of ``plan``'s readings (one group) from their tallies: a
-    :class:`~virtspec_mi.results.hemispherical.Result` over (wavelength, θi, parameter dims).
+    :class:`~virtspec_mi.results.hemispherical.Result` over (wavelength, θi, parameter dims),
+    recording the scene's fingerprint ``scene`` and its ``source``.
     """
 
     space = plan.parameters
@@ -74,4 +76,4 @@ def hemispherical_result(bench: Any, plan: Plan, tally: Tally, scene: str = "") 
         pilot=None if tally.pilot is None else tally.pilot.map(lambda v: reading_grid(plan, v)),
         settings=plan.settings, geometry=bench.geometry, seconds=tally.seconds, scene=scene,
         wavelength_independent=shares_wavelengths(bench),
-        parameters=None if space is None else space.as_dict())
+        parameters=None if space is None else space.as_dict(), source=source)

@@ -274,7 +274,8 @@ class IntegratingSphere(Instrument):
                             options=self.sphere_options.as_dict(), settings=plan.settings, seconds=tally.seconds,
                             scene=self.scene, sphere_parameters=sphere.parameters(),
                             specimen_radius=float(self.bench.geometry.specimen_radius),
-                            parameters=None if plan.parameters is None else plan.parameters.as_dict())
+                            parameters=None if plan.parameters is None else plan.parameters.as_dict(),
+                            source=self.source)
 
     def warn_if_uncertified(self, result: SphereResult, stacklevel: int = 2) -> None:
         """

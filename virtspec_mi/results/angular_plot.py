@@ -203,9 +203,11 @@ def plot_series(reading: Any, path: str | os.PathLike | None = None, wavelength:
 
 def _finish(figure: Any, reading: Any, w: int, what: str, band: str, size: int,
             path: str | os.PathLike | None) -> Any:
-    """The figure's title (beam, λ, N, K and the band's level), saved to ``path`` when given."""
+    """The figure's title (the specimen, beam, λ, N, K and the band's level), saved to ``path`` when given."""
 
-    figure.suptitle(f"{what}, {reading.result.settings.beam} beam, λ = {reading.wavelengths[w]:g} nm, "
+    specimen = reading.specimen_label
+    of = f" of {specimen}" if specimen else ""
+    figure.suptitle(f"{what}{of}, {reading.result.settings.beam} beam, λ = {reading.wavelengths[w]:g} nm, "
                     f"N = {int(reading.rays.max()):,} rays, K = {reading.size} bins ({band} at "
                     f"{1 - reading.delta:g})", fontsize=size)
     if path is not None:

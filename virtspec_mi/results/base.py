@@ -26,7 +26,7 @@ everything else derived from them. This module holds what they share, written on
   ``to_dataset()`` has its ``units`` and ``long_name`` (:func:`virtspec_mi.results.formats.annotate`);
 - **spectra**: :meth:`ResultBase.spectrum` — one quantity over wavelength at one θi with
   its certified tolerance (:class:`Spectrum`) — is what ``to_sd``, ``colour``,
-  :func:`virtspec_mi.compare.compare` and the spectrum plots read, for every kind.
+  :func:`virtspec_mi.comparison.compare` and the spectrum plots read, for every kind.
 
 References
 ----------
@@ -36,6 +36,7 @@ CF Conventions 1.11, Sect. 3 (``units``, ``long_name``).
 
 from __future__ import annotations
 
+import json
 import os
 from dataclasses import dataclass
 from pathlib import Path
@@ -45,7 +46,7 @@ import numpy as np
 
 from virtspec_mi.results.formats import format_parts, tagged
 from virtspec_mi.results.integrity import (CountRules, check_agreement, check_checksum, check_result, finite_labels,
-                                           parameters_of, read_file, sealed_text, whole_counts)
+                                           parameters_of, read_file, sealed_text, source_of, whole_counts)
 
 __all__ = [
     "ResultBase",
@@ -164,6 +165,9 @@ class ResultBase:
     dims: tuple[str, ...]
     coords: dict[str, np.ndarray]
     parameters: dict | None
+    source: dict | None
+    """The scene measured, for people (:func:`virtspec_mi.scene.scene_source`): its ``scene`` name and
+    ``defines``; ``None`` when not recorded (a result made outside the API, a file written before)."""
 
     # -- what each kind declares ------------------------------------------------------
 
@@ -541,18 +545,42 @@ class ResultBase:
         return self.to_dataset()  # type: ignore[attr-defined]
 
     def _dataset_attrs(self) -> dict[str, Any]:
-        """The attributes every kind's dataset carries: its format tag and the whole result as JSON."""
+        """
+        The attributes every kind's dataset carries: its format tag, the whole result as
+        JSON and, when recorded, the scene's name (``scene_name``) and ``-D`` defines
+        (``defines``, JSON).
+        """
 
-        return {"format": self.FORMAT, "result_json": self.sealed_json()}
+        source = {} if self.source is None else {"scene_name": self.source["scene"],
+                                                 "defines": json.dumps(self.source["defines"])}
+        return {"format": self.FORMAT, **source, "result_json": self.sealed_json()}
+
+    @property
+    def specimen_label(self) -> str:
+        """
+        The specimen in words for titles: the scene's name, its ``-D`` defines and the
+        parameter point a selection holds (``"soybean_abmb -D thickness=2e-4,
+        specimen.N = 1.5"``); ``""`` when none is known.
+        """
+
+        parts = [] if self.source is None else [" ".join(
+            [self.source["scene"], *(f"-D {k}={v}" for k, v in self.source["defines"].items())])]
+        point = [f"{name} = {float(self.coords[name]):g}" for name in self.parameter_names
+                 if name in self.coords and np.ndim(self.coords[name]) == 0]
+        return ", ".join(parts + point)
 
     def as_dict(self) -> dict[str, Any]:
         raise NotImplementedError
 
     def _labels_as_dict(self) -> dict[str, Any]:
-        """The labels as plain data: ``dims``, ``wavelengths``, ``theta_i`` (what :meth:`labels_from_dict` reads)."""
+        """
+        The labels as plain data: ``dims``, ``wavelengths``, ``theta_i`` and, when recorded,
+        the scene's ``source`` (what :meth:`labels_from_dict` reads).
+        """
 
+        source = {} if self.source is None else {"source": self.source}
         return {"dims": list(self.dims), "wavelengths": plain_data(self.coords["wavelength"]),
-                "theta_i": plain_data(self.coords["theta_i"])}
+                "theta_i": plain_data(self.coords["theta_i"]), **source}
 
     def _parameters_as_dict(self) -> dict[str, Any]:
         """The swept parameters and their coordinates as plain data (none: nothing)."""
@@ -565,7 +593,7 @@ class ResultBase:
 
     @staticmethod
     def labels_from_dict(data: dict[str, Any]) -> dict[str, Any]:
-        """``dims``, ``coords`` and ``parameters`` (constructor keywords) from a result's plain data."""
+        """``dims``, ``coords``, ``parameters`` and ``source`` (constructor keywords) from a result's plain data."""
 
         extra = {name: whole_counts(value, name) if name == "point" else finite_labels(value, name)
                  for name, value in (data.get("parameter_coords") or {}).items()}
@@ -576,7 +604,7 @@ class ResultBase:
         return {"dims": tuple(dims),
                 "coords": {"wavelength": finite_labels(data["wavelengths"], "wavelengths"),
                            "theta_i": finite_labels(data["theta_i"], "theta_i"), **extra},
-                "parameters": parameters_of(parameters)}
+                "parameters": parameters_of(parameters), "source": source_of(data.get("source"))}
 
     def _parameter_keys(self) -> dict[str, str] | None:
         """Swept parameter names → their ``mi.traverse`` keys (for :func:`annotate`), or ``None``."""

@@ -128,6 +128,10 @@ class GonioResult(ResultBase):
         return self.result.scene
 
     @property
+    def source(self) -> dict | None:  # type: ignore[override]
+        return self.result.source
+
+    @property
     def seconds(self) -> float:
         return self.result.seconds
 

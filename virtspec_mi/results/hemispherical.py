@@ -106,6 +106,8 @@ class Result(ResultBase):
         one dim per parameter (named as given) after ``theta_i``; points add the dim
         ``point`` with each parameter as a coordinate along it. A parameter selected with
         :meth:`sel` stays as a scalar coordinate.
+    source : dict or None
+        The scene's name and ``-D`` defines (:func:`virtspec_mi.scene.scene_source`), or ``None``.
     """
 
     dims: tuple[str, ...]
@@ -119,6 +121,7 @@ class Result(ResultBase):
     wavelength_independent: bool = False
     version: str = field(default=__version__)
     parameters: dict | None = None
+    source: dict | None = None
 
     FORMAT: ClassVar[str] = "virtspec-mi result 1"
     KIND: ClassVar[str] = "hemispherical reading"

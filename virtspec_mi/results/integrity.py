@@ -65,6 +65,7 @@ __all__ = [
     "finite_labels",
     "optional_numbers",
     "parameters_of",
+    "source_of",
     "field_value",
     "check_labels",
     "check_shapes",
@@ -251,6 +252,23 @@ def parameters_of(parameters: Any) -> dict | None:
     if not isinstance(names, list) or not all(isinstance(n, str) for n in names) or len(set(names)) != len(names):
         raise ValueError(f"'parameters' must be null or an object with distinct 'names' (got {_short(parameters)})")
     return dict(parameters)
+
+
+def source_of(source: Any) -> dict | None:
+    """
+    A result's scene source (``None`` — files written before it was recorded — or an object
+    with a ``scene`` name and its ``defines``, names to strings); else ``ValueError``.
+    """
+
+    if source is None:
+        return None
+    defines = source.get("defines") if isinstance(source, Mapping) else None
+    if (not isinstance(source, Mapping) or set(source) != {"scene", "defines"} or not isinstance(source["scene"], str)
+            or not isinstance(defines, Mapping)
+            or not all(isinstance(k, str) and isinstance(v, str) for k, v in defines.items())):
+        raise ValueError(f"'source' must be null or an object of a 'scene' name and its 'defines' (names to strings) "
+                         f"(got {_short(source)})")
+    return {"scene": source["scene"], "defines": dict(defines)}
 
 
 _LABEL_RANGES: dict[str, tuple[float, float, str]] = {

@@ -12,11 +12,11 @@ Plots of results with matplotlib (PNG and SVG)
 - :func:`plot_densities`: sweeps at successive ray densities N = 10^d side by side
   (Fig. 5), their fluctuation Δ of eq. (24) (Fig. 6a) and their seconds (Fig. 6b).
 - :func:`plot_comparison`: a result over a measured spectrum (a
-  :class:`virtspec_mi.compare.Comparison`) with a panel of the residuals and their
+  :class:`virtspec_mi.comparison.Comparison`) with a panel of the residuals and their
   combined tolerance.
 
 Every figure names what was measured in its title (a name when given, the quantity,
-the beam, θi, the rays and the scene's fingerprint), gives the certified band a
+the beam, θi, the rays and the specimen: its scene, defines and parameter point), gives the certified band a
 legend entry, draws markers on sparse grids (≤ :data:`SPARSE` points) and tells every
 curve apart by colour and line style (both cycle; 40 curves are distinct). The
 figures are built without ``pyplot`` (no display needed); the file suffix picks the
@@ -87,7 +87,9 @@ def curve_style(index: int, points: int) -> dict[str, Any]:
 def describe(result: Any, quantity: str = "reflectance", name: str | None = None) -> str:
     """
     A two-line title naming what was measured (a result of any kind): ``name`` (e.g. a
-    file name) and the scene's fingerprint, then the quantity, beam, θi and rays per reading.
+    file name) and the specimen (its scene, ``-D`` defines and parameter point:
+    :attr:`~virtspec_mi.results.base.ResultBase.specimen_label`), then the quantity, beam,
+    θi and rays per reading.
     """
 
     s = result.settings
@@ -99,8 +101,7 @@ def describe(result: Any, quantity: str = "reflectance", name: str | None = None
         incidence = f"{s.beam} beam, {theta}" + (f", φi = {s.phi_i:g}°" if s.phi_i else "")
     low, high = int(np.min(result.rays)), int(np.max(result.rays))
     rays = f"N = {low:,}" if low == high else f"N = {low:,}–{high:,}"
-    scene = f"scene {result.scene[:19]}…" if result.scene else ""
-    head = " — ".join(filter(None, (name, scene))) or "virtspec-mi result"
+    head = " — ".join(filter(None, (name, result.specimen_label))) or "virtspec-mi result"
     return f"{head}\n{quantity}, {incidence}, {rays} rays per reading"
 
 
@@ -268,7 +269,7 @@ def plot_densities(results: Sequence[Any], densities: Sequence[float], deltas: S
 def plot_comparison(comparison: Any, path: str | os.PathLike | None = None, *, title: str | None = None,
                     name: str | None = None) -> Any:
     """
-    A result over a measured spectrum (``comparison``: a :class:`virtspec_mi.compare.Comparison`):
+    A result over a measured spectrum (``comparison``: a :class:`virtspec_mi.comparison.Comparison`):
     above, the simulated spectrum with its certified band and the measured one (with
     its uncertainty when known; wavelengths outside the measured range shaded: not
     compared); below, the residuals simulated − measured with the combined tolerance

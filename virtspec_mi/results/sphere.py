@@ -27,7 +27,7 @@ It is a result like the others (:class:`~virtspec_mi.results.base.ResultBase`): 
 (the counts over the reading's dims and ``configuration``), ``write`` / ``read``
 (NetCDF, CSV, JSON, Zarr; files of the former ``"kind": "sphere_result"`` layout read
 too), spectra of ``reading``, ``corrected`` or ``hemispherical`` (``spectrum``, ``to_sd``,
-``colour``, :func:`virtspec_mi.compare.compare`) and :meth:`SphereResult.plot`.
+``colour``, :func:`virtspec_mi.comparison.compare`) and :meth:`SphereResult.plot`.
 
 References
 ----------
@@ -123,6 +123,8 @@ class SphereResult(ResultBase):
     pilot : dict or None
         Two-stage pilot counts per configuration (spent, not in the estimates); ``None``
         for budgets sized in advance.
+    source : dict or None
+        The scene's name and ``-D`` defines (:func:`virtspec_mi.scene.scene_source`), or ``None``.
     """
 
     dims: tuple[str, ...]
@@ -140,6 +142,7 @@ class SphereResult(ResultBase):
     version: str = __version__
     parameters: dict | None = None
     pilot: dict[str, dict[str, np.ndarray]] | None = None
+    source: dict | None = None
 
     FORMAT: ClassVar[str] = "virtspec-mi sphere 1"
     LEGACY: ClassVar[tuple[str, ...]] = ("virtspec-mi sphere 0",)

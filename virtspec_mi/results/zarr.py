@@ -294,7 +294,7 @@ def _table(result: Any, identity: str) -> Any:
     plain = result.as_dict()
     meta = {**{k: plain[k] for k in ("format", "dims", "settings", "geometry", "seconds", "scene",
                                       "wavelength_independent", "version") + (
-                ("parameters",) if "parameters" in plain else ())},
+                ("parameters",) if "parameters" in plain else ()) + (("source",) if "source" in plain else ())},
             **({} if own_dims == dims else {"result_dims": list(own_dims)})}
     if result.pilot is not None:
         for name in Counts.names():

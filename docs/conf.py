@@ -4,11 +4,14 @@ from __future__ import annotations
 
 import os
 import re
+import shutil
 import sys
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
+# autosummary's pages are written anew on every build: a module renamed or removed leaves no stale page behind
+shutil.rmtree(Path(__file__).with_name("_generated"), ignore_errors=True)
 os.environ.setdefault("MPLBACKEND", "Agg")
 
 import virtspec_mi  # noqa: E402

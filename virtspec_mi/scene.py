@@ -260,10 +260,23 @@ def scene_fingerprint(scene: Any, bench: Bench, defines: dict[str, Any] | None =
             digest.update(repr(sorted(check_defines(defines).items())).encode())
     elif isinstance(scene, dict):
         digest.update(repr(sorted(scene.items(), key=lambda item: str(item[0]))).encode())
-    digest.update(str(bench.bsdf).encode())
+    digest.update(_described(bench.bsdf).encode())
     digest.update(np.asarray(bench.to_world, dtype=np.float64).round(9).tobytes())
     digest.update(repr(asdict(bench.geometry)).encode())
     return f"sha256:{digest.hexdigest()[:16]}"
+
+
+def _described(bsdf: Any) -> str:
+    """
+    ``str(bsdf)``; for a Python plugin without ``to_string`` (Mitsuba's trampoline raises),
+    its class and its ``mi.traverse`` parameters.
+    """
+
+    try:
+        return str(bsdf)
+    except RuntimeError:
+        params = mitsuba().traverse(bsdf)
+        return f"{type(bsdf).__module__}.{type(bsdf).__qualname__}" + repr([(k, str(params[k])) for k in params.keys()])
 
 
 def scene_source(scene: Any, bench: Bench, defines: dict[str, Any] | None = None) -> dict[str, Any]:

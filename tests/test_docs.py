@@ -1,6 +1,8 @@
 """
 The manual (``docs/``, Sphinx): it builds with warnings as errors, and every ``python``
-block and shell command of its pages runs, as the README's do (``tests/test_readme.py``).
+block and shell command of its pages runs, as the README's do (``tests/test_readme.py``);
+every ``xml`` block loads in Mitsuba (a whole scene is measured, a fragment — a BSDF — is
+loaded on its own).
 """
 
 from __future__ import annotations
@@ -20,6 +22,7 @@ PAGES = sorted(p for p in DOCS.rglob("*.md") if "_build" not in p.parts and "_ge
                and "notebooks" not in p.parts)
 PYTHON = [(page, i) for page in PAGES for i in range(len(code_blocks.blocks(page, "python")))]
 SHELL = [(page, command) for page in PAGES for command in code_blocks.shell_commands(page)]
+XML = [(page, i) for page in PAGES for i in range(len(code_blocks.blocks(page, "xml")))]
 
 
 def _id(item: tuple[Path, object]) -> str:
@@ -45,7 +48,25 @@ def workdir(tmp_path_factory):
 
 
 def test_the_manual_has_code_to_run():
-    assert PAGES and PYTHON
+    assert PAGES and PYTHON and XML
+
+
+@pytest.mark.parametrize("item", XML, ids=[_id(item) for item in XML])
+def test_xml_block_loads(item, mi):
+    import re
+
+    import virtspec_mi as vm
+
+    page, index = item
+    source = code_blocks.blocks(page, "xml")[index]
+    if "version=" not in source.split(">", 1)[0]:  # a fragment: its root element gets the format version
+        source = re.sub(r"^\s*<(\w+)", r'<\1 version="3.0.0"', source, count=1)
+    loaded = mi.load_string(source)
+    if isinstance(loaded, mi.Scene):
+        reading = vm.measure(loaded, rays=500, wavelengths=[551])
+        assert reading.rays == 500
+    else:
+        assert isinstance(loaded, mi.BSDF)
 
 
 @pytest.mark.slow

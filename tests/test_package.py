@@ -37,3 +37,18 @@ def test_an_unknown_name_is_an_attribute_error_naming_it():
 
     with pytest.raises(AttributeError, match="no attribute 'mesure'"):
         vm.mesure  # noqa: B018
+
+
+def test_make_lab_opens_the_notebooks_with_the_notebook_extra():
+    """``make lab`` installs the ``notebook`` extra (JupyterLab) into .venv when missing, then opens notebooks/."""
+
+    import subprocess
+    import tomllib
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parents[1]
+    extras = tomllib.loads((root / "pyproject.toml").read_text())["project"]["optional-dependencies"]
+    assert any(requirement.startswith("jupyterlab") for requirement in extras["notebook"])
+    plan = subprocess.run(["make", "-n", "lab"], cwd=root, capture_output=True, text=True)
+    assert plan.returncode == 0, plan.stderr
+    assert "notebook]" in plan.stdout and "jupyter lab notebooks" in plan.stdout

@@ -61,3 +61,18 @@ def test_shell_command_runs(command, workdir):
     env = dict(os.environ, PATH=f"{Path(sys.executable).parent}{os.pathsep}{os.environ['PATH']}")
     result = subprocess.run(["bash", "-c", command], cwd=workdir, env=env, capture_output=True, text=True)
     assert result.returncode == 0, f"{command}\n{result.stderr[-2000:]}"
+
+
+def test_the_readme_is_a_front_door():
+    """Short (≤ 300 lines), the two commands shown, a Python example, a figure, and every link into the checkout resolves."""
+
+    import re
+
+    text = README.read_text()
+    assert len(text.splitlines()) <= 300
+    assert "make demo" in text and "make test" in text and blocks("python") and "![" in text
+    links = re.findall(r"\]\(([^)#\s]+)(?:#[^)]*)?\)", text)
+    local = [link for link in links if "://" not in link]
+    assert len(local) >= 15, local  # the manual's pages
+    missing = [link for link in local if not (ROOT / link).exists()]
+    assert missing == []

@@ -74,7 +74,7 @@ def klems_measure(
         XML path, scene dict or ``mi.Scene`` with ``emitter`` and ``specimen`` disks (as
         for :func:`virtspec_mi.measure`); its geometry does not matter (collimated beam).
     basis
-        ``full`` (145 patches), ``half`` (73) or ``quarter`` (41).
+        ``full`` (145 patches), ``half`` (77, as Radiance reads it) or ``quarter`` (41).
     back
         The back side: ``None`` (default) the specimen turned over
         (:func:`virtspec_mi.exchange.flip.flipped`), a scene of its own (e.g. a leaf with

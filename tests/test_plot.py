@@ -195,3 +195,24 @@ def test_cli_plots_a_sweep_file_and_a_measure_json(angular, scenes_dir, tmp_path
     printed = virtspec("plot", "fig5.nc", "--wavelengths", "600")
     assert printed.returncode == 1 and "wavelengths must be among the result's wavelengths" in printed.stderr
 
+
+# --- goniophotometer figures; no figure clips its titles ---------------------------------------
+
+
+@pytest.fixture(scope="module")
+def gonio(mi):
+    from result_kinds import gonio_reading
+
+    return gonio_reading()
+
+
+def test_the_polar_radial_labels_lie_on_the_horizon_clear_of_every_curve(gonio):
+    from virtspec_mi.results.angular_plot import HORIZON, plot_polar
+
+    for log in (False, True):
+        for axes in plot_polar(gonio, log=log).axes:
+            spans = [np.degrees([np.min(line.get_xdata()), np.max(line.get_xdata())]) for line in axes.lines]
+            assert min(low for low, _ in spans) < -HORIZON and max(high for _, high in spans) > HORIZON  # both lobes
+            where = axes.get_rlabel_position()
+            assert where == HORIZON and not any(low < where < high for low, high in spans), spans
+            assert all(label.get_fontsize() < 7 for label in axes.get_yticklabels())  # smaller than the angles'

@@ -15,7 +15,9 @@ Plots of goniophotometer readings (PNG and SVG)
 The plane of incidence is drawn through the φo bins that hold φi + 180° (the mirror
 side, drawn at +θo) and φi (the back side, drawn at −θo); the perpendicular plane
 through φi ± 90°. Folded readings (relative azimuth) use 180° and 0°, resp. 90°.
-The figures are built without ``pyplot``; the file suffix picks the format.
+The polar plots write their radial tick labels small, along the horizon (:data:`HORIZON`),
+clear of the lobes. The figures are built without ``pyplot``; the file suffix picks
+the format.
 
 References
 ----------
@@ -32,7 +34,14 @@ import numpy as np
 
 from virtspec_mi.results.plot import check_figure_path, curve_style
 
-__all__ = ["plot_polar", "plot_hemisphere", "plot_series", "plane_bins"]
+__all__ = ["HORIZON", "plot_polar", "plot_hemisphere", "plot_series", "plane_bins"]
+
+HORIZON: float = 90.0
+"""
+Where :func:`plot_polar` writes its radial tick labels (degrees, on the mirror side): along
+the horizon θo = 90°, which parts the reflection lobe (drawn within ±90° of the upper
+normal) from the transmission lobe (beyond); a curve only ends there, none crosses it.
+"""
 
 
 def plane_bins(reading: Any, across: bool = False) -> tuple[int, int]:
@@ -98,6 +107,8 @@ def plot_polar(reading: Any, path: str | os.PathLike | None = None, wavelength: 
         axes.set_title(f"f (1/sr), {title}", fontsize=10)
         axes.set_thetagrids(range(0, 360, 30), labels=[f"{a if a <= 180 else a - 360}°" for a in range(0, 360, 30)],
                             fontsize=7)
+        axes.set_rlabel_position(HORIZON)  # between the lobes, away from the beam's arrows (drawn at −θi)
+        axes.tick_params(axis="y", labelsize=6)
         if panel == 0:
             axes.legend(loc="lower left", fontsize=7, bbox_to_anchor=(-0.15, -0.12))
     return _finish(figure, reading, w, f"{name + ': ' if name else ''}goniophotometer", "band: all bins", 10, path)

@@ -7,7 +7,7 @@ import pytest
 
 import virtspec_mi as vm
 from virtspec_mi.results.plot import (COLOUR_MAP, LEGEND, SPARSE, curve_style, plot_comparison, plot_densities,
-                                     plot_sweep, select)
+                                     plot_spectra, plot_sweep, select)
 
 
 @pytest.fixture(scope="module")
@@ -216,3 +216,40 @@ def test_the_polar_radial_labels_lie_on_the_horizon_clear_of_every_curve(gonio):
             where = axes.get_rlabel_position()
             assert where == HORIZON and not any(low < where < high for low, high in spans), spans
             assert all(label.get_fontsize() < 7 for label in axes.get_yticklabels())  # smaller than the angles'
+
+
+# a specimen named by its scene file and defines: a title longer than any figure is wide
+LONG_NAME = ("soybean_abmb.xml -D specimen.chlorophyll=45.0 -D specimen.water=0.015 -D specimen.dry_matter=0.004 "
+             "-D specimen.thickness=2.04e-4")
+
+
+def test_no_figure_clips_a_title(angular, gonio):
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from result_kinds import sphere_grid
+
+    from virtspec_mi.compare import compare
+    from virtspec_mi.results.angular_plot import plot_hemisphere, plot_polar, plot_series
+
+    wavelengths = np.arange(400, 701, 10)
+    sweep = grid_result(np.linspace(0.1, 0.5, 31 * 3), wavelengths, [0, 30, 60])
+    spectrum = grid_result(np.linspace(0.1, 0.5, 31), wavelengths, [8])
+    figures = {
+        "sweep": plot_sweep(sweep, name=LONG_NAME),
+        "spectrum": plot_sweep(spectrum, name=LONG_NAME),
+        "spectra": plot_spectra(sphere_grid().isel(point=0), quantities=["reading", "hemispherical"], theta_i=8,
+                                name=LONG_NAME),
+        "densities": plot_densities([angular, angular], [3.3, 4.3], [float("nan"), 0.0]),
+        "comparison": plot_comparison(compare(spectrum, ([400, 500, 600], [0.1, 0.2, 0.3])), name=LONG_NAME),
+        "polar": plot_polar(gonio, name=LONG_NAME),
+        "hemisphere": plot_hemisphere(gonio, transmission=True),
+        "series": plot_series(gonio),
+    }
+    for kind, figure in figures.items():
+        FigureCanvasAgg(figure).draw()
+        page = figure.bbox
+        titles = [text for text in [*(axes.title for axes in figure.axes), *figure.texts] if text.get_text()]
+        assert titles, kind
+        for title in titles:
+            box = title.get_window_extent()
+            assert page.x0 <= box.x0 and box.x1 <= page.x1 and page.y0 <= box.y0 and box.y1 <= page.y1, \
+                (kind, title.get_text(), box, page)

@@ -16,8 +16,8 @@ The plane of incidence is drawn through the φo bins that hold φi + 180° (the 
 side, drawn at +θo) and φi (the back side, drawn at −θo); the perpendicular plane
 through φi ± 90°. Folded readings (relative azimuth) use 180° and 0°, resp. 90°.
 The polar plots write their radial tick labels small, along the horizon (:data:`HORIZON`),
-clear of the lobes. The figures are built without ``pyplot``; the file suffix picks
-the format.
+clear of the lobes; titles wrap to the figure's width. The figures are built without
+``pyplot``; the file suffix picks the format.
 
 References
 ----------
@@ -138,7 +138,7 @@ def plot_hemisphere(reading: Any, path: str | os.PathLike | None = None, transmi
     figure.colorbar(mesh, ax=axes, label="BTDF (1/sr)" if transmission else "BRDF (1/sr)")
     axes.set_title(f"{'transmission' if transmission else 'reflection'} hemisphere, θi = {reading.theta_i[i]:g}°, "
                    f"λ = {reading.wavelengths[w]:g} nm\n(radius: polar angle from the "
-                   f"{'lower' if transmission else 'upper'} normal)", fontsize=9)
+                   f"{'lower' if transmission else 'upper'} normal)", fontsize=9, wrap=True)
     if path is not None:
         figure.savefig(Path(path), dpi=90)
     return figure
@@ -218,7 +218,7 @@ def _finish(figure: Any, reading: Any, w: int, what: str, band: str, size: int,
 
     figure.suptitle(f"{what}, {reading.result.settings.beam} beam, λ = {reading.wavelengths[w]:g} nm, "
                     f"N = {int(reading.rays.max()):,} rays, K = {reading.size} bins ({band} at "
-                    f"{1 - reading.delta:g})", fontsize=size)
+                    f"{1 - reading.delta:g})", fontsize=size, wrap=True)
     if path is not None:
         figure.savefig(path, dpi=72)
     return figure

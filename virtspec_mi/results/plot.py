@@ -16,7 +16,7 @@ Plots of results with matplotlib (PNG and SVG)
   combined tolerance.
 
 Every figure names what was measured in its title (a name when given, the quantity,
-the beam, θi, the rays and the scene's fingerprint),
+the beam, θi, the rays and the scene's fingerprint; wrapped to the figure's width),
 gives the certified band a legend entry and draws markers on sparse grids
 (≤ :data:`SPARSE` points). It tells its curves apart: up to :data:`LEGEND` curves each
 by colour and line style (:func:`curve_style`; both cycle), each with a legend entry;
@@ -249,7 +249,7 @@ def plot_sweep(results: Any, path: str | os.PathLike | None = None, *, quantity:
     axes = figure.add_subplot()
     _draw(axes, results, quantity, labels)
     axes.grid(alpha=0.3)
-    axes.set_title(title or describe(results[0].as_grid(), quantity, name), fontsize="medium")
+    axes.set_title(title or describe(results[0].as_grid(), quantity, name), fontsize="medium", wrap=True)
     if path is not None:
         figure.savefig(path, dpi=110)
     return figure
@@ -280,7 +280,7 @@ def plot_spectra(result: Any, path: str | os.PathLike | None = None, *, quantiti
     _legend(axes, spectra[0].delta, summary=f"{len(spectra)} quantities (colours and line styles cycle)")
     axes.grid(alpha=0.3)
     shown = select(result, theta_i=[spectra[0].theta_i])
-    axes.set_title(title or describe(shown, ", ".join(quantities), name), fontsize="medium")
+    axes.set_title(title or describe(shown, ", ".join(quantities), name), fontsize="medium", wrap=True)
     if path is not None:
         figure.savefig(path, dpi=110)
     return figure
@@ -371,7 +371,7 @@ def plot_comparison(comparison: Any, path: str | os.PathLike | None = None, *, t
     delta_e = f"ΔE2000 = {c.delta_E:.2f} ({c.illuminant})" if not c.delta_E_note else "ΔE2000 not computed"
     top.text(0.01, 0.98, f"RMSE = {c.rmse:.4f}, {delta_e}", transform=top.transAxes, va="top", fontsize="small")
     shown = select(c.result, theta_i=[c.theta_i])  # the angle compared
-    top.set_title(title or describe(shown, c.quantity, name or c.result_name), fontsize="medium")
+    top.set_title(title or describe(shown, c.quantity, name or c.result_name), fontsize="medium", wrap=True)
     if path is not None:
         figure.savefig(path, dpi=110)
     return figure

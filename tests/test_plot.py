@@ -1,4 +1,4 @@
-"""Tests of virtspec_mi.results.plot: Fig. 5 style curves with the certified band, Figs. 5–6 of densities."""
+"""Tests of the figures: Fig. 5 style curves with the certified band, Figs. 5–6, the goniophotometer's plots."""
 
 from __future__ import annotations
 
@@ -6,7 +6,8 @@ import numpy as np
 import pytest
 
 import virtspec_mi as vm
-from virtspec_mi.results.plot import SPARSE, curve_style, plot_comparison, plot_densities, plot_sweep, select
+from virtspec_mi.results.plot import (COLOUR_MAP, LEGEND, SPARSE, curve_style, plot_comparison, plot_densities,
+                                     plot_spectra, plot_sweep, select)
 
 
 @pytest.fixture(scope="module")
@@ -68,6 +69,9 @@ def legend_texts(axes) -> list[str]:
     return [text.get_text() for text in axes.get_legend().get_texts()]
 
 
+BAND = "certified ±μ' (δ = 0.01 per reading)"  # the legend entry of the certified band
+
+
 def test_the_title_names_the_scene_beam_angles_and_rays(angular):
     title = plot_sweep(angular, name="diamond.nc").axes[0].get_title()
     assert title.startswith("diamond.nc — scene dict, specimen SimpleDielectric\n")
@@ -86,7 +90,7 @@ def test_the_title_names_a_scene_file_its_defines_and_the_parameter_point(mi, sc
 
 def test_the_certified_band_has_a_legend_entry(angular):
     texts = legend_texts(plot_sweep(angular).axes[0])
-    assert texts[0] == "λ = 551 nm" and texts[-1] == "certified ±μ' (δ = 0.01 per reading)"
+    assert texts[0] == "λ = 551 nm" and texts[-1] == BAND
 
 
 def test_markers_on_sparse_grids_only(angular):
@@ -96,17 +100,52 @@ def test_markers_on_sparse_grids_only(angular):
     assert dense.get_marker() in (None, "None", "")
 
 
-def test_every_curve_is_told_apart_by_colour_and_line_style():
-    wavelengths = np.arange(400, 800, 10)  # 40 curves against theta_i
-    figure = plot_sweep(grid_result(np.full((40, 3), 0.3), wavelengths, [0, 30, 60]))
+def test_up_to_twelve_curves_are_told_apart_by_colour_and_line_style_each_in_the_legend():
+    wavelengths = np.arange(400, 520, 10)  # 12 curves against theta_i: the legend lists them
+    figure = plot_sweep(grid_result(np.full((12, 3), 0.3), wavelengths, [0, 30, 60]))
     axes = figure.axes[0]
     styles = {(line.get_color(), line.get_linestyle()) for line in axes.lines}
-    assert len(axes.lines) == 40 and len(styles) == 40
+    assert len(figure.axes) == 1 and len(axes.lines) == 12 and len(styles) == 12  # and no colour bar
     assert [curve_style(k, 3)["color"] for k in (0, 10)] == ["C0", "C0"]
     assert curve_style(0, 3)["linestyle"] != curve_style(10, 3)["linestyle"]
-    texts = legend_texts(axes)  # too many curves to list: how many, and the band
-    assert texts == ["40 curves, λ = 400…790 nm (colours and line styles cycle)",
-                     "certified ±μ' (δ = 0.01 per reading)"]
+    assert legend_texts(axes) == [f"λ = {w} nm" for w in wavelengths] + [BAND]
+    assert {band.get_alpha() for band in axes.collections} == {0.2}
+
+
+def test_a_sweep_of_31_wavelengths_is_coloured_along_a_colour_bar_of_its_wavelengths():
+    from matplotlib import colormaps
+    from matplotlib.colors import to_rgba
+
+    wavelengths = np.arange(400, 701, 10)  # 31 curves against theta_i: too many to list
+    figure = plot_sweep(grid_result(np.linspace(0.1, 0.5, 31 * 3), wavelengths, [0, 30, 60]))
+    axes, bar = figure.axes
+    assert bar.get_ylabel() == "wavelength (nm)" and bar.get_ylim() == pytest.approx((400, 700))
+    colours = np.array([to_rgba(line.get_color()) for line in axes.lines])
+    assert len(colours) == 31 and LEGEND < 31
+    np.testing.assert_allclose(colours, colormaps[COLOUR_MAP]((wavelengths - 400) / 300))
+    lightness = colours[:, :3] @ [0.299, 0.587, 0.114]
+    assert np.all(np.diff(lightness) > 0)  # monotone along the bar: 400 nm darkest, 700 nm lightest
+    assert {line.get_linestyle() for line in axes.lines} == {"-"}
+    alphas = np.array([band.get_alpha() for band in axes.collections])  # faint: 31 bands stacked are no wall
+    assert len(alphas) == 31 and np.all(alphas < 0.05) and 1 - np.prod(1 - alphas) == pytest.approx(0.5)
+    assert legend_texts(axes) == [BAND]  # the colour bar names the curves
+
+
+def test_several_results_of_many_curves_share_the_colour_map_each_in_its_line_style():
+    wavelengths = np.arange(400, 701, 10)
+    sweeps = [grid_result(np.full((31, 3), value), wavelengths, [0, 30, 60]) for value in (0.2, 0.4)]
+    axes, bar = plot_sweep(sweeps, labels=["log N = 3", "log N = 4"]).axes
+    assert [line.get_linestyle() for line in axes.lines] == ["-"] * 31 + ["--"] * 31
+    assert axes.lines[0].get_color() == axes.lines[31].get_color()  # 400 nm in both
+    assert legend_texts(axes) == ["log N = 3", "log N = 4", BAND] and bar.get_ylabel() == "wavelength (nm)"
+    spectra = [grid_result([0.2, 0.3, 0.4, 0.5], [400, 500, 600, 700], [angle]) for angle in range(0, 65, 5)]
+    axes, bar = plot_sweep(spectra).axes  # 13 spectra, one curve each: coloured by their theta_i
+    assert bar.get_ylabel() == "θi (°)" and bar.get_ylim() == pytest.approx((0, 60))
+    assert legend_texts(axes) == ["13 results (line styles cycle; colour: θi (°))", BAND]
+    alike = [grid_result([0.3, 0.3], [500, 600], [8])] * 13  # 13 curves of one θi: nothing to map
+    axes, = plot_sweep(alike).axes
+    assert len({(line.get_color(), line.get_linestyle()) for line in axes.lines}) == 13
+    assert legend_texts(axes) == ["13 curves, θi = 8° (colours and line styles cycle)", BAND]
 
 
 def test_readings_are_selected_by_wavelength_and_angle(angular):
@@ -163,3 +202,62 @@ def test_cli_plots_a_sweep_file_and_a_measure_json(angular, scenes_dir, tmp_path
     assert (tmp_path / "reading.png").read_bytes()[:4] == b"\x89PNG"
     printed = virtspec("plot", "fig5.nc", "--wavelengths", "600")
     assert printed.returncode == 1 and "wavelengths must be among the result's wavelengths" in printed.stderr
+
+
+# --- goniophotometer figures; no figure clips its titles ---------------------------------------
+
+
+@pytest.fixture(scope="module")
+def gonio(mi):
+    from result_kinds import gonio_reading
+
+    return gonio_reading()
+
+
+def test_the_polar_radial_labels_lie_on_the_horizon_clear_of_every_curve(gonio):
+    from virtspec_mi.results.angular_plot import HORIZON, plot_polar
+
+    for log in (False, True):
+        for axes in plot_polar(gonio, log=log).axes:
+            spans = [np.degrees([np.min(line.get_xdata()), np.max(line.get_xdata())]) for line in axes.lines]
+            assert min(low for low, _ in spans) < -HORIZON and max(high for _, high in spans) > HORIZON  # both lobes
+            where = axes.get_rlabel_position()
+            assert where == HORIZON and not any(low < where < high for low, high in spans), spans
+            assert all(label.get_fontsize() < 7 for label in axes.get_yticklabels())  # smaller than the angles'
+
+
+# a specimen named by its scene file and defines: a title longer than any figure is wide
+LONG_NAME = ("soybean_abmb.xml -D specimen.chlorophyll=45.0 -D specimen.water=0.015 -D specimen.dry_matter=0.004 "
+             "-D specimen.thickness=2.04e-4")
+
+
+def test_no_figure_clips_a_title(angular, gonio):
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from result_kinds import sphere_grid
+
+    from virtspec_mi.compare import compare
+    from virtspec_mi.results.angular_plot import plot_hemisphere, plot_polar, plot_series
+
+    wavelengths = np.arange(400, 701, 10)
+    sweep = grid_result(np.linspace(0.1, 0.5, 31 * 3), wavelengths, [0, 30, 60])
+    spectrum = grid_result(np.linspace(0.1, 0.5, 31), wavelengths, [8])
+    figures = {
+        "sweep": plot_sweep(sweep, name=LONG_NAME),
+        "spectrum": plot_sweep(spectrum, name=LONG_NAME),
+        "spectra": plot_spectra(sphere_grid().isel(point=0), quantities=["reading", "hemispherical"], theta_i=8,
+                                name=LONG_NAME),
+        "densities": plot_densities([angular, angular], [3.3, 4.3], [float("nan"), 0.0]),
+        "comparison": plot_comparison(compare(spectrum, ([400, 500, 600], [0.1, 0.2, 0.3])), name=LONG_NAME),
+        "polar": plot_polar(gonio, name=LONG_NAME),
+        "hemisphere": plot_hemisphere(gonio, transmission=True),
+        "series": plot_series(gonio),
+    }
+    for kind, figure in figures.items():
+        FigureCanvasAgg(figure).draw()
+        page = figure.bbox
+        titles = [text for text in [*(axes.title for axes in figure.axes), *figure.texts] if text.get_text()]
+        assert titles, kind
+        for title in titles:
+            box = title.get_window_extent()
+            assert page.x0 <= box.x0 and box.x1 <= page.x1 and page.y0 <= box.y0 and box.y1 <= page.y1, \
+                (kind, title.get_text(), box, page)

@@ -15,7 +15,9 @@ Plots of goniophotometer readings (PNG and SVG)
 The plane of incidence is drawn through the φo bins that hold φi + 180° (the mirror
 side, drawn at +θo) and φi (the back side, drawn at −θo); the perpendicular plane
 through φi ± 90°. Folded readings (relative azimuth) use 180° and 0°, resp. 90°.
-The figures are built without ``pyplot``; the file suffix picks the format.
+The polar plots write their radial tick labels small, along the horizon (:data:`HORIZON`),
+clear of the lobes; titles wrap to the figure's width. The figures are built without
+``pyplot``; the file suffix picks the format.
 
 References
 ----------
@@ -32,7 +34,14 @@ import numpy as np
 
 from virtspec_mi.results.plot import check_figure_path, curve_style
 
-__all__ = ["plot_polar", "plot_hemisphere", "plot_series", "plane_bins"]
+__all__ = ["HORIZON", "plot_polar", "plot_hemisphere", "plot_series", "plane_bins"]
+
+HORIZON: float = 90.0
+"""
+Where :func:`plot_polar` writes its radial tick labels (degrees, on the mirror side): along
+the horizon θo = 90°, which parts the reflection lobe (drawn within ±90° of the upper
+normal) from the transmission lobe (beyond); a curve only ends there, none crosses it.
+"""
 
 
 def plane_bins(reading: Any, across: bool = False) -> tuple[int, int]:
@@ -98,6 +107,8 @@ def plot_polar(reading: Any, path: str | os.PathLike | None = None, wavelength: 
         axes.set_title(f"f (1/sr), {title}", fontsize=10)
         axes.set_thetagrids(range(0, 360, 30), labels=[f"{a if a <= 180 else a - 360}°" for a in range(0, 360, 30)],
                             fontsize=7)
+        axes.set_rlabel_position(HORIZON)  # between the lobes, away from the beam's arrows (drawn at −θi)
+        axes.tick_params(axis="y", labelsize=6)
         if panel == 0:
             axes.legend(loc="lower left", fontsize=7, bbox_to_anchor=(-0.15, -0.12))
     return _finish(figure, reading, w, f"{name + ': ' if name else ''}goniophotometer", "band: all bins", 10, path)
@@ -127,7 +138,7 @@ def plot_hemisphere(reading: Any, path: str | os.PathLike | None = None, transmi
     figure.colorbar(mesh, ax=axes, label="BTDF (1/sr)" if transmission else "BRDF (1/sr)")
     axes.set_title(f"{'transmission' if transmission else 'reflection'} hemisphere, θi = {reading.theta_i[i]:g}°, "
                    f"λ = {reading.wavelengths[w]:g} nm\n(radius: polar angle from the "
-                   f"{'lower' if transmission else 'upper'} normal)", fontsize=9)
+                   f"{'lower' if transmission else 'upper'} normal)", fontsize=9, wrap=True)
     if path is not None:
         figure.savefig(Path(path), dpi=90)
     return figure
@@ -209,7 +220,7 @@ def _finish(figure: Any, reading: Any, w: int, what: str, band: str, size: int,
     of = f" of {specimen}" if specimen else ""
     figure.suptitle(f"{what}{of}, {reading.result.settings.beam} beam, λ = {reading.wavelengths[w]:g} nm, "
                     f"N = {int(reading.rays.max()):,} rays, K = {reading.size} bins ({band} at "
-                    f"{1 - reading.delta:g})", fontsize=size)
+                    f"{1 - reading.delta:g})", fontsize=size, wrap=True)
     if path is not None:
         figure.savefig(path, dpi=72)
     return figure

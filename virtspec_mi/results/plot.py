@@ -16,11 +16,16 @@ Plots of results with matplotlib (PNG and SVG)
   combined tolerance.
 
 Every figure names what was measured in its title (a name when given, the quantity,
-the beam, θi, the rays and the specimen: its scene, defines and parameter point), gives the certified band a
-legend entry, draws markers on sparse grids (≤ :data:`SPARSE` points) and tells every
-curve apart by colour and line style (both cycle; 40 curves are distinct). The
-figures are built without ``pyplot`` (no display needed); the file suffix picks the
-format (``.png`` or ``.svg``).
+the beam, θi, the rays and the specimen: its scene, defines and parameter point; wrapped
+to the figure's width), gives the certified band a legend entry and draws markers on sparse grids
+(≤ :data:`SPARSE` points). It tells its curves apart: up to :data:`LEGEND` curves each
+by colour and line style (:func:`curve_style`; both cycle), each with a legend entry;
+more (e.g. a sweep of 31 wavelengths) by a sequential colour map (:data:`COLOUR_MAP`)
+over each curve's wavelength (resp. θi), with a colour bar, in solid lines, with bands
+so faint that all of them stacked are half opaque; several results then each have a
+line style (and marker) of their own, named in the legend. The figures are built
+without ``pyplot`` (no display needed); the file suffix picks the format (``.png``
+or ``.svg``).
 
 References
 ----------
@@ -38,6 +43,8 @@ import numpy as np
 __all__ = [
     "FIGURE_SUFFIXES",
     "SPARSE",
+    "LEGEND",
+    "COLOUR_MAP",
     "check_figure_path",
     "describe",
     "select",
@@ -53,10 +60,18 @@ FIGURE_SUFFIXES: tuple[str, ...] = (".png", ".svg")
 SPARSE: int = 20
 """Curves with at most this many points are drawn with markers."""
 
+LEGEND: int = 12
+"""A figure lists at most this many curves in its legend; with more it colours them by :data:`COLOUR_MAP`."""
+
+COLOUR_MAP: str = "viridis"
+"""The sequential colour map of many curves over their wavelength (resp. θi): lighter as it grows."""
+
 _COLOURS = 10  # matplotlib's default "tab10" cycle: C0 … C9
 _LINE_STYLES = ("-", "--", "-.", ":")
 _MARKERS = ("o", "s", "^", "D", "v", "P", "X", "*")
 _BAND = "certified ±μ'"
+_BAND_ALPHA = 0.2  # a certified band's opacity among few curves
+_STACKED_BANDS = 0.5  # among many, the opacity of all bands stacked: each the fainter the more curves
 
 
 def check_figure_path(path: str | os.PathLike | None) -> Path | None:
@@ -131,42 +146,83 @@ def _indices(name: str, have: np.ndarray, wanted: Sequence[float] | None) -> np.
     return np.array(indices)
 
 
-def _draw(axes: Any, result: Any, quantity: str, label: str | None) -> int:
-    """Draw the curves of one result (continuing the axes' style cycle); returns how many."""
+def _curves(result: Any, quantity: str) -> tuple[bool, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """
+    The curves of one result (any kind): whether they run against θi (one curve per
+    wavelength; else against wavelength, one per θi), the abscissae in order, the readings
+    and their certified half-widths (one row per curve) and each curve's wavelength (resp. θi).
+    """
 
     result = result.as_grid()
-    values = result.quantity(quantity)
-    mu = result.certified_mu
     by_angle = len(result.theta_i) > 1 or len(result.wavelengths) == 1
     x = np.asarray(result.theta_i if by_angle else result.wavelengths, dtype=np.float64)
     order = np.argsort(x)
-    curves, bands = (values, mu) if by_angle else (values.T, mu.T)  # one row per curve
-    names = result.wavelengths if by_angle else result.theta_i
-    unit = "nm" if by_angle else "°"
-    first = len(axes.lines)
-    for k, (name, curve, band) in enumerate(zip(names, curves, bands)):
-        text = f"{label + ', ' if label else ''}{'λ' if by_angle else 'θi'} = {name:g}{' ' if by_angle else ''}{unit}"
-        line, = axes.plot(x[order], curve[order], lw=1.2, label=text, **curve_style(first + k, len(x)))
-        axes.fill_between(x[order], (curve - band)[order], (curve + band)[order], color=line.get_color(),
-                          alpha=0.2, lw=0)
+    values, mu = np.asarray(result.quantity(quantity)), np.asarray(result.certified_mu)
+    curves, bands = (values, mu) if by_angle else (values.T, mu.T)
+    each = np.asarray(result.wavelengths if by_angle else result.theta_i, dtype=np.float64)
+    return by_angle, x[order], curves[:, order], bands[:, order], each
+
+
+def _draw(axes: Any, results: Sequence[Any], quantity: str, labels: Sequence[str | None]) -> None:
+    """
+    Draw the curves of ``results`` (each with the band of its certified tolerance) and their
+    legend. At most :data:`LEGEND` curves in all: each its own colour and line style
+    (:func:`curve_style`) and legend entry. More (their wavelengths, resp. θi, not all one):
+    each curve coloured by its wavelength (resp. θi) on :data:`COLOUR_MAP`, with a colour
+    bar, its band so faint that all of them stacked are half opaque; each result its line
+    style (and small markers), with a legend entry (its label, else "result 1", …) when
+    there are several.
+    """
+
+    from matplotlib.cm import ScalarMappable
+    from matplotlib.colors import Normalize
+    from matplotlib.lines import Line2D
+
+    drawn = [_curves(result, quantity) for result in results]
+    by_angle = drawn[0][0]
+    symbol, unit, variable = ("λ", " nm", "wavelength (nm)") if by_angle else ("θi", "°", "θi (°)")
+    every = np.concatenate([each for *_, each in drawn])
+    low, high = float(every.min()), float(every.max())
+    mapped = len(every) > LEGEND and high > low
+    colours = ScalarMappable(Normalize(low, high), COLOUR_MAP)
+    alpha = 1.0 - (1.0 - _STACKED_BANDS) ** (1.0 / len(every)) if mapped else _BAND_ALPHA
+    count = 0
+    for r, ((_, x, curves, bands, each), label) in enumerate(zip(drawn, labels)):
+        for value, curve, band in zip(each, curves, bands):
+            style = {**curve_style(r, len(x)), "color": colours.to_rgba(value), "markersize": 2.5} if mapped else \
+                curve_style(count, len(x))
+            line, = axes.plot(x, curve, lw=1.2, label=f"{label + ', ' if label else ''}{symbol} = {value:g}{unit}",
+                              **style)
+            axes.fill_between(x, curve - band, curve + band, color=line.get_color(), lw=0, alpha=alpha)
+            count += 1
     axes.set_xlabel("θi (degrees)" if by_angle else "wavelength (nm)")
     axes.set_ylabel(quantity)
-    return len(names)
+    delta = results[0].interval_delta
+    if not mapped:
+        span = f"{low:g}" if low == high else f"{low:g}…{high:g}"
+        _legend(axes, delta, summary=f"{count} curves, {symbol} = {span}{unit} (colours and line styles cycle)")
+        return
+    axes.get_figure().colorbar(colours, ax=axes, label=variable)
+    entries = [Line2D([], [], label=label or f"result {r + 1}", **{**curve_style(r, len(x)), "color": "0.3"})
+               for r, ((_, x, *_), label) in enumerate(zip(drawn, labels))]
+    _legend(axes, delta, entries if len(results) > 1 else [],
+            summary=f"{len(results)} results (line styles cycle; colour: {variable})")
 
 
-def _legend(axes: Any, delta: float, curves: int, note: str = "", **options: Any) -> None:
-    """All curves when they are few (≤ 12), else a line saying how many; always the certified band."""
+def _legend(axes: Any, delta: float, entries: Sequence[Any] | None = None, summary: str = "") -> None:
+    """
+    The legend: ``entries`` (default: the axes' labelled curves) when at most :data:`LEGEND`,
+    else one line, ``summary``, saying how many; always the certified band.
+    """
 
     from matplotlib.lines import Line2D
     from matplotlib.patches import Patch
 
-    handles, labels = axes.get_legend_handles_labels()
-    if curves > 12:
-        handles = [Line2D([], [], color="none")]
-        labels = [f"{curves} curves{note} (colours and line styles cycle)"]
-    handles.append(Patch(facecolor="grey", alpha=0.35, lw=0))
-    labels.append(f"{_BAND} (δ = {delta:g} per reading)")
-    axes.legend(handles, labels, fontsize="small", **options)
+    entries = axes.get_legend_handles_labels()[0] if entries is None else list(entries)
+    if len(entries) > LEGEND:
+        entries = [Line2D([], [], color="none", label=summary)]
+    band = Patch(facecolor="grey", alpha=0.35, lw=0, label=f"{_BAND} (δ = {delta:g} per reading)")
+    axes.legend(handles=[*entries, band], fontsize="small")
 
 
 def plot_sweep(results: Any, path: str | os.PathLike | None = None, *, quantity: str = "reflectance",
@@ -176,9 +232,11 @@ def plot_sweep(results: Any, path: str | os.PathLike | None = None, *, quantity:
     Plot one or several results and save to ``path`` (``.png``/``.svg``) when given.
 
     A sweep over several θi is drawn against θi (one curve per wavelength), a result
-    at one θi against wavelength. ``wavelengths`` / ``theta_i`` keep only those
-    readings; ``name`` goes into the title (:func:`describe`), ``title`` replaces it.
-    Returns the ``matplotlib.figure.Figure``.
+    at one θi against wavelength. More than :data:`LEGEND` curves in all are coloured
+    by their wavelength (resp. θi) on :data:`COLOUR_MAP` with a colour bar, each result
+    (``labels``) in a line style of its own. ``wavelengths`` / ``theta_i`` keep only
+    those readings; ``name`` goes into the title (:func:`describe`), ``title`` replaces
+    it. Returns the ``matplotlib.figure.Figure``.
     """
 
     from matplotlib.figure import Figure
@@ -190,14 +248,9 @@ def plot_sweep(results: Any, path: str | os.PathLike | None = None, *, quantity:
     labels = list(labels) if labels is not None else [None] * len(results)
     figure = Figure(figsize=(6.4, 4.4), layout="constrained")
     axes = figure.add_subplot()
-    curves = sum(_draw(axes, result, quantity, label) for result, label in zip(results, labels))
-    first = results[0].as_grid()
-    by_angle = len(first.theta_i) > 1 or len(first.wavelengths) == 1
-    names = first.wavelengths if by_angle else first.theta_i
-    note = f", {'λ' if by_angle else 'θi'} = {np.min(names):g}…{np.max(names):g}{' nm' if by_angle else '°'}"
-    _legend(axes, first.interval_delta, curves, note)
+    _draw(axes, results, quantity, labels)
     axes.grid(alpha=0.3)
-    axes.set_title(title or describe(first, quantity, name), fontsize="medium")
+    axes.set_title(title or describe(results[0].as_grid(), quantity, name), fontsize="medium", wrap=True)
     if path is not None:
         figure.savefig(path, dpi=110)
     return figure
@@ -222,13 +275,13 @@ def plot_spectra(result: Any, path: str | os.PathLike | None = None, *, quantiti
     for k, spectrum in enumerate(spectra):
         x, y, band = spectrum.wavelengths, spectrum.values, spectrum.tolerance
         line, = axes.plot(x, y, lw=1.2, label=spectrum.quantity, **curve_style(k, len(x)))
-        axes.fill_between(x, y - band, y + band, color=line.get_color(), alpha=0.2, lw=0)
+        axes.fill_between(x, y - band, y + band, color=line.get_color(), alpha=_BAND_ALPHA, lw=0)
     axes.set_xlabel("wavelength (nm)")
     axes.set_ylabel(spectra[0].measures)
-    _legend(axes, spectra[0].delta, len(spectra))
+    _legend(axes, spectra[0].delta, summary=f"{len(spectra)} quantities (colours and line styles cycle)")
     axes.grid(alpha=0.3)
     shown = select(result, theta_i=[spectra[0].theta_i])
-    axes.set_title(title or describe(shown, ", ".join(quantities), name), fontsize="medium")
+    axes.set_title(title or describe(shown, ", ".join(quantities), name), fontsize="medium", wrap=True)
     if path is not None:
         figure.savefig(path, dpi=110)
     return figure
@@ -247,8 +300,7 @@ def plot_densities(results: Sequence[Any], densities: Sequence[float], deltas: S
     path = check_figure_path(path)
     figure = Figure(figsize=(12, 3.8), layout="constrained")
     curves, fluct, cost = figure.subplots(1, 3)
-    drawn = sum(_draw(curves, result, quantity, f"log N = {d:g}") for result, d in zip(results, densities))
-    _legend(curves, results[0].interval_delta, drawn)
+    _draw(curves, results, quantity, [f"log N = {d:g}" for d in densities])
     curves.set_title("Fig. 5: readings at each ray density", fontsize="medium")
     fluct.plot(list(densities)[1:], list(deltas)[1:], "o-")
     fluct.set_xlabel("log10 N")
@@ -320,7 +372,7 @@ def plot_comparison(comparison: Any, path: str | os.PathLike | None = None, *, t
     delta_e = f"ΔE2000 = {c.delta_E:.2f} ({c.illuminant})" if not c.delta_E_note else "ΔE2000 not computed"
     top.text(0.01, 0.98, f"RMSE = {c.rmse:.4f}, {delta_e}", transform=top.transAxes, va="top", fontsize="small")
     shown = select(c.result, theta_i=[c.theta_i])  # the angle compared
-    top.set_title(title or describe(shown, c.quantity, name or c.result_name), fontsize="medium")
+    top.set_title(title or describe(shown, c.quantity, name or c.result_name), fontsize="medium", wrap=True)
     if path is not None:
         figure.savefig(path, dpi=110)
     return figure

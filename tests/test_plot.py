@@ -235,7 +235,7 @@ def test_no_figure_clips_a_title(angular, gonio):
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from result_kinds import sphere_grid
 
-    from virtspec_mi.compare import compare
+    from virtspec_mi.comparison import compare
     from virtspec_mi.results.angular_plot import plot_hemisphere, plot_polar, plot_series
 
     wavelengths = np.arange(400, 701, 10)

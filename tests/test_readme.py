@@ -64,7 +64,7 @@ def test_shell_command_runs(command, workdir):
 
 
 def test_the_readme_is_a_front_door():
-    """Short (≤ 300 lines), the two commands shown, a Python example, a figure, and every link into the checkout resolves."""
+    """Short (≤ 300 lines): the two commands, a Python example, a figure; every link into the checkout resolves."""
 
     import re
 

@@ -72,7 +72,7 @@ class KlemsBasis:
 
     @property
     def size(self) -> int:
-        """Patches per hemisphere (145, 77 or 41: the half and quarter bases of the Radiance library pyradiance ships)."""
+        """Patches per hemisphere (145, 77 or 41: the half and quarter bases as Radiance reads them)."""
 
         return int(self.phis.sum())
 

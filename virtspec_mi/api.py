@@ -1,6 +1,6 @@
 """
-The measurement API: :func:`measure`, :func:`sweep`, :func:`gonio`, :func:`sphere_measure`
-============================================================================================
+The measurement API: :func:`measure`, :func:`sweep`, :func:`gonio`, :func:`sphere_measure`, :func:`take`
+========================================================================================================
 
 :func:`measure` takes a scene (XML path, dict or ``mi.Scene``), resolves the settings
 (explicit keywords, then the scene's ``spectrophotometer`` integrator, then the
@@ -26,7 +26,9 @@ the boundary — every setting of :class:`~virtspec_mi.settings.Settings` and ev
 of its instrument (its signature is built from their fields,
 :func:`virtspec_mi.settings.keywords`; a bad value raises ``ValueError`` naming it and
 its allowed range, an unknown name ``TypeError``) — and runs the instrument of the
-registry (:data:`virtspec_mi.instruments.INSTRUMENTS`).
+registry (:data:`virtspec_mi.instruments.INSTRUMENTS`). :func:`take` reads with any
+instrument of the registry by name (a fourth instrument is one module and one row
+there): the same keyed engine run, checkpoints and Dask included.
 
 References
 ----------
@@ -50,7 +52,7 @@ from virtspec_mi.files import WriteError
 from virtspec_mi.engine.plan import Plan
 from virtspec_mi.engine.readings import in_process_runner
 from virtspec_mi.instruments import INSTRUMENTS
-from virtspec_mi.instruments.base import take
+from virtspec_mi.instruments import base as instruments_base
 from virtspec_mi.instruments.goniophotometer import GonioOptions
 from virtspec_mi.instruments.sphere import SphereOptions
 from virtspec_mi.results.goniophotometer import GonioResult
@@ -62,7 +64,7 @@ from virtspec_mi.results.zarr import ZarrTable
 from virtspec_mi.scene import find_bench, scene_fingerprint, scene_source
 from virtspec_mi.settings import Settings, keywords, resolve
 
-__all__ = ["measure", "sweep", "gonio", "read_result", "read_gonio", "fluctuation", "sphere_measure"]
+__all__ = ["measure", "sweep", "gonio", "read_result", "read_gonio", "fluctuation", "sphere_measure", "take"]
 
 
 def measure(scene: Any, *, parameters: dict[str, Any] | None = None, defines: dict[str, Any] | None = None,
@@ -102,7 +104,7 @@ def measure(scene: Any, *, parameters: dict[str, Any] | None = None, defines: di
     if space is not None and space.size != 1:
         raise ValueError("measure takes one value per parameter (a sweep takes several: use sweep)")
     instrument = _instrument("hemispherical", scene, bench, defines)
-    result = take(instrument, bench, settings, parameters=space, progress=progress)
+    result = instruments_base.take(instrument, bench, settings, parameters=space, progress=progress)
     result = result.squeeze("theta_i", *([] if space is None else space.dims))  # one reading: scalar labels
     instrument.warn_if_uncertified(result)
     return result
@@ -187,11 +189,9 @@ def sweep(
     Baranoski et al. (2001), eq. (23), Fig. 5.
     """
 
-    bench = find_bench(scene, defines)
-    base, = resolve("sweep", settings, _scene_options(bench, Settings))
-    return _keyed("hemispherical", "a sweep", scene, bench, base, None, theta_i=theta_i, parameters=parameters,
-                  points=points, defines=defines, checkpoint=checkpoint, out=out, progress=progress, workers=workers,
-                  task_readings=task_readings)
+    return _reading("hemispherical", "sweep", "a sweep", scene, settings, theta_i=theta_i, parameters=parameters,
+                    points=points, defines=defines, checkpoint=checkpoint, out=out, progress=progress, workers=workers,
+                    task_readings=task_readings)
 
 
 def _keyed(name: str, what: str, scene: Any, bench: Bench, settings: Settings, options: Any, *, theta_i: Any,
@@ -353,11 +353,9 @@ def gonio(scene: Any, *, theta_i: Any = None, parameters: dict[str, Any] | None 
     Baranoski et al. (2001), eq. (23), Sect. 6; :mod:`virtspec_mi.budgets.bins`.
     """
 
-    bench = find_bench(scene, defines)
-    settings, spec = resolve("gonio", options, _scene_options(bench, Settings), _scene_options(bench, GonioOptions))
-    return _keyed("goniophotometer", "a goniophotometer reading", scene, bench, settings, spec, theta_i=theta_i,
-                  parameters=parameters, points=points, defines=defines, checkpoint=checkpoint, out=out,
-                  progress=progress, workers=workers, task_readings=task_readings)
+    return _reading("goniophotometer", "gonio", "a goniophotometer reading", scene, options, theta_i=theta_i,
+                    parameters=parameters, points=points, defines=defines, checkpoint=checkpoint, out=out,
+                    progress=progress, workers=workers, task_readings=task_readings)
 
 
 gonio.__signature__ = keywords(gonio, GonioOptions, Settings)  # type: ignore[attr-defined]
@@ -440,12 +438,62 @@ def sphere_measure(scene: Any, *, theta_i: Any = None, parameters: dict[str, Any
     Baranoski et al. (2001), eqs. (2), (23); Goebel (1967).
     """
 
-    bench = find_bench(scene, defines)
-    base, options = resolve("sphere_measure", settings, _scene_options(bench, Settings),
-                            _scene_options(bench, SphereOptions))
-    return _keyed("sphere", "a sphere reading", scene, bench, base, options, theta_i=theta_i, parameters=parameters,
-                  points=points, defines=defines, checkpoint=checkpoint, out=out, progress=progress, workers=workers,
-                  task_readings=task_readings)
+    return _reading("sphere", "sphere_measure", "a sphere reading", scene, settings, theta_i=theta_i,
+                    parameters=parameters, points=points, defines=defines, checkpoint=checkpoint, out=out,
+                    progress=progress, workers=workers, task_readings=task_readings)
 
 
 sphere_measure.__signature__ = keywords(sphere_measure, Settings, SphereOptions)  # type: ignore[attr-defined]
+
+
+def take(instrument: str, scene: Any, *, theta_i: Any = None, parameters: dict[str, Any] | None = None,
+         points: bool = False, defines: dict[str, Any] | None = None, checkpoint: str | os.PathLike | None = None,
+         out: str | os.PathLike | None = None, progress: bool | None = None, workers: Any = None,
+         task_readings: int | None = None, **options: Any) -> Any:
+    """
+    A reading of ``scene`` with any instrument of the registry, by its name
+    (:data:`virtspec_mi.instruments.INSTRUMENTS`: ``hemispherical``, ``goniophotometer``,
+    ``sphere``, ``gloss``, and any instrument added there): the instrument's plan traced
+    by the engine as a sweep's is (keyed readings: counts depend on (seed, reading) only;
+    resumable from a checkpoint; on Dask workers with the same counts), then its result.
+    :func:`sweep`, :func:`gonio` and :func:`sphere_measure` are this call for their
+    instruments, with their own documentation.
+
+    Parameters
+    ----------
+    instrument
+        The instrument's name in the registry.
+    scene, theta_i, parameters, points, defines, checkpoint, out, progress, workers, task_readings
+        As for :func:`sweep`; ``out`` needs a result kind with files (not a gloss reading).
+    **options
+        Every setting of :class:`~virtspec_mi.settings.Settings` and every option the
+        instrument declares (its ``options`` class); ``None`` keeps the scene's value.
+
+    References
+    ----------
+    Baranoski et al. (2001), eq. (23); Dubovik et al. (2021), Eradiate's ``Experiment``
+    (init, process, postprocess), https://eradiate.readthedocs.io.
+    """
+
+    if not isinstance(instrument, str) or instrument not in INSTRUMENTS:
+        raise ValueError(f"instrument must be one of {', '.join(INSTRUMENTS)} (got {instrument!r})")
+    if out is not None and not hasattr(INSTRUMENTS[instrument].result, "write"):
+        raise ValueError(f"out: a {instrument} reading ({INSTRUMENTS[instrument].result.__name__}) has no file "
+                         f"format; take it without out (got out={str(out)!r})")
+    return _reading(instrument, "take", f"a {instrument} reading", scene, options, theta_i=theta_i,
+                    parameters=parameters, points=points, defines=defines, checkpoint=checkpoint, out=out,
+                    progress=progress, workers=workers, task_readings=task_readings)
+
+
+def _reading(name: str, caller: str, what: str, scene: Any, given: dict[str, Any], *, defines: dict[str, Any] | None,
+             **run: Any) -> Any:
+    """
+    The keyed reading (:func:`_keyed`) of the instrument ``name`` with the keywords
+    ``given`` of ``caller`` over the scene's settings and the instrument's options.
+    """
+
+    bench = find_bench(scene, defines)
+    declared = INSTRUMENTS[name].options
+    settings, *options = resolve(caller, given, _scene_options(bench, Settings),
+                                 *(() if declared is None else (_scene_options(bench, declared),)))
+    return _keyed(name, what, scene, bench, settings, options[0] if options else None, defines=defines, **run)

@@ -292,9 +292,9 @@ def _table(result: Any, identity: str) -> Any:
     dataset = result.to_dataset()
     dims = result.dims
     plain = result.as_dict()
-    meta = {**{k: plain[k] for k in ("format", "dims", "settings", "geometry", "seconds", "scene",
-                                      "wavelength_independent", "version") + (
-                ("parameters",) if "parameters" in plain else ()) + (("source",) if "source" in plain else ())},
+    kept = ("format", "dims", "settings", "geometry", "seconds", "scene", "wavelength_independent", "version",
+            "parameters", "source")  # the last two only when the result has them
+    meta = {**{k: plain[k] for k in kept if k in plain},
             **({} if own_dims == dims else {"result_dims": list(own_dims)})}
     if result.pilot is not None:
         for name in Counts.names():

@@ -44,6 +44,7 @@ from virtspec_mi.engine.parameters import ParameterSpace
 from virtspec_mi.engine.plan import Columns, Plan
 from virtspec_mi.engine.tally import Tally
 from virtspec_mi.instruments.base import Instrument, reading_grid
+from virtspec_mi.instruments.command import Command, Figure
 from virtspec_mi.instruments.hemispherical import hemispherical_result
 from virtspec_mi.kernel.counts import Fate
 from virtspec_mi.kernel.hooks import ExitHook
@@ -169,6 +170,17 @@ class GlossMeter(Instrument):
     name: ClassVar[str] = "gloss"
     options: ClassVar[type[Options] | None] = GlossOptions
     result: ClassVar[type] = GlossResult
+    commands: ClassVar[tuple[Command, ...]] = (Command(
+        "gloss", "a specular gloss meter: the share of rays reflected into a cone about the mirror direction",
+        "Light the specimen at one theta_i (20, 60 or 85 degrees in ISO 2813) and read the share of the rays "
+        "reflected into a receptor cone of half-angle --cone about the mirror direction: the gloss fraction of "
+        "every wavelength with the tolerance its rays guarantee (as the reflectance's, eq. 23) and a "
+        "Clopper-Pearson interval, beside the hemispherical reading of the same rays.",
+        ("virtspec gloss diamond_collimated --theta-i 60 --cone 2",
+         "virtspec gloss soybean_abmb --theta-i 20 --wavelengths 450,550,650 --out gloss.nc --plot gloss.png"),
+        figures=(Figure("--plot", "plot", "the gloss fraction over wavelength with the band of its certified "
+                                          "tolerance"),),
+        one_reading=True),)
 
     def init(self, bench: Any, settings: Settings, options: GlossOptions, theta_i: np.ndarray,
              parameters: ParameterSpace | None) -> Plan:

@@ -187,6 +187,14 @@ class ResultBase:
 
         raise NotImplementedError
 
+    def drawn_note(self, quantity: str | None = None) -> str:
+        """
+        What :meth:`plot` of ``quantity`` leaves out, for the reader (a figure of one
+        label of several: which it drew and how to draw another), or ``""``.
+        """
+
+        return ""
+
     # -- labels -----------------------------------------------------------------------
 
     @property

@@ -371,7 +371,8 @@ def read_result(path: str | os.PathLike) -> Any:
     """
     The result in a file, whatever its kind — a hemispherical reading or sweep, a
     goniophotometer reading, a sphere reading — by its format tag
-    (:func:`virtspec_mi.results.kinds.read_result`).
+    (:func:`virtspec_mi.results.kinds.read_result`), an instrument's own kind too (the
+    registry is loaded: :data:`virtspec_mi.instruments.INSTRUMENTS`).
     """
 
     from virtspec_mi.results.kinds import read_result as read_any
@@ -451,9 +452,6 @@ def take(instrument: str, scene: Any, *, theta_i: Any = None, parameters: dict[s
 
     if not isinstance(instrument, str) or instrument not in INSTRUMENTS:
         raise ValueError(f"instrument must be one of {', '.join(INSTRUMENTS)} (got {instrument!r})")
-    if out is not None and not hasattr(INSTRUMENTS[instrument].result, "write"):
-        raise ValueError(f"out: a {instrument} reading ({INSTRUMENTS[instrument].result.__name__}) has no file "
-                         f"format; take it without out (got out={str(out)!r})")
     return _reading(instrument, "take", f"a {instrument} reading", scene, options, theta_i=theta_i,
                     parameters=parameters, points=points, defines=defines, checkpoint=checkpoint, out=out,
                     progress=progress, workers=workers, task_readings=task_readings)

@@ -348,7 +348,7 @@ def _selected(path: Any, selections: Sequence[str]) -> Any:
 
     import numpy as np
 
-    from virtspec_mi.results.kinds import read_result
+    from virtspec_mi.api import read_result
 
     result = read_result(path)
     labels = {}

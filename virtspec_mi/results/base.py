@@ -656,7 +656,7 @@ def _kind_in_words(word: str) -> str:
     """A kind for messages: ``"goniophotometer reading (GonioResult)"``; the word itself if unknown."""
 
     kind = KINDS.get(word)
-    return word if kind is None else f"{kind.KIND} ({kind.__name__})"
+    return word if kind is None else f"{kind.KIND} (virtspec_mi.{kind.__name__})"
 
 
 def _coord_dims(name: str, coords: dict[str, np.ndarray], dims: tuple[str, ...]) -> tuple[str, ...]:

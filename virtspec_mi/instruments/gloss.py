@@ -243,6 +243,10 @@ class GlossMeter(Instrument):
         figures=(Figure("--plot", "plot", "the gloss fraction over wavelength with the band of its certified "
                                           "tolerance"),),
         one_reading=True),)
+    example: ClassVar[dict[str, Any]] = {
+        "scene": "diamond_collimated", "theta_i": 60, "wavelengths": [450, 650], "rays": 4000, "cone": 2, "seed": 4,
+        "long": {"scene": "soybean_abmb", "theta_i": 20, "wavelengths": "400:2500:5", "rays": 100_000,
+                 "readings": 421}}
 
     def init(self, bench: Any, settings: Settings, options: GlossOptions, theta_i: np.ndarray,
              parameters: ParameterSpace | None) -> Plan:

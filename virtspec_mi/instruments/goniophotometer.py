@@ -168,6 +168,10 @@ class Goniophotometer(Instrument):
     options: ClassVar[type[Options] | None] = GonioOptions
     result: ClassVar[type] = GonioResult
     commands: ClassVar[tuple[Command, ...]] = (GONIO_COMMAND,)
+    example: ClassVar[dict[str, Any]] = {
+        "scene": "diamond_collimated", "theta_i": [0, 30], "rays": 4000, "theta_o_bins": 3, "phi_o_bins": 4,
+        "seed": 2, "long": {"theta_i": "0:90:1", "rays": 200_000, "theta_o_bins": 6, "phi_o_bins": 8,
+                 "parameters": {"specimen.eta": [1.5, 2.4]}, "readings": 182}}
 
     def init(self, bench: Any, settings: Settings, options: GonioOptions, theta_i: np.ndarray,
              parameters: ParameterSpace | None) -> Plan:

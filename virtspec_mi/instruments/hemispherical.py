@@ -164,6 +164,10 @@ class Hemispherical(Instrument):
     options: ClassVar[type[Options] | None] = None
     result: ClassVar[type] = Result
     commands: ClassVar[tuple[Command, ...]] = (_MEASURE, _SWEEP)
+    example: ClassVar[dict[str, Any]] = {
+        "scene": "diamond_collimated", "theta_i": [0, 45], "wavelengths": [450, 650], "rays": 4000, "seed": 1,
+        "long": {"scene": "soybean_abmb", "theta_i": 8, "wavelengths": "400:2500:5", "rays": 100_000,
+                 "readings": 421}}
 
     def init(self, bench: Any, settings: Settings, options: Options | None, theta_i: np.ndarray,
              parameters: ParameterSpace | None) -> Plan:

@@ -361,6 +361,9 @@ class IntegratingSphere(Instrument):
     options: ClassVar[type[Options] | None] = SphereOptions
     result: ClassVar[type] = SphereResult
     commands: ClassVar[tuple[Command, ...]] = (SPHERE_COMMAND,)
+    example: ClassVar[dict[str, Any]] = {
+        "scene": "sphere_150mm_8d", "wavelengths": [450, 650], "rays": 4000, "seed": 3,
+        "long": {"wavelengths": "400:2500:20", "rays": 40_000, "method": "comparison", "readings": 212}}
 
     def init(self, bench: Any, settings: Settings, options: SphereOptions, theta_i: np.ndarray,
              parameters: ParameterSpace | None) -> Plan:

@@ -199,6 +199,20 @@ class ResultBase:
                 raise ValueError(f"result kind {cls.__qualname__}: the format word {word!r} is {known.__qualname__}'s")
             KINDS[word] = cls
 
+    def rendered(self) -> np.ndarray:
+        """
+        What ``mi.render`` returns for a result of one θi (the scene's integrator): one row
+        per wavelength, the quantities :attr:`QUANTITIES` names (a reading's R, T, A), as
+        ``float32``.
+        """
+
+        reading = self.squeeze()
+        return np.stack([np.asarray(reading._quantity(name)[0], dtype=np.float32)
+                         for name in self.RENDERED], axis=1)
+
+    RENDERED: ClassVar[tuple[str, ...]] = ("reflectance", "transmittance", "absorptance")
+    """The quantities :meth:`rendered` returns, in its columns."""
+
     def drawn_note(self, quantity: str | None = None) -> str:
         """
         What :meth:`plot` of ``quantity`` leaves out, for the reader (a figure of one

@@ -815,7 +815,6 @@ def _plot(args: argparse.Namespace) -> int:
     from dataclasses import replace
     from pathlib import Path
 
-    import numpy as np
 
     from virtspec_mi.checks import parse_theta_i, parse_wavelengths
     from virtspec_mi.comparison import compare

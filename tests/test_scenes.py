@@ -44,9 +44,43 @@ def test_a_reading_of_a_named_scene_is_the_reading_of_its_file():
     assert by_name.scene == by_path.scene  # one fingerprint: the same file
 
 
-def test_virtspec_scenes_lists_them():
+def test_virtspec_scenes_lists_them_with_their_files():
     run = subprocess.run([sys.executable, "-m", "virtspec_mi", "scenes"], capture_output=True, text=True, check=True)
-    assert run.stdout.strip() == scenes.catalogue()
+    assert run.stdout.strip() == scenes.listing()
+    lines = run.stdout.splitlines()
+    assert [line.split()[0] for line in lines[::2]] == scenes.names()
+    assert [Path(line.strip()) for line in lines[1::2]] == [scenes.path(name) for name in scenes.names()]
+
+
+def test_virtspec_scenes_path_and_copy(tmp_path, monkeypatch, capsys):
+    from virtspec_mi.cli import main
+
+    monkeypatch.chdir(tmp_path)
+    assert main(["scenes", "--path", "sphere_150mm_8d"]) == 0
+    assert capsys.readouterr().out.strip() == str(scenes.path("sphere_150mm_8d"))
+    assert main(["scenes", "--copy", "sphere_150mm_8d", "mine.xml"]) == 0
+    assert capsys.readouterr().out.strip() == "mine.xml"
+    assert (tmp_path / "mine.xml").read_bytes() == scenes.path("sphere_150mm_8d").read_bytes()
+    (tmp_path / "mine.xml").write_text("edited")
+    assert main(["scenes", "--copy", "sphere_150mm_8d", "mine.xml"]) == 1
+    assert "mine.xml exists (it is kept" in capsys.readouterr().err
+    assert (tmp_path / "mine.xml").read_text() == "edited"
+    assert main(["scenes", "--path", "soybean_abm"]) == 1
+    assert "did you mean 'soybean_abmb'?" in capsys.readouterr().err
+    assert main(["scenes", "mine.xml"]) == 1
+    assert "give --copy NAME DEST" in capsys.readouterr().err
+
+
+def test_the_help_examples_give_shipped_scenes_by_name():
+    """Each --help example that takes a scene runs anywhere: it names a shipped scene, not a checkout path."""
+
+    from virtspec_mi.cli import MEASURING, build_parser
+
+    parser = build_parser()
+    for row in MEASURING.values():
+        for example in row.examples:
+            args = parser.parse_args(example.split()[1:])
+            assert args.scene in scenes.names(), example
 
 
 def test_a_name_is_sent_to_workers_as_the_shipped_file_whatever_the_directory(tmp_path, monkeypatch):

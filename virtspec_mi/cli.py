@@ -74,7 +74,9 @@ _EXAMPLES = {
               "  virtspec colour lut.nc --sel specimen.thickness=1.6e-4 --sel theta_i=8\n"
               "  virtspec colour sphere.json --quantity hemispherical",
     "llvm": "example: virtspec llvm check",
-    "scenes": "examples:\n  virtspec scenes\n  virtspec measure soybean_abmb --wavelengths 400:2500:5",
+    "scenes": "examples:\n  virtspec scenes\n  virtspec scenes --path sphere_150mm_8d\n"
+              "  virtspec scenes --copy sphere_150mm_8d my_sphere.xml\n"
+              "  virtspec measure soybean_abmb --wavelengths 400:2500:5",
     "albedo-table": "examples:\n  virtspec albedo-table --engine cycles --epsilon 1e-3 --out ggx_E.nc ggx_E.h\n"
                     "  virtspec albedo-table --model glass --engine cycles --out glass.nc --checkpoint glass.parts\n"
                     "  virtspec albedo-table --from ggx_E.nc --compare published_tables.h --rounding 5e-7",
@@ -118,8 +120,8 @@ MEASURING: dict[str, Measuring] = {row.name: row for row in (
         "scene's spectrophotometer integrator, else to the paper's defaults. The readings are keyed as a sweep's "
         "(virtspec sweep --theta-i THETA gives the same counts): resumable with --out, the same on Dask workers.",
         "the reading over wavelength with the band of its certified tolerance",
-        ("virtspec measure scenes/diamond_conical.xml --theta-i 70",
-         "virtspec measure scenes/soybean_abmb.xml --wavelengths 400:2500:5 --bound two-stage --json",
+        ("virtspec measure diamond_conical --theta-i 70",
+         "virtspec measure soybean_abmb --wavelengths 400:2500:5 --bound two-stage --json",
          "virtspec measure soybean_abmb --wavelengths 400:700:10 --param specimen.thickness=2e-4 --plot leaf.png"),
         one_reading=True),
     Measuring(
@@ -129,12 +131,12 @@ MEASURING: dict[str, Measuring] = {row.name: row for row in (
         "stdout and the summary goes to stderr.",
         "the readings against theta_i (one curve per wavelength) or wavelength, with the band of their certified "
         "tolerance (one parameter point: draw a parameter sweep with virtspec plot FILE --sel NAME=VALUE)",
-        ("virtspec sweep scenes/diamond_collimated.xml --theta-i 0:90:1 --out fig5.nc --plot fig5.png",
-         "virtspec sweep scenes/diamond_collimated.xml --theta-i 0:90:1 --densities 3 4 5 6",
-         "virtspec sweep scenes/soybean_abmb.xml --theta-i 8 --wavelengths 450,550,650 "
+        ("virtspec sweep diamond_collimated --theta-i 0:90:1 --out fig5.nc --plot fig5.png",
+         "virtspec sweep diamond_collimated --theta-i 0:90:1 --densities 3 4 5 6",
+         "virtspec sweep soybean_abmb --theta-i 8 --wavelengths 450,550,650 "
          "--param specimen.thickness=1.2e-4:2e-4:4e-5 --param specimen.chlorophyll_a=2,4 --out lut.nc",
-         "virtspec sweep scenes/soybean_abmb.xml -D side=abaxial --theta-i 8",
-         "virtspec sweep scenes/soybean_abmb.xml --theta-i 8 --wavelengths 400:2500:5 --workers 2 --out leaf.nc")),
+         "virtspec sweep soybean_abmb -D side=abaxial --theta-i 8",
+         "virtspec sweep soybean_abmb --theta-i 8 --wavelengths 400:2500:5 --workers 2 --out leaf.nc")),
     Measuring(
         "gonio", "goniophotometer", "goniophotometer: certified BRDF/BTDF by outgoing direction",
         "Measure the specimen of a scene as the spectrophotometer does, and bin every escaping ray by its outgoing "
@@ -146,10 +148,10 @@ MEASURING: dict[str, Measuring] = {row.name: row for row in (
         "the CDF of theta_o); f per bin is in --out and --json.",
         "polar plots of f in and across the plane of incidence, one curve per theta_i with its certified band; "
         "several wavelengths: one figure per wavelength, FIG_<nm>nm.png",
-        ("virtspec gonio scenes/diamond_collimated.xml --theta-i 30 --theta-o-bins 9 --phi-o-bins 12",
-         "virtspec gonio scenes/diamond_collimated.xml --theta-i 0 30 --binning projected --fold-phi "
+        ("virtspec gonio diamond_collimated --theta-i 30 --theta-o-bins 9 --phi-o-bins 12",
+         "virtspec gonio diamond_collimated --theta-i 0 30 --binning projected --fold-phi "
          "--out brdf.nc --plot brdf.png",
-         "virtspec gonio scenes/soybean_abmb.xml --wavelengths 550 650 --theta-o-bins 9 --phi-o-bins 12 "
+         "virtspec gonio soybean_abmb --wavelengths 550 650 --theta-o-bins 9 --phi-o-bins 12 "
          "--fold-phi --mu 0.02 --plot leaf.png")),
     Measuring(
         "sphere", "sphere", "an integrating sphere's readout (sample over standard)",
@@ -159,8 +161,8 @@ MEASURING: dict[str, Measuring] = {row.name: row for row in (
         "with its interval. The sphere comes from the scene's integrating_sphere integrator.",
         "the reading and the hemispherical value of the same rays over wavelength, with their certified bands; "
         "several theta_i: one figure per angle, FIG_<deg>deg.png",
-        ("virtspec sphere scenes/sphere_150mm_8d.xml --specular SCE --rays 20000",
-         "virtspec sphere scenes/sphere_150mm_8d.xml --method comparison --wavelengths 400:700:100 --rays 20000 "
+        ("virtspec sphere sphere_150mm_8d --specular SCE --rays 20000",
+         "virtspec sphere sphere_150mm_8d --method comparison --wavelengths 400:700:100 --rays 20000 "
          "--correct --out r.json")),
 )}
 """The measuring subcommands: each takes the settings' flags, its instrument's and :data:`COMMON_FLAGS`."""
@@ -327,9 +329,16 @@ def build_parser() -> argparse.ArgumentParser:
                      "layout; --compare lists every cell of a published table outside the certified interval.")
     _albedo_options(albedo)
 
-    command("scenes", "the shipped scenes (every SCENE argument takes their names)",
-            "List the scenes shipped with virtspec-mi. Every subcommand that takes a SCENE takes a shipped "
-            "scene's name as well as a file path (e.g. virtspec measure soybean_abmb).")
+    shipped = command("scenes", "the shipped scenes (every SCENE argument takes their names)",
+                      "List the scenes shipped with virtspec-mi and their files. Every subcommand that takes a "
+                      "SCENE takes a shipped scene's name as well as a file path (e.g. virtspec measure "
+                      "soybean_abmb). --copy NAME [DEST] copies one as a template to edit (never over an "
+                      "existing file).")
+    asked = shipped.add_mutually_exclusive_group()
+    asked.add_argument("--path", metavar="NAME", help="print the file of the shipped scene NAME")
+    asked.add_argument("--copy", metavar="NAME", help="copy the shipped scene NAME to DEST (a file or a folder; "
+                                                      "default ./NAME.xml) and print the copy's path")
+    shipped.add_argument("destination", nargs="?", metavar="DEST", help="where --copy puts its copy")
 
     llvm = command("llvm", "find or check the libLLVM Dr.Jit uses (set-up)",
                    "find: print a libLLVM >= 17 on this machine (exit 1 if none); check: load it in Dr.Jit "
@@ -549,9 +558,9 @@ def _command(args: argparse.Namespace, exit_status: Any) -> int:
             print(format_budgets(args.mu, args.delta))
             return 0
         if args.command == "scenes":
-            from virtspec_mi.scenes import catalogue
+            from virtspec_mi.scenes import answer
 
-            print(catalogue())
+            print(answer(args.path, args.copy, args.destination))
             return 0
         if args.command == "llvm":
             from virtspec_mi.llvm import main as llvm_main

@@ -30,7 +30,9 @@ import re
 from pathlib import Path
 from typing import Any
 
-__all__ = ["FOLDER", "names", "path", "describe", "catalogue", "listing", "resolve", "hint", "copy", "include_folder"]
+__all__ = [
+    "FOLDER", "names", "path", "describe", "catalogue", "listing", "resolve", "hint", "copy", "include_folder", "answer",
+]
 
 FOLDER: Path = Path(__file__).resolve().parent
 """Where the shipped scenes are."""
@@ -141,3 +143,19 @@ def include_folder(resolver: Any) -> None:
     folder = str(FOLDER)
     if folder not in (str(resolver[i]) for i in range(len(resolver))):
         resolver.append(folder)
+
+
+def answer(path_of: str | None = None, copy_of: str | None = None, destination: str | None = None) -> str:
+    """
+    What ``virtspec scenes`` prints: the listing (:func:`listing`); with ``path_of`` the
+    scene's file; with ``copy_of`` the path of its copy at ``destination``
+    (:func:`copy`). ``ValueError`` for a destination without a scene to copy.
+    """
+
+    if destination is not None and copy_of is None:
+        raise ValueError(f"DEST ({destination}) is where --copy NAME puts its copy: give --copy NAME DEST")
+    if path_of is not None:
+        return str(path(path_of))
+    if copy_of is not None:
+        return str(copy(copy_of, destination))
+    return listing()

@@ -528,9 +528,27 @@ def _given(args: argparse.Namespace, kind: Any, several: tuple[str, ...] = ()) -
         try:
             check(value)
         except ValueError as error:
-            raise ValueError(f"{_flag(item.name)}: {error}") from None
+            hint = _ONE_ANGLE if item.name in _SEVERAL and item.name not in several else ""
+            raise ValueError(f"{_flag(item.name)}: {error}{hint}") from None
         given[item.name] = value
     return given
+
+
+_ONE_ANGLE = "; measure takes one angle: for several, virtspec sweep SCENE --theta-i 0 30 (or 0:90:10)"
+
+
+def _unrecognized_hint(args: argparse.Namespace, extra: list[str]) -> str:
+    """What to do instead of the ``extra`` words: ``sweep`` for several angles after ``measure --theta-i``."""
+
+    from virtspec_mi.checks import parse_theta_i
+
+    if getattr(args, "command", None) != "measure" or getattr(args, "theta_i", None) is None:
+        return ""
+    try:
+        parse_theta_i(" ".join(extra))
+    except ValueError:
+        return ""
+    return _ONE_ANGLE
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -538,7 +556,9 @@ def main(argv: Sequence[str] | None = None) -> int:
 
     signal.signal(signal.SIGPIPE, signal.SIG_DFL)  # a closed pipe (virtspec bounds | head) ends us quietly
     parser = build_parser()
-    args = parser.parse_args(argv)
+    args, extra = parser.parse_known_args(argv)
+    if extra:
+        parser.error(f"unrecognized arguments: {' '.join(extra)}{_unrecognized_hint(args, extra)}")
     from virtspec_mi.engine.interrupts import catching, exit_status
 
     with catching():  # SIGINT and SIGTERM stop a run at its next safe point, its checkpoint saved

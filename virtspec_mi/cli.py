@@ -192,6 +192,10 @@ COMMON_FLAGS: tuple[Flag, ...] = (
                        help="result file .nc, .csv, .json or .zarr, written atomically once every reading is done; "
                             "finished readings are kept in FILE.partial.json meanwhile: re-run the same command to "
                             "resume (virtspec plot, colour and compare read the file)")),
+    Flag("--csv-plain", dict(metavar="FILE.csv",
+                             help="also write the result as a plain CSV for a spreadsheet: a row of column names "
+                                  "and one row per reading, without the attribute line of an --out .csv (not read "
+                                  "back as a result)")),
     Flag("--plot", dict(metavar="FIG", help="figure .png or .svg: {plot}")),
     Flag("--json", dict(action="store_true",
                         help="print the result as one JSON object instead (its as_dict(): a result file that "
@@ -628,10 +632,15 @@ def _keywords(args: argparse.Namespace, command: Measuring) -> dict[str, Any]:
     figures' suffixes, one reading for ``measure``, no parameter sweep to draw.
     """
 
-    from virtspec_mi.results.io import check_output
+    from virtspec_mi.results.io import check_output, check_plain_csv
     from virtspec_mi.results.plot import check_figure_path
 
     out = _flagged("--out", check_output, args.out) if args.out else None
+    if args.csv_plain:
+        plain = _flagged("--csv-plain", lambda path: check_output(path, "csv_plain"), args.csv_plain)
+        _flagged("--csv-plain", lambda path: check_plain_csv(path, "csv_plain"), plain)
+        if out is not None and plain.resolve() == out.resolve():
+            raise ValueError(f"--csv-plain: {plain} is also --out (the result file); give the plain CSV another name")
     figures = {flag: getattr(args, flag.lstrip("-").replace("-", "_"), None) for flag in ("--plot", "--plot-series")}
     for flag, path in figures.items():
         _flagged(flag, check_figure_path, path)
@@ -739,12 +748,16 @@ def _report(args: argparse.Namespace, result: Any, text: str, figures: Sequence[
     ``--quiet`` and ``--out`` (the file holds the result).
     """
 
+    plain = getattr(args, "csv_plain", None)
+    if plain:
+        result.write(plain, plain=True)
     if args.json:
         print(result.sealed_json() if data is None else json.dumps(data))
         return 0
     if args.quiet and args.out:
         return 0
-    lines = [text, *([f"written: {args.out}"] if args.out else []), *(f"plot: {path}" for path in figures)]
+    written = [path for path in (args.out, plain) if path]
+    lines = [text, *(f"written: {path}" for path in written), *(f"plot: {path}" for path in figures)]
     print("\n".join(lines), file=stream or sys.stdout)
     return 0
 
@@ -774,6 +787,8 @@ def _sweep(args: argparse.Namespace) -> int:
         return _report(args, result, result.summary(), figures)
     if not args.quiet:  # the summary on stderr, so that the table can be piped
         _report(args, result, result.summary(), figures, stream=sys.stderr)
+    elif args.csv_plain:
+        result.write(args.csv_plain, plain=True)
     print(csv_text(result.to_dataset()), end="")
     return 0
 

@@ -440,12 +440,16 @@ class ResultBase:
 
     # -- files ------------------------------------------------------------------------
 
-    def write(self, path: str | os.PathLike) -> Path:
-        """Write to ``.nc`` (NetCDF-4), ``.csv``, ``.json`` or ``.zarr`` by suffix (:mod:`virtspec_mi.results.io`)."""
+    def write(self, path: str | os.PathLike, *, plain: bool = False) -> Path:
+        """
+        Write to ``.nc`` (NetCDF-4), ``.csv``, ``.json`` or ``.zarr`` by suffix
+        (:mod:`virtspec_mi.results.io`); ``plain=True``: a ``.csv`` of columns and rows
+        alone, for a spreadsheet (not read back as a result).
+        """
 
         from virtspec_mi.results import io as results_io
 
-        return results_io.write(self, path)
+        return results_io.write(self, path, plain=plain)
 
     @classmethod
     def read(cls, path: str | os.PathLike) -> Any:

@@ -119,7 +119,7 @@ MEASURING: dict[str, Measuring] = {row.name: row for row in (
         "each with the tolerance its rays guarantee and a Clopper-Pearson interval. Every setting defaults to the "
         "scene's spectrophotometer integrator, else to the paper's defaults. The readings are keyed as a sweep's "
         "(virtspec sweep --theta-i THETA gives the same counts): resumable with --out, the same on Dask workers.",
-        "the reading over wavelength with the band of its certified tolerance",
+        "reflectance and transmittance over wavelength, each with the band of its certified tolerance",
         ("virtspec measure diamond_conical --theta-i 70",
          "virtspec measure soybean_abmb --wavelengths 400:2500:5 --bound two-stage --json",
          "virtspec measure soybean_abmb --wavelengths 400:700:10 --param specimen.thickness=2e-4 --plot leaf.png"),
@@ -767,9 +767,12 @@ def _measure(args: argparse.Namespace) -> int:
 
     from virtspec_mi.api import sweep
 
+    from virtspec_mi.results.plot import plot_spectra
+
     result = _run(args, sweep, _keywords(args, MEASURING["measure"]))
     reading = result.squeeze(*(d for d in result.dims if d != "wavelength"))
-    return _report(args, reading, reading.summary(), _drawn(args.plot, reading.plot))
+    figures = _drawn(args.plot, lambda path: plot_spectra(reading, path, quantities=("reflectance", "transmittance")))
+    return _report(args, reading, reading.summary(), figures)
 
 
 def _sweep(args: argparse.Namespace) -> int:

@@ -7,17 +7,34 @@ VENV   := .venv
 PY     := $(VENV)/bin/python
 STAMP  := $(VENV)/.installed
 SUDO   := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
+APT    ?= apt-get
 PYTEST_ARGS ?=
 
-.PHONY: setup llvm demo test test-fast docs lab bench notebooks clean
+.PHONY: setup venv llvm demo test test-fast docs lab bench notebooks clean
 
 setup: $(STAMP) llvm
 
-$(STAMP): pyproject.toml
-	@[ -x $(PY) ] || $(PYTHON) -m venv $(VENV)
+$(STAMP): pyproject.toml | venv
 	$(PY) -m pip install --quiet --upgrade pip
 	$(PY) -m pip install --quiet -e '.[test,docs]'
 	@touch $(STAMP)
+
+# A .venv whose pip is missing (left half-made by `python3 -m venv` on Debian/Ubuntu without the
+# python3-venv package: "ensurepip is not available") is made again; python3-venv is installed with
+# apt when missing, else named.
+venv:
+	@$(PY) -m pip --version >/dev/null 2>&1 || { \
+	  if [ -e $(VENV) ]; then echo "setup: $(VENV) has no working pip (a half-made virtual environment): making it again"; \
+	    rm -rf $(VENV); fi; \
+	  $(PYTHON) -m venv $(VENV) >/dev/null 2>&1 || { \
+	    rm -rf $(VENV); \
+	    echo "setup: $(PYTHON) -m venv cannot install pip: the system package python3-venv is missing"; \
+	    if command -v $(APT) >/dev/null 2>&1; then echo "setup: installing python3-venv with $(APT)"; \
+	      $(SUDO) $(APT) update -qq && $(SUDO) DEBIAN_FRONTEND=noninteractive $(APT) install -y -qq python3-venv >/dev/null; \
+	    fi; \
+	    $(PYTHON) -m venv $(VENV) >/dev/null 2>&1 || { rm -rf $(VENV); \
+	      echo "setup: install python3-venv (Debian/Ubuntu: sudo apt-get install python3-venv), then run make setup again" >&2; \
+	      exit 1; }; }; }
 
 # Dr.Jit aborts under libLLVM 14/15/16 (Debian 12's defaults): install 19 when no good one is found.
 llvm: $(STAMP)

@@ -205,3 +205,35 @@ def test_bad_input_gets_one_line_that_names_it(scenes_dir, tmp_path, args, messa
     result = virtspec(*[where.get(a, a) for a in args])
     assert result.returncode == 1 and result.stderr.startswith("virtspec: error: "), result.stderr
     assert message in result.stderr and "Traceback" not in result.stderr
+
+
+@pytest.mark.parametrize("args, message", [
+    (["--theta-i", "0", "30"], "unrecognized arguments: 30; measure takes one angle: for several, virtspec sweep SCENE "
+                               "--theta-i 0 30"),
+    (["--theta-i", "0:30:10"], "--theta-i: theta_i must be a number (got '0:30:10'); measure takes one angle"),
+    (["--wavelengths", "400-700"], "wavelengths must be a number (got '400-700'); a range is start:stop:step, "
+                                   "e.g. 400:700:10"),
+    (["--wavelengths", "400", "abc"], "(got 'abc'); write numbers separated by commas or spaces (450,550,650) or "
+                                      "start:stop:step ranges (400:700:10)"),
+])
+def test_a_newcomers_slip_gets_the_form_to_use(args, message):
+    result = virtspec("measure", "diamond_conical", *args, "--rays", "100")
+    assert result.returncode in (1, 2) and message in result.stderr, result.stderr
+    assert "Traceback" not in result.stderr
+
+
+def test_csv_plain_writes_a_spreadsheet_table_beside_the_result(tmp_path):
+    import pandas as pd
+
+    result = virtspec("measure", "diamond_conical", "--theta-i", "70", "--wavelengths", "450,550", "--rays", "1000",
+                      "--out", str(tmp_path / "r.nc"), "--csv-plain", str(tmp_path / "r.csv"))
+    assert result.returncode == 0, result.stderr
+    assert f"written: {tmp_path / 'r.csv'}" in result.stdout
+    table = pd.read_csv(tmp_path / "r.csv")
+    assert table["wavelength"].tolist() == [450.0, 550.0] and table["rays"].tolist() == [1000, 1000]
+    quiet = virtspec("sweep", "diamond_conical", "--theta-i", "0", "70", "--wavelengths", "550", "--rays", "500",
+                     "--quiet", "--csv-plain", str(tmp_path / "s.csv"))
+    assert quiet.returncode == 0 and pd.read_csv(tmp_path / "s.csv")["theta_i"].tolist() == [0.0, 70.0]
+    same = virtspec("measure", "diamond_conical", "--out", str(tmp_path / "r.csv"), "--csv-plain",
+                    str(tmp_path / "r.csv"))
+    assert same.returncode == 1 and "is also --out" in same.stderr

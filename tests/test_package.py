@@ -52,3 +52,17 @@ def test_make_lab_opens_the_notebooks_with_the_notebook_extra():
     plan = subprocess.run(["make", "-n", "lab"], cwd=root, capture_output=True, text=True)
     assert plan.returncode == 0, plan.stderr
     assert "notebook]" in plan.stdout and "jupyter lab notebooks" in plan.stdout
+
+
+def test_the_project_has_a_bsd_3_clause_licence_in_its_metadata_and_the_leaf_data_keeps_its_own():
+    import tomllib
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parents[1]
+    text = (root / "LICENSE").read_text()
+    assert text.startswith("BSD 3-Clause License") and "the virtspec-mi developers" in text
+    assert "Neither the name of the copyright holder" in text
+    project = tomllib.loads((root / "pyproject.toml").read_text())["project"]
+    assert project["license"] == "BSD-3-Clause"
+    assert project["license-files"] == ["LICENSE", "virtspec_mi/data/abm-npsg/LICENSE"]
+    assert "Natural Phenomena Simulation Group" in (root / "virtspec_mi/data/abm-npsg/LICENSE").read_text()

@@ -69,7 +69,8 @@ def legend_texts(axes) -> list[str]:
     return [text.get_text() for text in axes.get_legend().get_texts()]
 
 
-BAND = "certified ±μ' (δ = 0.01 per reading)"  # the legend entry of the certified band
+MU = "μ': the tolerance its rays guarantee"  # what the band's half-width is
+BAND = f"certified ±μ' (δ = 0.01 per reading; {MU})"  # the legend entry of the certified band
 
 
 def test_the_title_names_the_scene_beam_angles_and_rays(angular):
@@ -169,7 +170,7 @@ def test_the_comparison_figure_overlays_and_shows_the_residuals(tmp_path):
     top, bottom = figure.axes
     assert top.get_title().startswith("grey wedge\n") and "θi = 8°" in top.get_title()
     texts = legend_texts(top)
-    assert "certified ±μ' (δ = 0.01 per point)" in texts and "measured: measured (± its uncertainty)" in texts
+    assert f"certified ±μ' (δ = 0.01 per point; {MU})" in texts and "measured: measured (± its uncertainty)" in texts
     assert "not compared (outside the measured range)" in texts
     residuals = bottom.lines[-1]
     np.testing.assert_array_equal(residuals.get_xdata(), [400, 500, 600])
@@ -223,7 +224,58 @@ def test_the_polar_radial_labels_lie_on_the_horizon_clear_of_every_curve(gonio):
             assert min(low for low, _ in spans) < -HORIZON and max(high for _, high in spans) > HORIZON  # both lobes
             where = axes.get_rlabel_position()
             assert where == HORIZON and not any(low < where < high for low, high in spans), spans
-            assert all(label.get_fontsize() < 7 for label in axes.get_yticklabels())  # smaller than the angles'
+            angles = min(label.get_fontsize() for label in axes.get_xticklabels())
+            assert all(8 <= label.get_fontsize() < angles for label in axes.get_yticklabels())  # smaller than those
+
+
+def test_the_polar_plots_are_large_and_their_labels_do_not_collide(gonio, tmp_path):
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from PIL import Image
+
+    from virtspec_mi.results.angular_plot import plot_polar
+
+    figure = plot_polar(gonio, tmp_path / "polar.png", name="soybean_abmb")
+    assert Image.open(tmp_path / "polar.png").size[0] >= 1100  # was 691 x 345 px
+    FigureCanvasAgg(figure).draw()
+    for axes in figure.axes:
+        labels = [label for label in axes.get_yticklabels() if label.get_text()]
+        assert 2 <= len(labels) <= 5
+        boxes = sorted((label.get_window_extent() for label in labels), key=lambda box: box.x0)
+        assert all(left.x1 < right.x0 for left, right in zip(boxes, boxes[1:])), boxes  # none runs into the next
+    assert figure.texts[0].get_text().count("\n") == 1  # two lines, not wrapped
+
+
+def test_a_band_at_one_wavelength_is_drawn_as_an_error_bar():
+    from result_kinds import sphere_grid
+
+    one = sphere_grid().isel(point=0)
+    one = one.isel(wavelength=[0])
+    axes = plot_spectra(one, quantities=["reading", "hemispherical"], theta_i=8).axes[0]
+    bars = [c for c in axes.collections if type(c).__name__ == "LineCollection"]
+    assert len(bars) == 2  # one per quantity: an area of no width would show nothing
+    for bar, quantity in zip(bars, ("reading", "hemispherical")):
+        (x, low), (_, high) = bar.get_segments()[0]
+        spectrum = one.spectrum(quantity, 8)
+        assert high - low == pytest.approx(2 * spectrum.tolerance[0]) and x == spectrum.wavelengths[0]
+
+
+def test_measure_plot_draws_reflectance_and_transmittance(mi, tmp_path, monkeypatch):
+    import virtspec_mi.results.plot as plots
+    from virtspec_mi.cli import main
+
+    drawn, original = [], plots.plot_spectra
+
+    def recording(result, path, **options):
+        drawn.append(original(result, path, **options))
+        return drawn[-1]
+
+    monkeypatch.setattr(plots, "plot_spectra", recording)
+    assert main(["measure", "soybean_abmb", "--wavelengths", "550,650", "--rays", "500", "--quiet", "--plot",
+                 str(tmp_path / "leaf.png")]) == 0
+    assert (tmp_path / "leaf.png").is_file()
+    axes = drawn[0].axes[0]
+    assert legend_texts(axes)[:2] == ["reflectance", "transmittance"]
+    assert axes.get_ylabel() == "reflectance, transmittance"
 
 
 # a specimen named by its scene file and defines: a title longer than any figure is wide

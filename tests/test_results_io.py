@@ -194,3 +194,22 @@ def test_concurrent_writers_never_show_a_partial_file(tmp_path):
     assert errors == []
     assert read_sweep(path).as_dict() in [r.as_dict() for r in results]
     assert [p.name for p in tmp_path.iterdir()] == ["shared.json"]
+
+
+def test_a_plain_csv_is_columns_and_rows_and_pandas_reads_both(result, tmp_path):
+    import pandas as pd
+
+    full, plain = result.write(tmp_path / "full.csv"), result.write(tmp_path / "plain.csv", plain=True)
+    assert full.read_text().startswith("# virtspec-mi result {")
+    assert plain.read_text().splitlines()[0].startswith("wavelength,theta_i,reflectance,")
+    assert plain.read_text().splitlines()[1:] == full.read_text().splitlines()[2:]
+    table, commented = pd.read_csv(plain), pd.read_csv(full, comment="#")  # as the manual says
+    assert list(table.columns) == list(commented.columns) and table.shape == (7 * 3, commented.shape[1])
+    np.testing.assert_array_equal(table["reflected"].to_numpy(), result.to_dataset()["reflected"].values.ravel())
+    assert np.array_equal(read_sweep(full).reflected, result.reflected)
+    with pytest.raises(ValueError, match="a plain CSV, written for a spreadsheet, holds no settings"):
+        read_sweep(plain)
+    with pytest.raises(ValueError, match="out must end in .csv: a plain CSV holds columns and rows"):
+        result.write(tmp_path / "plain.nc", plain=True)
+    with pytest.raises(ValueError, match="plain must be True or False"):
+        result.write(tmp_path / "plain.csv", plain="yes")

@@ -42,6 +42,10 @@ def test_the_wheel_and_the_sdist_hold_the_whole_package(built):
             "virtspec_mi/plugins/bsdfs/abm_b.py", "virtspec_mi/kernel/tracer.py"} <= expected
     wheel = set(zipfile.ZipFile(built["wheel"]).namelist())
     assert expected <= wheel, sorted(expected - wheel)
+    info = next(name.split("/")[0] for name in wheel if name.endswith(".dist-info/METADATA"))
+    assert {f"{info}/licenses/LICENSE", f"{info}/licenses/virtspec_mi/data/abm-npsg/LICENSE"} <= wheel
+    metadata = zipfile.ZipFile(built["wheel"]).read(f"{info}/METADATA").decode()
+    assert "License-Expression: BSD-3-Clause" in metadata and "License-File: LICENSE" in metadata
     with tarfile.open(built["sdist"]) as sdist:
         members = {"/".join(name.split("/")[1:]) for name in sdist.getnames()}
     assert expected <= members, sorted(expected - members)

@@ -35,6 +35,7 @@ from __future__ import annotations
 import functools
 import inspect
 import math
+import re
 import sys
 from typing import Any, Callable, Iterable, TypeVar
 
@@ -475,7 +476,7 @@ def _parse_numbers(name: str, value: Any, unit: str) -> list[float]:
         values: list[float] = []
         for token in value_tokens(name, value):
             values.extend(_parse_range(token, name, MAX_VALUES - len(values)) if ":" in token
-                          else [number(name, token)])
+                          else [_token_number(name, token)])
             _check_count(name, len(values))
         return values
     if isinstance(value, (int, float)) and not _is_bool(value):
@@ -489,6 +490,21 @@ def _parse_numbers(name: str, value: Any, unit: str) -> list[float]:
             _check_count(name, len(values))
         return values
     raise ValueError(f"{name} must be numbers in {unit} (got {value!r})")
+
+
+def _token_number(name: str, token: str) -> float:
+    """
+    One number of a string of numbers; a token that is not one is refused with the forms
+    that are (a dash range, ``400-700``, with its ``start:stop:step`` spelling).
+    """
+
+    try:
+        return number(name, token)
+    except ValueError as error:
+        dashed = re.fullmatch(r"(\d+(?:\.\d*)?)-(\d+(?:\.\d*)?)", token.strip())
+        form = (f"a range is start:stop:step, e.g. {dashed[1]}:{dashed[2]}:10" if dashed else
+                "write numbers separated by commas or spaces (450,550,650) or start:stop:step ranges (400:700:10)")
+        raise ValueError(f"{error}; {form}") from None
 
 
 def _check_count(name: str, count: float) -> None:

@@ -77,7 +77,9 @@ _EXAMPLES = {
               "  virtspec colour lut.nc --sel specimen.thickness=1.6e-4 --sel theta_i=8\n"
               "  virtspec colour sphere.json --quantity hemispherical",
     "llvm": "example: virtspec llvm check",
-    "scenes": "examples:\n  virtspec scenes\n  virtspec measure soybean_abmb --wavelengths 400:2500:5",
+    "scenes": "examples:\n  virtspec scenes\n  virtspec scenes --path sphere_150mm_8d\n"
+              "  virtspec scenes --copy sphere_150mm_8d my_sphere.xml\n"
+              "  virtspec measure soybean_abmb --wavelengths 400:2500:5",
     "albedo-table": "examples:\n  virtspec albedo-table --engine cycles --epsilon 1e-3 --out ggx_E.nc ggx_E.h\n"
                     "  virtspec albedo-table --model glass --engine cycles --out glass.nc --checkpoint glass.parts\n"
                     "  virtspec albedo-table --from ggx_E.nc --compare published_tables.h --rounding 5e-7",
@@ -167,6 +169,10 @@ COMMON_FLAGS: tuple[Flag, ...] = (
                        help="result file .nc, .csv, .json or .zarr, written atomically once every reading is done; "
                             "finished readings are kept in FILE.partial.json meanwhile: re-run the same command to "
                             "resume (virtspec plot, colour and compare read the file)")),
+    Flag("--csv-plain", dict(metavar="FILE.csv",
+                             help="also write the result as a plain CSV for a spreadsheet: a row of column names "
+                                  "and one row per reading, without the attribute line of an --out .csv (not read "
+                                  "back as a result)")),
     Flag("--plot", dict(metavar="FIG", help="figure .png or .svg: {plot}")),
     Flag("--json", dict(action="store_true",
                         help="print the result as one JSON object instead (its as_dict(): a result file that "
@@ -294,9 +300,16 @@ def build_parser() -> argparse.ArgumentParser:
                      "layout; --compare lists every cell of a published table outside the certified interval.")
     _albedo_options(albedo)
 
-    command("scenes", "the shipped scenes (every SCENE argument takes their names)",
-            "List the scenes shipped with virtspec-mi. Every subcommand that takes a SCENE takes a shipped "
-            "scene's name as well as a file path (e.g. virtspec measure soybean_abmb).")
+    shipped = command("scenes", "the shipped scenes (every SCENE argument takes their names)",
+                      "List the scenes shipped with virtspec-mi and their files. Every subcommand that takes a "
+                      "SCENE takes a shipped scene's name as well as a file path (e.g. virtspec measure "
+                      "soybean_abmb). --copy NAME [DEST] copies one as a template to edit (never over an "
+                      "existing file).")
+    asked = shipped.add_mutually_exclusive_group()
+    asked.add_argument("--path", metavar="NAME", help="print the file of the shipped scene NAME")
+    asked.add_argument("--copy", metavar="NAME", help="copy the shipped scene NAME to DEST (a file or a folder; "
+                                                      "default ./NAME.xml) and print the copy's path")
+    shipped.add_argument("destination", nargs="?", metavar="DEST", help="where --copy puts its copy")
 
     llvm = command("llvm", "find or check the libLLVM Dr.Jit uses (set-up)",
                    "find: print a libLLVM >= 17 on this machine (exit 1 if none); check: load it in Dr.Jit "
@@ -463,9 +476,40 @@ def _given(args: argparse.Namespace, kind: Any, several: tuple[str, ...] = ()) -
         try:
             check(value)
         except ValueError as error:
-            raise ValueError(f"{_flag(item.name)}: {error}") from None
+            hint = _one_angle(args.command) if item.name in _SEVERAL and item.name not in several else ""
+            raise ValueError(f"{_flag(item.name)}: {error}{hint}") from None
         given[item.name] = value
     return given
+
+
+def _one_angle(name: str) -> str:
+    """
+    The hint for several angles given to a one-reading subcommand ``name``: the subcommand
+    of the same instrument that takes several (``measure`` → ``sweep``), if any.
+    """
+
+    rows = measuring()
+    row = rows.get(name)
+    if row is None or not row.one_reading:
+        return ""
+    several = [other.name for other in rows.values() if other.instrument == row.instrument and not other.one_reading]
+    if not several:
+        return f"; {name} takes one angle"
+    return f"; {name} takes one angle: for several, virtspec {several[0]} SCENE --theta-i 0 30 (or 0:90:10)"
+
+
+def _unrecognized_hint(args: argparse.Namespace, extra: list[str]) -> str:
+    """What to do instead of the ``extra`` words: ``sweep`` for several angles after ``measure --theta-i``."""
+
+    from virtspec_mi.checks import parse_theta_i
+
+    if getattr(args, "theta_i", None) is None or not _one_angle(getattr(args, "command", "")):
+        return ""
+    try:
+        parse_theta_i(" ".join(extra))
+    except ValueError:
+        return ""
+    return _one_angle(args.command)
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -473,7 +517,9 @@ def main(argv: Sequence[str] | None = None) -> int:
 
     signal.signal(signal.SIGPIPE, signal.SIG_DFL)  # a closed pipe (virtspec bounds | head) ends us quietly
     parser = build_parser()
-    args = parser.parse_args(argv)
+    args, extra = parser.parse_known_args(argv)
+    if extra:
+        parser.error(f"unrecognized arguments: {' '.join(extra)}{_unrecognized_hint(args, extra)}")
     from virtspec_mi.engine.interrupts import catching, exit_status
 
     with catching():  # SIGINT and SIGTERM stop a run at its next safe point, its checkpoint saved
@@ -493,9 +539,9 @@ def _command(args: argparse.Namespace, exit_status: Any) -> int:
             print(format_budgets(args.mu, args.delta))
             return 0
         if args.command == "scenes":
-            from virtspec_mi.scenes import catalogue
+            from virtspec_mi.scenes import answer
 
-            print(catalogue())
+            print(answer(args.path, args.copy, args.destination))
             return 0
         if args.command == "llvm":
             from virtspec_mi.llvm import main as llvm_main
@@ -544,10 +590,15 @@ def _keywords(args: argparse.Namespace, command: Measuring) -> dict[str, Any]:
     figures' suffixes, one reading for ``measure``, no parameter sweep to draw.
     """
 
-    from virtspec_mi.results.io import check_output
+    from virtspec_mi.results.io import check_output, check_plain_csv
     from virtspec_mi.results.plot import check_figure_path
 
     out = _flagged("--out", check_output, args.out) if args.out else None
+    if args.csv_plain:
+        plain = _flagged("--csv-plain", lambda path: check_output(path, "csv_plain"), args.csv_plain)
+        _flagged("--csv-plain", lambda path: check_plain_csv(path, "csv_plain"), plain)
+        if out is not None and plain.resolve() == out.resolve():
+            raise ValueError(f"--csv-plain: {plain} is also --out (the result file); give the plain CSV another name")
     figures = {figure.flag: getattr(args, _dest(figure.flag), None) for figure in command.command.all_figures()}
     for flag, path in figures.items():
         _flagged(flag, check_figure_path, path)
@@ -655,12 +706,16 @@ def _report(args: argparse.Namespace, result: Any, text: str, figures: Sequence[
     ``--quiet`` and ``--out`` (the file holds the result).
     """
 
+    plain = getattr(args, "csv_plain", None)
+    if plain:
+        result.write(plain, plain=True)
     if args.json:
         print(result.sealed_json() if data is None else json.dumps(data))
         return 0
     if args.quiet and args.out:
         return 0
-    lines = [text, *([f"written: {args.out}"] if args.out else []), *(f"plot: {path}" for path in figures)]
+    written = [path for path in (args.out, plain) if path]
+    lines = [text, *(f"written: {path}" for path in written), *(f"plot: {path}" for path in figures)]
     print("\n".join(lines), file=stream or sys.stdout)
     return 0
 
@@ -697,8 +752,9 @@ class _Session:
         paths: list[Any] = []
         for figure in self.command.all_figures():
             labels = np.atleast_1d(result.coords[figure.dim]) if figure.dim else ()
-            paths += _drawn(getattr(self.args, _dest(figure.flag), None), getattr(result, figure.method), figure.dim,
-                            labels)
+            method = getattr(result, figure.method)
+            draw = functools.partial(method, **figure.keywords) if figure.keywords else method
+            paths += _drawn(getattr(self.args, _dest(figure.flag), None), draw, figure.dim, labels)
         return paths
 
     def report(self, result: Any, text: str, figures: Sequence[Any] = (), data: dict[str, Any] | None = None,

@@ -47,9 +47,11 @@ _SEARCH_PATTERNS = (
 )
 
 _FIX = (
-    "Install a working libLLVM (Debian/Ubuntu: 'apt-get install libllvm19', or run "
-    "'make setup') and, if it is not found automatically, point DRJIT_LIBLLVM_PATH at it, "
-    "e.g. DRJIT_LIBLLVM_PATH=/usr/lib/x86_64-linux-gnu/libLLVM.so.19.1"
+    "Install a working libLLVM (Debian/Ubuntu: 'sudo apt-get install libllvm19'; Fedora: 'sudo dnf install "
+    "llvm-libs'; macOS: 'brew install llvm'; in a checkout 'make setup' does it) and, if it is not found "
+    "automatically, point DRJIT_LIBLLVM_PATH at it, e.g. DRJIT_LIBLLVM_PATH=/usr/lib/x86_64-linux-gnu/libLLVM.so.19.1 "
+    "or DRJIT_LIBLLVM_PATH=$(brew --prefix llvm)/lib/libLLVM.dylib; then 'virtspec llvm check' (the manual's "
+    "installation page)"
 )
 
 

@@ -80,6 +80,7 @@ from virtspec_mi.engine.plan import Plan
 from virtspec_mi.engine.readings import BatchRunner, take_keyed_readings
 from virtspec_mi.engine.tally import Tally
 from virtspec_mi.runtime import mitsuba, variant
+from virtspec_mi import scenes
 from virtspec_mi.scene import find_bench
 
 __all__ = [
@@ -294,6 +295,7 @@ def portable_scene(scene: Any) -> Any:
     a loaded ``mi.Scene`` (the workers load the scene themselves).
     """
 
+    scene = scenes.resolve(scene)  # a shipped scene's name: its file, not a name in the workers' directory
     if isinstance(scene, (str, os.PathLike)):
         return os.path.abspath(os.fspath(scene))  # the same path on every worker, whatever its directory
     if isinstance(scene, dict):

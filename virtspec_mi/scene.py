@@ -3,7 +3,8 @@ Scenes: loading, building and fingerprinting instrument scenes
 ==============================================================
 
 - :func:`load_scene` accepts an XML path, a shipped scene's name
-  (:mod:`virtspec_mi.scenes`), a scene dict or a loaded ``mi.Scene`` and
+  (:mod:`virtspec_mi.scenes`; an XML file may include a shipped scene by its file
+  name), a scene dict or a loaded ``mi.Scene`` and
   turns Mitsuba's loader errors into messages that name the problem; an XML scene's
   parameters (``$name`` with a ``<default name="name" value="…"/>``) are set by
   ``defines`` (name → value), as Mitsuba's ``mitsuba -D name=value`` and
@@ -67,8 +68,9 @@ def load_scene(scene: Any, defines: dict[str, Any] | None = None) -> Any:
             if path.is_dir():
                 raise SceneError(f"scene {path} is a directory; give a Mitsuba XML scene file")
             if not path.is_file():
-                raise SceneError(f"scene file not found: {path}")
+                raise SceneError(f"scene file not found: {path}{scenes.hint(path)}")
             _check_defined(path, defines)
+            scenes.include_folder(mi.file_resolver())  # <include filename="diamond_conical.xml"/> finds it
             return mi.load_file(str(path), **defines)
         if isinstance(scene, dict):
             _check_dict(scene)

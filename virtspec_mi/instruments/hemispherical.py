@@ -87,6 +87,8 @@ def _respond_sweep(session: Session) -> int:
         return session.report(result, result.summary(), figures)
     if not args.quiet:  # the summary on stderr, so that the table can be piped
         session.report(result, result.summary(), figures, stream=sys.stderr)
+    elif args.csv_plain:
+        result.write(args.csv_plain, plain=True)
     print(csv_text(result.to_dataset()), end="")
     return 0
 
@@ -137,7 +139,9 @@ _MEASURE = Command(
     ("virtspec measure diamond_conical --theta-i 70",
      "virtspec measure soybean_abmb --wavelengths 400:2500:5 --bound two-stage --json",
      "virtspec measure soybean_abmb --wavelengths 400:700:10 --param specimen.thickness=2e-4 --plot leaf.png"),
-    figures=(Figure("--plot", "plot", "the reading over wavelength with the band of its certified tolerance"),),
+    figures=(Figure("--plot", "plot_spectra", "reflectance and transmittance over wavelength, each with the band of "
+                                              "its certified tolerance",
+                    keywords={"quantities": ("reflectance", "transmittance")}),),
     one_reading=True, function="sweep")
 
 _SWEEP = Command(

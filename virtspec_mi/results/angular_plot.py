@@ -15,8 +15,9 @@ Plots of goniophotometer readings (PNG and SVG)
 The plane of incidence is drawn through the φo bins that hold φi + 180° (the mirror
 side, drawn at +θo) and φi (the back side, drawn at −θo); the perpendicular plane
 through φi ± 90°. Folded readings (relative azimuth) use 180° and 0°, resp. 90°.
-The polar plots write their radial tick labels small, along the horizon (:data:`HORIZON`),
-clear of the lobes; titles wrap to the figure's width. The figures are built without
+The polar plots (:data:`POLAR_SIZE`, at :data:`DPI`) write four or five radial tick labels
+along the horizon (:data:`HORIZON`), clear of the lobes and of each other; their
+title takes two lines (what, then the rays and bins). The figures are built without
 ``pyplot``; the file suffix picks the format.
 
 References
@@ -34,7 +35,13 @@ import numpy as np
 
 from virtspec_mi.results.plot import check_figure_path, curve_style
 
-__all__ = ["HORIZON", "plot_polar", "plot_hemisphere", "plot_series", "plane_bins"]
+__all__ = ["HORIZON", "POLAR_SIZE", "DPI", "plot_polar", "plot_hemisphere", "plot_series", "plane_bins"]
+
+POLAR_SIZE: tuple[float, float] = (12.0, 6.8)
+"""The polar plots' size in inches: 1,200 × 680 px at :data:`DPI`."""
+
+DPI: int = 100
+"""Dots per inch of the goniophotometer figures' PNG files."""
 
 HORIZON: float = 90.0
 """
@@ -75,7 +82,9 @@ def plot_polar(reading: Any, path: str | os.PathLike | None = None, wavelength: 
 
     path = check_figure_path(path)
     w = 0 if wavelength is None else int(np.argmin(np.abs(reading.wavelengths - wavelength)))
-    figure = Figure(figsize=(9.6, 4.8), layout="constrained")
+    from matplotlib.ticker import MaxNLocator
+
+    figure = Figure(figsize=POLAR_SIZE, layout="constrained")
     theta = reading.bins.theta_centres
     lower_t, upper_t = reading.bins.theta_edges[:-1], reading.bins.theta_edges[1:]
     for panel, (across, title) in enumerate(((False, "plane of incidence"), (True, "perpendicular plane"))):
@@ -104,14 +113,15 @@ def plot_polar(reading: Any, path: str | os.PathLike | None = None, wavelength: 
                               arrowprops={"arrowstyle": "<-", "color": style["color"], "alpha": 0.5})
         if log:
             axes.set_rscale("symlog", linthresh=1e-2)
-        axes.set_title(f"f (1/sr), {title}", fontsize=10)
+        axes.set_title(f"f (1/sr), {title}", fontsize=11, pad=14)
         axes.set_thetagrids(range(0, 360, 30), labels=[f"{a if a <= 180 else a - 360}°" for a in range(0, 360, 30)],
-                            fontsize=7)
+                            fontsize=9)
+        axes.yaxis.set_major_locator(MaxNLocator(4))  # few radial labels: they do not run into each other
         axes.set_rlabel_position(HORIZON)  # between the lobes, away from the beam's arrows (drawn at −θi)
-        axes.tick_params(axis="y", labelsize=6)
+        axes.tick_params(axis="y", labelsize=8)
         if panel == 0:
-            axes.legend(loc="lower left", fontsize=7, bbox_to_anchor=(-0.15, -0.12))
-    return _finish(figure, reading, w, f"{name + ': ' if name else ''}goniophotometer", "band: all bins", 10, path)
+            axes.legend(loc="lower left", fontsize=9, bbox_to_anchor=(-0.12, -0.1))
+    return _finish(figure, reading, w, f"{name + ': ' if name else ''}goniophotometer", "band: all bins", 12, path)
 
 
 def plot_hemisphere(reading: Any, path: str | os.PathLike | None = None, transmission: bool = False,
@@ -140,7 +150,7 @@ def plot_hemisphere(reading: Any, path: str | os.PathLike | None = None, transmi
                    f"λ = {reading.wavelengths[w]:g} nm\n(radius: polar angle from the "
                    f"{'lower' if transmission else 'upper'} normal)", fontsize=9, wrap=True)
     if path is not None:
-        figure.savefig(Path(path), dpi=90)
+        figure.savefig(Path(path), dpi=DPI)
     return figure
 
 
@@ -218,9 +228,9 @@ def _finish(figure: Any, reading: Any, w: int, what: str, band: str, size: int,
 
     specimen = reading.specimen_label
     of = f" of {specimen}" if specimen else ""
-    figure.suptitle(f"{what}{of}, {reading.result.settings.beam} beam, λ = {reading.wavelengths[w]:g} nm, "
+    figure.suptitle(f"{what}{of}, {reading.result.settings.beam} beam, λ = {reading.wavelengths[w]:g} nm\n"
                     f"N = {int(reading.rays.max()):,} rays, K = {reading.size} bins ({band} at "
                     f"{1 - reading.delta:g})", fontsize=size, wrap=True)
     if path is not None:
-        figure.savefig(path, dpi=72)
+        figure.savefig(path, dpi=DPI)
     return figure

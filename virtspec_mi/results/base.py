@@ -213,6 +213,13 @@ class ResultBase:
     RENDERED: ClassVar[tuple[str, ...]] = ("reflectance", "transmittance", "absorptance")
     """The quantities :meth:`rendered` returns, in its columns."""
 
+    def plot_spectra(self, path: str | os.PathLike | None = None, **options: Any) -> Any:
+        """Quantities of the result over wavelength at one θi (:func:`virtspec_mi.results.plot.plot_spectra`)."""
+
+        from virtspec_mi.results.plot import plot_spectra
+
+        return plot_spectra(self, path, **options)
+
     def drawn_note(self, quantity: str | None = None) -> str:
         """
         What :meth:`plot` of ``quantity`` leaves out, for the reader (a figure of one
@@ -474,12 +481,16 @@ class ResultBase:
 
     # -- files ------------------------------------------------------------------------
 
-    def write(self, path: str | os.PathLike) -> Path:
-        """Write to ``.nc`` (NetCDF-4), ``.csv``, ``.json`` or ``.zarr`` by suffix (:mod:`virtspec_mi.results.io`)."""
+    def write(self, path: str | os.PathLike, *, plain: bool = False) -> Path:
+        """
+        Write to ``.nc`` (NetCDF-4), ``.csv``, ``.json`` or ``.zarr`` by suffix
+        (:mod:`virtspec_mi.results.io`); ``plain=True``: a ``.csv`` of columns and rows
+        alone, for a spreadsheet (not read back as a result).
+        """
 
         from virtspec_mi.results import io as results_io
 
-        return results_io.write(self, path)
+        return results_io.write(self, path, plain=plain)
 
     @classmethod
     def read(cls, path: str | os.PathLike) -> Any:

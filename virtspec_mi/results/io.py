@@ -14,7 +14,9 @@ module only writes and reads them, by suffix):
   settings, geometry, provenance, ``format`` and ``result_json`` as attributes;
 - ``.csv`` — one row per cell of ``result.csv_dataset()`` (a reading; a goniophotometer
   bin; a sphere configuration) with its variables as columns, after one
-  ``# virtspec-mi result {…}`` line holding the attributes as JSON;
+  ``# virtspec-mi result {…}`` line holding the attributes as JSON (``pandas.read_csv(path,
+  comment="#")`` skips it); with ``plain=True`` the columns and rows alone, for a
+  spreadsheet (such a file is not read back as a result: it has no settings);
 - ``.json`` — ``result.as_dict()``: one object (what ``virtspec measure --json``
   prints), arrays as nested lists over the dims;
 - ``.zarr`` — a Zarr store (a directory) of the same dataset, which a hemispherical
@@ -60,6 +62,7 @@ __all__ = [
     "SUFFIXES",
     "result_format",
     "check_output",
+    "check_plain_csv",
     "csv_text",
     "write",
     "read",
@@ -75,18 +78,21 @@ SUFFIXES: tuple[str, ...] = (".nc", ".csv", ".json", ".zarr")
 _CSV_HEADER = "# virtspec-mi result "
 
 
-def write(result: Any, path: str | os.PathLike) -> Path:
+def write(result: Any, path: str | os.PathLike, *, plain: bool = False) -> Path:
     """
     Write ``result`` (any kind of :class:`~virtspec_mi.results.base.ResultBase`) to ``path``;
     the suffix picks the format, and only what it needs is built: ``result.to_dataset()``
     for ``.nc`` and ``.zarr``, ``result.csv_dataset()`` for ``.csv``, ``result.sealed_json()``
-    for ``.json``. A failed write (a full disk …) raises :class:`~virtspec_mi.files.WriteError`
-    naming the path and the cause, with the result attached (``error.result``): nothing
-    traced is lost with the file.
+    for ``.json``. ``plain=True`` (a ``.csv`` only) leaves out the attribute line: a
+    header row and the rows, for a spreadsheet. A failed write (a full disk …) raises
+    :class:`~virtspec_mi.files.WriteError` naming the path and the cause, with the result
+    attached (``error.result``): nothing traced is lost with the file.
     """
 
     path = Path(path)
-    suffix = result_format(path)
+    if not isinstance(plain, (bool, np.bool_)):
+        raise ValueError(f"plain must be True or False (got {plain!r})")
+    suffix = check_plain_csv(path) if plain else result_format(path)
     try:
         if suffix == ".zarr":
             from virtspec_mi.results.zarr import write_result
@@ -98,7 +104,7 @@ def write(result: Any, path: str | os.PathLike) -> Path:
             elif suffix == ".json":
                 temporary.write_text(result.sealed_json() + "\n")
             else:
-                temporary.write_text(csv_text(result.csv_dataset()))
+                temporary.write_text(csv_text(result.csv_dataset(), plain=bool(plain)))
     except WriteError as error:
         raise error.keeping(error.kept or IN_MEMORY, result) from None
     return path
@@ -142,16 +148,27 @@ def check_output(path: str | os.PathLike, name: str = "out") -> Path:
     return path
 
 
-def csv_text(dataset: Any) -> str:
+def check_plain_csv(path: str | os.PathLike, name: str = "out") -> str:
+    """``".csv"`` when ``path`` ends in it (a plain CSV is a CSV), else ``ValueError`` naming ``name``."""
+
+    if Path(path).suffix.lower() != ".csv":
+        raise ValueError(f"{name} must end in .csv: a plain CSV holds columns and rows, without the attribute line "
+                         f"(got {Path(path).name!r})")
+    return ".csv"
+
+
+def csv_text(dataset: Any, plain: bool = False) -> str:
     """
-    The CSV form of a result's dataset: the attribute header line, then one row per
-    reading (floats in their shortest exact form, NaN as an empty field). Linear in the
-    cells, and column by column (no Python call per cell but the float's ``repr``).
+    The CSV form of a result's dataset: the attribute header line (none when ``plain``),
+    then a row of column names and one row per reading (floats in their shortest exact
+    form, NaN as an empty field). Linear in the cells, and column by column (no Python
+    call per cell but the float's ``repr``).
     """
 
     frame = dataset.to_dataframe().reset_index()
     columns = [_csv_fields(frame[name].to_numpy()) for name in frame.columns]
-    lines = [_CSV_HEADER + json.dumps(dataset.attrs), ",".join(map(str, frame.columns)), *map(",".join, zip(*columns))]
+    header = [] if plain else [_CSV_HEADER + json.dumps(dataset.attrs)]
+    lines = [*header, ",".join(map(str, frame.columns)), *map(",".join, zip(*columns))]
     return "\n".join(lines) + "\n"
 
 
@@ -202,7 +219,8 @@ def read(path: str | os.PathLike) -> tuple[str, Any]:
         return "plain", unsealed(text, data)
     first, _, body = text.partition("\n")
     if not first.startswith(_CSV_HEADER):
-        raise ValueError(f"is not a virtspec-mi result CSV (its first line must start with {_CSV_HEADER.strip()!r})")
+        raise ValueError(f"is not a virtspec-mi result CSV (its first line must start with {_CSV_HEADER.strip()!r}; "
+                         "a plain CSV, written for a spreadsheet, holds no settings to read back)")
     try:
         attrs = json.loads(first[len(_CSV_HEADER):])
     except (json.JSONDecodeError, RecursionError) as error:

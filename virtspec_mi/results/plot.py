@@ -17,7 +17,9 @@ Plots of results with matplotlib (PNG and SVG)
 
 Every figure names what was measured in its title (a name when given, the quantity,
 the beam, θi, the rays and the specimen: its scene, defines and parameter point; wrapped
-to the figure's width), gives the certified band a legend entry and draws markers on sparse grids
+to the figure's width), gives the certified band a legend entry that says what its
+half-width μ' is (the tolerance the reading's rays guarantee; a single point's band is an
+error bar) and draws markers on sparse grids
 (≤ :data:`SPARSE` points). It tells its curves apart: up to :data:`LEGEND` curves each
 by colour and line style (:func:`curve_style`; both cycle), each with a legend entry;
 more (e.g. a sweep of 31 wavelengths) by a sequential colour map (:data:`COLOUR_MAP`)
@@ -70,6 +72,7 @@ _COLOURS = 10  # matplotlib's default "tab10" cycle: C0 … C9
 _LINE_STYLES = ("-", "--", "-.", ":")
 _MARKERS = ("o", "s", "^", "D", "v", "P", "X", "*")
 _BAND = "certified ±μ'"
+_MU = "μ': the tolerance its rays guarantee"  # what the band's half-width is, said in every legend
 _BAND_ALPHA = 0.2  # a certified band's opacity among few curves
 _STACKED_BANDS = 0.5  # among many, the opacity of all bands stacked: each the fainter the more curves
 
@@ -193,7 +196,7 @@ def _draw(axes: Any, results: Sequence[Any], quantity: str, labels: Sequence[str
                 curve_style(count, len(x))
             line, = axes.plot(x, curve, lw=1.2, label=f"{label + ', ' if label else ''}{symbol} = {value:g}{unit}",
                               **style)
-            axes.fill_between(x, curve - band, curve + band, color=line.get_color(), lw=0, alpha=alpha)
+            _band(axes, x, curve, band, line.get_color(), alpha)
             count += 1
     axes.set_xlabel("θi (degrees)" if by_angle else "wavelength (nm)")
     axes.set_ylabel(quantity)
@@ -209,6 +212,19 @@ def _draw(axes: Any, results: Sequence[Any], quantity: str, labels: Sequence[str
             summary=f"{len(results)} results (line styles cycle; colour: {variable})")
 
 
+def _band(axes: Any, x: np.ndarray, y: np.ndarray, half_width: np.ndarray, colour: Any, alpha: float) -> None:
+    """
+    The certified band ``y ± half_width`` over ``x``: a shaded area, or for a single
+    point (one wavelength) an error bar, which an area of no width would not show.
+    """
+
+    if len(x) > 1:
+        axes.fill_between(x, y - half_width, y + half_width, color=colour, lw=0, alpha=alpha)
+    else:
+        axes.errorbar(x, y, yerr=half_width, fmt="none", ecolor=colour, elinewidth=6, alpha=max(alpha, 0.35),
+                      capsize=0)
+
+
 def _legend(axes: Any, delta: float, entries: Sequence[Any] | None = None, summary: str = "") -> None:
     """
     The legend: ``entries`` (default: the axes' labelled curves) when at most :data:`LEGEND`,
@@ -221,7 +237,7 @@ def _legend(axes: Any, delta: float, entries: Sequence[Any] | None = None, summa
     entries = axes.get_legend_handles_labels()[0] if entries is None else list(entries)
     if len(entries) > LEGEND:
         entries = [Line2D([], [], color="none", label=summary)]
-    band = Patch(facecolor="grey", alpha=0.35, lw=0, label=f"{_BAND} (δ = {delta:g} per reading)")
+    band = Patch(facecolor="grey", alpha=0.35, lw=0, label=f"{_BAND} (δ = {delta:g} per reading; {_MU})")
     axes.legend(handles=[*entries, band], fontsize="small")
 
 
@@ -275,9 +291,9 @@ def plot_spectra(result: Any, path: str | os.PathLike | None = None, *, quantiti
     for k, spectrum in enumerate(spectra):
         x, y, band = spectrum.wavelengths, spectrum.values, spectrum.tolerance
         line, = axes.plot(x, y, lw=1.2, label=spectrum.quantity, **curve_style(k, len(x)))
-        axes.fill_between(x, y - band, y + band, color=line.get_color(), alpha=_BAND_ALPHA, lw=0)
+        _band(axes, x, y, band, line.get_color(), _BAND_ALPHA)
     axes.set_xlabel("wavelength (nm)")
-    axes.set_ylabel(spectra[0].measures)
+    axes.set_ylabel(", ".join(dict.fromkeys(spectrum.measures for spectrum in spectra)))
     _legend(axes, spectra[0].delta, summary=f"{len(spectra)} quantities (colours and line styles cycle)")
     axes.grid(alpha=0.3)
     shown = select(result, theta_i=[spectra[0].theta_i])
@@ -337,7 +353,7 @@ def plot_comparison(comparison: Any, path: str | os.PathLike | None = None, *, t
     x, y, mu = c.simulated_spectrum()
     line, = top.plot(x, y, lw=1.3, label=f"simulated: {c.result_name}", **curve_style(0, len(x)))
     top.fill_between(x, y - mu, y + mu, color=line.get_color(), alpha=0.25, lw=0,
-                     label=f"{_BAND} (δ = {c.interval_delta:g} per point)")
+                     label=f"{_BAND} (δ = {c.interval_delta:g} per point; {_MU})")
     m = c.spectrum
     sparse = len(m.wavelengths) <= SPARSE
     if m.uncertainty is not None and sparse:

@@ -40,6 +40,7 @@ from virtspec_mi.geometry.disks import (
     InstrumentGeometry,
 )
 from virtspec_mi.engine.bench import EMITTER_ID, SPECIMEN_ID, Bench, SceneError, read_bench
+from virtspec_mi.engine import interrupts
 from virtspec_mi import scenes
 from virtspec_mi.runtime import mitsuba
 from virtspec_mi.settings import SETTING_NAMES
@@ -69,10 +70,12 @@ def load_scene(scene: Any, defines: dict[str, Any] | None = None) -> Any:
             if not path.is_file():
                 raise SceneError(f"scene file not found: {path}")
             _check_defined(path, defines)
-            return mi.load_file(str(path), **defines)
+            with interrupts.deferred():  # a Ctrl-C in a plugin's Python would come out as Mitsuba's RuntimeError
+                return mi.load_file(str(path), **defines)
         if isinstance(scene, dict):
             _check_dict(scene)
-            return mi.load_dict(scene)
+            with interrupts.deferred():
+                return mi.load_dict(scene)
     except SceneError:
         raise
     except Exception as error:  # Mitsuba raises RuntimeError/ValueError with its parser text

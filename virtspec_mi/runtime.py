@@ -73,8 +73,9 @@ def mitsuba() -> ModuleType:
             return mi
     from virtspec_mi.engine import interrupts
 
-    # Importing Dr.Jit and Mitsuba (about half a second) must not be cut by a KeyboardInterrupt: it would come
-    # out as a SystemError or NameError, and leave the modules half made; a Ctrl-C waits for its end instead
+    # Importing Dr.Jit and Mitsuba's variant (C extensions, about half a second) must not be cut by a
+    # KeyboardInterrupt: it would come out as a SystemError or NameError and leave the modules half made; a
+    # Ctrl-C waits for its end instead (the plugins' Python modules after it take a KeyboardInterrupt as any)
     with interrupts.deferred():
         if name.startswith("llvm"):
             select_libllvm()
@@ -83,12 +84,12 @@ def mitsuba() -> ModuleType:
 
         if mi.variant() != name:
             mi.set_variant(name)
-        if name not in _registered:
-            from virtspec_mi.plugins.integrators.spectrophotometer import clear_render_errors
+    if name not in _registered:
+        from virtspec_mi.plugins.integrators.spectrophotometer import clear_render_errors
 
-            register()
-            mi.render = clear_render_errors(mi.render)
-            _registered.add(name)
+        register()
+        mi.render = clear_render_errors(mi.render)
+        _registered.add(name)
     return mi
 
 

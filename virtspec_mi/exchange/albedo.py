@@ -933,6 +933,10 @@ def albedo_table(
     # One run at a time on a checkpoint (a second refuses; it never touches the first's groups), and signals
     # acted on at safe points only: never inside a write (a KeyboardInterrupt inside xarray's file lock hung
     # the process, and left a temporary file)
+    if checkpoint is not None:  # the parts' writer, imported here (a second or more), not between two safe points
+        from virtspec_mi.results.io import warm_writer
+
+        warm_writer()
     with (nullcontext() if checkpoint is None else locked(Path(checkpoint))), interrupts.deferred():
             store = _Store(None if checkpoint is None else Path(checkpoint), identity)
             scene = load_scene(_scene(grid))

@@ -152,6 +152,7 @@ def test_a_signal_at_a_random_moment_ends_the_command_within_a_second(path, seed
     _case(path, seed, tmp_path, resume=False)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("path", ["sweep", "albedo-table"])
 def test_an_interrupted_run_resumes_to_the_bit_identical_result(path, tmp_path, loaded):
     """The rerun says what it reused and ends with the counts of a run never interrupted."""

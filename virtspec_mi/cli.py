@@ -1128,7 +1128,7 @@ def _albedo_table(args: argparse.Namespace) -> int:
     return 0
 
 
-if __name__ == "__main__":
-    from virtspec_mi.__main__ import run
+if __name__ == "__main__":  # python -m virtspec_mi.cli: as python -m virtspec_mi (virtspec_mi.__main__.run)
+    import runpy
 
-    run()
+    runpy.run_module("virtspec_mi", run_name="__main__")

@@ -85,8 +85,10 @@ from typing import Any, Sequence
 import numpy as np
 
 from virtspec_mi import __version__
+from virtspec_mi.checks import check_delta, number, shown_value
 from virtspec_mi.engine import interrupts
 from virtspec_mi.engine.checkpoint import locked
+from virtspec_mi.settings import true_or_false, whole_number
 from virtspec_mi.exchange.common import atomic_write, check_companions, derived_seed
 from virtspec_mi.exchange.conventions import Convention, convention
 from virtspec_mi.exchange.sizing import (binomial_rays, clopper_pearson_each, pilot_intervals, stage_two_shares,
@@ -627,6 +629,23 @@ def _check_output(path: Path, average: bool, overwrite: bool) -> None:
     check_companions(path, companions, lambda companion: _ours(path), overwrite)
 
 
+def _check_epsilon(epsilon: Any) -> float:
+    """ε of a table: a real number, 0 < ε < 0.5 (as μ: :func:`virtspec_mi.checks.check_mu`, named ``epsilon``)."""
+
+    value = number("epsilon", epsilon)
+    if not 0.0 < value < 0.5:
+        raise ValueError(f"epsilon must satisfy 0 < epsilon < 0.5 (got {shown_value(epsilon)})")
+    return value
+
+
+def _whole(name: str, value: Any, low: int, high: int) -> int:
+    """A whole number given as a number (a string or a boolean refused), ``low`` <= value <= ``high``."""
+
+    if isinstance(value, str):
+        raise ValueError(f"{name} must be a whole number, not a string (got {value!r})")
+    return whole_number(name, low, high, f"{low} <= {name} <= {high}")(value)
+
+
 def _ours(npy: Path) -> bool:
     """Whether ``NAME.json`` beside a table's ``NAME.npy`` is an albedo table's sidecar (so are its companions)."""
 
@@ -684,6 +703,8 @@ class _Grid:
 
 
 def _check_nodes(name: str, values: Any, low: float, high: float, open_low: bool = False) -> np.ndarray:
+    if any(isinstance(value, (bool, np.bool_, str)) for value in np.ravel(np.asarray(values, dtype=object))):
+        raise ValueError(f"{name} must be a sequence of numbers (got {values!r})")
     try:
         array = np.atleast_1d(np.asarray(values, dtype=np.float64))
     except (TypeError, ValueError):
@@ -896,18 +917,15 @@ def albedo_table(
     from virtspec_mi.scene import load_scene
 
     grid = _grid(model, distribution, engine, mu, alpha, roughness, eta)
-    if not (isinstance(epsilon, (int, float)) and not isinstance(epsilon, bool) and 0 < epsilon < 0.5):
-        raise ValueError(f"epsilon must satisfy 0 < epsilon < 0.5 (got {epsilon!r})")
-    if not (isinstance(delta, (int, float)) and not isinstance(delta, bool) and 0 < delta < 1):
-        raise ValueError(f"delta must satisfy 0 < delta < 1 (got {delta!r})")
+    epsilon, delta = _check_epsilon(epsilon), check_delta(delta)  # any real number type (numpy's float32 too)
+    average, parts = true_or_false("average")(average), true_or_false("parts")(parts)
+    seed = _whole("seed", seed, 0, 2**32 - 1)
     if bound not in BOUNDS:
         raise ValueError(f"bound must be one of {', '.join(BOUNDS)} (got {bound!r})")
     if parts and model != "glass":
         raise ValueError("parts=True certifies E_R and E_T of a glass table (model='glass')")
     epsilon, delta = float(epsilon), float(delta)
-    n1 = math.ceil(40.0 / epsilon - 1e-9) if pilot_rays is None else int(pilot_rays)
-    if not 1 <= n1 <= 2**32 - 1:
-        raise ValueError(f"pilot_rays must satisfy 1 <= pilot_rays <= 4294967295 (got {pilot_rays!r})")
+    n1 = math.ceil(40.0 / epsilon - 1e-9) if pilot_rays is None else _whole("pilot_rays", pilot_rays, 1, 2**32 - 1)
     outs = [] if out is None else [Path(out)] if isinstance(out, (str, os.PathLike)) else [Path(p) for p in out]
     for path in outs:
         if path.suffix.lower() not in (".nc", ".npy", ".h", ".hpp"):

@@ -42,6 +42,7 @@ import numpy as np
 
 from virtspec_mi import __version__
 from virtspec_mi.exchange.common import derived_seed
+from virtspec_mi.checks import check_delta, number, shown_value
 from virtspec_mi.engine import interrupts
 from virtspec_mi.engine.readings import check_specimen
 from virtspec_mi.exchange.klems import SIDES, KlemsMeasurement, aggregate, check_escaped, check_klems_output
@@ -117,10 +118,9 @@ def klems_measure(
     from virtspec_mi.scene import find_bench, instrument_scene
 
     klems = klems_basis(basis)
-    if not (isinstance(epsilon, (int, float)) and not isinstance(epsilon, bool) and 0 < epsilon < 0.5):
-        raise ValueError(f"epsilon must satisfy 0 < epsilon < 0.5 (got {epsilon!r})")
-    if not (isinstance(delta, (int, float)) and not isinstance(delta, bool) and 0 < delta < 1):
-        raise ValueError(f"delta must satisfy 0 < delta < 1 (got {delta!r})")
+    epsilon, delta = number("epsilon", epsilon), check_delta(delta)  # any real number type (numpy's too)
+    if not 0.0 < epsilon < 0.5:
+        raise ValueError(f"epsilon must satisfy 0 < epsilon < 0.5 (got {shown_value(epsilon)})")
     lams = np.array(parse_wavelengths(wavelengths), dtype=np.float64)
     if out is not None:  # before anything is measured: the folder, the scene itself, the sidecar's name
         from virtspec_mi import scenes as shipped

@@ -546,6 +546,9 @@ class AlbedoTable:
 
         if side not in SIDES:
             raise ValueError(f"side must be one of {', '.join(SIDES)} (got {side!r})")
+        if side != "outside" and self.model != "glass":
+            raise ValueError(f"side={side!r} names a glass table's block; a {self.model} table has one side (leave side "
+                             "as 'outside')")
         if not (np.isfinite(rounding) and rounding >= 0):
             raise ValueError(f"rounding must be a finite number >= 0 (got {rounding!r})")
         mine = self.layout(average=average)
@@ -554,11 +557,20 @@ class AlbedoTable:
             tol = self.layout(tol)
         if self.model == "glass":
             mine, tol = mine[SIDES.index(side)], tol[SIDES.index(side)]
-        if array is None and not isinstance(published, np.ndarray):
-            from virtspec_mi.exchange.header import array_name
+        own = _own_table(published) if array is None else None
+        if own is not None:  # an albedo table's .nc: canonical (mu, alpha) order, put in this table's memory order
+            values = own.E_avg if average else self.layout(np.asarray(own.E))
+            if values is None or np.shape(values) != np.shape(self.layout(average=average)):
+                raise ValueError(f"the published table {published} is an albedo table of another grid "
+                                 f"(shape {np.shape(own.E)}; this table's {np.shape(self.E)})")
+            if self.model == "glass" and not average:
+                values = values[SIDES.index(side)]
+        else:
+            if array is None and not isinstance(published, np.ndarray):
+                from virtspec_mi.exchange.header import array_name
 
-            array = array_name(self, average=average, side=side)
-        values = read_table_values(published, array=array, expected=mine.size)
+                array = array_name(self, average=average, side=side)
+            values = read_table_values(published, array=array, expected=mine.size)
         values = np.asarray(values, dtype=np.float64).reshape(mine.shape)
         outside = ~(np.abs(values - mine) < tol + rounding)  # NaN tolerance (uncertified): reported too
         dims = list(self.average_dims if average else (["side"] if self.model == "glass" else []) + list(self.order))
@@ -618,6 +630,24 @@ def read_albedo_table(path: str | os.PathLike) -> AlbedoTable:
         raise ValueError(f"path must be a .nc file written by AlbedoTable.write (got {path.name!r})")
     with xr.open_dataset(path) as dataset:
         return AlbedoTable.from_dataset(dataset.load())
+
+
+def _own_table(published: Any) -> "AlbedoTable | None":
+    """The :class:`AlbedoTable` of a published ``.nc`` written by :meth:`AlbedoTable.write` (else ``None``)."""
+
+    if not isinstance(published, (str, os.PathLike)) or Path(published).suffix.lower() != ".nc":
+        return None
+    if not Path(published).is_file():
+        return None
+    import xarray as xr
+
+    try:
+        with xr.open_dataset(published) as dataset:
+            if dataset.attrs.get("format") != _FORMAT:
+                return None
+    except Exception:  # not a NetCDF file: read_table_values says so
+        return None
+    return read_albedo_table(published)
 
 
 def _check_output(path: Path, average: bool, overwrite: bool) -> None:

@@ -176,3 +176,24 @@ def test_the_command_line_names_the_albedo_checkpoint_and_the_rerun_says_what_it
     again = subprocess.run(command, cwd=tmp_path, capture_output=True, text=True)
     assert again.returncode == 0 and f"resumed from {parts}:" in again.stderr and "reused" in again.stderr
     assert not parts.exists() and (tmp_path / "t.nc").exists()
+
+
+# --- the comparison ---------------------------------------------------------------------------------------
+
+
+def test_a_table_compared_with_its_own_nc_in_any_memory_order_flags_nothing(mi, tmp_path):
+    """The .nc is in canonical (mu, alpha) order; a Filament-order table's memory order is (alpha, mu)."""
+
+    import dataclasses
+
+    table = vm.albedo_table(model="conductor", engine=None, mu=[0.3, 0.6, 1.0], alpha=[0.1, 0.5], epsilon=0.05,
+                            progress=False)
+    transposed = dataclasses.replace(table, order=("alpha", "mu"))
+    assert transposed.layout().shape == (2, 3)
+    for each in (table, transposed):
+        each.write(tmp_path / "own.nc")
+        for average in (False, True):
+            comparison = each.compare(tmp_path / "own.nc", average=average)
+            assert comparison.outside == [] and comparison.cells == (2 if average else 6)
+    with pytest.raises(ValueError, match="side='inside' names a glass table's block"):
+        table.compare(tmp_path / "own.nc", side="inside")

@@ -62,7 +62,7 @@ from virtspec_mi.results.sphere import SphereResult
 from virtspec_mi.results.zarr import SUFFIX as ZARR_SUFFIX
 from virtspec_mi.results.zarr import ZarrTable
 from virtspec_mi.scene import find_bench, scene_fingerprint, scene_source
-from virtspec_mi.settings import Settings, keywords, resolve
+from virtspec_mi.settings import Settings, keywords, resolve, true_or_false
 
 __all__ = ["measure", "sweep", "gonio", "read_result", "read_gonio", "fluctuation", "sphere_measure", "take"]
 
@@ -212,7 +212,7 @@ def _keyed(name: str, what: str, scene: Any, bench: Bench, settings: Settings, o
     if out is not None:
         check_output(out)
         checkpoint = checkpoint if checkpoint is not None else checkpoint_for(out)
-    space = parameter_space(bench, parameters or {}, points=points)
+    space = parameter_space(bench, parameters or {}, points=true_or_false("points")(points))
     angles = _angles(settings, theta_i, what)
     if len(np.unique(settings.wavelengths)) != len(settings.wavelengths):
         raise ValueError(f"wavelengths of {what} must be distinct (got repeated values)")

@@ -516,13 +516,18 @@ def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of ``virtspec``; returns the exit status."""
 
     signal.signal(signal.SIGPIPE, signal.SIG_DFL)  # a closed pipe (virtspec bounds | head) ends us quietly
-    parser = build_parser()
-    args, extra = parser.parse_known_args(argv)
-    if extra:
-        parser.error(f"unrecognized arguments: {' '.join(extra)}{_unrecognized_hint(args, extra)}")
     from virtspec_mi.engine.interrupts import catching, exit_status
 
-    with catching():  # SIGINT and SIGTERM stop a run at its next safe point, its checkpoint saved
+    # SIGINT and SIGTERM stop a run at its next safe point, its checkpoint saved; taken from the start, so a
+    # Ctrl-C while the modules load (the parser imports numpy) is an interrupt too, never a traceback
+    with catching():
+        try:
+            parser = build_parser()
+            args, extra = parser.parse_known_args(argv)
+            if extra:
+                parser.error(f"unrecognized arguments: {' '.join(extra)}{_unrecognized_hint(args, extra)}")
+        except KeyboardInterrupt as stop:
+            return _interrupted(stop, argparse.Namespace(), exit_status)
         return _command(args, exit_status)
 
 
@@ -551,19 +556,31 @@ def _command(args: argparse.Namespace, exit_status: Any) -> int:
         if args.command in handlers:
             return handlers[args.command](args)
         return _measuring(args, measuring()[args.command])
-    except (ValueError, RuntimeError, OSError) as error:
+    except KeyboardInterrupt as stop:  # Ctrl-C (SIGINT) or SIGTERM: virtspec_mi.engine.interrupts.Interrupted
+        return _interrupted(stop, args, exit_status)
+    except Exception as error:
+        from virtspec_mi.engine.interrupts import received
+
+        if received() is not None:  # an interrupt raised inside an import or a C extension comes out as another error
+            return _interrupted(KeyboardInterrupt(received()), args, exit_status, received())
+        if not isinstance(error, (ValueError, RuntimeError, OSError)):
+            raise
         print(f"virtspec: error: {_rescued(error)}", file=sys.stderr)
         return 1
-    except KeyboardInterrupt as stop:  # Ctrl-C (SIGINT) or SIGTERM: virtspec_mi.engine.interrupts.Interrupted
-        signum = getattr(stop, "signum", signal.SIGINT)
-        # the checkpoint of the run under way: named by the run, else the one the command set (_sweep)
-        partial = getattr(stop, "checkpoint", None) or getattr(args, "checkpoint", None)
-        kept = "" if partial is None else (
-            f" (finished readings are kept in {partial}: re-run the same command to resume)" if Path(partial).exists()
-            else " (no reading had finished: nothing to resume)")
-        word = "interrupted" if signum == signal.SIGINT else f"terminated by {signal.Signals(signum).name}"
-        print(f"virtspec: {word}{kept}", file=sys.stderr)
-        return exit_status(signum)
+
+
+def _interrupted(stop: BaseException, args: argparse.Namespace, exit_status: Any, signum: int | None = None) -> int:
+    """The one line and the exit status (130, 143) of a command stopped by a signal, naming its checkpoint."""
+
+    signum = signum or getattr(stop, "signum", signal.SIGINT)
+    # the checkpoint of the run under way: named by the run, else the one the command set (_sweep)
+    partial = getattr(stop, "checkpoint", None) or getattr(args, "checkpoint", None)
+    kept = "" if partial is None else (
+        f" (finished readings are kept in {partial}: re-run the same command to resume)" if Path(partial).exists()
+        else " (no reading had finished: nothing to resume)")
+    word = "interrupted" if signum == signal.SIGINT else f"terminated by {signal.Signals(signum).name}"
+    print(f"virtspec: {word}{kept}", file=sys.stderr)
+    return exit_status(signum)
 
 
 def _rescued(error: BaseException) -> Any:
@@ -962,5 +979,7 @@ def _albedo_table(args: argparse.Namespace) -> int:
     return 0
 
 
-if __name__ == "__main__":
-    sys.exit(main())
+if __name__ == "__main__":  # python -m virtspec_mi.cli: as python -m virtspec_mi (virtspec_mi.__main__.run)
+    import runpy
+
+    runpy.run_module("virtspec_mi", run_name="__main__")

@@ -66,13 +66,24 @@ def mitsuba() -> ModuleType:
     """Return the ``mitsuba`` module, set up for virtspec-mi (idempotent)."""
 
     name = variant()
-    if name.startswith("llvm"):
-        select_libllvm()
-        check_loaded_llvm()
-    import mitsuba as mi
+    if name in _registered:
+        import mitsuba as mi
 
-    if mi.variant() != name:
-        mi.set_variant(name)
+        if mi.variant() == name:
+            return mi
+    from virtspec_mi.engine import interrupts
+
+    # Importing Dr.Jit and Mitsuba's variant (C extensions, about half a second) must not be cut by a
+    # KeyboardInterrupt: it would come out as a SystemError or NameError and leave the modules half made; a
+    # Ctrl-C waits for its end instead (the plugins' Python modules after it take a KeyboardInterrupt as any)
+    with interrupts.deferred():
+        if name.startswith("llvm"):
+            select_libllvm()
+            check_loaded_llvm()
+        import mitsuba as mi
+
+        if mi.variant() != name:
+            mi.set_variant(name)
     if name not in _registered:
         from virtspec_mi.plugins.integrators.spectrophotometer import clear_render_errors
 

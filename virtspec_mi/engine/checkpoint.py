@@ -115,6 +115,23 @@ def claim(path: str | os.PathLike) -> Iterator[Path]:
         _unlock(path, handle)
 
 
+@contextmanager
+def locked(path: str | os.PathLike) -> Iterator[Path]:
+    """
+    An exclusive OS lock on ``PATH.lock`` (beside ``path``: a checkpoint file or folder)
+    until the block ends, as :func:`claim` takes it: ``CheckpointError`` naming the
+    path and the pid when another run holds it (a second run on one output refuses,
+    never touching the first's files).
+    """
+
+    path = Path(path)
+    handle = _lock(path)
+    try:
+        yield path
+    finally:
+        _unlock(path, handle)
+
+
 def remove(path: str | os.PathLike) -> None:
     """Remove checkpoint ``path`` (if it exists): call only once its readings are safe elsewhere."""
 

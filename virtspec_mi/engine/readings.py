@@ -60,7 +60,8 @@ from virtspec_mi.engine.progress import Progress
 from virtspec_mi.engine.tally import Tally
 from virtspec_mi.settings import Settings
 
-__all__ = ["BatchRunner", "run", "take_keyed_readings", "trace_readings", "in_process_runner", "shares_wavelengths"]
+__all__ = ["BatchRunner", "run", "take_keyed_readings", "trace_readings", "in_process_runner", "shares_wavelengths",
+           "check_specimen"]
 
 BatchRunner = Callable[[list[np.ndarray]], Iterable[tuple[np.ndarray, Tally]]]
 """
@@ -231,7 +232,7 @@ def _traced_readings(bench: Any, readings: Sequence[tuple[float, float, float]],
     """
 
     check_readings(len(readings), 0)
-    _check_specimen(bench.bsdf, sorted({float(r[0]) for r in readings}))
+    check_specimen(bench.bsdf, sorted({float(r[0]) for r in readings}))
     readings = [(float(w), float(t), float(p)) for w, t, p in readings]
     if shared:
         first: dict[tuple[float, float], int] = {}
@@ -242,7 +243,7 @@ def _traced_readings(bench: Any, readings: Sequence[tuple[float, float, float]],
     return readings, source, traced
 
 
-def _check_specimen(bsdf: Any, wavelengths: list[float]) -> None:
+def check_specimen(bsdf: Any, wavelengths: list[float]) -> None:
     """
     Refuse, before tracing, wavelengths the specimen does not take: outside its
     ``wavelength_range`` (the ABM leaves' data, a measured table's), outside the data of

@@ -76,6 +76,7 @@ import os
 import re
 import time
 import warnings
+from contextlib import nullcontext
 from dataclasses import dataclass, field
 from datetime import datetime, timezone
 from pathlib import Path
@@ -84,7 +85,11 @@ from typing import Any, Sequence
 import numpy as np
 
 from virtspec_mi import __version__
-from virtspec_mi.exchange.common import atomic_write, derived_seed
+from virtspec_mi.checks import check_delta, number, shown_value
+from virtspec_mi.engine import interrupts
+from virtspec_mi.engine.checkpoint import locked
+from virtspec_mi.settings import true_or_false, whole_number
+from virtspec_mi.exchange.common import atomic_write, check_companions, derived_seed
 from virtspec_mi.exchange.conventions import Convention, convention
 from virtspec_mi.exchange.sizing import (binomial_rays, clopper_pearson_each, pilot_intervals, stage_two_shares,
                                          union_hoeffding_rays, union_hoeffding_rays_array)
@@ -458,18 +463,26 @@ class AlbedoTable:
                    float(attrs["epsilon"]), float(attrs["delta"]), str(attrs["bound"]),
                    tuple(str(attrs["quantities"]).split()), json.loads(str(attrs["provenance"])))
 
-    def write(self, path: str | os.PathLike) -> Path:
+    def check_output(self, path: str | os.PathLike, overwrite: bool = False) -> None:
+        """Refuse companions of ``path`` that would replace a file not written by this format (see :meth:`write`)."""
+
+        _check_output(Path(path), self.E_avg is not None, overwrite)
+
+    def write(self, path: str | os.PathLike, overwrite: bool = False) -> Path:
         """
         Write the table: ``.nc`` (NetCDF of :meth:`to_dataset`), ``.npy`` (Ê as float32 in
         the engine's memory order; E_avg in ``NAME_avg.npy``; provenance and certificate in
         ``NAME.json``) or ``.h`` / ``.hpp`` (a C header in Cycles' layout,
-        :mod:`virtspec_mi.exchange.header`).
+        :mod:`virtspec_mi.exchange.header`). A ``.npy``'s companions replace files of their
+        names only when those are an albedo table's (its ``NAME.json`` says so) or with
+        ``overwrite=True`` (else ``ValueError``, before anything is written).
         """
 
         from virtspec_mi.exchange.header import write_header
 
         path = Path(path)
         suffix = path.suffix.lower()
+        self.check_output(path, overwrite)
         if suffix == ".nc":
             atomic_write(path, lambda tmp: self.to_dataset().to_netcdf(tmp))
         elif suffix == ".npy":
@@ -533,6 +546,9 @@ class AlbedoTable:
 
         if side not in SIDES:
             raise ValueError(f"side must be one of {', '.join(SIDES)} (got {side!r})")
+        if side != "outside" and self.model != "glass":
+            raise ValueError(f"side={side!r} names a glass table's block; a {self.model} table has one side (leave side "
+                             "as 'outside')")
         if not (np.isfinite(rounding) and rounding >= 0):
             raise ValueError(f"rounding must be a finite number >= 0 (got {rounding!r})")
         mine = self.layout(average=average)
@@ -541,11 +557,20 @@ class AlbedoTable:
             tol = self.layout(tol)
         if self.model == "glass":
             mine, tol = mine[SIDES.index(side)], tol[SIDES.index(side)]
-        if array is None and not isinstance(published, np.ndarray):
-            from virtspec_mi.exchange.header import array_name
+        own = _own_table(published) if array is None else None
+        if own is not None:  # an albedo table's .nc: canonical (mu, alpha) order, put in this table's memory order
+            values = own.E_avg if average else self.layout(np.asarray(own.E))
+            if values is None or np.shape(values) != np.shape(self.layout(average=average)):
+                raise ValueError(f"the published table {published} is an albedo table of another grid "
+                                 f"(shape {np.shape(own.E)}; this table's {np.shape(self.E)})")
+            if self.model == "glass" and not average:
+                values = values[SIDES.index(side)]
+        else:
+            if array is None and not isinstance(published, np.ndarray):
+                from virtspec_mi.exchange.header import array_name
 
-            array = array_name(self, average=average, side=side)
-        values = read_table_values(published, array=array, expected=mine.size)
+                array = array_name(self, average=average, side=side)
+            values = read_table_values(published, array=array, expected=mine.size)
         values = np.asarray(values, dtype=np.float64).reshape(mine.shape)
         outside = ~(np.abs(values - mine) < tol + rounding)  # NaN tolerance (uncertified): reported too
         dims = list(self.average_dims if average else (["side"] if self.model == "glass" else []) + list(self.order))
@@ -607,6 +632,59 @@ def read_albedo_table(path: str | os.PathLike) -> AlbedoTable:
         return AlbedoTable.from_dataset(dataset.load())
 
 
+def _own_table(published: Any) -> "AlbedoTable | None":
+    """The :class:`AlbedoTable` of a published ``.nc`` written by :meth:`AlbedoTable.write` (else ``None``)."""
+
+    if not isinstance(published, (str, os.PathLike)) or Path(published).suffix.lower() != ".nc":
+        return None
+    if not Path(published).is_file():
+        return None
+    import xarray as xr
+
+    try:
+        with xr.open_dataset(published) as dataset:
+            if dataset.attrs.get("format") != _FORMAT:
+                return None
+    except Exception:  # not a NetCDF file: read_table_values says so
+        return None
+    return read_albedo_table(published)
+
+
+def _check_output(path: Path, average: bool, overwrite: bool) -> None:
+    """A ``.npy`` output's companions (``NAME.json``, ``NAME_avg.npy``) replace only an albedo table's files."""
+
+    if path.suffix.lower() != ".npy":
+        return
+    companions = [path.with_suffix(".json")] + ([path.with_name(path.stem + "_avg.npy")] if average else [])
+    check_companions(path, companions, lambda companion: _ours(path), overwrite)
+
+
+def _check_epsilon(epsilon: Any) -> float:
+    """ε of a table: a real number, 0 < ε < 0.5 (as μ: :func:`virtspec_mi.checks.check_mu`, named ``epsilon``)."""
+
+    value = number("epsilon", epsilon)
+    if not 0.0 < value < 0.5:
+        raise ValueError(f"epsilon must satisfy 0 < epsilon < 0.5 (got {shown_value(epsilon)})")
+    return value
+
+
+def _whole(name: str, value: Any, low: int, high: int) -> int:
+    """A whole number given as a number (a string or a boolean refused), ``low`` <= value <= ``high``."""
+
+    if isinstance(value, str):
+        raise ValueError(f"{name} must be a whole number, not a string (got {value!r})")
+    return whole_number(name, low, high, f"{low} <= {name} <= {high}")(value)
+
+
+def _ours(npy: Path) -> bool:
+    """Whether ``NAME.json`` beside a table's ``NAME.npy`` is an albedo table's sidecar (so are its companions)."""
+
+    try:
+        return json.loads(npy.with_suffix(".json").read_text(encoding="utf-8")).get("format") == _FORMAT
+    except (OSError, ValueError, AttributeError):
+        return False
+
+
 def _save_npy(path: str, values: np.ndarray) -> None:
     with open(path, "wb") as handle:
         np.save(handle, values)
@@ -655,6 +733,8 @@ class _Grid:
 
 
 def _check_nodes(name: str, values: Any, low: float, high: float, open_low: bool = False) -> np.ndarray:
+    if any(isinstance(value, (bool, np.bool_, str)) for value in np.ravel(np.asarray(values, dtype=object))):
+        raise ValueError(f"{name} must be a sequence of numbers (got {values!r})")
     try:
         array = np.atleast_1d(np.asarray(values, dtype=np.float64))
     except (TypeError, ValueError):
@@ -721,11 +801,19 @@ _KEYS = ("reflected", "transmitted", "rounded_weights", "weight_violations", "in
 
 
 class _Store:
-    """Finished groups of a table, kept as result files in a directory (resume)."""
+    """
+    Finished groups of a table, kept as result files in a directory (resume): ``identity.json``
+    and one ``<16 hex>.nc`` per group, each written whole under its name (a temporary
+    ``.<name>.<random>.tmp`` beside it, renamed).
+    """
+
+    _OURS = re.compile(r"identity\.json|[0-9a-f]{16}\.nc")
+    _TEMPORARY = re.compile(r"\.(identity\.json|[0-9a-f]{16}\.nc)\.[0-9a-z]+\.tmp")
 
     def __init__(self, directory: Path | None, identity: dict[str, Any]) -> None:
         self.directory = directory
         self.reused = 0
+        self.saved = 0
         if directory is None:
             return
         if directory.exists() and not directory.is_dir():
@@ -739,6 +827,7 @@ class _Store:
                 differ = sorted(k for k in set(old) | set(identity) if old.get(k) != identity.get(k))
                 raise ValueError(f"checkpoint {directory} belongs to a different table (differs in: "
                                  f"{', '.join(differ)}); re-run with the same settings, or delete it")
+            self.saved = sum(1 for path in directory.iterdir() if self._OURS.fullmatch(path.name)) - 1
         else:
             atomic_write(stamp, lambda tmp: Path(tmp).write_text(text))
 
@@ -760,12 +849,15 @@ class _Store:
         path = self.path(label)
         if path is not None:
             result.write(path)
+            self.saved += 1
 
     def remove(self) -> None:
+        """Remove the folder: what this store writes (identity.json, <16 hex>.nc, their temporaries), not more."""
+
         if self.directory is None:
             return
-        for path in self.directory.iterdir():  # only what this store wrote: identity.json and <16 hex>.nc
-            if path.name == "identity.json" or re.fullmatch(r"[0-9a-f]{16}\.nc", path.name):
+        for path in self.directory.iterdir():
+            if self._OURS.fullmatch(path.name) or self._TEMPORARY.fullmatch(path.name):
                 path.unlink()
         try:
             self.directory.rmdir()
@@ -794,6 +886,7 @@ def albedo_table(
     out: str | os.PathLike | Sequence[str | os.PathLike] | None = None,
     progress: bool | None = None,
     chunk_size: int | None = None,
+    overwrite: bool = False,
 ) -> AlbedoTable:
     """
     Measure a certified albedo table (see the module docstring).
@@ -835,6 +928,9 @@ def albedo_table(
         terminal and the run is expected to last more than ~2 s.
     chunk_size
         Rays per kernel launch (memory only; the counts do not depend on it).
+    overwrite
+        Let a ``.npy`` output's companions (``NAME.json``, ``NAME_avg.npy``) replace files of those names that
+        this table's format did not write (refused otherwise, before anything is traced).
 
     Returns
     -------
@@ -848,26 +944,25 @@ def albedo_table(
     from virtspec_mi.api import sweep
     from virtspec_mi.engine.progress import Progress
     from virtspec_mi.runtime import mitsuba
+    from virtspec_mi.scene import load_scene
 
     grid = _grid(model, distribution, engine, mu, alpha, roughness, eta)
-    if not (isinstance(epsilon, (int, float)) and not isinstance(epsilon, bool) and 0 < epsilon < 0.5):
-        raise ValueError(f"epsilon must satisfy 0 < epsilon < 0.5 (got {epsilon!r})")
-    if not (isinstance(delta, (int, float)) and not isinstance(delta, bool) and 0 < delta < 1):
-        raise ValueError(f"delta must satisfy 0 < delta < 1 (got {delta!r})")
+    epsilon, delta = _check_epsilon(epsilon), check_delta(delta)  # any real number type (numpy's float32 too)
+    average, parts = true_or_false("average")(average), true_or_false("parts")(parts)
+    seed = _whole("seed", seed, 0, 2**32 - 1)
     if bound not in BOUNDS:
         raise ValueError(f"bound must be one of {', '.join(BOUNDS)} (got {bound!r})")
     if parts and model != "glass":
         raise ValueError("parts=True certifies E_R and E_T of a glass table (model='glass')")
     epsilon, delta = float(epsilon), float(delta)
-    n1 = math.ceil(40.0 / epsilon - 1e-9) if pilot_rays is None else int(pilot_rays)
-    if not 1 <= n1 <= 2**32 - 1:
-        raise ValueError(f"pilot_rays must satisfy 1 <= pilot_rays <= 4294967295 (got {pilot_rays!r})")
+    n1 = math.ceil(40.0 / epsilon - 1e-9) if pilot_rays is None else _whole("pilot_rays", pilot_rays, 1, 2**32 - 1)
     outs = [] if out is None else [Path(out)] if isinstance(out, (str, os.PathLike)) else [Path(p) for p in out]
     for path in outs:
         if path.suffix.lower() not in (".nc", ".npy", ".h", ".hpp"):
             raise ValueError(f"out must end in .nc, .npy, .h or .hpp (got {path.name!r})")
         if not path.parent.exists():
             raise ValueError(f"out {path}: the directory {path.parent} does not exist")
+        _check_output(path, bool(average), bool(overwrite))
     if checkpoint is None and outs:
         checkpoint = outs[0].with_name(outs[0].name + ".parts")
     quantities = ("E", "E_R", "E_T") if parts else ("E",)
@@ -883,108 +978,121 @@ def albedo_table(
                 "alpha": grid.alpha.tolist(), "eta": None if grid.eta is None else grid.eta.tolist(),
                 "epsilon": epsilon, "delta": delta, "bound": bound, "average": bool(average), "parts": bool(parts),
                 "pilot_rays": n1, "seed": int(seed), "wavelength": float(wavelength), "version": __version__}
-    store = _Store(None if checkpoint is None else Path(checkpoint), identity)
-    scene = mi.load_dict(_scene(grid))
-    started = time.perf_counter()
-    traced_seconds = 0.0
-    groups = 0
-    adaptive = BOUNDS[bound].adaptive
-    bar = Progress(progress, n_cells * (2 if adaptive else 1), desc="albedo table")
+    # One run at a time on a checkpoint (a second refuses; it never touches the first's groups), and signals
+    # acted on at safe points only: never inside a write (a KeyboardInterrupt inside xarray's file lock hung
+    # the process, and left a temporary file)
+    if checkpoint is not None:  # the parts' writer, imported here (a second or more), not between two safe points
+        from virtspec_mi.results.io import warm_writer
 
-    def run(label: str, beam: str, angles: Sequence[float], pts: np.ndarray, rays: int) -> Any:
-        nonlocal traced_seconds, groups
-        groups += 1
-        result = store.load(label)
-        if result is None:
-            with warnings.catch_warnings():  # a group's uncertified readings are reported once, for the table
-                warnings.simplefilter("ignore", RuntimeWarning)
-                result = sweep(scene, theta_i=list(angles), beam=beam, rays=int(rays), wavelengths=[wavelength],
-                               parameters={n: pts[:, k].tolist() for k, n in enumerate(names)}, points=True,
-                               seed=derived_seed(seed, label), sampling="random", progress=False,
-                               **({} if chunk_size is None else {"chunk_size": chunk_size}))
-            store.save(label, result)
-        traced_seconds += result.seconds
-        bar.reach(bar.done + len(angles) * len(pts))
-        return result
+        warm_writer()
+    with (nullcontext() if checkpoint is None else locked(Path(checkpoint))), interrupts.deferred():
+            store = _Store(None if checkpoint is None else Path(checkpoint), identity)
+            scene = load_scene(_scene(grid))
+            started = time.perf_counter()
+            traced_seconds = 0.0
+            groups = 0
+            adaptive = BOUNDS[bound].adaptive
+            bar = Progress(progress, n_cells * (2 if adaptive else 1), desc="albedo table")
 
-    def counts_of(result: Any) -> dict[str, np.ndarray]:  # (θ, point) arrays of one wavelength
-        return {k: np.asarray(getattr(result, k))[0] for k in ("rays",) + _KEYS}
+            def run(label: str, beam: str, angles: Sequence[float], pts: np.ndarray, rays: int) -> Any:
+                nonlocal traced_seconds, groups
+                groups += 1
+                result = store.load(label)
+                if result is None:
+                    with warnings.catch_warnings():  # a group's uncertified readings are reported once, for the table
+                        warnings.simplefilter("ignore", RuntimeWarning)
+                        result = sweep(scene, theta_i=list(angles), beam=beam, rays=int(rays), wavelengths=[wavelength],
+                                       parameters={n: pts[:, k].tolist() for k, n in enumerate(names)}, points=True,
+                                       seed=derived_seed(seed, label), sampling="random", progress=False,
+                                       **({} if chunk_size is None else {"chunk_size": chunk_size}))
+                    store.save(label, result)
+                    interrupts.check()  # a safe point: the group is saved, none is being written
+                traced_seconds += result.seconds
+                bar.reach(bar.done + len(angles) * len(pts))
+                return result
 
-    beams = [("collimated", theta, n_mu)] + ([("diffuse", np.array([0.0]), 1)] if average else [])
-    assembled: dict[str, dict[str, np.ndarray]] = {}
-    try:
-        pilots = {}
-        for beam, angles, rows in beams:
-            shape = (rows, n_p)
-            totals = {k: np.zeros(shape, dtype=np.int64) for k in ("rays",) + _KEYS}
-            totals["pilot_rays"] = np.zeros(shape, dtype=np.int64)
-            totals["pilot_violations"] = np.zeros(shape, dtype=np.int64)
-            totals["interval_delta"] = np.full(shape, delta / (n_cells * q))
-            if not adaptive:
-                rays = union_hoeffding_rays(epsilon, delta, n_cells * q)
-                found = counts_of(run(f"hoeffding:{beam}", beam, angles, points, rays))
-                for k in found:
-                    totals[k][:] = found[k]
-            else:
-                pilot = counts_of(run(f"pilot:{beam}", beam, angles, points, n1))
-                totals["pilot_rays"][:] = pilot["rays"]
-                totals["pilot_violations"][:] = (pilot["weight_violations"] + pilot["invalid_directions"]
-                                                 + pilot["capped"])
-                hits = [pilot["reflected"] + pilot["transmitted"]]
-                if parts:
-                    hits += [pilot["reflected"], pilot["transmitted"]]
-                pilots[beam] = [pilot_intervals(h, n1, delta / 10.0 / (n_cells * q)) for h in hits]
-            assembled[beam] = totals
-        if adaptive:
-            shares = stage_two_shares({beam: intervals for beam, intervals in pilots.items()}, delta * 0.9)
-            for beam, angles, rows in beams:
-                totals = assembled[beam]
-                share = shares[beam]  # δ of each quantity's second batch, per cell
-                totals["interval_delta"] = share
-                need = np.max([binomial_rays(lo, hi, epsilon, share) for lo, hi in pilots[beam]], axis=0)
-                classes = np.minimum(np.ceil(_CLASS_STEP ** np.ceil(np.log(need) / np.log(_CLASS_STEP) - 1e-9)),
-                                     union_hoeffding_rays_array(epsilon, share)).astype(np.int64)
-                for rays in np.unique(classes):
-                    rows_in, cols_in = np.nonzero(classes == rays)
-                    if len(np.unique(rows_in)) <= len(np.unique(cols_in)):  # fewer sweeps: one per θ row …
-                        for row in np.unique(rows_in):
-                            members = cols_in[rows_in == row]
-                            label = f"stage2:{beam}:{int(rays)}:row{row}:" + ",".join(map(str, members.tolist()))
-                            found = counts_of(run(label, beam, [angles[row]], points[members], int(rays)))
-                            for k in found:
-                                totals[k][row, members] = found[k][0]
-                    else:  # … or one per parameter point (a column of θ rows)
-                        for col in np.unique(cols_in):
-                            members = rows_in[cols_in == col]
-                            label = f"stage2:{beam}:{int(rays)}:col{col}:" + ",".join(map(str, members.tolist()))
-                            found = counts_of(run(label, beam, angles[members], points[[col]], int(rays)))
-                            for k in found:
-                                totals[k][members, col] = found[k][:, 0]
-    finally:
-        bar.close()
-    if store.reused:
-        bar.note(f"resumed from {store.directory}: {store.reused} finished group(s) reused")
+            def counts_of(result: Any) -> dict[str, np.ndarray]:  # (θ, point) arrays of one wavelength
+                return {k: np.asarray(getattr(result, k))[0] for k in ("rays",) + _KEYS}
 
-    import mitsuba as _mitsuba_module
+            beams = [("collimated", theta, n_mu)] + ([("diffuse", np.array([0.0]), 1)] if average else [])
+            assembled: dict[str, dict[str, np.ndarray]] = {}
+            try:  # an interrupt: at a kernel chunk of a group's sweep or between two groups, the finished ones kept
+                pilots = {}
+                for beam, angles, rows in beams:
+                    shape = (rows, n_p)
+                    totals = {k: np.zeros(shape, dtype=np.int64) for k in ("rays",) + _KEYS}
+                    totals["pilot_rays"] = np.zeros(shape, dtype=np.int64)
+                    totals["pilot_violations"] = np.zeros(shape, dtype=np.int64)
+                    totals["interval_delta"] = np.full(shape, delta / (n_cells * q))
+                    if not adaptive:
+                        rays = union_hoeffding_rays(epsilon, delta, n_cells * q)
+                        found = counts_of(run(f"hoeffding:{beam}", beam, angles, points, rays))
+                        for k in found:
+                            totals[k][:] = found[k]
+                    else:
+                        pilot = counts_of(run(f"pilot:{beam}", beam, angles, points, n1))
+                        totals["pilot_rays"][:] = pilot["rays"]
+                        totals["pilot_violations"][:] = (pilot["weight_violations"] + pilot["invalid_directions"]
+                                                         + pilot["capped"])
+                        hits = [pilot["reflected"] + pilot["transmitted"]]
+                        if parts:
+                            hits += [pilot["reflected"], pilot["transmitted"]]
+                        pilots[beam] = [pilot_intervals(h, n1, delta / 10.0 / (n_cells * q)) for h in hits]
+                    assembled[beam] = totals
+                if adaptive:
+                    shares = stage_two_shares({beam: intervals for beam, intervals in pilots.items()}, delta * 0.9)
+                    for beam, angles, rows in beams:
+                        totals = assembled[beam]
+                        share = shares[beam]  # δ of each quantity's second batch, per cell
+                        totals["interval_delta"] = share
+                        need = np.max([binomial_rays(lo, hi, epsilon, share) for lo, hi in pilots[beam]], axis=0)
+                        classes = np.minimum(np.ceil(_CLASS_STEP ** np.ceil(np.log(need) / np.log(_CLASS_STEP) - 1e-9)),
+                                             union_hoeffding_rays_array(epsilon, share)).astype(np.int64)
+                        for rays in np.unique(classes):
+                            rows_in, cols_in = np.nonzero(classes == rays)
+                            if len(np.unique(rows_in)) <= len(np.unique(cols_in)):  # fewer sweeps: one per θ row …
+                                for row in np.unique(rows_in):
+                                    members = cols_in[rows_in == row]
+                                    label = f"stage2:{beam}:{int(rays)}:row{row}:" + ",".join(map(str, members.tolist()))
+                                    found = counts_of(run(label, beam, [angles[row]], points[members], int(rays)))
+                                    for k in found:
+                                        totals[k][row, members] = found[k][0]
+                            else:  # … or one per parameter point (a column of θ rows)
+                                for col in np.unique(cols_in):
+                                    members = rows_in[cols_in == col]
+                                    label = f"stage2:{beam}:{int(rays)}:col{col}:" + ",".join(map(str, members.tolist()))
+                                    found = counts_of(run(label, beam, angles[members], points[[col]], int(rays)))
+                                    for k in found:
+                                        totals[k][members, col] = found[k][:, 0]
+            except interrupts.Interrupted as stop:
+                stop.checkpoint = store.directory if store.directory is not None and store.saved else None
+                raise
+            finally:
+                bar.close()
+            if store.reused:
+                bar.note(f"resumed from {store.directory}: {store.reused} finished group(s) reused")
 
-    collimated = {k: grid.canonical(v) for k, v in assembled["collimated"].items()}
-    averaged = None
-    if average:
-        averaged = {k: grid.canonical_average(v[0]) for k, v in assembled["diffuse"].items()}
-    provenance = {"seed": int(seed), "wavelength_nm": float(wavelength), "mitsuba": _mitsuba_module.__version__,
-                  "variant": mi.variant(), "virtspec_mi": __version__, "pilot_rays": n1 if adaptive else 0,
-                  "seconds_wall": round(time.perf_counter() - started, 3), "seconds_traced": round(traced_seconds, 3),
-                  "groups": groups,
-                  "created": datetime.now(timezone.utc).isoformat(timespec="seconds"),
-                  "bsdf": "roughconductor (material none, Fresnel = 1)" if model == "conductor" else "roughdielectric",
-                  "beam": "collimated (E), diffuse cosine-weighted (E_avg)",
-                  "alpha_clamp": "Mitsuba clamps alpha >= 1e-4 (MicrofacetDistribution::configure)"}
-    table = AlbedoTable(model, distribution, grid.mu, grid.alpha, grid.eta, grid.roughness, grid.engine, grid.order,
-                        collimated, averaged, epsilon, delta, bound, quantities, provenance)
-    if not table.certified:
-        warnings.warn(f"albedo table: {table.statement()}", RuntimeWarning, stacklevel=2)
-    for path in outs:
-        table.write(path)
-    store.remove()  # the table is returned (and written to every out): its groups are safe
-    return table
+            import mitsuba as _mitsuba_module
+
+            collimated = {k: grid.canonical(v) for k, v in assembled["collimated"].items()}
+            averaged = None
+            if average:
+                averaged = {k: grid.canonical_average(v[0]) for k, v in assembled["diffuse"].items()}
+            provenance = {"seed": int(seed), "wavelength_nm": float(wavelength), "mitsuba": _mitsuba_module.__version__,
+                          "variant": mi.variant(), "virtspec_mi": __version__, "pilot_rays": n1 if adaptive else 0,
+                          "seconds_wall": round(time.perf_counter() - started, 3), "seconds_traced": round(traced_seconds, 3),
+                          "groups": groups,
+                          "created": datetime.now(timezone.utc).isoformat(timespec="seconds"),
+                          "bsdf": "roughconductor (material none, Fresnel = 1)" if model == "conductor" else "roughdielectric",
+                          "beam": "collimated (E), diffuse cosine-weighted (E_avg)",
+                          "alpha_clamp": "Mitsuba clamps alpha >= 1e-4 (MicrofacetDistribution::configure)"}
+            table = AlbedoTable(model, distribution, grid.mu, grid.alpha, grid.eta, grid.roughness, grid.engine, grid.order,
+                                collimated, averaged, epsilon, delta, bound, quantities, provenance)
+            if not table.certified:
+                warnings.warn(f"albedo table: {table.statement()}", RuntimeWarning, stacklevel=2)
+            interrupts.check()  # the last safe point before the outputs are written
+            for path in outs:
+                table.write(path, overwrite=overwrite)
+            store.remove()  # the table is returned (and written to every out): its groups are safe
+            return table
 

@@ -112,7 +112,7 @@ def bsdf_model(model: str, distribution: str, engine: str, shadowing: str | None
     check_model(distribution, shadowing, g1, fresnel)
     words = model_statement(distribution, shadowing, g1, fresnel)
     if engine != "grid" and (distribution != "ggx" or shadowing != ENGINE_SHADOWING[engine]):
-        words += f"; NOT {engine}'s own model (GGX, {ENGINE_SHADOWING[engine]}) on its grid"
+        words += f"; NOT the {engine} engine's own model (GGX, {ENGINE_SHADOWING[engine]}) on its grid"
     return ({"shadowing": shadowing, "g1": g1, "fresnel": fresnel}, words,
             WALTER_SCALE if g1 == "walter" else 1.0)
 

@@ -38,7 +38,10 @@ shadowing : str, default ``"separable"``
     ``roughconductor``); ``height_correlated`` 1/(1 + Λ(ω_i) + Λ(ω_o)) (Heitz 2014,
     eq. 99; Cycles and Filament); ``unreal`` (GGX only) the approximation of Unreal
     Engine 4's ``PreintegratedGF``, G₂ = 2/(2(1 − α) + α/cos θ_i + α/cos θ_o)
-    (``Vis_SmithJointApprox``), which is ≤ G₁(ω_i), so w ≤ 1.
+    (``Vis_SmithJointApprox``), which is ≤ G₁(ω_i) for α ≤ 1 (Unreal's roughness ≤ 1),
+    so w ≤ 1: with ``unreal`` α must satisfy 0 < α ≤ 1. Proof: it is
+    1/(1 + Λ̃(ω_i) + Λ̃(ω_o)) with Λ̃(μ) = α(1 − μ)/(2μ) ≥ 0, and Λ̃ ≥ Λ_GGX because
+    (μ(1 − α) + α)² − (α² + (1 − α²)μ²) = 2α(1 − α)μ(1 − μ) ≥ 0.
 g1 : str, default ``"exact"``
     The Smith G₁ of ``beckmann``: ``exact`` 1/(1 + Λ), Λ(a) = (erf(a) − 1)/2 +
     e^(−a²)/(2a√π), a = 1/(α tan θ) (Walter et al. 2007, eq. 25), or ``walter`` the
@@ -160,6 +163,8 @@ class Microfacet(mi.BSDF):
 
     def _set_alpha(self, alpha: Any) -> None:
         low, high = ALPHA_RANGE
+        if self.shadowing == "unreal":  # the approximation is <= G1(wi) (w <= 1) for alpha <= 1 only
+            high = 1.0
         self.alpha = check_float32("microfacet: 'alpha'", alpha, f"be a number with {low:g} < alpha <= {high:g}",
                                    lambda value: low < value <= high)
         self._alpha = dr.opaque(mi.Float, self.alpha)

@@ -1131,7 +1131,7 @@ def _engine_tables(args: argparse.Namespace) -> int:
     """``--audit`` (and an engine's drop-in files): every channel of the engine's model certified at once."""
 
     from virtspec_mi.exchange.audit import audit
-    from virtspec_mi.exchange.engine_models import engine_tables
+    from virtspec_mi.exchange.engine_tables import engine_tables
 
     if args.engine not in ("cycles", "filament", "unreal"):
         raise ValueError("--audit needs --engine cycles, filament or unreal (the published table's layout)")

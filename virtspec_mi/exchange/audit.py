@@ -3,10 +3,10 @@ Auditing an engine's published table against a certified table of the same model
 =================================================================================
 
 :func:`audit` reads a table an engine ships, in its native layout
-(:func:`~virtspec_mi.exchange.engine_models.read_engine_file`: Cycles' C header,
+(:func:`~virtspec_mi.exchange.engine_tables.read_engine_file`: Cycles' C header,
 Filament's ``dfg.inc``, Unreal's G16R16 texture or PNG-16), and holds every cell to a
 certified table of the same model on the same grid
-(:func:`~virtspec_mi.exchange.engine_models.engine_tables`): a published value v is
+(:func:`~virtspec_mi.exchange.engine_tables.engine_tables`): a published value v is
 *outside* when |v − Ê| ≥ ε′ + r, with Ê the certified value, ε′ its certified tolerance
 and r the published value's own rounding (Cycles six decimals: 5·10⁻⁷; Filament's half
 float: half a unit in the last place of v; Unreal's 16-bit unorm: 0.5/65535). With
@@ -196,7 +196,7 @@ def audit(published: str | os.PathLike | dict[str, np.ndarray], certified: Any, 
     published
         A file in the engine's native layout, or arrays by channel (engine memory order).
     certified
-        :class:`~virtspec_mi.exchange.engine_models.EngineTables` of that engine (or a
+        :class:`~virtspec_mi.exchange.engine_tables.EngineTables` of that engine (or a
         Cycles :class:`~virtspec_mi.exchange.albedo.AlbedoTable`: channel ``E`` and ``E_avg``).
     engine
         ``cycles``, ``filament`` or ``unreal`` (default: the certified table's).
@@ -208,7 +208,7 @@ def audit(published: str | os.PathLike | dict[str, np.ndarray], certified: Any, 
     Audit
     """
 
-    from virtspec_mi.exchange.engine_models import EngineTables, engine_layout, read_engine_file
+    from virtspec_mi.exchange.engine_tables import EngineTables, engine_layout, read_engine_file
 
     if not isinstance(certified, EngineTables):
         if getattr(certified, "engine", None) != "cycles" or getattr(certified, "model", None) != "conductor":

@@ -27,7 +27,8 @@ DISTRIBUTIONS: tuple[str, ...] = ("ggx", "beckmann")
 SHADOWINGS: dict[str, str] = {
     "separable": "separable Smith G2 = G1(wi) G1(wo) (Walter et al. 2007, eq. 23)",
     "height_correlated": "height-correlated Smith G2 = 1/(1 + Lambda(wi) + Lambda(wo)) (Heitz 2014, eq. 99)",
-    "unreal": "Unreal Engine 4's approximation G2 = 2/(2(1 - alpha) + alpha/cos_i + alpha/cos_o) (Vis_SmithJointApprox)",
+    "unreal": ("Unreal Engine 4's approximation G2 = 2/(2(1 - alpha) + alpha/cos_i + alpha/cos_o) "
+               "(Vis_SmithJointApprox)"),
 }
 """Masking–shadowing terms, and what each is."""
 

@@ -6,11 +6,11 @@ In one run, warm (small tables compile each channel's kernel first):
 
 1. **Cycles' full GGX set** — E 32 × 32 + E_avg 32 of the height-correlated GGX
    (``engine_tables("cycles")``), ε = 10⁻³, δ = 0.01 jointly (target ≤ 60 s on 2 cores);
-2. **Filament's DFG** — 128 × 128, DFG.x and DFG.y, ε = 10⁻³, δ = 0.01 jointly over the
-   32,768 values (target ≤ 10 min): measured on a fraction — ``--rows`` of the 128
-   roughness rows (evenly spaced), both channels, each cell at the δ the full table
-   would give it on average (δ × cells measured / 32,768) — and projected to the whole
-   by its rays (the rate measured);
+2. **Filament's DFG** — 128 × 128, DFG.x and DFG.y (counted on the same rays:
+   ``fresnel="split"``), ε = 10⁻³, δ = 0.01 jointly (target ≤ 10 min): measured on a
+   fraction — ``--rows`` of the 128 roughness rows (evenly spaced), each texel at the δ
+   the full table would give it on average (δ × texels measured / 16,384) — and
+   projected to the whole by its rays (the rate measured);
 3. the **projection to ε = 10⁻⁴** on ``--workers`` 1-thread Dask workers
    (``benchmarks/albedo_table.py``'s method: second-stage rays from the certified values
    standing in for the pilots, at the per-core rate measured here);
@@ -63,15 +63,15 @@ def main() -> None:
     print(f"# machine: {platform.processor() or platform.machine()}, {os.cpu_count()} cores, {_simd()}; "
           f"Dr.Jit {dr.__version__} ({dr.thread_count()} threads), Mitsuba {mitsuba.__version__}; "
           f"load average {os.getloadavg()[0]:.2f}")
-    for fresnel in ("one", "fc"):  # compile the kernels
+    for fresnel in ("one", "split"):  # compile the kernels
         albedo_table(engine=None, mu=[1.0, 0.5], alpha=[0.5], shadowing="height_correlated", fresnel=fresnel,
-                     epsilon=0.05, progress=False)
+                     parts=fresnel == "split", epsilon=0.05, progress=False)
     epsilon = 1e-2 if args.quick else 1e-3
 
     start = time.perf_counter()
     cycles = engine_tables("cycles", epsilon=epsilon, delta=0.01, progress=False)
     wall = time.perf_counter() - start
-    table = cycles.channels["E"]
+    table = cycles.table
     rate = table.rays / table.provenance["seconds_traced"]
     print(f"\nCycles GGX E 32 x 32 + E_avg 32, height-correlated, epsilon = {epsilon:g}, delta = 0.01 jointly: "
           f"wall {wall:.1f} s (traced {table.provenance['seconds_traced']:.1f} s, {table.provenance['groups']} sweep "
@@ -83,14 +83,14 @@ def main() -> None:
     fraction = len(rows) / 128
     start = time.perf_counter()
     parts = [albedo_table(engine=None, mu=filament.mu, alpha=filament.alpha[rows], shadowing="height_correlated",
-                          fresnel=fresnel, epsilon=epsilon, delta=0.01 * fraction / 2, average=False, seed=9 + k,
-                          progress=False) for k, fresnel in enumerate(("fc", "one"))]
+                          fresnel="split", parts=True, epsilon=epsilon, delta=0.01 * fraction, average=False, seed=9,
+                          progress=False)]  # DFG.x = E_R, DFG.y = E on the same rays
     part_wall = time.perf_counter() - start
     part_rays = sum(p.rays for p in parts)
     part_traced = sum(p.provenance["seconds_traced"] for p in parts)
     print(f"\nFilament DFG.x + DFG.y, {len(rows)} of 128 roughness rows (rows {rows.tolist()}), epsilon = {epsilon:g}, "
           f"delta per cell as in the full table: wall {part_wall:.1f} s (traced {part_traced:.1f} s); rays "
-          f"{part_rays:,} ({part_rays / parts[0].E.size / 2:,.0f} per cell); {part_rays / part_traced / 1e6:.1f} "
+          f"{part_rays:,} ({part_rays / parts[0].E.size:,.0f} per texel, both channels); {part_rays / part_traced / 1e6:.1f} "
           f"Mray/s -> the whole 128 x 128 x 2: {part_rays / fraction:.3g} rays, {part_wall / fraction / 60:.1f} min "
           "projected (the rows are evenly spaced in roughness, so their mean cost stands for all rows)")
 

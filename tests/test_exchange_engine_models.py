@@ -89,6 +89,23 @@ def test_walter_tables_scale_their_counts_and_keep_epsilon(model_table):
     assert np.nanmax(table.certified_epsilon()) == pytest.approx(table.epsilon)  # the rays were sized for eps/c
 
 
+@pytest.mark.parametrize("shadowing", ["height_correlated", pytest.param("unreal", marks=pytest.mark.slow)])
+def test_split_certifies_both_halves_and_their_sum_on_the_same_rays(mi, shadowing):
+    """Filament's DFG.x, DFG.y (height-correlated) and Unreal's A, B: E_R, E and E_T of one table, 48 cells."""
+
+    table = albedo_table("conductor", engine=None, mu=MU, alpha=ALPHA, shadowing=shadowing, fresnel="split",
+                         parts=True, epsilon=0.01, average=False, seed=61, progress=False)
+    assert table.quantities == ("E", "E_R", "E_T") and table.certified
+    tolerance = table.certified_epsilon()
+    for i, mu in enumerate(MU):
+        for j, alpha in enumerate(ALPHA):
+            for name, fresnel in (("E", "one"), ("E_R", "fc"), ("E_T", "one_minus_fc")):
+                expected, quad = albedo_with_error(mu, alpha, "ggx", shadowing, "exact", fresnel)
+                assert abs(table.quantity(name)[i, j] - expected) < tolerance[i, j] + quad, (name, mu, alpha)
+    assert np.array_equal(table.counts["reflected"] + table.counts["transmitted"],
+                          np.rint(table.E * table.counts["rays"]).astype(np.int64))
+
+
 def test_the_issues_beckmann_cell_is_the_integral_of_mitsubas_own_eval(mi):
     """μ = 0.15, α = 1: Mitsuba's eval() integrates to 0.890126 (the issue); its sampler counted 0.887287."""
 
@@ -142,6 +159,7 @@ def test_engine_defaults_and_provenance(mi):
     ({"shadowing": "unreal", "distribution": "beckmann"}, "shadowing='unreal'"),
     ({"shadowing": "smith"}, "'shadowing' must be one of"),
     ({"fresnel": "schlick"}, "'fresnel' must be one of"),
+    ({"parts": True}, "fresnel='split'"),
 ])
 def test_bad_models_are_refused_by_name(mi, kwargs, message):
     model = kwargs.pop("model", "conductor")

@@ -55,6 +55,20 @@ def test_the_mean_weight_times_c_is_the_albedo(mi, model):
     assert abs(weight.mean() - albedo(0.3, 0.6, *model)) < 5 * weight.std() / np.sqrt(weight.size)
 
 
+def test_split_keeps_each_half_with_its_probability_and_weight_one(mi):
+    """fresnel='split': up with probability w Fc, below with w (1 - Fc); eval/pdf = c on every kept ray."""
+
+    bsdf = mi.load_dict({"type": "microfacet", "shadowing": "height_correlated", "fresnel": "split", "alpha": 0.6})
+    weight, value, pdf, sampled_pdf, cos_o = _draw(mi, bsdf, 0.3, 400000, seed=11)
+    assert set(np.unique(weight)) <= {0.0, 1.0}
+    kept, up = weight > 0, cos_o > 0
+    assert np.allclose(value[kept] / pdf[kept], 1.0, rtol=1e-4) and np.allclose(sampled_pdf[kept], pdf[kept])
+    n = weight.size
+    for share, fresnel in ((np.mean(kept & up), "fc"), (np.mean(kept & ~up), "one_minus_fc")):
+        expected = albedo(0.3, 0.6, "ggx", "height_correlated", "exact", fresnel)
+        assert abs(share - expected) < 5 * np.sqrt(expected * (1 - expected) / n), (fresnel, share, expected)
+
+
 def test_alpha_through_traverse_and_errors(mi):
     bsdf = mi.load_dict({"type": "microfacet", "alpha": 0.2})
     params = mi.traverse(bsdf)

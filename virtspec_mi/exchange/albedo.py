@@ -416,6 +416,12 @@ class AlbedoTable:
         target = (["side"] if self.model == "glass" else []) + list(self.order)
         return np.transpose(values, [dims.index(d) for d in target])
 
+    @property
+    def _parts_names(self) -> tuple[str, ...]:
+        """The quantities a file carries: E, and E_R, E_T for glass or a ``split`` conductor."""
+
+        return ("E", "E_R", "E_T") if self.model == "glass" or "E_R" in self.quantities else ("E",)
+
     def to_dataset(self) -> Any:
         """The table as an ``xarray.Dataset`` (canonical dims), counts and certificate included."""
 
@@ -430,7 +436,7 @@ class AlbedoTable:
             coords["relative_eta"] = (("side", "eta"), np.stack([self.eta, 1.0 / self.eta]))
         data: dict[str, Any] = {}
         dims, adims = self.dims, self.average_dims
-        for name in ("E", "E_R", "E_T") if self.model == "glass" else ("E",):
+        for name in self._parts_names:
             data[name] = (dims, self.quantity(name))
             lower, upper = self.interval(name)
             data[f"{name}_lower"], data[f"{name}_upper"] = (dims, lower), (dims, upper)
@@ -438,7 +444,7 @@ class AlbedoTable:
         for key, value in self.counts.items():
             data[key] = (dims, value)
         if self.average_counts is not None:
-            for name in ("E", "E_R", "E_T") if self.model == "glass" else ("E",):
+            for name in self._parts_names:
                 data[f"{name}_avg"] = (adims, self.quantity(name, average=True))
                 lower, upper = self.interval(name, average=True)
                 data[f"{name}_avg_lower"], data[f"{name}_avg_upper"] = (adims, lower), (adims, upper)
@@ -845,7 +851,8 @@ def albedo_table(
     average
         Also measure E_avg (diffuse beam) per α (and η, side).
     parts
-        Glass: certify E_R and E_T too (three quantities per cell; more rays).
+        Glass, or a conductor with ``fresnel="split"``: certify E_R and E_T too (three
+        quantities per cell, on the same rays; split: E_R = ∫ F_c f cos, E_T = ∫ (1 − F_c) f cos).
     pilot_rays
         Two-stage pilot per cell (default ⌈10/ε⌉).
     seed
@@ -886,8 +893,9 @@ def albedo_table(
         raise ValueError(f"delta must satisfy 0 < delta < 1 (got {delta!r})")
     if bound not in BOUNDS:
         raise ValueError(f"bound must be one of {', '.join(BOUNDS)} (got {bound!r})")
-    if parts and model != "glass":
-        raise ValueError("parts=True certifies E_R and E_T of a glass table (model='glass')")
+    if parts and model != "glass" and fresnel != "split":
+        raise ValueError("parts=True certifies E_R and E_T of a glass table (model='glass') or of a conductor with "
+                         "fresnel='split'")
     epsilon, delta = float(epsilon), float(delta)
     sized = epsilon / count_scale  # the counts estimate E/c: held to ε/c, the values c × count/N to ε
     n1 = math.ceil(40.0 / epsilon - 1e-9) if pilot_rays is None else int(pilot_rays)

@@ -213,7 +213,7 @@ def audit(published: str | os.PathLike | dict[str, np.ndarray], certified: Any, 
     if not isinstance(certified, EngineTables):
         if getattr(certified, "engine", None) != "cycles" or getattr(certified, "model", None) != "conductor":
             raise ValueError("certified must be EngineTables (engine_tables(...)) or a Cycles conductor AlbedoTable")
-        certified = EngineTables("cycles", {"E": certified}, certified.delta)
+        certified = EngineTables("cycles", certified, {"E": "E"})
     engine = certified.engine if engine is None else engine
     if engine != certified.engine:
         raise ValueError(f"engine {engine!r} does not match the certified tables' engine {certified.engine!r}")
@@ -222,8 +222,9 @@ def audit(published: str | os.PathLike | dict[str, np.ndarray], certified: Any, 
     source = "arrays" if isinstance(published, dict) else str(published)
     values = published if isinstance(published, dict) else read_engine_file(published, engine)
     shapes = engine_layout(engine)
+    table = certified.table
     channels: dict[str, ChannelAudit] = {}
-    for name, table in certified.channels.items():
+    for name in certified.channels:
         for key, average in ((name, False), ("E_avg", True)):
             if average and (engine != "cycles" or table.E_avg is None or "E_avg" not in values):
                 continue
@@ -232,9 +233,7 @@ def audit(published: str | os.PathLike | dict[str, np.ndarray], certified: Any, 
             pub = np.asarray(values[key], dtype=np.float64)
             if pub.shape != shapes[key]:
                 raise ValueError(f"channel {key!r}: shape {pub.shape}, {engine} lays it out as {shapes[key]}")
-            mine = table.layout(average=average)
-            tol = table.certified_epsilon(average=average)
-            tol = tol if average else table.layout(tol)
+            mine, tol = certified.values(name, average), certified.tolerance(name, average)
             r = ROUNDING[engine](pub) if rounding is None else np.full(pub.shape, float(rounding))
             if average:
                 rough = np.sqrt(table.alpha) if table.roughness is None else table.roughness

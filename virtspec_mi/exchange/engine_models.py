@@ -15,7 +15,7 @@ provenance:
 - ``unreal`` (UE4 ``SystemTextures.cpp``, ``PreintegratedGF``): GGX with
   ``Vis_SmithJointApprox`` — A = ∫ (1 − F_c) f cos, B = ∫ F_c f cos;
 
-(:data:`ENGINE_CHANNELS`; F_c = (1 − ω_i·h)⁵). On a user grid the default is the
+(:data:`ENGINE_CHANNELS`; F_c = (1 − ω_i·h)⁵; both halves are counted on the same rays). On a user grid the default is the
 separable G₂ of Mitsuba's ``roughconductor``. Glass stays Mitsuba's ``roughdielectric``
 (separable GGX; *not* Cycles' glass model, which the provenance says); Beckmann glass is
 refused, Mitsuba's Beckmann sampler and evaluation using different G₁.
@@ -37,12 +37,16 @@ ENGINE_SHADOWING: dict[str, str] = {"cycles": "height_correlated", "filament": "
                                     "unreal": "unreal", "grid": "separable"}
 """The G₂ a table measures by default on each engine's grid (``grid``: a user grid)."""
 
-ENGINE_CHANNELS: dict[str, tuple[tuple[str, str], ...]] = {
-    "cycles": (("E", "one"),),
-    "filament": (("DFG.x", "fc"), ("DFG.y", "one")),
-    "unreal": (("A", "one_minus_fc"), ("B", "fc")),
+ENGINE_CHANNELS: dict[str, tuple[str, dict[str, str]]] = {
+    "cycles": ("one", {"E": "E"}),
+    "filament": ("split", {"DFG.x": "E_R", "DFG.y": "E"}),
+    "unreal": ("split", {"A": "E_T", "B": "E_R"}),
 }
-"""Each engine's channels: (name, the plugin's ``fresnel``)."""
+"""
+Each engine's table: the plugin's ``fresnel`` and, per channel, the certified quantity
+that holds it. ``split`` counts both split-sum halves on the same rays: reflected rays
+E_R = ∫ F_c f cos, the rays sent below E_T = ∫ (1 − F_c) f cos, and E = E_R + E_T.
+"""
 
 
 def bsdf_model(model: str, distribution: str, engine: str, shadowing: str | None, g1: str,

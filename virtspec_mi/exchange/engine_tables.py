@@ -26,8 +26,10 @@ channel of an engine's table:
     :func:`write_unreal` writes that raw texture (``.raw``) or a 16-bit RGB PNG (R = A,
     G = B, B = 0; the provenance in a ``tEXt`` chunk).
 
-A multi-channel table (:class:`EngineTables`) certifies every channel's cells at once
-with probability ≥ 1 − δ: each channel's table gets δ/k (union bound).
+Filament's and Unreal's two channels are the two halves of the split sum, counted on the
+same rays (the plugin's ``fresnel="split"``): one table certifies E_R = ∫ F_c f cos,
+E_T = ∫ (1 − F_c) f cos and E together (:class:`EngineTables`), every cell of every
+channel at once with probability ≥ 1 − δ.
 
 References
 ----------
@@ -67,47 +69,66 @@ __all__ = ["EngineTables", "engine_tables",
 @dataclass(frozen=True, eq=False)
 class EngineTables:
     """
-    An engine's channels, each an :class:`~virtspec_mi.exchange.albedo.AlbedoTable` of the
-    engine's model on its grid at δ/k, so that every cell of every channel is certified at
-    once with probability ≥ 1 − δ.
+    An engine's table: one :class:`~virtspec_mi.exchange.albedo.AlbedoTable` of the
+    engine's model on its grid whose certified quantities hold the engine's channels
+    (:data:`~virtspec_mi.exchange.engine_models.ENGINE_CHANNELS`): every cell of every
+    channel within its tolerance at once with probability ≥ 1 − δ.
     """
 
     engine: str
-    channels: dict[str, Any]
-    delta: float
+    table: Any
+    channels: dict[str, str]
+
+    @property
+    def delta(self) -> float:
+        return self.table.delta
 
     @property
     def epsilon(self) -> float:
-        return max(t.epsilon for t in self.channels.values())
+        return self.table.epsilon
 
     @property
     def rays(self) -> int:
-        return sum(t.rays for t in self.channels.values())
+        return self.table.rays
 
     @property
     def seconds(self) -> float:
-        return sum(float(t.provenance.get("seconds_wall", 0.0)) for t in self.channels.values())
+        return float(self.table.provenance.get("seconds_wall", 0.0))
+
+    def values(self, channel: str, average: bool = False) -> np.ndarray:
+        """A channel's certified values in the engine's memory order (``average``: its E_avg)."""
+
+        if channel not in self.channels:
+            raise ValueError(f"channel must be one of {', '.join(self.channels)} (got {channel!r})")
+        values = self.table.quantity(self.channels[channel], average)
+        return values if average else self.table.layout(values)
+
+    def tolerance(self, channel: str, average: bool = False) -> np.ndarray:
+        """A channel's certified tolerance ε′ per cell (the table's: every quantity of a cell shares it)."""
+
+        if channel not in self.channels:
+            raise ValueError(f"channel must be one of {', '.join(self.channels)} (got {channel!r})")
+        tolerance = self.table.certified_epsilon(average)
+        return tolerance if average else self.table.layout(tolerance)
 
     def statement(self) -> str:
         """The joint certificate in one sentence."""
 
-        parts = "; ".join(f"{name}: {t.statement()}" for name, t in self.channels.items())
-        return (f"{self.engine}: every cell of {', '.join(self.channels)} within its tolerance at once with "
-                f"probability >= {1 - self.delta:g} (delta/{len(self.channels)} per channel) — {parts}")
+        held = ", ".join(f"{name} = {quantity}" for name, quantity in self.channels.items())
+        return f"{self.engine} ({held}): {self.table.statement()}"
 
     def description(self) -> dict[str, Any]:
-        """Provenance and certificates of every channel (the sidecar of a drop-in file)."""
+        """Provenance and certificate (the sidecar of a drop-in file)."""
 
-        return {"engine": self.engine, "delta": self.delta, "certificate": self.statement(),
-                "file": _ENGINE_FILES[self.engine],
-                "channels": {name: t.description() for name, t in self.channels.items()}}
+        return {"engine": self.engine, "channels": self.channels, "certificate": self.statement(),
+                "file": _ENGINE_FILES[self.engine], "table": self.table.description()}
 
     def write(self, path: str | os.PathLike, cloth: np.ndarray | None = None) -> Path:
         """
         The drop-in file by the engine: ``cycles`` ``.h``/``.hpp``; ``filament`` ``.inc``
         (``cloth``: a 128 × 128 third channel to carry along, uncertified); ``unreal``
-        ``.raw`` or ``.png``. A ``PATH.json`` sidecar holds every channel's provenance and
-        certificate (the header, the ``.inc`` comments and the PNG's text chunk hold them too).
+        ``.raw`` or ``.png``. A ``PATH.json`` sidecar holds the provenance and certificate
+        (the header, the ``.inc`` comments and the PNG's text chunk hold them too).
         """
 
         path = Path(path)
@@ -116,25 +137,24 @@ class EngineTables:
         if suffix not in allowed:
             raise ValueError(f"path for engine {self.engine!r} must end in {' or '.join(allowed)} (got {path.name!r})")
         if self.engine == "cycles":
-            self.channels["E"].write(path)
+            self.table.write(path)
         elif self.engine == "filament":
-            write_filament_inc(path, self.channels["DFG.x"].layout(), self.channels["DFG.y"].layout(),
-                               self._comment(), cloth)
+            write_filament_inc(path, self.values("DFG.x"), self.values("DFG.y"), self._comment(), cloth)
         else:
-            write_unreal(path, self.channels["A"].layout(), self.channels["B"].layout(), self._comment())
+            write_unreal(path, self.values("A"), self.values("B"), self._comment())
         sidecar = path.with_name(path.name + ".json")
         atomic_write(sidecar, lambda tmp: Path(tmp).write_text(json.dumps(self.description(), indent=1)))
         return path
 
     def _comment(self) -> list[str]:
-        first = next(iter(self.channels.values()))
-        prov = first.provenance
+        prov = self.table.provenance
         return [f"Certified by virtspec-mi {prov.get('virtspec_mi')} (Mitsuba {prov.get('mitsuba')}, "
                 f"{prov.get('variant')}), {prov.get('created')}, seed {prov.get('seed')}",
                 f"model: {prov.get('bsdf_model')}",
-                *(f"{name}: fresnel {t.bsdf.get('fresnel')}; every cell within {np.nanmax(t.certified_epsilon()):.4g}"
-                  for name, t in self.channels.items()),
-                f"jointly with probability >= {1 - self.delta:g}; rays {self.rays:,}"]
+                "channels: " + ", ".join(f"{name} = {q}" for name, q in self.channels.items())
+                + " (E_R: reflected rays = int Fc f cos; E_T: rays sent below = int (1 - Fc) f cos; E = both)",
+                f"every value within {np.nanmax(self.table.certified_epsilon()):.4g}, jointly with probability "
+                f">= {1 - self.delta:g}; rays {self.rays:,}"]
 
 
 def engine_tables(engine: str, *, epsilon: float = 1e-3, delta: float = 0.01, seed: int = 0,
@@ -142,30 +162,22 @@ def engine_tables(engine: str, *, epsilon: float = 1e-3, delta: float = 0.01, se
                   checkpoint: str | os.PathLike | None = None, chunk_size: int | None = None) -> EngineTables:
     """
     Certify every channel of ``engine``'s table with its own model on its grid (module
-    docstring): Cycles E (and E_avg, ``average`` default ``True``), Filament DFG.x and
-    DFG.y, Unreal A and B, each at δ/k (k channels). ``checkpoint``: a directory with one
-    sub-directory per channel (resume).
+    docstring), in one table: Cycles E (and E_avg, ``average`` default ``True``);
+    Filament DFG.x and DFG.y, Unreal A and B on the same rays (``fresnel="split"``,
+    ``parts=True``). ``checkpoint``: a directory keeping finished groups (resume).
     """
 
     from virtspec_mi.exchange.albedo import albedo_table
 
     if engine not in ENGINE_CHANNELS:
         raise ValueError(f"engine must be one of {', '.join(ENGINE_CHANNELS)} (got {engine!r})")
-    if not (isinstance(delta, (int, float)) and not isinstance(delta, bool) and 0 < delta < 1):
-        raise ValueError(f"delta must satisfy 0 < delta < 1 (got {delta!r})")
-    channels = ENGINE_CHANNELS[engine]
+    fresnel, channels = ENGINE_CHANNELS[engine]
     if average is None:
         average = engine == "cycles"
-    tables = {}
-    for index, (name, fresnel) in enumerate(channels):
-        keep = None if checkpoint is None else Path(checkpoint) / name.replace(".", "_")
-        if keep is not None:
-            keep.parent.mkdir(parents=True, exist_ok=True)
-        tables[name] = albedo_table("conductor", distribution="ggx", engine=engine, fresnel=fresnel,
-                                    epsilon=epsilon, delta=delta / len(channels), bound=bound, average=average,
-                                    seed=seed + 7919 * index, progress=progress, checkpoint=keep,
-                                    chunk_size=chunk_size)
-    return EngineTables(engine, tables, float(delta))
+    table = albedo_table("conductor", distribution="ggx", engine=engine, fresnel=fresnel, parts=fresnel == "split",
+                         epsilon=epsilon, delta=delta, bound=bound, average=average, seed=seed, progress=progress,
+                         checkpoint=checkpoint, chunk_size=chunk_size)
+    return EngineTables(engine, table, dict(channels))
 
 
 def engine_layout(engine: str) -> dict[str, tuple[int, ...]]:

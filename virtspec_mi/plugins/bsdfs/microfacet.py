@@ -53,7 +53,12 @@ fresnel : str, default ``"one"``
     The Fresnel factor F: ``one`` (F = 1, the albedo E), ``fc`` F = F_c = (1 − ω_i·m)⁵ or
     ``one_minus_fc`` F = 1 − F_c: the two halves of the split-sum integrals of Karis
     (2013) — Filament's DFG.x is ∫ F_c f cos (with DFG.y = E), Unreal's A and B are
-    ∫ (1 − F_c) f cos and ∫ F_c f cos.
+    ∫ (1 − F_c) f cos and ∫ F_c f cos; or ``split``: both halves on the same rays —
+    the ray is kept with probability w (F = 1) and, by the 1-D sample, *reflected* with
+    probability w F_c or sent *below* the surface (mirrored, a bookkeeping
+    "transmission") with probability w (1 − F_c), weight 1 either way. The instrument's
+    reflected count then estimates ∫ F_c f cos, the transmitted one ∫ (1 − F_c) f cos and
+    their sum E: a table certifies all three on one set of rays (``parts=True``).
 
 References
 ----------
@@ -102,7 +107,12 @@ class Microfacet(mi.BSDF):
         self.count_scale = WALTER_SCALE if self.g1 == "walter" else 1.0
         self._set_alpha(props.get("alpha", 0.5))
         self.m_components = [mi.BSDFFlags.GlossyReflection | mi.BSDFFlags.FrontSide]
+        if self.fresnel == "split":
+            self.m_components.append(mi.BSDFFlags.GlossyTransmission | mi.BSDFFlags.FrontSide
+                                     | mi.BSDFFlags.NonSymmetric)
         self.m_flags = self.m_components[0]
+        for component in self.m_components[1:]:
+            self.m_flags = self.m_flags | component
 
     # -- parameters --------------------------------------------------------------------
 
@@ -152,9 +162,14 @@ class Microfacet(mi.BSDF):
             return 1.0 / (dr.pi * alpha2 * dr.square(cos2) * dr.square(1.0 + tan2 / alpha2))
         return dr.exp(-tan2 / alpha2) / (dr.pi * alpha2 * dr.square(cos2))
 
-    def _ratio(self, cos_i: Any, cos_o: Any, wi_dot_m: Any, wo_dot_m: Any) -> Any:
+    def _fc(self, wi_dot_m: Any) -> Any:
+        c = 1.0 - dr.clip(wi_dot_m, 0.0, 1.0)
+        return dr.square(dr.square(c)) * c
+
+    def _ratio(self, cos_i: Any, cos_o: Any, wi_dot_m: Any, wo_dot_m: Any, fresnel: str | None = None) -> Any:
         """G₂(ω_i, ω_o) F / G₁,exact(ω_i): the weight before the scale c (0 where invalid)."""
 
+        fresnel = self.fresnel if fresnel is None else fresnel
         lam_i, lam_o = self._lambda(cos_i, False), self._lambda(cos_o, False)
         lam_exact = self._lambda(cos_i, True)
         if self.shadowing == "separable":
@@ -165,10 +180,9 @@ class Microfacet(mi.BSDF):
             alpha = self._alpha
             g2 = 2.0 / (2.0 * (1.0 - alpha) + alpha / cos_i + alpha / cos_o)
         ratio = g2 * (1.0 + lam_exact)
-        if self.fresnel != "one":
-            c = 1.0 - dr.clip(wi_dot_m, 0.0, 1.0)
-            fc = dr.square(dr.square(c)) * c
-            ratio = ratio * (fc if self.fresnel == "fc" else 1.0 - fc)
+        if fresnel in ("fc", "one_minus_fc"):
+            fc = self._fc(wi_dot_m)
+            ratio = ratio * (fc if fresnel == "fc" else 1.0 - fc)
         valid = (cos_i > 0.0) & (cos_o > 0.0) & (wi_dot_m > 0.0) & (wo_dot_m > 0.0)
         return dr.select(valid, ratio, 0.0)
 
@@ -193,28 +207,59 @@ class Microfacet(mi.BSDF):
         active = active & (cos_i > 0.0)
         m = self._visible_normal(wi, sample2)
         wo = mi.reflect(wi, m)
-        weight = self._ratio(cos_i, mi.Frame3f.cos_theta(wo), dr.dot(wi, m), dr.dot(wo, m)) / self.count_scale
+        wi_dot_m = dr.dot(wi, m)
+        weight = self._ratio(cos_i, mi.Frame3f.cos_theta(wo), wi_dot_m, dr.dot(wo, m)) / self.count_scale
         bs = dr.zeros(mi.BSDFSample3f)
-        bs.wo = wo
-        bs.pdf = self._pdf(wi, wo)
         bs.eta = 1.0
-        bs.sampled_component = mi.UInt32(0)
-        bs.sampled_type = mi.UInt32(+mi.BSDFFlags.GlossyReflection)
-        return bs, dr.select(active, mi.Spectrum(weight), mi.Spectrum(0.0))
+        if self.fresnel != "split":
+            bs.wo = wo
+            bs.pdf = self._pdf(wi, wo)
+            bs.sampled_component = mi.UInt32(0)
+            bs.sampled_type = mi.UInt32(+mi.BSDFFlags.GlossyReflection)
+            return bs, dr.select(active, mi.Spectrum(weight), mi.Spectrum(0.0))
+        # split: reflected with probability w Fc, sent below with probability w (1 - Fc), weight 1
+        up_share = weight * self._fc(wi_dot_m)
+        up, kept = sample1 < up_share, sample1 < weight
+        below = kept & ~up
+        bs.wo = dr.select(below, mi.Vector3f(wo.x, wo.y, -wo.z), wo)
+        bs.pdf = self._pdf(wi, bs.wo)
+        bs.sampled_component = dr.select(below, mi.UInt32(1), mi.UInt32(0))
+        bs.sampled_type = dr.select(below, mi.UInt32(+mi.BSDFFlags.GlossyTransmission),
+                                    mi.UInt32(+mi.BSDFFlags.GlossyReflection))
+        return bs, dr.select(active & kept, mi.Spectrum(1.0), mi.Spectrum(0.0))
 
     def _pdf(self, wi: Any, wo: Any) -> Any:
-        cos_i, cos_o = mi.Frame3f.cos_theta(wi), mi.Frame3f.cos_theta(wo)
-        m = dr.normalize(wi + wo)
+        """Density of ω_o (``split``: of the outcome, a direction below being the mirror of one above)."""
+
+        below = wo.z < 0.0
+        up = dr.select(below, mi.Vector3f(wo.x, wo.y, -wo.z), wo)
+        cos_i, cos_o = mi.Frame3f.cos_theta(wi), mi.Frame3f.cos_theta(up)
+        m = dr.normalize(wi + up)
         pdf = self._d(m) / ((1.0 + self._lambda(cos_i, True)) * 4.0 * cos_i)
+        if self.fresnel == "split":  # times the probability of that outcome
+            share = self._fc(dr.dot(wi, m))
+            pdf = pdf * self._ratio(cos_i, cos_o, dr.dot(wi, m), dr.dot(up, m)) / self.count_scale
+            pdf = pdf * dr.select(below, 1.0 - share, share)
+        else:
+            pdf = dr.select(below, 0.0, pdf)
         return dr.select((cos_i > 0.0) & (cos_o > 0.0) & (dr.dot(wi, m) > 0.0), pdf, 0.0)
 
     def eval(self, ctx, si, wo, active=True):
-        """f cos θ_o = D G₂ F/(4 cos θ_i) (0 below the surface)."""
+        """
+        f cos θ_o = D G₂ F/(4 cos θ_i) (0 below the surface; ``split``: F = F_c above, and
+        below, at the mirror of an upward direction, F = 1 − F_c).
+        """
 
         wi = si.wi
-        cos_i, cos_o = mi.Frame3f.cos_theta(wi), mi.Frame3f.cos_theta(wo)
-        m = dr.normalize(wi + wo)
-        ratio = self._ratio(cos_i, cos_o, dr.dot(wi, m), dr.dot(wo, m))
+        below = wo.z < 0.0
+        up = dr.select(below, mi.Vector3f(wo.x, wo.y, -wo.z), wo) if self.fresnel == "split" else wo
+        cos_i, cos_o = mi.Frame3f.cos_theta(wi), mi.Frame3f.cos_theta(up)
+        m = dr.normalize(wi + up)
+        if self.fresnel == "split":
+            ratio = dr.select(below, self._ratio(cos_i, cos_o, dr.dot(wi, m), dr.dot(up, m), "one_minus_fc"),
+                              self._ratio(cos_i, cos_o, dr.dot(wi, m), dr.dot(up, m), "fc"))
+        else:
+            ratio = self._ratio(cos_i, cos_o, dr.dot(wi, m), dr.dot(up, m))
         value = ratio * self._d(m) / ((1.0 + self._lambda(cos_i, True)) * 4.0 * cos_i)
         return dr.select(active & (cos_i > 0.0) & (cos_o > 0.0), mi.Spectrum(value), mi.Spectrum(0.0))
 

@@ -42,6 +42,8 @@ FRESNELS: dict[str, str] = {
     "one": "F = 1",
     "fc": "F = Fc = (1 - wi.m)^5",
     "one_minus_fc": "F = 1 - Fc",
+    "split": "F = 1, split on the same rays: reflected with probability w Fc, sent below with probability "
+             "w (1 - Fc) (reflected counts integrate Fc f cos, transmitted counts (1 - Fc) f cos)",
 }
 """Fresnel factors."""
 

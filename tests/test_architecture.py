@@ -57,7 +57,8 @@ LAYERS: list[tuple[str, tuple[str, ...]]] = [
     ("api", ("virtspec_mi.api", "virtspec_mi.comparison", "virtspec_mi.scaleout", "virtspec_mi.validation",
              "virtspec_mi.scene", "virtspec_mi.runtime",
              # the exchange formats that take their readings through the API
-             "virtspec_mi.exchange.albedo", "virtspec_mi.exchange.klems_gonio", "virtspec_mi.exchange.flip")),
+             "virtspec_mi.exchange.albedo", "virtspec_mi.exchange.klems_gonio", "virtspec_mi.exchange.flip",
+             "virtspec_mi.exchange.engine_tables", "virtspec_mi.exchange.audit")),
     # the integrators: Mitsuba's entry (mi.render), thin adapters over the instruments
     ("adapter", ("virtspec_mi.plugins.integrators",)),
     ("instruments", ("virtspec_mi.instruments",)),

@@ -82,7 +82,9 @@ _EXAMPLES = {
               "  virtspec measure soybean_abmb --wavelengths 400:2500:5",
     "albedo-table": "examples:\n  virtspec albedo-table --engine cycles --epsilon 1e-3 --out ggx_E.nc ggx_E.h\n"
                     "  virtspec albedo-table --model glass --engine cycles --out glass.nc --checkpoint glass.parts\n"
-                    "  virtspec albedo-table --from ggx_E.nc --compare published_tables.h --rounding 5e-7",
+                    "  virtspec albedo-table --from ggx_E.nc --compare published_tables.h --rounding 5e-7\n"
+                    "  virtspec albedo-table --engine filament --out dfg.inc\n"
+                    "  virtspec albedo-table --engine unreal --audit PreintegratedGF.png --figure audit.png",
     "compare": "examples:\n  virtspec compare spectrum.nc measured.csv --plot compare.png\n"
                "  virtspec compare reading.json npsg.csv --quantity transmittance --json",
     "plot": "examples:\n  virtspec plot fig5.nc --wavelengths 400 550 700 --out fig5.png\n"
@@ -928,6 +930,11 @@ def _albedo_options(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--model", choices=("conductor", "glass"), default="conductor",
                         help="roughconductor with Fresnel = 1, or roughdielectric (default conductor)")
     parser.add_argument("--distribution", choices=("ggx", "beckmann"), default="ggx", help="(default ggx)")
+    parser.add_argument("--shadowing", choices=("separable", "height_correlated", "unreal"), default=None,
+                        help="conductor G2 (default: the engine's own; separable on a user grid)")
+    parser.add_argument("--g1", choices=("exact", "walter"), default="exact", help="Beckmann G1 (default exact)")
+    parser.add_argument("--fresnel", choices=("one", "fc", "one_minus_fc"), default="one",
+                        help="conductor F: 1, Fc = (1 - wi.m)^5 or 1 - Fc (default one)")
     parser.add_argument("--engine", choices=("cycles", "filament", "unreal", "none"), default=None,
                         help="grid and memory order of that engine (default cycles, or none with --mu/--alpha)")
     for name, text in (("mu", "cosines of incidence"), ("alpha", "roughness alpha"),
@@ -948,6 +955,10 @@ def _albedo_options(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--side", choices=("outside", "inside"), default="outside", help="--compare, glass")
     parser.add_argument("--average", action="store_true", help="--compare E_avg instead of E")
     parser.add_argument("--rounding", type=float, default=0.0, help="--compare: the published values' rounding")
+    parser.add_argument("--audit", metavar="PUBLISHED", help="an engine's published table in its native layout "
+                        "(cycles .h, filament dfg.inc, unreal .raw/.png) to audit against certified tables of its "
+                        "model (--engine cycles|filament|unreal)")
+    parser.add_argument("--figure", help="--audit: write the heat map of (published - certified)/epsilon here")
     parser.add_argument("--quiet", action="store_true", help="no progress bar")
 
 
@@ -955,6 +966,9 @@ def _albedo_table(args: argparse.Namespace) -> int:
     from virtspec_mi.checks import parse_values
     from virtspec_mi.exchange.albedo import albedo_table, read_albedo_table
 
+    native = (".inc", ".raw", ".png")
+    if args.audit or (args.engine in ("filament", "unreal") and any(p.lower().endswith(native) for p in args.out)):
+        return _engine_tables(args)
     if args.source:
         table = read_albedo_table(args.source)
         for path in args.out:
@@ -964,6 +978,7 @@ def _albedo_table(args: argparse.Namespace) -> int:
                 for name in ("mu", "alpha", "roughness", "eta")}
         engine = args.engine if args.engine is not None else (None if grid["mu"] is not None else "cycles")
         table = albedo_table(args.model, distribution=args.distribution, engine=None if engine == "none" else engine,
+                             shadowing=args.shadowing, g1=args.g1, fresnel=args.fresnel,
                              epsilon=args.epsilon, delta=args.delta, bound=args.bound, average=not args.no_average,
                              parts=args.parts, seed=args.seed, out=args.out or None, checkpoint=args.checkpoint,
                              progress=False if args.quiet else None, **grid)
@@ -976,6 +991,30 @@ def _albedo_table(args: argparse.Namespace) -> int:
         comparison = table.compare(args.compare, average=args.average, side=args.side, array=args.array,
                                    rounding=args.rounding)
         print(comparison.summary())
+    return 0
+
+
+def _engine_tables(args: argparse.Namespace) -> int:
+    """``--audit`` (and an engine's drop-in files): every channel of the engine's model certified at once."""
+
+    from virtspec_mi.exchange.audit import audit
+    from virtspec_mi.exchange.engine_tables import engine_tables
+
+    if args.engine not in ("cycles", "filament", "unreal"):
+        raise ValueError("--audit needs --engine cycles, filament or unreal (the published table's layout)")
+    tables = engine_tables(args.engine, epsilon=args.epsilon, delta=args.delta, seed=args.seed, bound=args.bound,
+                           progress=False if args.quiet else None, checkpoint=args.checkpoint)
+    print(tables.statement())
+    print(f"rays {tables.rays:,}; {tables.seconds:g} s")
+    for path in args.out:
+        tables.write(path)
+        print(f"written: {path} (provenance: {path}.json)")
+    if args.audit:
+        report = audit(args.audit, tables)
+        print(report.summary())
+        if args.figure:
+            report.figure(args.figure)
+            print(f"written: {args.figure}")
     return 0
 
 

@@ -21,8 +21,14 @@ near grazing incidence, where E changes fastest).
 :func:`albedo_table` measures, on the user's grid or on an engine's
 (:mod:`virtspec_mi.exchange.conventions`):
 
-- ``model="conductor"``: Mitsuba's ``roughconductor`` with Fresnel = 1
-  (``material="none"``), ``distribution`` ``ggx`` or ``beckmann``: E = reflected;
+- ``model="conductor"``: the project's ``microfacet`` plugin
+  (:mod:`virtspec_mi.plugins.bsdfs.microfacet`), ``distribution`` ``ggx`` or
+  ``beckmann``, ``shadowing`` ``separable`` / ``height_correlated`` / ``unreal``, Beckmann
+  ``g1`` ``exact`` or ``walter``, ``fresnel`` ``one`` (E) or a split-sum half
+  (:mod:`virtspec_mi.exchange.engine_models`: each engine's own model is the default on
+  its grid): E = reflected. Its sampler and its evaluation use the same G, so the count
+  *is* ∫ f cos (Mitsuba's ``roughconductor`` with Beckmann counts
+  G₁,exact(ω_i)/G₁,fit(ω_i) × ∫ f cos instead, which is why it is not used);
 - ``model="glass"``: Mitsuba's ``roughdielectric``: E = reflected + transmitted (the
   energy *not lost* by single scattering — for a smooth dielectric nothing is lost, but
   the masking term of a rough one loses energy), for light from outside (relative index
@@ -98,7 +104,7 @@ __all__ = ["MODELS", "DISTRIBUTIONS", "BOUNDS", "TableBudget", "AlbedoTable", "T
            "read_albedo_table"]
 
 MODELS: dict[str, str] = {
-    "conductor": "Mitsuba roughconductor, Fresnel = 1 (material none): E = reflected",
+    "conductor": "virtspec-mi microfacet reflector (sampling consistent with eval): E = reflected",
     "glass": "Mitsuba roughdielectric: E = reflected + transmitted, light from outside (eta) and inside (1/eta)",
 }
 """Models a table can hold, and what E counts."""
@@ -175,7 +181,14 @@ class AlbedoTable:
     quantities : tuple of str
         Quantities certified per cell: ``E`` and, for glass with ``parts=True``, ``E_R``, ``E_T``.
     provenance : dict
-        Seed, wavelength, Mitsuba and virtspec-mi versions, seconds, creation time, rays.
+        Seed, wavelength, Mitsuba and virtspec-mi versions, seconds, creation time, rays,
+        and ``bsdf_model``: the model in words (which G₂, which G₁, which F).
+    bsdf : dict
+        Conductor: ``shadowing``, ``g1``, ``fresnel`` of the ``microfacet`` plugin (empty
+        for glass: Mitsuba's ``roughdielectric``).
+    count_scale : float
+        c: each value is c × count/N (c = 1 except Beckmann ``g1="walter"``, whose weights
+        are divided by c = 1.0032 to stay ≤ 1); intervals and tolerances scale with it.
     """
 
     model: str
@@ -193,6 +206,8 @@ class AlbedoTable:
     bound: str
     quantities: tuple[str, ...] = ("E",)
     provenance: dict[str, Any] = field(default_factory=dict)
+    bsdf: dict[str, str] = field(default_factory=dict)
+    count_scale: float = 1.0
 
     # -- dims ------------------------------------------------------------------------
 
@@ -238,7 +253,7 @@ class AlbedoTable:
             hits = counts["transmitted"]
         else:
             raise ValueError(f"quantity must be one of E, E_R, E_T (got {quantity!r})")
-        return hits / counts["rays"]
+        return self.count_scale * hits / counts["rays"]
 
     @property
     def E(self) -> np.ndarray:
@@ -286,7 +301,7 @@ class AlbedoTable:
         counts = self.average_counts if average else self.counts
         if counts is None:
             raise ValueError("this table has no E_avg (made with average=False)")
-        bias = counts["rounded_weights"] * WEIGHT_ROUNDING / counts["rays"]
+        bias = self.count_scale * counts["rounded_weights"] * WEIGHT_ROUNDING / counts["rays"]
         return np.where(self._certified(counts), self.epsilon + bias, np.nan)
 
     @property
@@ -303,9 +318,10 @@ class AlbedoTable:
         """
 
         counts = self.average_counts if average else self.counts
-        values = self.quantity(quantity, average)
+        values = self.quantity(quantity, average) / self.count_scale
         hits = np.rint(values * counts["rays"]).astype(np.int64)
-        return clopper_pearson_each(hits, counts["rays"], counts["interval_delta"])
+        lower, upper = clopper_pearson_each(hits, counts["rays"], counts["interval_delta"])
+        return self.count_scale * lower, self.count_scale * upper
 
     @property
     def rays(self) -> int:
@@ -405,6 +421,12 @@ class AlbedoTable:
         target = (["side"] if self.model == "glass" else []) + list(self.order)
         return np.transpose(values, [dims.index(d) for d in target])
 
+    @property
+    def _parts_names(self) -> tuple[str, ...]:
+        """The quantities a file carries: E, and E_R, E_T for glass or a ``split`` conductor."""
+
+        return ("E", "E_R", "E_T") if self.model == "glass" or "E_R" in self.quantities else ("E",)
+
     def to_dataset(self) -> Any:
         """The table as an ``xarray.Dataset`` (canonical dims), counts and certificate included."""
 
@@ -419,7 +441,7 @@ class AlbedoTable:
             coords["relative_eta"] = (("side", "eta"), np.stack([self.eta, 1.0 / self.eta]))
         data: dict[str, Any] = {}
         dims, adims = self.dims, self.average_dims
-        for name in ("E", "E_R", "E_T") if self.model == "glass" else ("E",):
+        for name in self._parts_names:
             data[name] = (dims, self.quantity(name))
             lower, upper = self.interval(name)
             data[f"{name}_lower"], data[f"{name}_upper"] = (dims, lower), (dims, upper)
@@ -427,7 +449,7 @@ class AlbedoTable:
         for key, value in self.counts.items():
             data[key] = (dims, value)
         if self.average_counts is not None:
-            for name in ("E", "E_R", "E_T") if self.model == "glass" else ("E",):
+            for name in self._parts_names:
                 data[f"{name}_avg"] = (adims, self.quantity(name, average=True))
                 lower, upper = self.interval(name, average=True)
                 data[f"{name}_avg_lower"], data[f"{name}_avg_upper"] = (adims, lower), (adims, upper)
@@ -438,7 +460,8 @@ class AlbedoTable:
                  "order": " ".join(self.order), "epsilon": self.epsilon, "delta": self.delta, "bound": self.bound,
                  "quantities": " ".join(self.quantities),
                  "certificate": self.statement(), "rays_total": self.rays,
-                 "provenance": json.dumps(self.provenance, sort_keys=True)}
+                 "provenance": json.dumps(self.provenance, sort_keys=True),
+                 "bsdf": json.dumps(self.bsdf, sort_keys=True), "count_scale": self.count_scale}
         return xr.Dataset(data, coords=coords, attrs=attrs)
 
     @classmethod
@@ -461,7 +484,8 @@ class AlbedoTable:
                    np.asarray(dataset["roughness"].values, dtype=np.float64) if "roughness" in dataset.coords else None,
                    str(attrs["engine"]), tuple(str(attrs["order"]).split()), counts, average,
                    float(attrs["epsilon"]), float(attrs["delta"]), str(attrs["bound"]),
-                   tuple(str(attrs["quantities"]).split()), json.loads(str(attrs["provenance"])))
+                   tuple(str(attrs["quantities"]).split()), json.loads(str(attrs["provenance"])),
+                   json.loads(str(attrs.get("bsdf", "{}"))), float(attrs.get("count_scale", 1.0)))
 
     def check_output(self, path: str | os.PathLike, overwrite: bool = False) -> None:
         """Refuse companions of ``path`` that would replace a file not written by this format (see :meth:`write`)."""
@@ -511,7 +535,7 @@ class AlbedoTable:
                 "epsilon": self.epsilon, "delta": self.delta, "bound": self.bound, "quantities": list(self.quantities),
                 "certificate": self.statement(), "rays_total": self.rays,
                 "worst_certified_epsilon": float(np.nanmax(self.certified_epsilon())),
-                "provenance": self.provenance}
+                "bsdf": self.bsdf, "count_scale": self.count_scale, "provenance": self.provenance}
 
     # -- reading and comparing -----------------------------------------------------------
 
@@ -785,11 +809,11 @@ def _grid(model: str, distribution: str, engine: str | None, mu: Any, alpha: Any
     return _Grid(model, distribution, mu, alpha, etas, rough, "grid", order)
 
 
-def _scene(grid: _Grid) -> dict[str, Any]:
+def _scene(grid: _Grid, model: dict[str, str]) -> dict[str, Any]:
     from virtspec_mi.scene import instrument_scene
 
     if grid.model == "conductor":
-        bsdf = {"type": "roughconductor", "distribution": grid.distribution, "material": "none", "alpha": 0.5}
+        bsdf = {"type": "microfacet", "distribution": grid.distribution, "alpha": 0.5, **model}
     else:
         bsdf = {"type": "roughdielectric", "distribution": grid.distribution, "alpha": 0.5, "int_ior": 1.5,
                 "ext_ior": 1.0}
@@ -870,6 +894,9 @@ def albedo_table(
     *,
     distribution: str = "ggx",
     engine: str | None = "cycles",
+    shadowing: str | None = None,
+    g1: str = "exact",
+    fresnel: str = "one",
     mu: Sequence[float] | None = None,
     alpha: Sequence[float] | None = None,
     roughness: Sequence[float] | None = None,
@@ -897,6 +924,12 @@ def albedo_table(
         ``conductor`` (``roughconductor``, Fresnel = 1) or ``glass`` (``roughdielectric``).
     distribution
         ``ggx`` or ``beckmann``.
+    shadowing, g1, fresnel
+        Conductor: the ``microfacet`` plugin's G₂ (``separable``, ``height_correlated``,
+        ``unreal``; default: the engine's own, :data:`~virtspec_mi.exchange.engine_models.ENGINE_SHADOWING`,
+        ``separable`` on a user grid), Beckmann's G₁ (``exact`` or ``walter``) and F
+        (``one``, ``fc``, ``one_minus_fc``). Glass (Mitsuba's ``roughdielectric``) takes
+        none of them and only ``ggx``.
     engine
         ``cycles`` (default), ``filament`` or ``unreal``: that engine's grid and memory
         order (:mod:`virtspec_mi.exchange.conventions`); ``None`` with ``mu`` and ``alpha``
@@ -911,7 +944,8 @@ def albedo_table(
     average
         Also measure E_avg (diffuse beam) per α (and η, side).
     parts
-        Glass: certify E_R and E_T too (three quantities per cell; more rays).
+        Glass, or a conductor with ``fresnel="split"``: certify E_R and E_T too (three
+        quantities per cell, on the same rays; split: E_R = ∫ F_c f cos, E_T = ∫ (1 − F_c) f cos).
     pilot_rays
         Two-stage pilot per cell (default ⌈10/ε⌉).
     seed
@@ -946,15 +980,20 @@ def albedo_table(
     from virtspec_mi.runtime import mitsuba
     from virtspec_mi.scene import load_scene
 
+    from virtspec_mi.exchange.engine_models import bsdf_model
+
     grid = _grid(model, distribution, engine, mu, alpha, roughness, eta)
+    bsdf_parameters, model_words, count_scale = bsdf_model(model, distribution, grid.engine, shadowing, g1, fresnel)
     epsilon, delta = _check_epsilon(epsilon), check_delta(delta)  # any real number type (numpy's float32 too)
     average, parts = true_or_false("average")(average), true_or_false("parts")(parts)
     seed = _whole("seed", seed, 0, 2**32 - 1)
     if bound not in BOUNDS:
         raise ValueError(f"bound must be one of {', '.join(BOUNDS)} (got {bound!r})")
-    if parts and model != "glass":
-        raise ValueError("parts=True certifies E_R and E_T of a glass table (model='glass')")
+    if parts and model != "glass" and fresnel != "split":
+        raise ValueError("parts=True certifies E_R and E_T of a glass table (model='glass') or of a conductor with "
+                         "fresnel='split'")
     epsilon, delta = float(epsilon), float(delta)
+    sized = epsilon / count_scale  # the counts estimate E/c: held to ε/c, the values c × count/N to ε
     n1 = math.ceil(40.0 / epsilon - 1e-9) if pilot_rays is None else _whole("pilot_rays", pilot_rays, 1, 2**32 - 1)
     outs = [] if out is None else [Path(out)] if isinstance(out, (str, os.PathLike)) else [Path(p) for p in out]
     for path in outs:
@@ -977,7 +1016,8 @@ def albedo_table(
     identity = {"format": _FORMAT, "model": model, "distribution": distribution, "mu": grid.mu.tolist(),
                 "alpha": grid.alpha.tolist(), "eta": None if grid.eta is None else grid.eta.tolist(),
                 "epsilon": epsilon, "delta": delta, "bound": bound, "average": bool(average), "parts": bool(parts),
-                "pilot_rays": n1, "seed": int(seed), "wavelength": float(wavelength), "version": __version__}
+                "pilot_rays": n1, "seed": int(seed), "wavelength": float(wavelength), "version": __version__,
+                "bsdf": bsdf_parameters}
     # One run at a time on a checkpoint (a second refuses; it never touches the first's groups), and signals
     # acted on at safe points only: never inside a write (a KeyboardInterrupt inside xarray's file lock hung
     # the process, and left a temporary file)
@@ -987,7 +1027,7 @@ def albedo_table(
         warm_writer()
     with (nullcontext() if checkpoint is None else locked(Path(checkpoint))), interrupts.deferred():
             store = _Store(None if checkpoint is None else Path(checkpoint), identity)
-            scene = load_scene(_scene(grid))
+            scene = load_scene(_scene(grid, bsdf_parameters))
             started = time.perf_counter()
             traced_seconds = 0.0
             groups = 0
@@ -1025,7 +1065,7 @@ def albedo_table(
                     totals["pilot_violations"] = np.zeros(shape, dtype=np.int64)
                     totals["interval_delta"] = np.full(shape, delta / (n_cells * q))
                     if not adaptive:
-                        rays = union_hoeffding_rays(epsilon, delta, n_cells * q)
+                        rays = union_hoeffding_rays(sized, delta, n_cells * q)
                         found = counts_of(run(f"hoeffding:{beam}", beam, angles, points, rays))
                         for k in found:
                             totals[k][:] = found[k]
@@ -1045,9 +1085,9 @@ def albedo_table(
                         totals = assembled[beam]
                         share = shares[beam]  # δ of each quantity's second batch, per cell
                         totals["interval_delta"] = share
-                        need = np.max([binomial_rays(lo, hi, epsilon, share) for lo, hi in pilots[beam]], axis=0)
+                        need = np.max([binomial_rays(lo, hi, sized, share) for lo, hi in pilots[beam]], axis=0)
                         classes = np.minimum(np.ceil(_CLASS_STEP ** np.ceil(np.log(need) / np.log(_CLASS_STEP) - 1e-9)),
-                                             union_hoeffding_rays_array(epsilon, share)).astype(np.int64)
+                                             union_hoeffding_rays_array(sized, share)).astype(np.int64)
                         for rays in np.unique(classes):
                             rows_in, cols_in = np.nonzero(classes == rays)
                             if len(np.unique(rows_in)) <= len(np.unique(cols_in)):  # fewer sweeps: one per θ row …
@@ -1083,11 +1123,15 @@ def albedo_table(
                           "seconds_wall": round(time.perf_counter() - started, 3), "seconds_traced": round(traced_seconds, 3),
                           "groups": groups,
                           "created": datetime.now(timezone.utc).isoformat(timespec="seconds"),
-                          "bsdf": "roughconductor (material none, Fresnel = 1)" if model == "conductor" else "roughdielectric",
+                          "bsdf": "microfacet" if model == "conductor" else "roughdielectric",
+                          "bsdf_model": model_words,
                           "beam": "collimated (E), diffuse cosine-weighted (E_avg)",
-                          "alpha_clamp": "Mitsuba clamps alpha >= 1e-4 (MicrofacetDistribution::configure)"}
+                          "alpha_clamp": ("none: GGX visible normals are sampled for any alpha > 0"
+                                          if model == "conductor" and distribution == "ggx" else
+                                          "Mitsuba clamps alpha >= 1e-4 (MicrofacetDistribution::configure)")}
             table = AlbedoTable(model, distribution, grid.mu, grid.alpha, grid.eta, grid.roughness, grid.engine, grid.order,
-                                collimated, averaged, epsilon, delta, bound, quantities, provenance)
+                                collimated, averaged, epsilon, delta, bound, quantities, provenance,
+                                bsdf_parameters if model == "conductor" else {}, count_scale)
             if not table.certified:
                 warnings.warn(f"albedo table: {table.statement()}", RuntimeWarning, stacklevel=2)
             interrupts.check()  # the last safe point before the outputs are written

@@ -82,6 +82,7 @@ def write_header(table: Any) -> str:
     lines = [
         "/* Certified directional-albedo table made by virtspec-mi (a virtual spectrophotometer).",
         f" *   model:        {description['model_description']}, distribution {table.distribution}",
+        f" *   G and F:      {prov.get('bsdf_model', 'Mitsuba ' + str(prov.get('bsdf')))}",
         f" *   measured:     Mitsuba {prov.get('mitsuba')} ({prov.get('variant')}), virtspec-mi {prov.get('virtspec_mi')},"
         f" {prov.get('created')}",
         f" *   grid:         engine convention '{table.engine}'; memory order {' '.join(order)} (last index fastest)",

@@ -467,9 +467,20 @@ def klems_from_gonio(front: Any, back: Any = None, basis: str = "full", isotropi
     result = KlemsMeasurement(klems, SIDES[:len(readings)], np.asarray(front.wavelengths, dtype=np.float64), counts,
                               rays_arr, np.stack(refl), np.stack(trans), 0.0, float(front.delta), True,
                               {"virtspec_mi": __version__, "scene": front.result.scene, "source": "GonioResult",
+                               "mitsuba": _installed_mitsuba(),
                                "created": datetime.now(timezone.utc).isoformat(timespec="seconds")})
     eps = float(np.max(result.certified_epsilon)) if epsilon is None else float(epsilon)
     return KlemsMeasurement(**{**result.__dict__, "epsilon": eps})
+
+
+def _installed_mitsuba() -> str:
+    """The Mitsuba version installed now, labelled so (a GonioResult does not record the one that traced it)."""
+
+    try:
+        import mitsuba
+    except ImportError:  # pragma: no cover - the package needs Mitsuba
+        return "unknown (not installed)"
+    return f"{mitsuba.__version__} (installed when this file was made from the reading)"
 
 
 @dataclass(frozen=True)

@@ -68,7 +68,7 @@ __all__ = ["measure", "sweep", "gonio", "read_result", "read_gonio", "fluctuatio
 
 
 def measure(scene: Any, *, parameters: dict[str, Any] | None = None, defines: dict[str, Any] | None = None,
-            progress: bool | None = None, **settings: Any) -> Result:
+            progress: bool | None = None, target: Any = None, **settings: Any) -> Any:
     """
     Measure the specimen of ``scene`` and return a certified :class:`~virtspec_mi.results.hemispherical.Result`
     over wavelength (θi a scalar label).
@@ -92,6 +92,14 @@ def measure(scene: Any, *, parameters: dict[str, Any] | None = None, defines: di
         ``True``: always a tqdm bar of the readings on stderr; ``False``: never; ``None``
         (default): only when stderr is a terminal and the readings are expected to last
         more than ~2 s (a spectrum of many wavelengths).
+    target
+        A derived quantity to certify instead of a spectrum (``vm.colour(...)``,
+        ``vm.band(...)``, ``vm.index(...)``, ``vm.fapar(...)``): the instrument picks the
+        wavelengths and the rays of each (Nₖ ∝ |wₖ|) for the target's tolerance at δ and
+        returns a :class:`~virtspec_mi.applications.derived.result.DerivedResult`
+        (:mod:`virtspec_mi.applications.derived`). ``wavelengths``, ``mu``, ``rays``,
+        ``bound``, ``pilot_rays``, ``pilot_delta`` and ``joint`` are then the target's to
+        decide (giving one is an error); ``parameters`` are not taken.
 
     References
     ----------
@@ -99,6 +107,8 @@ def measure(scene: Any, *, parameters: dict[str, Any] | None = None, defines: di
     """
 
     bench = find_bench(scene, defines)
+    if target is not None:
+        return _measure_target(scene, bench, defines, parameters, target, settings)
     settings, = resolve("measure", settings, _scene_options(bench, Settings))
     space = parameter_space(bench, parameters or {})
     if space is not None and space.size != 1:
@@ -108,6 +118,24 @@ def measure(scene: Any, *, parameters: dict[str, Any] | None = None, defines: di
     result = result.squeeze("theta_i", *([] if space is None else space.dims))  # one reading: scalar labels
     instrument.warn_if_uncertified(result)
     return result
+
+
+def _measure_target(scene: Any, bench: Bench, defines: dict[str, Any] | None, parameters: Any, target: Any,
+                    settings: dict[str, Any]) -> Any:
+    """:func:`measure` of a derived quantity (:func:`virtspec_mi.applications.derived.measure.take_target`)."""
+
+    from virtspec_mi.applications.derived.measure import REFUSED_SETTINGS, take_target
+
+    given = sorted(name for name in REFUSED_SETTINGS if settings.get(name) is not None)
+    if given:
+        raise ValueError(f"{', '.join(given)}: a target picks its own wavelengths and rays (give its tolerance to the "
+                         "target, e.g. vm.band('B04', tolerance=0.002)); leave them out")
+    if parameters:
+        raise ValueError("parameters: a target is measured at the scene's own specimen parameters (set them in the "
+                         "scene or with defines)")
+    resolved, = resolve("measure", settings, _scene_options(bench, Settings))
+    return take_target(bench, resolved, target, scene=scene_fingerprint(scene, bench, defines),
+                       source=scene_source(scene, bench, defines))
 
 
 def sweep(

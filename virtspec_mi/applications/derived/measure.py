@@ -1,0 +1,169 @@
+"""
+Measuring a target: the rays a derived quantity needs, where it needs them
+==========================================================================
+
+:func:`take_target` certifies a :class:`~.targets.Target` on a bench (``vm.measure(scene,
+target=...)`` calls it):
+
+1. the target's functionals (:mod:`.functionals`) on one wavelength grid, checked against
+   the specimen's data (a band outside it, a colour of too little of the visible: refused
+   with the reason);
+2. for a nonlinear target, a pilot of about 7,000 rays per functional (Nₖ ∝ |wₖ|, its own
+   seed) gives the point at which the target picks each functional's tolerance;
+3. each functional j at δ/m (m functionals, union bound) needs Nₖ = ⌈cⱼ|wⱼₖ|⌉ rays at
+   wavelength k (:func:`~.functionals.allocate`); the readings take the most any
+   functional asks for, and wavelengths of zero weight are not traced at all;
+4. one batched kernel call (:func:`virtspec_mi.engine.readings.trace_allocated`, seed
+   :func:`~virtspec_mi.budgets.twostage.stage_two_seed` of the settings' seed: rays fresh
+   of the pilot's) traces them, each reading with rays of its own;
+5. the certificate comes from the rays spent: each functional's Hoeffding tolerance
+   (eq. 1 of :mod:`.functionals`) plus its rounding bias, then the target's map (exact
+   intervals, or the ΔE₀₀ bound of :mod:`.delta_e`): a :class:`~.result.DerivedResult`.
+
+The per-wavelength readings are returned too (``result.readings``, a hemispherical
+:class:`~virtspec_mi.results.hemispherical.Result`): they are the rays spent, and carry
+no joint per-wavelength certificate — each alone has the Hoeffding tolerance of its own
+N, which for most of them is wide.
+
+References
+----------
+Hoeffding (1963), Theorem 2; Baranoski et al. (2001), eq. (2).
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import replace
+from typing import Any
+
+import numpy as np
+
+from virtspec_mi.applications.derived.functionals import Functional, allocate, certified_tolerance, union_delta
+from virtspec_mi.applications.derived.result import DerivedResult
+from virtspec_mi.applications.derived.targets import ColourTarget, Target, Value, colour_of
+from virtspec_mi.budgets.twostage import stage_two_seed
+from virtspec_mi.engine.plan import Plan
+from virtspec_mi.engine.readings import trace_allocated
+from virtspec_mi.instruments.hemispherical import hemispherical_result
+from virtspec_mi.settings import Settings
+
+__all__ = ["take_target", "PILOT_TOLERANCE", "PILOT_DELTA", "REFUSED_SETTINGS"]
+
+PILOT_TOLERANCE: float = 0.01
+"""A pilot's tolerance on each functional, as a share of its Σ|w| (about 7,000 rays per functional)."""
+
+PILOT_DELTA: float = 0.5
+"""δ a pilot is sized at (it decides rays only; nothing it measures is claimed)."""
+
+REFUSED_SETTINGS: tuple[str, ...] = ("wavelengths", "mu", "rays", "bound", "pilot_rays", "pilot_delta", "joint")
+"""Settings a target decides itself: giving one with a target is an error."""
+
+
+def _fates(tally_counts: Any, quantity: str) -> np.ndarray:
+    return np.asarray(getattr(tally_counts, {"reflectance": "reflected", "transmittance": "transmitted",
+                                             "absorptance": "absorbed"}[quantity]), dtype=np.float64)
+
+
+def _specimen_fit(target: Target, bench: Any) -> Target:
+    """The target within the specimen's data (a colour's grid clipped to it), or ``ValueError`` saying why not."""
+
+    span = getattr(bench.bsdf, "wavelength_range", None)
+    if span is None:
+        return target
+    low, high = float(span[0]), float(span[1])
+    if isinstance(target, ColourTarget):
+        return replace(target, low=max(low, target.low or low), high=min(high, target.high or high))
+    for f in target.functionals():
+        used = f.wavelengths[f.weights != 0]
+        if used.min() < low or used.max() > high:
+            raise ValueError(f"target {target.describe()}: {f.name} needs {used.min():g}-{used.max():g} nm, outside "
+                             f"the specimen's data ({low:g}-{high:g} nm): the instrument cannot certify it")
+    return target
+
+
+def _grid(functionals: list[Functional]) -> tuple[np.ndarray, np.ndarray]:
+    """The union of the functionals' wavelengths and their weights on it, shape (m, n)."""
+
+    grid = np.unique(np.concatenate([f.wavelengths for f in functionals]))
+    return grid, np.stack([f.at(grid) for f in functionals])
+
+
+def _trace(bench: Any, settings: Settings, grid: np.ndarray, rays: np.ndarray, seed: int) -> tuple[np.ndarray, Any]:
+    """The traced wavelengths (rays > 0) and their tally, each reading from its own key k·stride."""
+
+    used = np.flatnonzero(rays > 0)
+    stride = int(rays.max())
+    readings = [(float(grid[k]), float(settings.theta_i), float(settings.phi_i)) for k in used]
+    tally = trace_allocated(bench, settings.updated(seed=seed), readings, rays[used], offsets=used * stride)
+    return used, tally
+
+
+def take_target(bench: Any, settings: Settings, target: Target, *, scene: str = "", source: dict | None = None
+                ) -> DerivedResult:
+    """Certify ``target`` on ``bench`` with ``settings`` (δ, θi, φi, beam, sampling, seed; see the module docstring)."""
+
+    if not isinstance(target, Target):
+        raise ValueError(f"target must be made by vm.colour, vm.band, vm.fapar or vm.index (got {target!r})")
+    start = time.perf_counter()
+    target = _specimen_fit(target, bench)
+    functionals = target.functionals()
+    quantity = functionals[0].quantity
+    grid, weights = _grid(functionals)
+    delta = float(settings.delta)
+    each = union_delta(delta, len(functionals))
+    pilot_rays = 0
+    estimates = None
+    if target.needs_pilot:
+        rays = np.max([allocate(w, PILOT_TOLERANCE * np.abs(w).sum(), PILOT_DELTA) for w in weights], axis=0)
+        used, tally = _trace(bench, settings, grid, rays, settings.seed)
+        values = np.zeros(len(grid))
+        values[used] = _fates(tally.counts, quantity) / rays[used]
+        estimates = weights @ values
+        pilot_rays = int(rays.sum())
+    tolerances = np.asarray(target.tolerances(estimates, delta), dtype=np.float64)
+    rays = np.max([allocate(w, t, each) for w, t in zip(weights, tolerances)], axis=0)
+    used, tally = _trace(bench, settings, grid, rays, stage_two_seed(settings.seed))
+    plan = Plan(settings.updated(wavelengths=[float(w) for w in grid[used]]), (float(settings.theta_i),), scene=scene)
+    readings = hemispherical_result(bench, plan, tally, scene, source).squeeze("theta_i")
+    spent = rays[used]
+    values = _fates(tally.counts, quantity) / spent
+    if not np.all(readings.certified):
+        raise ValueError(f"target {target.describe()}: some readings escaped their certificate (weight violations, "
+                         "capped walks or invalid directions): no certified value")
+    rounding = np.asarray(readings.rounding_bias, dtype=np.float64)
+    estimates = weights[:, used] @ values
+    certified = np.array([certified_tolerance(Functional(f.name, grid[used], w[used], f.quantity), spent, each,
+                                              rounding) for f, w in zip(functionals, weights)])
+    colour = None
+    if isinstance(target, ColourTarget):
+        colour = _certified_colour(target, functionals, estimates, certified, delta, int(spent.sum()))
+        reported = _colour_values(colour)
+    else:
+        reported = target.values(estimates, certified)
+    return DerivedResult(target=target, values=tuple(reported), readings=readings, rays=int(spent.sum()),
+                         pilot_rays=pilot_rays, delta=delta, statements=len(functionals),
+                         functional_tolerances=tuple(float(t) for t in certified), colour=colour,
+                         met=target.met(reported), seconds=time.perf_counter() - start)
+
+
+def _certified_colour(target: ColourTarget, functionals: list[Functional], estimates: np.ndarray,
+                      tolerances: np.ndarray, delta: float, rays: int) -> Any:
+    from virtspec_mi.applications.derived.colour import certify_colour
+
+    return certify_colour(colour_of(estimates, functionals, target), functionals, tolerances, delta, rays)
+
+
+def _colour_values(colour: Any) -> list[Value]:
+    out = []
+    for space, names, units, interval, values in (
+            ("CIE XYZ", "XYZ", "1", colour.XYZ_interval, colour.XYZ),
+            ("CIE L*a*b*", ("L", "a", "b"), "1", colour.Lab_interval, colour.Lab),
+            ("sRGB (encoded, before clipping)", ("sRGB_R", "sRGB_G", "sRGB_B"), "1", colour.sRGB_interval,
+             colour.sRGB)):
+        for name, (low, high), value in zip(names, interval, values):
+            out.append(Value(name, float(value), float(low), float(high), units, f"{space} {name}"))
+    out.append(Value("dE00_radius", colour.dE00_radius, 0.0, colour.dE00_radius, "1",
+                     "largest CIEDE2000 difference between the estimate and a colour of the certified box"))
+    out.append(Value("dEab_radius", colour.dEab_radius, 0.0, colour.dEab_radius, "1",
+                     "largest CIE 1976 difference between the estimate and a colour of the certified box"))
+    return out

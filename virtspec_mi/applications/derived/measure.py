@@ -8,7 +8,7 @@ target=...)`` calls it):
 1. the target's functionals (:mod:`.functionals`) on one wavelength grid, checked against
    the specimen's data (a band outside it, a colour of too little of the visible: refused
    with the reason);
-2. for a nonlinear target, a pilot of about 7,000 rays per functional (Nₖ ∝ |wₖ|, its own
+2. for a nonlinear target, a pilot of about 80,000 rays per functional (Nₖ ∝ |wₖ|, its own
    seed) gives the point at which the target picks each functional's tolerance;
 3. each functional j at δ/m (m functionals, union bound) needs Nₖ = ⌈cⱼ|wⱼₖ|⌉ rays at
    wavelength k (:func:`~.functionals.allocate`); the readings take the most any
@@ -49,8 +49,8 @@ from virtspec_mi.settings import Settings
 
 __all__ = ["take_target", "PILOT_TOLERANCE", "PILOT_DELTA", "REFUSED_SETTINGS"]
 
-PILOT_TOLERANCE: float = 0.01
-"""A pilot's tolerance on each functional, as a share of its Σ|w| (about 7,000 rays per functional)."""
+PILOT_TOLERANCE: float = 0.003
+"""A pilot's tolerance on each functional, as a share of its Σ|w| (about 80,000 rays per functional at PILOT_DELTA)."""
 
 PILOT_DELTA: float = 0.5
 """δ a pilot is sized at (it decides rays only; nothing it measures is claimed)."""

@@ -201,12 +201,12 @@ class FaparTarget(Target):
 
 
 def _scaled(shape: np.ndarray, fits: Callable[[np.ndarray], bool]) -> np.ndarray:
-    """The largest s·``shape`` (bisection on s over 40 halvings) for which ``fits`` holds."""
+    """About the largest s·``shape`` (bisection on s) for which ``fits`` holds."""
 
     low, high = 0.0, 1.0
     while fits(high * shape) and high < 1e6:
         low, high = high, high * 2
-    for _ in range(40):
+    for _ in range(14):  # s within 2^-14 of the largest that fits (from below: it always fits)
         middle = (low + high) / 2
         if fits(middle * shape):
             low = middle
@@ -311,21 +311,23 @@ class ColourTarget(Target):
 
         return colour_functionals(self.grid(), self.quantity, self.illuminant, self.observer)
 
-    def _radius(self, XYZ: np.ndarray, tolerances: np.ndarray, functionals: list[Functional]) -> float:
-        from virtspec_mi.applications.derived.colour import certify_colour
-
-        return certify_colour(colour_of(XYZ, functionals, self), functionals, tolerances, 0.5, 0).dE00_radius
-
     def tolerances(self, estimates: np.ndarray | None, delta: float) -> np.ndarray:
+        from virtspec_mi.applications.derived.delta_e import lab_box, radius
+
         functionals = self.functionals()
         XYZ = np.maximum(np.asarray(estimates, dtype=np.float64), 1e-3)
+        estimate = colour_of(XYZ, functionals, self)
+        white = _white(functionals)
+        floor = np.maximum(np.array([f.weights[f.weights < 0].sum() for f in functionals]), 0.0)
+
+        def radius_of(t: np.ndarray) -> float:  # the certificate's ΔE₀₀ radius for tolerances t (no sRGB)
+            return radius(estimate.Lab, lab_box(np.maximum(XYZ - t, floor), XYZ + t, white))[0]
+
         probe = 1e-3 * XYZ.max()
-        base = self._radius(XYZ, np.full(3, 1e-12), functionals)
-        slopes = np.array([(self._radius(XYZ, np.where(np.arange(3) == j, probe, 1e-12), functionals) - base) / probe
-                           for j in range(3)])
+        base = radius_of(np.full(3, 1e-12))
+        slopes = np.array([(radius_of(np.where(np.arange(3) == j, probe, 1e-12)) - base) / probe for j in range(3)])
         shape = (np.abs(slopes) + 1e-9) ** (-1.0 / 3.0) * np.array([f.total_weight for f in functionals]) ** (2 / 3)
-        return _scaled(shape / shape.max(), lambda t: self._radius(XYZ, t, functionals)
-                       <= MARGIN * self.tolerance_dE00)
+        return _scaled(shape / shape.max(), lambda t: radius_of(t) <= MARGIN * self.tolerance_dE00)
 
     def values(self, estimates: np.ndarray, tolerances: np.ndarray) -> list[Value]:
         raise NotImplementedError("a colour target's values come with its CertifiedColour (see measure)")
@@ -343,6 +345,14 @@ class ColourTarget(Target):
                 "observer": self.observer, "quantity": self.quantity, "step": self.step}
 
 
+def _white(functionals: list[Functional]) -> np.ndarray:
+    """xy of the perfect diffuser through the functionals (X, Y, Z): the white point colorimetry uses."""
+
+    import colour as cs
+
+    return np.asarray(cs.XYZ_to_xy(np.array([f.weights.sum() for f in functionals]) / 100.0))
+
+
 def colour_of(XYZ: np.ndarray, functionals: list[Functional], target: ColourTarget) -> Any:
     """The plain Colour of tristimulus values ``XYZ`` of ``functionals`` (as colorimetry gives it: white = Σ weights)."""
 
@@ -350,7 +360,7 @@ def colour_of(XYZ: np.ndarray, functionals: list[Functional], target: ColourTarg
 
     from virtspec_mi.results.colorimetry import Colour
 
-    white = cs.XYZ_to_xy(np.array([f.weights.sum() for f in functionals]) / 100.0)  # the perfect diffuser
+    white = _white(functionals)
     Lab = np.asarray(cs.XYZ_to_Lab(np.asarray(XYZ) / 100.0, white), dtype=np.float64)
     sRGB = np.asarray(cs.XYZ_to_sRGB(np.asarray(XYZ) / 100.0, illuminant=white), dtype=np.float64)
     return Colour(np.asarray(XYZ), Lab, sRGB, target.illuminant, target.observer, functionals[0].wavelengths)

@@ -262,6 +262,10 @@ def build_parser() -> argparse.ArgumentParser:
         if options is not None:
             option_flags(measuring[row.name], options)
         common_flags(measuring[row.name], row)
+    measuring["measure"].add_argument(  # issue 30: the target's text is parsed in applications.derived.parse
+        "--target", metavar="TARGET", help="certify a derived quantity instead of a spectrum, e.g. colour,dE00=0.5 | "
+        "band:B04:B08,tolerance=0.002 | index:NDVI,tolerance=0.002 | fapar,tolerance=0.002 (the instrument picks the "
+        "wavelengths and the rays of each)")
     measuring["sweep"].add_argument(
         "--densities", type=float, nargs="+", metavar="LOG10N",
         help="sweep at N = 10^d rays for each d; print seconds and the fluctuation of eq. (24)")
@@ -725,6 +729,10 @@ def _measure(args: argparse.Namespace) -> int:
 
     from virtspec_mi.api import sweep
 
+    if getattr(args, "target", None):
+        from virtspec_mi.applications.derived.parse import measure_target_command
+
+        return measure_target_command(args, _keywords(args, MEASURING["measure"]), _report)
     result = _run(args, sweep, _keywords(args, MEASURING["measure"]))
     reading = result.squeeze(*(d for d in result.dims if d != "wavelength"))
     return _report(args, reading, reading.summary(), _drawn(args.plot, reading.plot))

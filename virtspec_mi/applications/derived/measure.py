@@ -67,10 +67,14 @@ def _fates(tally_counts: Any, quantity: str) -> np.ndarray:
 def _specimen_fit(target: Target, bench: Any) -> Target:
     """The target within the specimen's data (a colour's grid clipped to it), or ``ValueError`` saying why not."""
 
-    span = getattr(bench.bsdf, "wavelength_range", None)
-    if span is None:
+    from virtspec_mi.kernel.spectra import data_ranges  # Mitsuba is set up: the bench is loaded
+
+    spans = [(float(r.low), float(r.high)) for r in data_ranges(bench.bsdf)]
+    own = getattr(bench.bsdf, "wavelength_range", None)
+    spans += [] if own is None else [(float(own[0]), float(own[1]))]
+    if not spans:
         return target
-    low, high = float(span[0]), float(span[1])
+    low, high = max(s[0] for s in spans), min(s[1] for s in spans)
     if isinstance(target, ColourTarget):
         return replace(target, low=max(low, target.low or low), high=min(high, target.high or high))
     for f in target.functionals():

@@ -17,12 +17,12 @@ e.g. ``colour,dE00=0.5``, ``band:B04:B08,tolerance=0.002``, ``index:NDVI,toleran
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, Callable
 
 from virtspec_mi.applications.derived import targets
 from virtspec_mi.applications.derived.targets import Target
 
-__all__ = ["parse_target", "KINDS"]
+__all__ = ["parse_target", "KINDS", "measure_target_command"]
 
 KINDS: dict[str, tuple[str, ...]] = {
     "colour": ("dE00", "illuminant", "observer", "quantity", "step"),
@@ -82,3 +82,31 @@ def parse_target(text: str) -> Target:
     if arguments:
         raise ValueError(f"--target fapar takes no ':' arguments (got {arguments})")
     return targets.fapar(**options)
+
+
+_NOT_WITH_TARGET = {"out": "--out", "workers": "--workers/--scheduler", "parameters": "--param"}
+
+
+def measure_target_command(args: Any, keywords: dict[str, Any], report: Callable[..., int]) -> int:
+    """
+    ``virtspec measure SCENE --target TARGET``: the target measured (``vm.measure(scene,
+    target=...)``) and printed by ``report`` (its summary, or with ``--json`` its ``as_dict()``).
+    """
+
+    from virtspec_mi.api import measure
+
+    try:
+        target = parse_target(args.target)
+    except ValueError as error:
+        message = str(error)
+        raise ValueError(message if message.startswith("--target") else f"--target: {message}") from None
+    for name, flag in _NOT_WITH_TARGET.items():
+        if keywords.get(name):
+            raise ValueError(f"{flag}: not taken with --target (its result is printed; --json prints it as JSON)")
+    if getattr(args, "plot", None):
+        raise ValueError("--plot: not taken with --target (draw result.readings from Python)")
+    settings = {k: v for k, v in keywords.items()
+                if k not in ("out", "workers", "task_readings", "points", "parameters", "defines", "progress")}
+    result = measure(args.scene, target=target, defines=keywords.get("defines") or None,
+                     progress=keywords.get("progress"), **settings)
+    return report(args, result, result.summary(), data=result.as_dict())

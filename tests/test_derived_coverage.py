@@ -125,9 +125,9 @@ def test_a_planted_wrong_allocation_is_caught_by_the_coverage_check(scene, monke
     target = vm.band({500: 1.0, **{510 + 10 * i: 0.02 for i in range(10)}}, tolerance=0.02)
     assert coverage(scene, target) >= least_hits(TRIALS, 1 - DELTA)
 
-    def inverse(weights, tolerance, delta):
-        right = functionals_module.allocate(weights, tolerance, delta)
-        w = np.abs(np.asarray(weights, dtype=np.float64))
+    def inverse(weights, tolerances, delta):
+        right = functionals_module.allocate_jointly(weights, tolerances, delta)
+        w = np.abs(np.atleast_2d(np.asarray(weights, dtype=np.float64))).max(axis=0)
         share = np.where(w > 0, 1 / np.where(w > 0, w, 1), 0)
         return np.maximum(np.where(w > 0, 1, 0), np.round(right.sum() * share / share.sum())).astype(np.int64)
 
@@ -135,7 +135,7 @@ def test_a_planted_wrong_allocation_is_caught_by_the_coverage_check(scene, monke
         weights, rays = np.asarray(weights, dtype=np.float64), np.asarray(rays, dtype=np.float64)
         return float(np.sqrt(np.abs(weights).sum() ** 2 / rays[weights != 0].sum() * np.log(2 / delta) / 2))
 
-    monkeypatch.setattr(measure_module, "allocate", inverse)
+    monkeypatch.setattr(measure_module, "allocate_jointly", inverse)
     monkeypatch.setattr(functionals_module, "hoeffding_tolerance", assumes_proportional)
     hits = coverage(scene, target)
     assert hits < least_hits(TRIALS, 1 - DELTA), hits

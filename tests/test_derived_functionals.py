@@ -66,3 +66,16 @@ def test_bands_are_normalised_trapezoid_weights(tmp_path):
         band("B99")
     with pytest.raises(ValueError, match="somewhere > 0"):
         band({600: 0.0, 610: 0.0})
+
+
+def test_the_joint_allocation_meets_every_tolerance_with_fewer_rays_than_the_largest_of_each():
+    from virtspec_mi.applications.derived.colour import tristimulus_weights
+    from virtspec_mi.applications.derived.functionals import allocate_jointly
+
+    weights = tristimulus_weights(np.arange(400, 781, 10.0))
+    tolerances, delta = np.array([0.014, 0.015, 0.025]), 0.01 / 3
+    joint = allocate_jointly(weights, tolerances, delta)
+    each = np.max([allocate(w, t, delta) for w, t in zip(weights, tolerances)], axis=0)
+    assert all(hoeffding_tolerance(w, joint, delta) <= t for w, t in zip(weights, tolerances))
+    assert joint.sum() < 0.9 * each.sum()
+    assert np.array_equal(allocate_jointly(weights[:1], tolerances[:1], delta), allocate(weights[0], 0.014, delta))

@@ -10,9 +10,10 @@ target=...)`` calls it):
    with the reason);
 2. for a nonlinear target, a pilot of about 80,000 rays per functional (Nₖ ∝ |wₖ|, its own
    seed) gives the point at which the target picks each functional's tolerance;
-3. each functional j at δ/m (m functionals, union bound) needs Nₖ = ⌈cⱼ|wⱼₖ|⌉ rays at
-   wavelength k (:func:`~.functionals.allocate`); the readings take the most any
-   functional asks for, and wavelengths of zero weight are not traced at all;
+3. each functional j at δ/m (m functionals, union bound) holds to its tolerance with the
+   fewest rays in all: Nₖ = ⌈cⱼ|wⱼₖ|⌉ for one functional (:func:`~.functionals.allocate`),
+   the joint optimum for several sharing wavelengths
+   (:func:`~.functionals.allocate_jointly`); wavelengths of zero weight are not traced;
 4. one batched kernel call (:func:`virtspec_mi.engine.readings.trace_allocated`, seed
    :func:`~virtspec_mi.budgets.twostage.stage_two_seed` of the settings' seed: rays fresh
    of the pilot's) traces them, each reading with rays of its own;
@@ -33,12 +34,13 @@ Hoeffding (1963), Theorem 2; Baranoski et al. (2001), eq. (2).
 from __future__ import annotations
 
 import time
-from dataclasses import replace
+from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
 
-from virtspec_mi.applications.derived.functionals import Functional, allocate, certified_tolerance, union_delta
+from virtspec_mi.applications.derived.functionals import (Functional, allocate, allocate_jointly, certified_tolerance,
+                                                          union_delta)
 from virtspec_mi.applications.derived.result import DerivedResult
 from virtspec_mi.applications.derived.targets import ColourTarget, Target, Value, colour_of
 from virtspec_mi.budgets.twostage import stage_two_seed
@@ -47,7 +49,7 @@ from virtspec_mi.engine.readings import trace_allocated
 from virtspec_mi.instruments.hemispherical import hemispherical_result
 from virtspec_mi.settings import Settings
 
-__all__ = ["take_target", "PILOT_TOLERANCE", "PILOT_DELTA", "REFUSED_SETTINGS"]
+__all__ = ["take_target", "plan_target", "TargetPlan", "PILOT_TOLERANCE", "PILOT_DELTA", "REFUSED_SETTINGS"]
 
 PILOT_TOLERANCE: float = 0.003
 """A pilot's tolerance on each functional, as a share of its Σ|w| (about 80,000 rays per functional at PILOT_DELTA)."""
@@ -102,19 +104,34 @@ def _trace(bench: Any, settings: Settings, grid: np.ndarray, rays: np.ndarray, s
     return used, tally
 
 
-def take_target(bench: Any, settings: Settings, target: Target, *, scene: str = "", source: dict | None = None
-                ) -> DerivedResult:
-    """Certify ``target`` on ``bench`` with ``settings`` (δ, θi, φi, beam, sampling, seed; see the module docstring)."""
+@dataclass(frozen=True, eq=False)
+class TargetPlan:
+    """
+    What :func:`plan_target` decided: the target (fitted to the specimen's data), its
+    functionals, their wavelength ``grid`` and ``weights`` (m × n), the tolerance each is
+    sized for, δ of each (``each``), the rays per wavelength and the pilot's rays.
+    """
+
+    target: Target
+    functionals: list[Functional]
+    grid: np.ndarray
+    weights: np.ndarray
+    tolerances: np.ndarray
+    each: float
+    rays: np.ndarray
+    pilot_rays: int
+
+
+def plan_target(bench: Any, settings: Settings, target: Target) -> TargetPlan:
+    """Steps 1–3 of the module docstring (the pilot traced when the target needs one): the rays, not yet traced."""
 
     if not isinstance(target, Target):
         raise ValueError(f"target must be made by vm.colour, vm.band, vm.fapar or vm.index (got {target!r})")
-    start = time.perf_counter()
     target = _specimen_fit(target, bench)
     functionals = target.functionals()
     quantity = functionals[0].quantity
     grid, weights = _grid(functionals)
-    delta = float(settings.delta)
-    each = union_delta(delta, len(functionals))
+    each = union_delta(float(settings.delta), len(functionals))
     pilot_rays = 0
     estimates = None
     if target.needs_pilot:
@@ -124,8 +141,20 @@ def take_target(bench: Any, settings: Settings, target: Target, *, scene: str = 
         values[used] = _fates(tally.counts, quantity) / rays[used]
         estimates = weights @ values
         pilot_rays = int(rays.sum())
-    tolerances = np.asarray(target.tolerances(estimates, delta), dtype=np.float64)
-    rays = np.max([allocate(w, t, each) for w, t in zip(weights, tolerances)], axis=0)
+    tolerances = np.asarray(target.tolerances(estimates, float(settings.delta)), dtype=np.float64)
+    rays = allocate_jointly(weights, tolerances, each)
+    return TargetPlan(target, functionals, grid, weights, tolerances, each, rays, pilot_rays)
+
+
+def take_target(bench: Any, settings: Settings, target: Target, *, scene: str = "", source: dict | None = None
+                ) -> DerivedResult:
+    """Certify ``target`` on ``bench`` with ``settings`` (δ, θi, φi, beam, sampling, seed; see the module docstring)."""
+
+    start = time.perf_counter()
+    planned = plan_target(bench, settings, target)
+    target, functionals, grid, weights = planned.target, planned.functionals, planned.grid, planned.weights
+    rays, each, pilot_rays, delta = planned.rays, planned.each, planned.pilot_rays, float(settings.delta)
+    quantity = functionals[0].quantity
     used, tally = _trace(bench, settings, grid, rays, stage_two_seed(settings.seed))
     plan = Plan(settings.updated(wavelengths=[float(w) for w in grid[used]]), (float(settings.theta_i),), scene=scene)
     readings = hemispherical_result(bench, plan, tally, scene, source).squeeze("theta_i")

@@ -64,7 +64,8 @@ def _box(colour: Any, name: str) -> tuple[np.ndarray, LabBox, float]:
                          "certified colour or L*a*b* numbers of a colour known exactly")
     Lab = np.asarray(colour, dtype=np.float64)
     if Lab.shape != (3,) or not np.all(np.isfinite(Lab)):
-        raise ValueError(f"{name} must be a certified colour, a result, or CIE L*a*b* as three numbers (got {colour!r})")
+        raise ValueError(f"{name} must be a certified colour, a result, or CIE L*a*b* as three numbers "
+                         f"(got {colour!r})")
     return Lab, LabBox.point(Lab), 0.0
 
 

@@ -80,7 +80,7 @@ INDICES: dict[str, Index] = {
 
 
 def index_definition(name: str, bands: dict[str, Any] | None = None) -> Index:
-    """The :class:`Index` ``name`` (case-insensitive), its bands replaced by ``bands`` (``{"plus": .., "minus": ..}``)."""
+    """The :class:`Index` ``name`` (case-insensitive), its bands replaced by ``bands`` ({"plus": .., "minus": ..})."""
 
     key = str(name).upper()
     if key not in INDICES:
@@ -89,7 +89,8 @@ def index_definition(name: str, bands: dict[str, Any] | None = None) -> Index:
     if bands:
         unknown = set(bands) - {"plus", "minus"}
         if unknown:
-            raise ValueError(f"bands of an index are 'plus' (A) and 'minus' (B) of (A - B)/(A + B) (got {sorted(unknown)})")
+            raise ValueError(f"bands of an index are 'plus' (A) and 'minus' (B) of (A - B)/(A + B) "
+                             f"(got {sorted(unknown)})")
         found = Index(found.name, bands.get("plus", found.plus), bands.get("minus", found.minus), found.long_name,
                       found.reference)
     return found

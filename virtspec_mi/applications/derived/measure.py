@@ -148,7 +148,7 @@ def plan_target(bench: Any, settings: Settings, target: Target) -> TargetPlan:
 
 def take_target(bench: Any, settings: Settings, target: Target, *, scene: str = "", source: dict | None = None
                 ) -> DerivedResult:
-    """Certify ``target`` on ``bench`` with ``settings`` (δ, θi, φi, beam, sampling, seed; see the module docstring)."""
+    """Certify ``target`` on ``bench`` with ``settings`` (δ, θi, φi, beam, sampling, seed: the module docstring)."""
 
     start = time.perf_counter()
     planned = plan_target(bench, settings, target)

@@ -354,7 +354,7 @@ def _white(functionals: list[Functional]) -> np.ndarray:
 
 
 def colour_of(XYZ: np.ndarray, functionals: list[Functional], target: ColourTarget) -> Any:
-    """The plain Colour of tristimulus values ``XYZ`` of ``functionals`` (as colorimetry gives it: white = Σ weights)."""
+    """The plain Colour of tristimulus values ``XYZ`` of ``functionals`` (as colorimetry gives it: white Σ w)."""
 
     import colour as cs
 

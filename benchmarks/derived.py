@@ -57,7 +57,7 @@ def _largest(fits, high: float = 0.5) -> float:
 
 
 def present_colour_mu(result, tolerance: float) -> float:
-    """The largest per-wavelength μ whose box (XYZ ± μ·Σ|w|) keeps the ΔE₀₀ bound ≤ tolerance at this colour."""
+    """The largest per-wavelength μ whose box (XYZ ± μ·Σ|w|) keeps the ΔE₀₀ bound ≤ tolerance here."""
 
     functionals = result.target.functionals()
     totals = np.array([f.total_weight for f in functionals])

@@ -9,7 +9,10 @@ target=...)`` calls it):
    the specimen's data (a band outside it, a colour of too little of the visible: refused
    with the reason);
 2. for a nonlinear target, a pilot of about 80,000 rays per functional (Nₖ ∝ |wₖ|, its own
-   seed) gives the point at which the target picks each functional's tolerance;
+   seed) gives the point at which the target picks each functional's tolerance; when
+   that asks for more than :data:`REFINE_ABOVE` times the pilot's rays, a second pilot
+   of :data:`REFINE_SHARE` of them (its own seed) refines the point, and the tolerances
+   are picked again with less in reserve (:data:`REFINED_MARGIN`);
 3. each functional j at δ/m (m functionals, union bound) holds to its tolerance with the
    fewest rays in all: Nₖ = ⌈cⱼ|wⱼₖ|⌉ for one functional (:func:`~.functionals.allocate`),
    the joint optimum for several sharing wavelengths
@@ -56,6 +59,18 @@ PILOT_TOLERANCE: float = 0.003
 
 PILOT_DELTA: float = 0.5
 """δ a pilot is sized at (it decides rays only; nothing it measures is claimed)."""
+
+REFINE_ABOVE: float = 50.0
+"""A nonlinear target whose rays exceed this many times the pilot's gets a second pilot (see :func:`plan_target`)."""
+
+REFINE_SHARE: float = 0.02
+"""The second pilot's rays, as a share of the rays first planned (laid out as they are)."""
+
+REFINED_MARGIN: float = 0.92
+"""The share of the tolerance sized for after the second pilot (:data:`~.targets.MARGIN` after the first)."""
+
+REFINE_SEED_MASK: int = 0x2C1B3C6D
+"""The second pilot's seed is the settings' seed XOR this (distinct from the first pilot's and the estimates')."""
 
 REFUSED_SETTINGS: tuple[str, ...] = ("wavelengths", "mu", "rays", "bound", "pilot_rays", "pilot_delta", "joint")
 """Settings a target decides itself: giving one with a target is an error."""
@@ -134,15 +149,26 @@ def plan_target(bench: Any, settings: Settings, target: Target) -> TargetPlan:
     each = union_delta(float(settings.delta), len(functionals))
     pilot_rays = 0
     estimates = None
+    counts = np.zeros(len(grid))
     if target.needs_pilot:
-        rays = np.max([allocate(w, PILOT_TOLERANCE * np.abs(w).sum(), PILOT_DELTA) for w in weights], axis=0)
-        used, tally = _trace(bench, settings, grid, rays, settings.seed)
-        values = np.zeros(len(grid))
-        values[used] = _fates(tally.counts, quantity) / rays[used]
-        estimates = weights @ values
-        pilot_rays = int(rays.sum())
+        first = np.max([allocate(w, PILOT_TOLERANCE * np.abs(w).sum(), PILOT_DELTA) for w in weights], axis=0)
+        used, tally = _trace(bench, settings, grid, first, settings.seed)
+        counts[used] = _fates(tally.counts, quantity)
+        estimates = weights @ (counts / np.maximum(first, 1))
+        pilot_rays = int(first.sum())
     tolerances = np.asarray(target.tolerances(estimates, float(settings.delta)), dtype=np.float64)
     rays = allocate_jointly(weights, tolerances, each)
+    if target.needs_pilot and rays.sum() > REFINE_ABOVE * pilot_rays:
+        # a costly target: a second pilot of REFINE_SHARE of those rays pins the point down, so the sizing can
+        # keep less in reserve (REFINED_MARGIN): its rays (counted) are few beside those it saves
+        second = np.where(rays > 0, np.maximum(1, np.ceil(REFINE_SHARE * rays)), 0).astype(np.int64)
+        used, tally = _trace(bench, settings, grid, second, settings.seed ^ REFINE_SEED_MASK)
+        counts[used] += _fates(tally.counts, quantity)
+        pooled = counts / np.maximum(first + second, 1)  # both pilots' rays (sizing only)
+        pilot_rays += int(second.sum())
+        tolerances = np.asarray(target.tolerances(weights @ pooled, float(settings.delta), REFINED_MARGIN),
+                                dtype=np.float64)
+        rays = allocate_jointly(weights, tolerances, each)
     return TargetPlan(target, functionals, grid, weights, tolerances, each, rays, pilot_rays)
 
 

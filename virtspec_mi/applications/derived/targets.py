@@ -89,8 +89,11 @@ class Target:
     def functionals(self) -> list[Functional]:
         raise NotImplementedError
 
-    def tolerances(self, estimates: np.ndarray | None, delta: float) -> np.ndarray:
-        """The tolerance each functional is sized for (from the pilot's ``estimates`` when nonlinear)."""
+    def tolerances(self, estimates: np.ndarray | None, delta: float, margin: float = MARGIN) -> np.ndarray:
+        """
+        The tolerance each functional is sized for (from the pilot's ``estimates`` when
+        nonlinear, for ``margin`` of the target's tolerance: :data:`MARGIN` by default).
+        """
 
         raise NotImplementedError
 
@@ -133,7 +136,7 @@ class BandTarget(Target):
     def functionals(self) -> list[Functional]:
         return [b.functional(self.quantity) for b in self.bands]
 
-    def tolerances(self, estimates: np.ndarray | None, delta: float) -> np.ndarray:
+    def tolerances(self, estimates: np.ndarray | None, delta: float, margin: float = MARGIN) -> np.ndarray:
         return np.full(len(self.bands), self.tolerance)
 
     def values(self, estimates: np.ndarray, tolerances: np.ndarray) -> list[Value]:
@@ -183,7 +186,7 @@ class FaparTarget(Target):
         return [Functional("fapar", grid, photons / photons.sum(), "absorptance", "1",
                            f"absorbed share of the {self.illuminant} PAR photons, {self.low:g}-{self.high:g} nm")]
 
-    def tolerances(self, estimates: np.ndarray | None, delta: float) -> np.ndarray:
+    def tolerances(self, estimates: np.ndarray | None, delta: float, margin: float = MARGIN) -> np.ndarray:
         return np.array([self.tolerance])
 
     def values(self, estimates: np.ndarray, tolerances: np.ndarray) -> list[Value]:
@@ -236,7 +239,7 @@ class IndexTarget(Target):
     def functionals(self) -> list[Functional]:
         return [b.functional("reflectance") for b in self._bands()]
 
-    def tolerances(self, estimates: np.ndarray | None, delta: float) -> np.ndarray:
+    def tolerances(self, estimates: np.ndarray | None, delta: float, margin: float = MARGIN) -> np.ndarray:
         a, b = np.clip(np.asarray(estimates, dtype=np.float64), 1e-6, 1.0)
         gradient = np.abs(np.array(self.index.gradient(a, b))) + 1e-9
         shape = gradient ** (-1.0 / 3.0)  # least rays for a linear budget: t_j ∝ |g_j|^(-1/3)
@@ -247,7 +250,7 @@ class IndexTarget(Target):
             except ValueError:
                 return False
             centre = self.index.value(a, b)
-            return max(centre - low, high - centre) <= MARGIN * self.tolerance
+            return max(centre - low, high - centre) <= margin * self.tolerance
 
         return _scaled(shape, fits)
 
@@ -311,7 +314,7 @@ class ColourTarget(Target):
 
         return colour_functionals(self.grid(), self.quantity, self.illuminant, self.observer)
 
-    def tolerances(self, estimates: np.ndarray | None, delta: float) -> np.ndarray:
+    def tolerances(self, estimates: np.ndarray | None, delta: float, margin: float = MARGIN) -> np.ndarray:
         from virtspec_mi.applications.derived.delta_e import lab_box, radius
 
         functionals = self.functionals()
@@ -327,7 +330,7 @@ class ColourTarget(Target):
         base = radius_of(np.full(3, 1e-12))
         slopes = np.array([(radius_of(np.where(np.arange(3) == j, probe, 1e-12)) - base) / probe for j in range(3)])
         shape = (np.abs(slopes) + 1e-9) ** (-1.0 / 3.0) * np.array([f.total_weight for f in functionals]) ** (2 / 3)
-        return _scaled(shape / shape.max(), lambda t: radius_of(t) <= MARGIN * self.tolerance_dE00)
+        return _scaled(shape / shape.max(), lambda t: radius_of(t) <= margin * self.tolerance_dE00)
 
     def values(self, estimates: np.ndarray, tolerances: np.ndarray) -> list[Value]:
         raise NotImplementedError("a colour target's values come with its CertifiedColour (see measure)")

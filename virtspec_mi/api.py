@@ -150,8 +150,9 @@ def sweep(
     progress: bool | None = None,
     workers: Any = None,
     task_readings: int | None = None,
+    target: Any = None,
     **settings: Any,
-) -> Result:
+) -> Any:
     """
     Certified readings of ``scene`` over every (wavelength, θi) pair.
 
@@ -211,12 +212,31 @@ def sweep(
         As for :func:`measure` (one value for the whole sweep); ``wavelengths`` must be
         distinct. With ``bound="two-stage"`` each reading is sized by its own pilot, all
         of them batched.
+    target
+        A derived quantity (as for :func:`measure`) certified at every θi: a
+        :class:`~virtspec_mi.applications.derived.result.DerivedSweep`, each angle at δ
+        (``parameters``, ``checkpoint``, ``out`` and ``workers`` are not taken with it).
 
     References
     ----------
     Baranoski et al. (2001), eq. (23), Fig. 5.
     """
 
+    if target is not None:
+        given = [name for name, value in (("parameters", parameters), ("checkpoint", checkpoint), ("out", out),
+                                          ("workers", workers)) if value]
+        if given:
+            raise ValueError(f"{', '.join(given)}: not taken with a target (each angle is one vm.measure(target=...))")
+        from virtspec_mi.applications.derived.result import DerivedSweep
+
+        bench = find_bench(scene, defines)
+        resolved, = resolve("sweep", {k: v for k, v in settings.items() if k not in ("wavelengths", "mu", "rays",
+                                                                                    "bound", "pilot_rays",
+                                                                                    "pilot_delta", "joint")},
+                            _scene_options(bench, Settings))
+        angles = _angles(resolved, theta_i, "a sweep")
+        return DerivedSweep(tuple(float(t) for t in angles), tuple(
+            _measure_target(scene, bench, defines, None, target, {**settings, "theta_i": float(t)}) for t in angles))
     return _reading("hemispherical", "sweep", "a sweep", scene, settings, theta_i=theta_i, parameters=parameters,
                     points=points, defines=defines, checkpoint=checkpoint, out=out, progress=progress, workers=workers,
                     task_readings=task_readings)

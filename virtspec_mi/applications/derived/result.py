@@ -28,7 +28,7 @@ import numpy as np
 
 from virtspec_mi.applications.derived.targets import Target, Value
 
-__all__ = ["DerivedResult", "FORMAT"]
+__all__ = ["DerivedResult", "DerivedSweep", "FORMAT"]
 
 FORMAT: str = "virtspec-mi derived 1"
 """The ``format`` of :meth:`DerivedResult.as_dict`."""
@@ -145,3 +145,53 @@ class DerivedResult:
                                           "readings_note": "per-wavelength readings: the rays spent, no joint "
                                                            "per-wavelength certificate"})
         return xr.merge([derived, readings], combine_attrs="override")
+
+
+@dataclass(frozen=True, eq=False)
+class DerivedSweep:
+    """
+    One target certified at several incidence angles (``vm.sweep(scene, theta_i=...,
+    target=...)``): one :class:`DerivedResult` per θi, each certified at its own δ (a
+    statement about all angles at once holds at δ × the number of angles, a union bound).
+    """
+
+    theta_i: tuple[float, ...]
+    results: tuple[DerivedResult, ...]
+
+    def __getitem__(self, index: int) -> DerivedResult:
+        return self.results[index]
+
+    def __len__(self) -> int:
+        return len(self.results)
+
+    @property
+    def total_rays(self) -> int:
+        return sum(r.total_rays for r in self.results)
+
+    def summary(self) -> str:
+        parts = []
+        for theta, result in zip(self.theta_i, self.results):
+            parts.append(f"theta_i = {theta:g} deg\n" + result.summary())
+        return "\n\n".join(parts)
+
+    def as_dict(self) -> dict[str, Any]:
+        return {"format": FORMAT, "theta_i": list(self.theta_i), "results": [r.as_dict() for r in self.results]}
+
+    def to_dataset(self) -> Any:
+        """The quantities and their bounds over ``theta_i`` (xarray; the readings left out: see each result's)."""
+
+        import xarray as xr
+
+        first = self.results[0]
+        data = {}
+        for k, v in enumerate(first.values):
+            for suffix, field_name in (("", "value"), ("_lower", "lower"), ("_upper", "upper")):
+                values = [getattr(r.values[k], field_name) for r in self.results]
+                long_name = v.long_name if not suffix else f"certified {field_name} bound of {v.name}"
+                data[v.name + suffix] = xr.Variable(("theta_i",), np.asarray(values, dtype=np.float64),
+                                                    {"units": v.units, "long_name": long_name})
+        data["rays"] = xr.Variable(("theta_i",), np.array([r.total_rays for r in self.results]),
+                                   {"units": "1", "long_name": "rays traced (pilots included)"})
+        return xr.Dataset(data, coords={"theta_i": ("theta_i", np.asarray(self.theta_i),
+                                                    {"units": "degree", "long_name": "incidence angle"})},
+                          attrs={"target": first.target.describe(), "delta_each": first.delta})

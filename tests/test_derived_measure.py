@@ -119,3 +119,14 @@ def test_the_cli_measures_a_target(mi, capsys):
     assert value["lower"] < value["value"] < value["upper"] and value["upper"] - value["value"] <= 0.01
     assert main(["measure", "soybean_abmb", "--target", "band:B04", "--out", "x.nc"]) != 0
     assert "--out: not taken with --target" in capsys.readouterr().err
+
+
+def test_a_sweep_certifies_a_target_at_every_angle(lambertian):
+    sweep = vm.sweep(lambertian, theta_i=[0, 45], target=vm.fapar(tolerance=0.02), delta=0.1, seed=2)
+    assert len(sweep) == 2 and sweep.theta_i == (0.0, 45.0)
+    data = sweep.to_dataset()
+    assert list(data["theta_i"].values) == [0.0, 45.0] and data["fapar"].attrs["units"] == "1"
+    assert np.all(data["fapar_lower"] <= data["fapar"]) and np.all(data["fapar"] <= data["fapar_upper"])
+    assert sweep.total_rays == int(data["rays"].sum()) and "theta_i = 45 deg" in sweep.summary()
+    with pytest.raises(ValueError, match="out: not taken with a target"):
+        vm.sweep(lambertian, theta_i=[0], target=vm.fapar(), out="x.nc")

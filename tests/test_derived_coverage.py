@@ -99,6 +99,7 @@ TARGETS = {
     "fapar": lambda: vm.fapar(tolerance=0.02),
     "index": lambda: vm.index("NDVI", tolerance=0.05),
     "colour": lambda: vm.colour(tolerance_dE00=4.0),
+    "albedo": lambda: vm.albedo(tolerance=0.02, low=350, high=780),
 }
 
 

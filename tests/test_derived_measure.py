@@ -103,8 +103,9 @@ def test_target_strings():
     assert [b.name for b in parse_target("band:B04:650-680,tolerance=0.002").bands] == ["B04", "650-680"]
     assert parse_target("index:NDVI,tolerance=0.002").index.name == "NDVI"
     assert parse_target("fapar,tolerance=0.01,low=410").low == 410
-    with pytest.raises(ValueError, match="the kind must be one of colour, band, index, fapar"):
-        parse_target("albedo")
+    assert parse_target("albedo,illuminant=A,tolerance=0.01").bands[0].name == "albedo_A"
+    with pytest.raises(ValueError, match="the kind must be one of colour, band, index, fapar, albedo"):
+        parse_target("ndvi")
     with pytest.raises(ValueError, match="NAME one of tolerance, step"):
         parse_target("index:NDVI,dE00=1")
 

@@ -63,6 +63,7 @@ __all__ = [
     "fapar",
     "index",
     "colour_difference",
+    "albedo",
     "DerivedResult",
 ]
 
@@ -112,6 +113,7 @@ _LAZY = {
     "fapar": "virtspec_mi.applications.derived.targets",
     "index": "virtspec_mi.applications.derived.targets",
     "colour_difference": "virtspec_mi.applications.derived.difference",
+    "albedo": "virtspec_mi.applications.derived.targets",
     "DerivedResult": "virtspec_mi.applications.derived.result",
 }
 

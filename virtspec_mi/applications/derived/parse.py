@@ -9,7 +9,9 @@ Targets written as text: ``virtspec measure --target ...``
 - ``band:B04:B08`` (Sentinel-2 names, ``650-680`` edges in nm, or a two-column file) with
   ``tolerance=0.002``, ``quantity=``, ``step=1``;
 - ``index:NDVI`` with ``tolerance=0.005``, ``step=1``;
-- ``fapar`` with ``tolerance=0.002``, ``illuminant=D65``, ``low=400``, ``high=700``, ``step=1``.
+- ``fapar`` with ``tolerance=0.002``, ``illuminant=D65``, ``low=400``, ``high=700``, ``step=1``;
+- ``albedo`` (illuminant-weighted) with ``tolerance=0.002``, ``illuminant=D65``, ``low``, ``high``,
+  ``quantity``, ``step``.
 
 e.g. ``colour,dE00=0.5``, ``band:B04:B08,tolerance=0.002``, ``index:NDVI,tolerance=0.002``,
 ``fapar,tolerance=0.002``. An unknown kind or name is refused with the allowed ones.
@@ -29,6 +31,7 @@ KINDS: dict[str, tuple[str, ...]] = {
     "band": ("tolerance", "quantity", "step"),
     "index": ("tolerance", "step"),
     "fapar": ("tolerance", "illuminant", "low", "high", "step"),
+    "albedo": ("tolerance", "illuminant", "low", "high", "quantity", "step"),
 }
 """Each kind of target and the names it takes."""
 
@@ -80,8 +83,8 @@ def parse_target(text: str) -> Target:
             raise ValueError("--target index needs one index name, e.g. index:NDVI")
         return targets.index(arguments[0], **options)
     if arguments:
-        raise ValueError(f"--target fapar takes no ':' arguments (got {arguments})")
-    return targets.fapar(**options)
+        raise ValueError(f"--target {kind} takes no ':' arguments (got {arguments})")
+    return targets.albedo(**options) if kind == "albedo" else targets.fapar(**options)
 
 
 _NOT_WITH_TARGET = {"out": "--out", "workers": "--workers/--scheduler", "parameters": "--param"}

@@ -41,7 +41,7 @@ from virtspec_mi.applications.derived.indices import Index, index_definition
 from virtspec_mi.results.colorimetry import DEFAULT_ILLUMINANT, DEFAULT_OBSERVER
 
 __all__ = ["Value", "Target", "BandTarget", "FaparTarget", "IndexTarget", "ColourTarget", "band", "fapar", "index",
-           "colour", "MARGIN", "colour_of"]
+           "colour", "albedo", "MARGIN", "colour_of"]
 
 MARGIN: float = 0.8
 """Share of a nonlinear target's tolerance the second batch is sized for from the pilot's point (the rest
@@ -384,7 +384,7 @@ def band(response: Any = "B04", *more: Any, tolerance: float = 0.002, quantity: 
 
     if quantity not in QUANTITIES:
         raise ValueError(f"quantity must be one of {', '.join(QUANTITIES)} (got {quantity!r})")
-    bands = tuple(make_band(r, step=step) for r in (response, *more))
+    bands = tuple(r if isinstance(r, Band) else make_band(r, step=step) for r in (response, *more))
     names = [b.name for b in bands]
     if len(set(names)) != len(names):
         raise ValueError(f"bands must have distinct names (got {names})")
@@ -424,3 +424,30 @@ def colour(tolerance_dE00: float = 0.5, illuminant: str = DEFAULT_ILLUMINANT, ob
                           float(step))
     target.grid()
     return target
+
+
+def albedo(tolerance: float = 0.002, illuminant: str = "D65", low: float | None = None, high: float | None = None,
+           quantity: str = "reflectance", step: float = 1.0) -> BandTarget:
+    """
+    An illuminant-weighted albedo: the mean ``quantity`` weighted by the spectral power of
+    ``illuminant`` (a name of ``colour.SDS_ILLUMINANTS``; CIE D65 daylight by default, over
+    its 300–780 nm unless ``low``/``high`` narrow it), to ±``tolerance``: a band whose
+    response is the illuminant. A broadband solar albedo needs a solar spectrum (e.g. ASTM
+    G173) given as a band's response: ``vm.band({wavelength: irradiance, ...})``.
+    """
+
+    import colour as cs
+
+    if illuminant not in cs.SDS_ILLUMINANTS:
+        raise ValueError(f"illuminant must be a name of colour.SDS_ILLUMINANTS, e.g. D65 (got {illuminant!r})")
+    light = cs.SDS_ILLUMINANTS[illuminant]
+    first, last = float(light.wavelengths[0]), float(light.wavelengths[-1])
+    low, high = first if low is None else float(low), last if high is None else float(high)
+    if not first <= low < high <= last:
+        raise ValueError(f"low and high must satisfy {first:g} <= low < high <= {last:g} nm, the data of illuminant "
+                         f"{illuminant} (got {low:g}, {high:g})")
+    grid = make_band((low, high), step=step).wavelengths
+    response = {float(w): float(v) for w, v in zip(grid, np.interp(grid, light.wavelengths, light.values))}
+    weighted = make_band(response, name=f"albedo_{illuminant}")
+    weighted = Band(weighted.name, weighted.wavelengths, weighted.response, f"weighted by illuminant {illuminant}")
+    return band(weighted, tolerance=tolerance, quantity=quantity, step=step)

@@ -70,12 +70,15 @@ def test_a_colour_target_meets_its_tolerance_and_reports_its_variables(lambertia
     assert "reflectance" in data and data.sizes["wavelength"] == len(rays)
     assert json.loads(result.to_json())["values"]["X"]["upper"] == pytest.approx(result["X"].upper)
     assert "no joint per-wavelength certificate" in result.summary()
+    assert "certified dE00 <=" in result.plot().axes[0].get_title()
 
 
-def test_a_band_target_spends_the_rays_of_one_reading(lambertian):
+def test_a_band_target_spends_the_rays_of_one_reading(lambertian, tmp_path):
     result = vm.measure(lambertian, target=vm.band((500, 530), tolerance=0.01), delta=0.05, seed=0)
     assert result.rays <= math.log(2 / 0.05) / (2 * 0.01 ** 2) + 31
     value = result["band_500-530"]
+    figure = result.plot(tmp_path / "band.png")
+    assert (tmp_path / "band.png").stat().st_size > 0 and len(figure.axes[0].lines) >= 1
     assert value.upper - value.value == pytest.approx(hoeffding_tolerance(
         result.target.functionals()[0].weights, result.readings.rays, 0.05))
 

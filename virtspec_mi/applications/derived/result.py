@@ -123,6 +123,13 @@ class DerivedResult:
                 "readings_note": "the rays spent per wavelength; no joint per-wavelength certificate of their own",
                 "readings": self.readings.as_dict()}
 
+    def plot(self, path: Any = None) -> Any:
+        """A colour swatch with its certified ΔE₀₀ radius, or the values with error bars (:mod:`.plot`)."""
+
+        from virtspec_mi.applications.derived.plot import plot_derived
+
+        return plot_derived(self, path)
+
     def to_json(self) -> str:
         return json.dumps(self.as_dict())
 

@@ -219,7 +219,8 @@ def _uncertifiable(result: Any) -> str:
     """Why ``result``'s colour gets no interval ("" when it does)."""
 
     if getattr(result, "KIND", "") != "hemispherical reading" or not hasattr(result, "certified"):
-        return f"a {getattr(result, 'KIND', type(result).__name__)}'s readings are not shares of independent rays"
+        return (f"intervals are derived for hemispherical readings only (this is a "
+                f"{getattr(result, 'KIND', type(result).__name__)})")
     if not np.all(result.certified):
         return "some readings escaped their certificate (weight violations, capped walks or invalid directions)"
     return ""

@@ -134,3 +134,23 @@ def test_a_sweep_certifies_a_target_at_every_angle(lambertian):
     assert sweep.total_rays == int(data["rays"].sum()) and "theta_i = 45 deg" in sweep.summary()
     with pytest.raises(ValueError, match="out: not taken with a target"):
         vm.sweep(lambertian, theta_i=[0], target=vm.fapar(), out="x.nc")
+
+
+def test_a_costly_colour_gets_a_second_pilot_and_still_holds_the_exact_colour(mi):
+    """A dark reflector (albedo 2-8 %): its colour moves fast with XYZ, so the plan is costly and refined."""
+
+    from virtspec_mi.applications.derived.measure import PILOT_DELTA, PILOT_TOLERANCE
+    from virtspec_mi.applications.derived.functionals import allocate
+
+    values = [0.02, 0.05, 0.08, 0.04]
+    dark = vm.instrument_scene({"type": "diffuse", "reflectance": {
+        "type": "regular", "wavelength_min": 300, "wavelength_max": 1000, "values": ", ".join(map(str, values))}})
+    result = vm.measure(dark, target=vm.colour(tolerance_dE00=2.0), delta=0.2, seed=4)
+    weights = np.stack([f.weights for f in result.target.functionals()])
+    first = np.max([allocate(w, PILOT_TOLERANCE * np.abs(w).sum(), PILOT_DELTA) for w in weights], axis=0).sum()
+    assert result.pilot_rays > first  # the second pilot ran
+    assert result.met and result.colour.dE00_radius <= 2.0
+    grid = result.target.functionals()[0].wavelengths
+    exact = weights @ np.interp(grid, np.linspace(300, 1000, 4), values)
+    box = result.colour.XYZ_interval
+    assert np.all((box[:, 0] <= exact) & (exact <= box[:, 1]))

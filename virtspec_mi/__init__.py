@@ -58,6 +58,13 @@ __all__ = [
     "Comparison",
     "MeasuredSpectrum",
     "GlossResult",
+    "colour",
+    "band",
+    "fapar",
+    "index",
+    "colour_difference",
+    "albedo",
+    "DerivedResult",
 ]
 
 _LAZY = {
@@ -101,6 +108,13 @@ _LAZY = {
     "Comparison": "virtspec_mi.comparison",
     "MeasuredSpectrum": "virtspec_mi.comparison",
     "GlossResult": "virtspec_mi.instruments.gloss",
+    "colour": "virtspec_mi.applications.derived.targets",
+    "band": "virtspec_mi.applications.derived.targets",
+    "fapar": "virtspec_mi.applications.derived.targets",
+    "index": "virtspec_mi.applications.derived.targets",
+    "colour_difference": "virtspec_mi.applications.derived.difference",
+    "albedo": "virtspec_mi.applications.derived.targets",
+    "DerivedResult": "virtspec_mi.applications.derived.result",
 }
 
 

@@ -818,6 +818,7 @@ def _colour(args: argparse.Namespace) -> int:
     from virtspec_mi.results.io import is_result_csv, read_spectra_csv
 
     path = Path(args.file)
+    result = None
     if path.suffix.lower() == ".csv" and path.is_file() and not is_result_csv(path):
         if args.selections:
             raise ValueError("--sel selects labels of a result file; a colour-science CSV holds one spectrum per "
@@ -833,7 +834,9 @@ def _colour(args: argparse.Namespace) -> int:
         quantity = result.check_quantity(args.quantity)
         sd = result.to_sd(quantity, args.theta_i)
         heading = f"{quantity} of {path} ({sd.name})"
-    colour = colorimetry(sd, args.illuminant, args.observer)
+    # a result's colour with certified intervals where its readings allow (issue 30), a CSV spectrum's without
+    colour = (colorimetry(sd, args.illuminant, args.observer) if result is None
+              else result.colour(quantity, args.theta_i, illuminant=args.illuminant, observer=args.observer))
     if args.json:
         print(json.dumps({"file": str(path), "quantity": quantity, "spectrum": heading, **colour.as_dict()}))
         return 0

@@ -60,8 +60,8 @@ from virtspec_mi.engine.progress import Progress
 from virtspec_mi.engine.tally import Tally
 from virtspec_mi.settings import Settings
 
-__all__ = ["BatchRunner", "run", "take_keyed_readings", "trace_readings", "in_process_runner", "shares_wavelengths",
-           "check_specimen"]
+__all__ = ["BatchRunner", "run", "take_keyed_readings", "trace_readings", "trace_allocated", "in_process_runner",
+           "shares_wavelengths", "check_specimen"]
 
 BatchRunner = Callable[[list[np.ndarray]], Iterable[tuple[np.ndarray, Tally]]]
 """
@@ -187,6 +187,33 @@ def trace_readings(bench: Any, plan: Plan, group: int, readings: Sequence[tuple[
         bar.close()
     back = np.searchsorted(traced, source)
     return Tally(tally.counts, None if pilot is None else pilot.counts, tally.bins, tally.sums).take(back)
+
+
+def trace_allocated(bench: Any, settings: Settings, readings: Sequence[tuple[float, float, float]],
+                    rays: Sequence[int] | np.ndarray, offsets: Sequence[int] | np.ndarray | None = None) -> Tally:
+    """
+    Trace every (wavelength nm, θi, φi) of ``readings`` with its own number of rays
+    ``rays[i]`` (an allocation among wavelengths, e.g. Nₖ ∝ |wₖ| of a derived quantity:
+    :mod:`virtspec_mi.applications.derived`) in one batched kernel call with ``settings``'
+    seed, beam, sampling and chunk size, and return their
+    :class:`~virtspec_mi.engine.tally.Tally`. Every reading has rays of its own — never
+    shared across wavelengths, even for a wavelength-independent specimen — from global
+    index ``offsets[i]`` (default: consecutive ranges), so the readings are independent.
+    The specimen's wavelength checks and the limits on readings and rays apply as for
+    :func:`trace_readings`.
+    """
+
+    rays = np.asarray(rays, dtype=np.int64)
+    if len(rays) != len(readings) or np.any(rays < 1):
+        raise ValueError(f"rays must hold one positive count per reading ({len(readings)}), got {rays.tolist()[:8]}")
+    if offsets is not None and len(offsets) != len(readings):
+        raise ValueError(f"offsets must hold one start per reading ({len(readings)}), got {len(offsets)}")
+    readings, _, _ = _traced_readings(bench, readings, False)
+    check_readings(len(readings), int(rays.sum()))
+    for n in np.unique(rays):
+        check_rays_needed(int(n), "the allocation")
+    tally = _fixed(bench, readings, settings, rays, None if offsets is None else np.asarray(offsets))
+    return Tally(tally.counts, None, tally.bins, tally.sums)
 
 
 def in_process_runner(bench: Any, plan: Plan) -> BatchRunner:

@@ -42,7 +42,7 @@ from virtspec_mi.instruments.command import Command, Figure, Session
 from virtspec_mi.results.hemispherical import Result, fluctuation
 from virtspec_mi.settings import Options, Settings, option
 
-__all__ = ["Hemispherical", "hemispherical_result", "SweepFlags"]
+__all__ = ["Hemispherical", "hemispherical_result", "SweepFlags", "MeasureFlags"]
 
 
 def _check_densities(value: Any) -> tuple[float, ...]:
@@ -71,6 +71,24 @@ class SweepFlags(Options):
     densities: tuple[float, ...] | None = option(
         None, _check_densities, "sweep at N = 10^d rays for each log10 N = d; print seconds and the fluctuation of "
                                 "eq. (24)", words=True)
+
+
+def _check_target(value: Any) -> str:
+    if not isinstance(value, str) or not value.strip():
+        raise ValueError(f"target must be a text such as colour,dE00=0.5 (got {value!r})")
+    return value
+
+
+@dataclass(frozen=True)
+class MeasureFlags(Options):
+    """``virtspec measure``'s own flag: a derived quantity certified instead of the spectrum."""
+
+    title: ClassVar[str] = "derived quantity"
+
+    target: str | None = option(
+        None, _check_target, "certify a derived quantity instead of a spectrum, e.g. colour,dE00=0.5 | "
+        "band:B04:B08,tolerance=0.002 | index:NDVI,tolerance=0.002 | fapar,tolerance=0.002 (the instrument picks "
+        "the wavelengths and the rays of each)")
 
 
 def _respond_sweep(session: Session) -> int:
@@ -142,7 +160,8 @@ _MEASURE = Command(
     figures=(Figure("--plot", "plot_spectra", "reflectance and transmittance over wavelength, each with the band of "
                                               "its certified tolerance",
                     keywords={"quantities": ("reflectance", "transmittance")}),),
-    one_reading=True, function="sweep")
+    one_reading=True, function="sweep", flags=MeasureFlags,
+    respond="virtspec_mi.applications.derived.parse:respond")
 
 _SWEEP = Command(
     "sweep", "certified readings over theta_i x wavelength (x parameters)",

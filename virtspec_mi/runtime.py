@@ -25,6 +25,7 @@ name                    kind         module (under :mod:`virtspec_mi.plugins`)
 ``abm_b``               BSDF         :mod:`.bsdfs.abm_b` (walk: :mod:`.bsdfs.abm_walk`)
 ``abm_u``               BSDF         :mod:`.bsdfs.abm_u` (walk: :mod:`.bsdfs.abm_walk`)
 ``tabulated``           BSDF         :mod:`.bsdfs.tabulated` (a goniophotometer table)
+``prospect_d``          BSDF         :mod:`.bsdfs.prospect_d` (model: :mod:`.bsdfs.prospect_model`)
 ``spectrophotometer``   integrator   :mod:`.integrators.spectrophotometer`
 ``integrating_sphere``  integrator   :mod:`.integrators.integrating_sphere`
 ======================  ===========  ===============================================
@@ -47,6 +48,7 @@ PLUGINS: dict[str, tuple[str, str, str]] = {
     "abm_b": ("bsdf", "virtspec_mi.plugins.bsdfs.abm_b", "ABMB"),
     "abm_u": ("bsdf", "virtspec_mi.plugins.bsdfs.abm_u", "ABMU"),
     "tabulated": ("bsdf", "virtspec_mi.plugins.bsdfs.tabulated", "Tabulated"),
+    "prospect_d": ("bsdf", "virtspec_mi.plugins.bsdfs.prospect_d", "ProspectD"),
     "spectrophotometer": ("integrator", "virtspec_mi.plugins.integrators.spectrophotometer", "Spectrophotometer"),
     "integrating_sphere": ("integrator", "virtspec_mi.plugins.integrators.integrating_sphere",
                            "IntegratingSphereIntegrator"),

@@ -58,6 +58,9 @@ __all__ = [
     "Comparison",
     "MeasuredSpectrum",
     "GlossResult",
+    "fit",
+    "read_fit",
+    "FitResult",
 ]
 
 _LAZY = {
@@ -101,6 +104,9 @@ _LAZY = {
     "Comparison": "virtspec_mi.comparison",
     "MeasuredSpectrum": "virtspec_mi.comparison",
     "GlossResult": "virtspec_mi.instruments.gloss",
+    "fit": "virtspec_mi.applications.fitting",
+    "read_fit": "virtspec_mi.applications.fitting",
+    "FitResult": "virtspec_mi.applications.fitting",
 }
 
 

@@ -299,6 +299,10 @@ def build_parser() -> argparse.ArgumentParser:
     compare.add_argument("--plot", help="figure .png or .svg: both spectra and the residuals")
     compare.add_argument("--json", action="store_true", help="print the comparison as one JSON object")
 
+    from virtspec_mi.applications.fitting.command import add_fit_command
+
+    add_fit_command(commands)  # virtspec fit: its flags live with the fitting package
+
     plot = command("plot", "a figure of any result file (or against a measured one)",
                    "Plot one quantity of a result file against theta_i (a sweep over angles: one curve per "
                    "wavelength) or wavelength (one curve per theta_i), with the band of the certified tolerance; "
@@ -558,7 +562,7 @@ def _command(args: argparse.Namespace, exit_status: Any) -> int:
 
             return llvm_main([args.action])
         handlers = {"measure": _measure, "sweep": _sweep, "gonio": _gonio, "sphere": _sphere, "colour": _colour,
-                    "compare": _compare, "plot": _plot, "albedo-table": _albedo_table}
+                    "compare": _compare, "plot": _plot, "albedo-table": _albedo_table, "fit": _fit}
         return handlers[args.command](args)
     except (ValueError, RuntimeError, OSError) as error:
         print(f"virtspec: error: {_rescued(error)}", file=sys.stderr)
@@ -988,6 +992,12 @@ def _compare(args: argparse.Namespace) -> int:
     if args.plot:
         print(f"plot: {args.plot}")
     return 0
+
+
+def _fit(args: argparse.Namespace) -> int:
+    from virtspec_mi.applications.fitting.command import run_fit
+
+    return run_fit(args)
 
 
 def _plot(args: argparse.Namespace) -> int:

@@ -17,7 +17,9 @@ on common random numbers across candidates. The fit goes
    from the last one's best, the simplex shrinking with it: rays are raised as the fit
    converges, and the **estimate** is the best candidate of the last stage, read at
    μ* = ``mu_fraction`` × the smallest measurement uncertainty (or ``forward_mu``);
-3. **profiles**: along each free parameter through the estimate (the others held), at μ*.
+3. **profiles**: along each free parameter through the estimate (the others held), at μ*:
+   ``profile_points`` over the bounds, then each end of the consistent stretch bisected
+   :data:`PROFILE_BISECTIONS` times.
 
 **The confidence set.** A candidate θ is *consistent* with the measurement when its
 certified spectrum F̂(θ) lies within the combined tolerance at every fitted point:
@@ -63,10 +65,13 @@ from virtspec_mi.applications.fitting.result import FitResult
 from virtspec_mi.checks import number
 from virtspec_mi.engine.parameters import apply_point, known_parameters
 
-__all__ = ["fit", "LOSSES", "UNCONSTRAINED_SHARE", "consistency", "intervals"]
+__all__ = ["fit", "LOSSES", "UNCONSTRAINED_SHARE", "PROFILE_BISECTIONS", "consistency", "intervals"]
 
 UNCONSTRAINED_SHARE: float = 0.9
 """A parameter whose interval covers at least this share of its bounds is flagged unconstrained."""
+
+PROFILE_BISECTIONS: int = 4
+"""Bisections at each end of a profile's consistent stretch."""
 
 _STAGES = (4.0, 2.0, 1.0)  # the refinement's tolerances, in units of mu*
 _TABLE_MU = 0.02  # the table's tolerance (unless mu* is larger)
@@ -246,11 +251,8 @@ def fit(measured: Any, specimen: Any, parameters: Mapping[str, Any], *, quantiti
         estimate = _refine(forward, problem, best, target, budget, 0.5 / (points - 1), measure_loss)
         if profile_points:
             for i, name in enumerate(problem.names):
-                for value in np.linspace(*problem.bounds[i], profile_points):
-                    values = estimate.values.copy()
-                    values[i] = value
-                    forward.reading(values, target, f"profile {name}")
-                note(progress, f"fit: profile of {name} ({profile_points} points at mu = {target:g})")
+                count_read = _profile(forward, problem, estimate, i, target, profile_points)
+                note(progress, f"fit: profile of {name} ({count_read} points at mu = {target:g})")
     finally:
         keys = known_parameters(problem.scene)
         apply_point(_Holder(problem.scene), [keys.get(k, k) for k in problem.keys], problem.start)
@@ -295,6 +297,43 @@ def _refine(forward: Forward, problem: FitProblem, best: Reading, target: float,
             final = stage_best
     assert final is not None
     return final
+
+
+def _profile(forward: Forward, problem: FitProblem, estimate: Reading, i: int, target: float, points: int) -> int:
+    """
+    The test statistic along parameter ``i`` through the estimate (the others held): ``points``
+    evenly over the bounds, then each end of the consistent stretch around the estimate found
+    to 1/2^PROFILE_BISECTIONS of the step by bisection. Returns the readings taken.
+    """
+
+    stage = f"profile {problem.names[i]}"
+
+    def statistic(value: float) -> float:
+        values = estimate.values.copy()
+        values[i] = value
+        return consistency(forward.reading(values, target, stage), problem)
+
+    centre = float(estimate.values[i])
+    scanned = {float(v): statistic(float(v)) for v in np.linspace(*problem.bounds[i], points)}
+    taken = len(scanned)
+    if consistency(estimate, problem) > 1.0:
+        return taken
+    for side in (-1.0, 1.0):
+        outside = sorted((v for v, s in scanned.items() if s > 1.0 and (v - centre) * side > 0),
+                         key=lambda v: abs(v - centre))
+        if not outside:
+            continue
+        inside_values = [v for v, s in scanned.items() if s <= 1.0 and 0 <= (v - centre) * side < abs(outside[0] - centre)]
+        good = max(inside_values, key=lambda v: abs(v - centre), default=centre)
+        bad = outside[0]
+        for _ in range(PROFILE_BISECTIONS):
+            middle = 0.5 * (good + bad)
+            if statistic(middle) <= 1.0:
+                good = middle
+            else:
+                bad = middle
+            taken += 1
+    return taken
 
 
 def _result(problem: FitProblem, forward: Forward, estimate: Reading, loss: str,

@@ -180,7 +180,7 @@ class Forward:
         extra = [d for d in result.dims if d not in (*self.problem.keys, "wavelength", "theta_i")]
         if extra:
             raise ValueError(f"the table {path} also varies {', '.join(extra)}: select one value first")
-        if result.scene and result.scene != self.problem.fingerprint:
+        if result.scene and result.scene not in self.problem.fingerprints:
             raise ValueError(f"the table {path} was measured on another scene ({result.scene}, this fit's: "
                              f"{self.problem.fingerprint})")
         if result.settings.quantity_delta > self.reading_delta * (1 + 1e-9):

@@ -13,7 +13,8 @@ on common random numbers across candidates. The fit goes
 1. **table**: a coarse grid over the box of bounds, one sweep at a coarse tolerance
    (a Zarr store, reusable by a later fit: a look-up-table inversion);
 2. **refinement**: from the table's best point, Nelder–Mead (``scipy.optimize``) on the
-   chosen ``loss`` in stages whose tolerance shrinks (4 μ*, 2 μ*, μ*), each stage starting
+   chosen ``loss`` in stages whose tolerance shrinks (4 μ*, 2 μ*, μ*; never coarser than
+   the table's), each stage starting
    from the last one's best, the simplex shrinking with it: rays are raised as the fit
    converges, and the **estimate** is the best candidate of the last stage, read at
    μ* = ``mu_fraction`` × the smallest measurement uncertainty (or ``forward_mu``);
@@ -248,7 +249,7 @@ def fit(measured: Any, specimen: Any, parameters: Mapping[str, Any], *, quantiti
         readings = forward.table(grid, table_mu, table_path)
         best = min(readings, key=lambda r: measure_loss(r, problem))
         budget = evaluations if evaluations is not None else tuple(k * count for k in (12, 6, 3))
-        estimate = _refine(forward, problem, best, target, budget, 0.5 / (points - 1), measure_loss)
+        estimate = _refine(forward, problem, best, target, table_mu, budget, 0.5 / (points - 1), measure_loss)
         if profile_points:
             for i, name in enumerate(problem.names):
                 count_read = _profile(forward, problem, estimate, i, target, profile_points)
@@ -264,7 +265,8 @@ class _Holder:
         self.scene = scene
 
 
-def _refine(forward: Forward, problem: FitProblem, best: Reading, target: float, budget: Sequence[int], step: float,
+def _refine(forward: Forward, problem: FitProblem, best: Reading, target: float, ceiling: float,
+            budget: Sequence[int], step: float,
             measure_loss: Callable[[Reading, FitProblem], float]) -> Reading:
     """Nelder–Mead in stages of shrinking tolerance (module docstring); the best reading at ``target``."""
 
@@ -272,7 +274,7 @@ def _refine(forward: Forward, problem: FitProblem, best: Reading, target: float,
     count = len(x)
     final = None
     for stage, (factor, evaluations) in enumerate(zip(_STAGES, budget), start=1):
-        mu = target * factor
+        mu = min(target * factor, ceiling)  # never coarser than the table
         last = stage == len(_STAGES)
         tried: list[Reading] = []
 

@@ -68,6 +68,9 @@ class FitProblem:
     specimen: str
     """The specimen in words (its plugin or scene name)."""
     fingerprint: str
+    """The scene's fingerprint as its readings record it (:func:`virtspec_mi.scene.scene_fingerprint`)."""
+    fingerprints: frozenset[str]
+    """Every fingerprint a reading of this scene may carry (of the loaded scene, of the scene as given)."""
     defines: dict[str, Any] | None
     start: tuple[float, ...]
     """The scene's own values of the free parameters (restored after the fit)."""
@@ -178,7 +181,9 @@ def fit_problem(measured: Any, specimen: Any, parameters: Mapping[str, Any], *,
         values[quantity], errors[quantity] = _on_wavelengths(spectrum, grid, measurement_uncertainty)
     return FitProblem(scene=scene, given_scene=given_scene, bench=bench, names=names, keys=keys, bounds=bounds,
                       wavelengths=grid, measured=values, uncertainty=errors, specimen=label,
-                      fingerprint=scene_fingerprint(given_scene, bench, defines),
+                      fingerprint=scene_fingerprint(scene, bench),
+                      fingerprints=frozenset({scene_fingerprint(scene, bench),
+                                              scene_fingerprint(given_scene, bench, defines)}),
                       defines=defines, start=tuple(start))
 
 

@@ -100,6 +100,19 @@ class ProspectCoefficients:
     absorption: dict[str, np.ndarray]
     source: str
 
+    def surfaces(self, alpha: float) -> tuple[np.ndarray, ...]:
+        """
+        The plate surfaces' (r_α, t_α, r₁₂, t₁₂, r₂₁, t₂₁) at every wavelength: from the cone of
+        half-angle ``alpha`` and isotropic light, inside to outside (computed once per α).
+        """
+
+        cache = self.__dict__.setdefault("_surfaces", {})
+        if alpha not in cache:
+            t_alpha, t12 = tav(alpha, self.n), tav(90.0, self.n)
+            t21 = t12 / (self.n * self.n)
+            cache[alpha] = (1.0 - t_alpha, t_alpha, 1.0 - t12, t12, 1.0 - t21, t21)
+        return cache[alpha]
+
     def at(self, wavelengths: Any) -> "ProspectCoefficients":
         """The coefficients linearly interpolated at ``wavelengths`` (nm, inside the data's range)."""
 
@@ -257,16 +270,13 @@ def _pile(data: ProspectCoefficients, alpha: float, p: dict[str, np.ndarray]) ->
     """R and T of the pile for parameter columns ``p`` (each of shape (m, 1)) on the data's wavelengths."""
 
     n_plates = p["N"]
-    k = sum(p[name] * data.absorption[name] for name in data.absorption) / n_plates
+    names = tuple(data.absorption)
+    matrix = data.__dict__.setdefault("_matrix", np.stack([data.absorption[name] for name in names]))
+    k = (np.hstack([p[name] for name in names]) @ matrix) / n_plates  # sum of C_i K_i(λ), over N
     positive = k > 0
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
         transmission = np.where(positive, (1.0 - k) * np.exp(-k) + k * k * exp1(np.where(positive, k, 1.0)), 1.0)
-    n = data.n
-    t_alpha = tav(alpha, n)
-    t12 = tav(90.0, n)
-    r_alpha, r12 = 1.0 - t_alpha, 1.0 - t12
-    t21 = t12 / (n * n)
-    r21 = 1.0 - t21
+    r_alpha, t_alpha, r12, t12, r21, t21 = data.surfaces(alpha)
     # one plate: lit from the cone (top) and isotropically (inside)
     denominator = 1.0 - r21 * r21 * transmission * transmission
     top_t = t_alpha * transmission * t21 / denominator

@@ -161,6 +161,7 @@ class Forward:
                                  self.workers)
             self.traced_rays += int(np.sum(result.rays_spent))
         result = result.squeeze("theta_i")
+        mu = float(result.settings.mu)  # a table read back: the tolerance it was measured to
         seconds = time.perf_counter() - started
         readings: list[Reading] = []
         size = int(np.prod([len(np.atleast_1d(result.coords[key])) for key in keys]))

@@ -20,7 +20,9 @@ on common random numbers across candidates. The fit goes
    μ* = ``mu_fraction`` × the smallest measurement uncertainty (or ``forward_mu``);
 3. **profiles**: along each free parameter through the estimate (the others held), at μ*:
    ``profile_points`` over the bounds, then each end of the consistent stretch bisected
-   :data:`PROFILE_BISECTIONS` times.
+   :data:`PROFILE_BISECTIONS` times;
+4. **confirmation**: every candidate consistent at a coarser tolerance is read again at μ*
+   and judged by that reading (``confirm``).
 
 **The confidence set.** A candidate θ is *consistent* with the measurement when its
 certified spectrum F̂(θ) lies within the combined tolerance at every fitted point:
@@ -66,7 +68,7 @@ from virtspec_mi.applications.fitting.result import FitResult
 from virtspec_mi.checks import number
 from virtspec_mi.engine.parameters import apply_point, known_parameters
 
-__all__ = ["fit", "LOSSES", "UNCONSTRAINED_SHARE", "PROFILE_BISECTIONS", "consistency", "intervals"]
+__all__ = ["fit", "LOSSES", "UNCONSTRAINED_SHARE", "PROFILE_BISECTIONS", "consistency", "intervals", "verdicts"]
 
 UNCONSTRAINED_SHARE: float = 0.9
 """A parameter whose interval covers at least this share of its bounds is flagged unconstrained."""
@@ -106,6 +108,20 @@ def consistency(reading: Reading, problem: FitProblem) -> float:
         ratio = np.abs(reading.predicted[q] - problem.measured[q]) / tolerance
         worst = max(worst, float(np.max(np.where(np.isnan(ratio), np.inf, ratio))))
     return worst
+
+
+def verdicts(readings: Sequence[Reading], statistic: np.ndarray) -> np.ndarray:
+    """
+    Whether each reading's candidate is consistent: the verdict of the finest reading of the
+    same parameter values (a candidate read again at a smaller tolerance is judged by that).
+    """
+
+    finest: dict[tuple, tuple[float, float]] = {}
+    for reading, s in zip(readings, statistic):
+        key = tuple(reading.values.tolist())
+        if key not in finest or reading.mu < finest[key][0]:
+            finest[key] = (reading.mu, float(s))
+    return np.array([finest[tuple(r.values.tolist())][1] <= 1.0 for r in readings], dtype=bool)
 
 
 def intervals(values: np.ndarray, consistent: np.ndarray, bounds: np.ndarray) -> np.ndarray:
@@ -155,7 +171,7 @@ def fit(measured: Any, specimen: Any, parameters: Mapping[str, Any], *, quantiti
         measurement_uncertainty: Any = None, wavelengths: Any = None, loss: str = "chi2", delta: float = 0.05,
         mu_fraction: float = 0.5, forward_mu: float | None = None, table: str | os.PathLike | None = None,
         table_points: int | None = None, evaluations: Sequence[int] | None = None, profile_points: int = 5,
-        seed: int = 0, directory: str | os.PathLike | None = None, defines: dict[str, Any] | None = None,
+        confirm: bool = True, seed: int = 0, directory: str | os.PathLike | None = None, defines: dict[str, Any] | None = None,
         workers: Any = None, progress: bool | None = None, **settings: Any) -> FitResult:
     """
     Fit the free ``parameters`` of ``specimen`` to a measured spectrum (see the module docstring).
@@ -201,6 +217,10 @@ def fit(measured: Any, specimen: Any, parameters: Mapping[str, Any], *, quantiti
         Forward readings per refinement stage (default 12, 6, 3 per free parameter).
     profile_points
         Points of each parameter's profile at μ* (0: none).
+    confirm
+        Read every candidate found consistent at a coarser tolerance (the table's, an early
+        stage's) again at μ*, and judge it by that reading (default ``True``; ``False`` keeps
+        the coarse verdicts: still a valid, wider confidence set).
     seed
         The seed of every forward reading (common random numbers).
     directory
@@ -254,6 +274,12 @@ def fit(measured: Any, specimen: Any, parameters: Mapping[str, Any], *, quantiti
             for i, name in enumerate(problem.names):
                 count_read = _profile(forward, problem, estimate, i, target, profile_points)
                 note(progress, f"fit: profile of {name} ({count_read} points at mu = {target:g})")
+        if confirm:
+            coarse = [r for r in list(forward.readings) if r.mu > target and consistency(r, problem) <= 1.0]
+            for reading in coarse:
+                forward.reading(reading.values, target, "confirm")
+            note(progress, f"fit: {len(coarse)} candidates consistent at a coarser tolerance read again at mu = "
+                           f"{target:g}")
     finally:
         keys = known_parameters(problem.scene)
         apply_point(_Holder(problem.scene), [keys.get(k, k) for k in problem.keys], problem.start)
@@ -344,7 +370,7 @@ def _result(problem: FitProblem, forward: Forward, estimate: Reading, loss: str,
     readings = forward.readings
     values = np.array([r.values for r in readings])
     statistic = np.array([consistency(r, problem) for r in readings])
-    consistent = statistic <= 1.0
+    consistent = verdicts(readings, statistic)
     found = intervals(values, consistent, problem.bounds)
     span = problem.bounds[:, 1] - problem.bounds[:, 0]
     unconstrained = tuple(bool(np.isfinite(w) and w >= UNCONSTRAINED_SHARE * s)
@@ -357,6 +383,6 @@ def _result(problem: FitProblem, forward: Forward, estimate: Reading, loss: str,
         measured=problem.measured, uncertainty=problem.uncertainty, fitted=estimate.predicted,
         fitted_tolerance=estimate.tolerance, candidate_values=values, candidate_mu=np.array([r.mu for r in readings]),
         candidate_statistic=statistic, candidate_loss=np.array([measure_loss(r, problem) for r in readings]),
-        candidate_stage=tuple(r.stage for r in readings), rays=int(sum(r.rays for r in readings)),
+        candidate_stage=tuple(r.stage for r in readings), candidate_consistent=consistent, rays=int(sum(r.rays for r in readings)),
         traced_rays=forward.traced_rays, seconds=time.perf_counter() - started, specimen=describe(problem),
         seed=int(seed), reading_delta=forward.reading_delta)

@@ -38,7 +38,7 @@ FIT_FORMAT: str = "virtspec-mi fit 1"
 FIT_SUFFIXES: tuple[str, ...] = (".json", ".nc")
 
 _ARRAYS = ("bounds", "estimate", "intervals", "wavelengths", "candidate_values", "candidate_mu",
-           "candidate_statistic", "candidate_loss")
+           "candidate_statistic", "candidate_loss", "candidate_consistent")
 _SPECTRA = ("measured", "uncertainty", "fitted", "fitted_tolerance")
 
 
@@ -73,6 +73,8 @@ class FitResult:
     candidate_statistic: np.ndarray
     candidate_loss: np.ndarray
     candidate_stage: tuple[str, ...]
+    candidate_consistent: np.ndarray
+    """Each reading's verdict (that of the finest reading of the same values)."""
     rays: int
     traced_rays: int
     seconds: float
@@ -88,6 +90,12 @@ class FitResult:
         """1 − δ: the confidence set's level, less the measurement's own risk."""
 
         return 1.0 - self.delta
+
+    @property
+    def consistent_candidates(self) -> int:
+        """Readings whose candidate is consistent (by the finest reading of its values)."""
+
+        return int(np.sum(self.candidate_consistent))
 
     @property
     def residuals(self) -> dict[str, np.ndarray]:
@@ -122,8 +130,7 @@ class FitResult:
                  f"({self.wavelengths.min():g}-{self.wavelengths.max():g} nm), loss {self.loss_name} = {self.loss:.4g}"]
         if self.consistent:
             lines.append(f"confidence set (level >= {self.level:g}, less the measurement's own risk): "
-                         f"{int(np.sum(self.candidate_statistic <= 1))} of {len(self.candidate_statistic)} "
-                         "candidates consistent")
+                         f"{self.consistent_candidates} of {len(self.candidate_statistic)} readings consistent")
         else:
             lines.append(f"INCONSISTENT: no candidate's certified spectrum lies within the measurement uncertainty "
                          f"+ its tolerance (the estimate's largest normalised residual s = {self.statistic:.3g} > 1): "
@@ -196,6 +203,7 @@ class FitResult:
              "candidate_mu": (("candidate",), self.candidate_mu),
              "candidate_statistic": (("candidate",), self.candidate_statistic),
              "candidate_loss": (("candidate",), self.candidate_loss),
+             "candidate_consistent": (("candidate",), self.candidate_consistent.astype(np.int8)),
              "candidate_stage": (("candidate",), np.array(self.candidate_stage, dtype=object))},
             coords={"quantity": list(self.quantities), "wavelength": self.wavelengths, "parameter": list(self.names),
                     "end": ["low", "high"]},
@@ -269,6 +277,7 @@ def read_fit(path: str | os.PathLike) -> FitResult:
             arrays = {name: np.asarray(dataset[name].values, dtype=np.float64) for name in
                       ("bounds", "estimate", "intervals", "candidate_values", "candidate_mu", "candidate_statistic",
                        "candidate_loss")}
+            arrays["candidate_consistent"] = np.asarray(dataset["candidate_consistent"].values, dtype=bool)
             return FitResult(
                 names=tuple(str(n) for n in dataset["parameter"].values), **arrays,
                 wavelengths=np.asarray(dataset["wavelength"].values, dtype=np.float64),
@@ -294,6 +303,6 @@ def read_fit(path: str | os.PathLike) -> FitResult:
         **{name: {q: np.array(v, dtype=np.float64) for q, v in data[name].items()} for name in _SPECTRA},
         candidate_values=array("candidate_values"), candidate_mu=array("candidate_mu"),
         candidate_statistic=array("candidate_statistic"), candidate_loss=array("candidate_loss"),
-        candidate_stage=tuple(data["candidate_stage"]),
+        candidate_consistent=array("candidate_consistent").astype(bool), candidate_stage=tuple(data["candidate_stage"]),
         **{k: data[k] for k in ("statistic", "loss_name", "loss", "delta", "mu_fraction", "forward_mu", "rays",
                                 "traced_rays", "seconds", "specimen", "seed", "reading_delta", "version")})

@@ -54,6 +54,8 @@ ROOT = Path(__file__).resolve().parents[1]
 # ---------------------------------------------------------------------------------------
 LAYERS: list[tuple[str, tuple[str, ...]]] = [
     ("cli", ("virtspec_mi.cli", "virtspec_mi.__main__")),
+    # the applications: clients of the API that answer a user's question (fits, derived quantities)
+    ("applications", ("virtspec_mi.applications",)),
     ("api", ("virtspec_mi.api", "virtspec_mi.comparison", "virtspec_mi.scaleout", "virtspec_mi.validation",
              "virtspec_mi.scene", "virtspec_mi.runtime",
              # the exchange formats that take their readings through the API

@@ -65,6 +65,9 @@ __all__ = [
     "colour_difference",
     "albedo",
     "DerivedResult",
+    "fit",
+    "read_fit",
+    "FitResult",
 ]
 
 _LAZY = {
@@ -115,6 +118,9 @@ _LAZY = {
     "colour_difference": "virtspec_mi.applications.derived.difference",
     "albedo": "virtspec_mi.applications.derived.targets",
     "DerivedResult": "virtspec_mi.applications.derived.result",
+    "fit": "virtspec_mi.applications.fitting",
+    "read_fit": "virtspec_mi.applications.fitting",
+    "FitResult": "virtspec_mi.applications.fitting",
 }
 
 

@@ -194,7 +194,7 @@ COMMON_FLAGS: tuple[Flag, ...] = (
 )
 """The flags every measuring subcommand takes, defined once (:func:`common_flags` adds them)."""
 
-_OTHERS = ("bounds", "colour", "compare", "plot", "albedo-table", "scenes", "llvm")
+_OTHERS = ("bounds", "colour", "compare", "plot", "albedo-table", "fit", "scenes", "llvm")
 """The subcommands that are not an instrument's (the registry's may not take their names)."""
 
 _SEVERAL = {"theta_i": "parse_theta_i"}
@@ -273,6 +273,10 @@ def build_parser() -> argparse.ArgumentParser:
     _selection_option(compare)
     compare.add_argument("--plot", help="figure .png or .svg: both spectra and the residuals")
     compare.add_argument("--json", action="store_true", help="print the comparison as one JSON object")
+
+    from virtspec_mi.applications.fitting.command import add_fit_command
+
+    add_fit_command(commands)  # virtspec fit: its flags live with the fitting package
 
     plot = command("plot", "a figure of any result file (or against a measured one)",
                    "Plot one quantity of a result file against theta_i (a sweep over angles: one curve per "
@@ -554,7 +558,7 @@ def _command(args: argparse.Namespace, exit_status: Any) -> int:
             from virtspec_mi.llvm import main as llvm_main
 
             return llvm_main([args.action])
-        handlers = {"colour": _colour, "compare": _compare, "plot": _plot, "albedo-table": _albedo_table}
+        handlers = {"colour": _colour, "compare": _compare, "plot": _plot, "albedo-table": _albedo_table, "fit": _fit}
         if args.command in handlers:
             return handlers[args.command](args)
         return _measuring(args, measuring()[args.command])
@@ -887,6 +891,12 @@ def _compare(args: argparse.Namespace) -> int:
     if args.plot:
         print(f"plot: {args.plot}")
     return 0
+
+
+def _fit(args: argparse.Namespace) -> int:
+    from virtspec_mi.applications.fitting.command import run_fit
+
+    return run_fit(args)
 
 
 def _plot(args: argparse.Namespace) -> int:

@@ -26,6 +26,7 @@ name                    kind         module (under :mod:`virtspec_mi.plugins`)
 ``abm_u``               BSDF         :mod:`.bsdfs.abm_u` (walk: :mod:`.bsdfs.abm_walk`)
 ``tabulated``           BSDF         :mod:`.bsdfs.tabulated` (a goniophotometer table)
 ``microfacet``          BSDF         :mod:`.bsdfs.microfacet` (the engines' albedo models)
+``prospect_d``          BSDF         :mod:`.bsdfs.prospect_d` (model: :mod:`.bsdfs.prospect_model`)
 ``spectrophotometer``   integrator   :mod:`.integrators.spectrophotometer`
 ``integrating_sphere``  integrator   :mod:`.integrators.integrating_sphere`
 ======================  ===========  ===============================================
@@ -49,6 +50,7 @@ PLUGINS: dict[str, tuple[str, str, str]] = {
     "abm_u": ("bsdf", "virtspec_mi.plugins.bsdfs.abm_u", "ABMU"),
     "tabulated": ("bsdf", "virtspec_mi.plugins.bsdfs.tabulated", "Tabulated"),
     "microfacet": ("bsdf", "virtspec_mi.plugins.bsdfs.microfacet", "Microfacet"),
+    "prospect_d": ("bsdf", "virtspec_mi.plugins.bsdfs.prospect_d", "ProspectD"),
     "spectrophotometer": ("integrator", "virtspec_mi.plugins.integrators.spectrophotometer", "Spectrophotometer"),
     "integrating_sphere": ("integrator", "virtspec_mi.plugins.integrators.integrating_sphere",
                            "IntegratingSphereIntegrator"),

@@ -54,14 +54,13 @@ ROOT = Path(__file__).resolve().parents[1]
 # ---------------------------------------------------------------------------------------
 LAYERS: list[tuple[str, tuple[str, ...]]] = [
     ("cli", ("virtspec_mi.cli", "virtspec_mi.__main__")),
-    # the applications: clients of the API that answer a user's question (fits, derived quantities)
-    ("applications", ("virtspec_mi.applications",)),
     ("api", ("virtspec_mi.api", "virtspec_mi.comparison", "virtspec_mi.scaleout", "virtspec_mi.validation",
              "virtspec_mi.scene", "virtspec_mi.runtime",
              # the exchange formats that take their readings through the API
              "virtspec_mi.exchange.albedo", "virtspec_mi.exchange.klems_gonio", "virtspec_mi.exchange.flip",
              "virtspec_mi.exchange.engine_tables", "virtspec_mi.exchange.audit",
-             # applications: clients of the API and the engine (their maths, which results read, below)
+             # applications: clients of the API and the engine that answer a user's question (fits,
+             # derived quantities; the maths that results read is below)
              "virtspec_mi.applications")),
     # the integrators: Mitsuba's entry (mi.render), thin adapters over the instruments
     ("adapter", ("virtspec_mi.plugins.integrators",)),

@@ -23,7 +23,7 @@ import pytest
 import virtspec_mi as vm
 from virtspec_mi.engine import interrupts
 from virtspec_mi.engine.checkpoint import CheckpointError, locked
-from virtspec_mi.exchange.common import atomic_write
+from virtspec_mi.files import atomic_write
 from virtspec_mi.files import WriteError
 
 ROOT = Path(__file__).resolve().parents[1]

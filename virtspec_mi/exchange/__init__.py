@@ -15,11 +15,11 @@ Exchange formats renderers and simulation tools read: certified tables and BSDF 
   goniophotometer, on the bases of
   :mod:`~virtspec_mi.exchange.klems_basis`, the back side through
   :mod:`~virtspec_mi.exchange.flip`.
-- :mod:`~virtspec_mi.exchange.sizing`: the ray budgets of many cells at once;
-  :mod:`~virtspec_mi.exchange.microfacet_reference`: the independent quadrature the
+- :mod:`~virtspec_mi.exchange.microfacet_reference`: the independent quadrature the
   tables are tested against.
 
-Names are imported on first use (this package imports nothing heavy).
+The rays of many cells at once are sized by the budgets (:mod:`virtspec_mi.budgets.binomial`),
+files written by :mod:`virtspec_mi.files`. Names are imported on first use (this package imports nothing heavy).
 """
 
 from __future__ import annotations

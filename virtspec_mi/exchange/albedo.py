@@ -42,7 +42,7 @@ N = ⌈ln(2C|Q|/δ)/(2ε²)⌉ rays (δ split evenly); ``bound="two-stage"`` (de
 pilot per cell (δ/10 split evenly over the pilots) and sizes a fresh second batch by the
 binomial tail bounds of Zubkov & Serov (2013) over the pilot's interval, the other 9δ/10
 shared among the cells in proportion to the variance their pilot allows
-(:mod:`virtspec_mi.exchange.sizing`); cells near 0 or 1 (low roughness: E ≈ 1) then need
+(:mod:`virtspec_mi.budgets.binomial`); cells near 0 or 1 (low roughness: E ≈ 1) then need
 a small fraction of Hoeffding's rays. A BSDF weight rounded into [0, 1] adds its largest bias to the cell's
 tolerance (``certified_epsilon``: Mitsuba's Beckmann G₁ overshoots 1 by 6·10⁻⁵);
 weight violations or invalid directions leave a cell uncertified (NaN).
@@ -75,11 +75,9 @@ Baranoski, G.V.G., Rokne, J.G., Xu, G. (2001). The Visual Computer 17, 506–518
 
 from __future__ import annotations
 
-import hashlib
 import json
 import math
 import os
-import re
 import time
 import warnings
 from contextlib import nullcontext
@@ -93,11 +91,13 @@ import numpy as np
 from virtspec_mi import __version__
 from virtspec_mi.checks import check_delta, number, shown_value
 from virtspec_mi.engine import interrupts
-from virtspec_mi.engine.checkpoint import locked
+from virtspec_mi.engine.checkpoint import ResultStore, locked
 from virtspec_mi.settings import true_or_false, whole_number
-from virtspec_mi.exchange.common import atomic_write, check_companions, derived_seed
+from virtspec_mi.exchange.common import check_companions, derived_seed
+from virtspec_mi.files import atomic_write
 from virtspec_mi.exchange.conventions import Convention, convention
-from virtspec_mi.exchange.sizing import (binomial_rays, clopper_pearson_each, pilot_intervals, stage_two_shares,
+from virtspec_mi.budgets.intervals import clopper_pearson_each
+from virtspec_mi.budgets.binomial import (binomial_rays, pilot_intervals, stage_two_shares,
                                          union_hoeffding_rays, union_hoeffding_rays_array)
 
 __all__ = ["MODELS", "DISTRIBUTIONS", "BOUNDS", "TableBudget", "AlbedoTable", "TableComparison", "albedo_table",
@@ -133,7 +133,7 @@ BOUNDS: dict[str, TableBudget] = {
     "hoeffding": TableBudget("every cell N = ceil(ln(2 C |Q| / delta) / (2 epsilon^2)) rays", False,
                              "delta split evenly over {cells:,} cells x {quantities} quantities"),
 }
-"""Ray budgets of a table, by name (:mod:`virtspec_mi.exchange.sizing`)."""
+"""Ray budgets of a table, by name (:mod:`virtspec_mi.budgets.binomial`)."""
 
 SIDES: tuple[str, ...] = ("outside", "inside")
 """Glass: light arriving from outside (relative index η) or from inside (1/η)."""
@@ -231,7 +231,7 @@ class AlbedoTable:
     def interval_delta(self, average: bool = False) -> np.ndarray:
         """
         Per cell, δ of each quantity's estimating batch: δ/(C|Q|) for ``hoeffding``; for
-        ``two-stage`` the cell's share of 0.9δ (:func:`~virtspec_mi.exchange.sizing.stage_two_shares`,
+        ``two-stage`` the cell's share of 0.9δ (:func:`~virtspec_mi.budgets.binomial.stage_two_shares`,
         its pilots having 0.1δ). They add up to at most δ over the table.
         """
 
@@ -824,71 +824,6 @@ def _scene(grid: _Grid, model: dict[str, str]) -> dict[str, Any]:
 _KEYS = ("reflected", "transmitted", "rounded_weights", "weight_violations", "invalid_directions", "capped")
 
 
-class _Store:
-    """
-    Finished groups of a table, kept as result files in a directory (resume): ``identity.json``
-    and one ``<16 hex>.nc`` per group, each written whole under its name (a temporary
-    ``.<name>.<random>.tmp`` beside it, renamed).
-    """
-
-    _OURS = re.compile(r"identity\.json|[0-9a-f]{16}\.nc")
-    _TEMPORARY = re.compile(r"\.(identity\.json|[0-9a-f]{16}\.nc)\.[0-9a-z]+\.tmp")
-
-    def __init__(self, directory: Path | None, identity: dict[str, Any]) -> None:
-        self.directory = directory
-        self.reused = 0
-        self.saved = 0
-        if directory is None:
-            return
-        if directory.exists() and not directory.is_dir():
-            raise ValueError(f"checkpoint must be a directory (got the file {directory})")
-        directory.mkdir(parents=True, exist_ok=True)
-        stamp = directory / "identity.json"
-        text = json.dumps(identity, sort_keys=True)
-        if stamp.exists():
-            if stamp.read_text() != text:
-                old = json.loads(stamp.read_text())
-                differ = sorted(k for k in set(old) | set(identity) if old.get(k) != identity.get(k))
-                raise ValueError(f"checkpoint {directory} belongs to a different table (differs in: "
-                                 f"{', '.join(differ)}); re-run with the same settings, or delete it")
-            self.saved = sum(1 for path in directory.iterdir() if self._OURS.fullmatch(path.name)) - 1
-        else:
-            atomic_write(stamp, lambda tmp: Path(tmp).write_text(text))
-
-    def path(self, label: str) -> Path | None:
-        if self.directory is None:
-            return None
-        return self.directory / (hashlib.blake2b(label.encode(), digest_size=8).hexdigest() + ".nc")
-
-    def load(self, label: str) -> Any:
-        path = self.path(label)
-        if path is not None and path.exists():
-            from virtspec_mi.results.hemispherical import Result
-
-            self.reused += 1
-            return Result.read(path)
-        return None
-
-    def save(self, label: str, result: Any) -> None:
-        path = self.path(label)
-        if path is not None:
-            result.write(path)
-            self.saved += 1
-
-    def remove(self) -> None:
-        """Remove the folder: what this store writes (identity.json, <16 hex>.nc, their temporaries), not more."""
-
-        if self.directory is None:
-            return
-        for path in self.directory.iterdir():
-            if self._OURS.fullmatch(path.name) or self._TEMPORARY.fullmatch(path.name):
-                path.unlink()
-        try:
-            self.directory.rmdir()
-        except OSError:
-            pass
-
-
 def albedo_table(
     model: str = "conductor",
     *,
@@ -975,7 +910,7 @@ def albedo_table(
     Kulla & Conty (2017); Hoeffding (1963), Theorem 1; Baranoski et al. (2001), eq. (23).
     """
 
-    from virtspec_mi.api import sweep
+    from virtspec_mi.api import read_result, sweep
     from virtspec_mi.engine.progress import Progress
     from virtspec_mi.runtime import mitsuba
     from virtspec_mi.scene import load_scene
@@ -1026,7 +961,7 @@ def albedo_table(
 
         warm_writer()
     with (nullcontext() if checkpoint is None else locked(Path(checkpoint))), interrupts.deferred():
-            store = _Store(None if checkpoint is None else Path(checkpoint), identity)
+            store = ResultStore(None if checkpoint is None else Path(checkpoint), identity)
             scene = load_scene(_scene(grid, bsdf_parameters))
             started = time.perf_counter()
             traced_seconds = 0.0
@@ -1037,7 +972,7 @@ def albedo_table(
             def run(label: str, beam: str, angles: Sequence[float], pts: np.ndarray, rays: int) -> Any:
                 nonlocal traced_seconds, groups
                 groups += 1
-                result = store.load(label)
+                result = store.load(label, read_result)
                 if result is None:
                     with warnings.catch_warnings():  # a group's uncertified readings are reported once, for the table
                         warnings.simplefilter("ignore", RuntimeWarning)

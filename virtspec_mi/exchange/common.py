@@ -1,11 +1,10 @@
 """
-Small pieces the exchange modules share: atomic file writes and derived seeds
-=============================================================================
+Small pieces the exchange modules share: companion files and derived seeds
+===========================================================================
 
-- :func:`atomic_write`: a file written through a temporary file beside it and renamed
-  onto its name in one step, so a reader never sees half a file and an interrupted
-  write leaves the old file (or none) — the rule every result file of the project
-  follows (the manual, docs/guide/files.md).
+Their files are written as every file of the project is
+(:func:`virtspec_mi.files.atomic_write`).
+
 - :func:`check_companions`: a companion file an output brings with it (a sidecar of
   another suffix, an average beside a table) never replaces a file of that name that
   the format did not write, unless told to (``overwrite``), and never an input.
@@ -25,24 +24,9 @@ from __future__ import annotations
 import hashlib
 import os
 from pathlib import Path
-from typing import Any, Callable, Iterable
+from typing import Callable, Iterable
 
-from virtspec_mi.files import atomic_file
-
-__all__ = ["atomic_write", "check_companions", "derived_seed"]
-
-
-def atomic_write(path: str | os.PathLike, write: Callable[[str], Any]) -> Path:
-    """
-    Call ``write(temporary_path)``, then rename the temporary file onto ``path``
-    (:func:`virtspec_mi.files.atomic_file`: a temporary created here, removed on failure;
-    a failed write — a full disk, a missing folder — a ``WriteError`` naming ``path``).
-    """
-
-    path = Path(path)
-    with atomic_file(path) as temporary:
-        write(str(temporary))
-    return path
+__all__ = ["check_companions", "derived_seed"]
 
 
 def check_companions(output: str | os.PathLike, companions: Iterable[str | os.PathLike], ours: Callable[[Path], bool],

@@ -53,7 +53,7 @@ from typing import Any
 
 import numpy as np
 
-from virtspec_mi.exchange.common import atomic_write
+from virtspec_mi.files import atomic_write
 from virtspec_mi.exchange.engine_models import ENGINE_CHANNELS
 
 _ENGINE_FILES = {"cycles": "Cycles' C header (.h)", "filament": "Filament's dfg.inc (half floats)",

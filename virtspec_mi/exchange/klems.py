@@ -30,7 +30,7 @@ transmittance (m/N of the same rays, exactly).
 **Certificate.** Every patch fraction m_io/N_i of the file — all four matrices, every
 wavelength — and every hemispherical R and T is within ε of its true value at once with
 probability ≥ 1 − δ: N_i = ⌈ln(2S/δ)/(2ε²)⌉ rays per incidence for the S statements
-(Hoeffding + union, :func:`virtspec_mi.exchange.sizing.union_hoeffding_rays`); the
+(Hoeffding + union, :func:`virtspec_mi.budgets.binomial.union_hoeffding_rays`); the
 sidecar (NetCDF) holds the counts, fractions, the patch values with their simultaneous
 Clopper–Pearson bounds (each at δ/S) and the statement.
 
@@ -70,7 +70,8 @@ from xml.sax.saxutils import escape
 import numpy as np
 
 from virtspec_mi import __version__
-from virtspec_mi.exchange.common import atomic_write, check_companions
+from virtspec_mi.exchange.common import check_companions
+from virtspec_mi.files import atomic_write
 from virtspec_mi.exchange.klems_basis import KlemsBasis, klems_basis
 from virtspec_mi.budgets.intervals import clopper_pearson
 

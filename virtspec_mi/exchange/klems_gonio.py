@@ -35,7 +35,6 @@ import os
 import time
 from dataclasses import dataclass
 from datetime import datetime, timezone
-from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -47,7 +46,7 @@ from virtspec_mi.engine import interrupts
 from virtspec_mi.engine.readings import check_specimen
 from virtspec_mi.exchange.klems import SIDES, KlemsMeasurement, aggregate, check_escaped, check_klems_output
 from virtspec_mi.exchange.klems_basis import klems_basis
-from virtspec_mi.exchange.sizing import union_hoeffding_rays
+from virtspec_mi.budgets.binomial import union_hoeffding_rays
 
 __all__ = ["klems_measure", "respond"]
 

@@ -197,7 +197,7 @@ def engine_layout(engine: str) -> dict[str, tuple[int, ...]]:
 def write_filament_inc(path: str | os.PathLike, x: np.ndarray, y: np.ndarray, comment: list[str] | None = None,
                        cloth: np.ndarray | None = None) -> Path:
     """
-    ``dfg.inc`` as ``cmgen`` writes it: half floats ``0x%04x, `` per channel, four texels
+    ``dfg.inc`` as ``cmgen`` writes it: half floats (``0x%04x,`` per channel value), four texels
     a line, rows in GL order (the last row of the [roughness][μ] table first). ``x``,
     ``y`` (and ``cloth``) are 128 × 128 in the table's order (roughest row first).
     """

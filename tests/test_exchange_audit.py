@@ -192,9 +192,24 @@ def test_audit_refuses_mismatches(published, certified):
 
 def test_the_command_line_audit(published, tmp_path):
     path, _ = published
-    figure = tmp_path / "fig.png"
+    figure, table = tmp_path / "fig.png", tmp_path / "certified.nc"
     run = subprocess.run([sys.executable, "-m", "virtspec_mi", "albedo-table", "--engine", "cycles", "--epsilon",
-                          str(EPSILON), "--seed", "4", "--quiet", "--audit", str(path), "--figure", str(figure)],
-                         capture_output=True, text=True, timeout=600)
+                          str(EPSILON), "--seed", "4", "--quiet", "--audit", str(path), "--figure", str(figure),
+                          "--out", str(table)], capture_output=True, text=True, timeout=600)
     assert run.returncode == 0, run.stderr
-    assert "0 of 1,056 published cells outside" in run.stdout and figure.exists()
+    assert "0 of 1,056 published cells outside" in run.stdout and figure.exists() and table.exists()
+    again = subprocess.run([sys.executable, "-m", "virtspec_mi", "albedo-table", "--engine", "cycles", "--from",
+                            str(table), "--audit", str(path)], capture_output=True, text=True, timeout=600)
+    assert again.returncode == 0, again.stderr
+    assert again.stdout.count("rays") >= 1 and "0 of 1,056 published cells outside" in again.stdout
+
+
+def test_an_engine_table_read_back(certified, tmp_path):
+    from virtspec_mi.exchange.albedo import read_albedo_table
+    from virtspec_mi.exchange.engine_tables import EngineTables
+
+    certified.write(tmp_path / "t.nc")
+    back = EngineTables.from_table(read_albedo_table(tmp_path / "t.nc"))
+    assert back.engine == "cycles" and np.array_equal(back.values("E"), certified.values("E"))
+    with pytest.raises(ValueError, match="not an engine table"):
+        EngineTables.from_table(certified.table.__class__(**{**certified.table.__dict__, "engine": "grid"}))

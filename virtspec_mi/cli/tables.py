@@ -67,7 +67,8 @@ def albedo_options(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--audit", metavar="PUBLISHED", help="an engine's published table in its native layout "
                         "(cycles .h, filament dfg.inc, unreal .raw/.png) to audit against certified tables of its "
                         "model (--engine cycles|filament|unreal)")
-    parser.add_argument("--figure", help="--audit: write the heat map of (published - certified)/epsilon here")
+    parser.add_argument("--figure", help="--audit: write the heat map of (published - certified)/epsilon here "
+                        "(--from TABLE.nc: audit against a certified engine table written before)")
     parser.add_argument("--quiet", action="store_true", help="no progress bar")
 
 
@@ -111,8 +112,18 @@ def engine_tables(args: argparse.Namespace) -> int:
 
     if args.engine not in ("cycles", "filament", "unreal"):
         raise ValueError("--audit needs --engine cycles, filament or unreal (the published table's layout)")
-    tables = engine_tables(args.engine, epsilon=args.epsilon, delta=args.delta, seed=args.seed, bound=args.bound,
-                           progress=False if args.quiet else None, checkpoint=args.checkpoint)
+    native = (".h", ".hpp", ".inc", ".raw", ".png", ".nc")
+    for path in args.out:
+        if not path.lower().endswith(native):
+            raise ValueError(f"--out {path}: an engine table is written as the engine's file or .nc")
+    if args.source:  # a certified engine table written before (--out TABLE.nc)
+        from virtspec_mi.exchange.albedo import read_albedo_table
+        from virtspec_mi.exchange.engine_tables import EngineTables
+
+        tables = EngineTables.from_table(read_albedo_table(args.source))
+    else:
+        tables = engine_tables(args.engine, epsilon=args.epsilon, delta=args.delta, seed=args.seed, bound=args.bound,
+                               progress=False if args.quiet else None, checkpoint=args.checkpoint)
     print(tables.statement())
     print(f"rays {tables.rays:,}; {tables.seconds:g} s")
     for path in args.out:

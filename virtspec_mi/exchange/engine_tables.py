@@ -79,6 +79,22 @@ class EngineTables:
     table: Any
     channels: dict[str, str]
 
+    @classmethod
+    def from_table(cls, table: Any) -> "EngineTables":
+        """
+        An :class:`~virtspec_mi.exchange.albedo.AlbedoTable` read back (``.nc``) as the
+        engine's table it was made as (``ValueError`` when it is not one: another grid,
+        model or Fresnel mode).
+        """
+
+        fresnel, channels = ENGINE_CHANNELS.get(getattr(table, "engine", ""), (None, {}))
+        if fresnel is None or table.model != "conductor" or table.bsdf.get("fresnel") != fresnel \
+                or any(q not in table.quantities for q in channels.values()):
+            raise ValueError(f"the table (engine {getattr(table, 'engine', None)!r}, fresnel "
+                             f"{getattr(table, 'bsdf', {}).get('fresnel')!r}) is not an engine table made by "
+                             "engine_tables (cycles: fresnel 'one'; filament, unreal: 'split' with parts)")
+        return cls(table.engine, table, dict(channels))
+
     @property
     def delta(self) -> float:
         return self.table.delta
@@ -128,14 +144,18 @@ class EngineTables:
         The drop-in file by the engine: ``cycles`` ``.h``/``.hpp``; ``filament`` ``.inc``
         (``cloth``: a 128 × 128 third channel to carry along, uncertified); ``unreal``
         ``.raw`` or ``.png``. A ``PATH.json`` sidecar holds the provenance and certificate
-        (the header, the ``.inc`` comments and the PNG's text chunk hold them too).
+        (the header, the ``.inc`` comments and the PNG's text chunk hold them too). ``.nc``:
+        the certified table itself, every count (:meth:`from_table` reads it back).
         """
 
         path = Path(path)
         suffix = path.suffix.lower()
         allowed = {"cycles": (".h", ".hpp"), "filament": (".inc",), "unreal": (".raw", ".png")}[self.engine]
+        if suffix == ".nc":  # the certified table itself (read it back with EngineTables.from_table)
+            return self.table.write(path)
         if suffix not in allowed:
-            raise ValueError(f"path for engine {self.engine!r} must end in {' or '.join(allowed)} (got {path.name!r})")
+            raise ValueError(f"path for engine {self.engine!r} must end in {' or '.join(allowed)}, or .nc for the "
+                             f"certified table (got {path.name!r})")
         if self.engine == "cycles":
             self.table.write(path)
         elif self.engine == "filament":
@@ -197,7 +217,7 @@ def engine_layout(engine: str) -> dict[str, tuple[int, ...]]:
 def write_filament_inc(path: str | os.PathLike, x: np.ndarray, y: np.ndarray, comment: list[str] | None = None,
                        cloth: np.ndarray | None = None) -> Path:
     """
-    ``dfg.inc`` as ``cmgen`` writes it: half floats ``0x%04x, `` per channel, four texels
+    ``dfg.inc`` as ``cmgen`` writes it: half floats (``0x%04x,`` per channel value), four texels
     a line, rows in GL order (the last row of the [roughness][μ] table first). ``x``,
     ``y`` (and ``cloth``) are 128 × 128 in the table's order (roughest row first).
     """

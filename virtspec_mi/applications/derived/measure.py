@@ -66,7 +66,7 @@ REFINE_ABOVE: float = 50.0
 REFINE_SHARE: float = 0.02
 """The second pilot's rays, as a share of the rays first planned (laid out as they are)."""
 
-REFINED_MARGIN: float = 0.92
+REFINED_MARGIN: float = 0.95
 """The share of the tolerance sized for after the second pilot (:data:`~.targets.MARGIN` after the first)."""
 
 REFINE_SEED_MASK: int = 0x2C1B3C6D

@@ -171,7 +171,8 @@ def fit(measured: Any, specimen: Any, parameters: Mapping[str, Any], *, quantiti
         measurement_uncertainty: Any = None, wavelengths: Any = None, loss: str = "chi2", delta: float = 0.05,
         mu_fraction: float = 0.5, forward_mu: float | None = None, table: str | os.PathLike | None = None,
         table_points: int | None = None, evaluations: Sequence[int] | None = None, profile_points: int = 5,
-        confirm: bool = True, seed: int = 0, directory: str | os.PathLike | None = None, defines: dict[str, Any] | None = None,
+        confirm: bool = True, seed: int = 0, directory: str | os.PathLike | None = None,
+        defines: dict[str, Any] | None = None,
         workers: Any = None, progress: bool | None = None, **settings: Any) -> FitResult:
     """
     Fit the free ``parameters`` of ``specimen`` to a measured spectrum (see the module docstring).
@@ -351,7 +352,8 @@ def _profile(forward: Forward, problem: FitProblem, estimate: Reading, i: int, t
                          key=lambda v: abs(v - centre))
         if not outside:
             continue
-        inside_values = [v for v, s in scanned.items() if s <= 1.0 and 0 <= (v - centre) * side < abs(outside[0] - centre)]
+        reach = abs(outside[0] - centre)
+        inside_values = [v for v, s in scanned.items() if s <= 1.0 and 0 <= (v - centre) * side < reach]
         good = max(inside_values, key=lambda v: abs(v - centre), default=centre)
         bad = outside[0]
         for _ in range(PROFILE_BISECTIONS):
@@ -383,6 +385,7 @@ def _result(problem: FitProblem, forward: Forward, estimate: Reading, loss: str,
         measured=problem.measured, uncertainty=problem.uncertainty, fitted=estimate.predicted,
         fitted_tolerance=estimate.tolerance, candidate_values=values, candidate_mu=np.array([r.mu for r in readings]),
         candidate_statistic=statistic, candidate_loss=np.array([measure_loss(r, problem) for r in readings]),
-        candidate_stage=tuple(r.stage for r in readings), candidate_consistent=consistent, rays=int(sum(r.rays for r in readings)),
+        candidate_stage=tuple(r.stage for r in readings), candidate_consistent=consistent,
+        rays=int(sum(r.rays for r in readings)),
         traced_rays=forward.traced_rays, seconds=time.perf_counter() - started, specimen=describe(problem),
         seed=int(seed), reading_delta=forward.reading_delta)

@@ -63,7 +63,8 @@ def main() -> None:
     print(f"measured spectrum (mu 0.004): {measuring:.1f} s")
     print(result.summary())
     for i, name in enumerate(result.names):
-        print(f"  truth {name} = {TRUTH[name]:g}: {'inside' if result.intervals[i, 0] <= TRUTH[name] <= result.intervals[i, 1] else 'OUTSIDE'} "
+        low, high = result.intervals[i]
+        print(f"  truth {name} = {TRUTH[name]:g}: {'inside' if low <= TRUTH[name] <= high else 'OUTSIDE'} "
               f"the interval; estimate error {result.estimate[i] - TRUTH[name]:+.3g}")
     print(f"fit wall time {seconds:.1f} s, CPU time {cpu:.1f} s (both threads; on 2 idle cores the wall time is "
           f"about CPU / 2 = {cpu / 2:.1f} s); forward error at the optimum {result.forward_tolerance:.4f}; "

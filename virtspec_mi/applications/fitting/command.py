@@ -22,7 +22,8 @@ EXAMPLES: str = (
     "examples:\n"
     "  virtspec fit leaf.csv --specimen prospect_d --free Cab=10:80 --free Cm=0.002:0.02 --quantity both\n"
     "  virtspec fit leaf_R.csv --transmittance leaf_T.csv --specimen abm_b --free chlorophyll_a=5:40 \\\n"
-    "      --free mesophyll_fraction=0.3:0.9 --theta-i 8 --beam collimated --directory fit-work --out fit.nc --plot fit.png"
+    "      --free mesophyll_fraction=0.3:0.9 --theta-i 8 --beam collimated --directory fit-work \\\n"
+    "      --out fit.nc --plot fit.png"
 )
 
 
@@ -49,7 +50,8 @@ def add_fit_command(commands: Any) -> argparse.ArgumentParser:
     parser.add_argument("measured", help="measured spectrum: a wavelength,value,uncertainty CSV (or a colour-science "
                                          "CSV with uncertainty columns), a NetCDF file or a result file")
     parser.add_argument("--specimen", required=True,
-                        help="a BSDF plugin (abm_b, abm_u, prospect_d, turbid_slab ...), a shipped scene or an XML scene")
+                        help="a BSDF plugin (abm_b, abm_u, prospect_d, turbid_slab ...), a shipped scene or an "
+                             "XML scene")
     parser.add_argument("--free", type=_pair, action="append", required=True, metavar="NAME=LOWEST:HIGHEST",
                         help="a free parameter and its bounds (repeat for several)")
     parser.add_argument("--quantity", choices=("reflectance", "transmittance", "both"), default="reflectance",

@@ -21,8 +21,9 @@ on common random numbers across candidates. The fit goes
 3. **profiles**: along each free parameter through the estimate (the others held), at μ*:
    ``profile_points`` over the bounds, then each end of the consistent stretch bisected
    :data:`PROFILE_BISECTIONS` times;
-4. **confirmation**: every candidate consistent at a coarser tolerance is read again at μ*
-   and judged by that reading (``confirm``).
+4. **confirmation**: a candidate that makes an end of an interval while judged only at a
+   coarser tolerance (the table's, an early stage's) is read again at μ* and judged by that
+   reading, until every end is judged at μ* (``confirm``).
 
 **The confidence set.** A candidate θ is *consistent* with the measurement when its
 certified spectrum F̂(θ) lies within the combined tolerance at every fitted point:
@@ -171,7 +172,8 @@ def fit(measured: Any, specimen: Any, parameters: Mapping[str, Any], *, quantiti
         measurement_uncertainty: Any = None, wavelengths: Any = None, loss: str = "chi2", delta: float = 0.05,
         mu_fraction: float = 0.5, forward_mu: float | None = None, table: str | os.PathLike | None = None,
         table_points: int | None = None, evaluations: Sequence[int] | None = None, profile_points: int = 5,
-        confirm: bool = True, seed: int = 0, directory: str | os.PathLike | None = None, defines: dict[str, Any] | None = None,
+        confirm: bool = True, seed: int = 0, directory: str | os.PathLike | None = None,
+        defines: dict[str, Any] | None = None,
         workers: Any = None, progress: bool | None = None, **settings: Any) -> FitResult:
     """
     Fit the free ``parameters`` of ``specimen`` to a measured spectrum (see the module docstring).
@@ -218,9 +220,9 @@ def fit(measured: Any, specimen: Any, parameters: Mapping[str, Any], *, quantiti
     profile_points
         Points of each parameter's profile at μ* (0: none).
     confirm
-        Read every candidate found consistent at a coarser tolerance (the table's, an early
-        stage's) again at μ*, and judge it by that reading (default ``True``; ``False`` keeps
-        the coarse verdicts: still a valid, wider confidence set).
+        Read the candidates that make the intervals' ends while judged only at a coarser
+        tolerance again at μ*, and judge them by that reading (default ``True``; ``False``
+        keeps the coarse verdicts: still a valid, wider confidence set).
     seed
         The seed of every forward reading (common random numbers).
     directory
@@ -275,11 +277,8 @@ def fit(measured: Any, specimen: Any, parameters: Mapping[str, Any], *, quantiti
                 count_read = _profile(forward, problem, estimate, i, target, profile_points)
                 note(progress, f"fit: profile of {name} ({count_read} points at mu = {target:g})")
         if confirm:
-            coarse = [r for r in list(forward.readings) if r.mu > target and consistency(r, problem) <= 1.0]
-            for reading in coarse:
-                forward.reading(reading.values, target, "confirm")
-            note(progress, f"fit: {len(coarse)} candidates consistent at a coarser tolerance read again at mu = "
-                           f"{target:g}")
+            confirmed = _confirm_ends(forward, problem, target)
+            note(progress, f"fit: {confirmed} candidates at the confidence set's ends read again at mu = {target:g}")
     finally:
         keys = known_parameters(problem.scene)
         apply_point(_Holder(problem.scene), [keys.get(k, k) for k in problem.keys], problem.start)
@@ -327,6 +326,37 @@ def _refine(forward: Forward, problem: FitProblem, best: Reading, target: float,
     return final
 
 
+def _confirm_ends(forward: Forward, problem: FitProblem, target: float) -> int:
+    """
+    Read again at ``target`` every candidate that makes an end of an interval while judged
+    only at a coarser tolerance, until every end is a candidate judged at ``target``.
+    Returns the readings taken.
+    """
+
+    taken = 0
+    while True:
+        readings = forward.readings
+        values = np.array([r.values for r in readings])
+        consistent = verdicts(readings, np.array([consistency(r, problem) for r in readings]))
+        if not consistent.any():
+            return taken
+        finest: dict[tuple, float] = {}
+        for r in readings:
+            key = tuple(r.values.tolist())
+            finest[key] = min(finest.get(key, np.inf), r.mu)
+        ends = []
+        for i in range(values.shape[1]):
+            chosen = np.flatnonzero(consistent)
+            for j in (chosen[np.argmin(values[chosen, i])], chosen[np.argmax(values[chosen, i])]):
+                if finest[tuple(values[j].tolist())] > target:
+                    ends.append(j)
+        if not ends:
+            return taken
+        for j in dict.fromkeys(ends):
+            forward.reading(values[j], target, "confirm")
+            taken += 1
+
+
 def _profile(forward: Forward, problem: FitProblem, estimate: Reading, i: int, target: float, points: int) -> int:
     """
     The test statistic along parameter ``i`` through the estimate (the others held): ``points``
@@ -351,7 +381,8 @@ def _profile(forward: Forward, problem: FitProblem, estimate: Reading, i: int, t
                          key=lambda v: abs(v - centre))
         if not outside:
             continue
-        inside_values = [v for v, s in scanned.items() if s <= 1.0 and 0 <= (v - centre) * side < abs(outside[0] - centre)]
+        reach = abs(outside[0] - centre)
+        inside_values = [v for v, s in scanned.items() if s <= 1.0 and 0 <= (v - centre) * side < reach]
         good = max(inside_values, key=lambda v: abs(v - centre), default=centre)
         bad = outside[0]
         for _ in range(PROFILE_BISECTIONS):
@@ -383,6 +414,7 @@ def _result(problem: FitProblem, forward: Forward, estimate: Reading, loss: str,
         measured=problem.measured, uncertainty=problem.uncertainty, fitted=estimate.predicted,
         fitted_tolerance=estimate.tolerance, candidate_values=values, candidate_mu=np.array([r.mu for r in readings]),
         candidate_statistic=statistic, candidate_loss=np.array([measure_loss(r, problem) for r in readings]),
-        candidate_stage=tuple(r.stage for r in readings), candidate_consistent=consistent, rays=int(sum(r.rays for r in readings)),
+        candidate_stage=tuple(r.stage for r in readings), candidate_consistent=consistent,
+        rays=int(sum(r.rays for r in readings)),
         traced_rays=forward.traced_rays, seconds=time.perf_counter() - started, specimen=describe(problem),
         seed=int(seed), reading_delta=forward.reading_delta)

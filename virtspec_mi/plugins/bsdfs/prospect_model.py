@@ -197,7 +197,8 @@ def tav(alpha: float, n: Any) -> np.ndarray:
     tp1 = -2 * n2 * (b - a) / np_ ** 2
     tp2 = -2 * n2 * np_ * np.log(b / a) / nm ** 2
     tp3 = n2 * (1 / b - 1 / a) / 2
-    tp4 = 16 * n2 ** 2 * (n2 ** 2 + 1) * np.log((2 * np_ * b - nm ** 2) / (2 * np_ * a - nm ** 2)) / (np_ ** 3 * nm ** 2)
+    tp4 = (16 * n2 ** 2 * (n2 ** 2 + 1) * np.log((2 * np_ * b - nm ** 2) / (2 * np_ * a - nm ** 2))
+           / (np_ ** 3 * nm ** 2))
     tp5 = 16 * n2 ** 3 * (1 / (2 * np_ * b - nm ** 2) - 1 / (2 * np_ * a - nm ** 2)) / np_ ** 3
     return (ts + tp1 + tp2 + tp3 + tp4 + tp5) / (2 * sa * sa)
 
@@ -207,7 +208,8 @@ def check_prospect_parameters(values: dict[str, Any]) -> dict[str, np.ndarray]:
 
     unknown = sorted(set(values) - set(PROSPECT_PARAMETERS))
     if unknown:
-        raise ValueError(f"PROSPECT-D has no parameter {unknown[0]!r} (its parameters: {', '.join(PROSPECT_PARAMETERS)})")
+        raise ValueError(f"PROSPECT-D has no parameter {unknown[0]!r} "
+                         f"(its parameters: {', '.join(PROSPECT_PARAMETERS)})")
     checked = {}
     for name, (default, low, high, unit, meaning) in PROSPECT_PARAMETERS.items():
         value = np.asarray(values.get(name, default), dtype=np.float64)

@@ -2,7 +2,9 @@
 The package anyone can install: the built wheel and sdist hold every subpackage, the
 plugins, the shipped scenes and the leaf data with its licence; the wheel installed with
 its dependencies into a fresh virtual environment outside the source tree (no editable
-finder, nothing beside it) takes a leaf reading, a sweep and runs the command line.
+finder, nothing beside it) takes a leaf reading, a sweep, runs the command line and runs
+the quick start page's commands (``docs/guide/quickstart.md``) from a folder of its own;
+the wheel's metadata holds the project's licence and the leaf data's.
 """
 
 from __future__ import annotations
@@ -15,6 +17,8 @@ import zipfile
 from pathlib import Path
 
 import pytest
+
+import code_blocks
 
 ROOT = Path(__file__).resolve().parents[1]
 PACKAGE = ROOT / "virtspec_mi"
@@ -77,3 +81,17 @@ def test_the_installed_wheel_measures_a_leaf_sweeps_and_runs_the_cli(built, tmp_
         assert run.returncode == 0, run.stderr
     assert "soybean_abmb" in subprocess.run([str(virtspec), "scenes"], cwd=away, env=env, capture_output=True,
                                             text=True).stdout
+    # the quick start's commands, as a newcomer runs them: from a folder of their own, the venv's bin on PATH
+    quickstart = ROOT / "docs" / "guide" / "quickstart.md"
+    newcomer = tmp_path / "newcomer"
+    newcomer.mkdir()
+    env["PATH"] = f"{venv / 'bin'}{os.pathsep}{env['PATH']}"
+    commands = code_blocks.shell_commands(quickstart)
+    assert any(c.startswith("virtspec measure diamond_conical") for c in commands), commands
+    for command in commands:
+        run = subprocess.run(["bash", "-c", command], cwd=newcomer, env=env, capture_output=True, text=True)
+        assert run.returncode == 0, f"{command}\n{run.stderr[-2000:]}"
+    for source in code_blocks.blocks(quickstart, "python"):
+        run = subprocess.run([str(python), "-c", source], cwd=newcomer, env=env, capture_output=True, text=True)
+        assert run.returncode == 0, f"{source}\n{run.stderr[-2000:]}"
+    assert {"leaf.png", "my_specimen.xml", "gold.nc", "gold.csv"} <= {p.name for p in newcomer.iterdir()}

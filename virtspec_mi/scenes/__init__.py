@@ -75,7 +75,8 @@ def listing() -> str:
     """One line per shipped scene: its name, its file and what it holds (``virtspec scenes``)."""
 
     width = max(len(n) for n in names())
-    return "\n".join(f"{name:<{width}}  {describe(name)}\n{'':<{width}}  {path(name)}" for name in names())
+    return "\n".join(f"{name:<{width}}  {describe(name)}\n{'':<{width}}  {path(name)}"
+                     for name in names())
 
 
 def resolve(scene: Any) -> Any:

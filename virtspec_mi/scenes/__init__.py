@@ -31,7 +31,8 @@ from pathlib import Path
 from typing import Any
 
 __all__ = [
-    "FOLDER", "names", "path", "describe", "catalogue", "listing", "resolve", "hint", "copy", "include_folder", "answer",
+    "FOLDER", "names", "path", "describe", "catalogue", "listing", "resolve", "hint", "copy", "include_folder",
+    "answer",
 ]
 
 FOLDER: Path = Path(__file__).resolve().parent

@@ -2,7 +2,7 @@
 Speed versus error of the four ray budgets (issue 5).
 
 For each bound (hoeffding, chebyshev, exact, two-stage) and each specimen of exactly
-known reflectance rho, take K independent readings in one batched take_readings call
+known reflectance rho, take K independent readings in one batched trace_readings call
 (virtspec_mi.validation.coverage) at mu = 0.005, delta = 0.01 and report: rays per
 reading (behind the estimate, and spent, pilot included), seconds, |error| against
 rho, the observed miss rate |m/N - rho| >= mu with its 95 % Clopper-Pearson interval,
@@ -127,7 +127,7 @@ def main(argv: list[str] | None = None) -> int:
     ]
     footer = [
         f"- command: benchmarks/speed_vs_error.py {' '.join(argv if argv is not None else sys.argv[1:])}".rstrip(),
-        f"- mu = {mu:g}, delta = {delta:g}, K = {k} readings per cell (one take_readings call each), seed {args.seed}",
+        f"- mu = {mu:g}, delta = {delta:g}, K = {k} readings per cell (one trace_readings call each), seed {args.seed}",
         f"- date: {started}; machine: {machine()}",
         f"- load average (1 min): {load:.2f} before the run, {os.getloadavg()[0]:.2f} after",
     ]

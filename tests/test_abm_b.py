@@ -7,7 +7,7 @@ import pytest
 
 import virtspec_mi as vm
 from virtspec_mi.engine.bench import SceneError
-from virtspec_mi.engine.readings import take_readings
+from plans import take_readings
 from abm_reference import SOYBEAN, SOYBEAN_RAYS, SOYBEAN_WAVELENGTHS, mismatches
 
 ANGLES = (0.0, 8.0, 45.0, 60.0)

@@ -26,8 +26,8 @@ def test_a_gloss_reading_by_name_counts_as_the_engines_own(mirror):
     meter = INSTRUMENTS["gloss"]
     own = take(meter(), vm.find_bench(mirror), vm.Settings(rays=20_000, wavelengths=[450, 650]), meter.options(cone=3),
                theta_i=[60])
-    assert np.array_equal(reading.glossy, own.glossy) and np.array_equal(reading.result.reflected, own.result.reflected)
-    assert reading.result.source == {"scene": "scene dict, specimen RoughConductor", "defines": {}}
+    assert np.array_equal(reading.glossy, own.glossy) and np.array_equal(reading.reflected, own.reflected)
+    assert reading.source == {"scene": "scene dict, specimen RoughConductor", "defines": {}}
 
 
 def test_the_goniophotometer_by_name_is_gonio(mirror):
@@ -50,11 +50,19 @@ def test_a_gloss_reading_on_two_workers_counts_as_in_process(mirror):
                           vm.take("gloss", mirror, **options).glossy)
 
 
+def test_a_gloss_reading_is_a_result_kind_with_files(mirror, tmp_path):
+    reading = vm.take("gloss", mirror, theta_i=60, cone=3, rays=4000, out=tmp_path / "gloss.nc")
+    back = vm.read_result(tmp_path / "gloss.nc")
+    assert type(back) is type(reading) and back.cone == 3
+    assert np.array_equal(back.glossy, reading.glossy) and np.array_equal(back.reflected, reading.reflected)
+    assert np.all(back.glossy <= back.reflected)
+
+
 def test_errors_name_the_instrument_the_option_and_the_file(mirror, tmp_path):
     with pytest.raises(ValueError, match="instrument must be one of hemispherical, goniophotometer, sphere, gloss"):
         vm.take("lamp", mirror)
-    with pytest.raises(ValueError, match=r"out: a gloss reading \(GlossResult\) has no file format"):
-        vm.take("gloss", mirror, out=tmp_path / "gloss.nc")
+    with pytest.raises(ValueError, match=r"out must end in one of"):
+        vm.take("gloss", mirror, out=tmp_path / "gloss.txt")
     with pytest.raises(TypeError, match="take\\(\\) got unexpected keyword argument\\(s\\) bins; .* the gloss meter "
                                         "options are cone"):
         vm.take("gloss", mirror, bins=3)

@@ -11,7 +11,8 @@ import pytest
 import virtspec_mi as vm
 from virtspec_mi.scene import find_bench
 from virtspec_mi.settings import Settings
-from virtspec_mi.engine.readings import shares_wavelengths, take_readings
+from plans import take_readings
+from virtspec_mi.engine.readings import shares_wavelengths
 
 WORD = 2**32
 

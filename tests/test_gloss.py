@@ -49,11 +49,11 @@ def test_a_smooth_dielectric_reads_its_fresnel_reflectance_within_the_certificat
     meter = INSTRUMENTS["gloss"]
     reading = take(meter(), glass, Settings(theta_i=theta, beam="collimated", seed=seed), meter.options(cone=1))
     assert isinstance(reading, meter.result)
-    assert np.array_equal(reading.glossy, reading.result.reflected)  # every reflected ray is in the cone
+    assert np.array_equal(reading.glossy, reading.reflected)  # every reflected ray is in the cone
     expected = fresnel(theta, 1.5)
     mu = reading.certified_mu[0, 0]
     assert mu <= 0.005 and abs(reading.gloss[0, 0] - expected) < mu
-    low, high = reading.interval[0, 0]
+    low, high = reading.gloss_interval[0, 0]
     assert low <= expected <= high
     assert "NOT CERTIFIED" not in reading.summary()
 
@@ -61,17 +61,17 @@ def test_a_smooth_dielectric_reads_its_fresnel_reflectance_within_the_certificat
 def test_spread_directions_reach_the_receptor_only_in_part(mi, glass):
     meter = INSTRUMENTS["gloss"]
     conical = take(meter(), glass, Settings(theta_i=60, rays=20_000), meter.options(cone=2))
-    assert 0 < conical.glossy[0, 0] < conical.result.reflected[0, 0]  # a conical beam spreads the mirror directions
+    assert 0 < conical.glossy[0, 0] < conical.reflected[0, 0]  # a conical beam spreads the mirror directions
     rough = vm.find_bench(vm.instrument_scene({"type": "roughdielectric", "alpha": 0.2, "int_ior": 1.5}))
     wide = take(meter(), rough, Settings(theta_i=60, beam="collimated", rays=20_000, seed=5), meter.options(cone=5))
-    assert 0 < wide.glossy[0, 0] < wide.result.reflected[0, 0]
+    assert 0 < wide.glossy[0, 0] < wide.reflected[0, 0]
 
 
 def test_two_stage_sizes_the_gloss_fraction_from_its_pilot(glass):
     meter = INSTRUMENTS["gloss"]
     reading = take(meter(), glass, Settings(theta_i=60, beam="collimated", bound="two-stage", mu=0.01, seed=4),
                    meter.options(cone=1))
-    assert reading.result.pilot is not None and reading.result.pilot.rays[0, 0] == 1000  # ceil(10/mu)
+    assert reading.pilot is not None and reading.pilot.rays[0, 0] == 1000  # ceil(10/mu)
     assert reading.certified_mu[0, 0] == pytest.approx(0.01)
     assert abs(reading.gloss[0, 0] - fresnel(60.0, 1.5)) < 0.01
 

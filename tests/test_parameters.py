@@ -17,7 +17,8 @@ import virtspec_mi as vm
 from virtspec_mi.engine.checkpoint import CheckpointError
 from virtspec_mi.cli import main
 from virtspec_mi.kernel.counts import Counts
-from virtspec_mi.engine.readings import take_keyed_readings
+from plans import hemispherical_plan
+from virtspec_mi.engine.readings import take_keyed_readings, trace_readings
 
 THICKNESS, CHLOROPHYLL = "specimen.thickness", "specimen.chlorophyll_a"
 SWEEP = dict(theta_i=8, wavelengths=[550, 800], rays=1500, seed=4, beam="collimated")
@@ -123,7 +124,9 @@ def test_a_reading_equals_the_scene_loaded_with_that_value_under_the_same_key(mi
                                                          "chlorophyll_a": 2.0 + 2 * i_c}))
         point = i_t * 3 + i_c
         keys = np.arange(point * n_lam, (point + 1) * n_lam)
-        counts, _ = take_keyed_readings(loaded, settings, [8.0], keys)
+        plan = hemispherical_plan(loaded, settings, [8.0])  # no parameters: reading k of the grid, key k
+        readings = [(float(plan.wavelengths[k % n_lam]), 8.0, settings.phi_i) for k in keys]
+        counts = trace_readings(loaded, plan, 0, readings, offsets=keys * plan.stride).counts
         _same_counts(counts, leaf_grid.counts.map(lambda v: v[:, 0, i_t, i_c]))
 
 
@@ -151,7 +154,8 @@ def test_counts_do_not_depend_on_how_the_sweep_is_split(soybean, leaf_grid):
 
     original = current_values(instrument, space.keys)
     try:
-        counts, pilot = take_keyed_readings(instrument, settings, [8.0], block, space)
+        tally = take_keyed_readings(instrument, hemispherical_plan(instrument, settings, [8.0], space), block)
+        counts, pilot = tally.counts, tally.pilot
     finally:  # take_keyed_readings leaves the last point's values: the caller restores them
         apply_point(instrument, space.keys, original)
     assert pilot is None
@@ -402,7 +406,8 @@ def test_a_parameter_space_survives_pickling_as_a_worker_receives_it(mi, leaf_da
     space = pickle.loads(pickle.dumps(parameter_space(here, GRID)))
     settings = vm.Settings(**{k: v for k, v in SWEEP.items() if k != "theta_i"}, theta_i=8)
     block = np.array([5, 6, 7])
-    counts, _ = take_keyed_readings(vm.find_bench(scene), settings, [8.0], block, space)
+    bench = vm.find_bench(scene)
+    counts = take_keyed_readings(bench, hemispherical_plan(bench, settings, [8.0], space), block).counts
     whole = vm.sweep(scene, parameters=GRID, **SWEEP)
     flat = whole.counts.map(lambda v: np.moveaxis(v, (0, 1), (-1, -2)).reshape(-1))
     _same_counts(counts, flat.map(lambda v: v[block]))

@@ -56,8 +56,12 @@ def test_every_kind_round_trips_exactly_in_every_format(results, tmp_path, name,
 
 
 def test_the_format_tags_of_the_kinds():
+    from virtspec_mi.instruments import INSTRUMENTS  # every instrument's kind registers when its class is defined
+
     assert {word: kind.FORMAT for word, kind in KINDS.items()} == {
-        "result": "virtspec-mi result 1", "gonio": "virtspec-mi gonio 1", "sphere": "virtspec-mi sphere 1"}
+        "result": "virtspec-mi result 1", "gonio": "virtspec-mi gonio 1", "sphere": "virtspec-mi sphere 1",
+        "gloss": "virtspec-mi gloss 1"}
+    assert {instrument.result for instrument in INSTRUMENTS.values()} <= set(KINDS.values())
 
 
 @pytest.mark.parametrize("suffix", [".nc", ".csv", ".json"])

@@ -78,7 +78,7 @@ def test_the_help_examples_give_shipped_scenes_by_name():
 
     parser = build_parser()
     for row in MEASURING.values():
-        for example in row.examples:
+        for example in row.command.examples:
             args = parser.parse_args(example.split()[1:])
             assert args.scene in scenes.names(), example
 

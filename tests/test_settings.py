@@ -107,7 +107,7 @@ def test_every_setting_is_an_api_keyword_an_xml_parameter_and_a_cli_flag(mi):
         parameters = inspect.signature(function).parameters
         assert set(SETTING_NAMES) <= set(parameters), function.__name__
     documented = re.findall(r"^(\w+) : ", spectrophotometer.__doc__, flags=re.M)
-    assert documented == list(SETTING_NAMES)
+    assert documented == ["instrument", *SETTING_NAMES]  # the instrument, then every setting
     for command in ("measure", "sweep"):
         text = subprocess.run([sys.executable, "-m", "virtspec_mi.cli", command, "--help"],
                               capture_output=True, text=True).stdout

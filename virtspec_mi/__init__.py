@@ -67,7 +67,7 @@ _LAZY = {
     "gonio": "virtspec_mi.api",
     "read_gonio": "virtspec_mi.api",
     "GonioResult": "virtspec_mi.results.goniophotometer",
-    "fluctuation": "virtspec_mi.api",
+    "fluctuation": "virtspec_mi.results.hemispherical",
     "sphere_measure": "virtspec_mi.api",
     "take": "virtspec_mi.api",
     "Sphere": "virtspec_mi.geometry.sphere",

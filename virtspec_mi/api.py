@@ -56,7 +56,7 @@ from virtspec_mi.instruments import base as instruments_base
 from virtspec_mi.instruments.goniophotometer import GonioOptions
 from virtspec_mi.instruments.sphere import SphereOptions
 from virtspec_mi.results.goniophotometer import GonioResult
-from virtspec_mi.results.hemispherical import Result
+from virtspec_mi.results.hemispherical import Result, fluctuation
 from virtspec_mi.results.io import check_output
 from virtspec_mi.results.sphere import SphereResult
 from virtspec_mi.results.zarr import SUFFIX as ZARR_SUFFIX
@@ -371,38 +371,13 @@ def read_result(path: str | os.PathLike) -> Any:
     """
     The result in a file, whatever its kind — a hemispherical reading or sweep, a
     goniophotometer reading, a sphere reading — by its format tag
-    (:func:`virtspec_mi.results.kinds.read_result`).
+    (:func:`virtspec_mi.results.kinds.read_result`), an instrument's own kind too (the
+    registry is loaded: :data:`virtspec_mi.instruments.INSTRUMENTS`).
     """
 
     from virtspec_mi.results.kinds import read_result as read_any
 
     return read_any(path)
-
-
-def fluctuation(a: Result | np.ndarray, b: Result | np.ndarray, quantity: str = "reflectance") -> float:
-    """
-    Average magnitude of the fluctuations between two sweeps, eq. (24):
-
-        Δ = Σᵢ |ρᵢ^(N_j) − ρᵢ^(N_{j−1})| / n
-
-    over the n readings of the sweeps (all their (wavelength, θi) pairs), for
-    ``quantity`` (reflectance by default). ``a`` and ``b`` are results over the same grid
-    (typically at successive ray densities N_{j−1} and N_j), or arrays of one shape.
-
-    References
-    ----------
-    Baranoski et al. (2001), eq. (24), Fig. 6a.
-    """
-
-    if isinstance(a, Result) and isinstance(b, Result):
-        for name in ("wavelengths", "theta_i"):
-            if not np.array_equal(getattr(a, name), getattr(b, name)):
-                raise ValueError(f"fluctuation needs sweeps over the same {name} (they differ)")
-        a, b = a.quantity(quantity), b.quantity(quantity)
-    a, b = np.asarray(a, dtype=np.float64), np.asarray(b, dtype=np.float64)
-    if a.shape != b.shape or a.size == 0:
-        raise ValueError(f"fluctuation needs two non-empty arrays of one shape (got {a.shape} and {b.shape})")
-    return float(np.mean(np.abs(a - b)))
 
 
 def sphere_measure(scene: Any, *, theta_i: Any = None, parameters: dict[str, Any] | None = None, points: bool = False,
@@ -477,9 +452,6 @@ def take(instrument: str, scene: Any, *, theta_i: Any = None, parameters: dict[s
 
     if not isinstance(instrument, str) or instrument not in INSTRUMENTS:
         raise ValueError(f"instrument must be one of {', '.join(INSTRUMENTS)} (got {instrument!r})")
-    if out is not None and not hasattr(INSTRUMENTS[instrument].result, "write"):
-        raise ValueError(f"out: a {instrument} reading ({INSTRUMENTS[instrument].result.__name__}) has no file "
-                         f"format; take it without out (got out={str(out)!r})")
     return _reading(instrument, "take", f"a {instrument} reading", scene, options, theta_i=theta_i,
                     parameters=parameters, points=points, defines=defines, checkpoint=checkpoint, out=out,
                     progress=progress, workers=workers, task_readings=task_readings)

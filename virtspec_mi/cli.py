@@ -56,13 +56,16 @@ Baranoski et al. (2001), eqs. (23), (24); Figs. 5 and 6.
 from __future__ import annotations
 
 import argparse
+import functools
+import importlib
 import json
 import signal
 import sys
-from pathlib import Path
 import textwrap
+from contextlib import contextmanager
 from dataclasses import dataclass
-from typing import Any, Callable, Sequence
+from pathlib import Path
+from typing import Any, Callable, Iterator, Sequence
 
 __all__ = ["main", "build_parser", "Measuring", "MEASURING", "Flag", "COMMON_FLAGS", "common_flags", "option_flags"]
 
@@ -89,83 +92,57 @@ _EXAMPLES = {
             "  virtspec plot lut.nc --sel specimen.thickness=1.6e-4 --sel theta_i=8",
 }
 
-_SCENE = "Mitsuba XML scene with 'emitter' and 'specimen' disks, or a shipped scene's name (virtspec scenes)"
-
-
 @dataclass(frozen=True)
 class Measuring:
-    """A measuring subcommand: the instrument whose readings it takes and what its help says."""
+    """A measuring subcommand: an instrument of the registry and one of its :class:`~virtspec_mi.instruments.command.Command`."""
 
-    name: str
-    """The subcommand."""
     instrument: str
     """Its instrument's key in :data:`virtspec_mi.instruments.INSTRUMENTS` (the flags of its ``options``)."""
-    summary: str
-    """One line in ``virtspec --help``."""
-    description: str
-    """The head of ``virtspec NAME --help``."""
-    plot: str
-    """What ``--plot`` draws."""
-    examples: tuple[str, ...]
-    """Command lines shown under ``--help`` (each runs as written from the checkout)."""
-    one_reading: bool = False
-    """One θi and one specimen parameter point (``measure``); else a grid of readings."""
+    command: Any
+    """The :class:`~virtspec_mi.instruments.command.Command` the instrument declares."""
+
+    @property
+    def name(self) -> str:
+        """The subcommand."""
+
+        return self.command.name
+
+    @property
+    def plot(self) -> str:
+        """What ``--plot`` draws."""
+
+        return self.command.plot
+
+    @property
+    def one_reading(self) -> bool:
+        return self.command.one_reading
 
 
-MEASURING: dict[str, Measuring] = {row.name: row for row in (
-    Measuring(
-        "measure", "hemispherical", "one certified reading at one theta_i (a spectrum)",
-        "Measure the specimen of a scene at one theta_i: reflectance, transmittance and absorptance per wavelength, "
-        "each with the tolerance its rays guarantee and a Clopper-Pearson interval. Every setting defaults to the "
-        "scene's spectrophotometer integrator, else to the paper's defaults. The readings are keyed as a sweep's "
-        "(virtspec sweep --theta-i THETA gives the same counts): resumable with --out, the same on Dask workers.",
-        "reflectance and transmittance over wavelength, each with the band of its certified tolerance",
-        ("virtspec measure diamond_conical --theta-i 70",
-         "virtspec measure soybean_abmb --wavelengths 400:2500:5 --bound two-stage --json",
-         "virtspec measure soybean_abmb --wavelengths 400:700:10 --param specimen.thickness=2e-4 --plot leaf.png"),
-        one_reading=True),
-    Measuring(
-        "sweep", "hemispherical", "certified readings over theta_i x wavelength (x parameters)",
-        "Measure a grid of readings (wavelength x theta_i, and specimen parameters with --param) at one phi_i, each "
-        "with its own rays and certificate. Without --out (or --json) the readings are printed as a CSV table on "
-        "stdout and the summary goes to stderr.",
-        "the readings against theta_i (one curve per wavelength) or wavelength, with the band of their certified "
-        "tolerance (one parameter point: draw a parameter sweep with virtspec plot FILE --sel NAME=VALUE)",
-        ("virtspec sweep diamond_collimated --theta-i 0:90:1 --out fig5.nc --plot fig5.png",
-         "virtspec sweep diamond_collimated --theta-i 0:90:1 --densities 3 4 5 6",
-         "virtspec sweep soybean_abmb --theta-i 8 --wavelengths 450,550,650 "
-         "--param specimen.thickness=1.2e-4:2e-4:4e-5 --param specimen.chlorophyll_a=2,4 --out lut.nc",
-         "virtspec sweep soybean_abmb -D side=abaxial --theta-i 8",
-         "virtspec sweep soybean_abmb --theta-i 8 --wavelengths 400:2500:5 --workers 2 --out leaf.nc")),
-    Measuring(
-        "gonio", "goniophotometer", "goniophotometer: certified BRDF/BTDF by outgoing direction",
-        "Measure the specimen of a scene as the spectrophotometer does, and bin every escaping ray by its outgoing "
-        "direction (theta_o, phi_o) in the specimen frame: exact counts, fractions and BRDF/BTDF per bin with their "
-        "certificate (DKW for the CDFs, union bound for the bins, Clopper-Pearson intervals for f). Prints R and T "
-        "with their certificate, the bins' certificate and a table with one row per theta_o bin (its centre) and "
-        "one column per reading: the fraction of the incident rays leaving into that theta_o bin, summed over "
-        "phi_o (the reflection rows add up to R, the transmission rows to T; each within 2 x the DKW tolerance of "
-        "the CDF of theta_o); f per bin is in --out and --json.",
-        "polar plots of f in and across the plane of incidence, one curve per theta_i with its certified band; "
-        "several wavelengths: one figure per wavelength, FIG_<nm>nm.png",
-        ("virtspec gonio diamond_collimated --theta-i 30 --theta-o-bins 9 --phi-o-bins 12",
-         "virtspec gonio diamond_collimated --theta-i 0 30 --binning projected --fold-phi "
-         "--out brdf.nc --plot brdf.png",
-         "virtspec gonio soybean_abmb --wavelengths 550 650 --theta-o-bins 9 --phi-o-bins 12 "
-         "--fold-phi --mu 0.02 --plot leaf.png")),
-    Measuring(
-        "sphere", "sphere", "an integrating sphere's readout (sample over standard)",
-        "Simulate an integrating-sphere instrument reading the scene's specimen: the detector fractions with the "
-        "sample and with the reference standard, their certified ratio (the reading), the hemispherical reading of "
-        "the same rays and the instrument error; with --correct also the reading corrected by the sphere theory, "
-        "with its interval. The sphere comes from the scene's integrating_sphere integrator.",
-        "the reading and the hemispherical value of the same rays over wavelength, with their certified bands; "
-        "several theta_i: one figure per angle, FIG_<deg>deg.png",
-        ("virtspec sphere sphere_150mm_8d --specular SCE --rays 20000",
-         "virtspec sphere sphere_150mm_8d --method comparison --wavelengths 400:700:100 --rays 20000 "
-         "--correct --out r.json")),
-)}
-"""The measuring subcommands: each takes the settings' flags, its instrument's and :data:`COMMON_FLAGS`."""
+def measuring() -> dict[str, Measuring]:
+    """
+    The measuring subcommands, generated from the registry: one per
+    :class:`~virtspec_mi.instruments.command.Command` of every instrument
+    (:data:`virtspec_mi.instruments.INSTRUMENTS`, outside instruments included). A name
+    two instruments declare is refused (``ValueError`` naming both).
+    """
+
+    from virtspec_mi.instruments import INSTRUMENTS
+
+    rows: dict[str, Measuring] = {}
+    for name, instrument in INSTRUMENTS.items():
+        for command in instrument.commands:
+            if command.name in rows or command.name in _OTHERS:
+                owner = rows[command.name].instrument if command.name in rows else "virtspec itself"
+                raise ValueError(f"instrument {name!r} declares the subcommand {command.name!r}, which {owner} "
+                                 "already has: give it another name")
+            rows[command.name] = Measuring(name, command)
+    return rows
+
+
+def __getattr__(name: str) -> Any:
+    if name == "MEASURING":  # the table, generated from the registry when first asked for
+        return measuring()
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
 @dataclass(frozen=True)
@@ -215,6 +192,9 @@ COMMON_FLAGS: tuple[Flag, ...] = (
 )
 """The flags every measuring subcommand takes, defined once (:func:`common_flags` adds them)."""
 
+_OTHERS = ("bounds", "colour", "compare", "plot", "albedo-table", "scenes", "llvm")
+"""The subcommands that are not an instrument's (the registry's may not take their names)."""
+
 _SEVERAL = {"theta_i": "parse_theta_i"}
 """Settings a grid subcommand takes as several values, and the parser of :mod:`virtspec_mi.checks` that reads them."""
 
@@ -256,23 +236,10 @@ def build_parser() -> argparse.ArgumentParser:
     bounds.add_argument("--delta", type=float, nargs="+", default=[0.001, 0.01, 0.1],
                         help="failure probabilities (default 0.001 0.01 0.1)")
 
-    measuring = {row.name: command(row.name, row.summary, row.description,
-                                   "examples:\n" + "\n".join(f"  {line}" for line in row.examples))
-                 for row in MEASURING.values()}
-    for row in MEASURING.values():
-        measuring[row.name].add_argument(
-            "scene", help=_SCENE if row.name != "sphere" else
-            "Mitsuba XML scene with an integrating_sphere integrator and 'emitter' and 'specimen' disks")
-        option_flags(measuring[row.name], _settings(), words=_several(row))
-        options = _instrument_options(row)
-        if options is not None:
-            option_flags(measuring[row.name], options)
-        common_flags(measuring[row.name], row)
-    measuring["sweep"].add_argument(
-        "--densities", type=float, nargs="+", metavar="LOG10N",
-        help="sweep at N = 10^d rays for each d; print seconds and the fluctuation of eq. (24)")
-    _gonio_flags(measuring["gonio"])
-    _correction_flags(measuring["sphere"])
+    rows = measuring()
+    for row in rows.values():
+        measuring_flags(command(row.name, row.command.summary, row.command.description,
+                                "examples:\n" + "\n".join(f"  {line}" for line in row.command.examples)), row)
 
     colour = command("colour", "CIE XYZ, L*a*b*, sRGB of a saved spectrum",
                      "Colorimetry (colour-science, ASTM E308) of one quantity of a result file at one theta_i, "
@@ -362,46 +329,23 @@ def common_flags(parser: argparse.ArgumentParser, command: Measuring) -> None:
     for flag in COMMON_FLAGS:
         keywords = dict(flag.keywords, help=flag.keywords["help"].format(plot=command.plot))
         (exclusive if flag.exclusive else group).add_argument(flag.name, **keywords)
+    for figure in command.command.all_figures()[1:]:  # --plot is common; a command's other figures
+        group.add_argument(figure.flag, metavar="FIG", help=f"figure .png or .svg: {figure.help}")
 
 
-def _gonio_flags(parser: argparse.ArgumentParser) -> None:
-    """The goniophotometer's own flags beside its options: the series figure and the Klems matrices."""
+def measuring_flags(parser: argparse.ArgumentParser, row: Measuring) -> None:
+    """
+    Every flag of the measuring subcommand ``row``, generated: its ``SCENE``, one flag per
+    setting, per option of its instrument and per option of the command's own ``flags``
+    (:func:`option_flags`), then the common flags (:func:`common_flags`, its figures among them).
+    """
 
-    group = parser.add_argument_group("goniophotometer figures and Klems matrices")
-    group.add_argument("--plot-series", metavar="FIG",
-                       help="figure .png or .svg: the distribution over theta_i as a series (f in the plane of "
-                            "incidence and the CDF of theta_o, certified bands); several wavelengths: one figure "
-                            "per wavelength")
-    group.add_argument("--klems", metavar="FILE", help="measure the Klems matrices instead (incidence at every patch "
-                       "centre, front and back; --mu is the certified tolerance of every patch fraction) and write "
-                       "WINDOW 6 XML FILE with its NetCDF sidecar FILE.nc")
-    group.add_argument("--klems-basis", choices=("full", "half", "quarter"), default="full",
-                       help="Klems basis of --klems (145, 77 or 41 patches; default full)")
-    group.add_argument("--isotropic", action="store_true",
-                       help="--klems: one reading per ring, rotated onto its other patches (rotation-invariant "
-                            "specimens)")
-
-
-_CORRECTION = {
-    "specular_reflectance": "the specimen's specular (mirror) reflectance at the beam's angle, 0 ... 1 (reflectance "
-                            "readings; default 0: a matte specimen)",
-    "sample_reflectance": "the specimen's reflectance for diffuse light from inside the sphere, 0 ... 1 (required "
-                          "for a transmittance reading; a reflectance reading: default the corrected value itself, "
-                          "a Lambertian specimen)",
-    "collimated_transmittance": "the unscattered part of a transmittance reading, 0 ... 1 (default 0)",
-}
-"""What the sphere theory's correction assumes: :meth:`~virtspec_mi.results.sphere.SphereResult.corrected`."""
-
-
-def _correction_flags(parser: argparse.ArgumentParser) -> None:
-    """``sphere --correct`` and what the correction assumes (each implies ``--correct``)."""
-
-    group = parser.add_argument_group("correction by the sphere theory")
-    group.add_argument("--correct", action="store_true",
-                       help="also print the reading corrected by the sphere theory (the hemispherical value it "
-                            "implies) and its interval, beside the reading (--json: corrected, corrected_interval)")
-    for name, text in _CORRECTION.items():
-        group.add_argument("--" + name.replace("_", "-"), metavar="VALUE", help=f"{text}; implies --correct")
+    parser.add_argument("scene", help=row.command.scene)
+    option_flags(parser, _settings(), words=_several(row))
+    for kind in (_instrument_options(row), row.command.flags):
+        if kind is not None:
+            option_flags(parser, kind)
+    common_flags(parser, row)
 
 
 def _selection_option(parser: argparse.ArgumentParser) -> None:
@@ -417,7 +361,7 @@ def _selected(path: Any, selections: Sequence[str]) -> Any:
 
     import numpy as np
 
-    from virtspec_mi.results.kinds import read_result
+    from virtspec_mi.api import read_result
 
     result = read_result(path)
     labels = {}
@@ -590,9 +534,10 @@ def _command(args: argparse.Namespace, exit_status: Any) -> int:
             from virtspec_mi.llvm import main as llvm_main
 
             return llvm_main([args.action])
-        handlers = {"measure": _measure, "sweep": _sweep, "gonio": _gonio, "sphere": _sphere, "colour": _colour,
-                    "compare": _compare, "plot": _plot, "albedo-table": _albedo_table}
-        return handlers[args.command](args)
+        handlers = {"colour": _colour, "compare": _compare, "plot": _plot, "albedo-table": _albedo_table}
+        if args.command in handlers:
+            return handlers[args.command](args)
+        return _measuring(args, measuring()[args.command])
     except (ValueError, RuntimeError, OSError) as error:
         print(f"virtspec: error: {_rescued(error)}", file=sys.stderr)
         return 1
@@ -641,7 +586,7 @@ def _keywords(args: argparse.Namespace, command: Measuring) -> dict[str, Any]:
         _flagged("--csv-plain", lambda path: check_plain_csv(path, "csv_plain"), plain)
         if out is not None and plain.resolve() == out.resolve():
             raise ValueError(f"--csv-plain: {plain} is also --out (the result file); give the plain CSV another name")
-    figures = {flag: getattr(args, flag.lstrip("-").replace("-", "_"), None) for flag in ("--plot", "--plot-series")}
+    figures = {figure.flag: getattr(args, _dest(figure.flag), None) for figure in command.command.all_figures()}
     for flag, path in figures.items():
         _flagged(flag, check_figure_path, path)
     settings = _given(args, _settings(), several=_several(command))
@@ -762,204 +707,75 @@ def _report(args: argparse.Namespace, result: Any, text: str, figures: Sequence[
     return 0
 
 
-def _measure(args: argparse.Namespace) -> int:
-    """``virtspec measure``: the readings of a sweep at one θi and one parameter point, as one reading."""
+def _dest(flag: str) -> str:
+    """The ``argparse`` destination of a flag: ``--plot-series`` → ``plot_series``."""
 
-    from virtspec_mi.api import sweep
-
-    from virtspec_mi.results.plot import plot_spectra
-
-    result = _run(args, sweep, _keywords(args, MEASURING["measure"]))
-    reading = result.squeeze(*(d for d in result.dims if d != "wavelength"))
-    figures = _drawn(args.plot, lambda path: plot_spectra(reading, path, quantities=("reflectance", "transmittance")))
-    return _report(args, reading, reading.summary(), figures)
+    return flag.lstrip("-").replace("-", "_")
 
 
-def _sweep(args: argparse.Namespace) -> int:
-    """``virtspec sweep``: without ``--out`` (or ``--json``) the CSV table on stdout, the summary on stderr."""
-
-    from virtspec_mi.api import sweep
-    from virtspec_mi.results.io import csv_text
-
-    keywords = _keywords(args, MEASURING["sweep"])
-    if args.densities:
-        return _densities(args, keywords)
-    result = _run(args, sweep, keywords)
-    figures = _drawn(args.plot, result.plot)
-    if keywords["out"] is not None or args.json:
-        return _report(args, result, result.summary(), figures)
-    if not args.quiet:  # the summary on stderr, so that the table can be piped
-        _report(args, result, result.summary(), figures, stream=sys.stderr)
-    elif args.csv_plain:
-        result.write(args.csv_plain, plain=True)
-    print(csv_text(result.to_dataset()), end="")
-    return 0
-
-
-def _densities(args: argparse.Namespace, keywords: dict[str, Any]) -> int:
-    """``--densities``: a sweep per ray density (on one cluster when workers are asked for)."""
-
-    if "rays" in keywords:
-        raise ValueError("--rays and --densities exclude each other (densities set N = 10^d)")
-    if args.json:
-        raise ValueError("--json prints one result and --densities a table of seconds and Delta per density: give "
-                         "one of them")
-    _check_densities(args.densities)
-    if keywords["workers"] is None:
-        return _each_density(args, keywords)
-    from virtspec_mi.scaleout import connect
-
-    with connect(keywords["workers"]) as client:  # one cluster (or connection) for every density
-        return _each_density(args, {**keywords, "workers": client})
-
-
-def _each_density(args: argparse.Namespace, keywords: dict[str, Any]) -> int:
-    """A sweep per ray density, its seconds and the fluctuation Δ against the previous one (eq. 24, Fig. 6)."""
-
-    from virtspec_mi.api import fluctuation, sweep
-    from virtspec_mi.results.plot import plot_densities
-
-    # Fig. 6b: time linear in N. The first sweep compiles the kernel (Dr.Jit caches it for every
-    # N): run it once at the smallest density first, so no density's seconds include compilation.
-    warm_up = sweep(args.scene, rays=int(round(10.0 ** min(args.densities))),
-                    **{**keywords, "out": None, "progress": False})
-    out, results, deltas = keywords["out"], [], [float("nan")]
-    print(f"{'log10 N':>8} {'N':>12} {'seconds':>9} {'Delta (eq. 24)':>15}")
-    for density in args.densities:
-        rays = int(round(10.0 ** density))
-        path = out.with_name(f"{out.stem}_logN{density:g}{out.suffix}") if out is not None else None
-        results.append(_run(args, sweep, {**keywords, "rays": rays, "out": path}))
-        if len(results) > 1:
-            deltas.append(fluctuation(results[-2], results[-1]))
-        delta_text = "" if len(results) == 1 else f"{deltas[-1]:.6f}"
-        print(f"{density:>8g} {rays:>12,} {results[-1].seconds:>9.3f} {delta_text:>15}", flush=True)
-    print(f"(seconds after a warm-up sweep at log10 N = {min(args.densities):g}, {warm_up.seconds:.3f} s, "
-          "which compiled the kernel" + ("; on workers: tracing seconds summed over the workers, not wall time)"
-                                         if keywords["workers"] is not None else ")"))
-    if args.plot:
-        plot_densities(results, args.densities, deltas, args.plot)
-    return 0
-
-
-def _gonio(args: argparse.Namespace) -> int:
-    """``virtspec gonio``: the summary (R and T, the bins' certificate, the per-θo table); a figure per wavelength."""
-
-    from virtspec_mi.api import gonio
-
-    if args.klems:
-        return _klems(args)
-    reading = _run(args, gonio, _keywords(args, MEASURING["gonio"]))
-    figures = (_drawn(args.plot, reading.plot, "wavelength", reading.wavelengths)
-               + _drawn(args.plot_series, reading.plot_series, "wavelength", reading.wavelengths))
-    return _report(args, reading, reading.summary(), figures)
-
-
-def _sphere(args: argparse.Namespace) -> int:
-    """``virtspec sphere``: the summary, and with ``--correct`` the corrected readings beside the readings."""
-
-    import numpy as np
-
-    from virtspec_mi.api import sphere_measure
-    from virtspec_mi.results.base import plain_data
-
-    assumptions = _assumptions(args)  # checked before any tracing
-    result = _run(args, sphere_measure, _keywords(args, MEASURING["sphere"]))
-    text, data = result.summary(), None
-    if assumptions is not None:
-        corrected, interval = _corrected(result, assumptions)
-        text += "\n" + _correction_table(result, corrected, interval, assumptions)
-        data = {**result.as_dict(), "corrected": plain_data(corrected), "corrected_interval": plain_data(interval),
-                "correction": assumptions}
-    angles = np.atleast_1d(result.coords["theta_i"])
-    return _report(args, result, text, _drawn(args.plot, result.plot, "theta_i", angles), data)
-
-
-def _assumptions(args: argparse.Namespace) -> dict[str, float] | None:
+class _Session:
     """
-    What ``sphere --correct`` assumes (the flags of :data:`_CORRECTION` given, each a
-    number in [0, 1]), or ``None`` when no correction is asked for.
+    What a measuring subcommand's hook is given (:class:`virtspec_mi.instruments.command.Session`):
+    the flags checked into API keywords before any scene is loaded, and the services every
+    measuring subcommand shares — take the readings, draw the figures, print the report.
     """
 
-    from virtspec_mi.checks import number
+    def __init__(self, args: argparse.Namespace, row: Measuring) -> None:
+        self.args, self.row, self.command = args, row, row.command
+        self.keywords = _keywords(args, row)
+        kind = row.command.flags
+        self.flags = None if kind is None else kind(**_given(args, kind))
 
-    given = {name: getattr(args, name) for name in _CORRECTION if getattr(args, name) is not None}
-    if not (args.correct or given):
-        return None
-    assumptions = {}
-    for name, text in given.items():
-        try:
-            value = number(name, text)
-            if not 0.0 <= value <= 1.0:
-                raise ValueError(f"{name} must satisfy 0 <= {name} <= 1 (got {text})")
-        except ValueError as error:
-            raise ValueError(f"{_flag(name)}: {error}") from None
-        assumptions[name] = value
-    return assumptions
+    def take(self, **overrides: Any) -> Any:
+        from virtspec_mi import api
 
+        name = self.command.function
+        function = getattr(api, name) if name is not None else functools.partial(api.take, self.row.instrument)
+        return _run(self.args, function, {**self.keywords, **overrides})
 
-def _corrected(result: Any, assumptions: dict[str, float]) -> tuple[Any, Any]:
-    """
-    :meth:`~virtspec_mi.results.sphere.SphereResult.corrected` and
-    :meth:`~virtspec_mi.results.sphere.SphereResult.corrected_interval` of every reading
-    of ``result`` (one spectrum per θi and parameter point), over its reading dims.
-    """
+    def draw(self, result: Any) -> list[Any]:
+        import numpy as np
 
-    import numpy as np
+        paths: list[Any] = []
+        for figure in self.command.all_figures():
+            labels = np.atleast_1d(result.coords[figure.dim]) if figure.dim else ()
+            paths += _drawn(getattr(self.args, _dest(figure.flag), None), getattr(result, figure.method), figure.dim,
+                            labels)
+        return paths
 
-    dims = list(result.reading_dims)
-    other = [d for d in dims if d != "wavelength"]
-    values, interval = np.full(np.shape(result.reading), np.nan), np.full(np.shape(result.reading_interval), np.nan)
-    for index in np.ndindex(*(result.sizes[d] for d in other)):
-        spectrum = result.isel(dict(zip(other, index)))
-        at = tuple(index[other.index(d)] if d in other else slice(None) for d in dims)
-        try:
-            values[at] = spectrum.corrected(**assumptions)
-            interval[at] = spectrum.corrected_interval(**assumptions)
-        except ValueError as error:  # what the sphere theory needs to be told (e.g. a transmittance reading)
-            raise ValueError(f"--correct: {error}") from None
-    return values, interval
+    def report(self, result: Any, text: str, figures: Sequence[Any] = (), data: dict[str, Any] | None = None,
+               stream: Any = None) -> int:
+        return _report(self.args, result, text, figures, data, stream)
 
+    def default(self) -> int:
+        result = self.take()
+        if self.command.one_reading:  # one reading over wavelength: its other labels scalar
+            result = result.squeeze(*(d for d in result.dims if d not in ("wavelength", *result.KIND_DIMS)))
+        return self.report(result, result.summary(), self.draw(result))
 
-def _correction_table(result: Any, corrected: Any, interval: Any, assumptions: dict[str, float]) -> str:
-    """Each reading with its interval, beside the corrected reading with its interval, and the hemispherical value."""
+    @contextmanager
+    def cluster(self) -> Iterator[Any]:
+        workers = self.keywords["workers"]
+        if workers is None:
+            yield None
+            return
+        from virtspec_mi.scaleout import connect
 
-    import numpy as np
-
-    taken = {"specular_reflectance": "0 (matte)", "sample_reflectance": "the corrected value (Lambertian)",
-             "collimated_transmittance": "0"}
-    if result.options["measurement"] == "reflectance":
-        del taken["collimated_transmittance"]
-    else:
-        del taken["specular_reflectance"]
-    taken.update({name: f"{value:g}" for name, value in assumptions.items()})
-    labels = list(result.reading_dims)
-    lines = ["corrected by the sphere theory (" + ", ".join(f"{name} = {value}" for name, value in taken.items())
-             + "; the theory's sphere: flat ports, no baffle): the hemispherical value each reading implies, and",
-             f"the reading interval's image: it holds the corrected expected reading with probability >= "
-             f"{1 - result.delta:g} (the theory's own error is not in it)",
-             " ".join(f"{'lambda/nm' if d == 'wavelength' else d:>10}" for d in labels)
-             + "    reading  [interval]              corrected  [interval]              hemispherical"]
-    reading, bounds = result.reading, result.reading_interval
-    for index in np.ndindex(*(result.sizes[d] for d in labels)):
-        at = " ".join(f"{float(np.atleast_1d(result.coords[d])[k]):>10g}" for d, k in zip(labels, index))
-        lines.append(f"{at}    {reading[index]:.5f}  [{bounds[index][0]:.5f}, {bounds[index][1]:.5f}]    "
-                     f"{corrected[index]:.5f}  [{interval[index][0]:.5f}, {interval[index][1]:.5f}]    "
-                     f"{result.hemispherical[index]:.5f}")
-    return "\n".join(lines)
+        with connect(workers) as client:
+            yield client
 
 
-def _check_densities(densities: Sequence[float]) -> None:
-    """Each log10 N of ``--densities`` must give 1 <= N = 10^d <= 2**32 - 1 rays per reading."""
+def _measuring(args: argparse.Namespace, row: Measuring) -> int:
+    """A measuring subcommand: its hook (:attr:`~virtspec_mi.instruments.command.Command.respond`) or the default."""
 
-    import math
-
-    from virtspec_mi.checks import MAX_RAYS
-
-    highest = math.log10(MAX_RAYS)
-    for density in densities:
-        if not 0.0 <= density <= highest:
-            raise ValueError(f"densities must satisfy 0 <= log10 N <= {highest:.2f} (N = 10^d rays per reading, "
-                             f"at most 2**32 - 1; got {density:g})")
+    session = _Session(args, row)
+    respond = row.command.respond
+    if respond is None:
+        return session.default()
+    if isinstance(respond, str):  # "module:function": a hook of a layer above the instruments
+        module, _, name = respond.partition(":")
+        respond = getattr(importlib.import_module(module), name)
+    return respond(session)
 
 
 def _colour(args: argparse.Namespace) -> int:
@@ -1041,11 +857,9 @@ def _plot(args: argparse.Namespace) -> int:
     from dataclasses import replace
     from pathlib import Path
 
-    import numpy as np
 
     from virtspec_mi.checks import parse_theta_i, parse_wavelengths
     from virtspec_mi.comparison import compare
-    from virtspec_mi.results.goniophotometer import GonioResult
     from virtspec_mi.results.plot import check_figure_path, select
 
     path = Path(args.file)
@@ -1060,10 +874,9 @@ def _plot(args: argparse.Namespace) -> int:
             result = select(result, wavelengths, theta_i)
         result.plot(out, quantity=args.quantity, name=path.name)
         print(f"plot: {out}")
-        drawn = np.atleast_1d(result.coords["wavelength"])
-        if isinstance(result, GonioResult) and args.quantity in (None, "brdf") and len(drawn) > 1:
-            print(f"drew the lobes at {drawn[0]:g} nm, the first of {len(drawn)} wavelengths "
-                  "(another: --sel wavelength=NM)")
+        note = result.drawn_note(args.quantity)
+        if note:
+            print(note)
         return 0
     if theta_i is not None and len(theta_i) != 1:
         raise ValueError(f"--theta-i must be one angle with --against (got {len(theta_i)})")
@@ -1075,30 +888,6 @@ def _plot(args: argparse.Namespace) -> int:
     comparison.plot(out)
     print(comparison.summary())
     print(f"plot: {out}")
-    return 0
-
-
-def _klems(args: argparse.Namespace) -> int:
-    """``virtspec gonio SCENE --klems FILE``: the Klems matrices (:func:`virtspec_mi.exchange.klems_gonio.klems_measure`)."""
-
-    from virtspec_mi.exchange.klems import sidecar_path
-    from virtspec_mi.exchange.klems_gonio import klems_measure
-
-    common = {"--out": args.out, "--plot": args.plot, "--plot-series": args.plot_series, "--json": args.json,
-              "--param": args.params, "--points": args.points, "-D": args.defines, "--workers": args.workers,
-              "--scheduler": args.scheduler, "--task-readings": args.task_readings}
-    unused = [flag for flag, value in common.items() if value not in (None, False, [])]
-    if unused:
-        raise ValueError(f"--klems measures readings of its own and writes FILE and FILE.nc: it takes none of "
-                         f"{', '.join(unused)}")
-    settings = _given(args, _settings(), several=_several(MEASURING["gonio"]))
-    measured = klems_measure(args.scene, basis=args.klems_basis, wavelengths=settings.get("wavelengths", 551.0),
-                             epsilon=float(settings.get("mu", 0.01)), delta=float(settings.get("delta", 0.01)),
-                             rays=None if "rays" not in settings else int(settings["rays"]),
-                             seed=int(settings.get("seed", 0)), isotropic=args.isotropic, out=args.klems,
-                             progress=False if args.quiet else None)
-    print(measured.statement())
-    print(f"written: {args.klems} (certified bounds per patch: {sidecar_path(args.klems)})")
     return 0
 
 

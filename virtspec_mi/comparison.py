@@ -219,7 +219,7 @@ def _read_file(path: Path, quantity: str, theta_i: float | None) -> MeasuredSpec
     if not path.is_file():
         raise ValueError(f"measured file not found: {path}")
     if suffix == ".json" or (suffix == ".csv" and _is_result_csv(path)):
-        from virtspec_mi.results.kinds import read_result
+        from virtspec_mi.api import read_result
 
         return _from_result(read_result(path), quantity, theta_i, path.name)
     if suffix == ".nc":
@@ -318,7 +318,7 @@ def _read_netcdf(path: Path, quantity: str, theta_i: float | None) -> MeasuredSp
     except (OSError, ValueError) as error:
         raise ValueError(f"could not read NetCDF {path.name}: {error}") from None
     if "result_json" in dataset.attrs or "gonio_json" in dataset.attrs:  # a virtspec-mi result file: its rules
-        from virtspec_mi.results.kinds import read_result
+        from virtspec_mi.api import read_result
 
         return _from_result(read_result(path), quantity, theta_i, path.name)
     names = [name for name in dataset.data_vars if "uncertainty" not in str(name)]
@@ -689,7 +689,7 @@ def _result_of(result: Any) -> tuple[ResultBase, str]:
     if isinstance(result, ResultBase):
         return result, "result"
     if isinstance(result, (str, os.PathLike)):
-        from virtspec_mi.results.kinds import read_result
+        from virtspec_mi.api import read_result
 
         return read_result(result), Path(result).name
     raise ValueError("result must be a virtspec-mi result (a Result, GonioResult or SphereResult) or a result file "

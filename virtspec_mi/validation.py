@@ -3,7 +3,7 @@ Coverage harness: do certified readings miss as often as the binomial law says?
 ===============================================================================
 
 For specimens whose reflectance ρ is known exactly, :func:`coverage` takes K
-independent readings in **one** :func:`virtspec_mi.engine.readings.take_readings` call (at
+independent readings in **one** :func:`virtspec_mi.engine.readings.trace_readings` call (at
 551 nm, one reading per azimuth φi = 360°·k/K: every reading has its own rays, and
 these isotropic specimens do not depend on φi — nor on wavelength, but readings that
 differ only in wavelength share rays, see :mod:`virtspec_mi.engine.readings`), counts the *misses* ``|m/N − ρ| ≥ μ`` and compares that count
@@ -86,7 +86,7 @@ class Coverage:
     rays_spent: float
     """Mean rays traced per reading (two-stage: pilot included)."""
     seconds: float
-    """Wall time of the one :func:`take_readings` call (tracing and sizing)."""
+    """Wall time of the one :func:`~virtspec_mi.engine.readings.trace_readings` call (tracing and sizing)."""
     misses: int
     miss_probability: float
     """q, the exact probability that one reading misses."""
@@ -140,7 +140,8 @@ def coverage(
 ) -> Coverage:
     """
     Take ``readings`` independent readings of ``specimen`` under ``bound`` in one batched
-    :func:`take_readings` call and test the miss count against its exact binomial law.
+    :func:`~virtspec_mi.engine.readings.trace_readings` call (the spectrophotometer's plan)
+    and test the miss count against its exact binomial law.
 
     ``settings`` go to :class:`Settings` (``joint``, ``pilot_rays``, ``pilot_delta``,
     ``rays``, ``chunk_size`` …). Defaults are the cheap test setting μ = 0.05, δ = 0.2.
@@ -148,8 +149,9 @@ def coverage(
 
     from scipy import stats
 
-    from virtspec_mi.engine.readings import take_readings
     from virtspec_mi.budgets.intervals import clopper_pearson
+    from virtspec_mi.engine.readings import trace_readings
+    from virtspec_mi.instruments.hemispherical import Hemispherical
     from virtspec_mi.scene import find_bench, instrument_scene
 
     if readings < 1:
@@ -159,7 +161,9 @@ def coverage(
                       delta=delta, bound=bound, seed=seed, **settings)
     instrument = find_bench(instrument_scene(specimen.bsdf))
     start = time.perf_counter()
-    tallies, pilot = take_readings(instrument, [(551.0, config.theta_i, phi) for phi in azimuths], config)
+    plan = Hemispherical().init(instrument, config, None, np.array([config.theta_i]), None)
+    tally = trace_readings(instrument, plan, 0, [(551.0, config.theta_i, phi) for phi in azimuths])
+    tallies, pilot = tally.counts, tally.pilot
     seconds = time.perf_counter() - start
     n, m, rho = tallies.rays, tallies.reflected, specimen.reflectance
     # |m/N − ρ| ≥ μ on the counts, with the same lattice convention as miss_probability

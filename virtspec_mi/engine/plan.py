@@ -153,7 +153,7 @@ class Plan:
     hooks: tuple[ExitHook | None, ...] | None = None
     columns: Columns | None = None
     scene: str = ""
-    instrument: str = "hemispherical"
+    instrument: str = ""
     options: dict[str, Any] = field(default_factory=dict)
     refusal: str = ""
 
@@ -231,7 +231,7 @@ class Plan:
         if not self.settings.adaptive:
             return False
         if self.columns is None:
-            reason = self.refusal or f"the {self.instrument} instrument does not say what it would certify"
+            reason = self.refusal or f"the {self.instrument or 'planned'} instrument does not say what it would certify"
             raise ValueError(f"bound={self.settings.bound!r} cannot size these readings: {reason}; use a fixed "
                              "budget (hoeffding, chebyshev, exact) or give rays")
         return True
@@ -269,7 +269,7 @@ class Plan:
         }
         if self.parameters is not None:
             identity["parameters"] = self.parameters.as_dict()
-        if self.instrument != "hemispherical" or self.hooks is not None or self.groups != ("",):
+        if self.options or self.hooks is not None or self.groups != ("",):  # beyond the fates of one group
             identity.update(instrument=self.instrument, groups=list(self.groups), options=_plain(self.options),
                             hooks=[_plain(h) for h in self.hooks or ()], columns=_plain(self.columns))
         return identity

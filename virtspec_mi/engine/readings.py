@@ -54,15 +54,13 @@ from virtspec_mi.budgets import twostage
 from virtspec_mi.checks import check_readings, check_rays_needed, check_wavelength_range, shown_value
 from virtspec_mi.engine import interrupts
 from virtspec_mi.engine.checkpoint import Checkpoint
-from virtspec_mi.engine.parameters import ParameterSpace, apply_point, current_values
-from virtspec_mi.engine.plan import Columns, Plan, kernel_options
+from virtspec_mi.engine.parameters import apply_point, current_values
+from virtspec_mi.engine.plan import Plan, kernel_options
 from virtspec_mi.engine.progress import Progress
 from virtspec_mi.engine.tally import Tally
-from virtspec_mi.kernel.counts import Counts
 from virtspec_mi.settings import Settings
 
-__all__ = ["BatchRunner", "run", "take_keyed_readings", "trace_readings", "in_process_runner", "shares_wavelengths",
-           "take_readings", "take_gonio_readings"]
+__all__ = ["BatchRunner", "run", "take_keyed_readings", "trace_readings", "in_process_runner", "shares_wavelengths"]
 
 BatchRunner = Callable[[list[np.ndarray]], Iterable[tuple[np.ndarray, Tally]]]
 """
@@ -106,7 +104,7 @@ def run(bench: Any, plan: Plan, *, checkpoint: Any = None, progress: bool | None
         return _run_keyed(bench, plan, shared, checkpoint, progress, runner or in_process_runner(bench, plan))
 
 
-def take_keyed_readings(bench: Any, plan: Any, batch: Any = None, *transitional: Any, **keywords: Any) -> Any:
+def take_keyed_readings(bench: Any, plan: Plan, batch: Any) -> Tally:
     """
     The tallies of readings ``batch`` of ``plan`` — flat indices, any subset in any order
     — as a :class:`~virtspec_mi.engine.tally.Tally` in the order of ``batch``. Reading k
@@ -117,15 +115,8 @@ def take_keyed_readings(bench: Any, plan: Any, batch: Any = None, *transitional:
     (:func:`virtspec_mi.engine.parameters.apply_point`); the scene's own values are
     restored before it returns (or raises). The one function that traces a batch of a
     keyed run, here or on a Dask worker (:mod:`virtspec_mi.scaleout`).
-
-    *Transitional:* ``take_keyed_readings(instrument, settings, theta_i, batch,
-    parameters=None)`` returns a hemispherical batch's ``(counts, pilot)``.
     """
 
-    if not isinstance(plan, Plan):  # (instrument, settings, theta_i, batch[, parameters]) or by keyword
-        if "theta_i" in keywords:
-            return _take_keyed_hemispherical(bench, plan, keywords["theta_i"], batch, keywords.get("parameters"))
-        return _take_keyed_hemispherical(bench, plan, batch, *transitional, **keywords)
     batch = np.asarray(batch, dtype=np.int64)
     group, point, theta, lam = plan.split(batch)
     offsets = (batch % plan.keys) * plan.stride
@@ -345,74 +336,3 @@ def _run_keyed(bench: Any, plan: Plan, shared: bool, checkpoint: Any, progress: 
         bar.close()
         state.flush()  # every finished reading is on disk, interrupted or not (saving may be spaced out)
     return state.tally(pilot=plan.adaptive)
-
-
-# -- transitional: the former per-instrument routes over the one path ----------------------
-
-
-def _hemispherical_plan(settings: Settings, theta_i: Sequence[float] | None = None,
-                        parameters: ParameterSpace | None = None, scene: str = "") -> Plan:
-    """*Transitional:* the plan of a hemispherical run (R, T[, A] certified by a two-stage rule)."""
-
-    angles = (settings.theta_i,) if theta_i is None else theta_i
-    return Plan(settings, angles, parameters=parameters, columns=Columns.fates(settings.joint), scene=scene)
-
-
-def _take_keyed_hemispherical(instrument: Any, settings: Settings, theta_i: Sequence[float], batch: np.ndarray,
-                              parameters: ParameterSpace | None = None) -> tuple[Counts, Counts | None]:
-    """
-    *Transitional:* a hemispherical batch's counts and two-stage pilot counts (else
-    ``None``) of the keyed grid ``settings.wavelengths`` × ``theta_i`` × parameter points.
-    """
-
-    plan = _hemispherical_plan(settings, theta_i, parameters)
-    if parameters is not None:
-        tally = take_keyed_readings(instrument, plan, batch)
-    else:  # reading k is the grid's reading k mod n_θ·n_λ with its own key k, whatever k (as it always was)
-        batch = np.asarray(batch, dtype=np.int64)
-        _, _, theta, lam = plan.split(batch % plan.keys)
-        tally = trace_readings(instrument, plan, 0, _readings(plan, theta, lam), offsets=batch * plan.stride)
-    return tally.counts, tally.pilot
-
-
-def take_readings(
-    instrument: Any,
-    readings: Sequence[tuple[float, float, float]],
-    settings: Settings,
-    offsets: Sequence[int] | np.ndarray | None = None,
-    progress: bool | None = False,
-) -> tuple[Counts, Counts | None]:
-    """
-    *Transitional:* :func:`trace_readings` of a hemispherical reading — the exact counts
-    of every (wavelength nm, θi, φi) of ``readings`` and, for two-stage, the pilot's
-    (else ``None``).
-    """
-
-    tally = trace_readings(instrument, _hemispherical_plan(settings), 0, readings, offsets, progress)
-    return tally.counts, tally.pilot
-
-
-_GONIO_TWO_STAGE = ("two-stage sizes each reading for R and T, not for its bins; the goniophotometer's N is sized "
-                    "by guarantee= over the bins")
-
-
-def _gonio_plan(settings: Settings, theta_i: Sequence[float], bins: Any, scene: str = "") -> Plan:
-    """*Transitional:* the plan of a goniophotometer reading (a fixed budget)."""
-
-    if settings.adaptive:
-        raise ValueError("bound must be a fixed budget for a goniophotometer reading (hoeffding, chebyshev, "
-                         "exact or rays given; two-stage sizes each reading for R and T, not for its bins)")
-    return Plan(settings, theta_i, hooks=(bins.layout(),), scene=scene, instrument="goniophotometer",
-                options={"bins": bins.as_dict()}, refusal=_GONIO_TWO_STAGE)
-
-
-def take_gonio_readings(instrument: Any, readings: Sequence[tuple[float, float, float]], settings: Settings,
-                        bins: Any) -> tuple[Counts, np.ndarray]:
-    """
-    *Transitional:* :func:`trace_readings` of goniophotometer readings (a fixed budget;
-    two-stage is refused): the counts and the exact per-bin tallies of the escaping rays,
-    shape (readings, θo bins, φo bins).
-    """
-
-    tally = trace_readings(instrument, _gonio_plan(settings, [settings.theta_i], bins), 0, readings)
-    return tally.counts, tally.bins.reshape(len(readings), *bins.shape)

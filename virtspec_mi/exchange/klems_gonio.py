@@ -46,7 +46,7 @@ from virtspec_mi.exchange.klems import SIDES, KlemsMeasurement, aggregate, check
 from virtspec_mi.exchange.klems_basis import klems_basis
 from virtspec_mi.exchange.sizing import union_hoeffding_rays
 
-__all__ = ["klems_measure"]
+__all__ = ["klems_measure", "respond"]
 
 
 
@@ -200,3 +200,33 @@ class _Single:
     def bin_counts(self) -> np.ndarray:
         counts = np.asarray(self.reading.bin_counts)[:, [self.column]]
         return np.roll(counts, self.shift, axis=-1)
+
+
+def respond(session: Any) -> int:
+    """
+    ``virtspec gonio``: its reading (:meth:`Session.default <virtspec_mi.instruments.command.Session.default>`),
+    or with ``--klems FILE`` the Klems matrices (:func:`klems_measure`) written to FILE and
+    its sidecar; ``--mu`` is then the tolerance of every patch fraction.
+    """
+
+    from virtspec_mi.exchange.klems import sidecar_path
+
+    flags, args = session.flags, session.args
+    if flags.klems is None:
+        return session.default()
+    common = {"--out": args.out, "--plot": args.plot, "--plot-series": getattr(args, "plot_series", None),
+              "--json": args.json, "--param": args.params, "--points": args.points, "-D": args.defines,
+              "--workers": args.workers, "--scheduler": args.scheduler, "--task-readings": args.task_readings}
+    unused = [flag for flag, value in common.items() if value not in (None, False, [])]
+    if unused:
+        raise ValueError(f"--klems measures readings of its own and writes FILE and FILE.nc: it takes none of "
+                         f"{', '.join(unused)}")
+    given = session.keywords
+    measured = klems_measure(args.scene, basis=flags.klems_basis, wavelengths=given.get("wavelengths", 551.0),
+                             epsilon=float(given.get("mu", 0.01)), delta=float(given.get("delta", 0.01)),
+                             rays=None if "rays" not in given else int(given["rays"]),
+                             seed=int(given.get("seed", 0)), isotropic=flags.isotropic, out=flags.klems,
+                             progress=False if args.quiet else None)
+    print(measured.statement())
+    print(f"written: {flags.klems} (certified bounds per patch: {sidecar_path(flags.klems)})")
+    return 0

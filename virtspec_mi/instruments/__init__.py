@@ -3,20 +3,38 @@ Instruments
 ===========
 
 The instruments that measure a specimen through the engine, each one module with one
-:class:`~virtspec_mi.instruments.base.Instrument` (its options, its plan, its result)
-and one row of :data:`INSTRUMENTS`, the registry: the API and the command line pick an
-instrument here by name.
+:class:`~virtspec_mi.instruments.base.Instrument` (its options, its plan, its result and
+its ``virtspec`` subcommands, :class:`~virtspec_mi.instruments.command.Command`) and one
+row of :data:`INSTRUMENTS`, the registry: the API (:func:`virtspec_mi.take`), the command
+line (one subcommand per command of each row), the result files (each row's result kind)
+and the ``spectrophotometer`` integrator's ``instrument`` parameter are generated from it.
 
-- ``hemispherical``: the spectrophotometer (:func:`virtspec_mi.measure`, :func:`virtspec_mi.sweep`),
+- ``hemispherical``: the spectrophotometer (``virtspec measure``, ``virtspec sweep``),
   :mod:`.hemispherical`;
-- ``goniophotometer``: its readings binned by outgoing direction (:func:`virtspec_mi.gonio`),
+- ``goniophotometer``: its readings binned by outgoing direction (``virtspec gonio``),
   :mod:`.goniophotometer`;
-- ``sphere``: a physical integrating sphere (:func:`virtspec_mi.sphere_measure`), :mod:`.sphere`;
+- ``sphere``: a physical integrating sphere (``virtspec sphere``), :mod:`.sphere`;
 - ``gloss``: a specular gloss meter, the example of a fourth instrument (one module, one
   row), :mod:`.gloss`.
+
+An outside package adds an instrument without editing this one, as xarray's backends do:
+an entry point of the group :data:`ENTRY_POINTS` (``virtspec_mi.instruments``) whose value
+is its :class:`~virtspec_mi.instruments.base.Instrument` class, e.g. in its
+``pyproject.toml``::
+
+    [project.entry-points."virtspec_mi.instruments"]
+    tiny = "tiny_instrument:Tiny"
+
+References
+----------
+Python Packaging User Guide, "Entry points specification"; xarray, "How to add a new
+backend" (the ``xarray.backends`` entry-point group).
 """
 
 from __future__ import annotations
+
+import warnings
+from importlib.metadata import entry_points
 
 from virtspec_mi.instruments.base import Instrument
 from virtspec_mi.instruments.gloss import GlossMeter
@@ -24,9 +42,38 @@ from virtspec_mi.instruments.goniophotometer import Goniophotometer
 from virtspec_mi.instruments.hemispherical import Hemispherical
 from virtspec_mi.instruments.sphere import IntegratingSphere
 
-__all__ = ["INSTRUMENTS"]
+__all__ = ["INSTRUMENTS", "ENTRY_POINTS", "discovered"]
 
-INSTRUMENTS: dict[str, type[Instrument]] = {
-    instrument.name: instrument for instrument in (Hemispherical, Goniophotometer, IntegratingSphere, GlossMeter)
-}
-"""Every instrument by name (its ``name``): the API's and the command line's one registry."""
+ENTRY_POINTS = "virtspec_mi.instruments"
+"""The entry-point group of outside instruments."""
+
+
+def discovered(builtin: tuple[type[Instrument], ...]) -> dict[str, type[Instrument]]:
+    """
+    The instruments ``builtin`` and those of every installed package's entry point of
+    :data:`ENTRY_POINTS`, by name. An entry point that cannot be loaded, is not an
+    :class:`~virtspec_mi.instruments.base.Instrument` class or takes a name already taken
+    is left out with a ``RuntimeWarning`` naming it (one broken package does not stop the tool).
+    """
+
+    found = {instrument.name: instrument for instrument in builtin}
+    for point in entry_points(group=ENTRY_POINTS):
+        try:
+            instrument = point.load()
+        except Exception as error:  # an outside package's import error: reported, not fatal
+            warnings.warn(f"instrument entry point {point.name!r} ({point.value}) could not be loaded: {error}",
+                          RuntimeWarning, stacklevel=2)
+            continue
+        if not (isinstance(instrument, type) and issubclass(instrument, Instrument)):
+            warnings.warn(f"instrument entry point {point.name!r} ({point.value}) is not a virtspec_mi Instrument "
+                          "class: left out", RuntimeWarning, stacklevel=2)
+        elif instrument.name in found:
+            warnings.warn(f"instrument entry point {point.name!r} ({point.value}) takes the name "
+                          f"{instrument.name!r}, already taken: left out", RuntimeWarning, stacklevel=2)
+        else:
+            found[instrument.name] = instrument
+    return found
+
+
+INSTRUMENTS: dict[str, type[Instrument]] = discovered((Hemispherical, Goniophotometer, IntegratingSphere, GlossMeter))
+"""Every instrument by name (its ``name``): the built-in ones, then the outside ones (:data:`ENTRY_POINTS`)."""

@@ -34,7 +34,9 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, replace
-from typing import Any, ClassVar
+from dataclasses import fields as dataclass_fields
+from functools import cached_property
+from typing import Any, ClassVar, Mapping
 
 import numpy as np
 
@@ -44,10 +46,13 @@ from virtspec_mi.engine.parameters import ParameterSpace
 from virtspec_mi.engine.plan import Columns, Plan
 from virtspec_mi.engine.tally import Tally
 from virtspec_mi.instruments.base import Instrument, reading_grid
+from virtspec_mi.instruments.command import Command, Figure
 from virtspec_mi.instruments.hemispherical import hemispherical_result
 from virtspec_mi.kernel.counts import Fate
 from virtspec_mi.kernel.hooks import ExitHook
+from virtspec_mi.results.base import plain_data
 from virtspec_mi.results.hemispherical import Result
+from virtspec_mi.results.integrity import CountRules, whole_counts
 from virtspec_mi.settings import Options, Settings, option
 
 __all__ = ["GlossOptions", "MirrorCone", "GlossResult", "GlossMeter"]
@@ -97,66 +102,124 @@ class MirrorCone(ExitHook):
         return dr.select(inside, mi.UInt32(0), mi.UInt32(1))
 
 
+_GLOSS_RULES = CountRules(None, parts={"glossy": "reflected"})
+"""The receptor's rays are reflected rays: 0 <= glossy <= reflected per reading."""
+
+
 @dataclass(frozen=True, eq=False)
-class GlossResult:
+class GlossResult(Result):
     """
-    Gloss readings over the readings' dims (wavelength, θi): the exact counts and the
-    certificate.
+    Gloss readings over the readings' dims (wavelength, θi, parameters): the hemispherical
+    reading of the same rays (:class:`~virtspec_mi.results.hemispherical.Result`, every
+    field and method of it) with the receptor's exact counts and its certificate; a result
+    kind of its own (format ``"virtspec-mi gloss 1"``: files, ``sel``, plots, colour).
 
     Attributes
     ----------
-    result : virtspec_mi.results.hemispherical.Result
-        The hemispherical reading of the same rays.
     glossy : ndarray
-        Rays reflected into the receptor cone, per reading (``int64``, over ``result.dims``).
+        Rays reflected into the receptor cone, per reading (``int64``, over ``dims``).
     cone : float
         Half-angle of the receptor cone, degrees.
     """
 
-    result: Result
-    glossy: np.ndarray
-    cone: float
+    glossy: np.ndarray | None = None
+    cone: float = 2.0
+
+    FORMAT: ClassVar[str] = "virtspec-mi gloss 1"
+    KIND: ClassVar[str] = "gloss reading"
+    QUANTITIES: ClassVar[tuple[str, ...]] = ("gloss", *Result.QUANTITIES)
+
+    def _labelled(self) -> dict[str, tuple[tuple[str, ...], np.ndarray]]:
+        return {**super()._labelled(), "glossy": (self.dims, self.glossy)}
+
+    def _relabelled(self, dims: tuple[str, ...], coords: dict[str, np.ndarray],
+                    arrays: dict[str, np.ndarray]) -> "GlossResult":
+        return replace(super()._relabelled(dims, coords, arrays), glossy=arrays["glossy"])
 
     @property
     def gloss(self) -> np.ndarray:
-        """The gloss fraction g = m/N per reading."""
+        """The gloss fraction g = m/N per reading (m: rays into the receptor cone)."""
 
-        return self.glossy / self.result.rays
+        return self.glossy / self.rays
+
+    def quantity(self, name: str) -> np.ndarray:
+        """``gloss``, ``reflectance``, ``transmittance`` or ``absorptance`` by name."""
+
+        if name == "gloss":
+            return self.gloss
+        if name not in self.QUANTITIES:
+            raise ValueError(f"quantity must be one of {', '.join(self.QUANTITIES)} (got {name!r})")
+        return super().quantity(name)
 
     @property
     def delta(self) -> float:
         """The failure probability of the certificate and the interval: the reading's (δ, or δ/2 with ``joint``)."""
 
-        return self.result.interval_delta
+        return self.interval_delta
+
+    @cached_property
+    def _intervals(self) -> dict[str, tuple[np.ndarray, np.ndarray]]:
+        """
+        Every quantity's Clopper–Pearson interval; the gloss fraction's is one proportion
+        of the reading's N rays, certified as its reflectance is (:attr:`certified_mu`:
+        the rule's μ for N, μ itself for a two-stage reading sized with the gloss
+        fraction among its columns, plus the rounding bias; NaN where no rule applies).
+        """
+
+        return {**super()._intervals, "gloss": clopper_pearson(self.glossy, self.rays, self.interval_delta)}
 
     @property
-    def certified_mu(self) -> np.ndarray:
-        """
-        |g − p| < μ at :attr:`delta`, per reading: one proportion of the reading's N rays,
-        certified as its reflectance is (:attr:`Result.certified_mu`: the rule's μ for N,
-        μ itself for a two-stage reading sized with the gloss fraction among its columns,
-        plus the rounding bias; NaN where no rule applies).
-        """
+    def gloss_interval(self) -> np.ndarray:
+        """The Clopper–Pearson interval ``[lower, upper]`` of each gloss fraction at :attr:`delta`, shape (…, 2)."""
 
-        return self.result.certified_mu
+        return np.stack(self.interval("gloss"), axis=-1)
 
-    @property
-    def interval(self) -> np.ndarray:
-        """The Clopper–Pearson interval of each gloss fraction at :attr:`delta`, shape (…, 2)."""
+    def summary(self, sized_by: str | None = None) -> str:
+        """The gloss fraction of every reading with its certificate, then the hemispherical reading's summary."""
 
-        return np.stack(clopper_pearson(self.glossy, self.result.rays, self.delta), axis=-1)
-
-    def summary(self) -> str:
-        """The gloss fraction of every reading with its certificate."""
-
-        lines = [f"gloss meter, theta_i = {float(np.ravel(self.result.coords['theta_i'])[0]):g} deg, receptor cone "
-                 f"{self.cone:g} deg about the mirror direction (probability >= {1 - self.delta:g})"]
-        for index in np.ndindex(self.gloss.shape):
-            mu, n = self.certified_mu[index], int(self.result.rays[index])
+        lines = [f"gloss meter, receptor cone {self.cone:g} deg about the mirror direction "
+                 f"(probability >= {1 - self.delta:g} per reading)"]
+        for index in np.ndindex(self.shape):
+            mu, n = self.certified_mu[index], int(self.rays[index])
             certificate = "NOT CERTIFIED" if np.isnan(mu) else f"|g - p| < {mu:.4g}"
-            lines.append(f"  {self.result.wavelengths[index[0]]:g} nm: g = {self.gloss[index]:.6f}, {certificate} "
-                         f"(N = {n:,})")
-        return "\n".join(lines)
+            labels = ", ".join(f"{dim} {float(np.asarray(self.coords[dim])[k]):g}" for dim, k in zip(self.dims, index))
+            lines.append(f"  {labels}: g = {self.gloss[index]:.6f}, {certificate} (N = {n:,})")
+        return "\n".join(lines) + "\n" + super().summary(sized_by)
+
+    def as_dict(self) -> dict[str, Any]:
+        return {**super().as_dict(), "glossy": plain_data(self.glossy), "gloss": plain_data(self.gloss),
+                "gloss_interval": plain_data(self.gloss_interval), "cone": self.cone}
+
+    @classmethod
+    def _from_dict(cls, data: Mapping[str, Any]) -> "GlossResult":
+        result = super()._from_dict(data)
+        return replace(result, glossy=whole_counts(data["glossy"], "glossy"), cone=_check_cone(data["cone"]))
+
+    def _count_groups(self) -> list[tuple[str, Mapping[str, np.ndarray], CountRules, tuple[str, ...]]]:
+        receptor = ("", {"glossy": self.glossy, "reflected": self.reflected}, _GLOSS_RULES, self.dims)
+        return [*super()._count_groups(), receptor]
+
+    def to_dataset(self) -> Any:
+        """The hemispherical reading's dataset with the gloss fraction, its counts and its interval (``cone`` in attrs)."""
+
+        dataset = super().to_dataset()
+        lower, upper = self.interval("gloss")
+        bound = {"clopper_pearson_delta": self.interval_delta}
+        dataset["gloss"] = (self.dims, self.gloss, {"units": "1", "long_name": "gloss fraction m/N (rays into the "
+                                                                            "receptor cone)"})
+        dataset["glossy"] = (self.dims, np.asarray(self.glossy, dtype=np.int64),
+                             {"units": "count", "long_name": "rays reflected into the receptor cone"})
+        dataset["gloss_lower"] = (self.dims, lower, {"units": "1", "long_name": "Clopper-Pearson lower bound of "
+                                                                                "the gloss fraction at delta", **bound})
+        dataset["gloss_upper"] = (self.dims, upper, {"units": "1", "long_name": "Clopper-Pearson upper bound of "
+                                                                                "the gloss fraction at delta", **bound})
+        dataset.attrs["cone"] = self.cone
+        return dataset
+
+    def plot(self, path: Any = None, quantity: str | None = None, **options: Any) -> Any:
+        """Plot ``quantity`` (default the gloss fraction) as a sweep is drawn (its certified band)."""
+
+        return super().plot(path, quantity=quantity or "gloss", **options)
 
 
 class GlossMeter(Instrument):
@@ -169,6 +232,21 @@ class GlossMeter(Instrument):
     name: ClassVar[str] = "gloss"
     options: ClassVar[type[Options] | None] = GlossOptions
     result: ClassVar[type] = GlossResult
+    commands: ClassVar[tuple[Command, ...]] = (Command(
+        "gloss", "a specular gloss meter: the share of rays reflected into a cone about the mirror direction",
+        "Light the specimen at one theta_i (20, 60 or 85 degrees in ISO 2813) and read the share of the rays "
+        "reflected into a receptor cone of half-angle --cone about the mirror direction: the gloss fraction of "
+        "every wavelength with the tolerance its rays guarantee (as the reflectance's, eq. 23) and a "
+        "Clopper-Pearson interval, beside the hemispherical reading of the same rays.",
+        ("virtspec gloss diamond_collimated --theta-i 60 --cone 2",
+         "virtspec gloss soybean_abmb --theta-i 20 --wavelengths 450,550,650 --out gloss.nc --plot gloss.png"),
+        figures=(Figure("--plot", "plot", "the gloss fraction over wavelength with the band of its certified "
+                                          "tolerance"),),
+        one_reading=True),)
+    example: ClassVar[dict[str, Any]] = {
+        "scene": "diamond_collimated", "theta_i": 60, "wavelengths": [450, 650], "rays": 4000, "cone": 2, "seed": 4,
+        "long": {"scene": "soybean_abmb", "theta_i": 20, "wavelengths": "400:2500:5", "rays": 100_000,
+                 "readings": 421}}
 
     def init(self, bench: Any, settings: Settings, options: GlossOptions, theta_i: np.ndarray,
              parameters: ParameterSpace | None) -> Plan:
@@ -182,5 +260,9 @@ class GlossMeter(Instrument):
         return self.plan
 
     def postprocess(self, tally: Tally) -> GlossResult:
-        return GlossResult(hemispherical_result(self.bench, self.plan, tally, self.scene, self.source),
-                           reading_grid(self.plan, tally.bins[:, 0]), self.gloss_options.cone)
+        reading = hemispherical_result(self.bench, self.plan, tally, self.scene, self.source)
+        fields = {item.name: getattr(reading, item.name) for item in dataclass_fields(reading)}
+        return GlossResult(**fields, glossy=reading_grid(self.plan, tally.bins[:, 0]), cone=self.gloss_options.cone)
+
+    def warn_if_uncertified(self, result: GlossResult, stacklevel: int = 2) -> None:
+        result.warn_if_uncertified(stacklevel=stacklevel + 2)

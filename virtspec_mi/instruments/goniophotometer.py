@@ -31,11 +31,12 @@ from virtspec_mi.engine.plan import Columns, Plan
 from virtspec_mi.engine.tally import Tally
 from virtspec_mi.geometry.bins import BINNINGS, HEMISPHERES, GonioBins, make_bins, parse_edges
 from virtspec_mi.instruments.base import Instrument, reading_grid
+from virtspec_mi.instruments.command import Command, Figure
 from virtspec_mi.instruments.hemispherical import hemispherical_result
 from virtspec_mi.results.goniophotometer import GonioResult
 from virtspec_mi.settings import Options, Settings, one_of, option, true_or_false
 
-__all__ = ["GonioOptions", "Goniophotometer"]
+__all__ = ["GonioOptions", "Goniophotometer", "KlemsFlags"]
 
 
 def _bin_spec(name: str) -> Any:
@@ -96,6 +97,57 @@ class GonioOptions(Options):
 
 
 
+def _klems_file(value: Any) -> str:
+    if not isinstance(value, str) or not value.strip():
+        raise ValueError(f"klems must be a file path (got {value!r})")
+    return value
+
+
+_BASES = {"full": "145 patches", "half": "77 patches", "quarter": "41 patches"}
+
+
+@dataclass(frozen=True)
+class KlemsFlags(Options):
+    """
+    ``virtspec gonio``'s own flags: the Klems matrices instead of one reading
+    (:func:`virtspec_mi.exchange.klems_gonio.klems_measure`).
+    """
+
+    title: ClassVar[str] = "Klems matrices"
+
+    klems: str | None = option(
+        None, _klems_file, "measure the Klems matrices instead (incidence at every patch centre, front and back; "
+                           "--mu is the certified tolerance of every patch fraction) and write WINDOW 6 XML FILE "
+                           "with its NetCDF sidecar FILE.nc")
+    klems_basis: str = option("full", one_of("klems_basis", _BASES), "Klems basis of --klems", _BASES)
+    isotropic: bool = option(False, true_or_false("isotropic"),
+                             "--klems: one reading per ring, rotated onto its other patches (rotation-invariant "
+                             "specimens)")
+
+
+GONIO_COMMAND = Command(
+    "gonio", "goniophotometer: certified BRDF/BTDF by outgoing direction",
+    "Measure the specimen of a scene as the spectrophotometer does, and bin every escaping ray by its outgoing "
+    "direction (theta_o, phi_o) in the specimen frame: exact counts, fractions and BRDF/BTDF per bin with their "
+    "certificate (DKW for the CDFs, union bound for the bins, Clopper-Pearson intervals for f). Prints R and T "
+    "with their certificate, the bins' certificate and a table with one row per theta_o bin (its centre) and "
+    "one column per reading: the fraction of the incident rays leaving into that theta_o bin, summed over "
+    "phi_o (the reflection rows add up to R, the transmission rows to T; each within 2 x the DKW tolerance of "
+    "the CDF of theta_o); f per bin is in --out and --json.",
+    ("virtspec gonio diamond_collimated --theta-i 30 --theta-o-bins 9 --phi-o-bins 12",
+     "virtspec gonio diamond_collimated --theta-i 0 30 --binning projected --fold-phi --out brdf.nc --plot brdf.png",
+     "virtspec gonio soybean_abmb --wavelengths 550 650 --theta-o-bins 9 --phi-o-bins 12 --fold-phi --mu 0.02 "
+     "--plot leaf.png"),
+    figures=(Figure("--plot", "plot", "polar plots of f in and across the plane of incidence, one curve per theta_i "
+                                      "with its certified band; several wavelengths: one figure per wavelength, "
+                                      "FIG_<nm>nm.png", dim="wavelength"),
+             Figure("--plot-series", "plot_series", "the distribution over theta_i as a series (f in the plane of "
+                                                    "incidence and the CDF of theta_o, certified bands); several "
+                                                    "wavelengths: one figure per wavelength", dim="wavelength")),
+    flags=KlemsFlags, function="gonio", respond="virtspec_mi.exchange.klems_gonio:respond")
+"""``virtspec gonio``: its reading, or with ``--klems`` the Klems matrices (the application's hook, by import path)."""
+
+
 class Goniophotometer(Instrument):
     """
     The goniophotometer (see the module docstring): the spectrophotometer's readings
@@ -115,6 +167,11 @@ class Goniophotometer(Instrument):
     name: ClassVar[str] = "goniophotometer"
     options: ClassVar[type[Options] | None] = GonioOptions
     result: ClassVar[type] = GonioResult
+    commands: ClassVar[tuple[Command, ...]] = (GONIO_COMMAND,)
+    example: ClassVar[dict[str, Any]] = {
+        "scene": "diamond_collimated", "theta_i": [0, 30], "rays": 4000, "theta_o_bins": 3, "phi_o_bins": 4,
+        "seed": 2, "long": {"theta_i": "0:90:1", "rays": 200_000, "theta_o_bins": 6, "phi_o_bins": 8,
+                 "parameters": {"specimen.eta": [1.5, 2.4]}, "readings": 182}}
 
     def init(self, bench: Any, settings: Settings, options: GonioOptions, theta_i: np.ndarray,
              parameters: ParameterSpace | None) -> Plan:

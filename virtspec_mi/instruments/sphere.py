@@ -59,11 +59,15 @@ from virtspec_mi.engine.plan import Columns, Plan
 from virtspec_mi.engine.tally import Tally
 from virtspec_mi.geometry.sphere import Sphere, is_sphere_parameter, sphere_from_parameters
 from virtspec_mi.instruments.base import Instrument, reading_grid, reading_labels
+from virtspec_mi.instruments.command import Command, Figure, Session
 from virtspec_mi.kernel.sphere_walk import FATES, HEMISPHERES, SPECIMEN, Holder, SphereFate, holder_frame
 from virtspec_mi.results.sphere import CONFIGURATIONS, SphereResult
-from virtspec_mi.settings import Options, Settings, one_of, option, share, whole_number
+from virtspec_mi.checks import number, shown_value
+from virtspec_mi.results.base import plain_data
+from virtspec_mi.settings import Options, Settings, one_of, option, share, true_or_false, whole_number
 
-__all__ = ["MEASUREMENTS", "SPECULAR", "METHODS", "SphereOptions", "IntegratingSphere", "configurations"]
+__all__ = ["MEASUREMENTS", "SPECULAR", "METHODS", "SphereOptions", "IntegratingSphere", "configurations",
+           "SphereCorrection"]
 
 MEASUREMENTS: dict[str, str] = {
     "reflectance": "8/d-type reflectance: the specimen in the sample port, lit through the entrance port",
@@ -217,6 +221,131 @@ def _check_beam(sphere: Sphere, options: SphereOptions, settings: Settings, fram
                          "give the angles the entrance port is built for")
 
 
+# -- the command line: ``virtspec sphere`` and its correction -----------------------------------
+
+
+def _fraction(name: str) -> Any:
+    """The check of a value 0 <= x <= 1 that the correction assumes."""
+
+    def check(value: Any) -> float:
+        result = number(name, value)
+        if not 0.0 <= result <= 1.0:
+            shown = value if isinstance(value, str) else shown_value(value)
+            raise ValueError(f"{name} must satisfy 0 <= {name} <= 1 (got {shown})")
+        return result
+    return check
+
+
+@dataclass(frozen=True)
+class SphereCorrection(Options):
+    """
+    ``virtspec sphere``'s own flags: the reading corrected by the sphere theory
+    (:meth:`~virtspec_mi.results.sphere.SphereResult.corrected`) and what the correction
+    assumes (each of those implies ``--correct``).
+    """
+
+    title: ClassVar[str] = "correction by the sphere theory"
+
+    correct: bool = option(False, true_or_false("correct"),
+                           "also print the reading corrected by the sphere theory (the hemispherical value it "
+                           "implies) and its interval, beside the reading (--json: corrected, corrected_interval)")
+    specular_reflectance: float | None = option(
+        None, _fraction("specular_reflectance"), "the specimen's specular (mirror) reflectance at the beam's angle, "
+        "0 ... 1 (reflectance readings; default 0: a matte specimen); implies --correct")
+    sample_reflectance: float | None = option(
+        None, _fraction("sample_reflectance"), "the specimen's reflectance for diffuse light from inside the "
+        "sphere, 0 ... 1 (required for a transmittance reading; a reflectance reading: default the corrected value "
+        "itself, a Lambertian specimen); implies --correct")
+    collimated_transmittance: float | None = option(
+        None, _fraction("collimated_transmittance"), "the unscattered part of a transmittance reading, 0 ... 1 "
+        "(default 0); implies --correct")
+
+    def assumptions(self) -> dict[str, float] | None:
+        """What the correction assumes (the values given), or ``None`` when no correction is asked for."""
+
+        given = {name: getattr(self, name) for name in self.names()
+                 if name != "correct" and getattr(self, name) is not None}
+        return given if (self.correct or given) else None
+
+
+def _respond_sphere(session: Session) -> int:
+    """``virtspec sphere``: the summary, and with ``--correct`` the corrected readings beside the readings."""
+
+    assumptions = session.flags.assumptions()
+    result = session.take()
+    text, data = result.summary(), None
+    if assumptions is not None:
+        corrected, interval = _corrected(result, assumptions)
+        text += "\n" + _correction_table(result, corrected, interval, assumptions)
+        data = {**result.as_dict(), "corrected": plain_data(corrected), "corrected_interval": plain_data(interval),
+                "correction": assumptions}
+    return session.report(result, text, session.draw(result), data)
+
+
+def _corrected(result: Any, assumptions: dict[str, float]) -> tuple[Any, Any]:
+    """
+    :meth:`~virtspec_mi.results.sphere.SphereResult.corrected` and
+    :meth:`~virtspec_mi.results.sphere.SphereResult.corrected_interval` of every reading
+    of ``result`` (one spectrum per θi and parameter point), over its reading dims.
+    """
+
+    dims = list(result.reading_dims)
+    other = [d for d in dims if d != "wavelength"]
+    values, interval = np.full(np.shape(result.reading), np.nan), np.full(np.shape(result.reading_interval), np.nan)
+    for index in np.ndindex(*(result.sizes[d] for d in other)):
+        spectrum = result.isel(dict(zip(other, index)))
+        at = tuple(index[other.index(d)] if d in other else slice(None) for d in dims)
+        try:
+            values[at] = spectrum.corrected(**assumptions)
+            interval[at] = spectrum.corrected_interval(**assumptions)
+        except ValueError as error:  # what the sphere theory needs to be told (e.g. a transmittance reading)
+            raise ValueError(f"--correct: {error}") from None
+    return values, interval
+
+
+def _correction_table(result: Any, corrected: Any, interval: Any, assumptions: dict[str, float]) -> str:
+    """Each reading with its interval, beside the corrected reading with its interval, and the hemispherical value."""
+
+    taken = {"specular_reflectance": "0 (matte)", "sample_reflectance": "the corrected value (Lambertian)",
+             "collimated_transmittance": "0"}
+    if result.options["measurement"] == "reflectance":
+        del taken["collimated_transmittance"]
+    else:
+        del taken["specular_reflectance"]
+    taken.update({name: f"{value:g}" for name, value in assumptions.items()})
+    labels = list(result.reading_dims)
+    lines = ["corrected by the sphere theory (" + ", ".join(f"{name} = {value}" for name, value in taken.items())
+             + "; the theory's sphere: flat ports, no baffle): the hemispherical value each reading implies, and",
+             f"the reading interval's image: it holds the corrected expected reading with probability >= "
+             f"{1 - result.delta:g} (the theory's own error is not in it)",
+             " ".join(f"{'lambda/nm' if d == 'wavelength' else d:>10}" for d in labels)
+             + "    reading  [interval]              corrected  [interval]              hemispherical"]
+    reading, bounds = result.reading, result.reading_interval
+    for index in np.ndindex(*(result.sizes[d] for d in labels)):
+        at = " ".join(f"{float(np.atleast_1d(result.coords[d])[k]):>10g}" for d, k in zip(labels, index))
+        lines.append(f"{at}    {reading[index]:.5f}  [{bounds[index][0]:.5f}, {bounds[index][1]:.5f}]    "
+                     f"{corrected[index]:.5f}  [{interval[index][0]:.5f}, {interval[index][1]:.5f}]    "
+                     f"{result.hemispherical[index]:.5f}")
+    return "\n".join(lines)
+
+
+SPHERE_COMMAND = Command(
+    "sphere", "an integrating sphere's readout (sample over standard)",
+    "Simulate an integrating-sphere instrument reading the scene's specimen: the detector fractions with the "
+    "sample and with the reference standard, their certified ratio (the reading), the hemispherical reading of "
+    "the same rays and the instrument error; with --correct also the reading corrected by the sphere theory, "
+    "with its interval. The sphere comes from the scene's integrating_sphere integrator.",
+    ("virtspec sphere sphere_150mm_8d --specular SCE --rays 20000",
+     "virtspec sphere sphere_150mm_8d --method comparison --wavelengths 400:700:100 --rays 20000 "
+     "--correct --out r.json"),
+    figures=(Figure("--plot", "plot", "the reading and the hemispherical value of the same rays over wavelength, "
+                                      "with their certified bands; several theta_i: one figure per angle, "
+                                      "FIG_<deg>deg.png", dim="theta_i"),),
+    flags=SphereCorrection, function="sphere_measure", respond=_respond_sphere,
+    scene="Mitsuba XML scene with an integrating_sphere integrator and 'emitter' and 'specimen' disks, or a "
+          "shipped scene's name (virtspec scenes)")
+
+
 class IntegratingSphere(Instrument):
     """
     The integrating sphere (see the module docstring): both configurations of every
@@ -231,6 +360,10 @@ class IntegratingSphere(Instrument):
     name: ClassVar[str] = "sphere"
     options: ClassVar[type[Options] | None] = SphereOptions
     result: ClassVar[type] = SphereResult
+    commands: ClassVar[tuple[Command, ...]] = (SPHERE_COMMAND,)
+    example: ClassVar[dict[str, Any]] = {
+        "scene": "sphere_150mm_8d", "wavelengths": [450, 650], "rays": 4000, "seed": 3,
+        "long": {"wavelengths": "400:2500:20", "rays": 40_000, "method": "comparison", "readings": 212}}
 
     def init(self, bench: Any, settings: Settings, options: SphereOptions, theta_i: np.ndarray,
              parameters: ParameterSpace | None) -> Plan:
@@ -311,3 +444,4 @@ def _named_counts(sphere: Sphere, layout: Any, bins: np.ndarray, sums: dict[str,
     out["detected_from_upper"] = cross[:, upper, detected] + cross[:, specular, detected]
     out.update(sums)
     return {k: np.asarray(v, dtype=np.int64) for k, v in out.items()}
+

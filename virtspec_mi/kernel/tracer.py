@@ -8,7 +8,7 @@ of a call run in chunks of one fused Dr.Jit kernel each: counter-based random nu
 (:mod:`virtspec_mi.kernel.disk`) → incident direction → the specimen BSDF's ``sample``
 (:class:`virtspec_mi.plugins` specimens or Mitsuba built-ins) → :class:`~virtspec_mi.kernel.counts.Fate`
 → exact integer tallies by name (:class:`~virtspec_mi.kernel.counts.Counts`).
-:func:`virtspec_mi.engine.readings.take_readings` drives it.
+:func:`virtspec_mi.engine.readings.trace_readings` drives it.
 
 A specimen whose random walk is declared as steps
 (:class:`~virtspec_mi.kernel.walk.RandomWalk`: ``abm_b``, ``abm_u``, ``turbid_slab``) is

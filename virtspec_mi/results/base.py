@@ -56,6 +56,7 @@ __all__ = [
     "round_up",
     "span",
     "per_count",
+    "KINDS",
 ]
 
 NEAREST: str = "nearest"
@@ -186,6 +187,39 @@ class ResultBase:
         """``(values, tolerance, delta)`` of a quantity over the readings' dims (see :class:`Spectrum`)."""
 
         raise NotImplementedError
+
+    def __init_subclass__(cls, **keywords: Any) -> None:
+        """A class that declares its own ``FORMAT`` is a result kind: registered in :data:`KINDS` by its word."""
+
+        super().__init_subclass__(**keywords)
+        if "FORMAT" in cls.__dict__:
+            word = format_parts(cls.FORMAT)[0]
+            known = KINDS.get(word)
+            if known is not None and known.__qualname__ != cls.__qualname__:
+                raise ValueError(f"result kind {cls.__qualname__}: the format word {word!r} is {known.__qualname__}'s")
+            KINDS[word] = cls
+
+    def rendered(self) -> np.ndarray:
+        """
+        What ``mi.render`` returns for a result of one θi (the scene's integrator): one row
+        per wavelength, the quantities :attr:`QUANTITIES` names (a reading's R, T, A), as
+        ``float32``.
+        """
+
+        reading = self.squeeze()
+        return np.stack([np.asarray(reading._quantity(name)[0], dtype=np.float32)
+                         for name in self.RENDERED], axis=1)
+
+    RENDERED: ClassVar[tuple[str, ...]] = ("reflectance", "transmittance", "absorptance")
+    """The quantities :meth:`rendered` returns, in its columns."""
+
+    def drawn_note(self, quantity: str | None = None) -> str:
+        """
+        What :meth:`plot` of ``quantity`` leaves out, for the reader (a figure of one
+        label of several: which it drew and how to draw another), or ``""``.
+        """
+
+        return ""
 
     # -- labels -----------------------------------------------------------------------
 
@@ -479,7 +513,7 @@ class ResultBase:
         word, version = format_parts(cls.FORMAT)
         theirs, their_version = format_parts(tag)
         if theirs != word:
-            raise ValueError(f"this file holds a {_WORDS.get(theirs, theirs)} (format {tag!r}), not a {cls.KIND}: "
+            raise ValueError(f"this file holds a {_kind_in_words(theirs)} (format {tag!r}), not a {cls.KIND}: "
                              "read it with virtspec_mi.read_result, which reads every kind")
         if their_version > version:
             raise ValueError(f"this {cls.KIND} was written in format {tag!r} by a newer virtspec-mi; this version "
@@ -627,9 +661,20 @@ class ResultBase:
         return f"<p><code>{html.escape(repr(self))}</code></p>" + dataset._repr_html_()
 
 
-_WORDS = {"result": "hemispherical reading (virtspec_mi.Result)",
-          "gonio": "goniophotometer reading (virtspec_mi.GonioResult)",
-          "sphere": "integrating-sphere reading (virtspec_mi.SphereResult)"}
+KINDS: dict[str, type[ResultBase]] = {}
+"""
+Every result kind by the word of its format tag (``"result"``, ``"gonio"``, ``"sphere"``,
+an instrument's own, e.g. ``"gloss"``): a class that declares its ``FORMAT`` registers
+itself here when it is defined (:meth:`ResultBase.__init_subclass__`), so a new kind is
+one class, wherever it lives (beside its instrument).
+"""
+
+
+def _kind_in_words(word: str) -> str:
+    """A kind for messages: ``"goniophotometer reading (GonioResult)"``; the word itself if unknown."""
+
+    kind = KINDS.get(word)
+    return word if kind is None else f"{kind.KIND} (virtspec_mi.{kind.__name__})"
 
 
 def _coord_dims(name: str, coords: dict[str, np.ndarray], dims: tuple[str, ...]) -> tuple[str, ...]:

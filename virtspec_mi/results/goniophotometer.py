@@ -533,6 +533,15 @@ class GonioResult(ResultBase):
 
         return self.result.to_msds(theta_i)
 
+    def drawn_note(self, quantity: str | None = None) -> str:
+        """The lobes are drawn at one wavelength: which, when there are several."""
+
+        drawn = np.atleast_1d(self.coords["wavelength"])
+        if quantity not in (None, "brdf") or len(drawn) < 2:
+            return ""
+        return (f"drew the lobes at {drawn[0]:g} nm, the first of {len(drawn)} wavelengths "
+                "(another: --sel wavelength=NM)")
+
     def plot(self, path: str | os.PathLike | None = None, quantity: str | None = None, **options: Any) -> Any:
         """
         Polar plot of f in the plane of incidence and across it, with the certified band

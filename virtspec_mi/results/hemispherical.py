@@ -45,7 +45,7 @@ from virtspec_mi.results.integrity import (CountRules, check_counts, check_shape
                                            reading_at, whole_counts)
 from virtspec_mi.settings import Settings
 
-__all__ = ["Result", "plain_data", "COUNT_RULES"]
+__all__ = ["Result", "plain_data", "COUNT_RULES", "fluctuation"]
 
 COUNT_RULES = CountRules(
     "rays",
@@ -572,3 +572,41 @@ class Result(ResultBase):
         from virtspec_mi.results.plot import plot_sweep
 
         return plot_sweep(self, path, quantity=self.check_quantity(quantity), **options)
+
+    def plot_spectra(self, path: str | os.PathLike | None = None,
+                     quantities: tuple[str, ...] = ("reflectance", "transmittance"), **options: Any) -> Any:
+        """
+        Reflectance and transmittance (or ``quantities``) over wavelength at one θi, each with
+        its certified band (:func:`virtspec_mi.results.plot.plot_spectra`; ``theta_i=``,
+        ``name=`` …): what ``virtspec measure --plot`` draws.
+        """
+
+        from virtspec_mi.results.plot import plot_spectra
+
+        return plot_spectra(self, path, quantities=[self.check_quantity(q) for q in quantities], **options)
+
+
+def fluctuation(a: Result | np.ndarray, b: Result | np.ndarray, quantity: str = "reflectance") -> float:
+    """
+    Average magnitude of the fluctuations between two sweeps, eq. (24):
+
+        Δ = Σᵢ |ρᵢ^(N_j) − ρᵢ^(N_{j−1})| / n
+
+    over the n readings of the sweeps (all their (wavelength, θi) pairs), for
+    ``quantity`` (reflectance by default). ``a`` and ``b`` are results over the same grid
+    (typically at successive ray densities N_{j−1} and N_j), or arrays of one shape.
+
+    References
+    ----------
+    Baranoski et al. (2001), eq. (24), Fig. 6a.
+    """
+
+    if isinstance(a, Result) and isinstance(b, Result):
+        for name in ("wavelengths", "theta_i"):
+            if not np.array_equal(getattr(a, name), getattr(b, name)):
+                raise ValueError(f"fluctuation needs sweeps over the same {name} (they differ)")
+        a, b = a.quantity(quantity), b.quantity(quantity)
+    a, b = np.asarray(a, dtype=np.float64), np.asarray(b, dtype=np.float64)
+    if a.shape != b.shape or a.size == 0:
+        raise ValueError(f"fluctuation needs two non-empty arrays of one shape (got {a.shape} and {b.shape})")
+    return float(np.mean(np.abs(a - b)))

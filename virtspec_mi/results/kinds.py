@@ -2,15 +2,17 @@
 Every result kind, by its format tag: :func:`read_result`
 =========================================================
 
-One table (:data:`KINDS`) of the result kinds of :mod:`virtspec_mi.results` —
-hemispherical (:class:`~virtspec_mi.results.hemispherical.Result`, format
-``"virtspec-mi result 1"``), goniophotometer
-(:class:`~virtspec_mi.results.goniophotometer.GonioResult`, ``"virtspec-mi gonio 1"``) and
-integrating sphere (:class:`~virtspec_mi.results.sphere.SphereResult`,
-``"virtspec-mi sphere 1"``) — and :func:`read_result`, which reads a file of any of them
-(NetCDF, CSV, JSON, Zarr; also ``virtspec measure --json`` output and files written
-before every kind had a tag) by the tag it carries
-(:func:`virtspec_mi.results.base.tagged`). A new kind is one module and one row here.
+The result kinds (:data:`virtspec_mi.results.base.KINDS`: every class that declares a
+format tag registers itself there when defined — hemispherical
+(:class:`~virtspec_mi.results.hemispherical.Result`, format ``"virtspec-mi result 1"``),
+goniophotometer (:class:`~virtspec_mi.results.goniophotometer.GonioResult`,
+``"virtspec-mi gonio 1"``), integrating sphere
+(:class:`~virtspec_mi.results.sphere.SphereResult`, ``"virtspec-mi sphere 1"``) and any
+instrument's own, e.g. the gloss meter's) and :func:`read_result`, which reads a file of
+any of them (NetCDF, CSV, JSON, Zarr; also ``virtspec measure --json`` output and files
+written before every kind had a tag) by the tag it carries
+(:func:`virtspec_mi.results.formats.tagged`). :func:`virtspec_mi.read_result` loads the
+instrument registry first, so that the kinds of every instrument are known.
 
 References
 ----------
@@ -23,18 +25,12 @@ import os
 from typing import Any
 
 from virtspec_mi.results import io as results_io
-from virtspec_mi.results.base import ResultBase
+from virtspec_mi.results import goniophotometer, hemispherical, sphere  # noqa: F401  (the kinds register)
+from virtspec_mi.results.base import KINDS, ResultBase
 from virtspec_mi.results.formats import format_parts, tagged
-from virtspec_mi.results.goniophotometer import GonioResult
-from virtspec_mi.results.hemispherical import Result
 from virtspec_mi.results.integrity import read_file
-from virtspec_mi.results.sphere import SphereResult
 
 __all__ = ["KINDS", "kind_of", "read_result", "result_from"]
-
-KINDS: dict[str, type[ResultBase]] = {format_parts(kind.FORMAT)[0]: kind for kind in (Result, GonioResult,
-                                                                                      SphereResult)}
-"""Each result kind by the word of its format tag (``"result"``, ``"gonio"``, ``"sphere"``)."""
 
 
 def kind_of(tag: str) -> type[ResultBase]:

@@ -419,6 +419,13 @@ class SphereResult(ResultBase):
         self.check_quantity(quantity)
         return str(self.options["measurement"])
 
+    def rendered(self) -> np.ndarray:
+        """What ``mi.render`` returns: per wavelength the reading, the hemispherical value and both detector fractions."""
+
+        reading = self.squeeze()
+        return np.stack([reading.reading, reading.hemispherical, reading.detector_fraction,
+                         reading.standard_fraction], axis=1).astype(np.float32)
+
     def plot(self, path: str | os.PathLike | None = None, quantity: str | None = None, **options: Any) -> Any:
         """
         The reading and the hemispherical value of the same rays over wavelength, each with

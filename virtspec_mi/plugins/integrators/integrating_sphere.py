@@ -45,42 +45,32 @@ fractions with the sample and with the standard; the full
 
 from __future__ import annotations
 
+from typing import Any
+
 import mitsuba as mi
-import numpy as np
 
-from virtspec_mi.engine.bench import read_bench
-from virtspec_mi.instruments import INSTRUMENTS
-from virtspec_mi.instruments.base import take
-from virtspec_mi.instruments.sphere import SphereOptions
+from virtspec_mi.instruments.sphere import IntegratingSphere
 
-from .spectrophotometer import Spectrophotometer, check_spp
+from .spectrophotometer import Spectrophotometer
 
 __all__ = ["IntegratingSphereIntegrator"]
-
-_WORD = 1 << 32
 
 
 class IntegratingSphereIntegrator(Spectrophotometer):
     """The sphere instrument as a Mitsuba integrator (see the module docstring)."""
 
+    plugin = "integrating_sphere"
+
     def __init__(self, props: mi.Properties) -> None:
         super().__init__(props)
-        try:
-            self.sphere_options = SphereOptions.from_parameters(props)
-            if self.sphere_options.sphere is None:
-                raise ValueError("sphere: diameter (mm) is required")
-        except (ValueError, TypeError) as error:
-            raise ValueError(f"integrating_sphere: {error}") from None
-        self.options[SphereOptions] = self.sphere_options
+        if self.instrument_options.sphere is None:
+            raise ValueError(f"{self.plugin}: sphere: diameter (mm) is required")
+        self.sphere_options = self.instrument_options
 
-    def render(self, scene, sensor=None, seed=0, spp=0, develop=True, evaluate=True):
-        rays = check_spp(spp)
-        settings = self.settings.updated(seed=(self.settings.seed + int(seed)) % _WORD, rays=rays or None)
-        reading = take(INSTRUMENTS["sphere"](), read_bench(scene), settings, self.sphere_options)
-        self.last_reading = reading
-        table = np.stack([reading.reading, reading.hemispherical, reading.detector_fraction,
-                          reading.standard_fraction], axis=1)
-        return mi.TensorXf(table.astype(np.float32))
+    def instrument_name(self, parameters: Any) -> str:
+        """Always the integrating sphere."""
+
+        return IntegratingSphere.name
 
     def to_string(self) -> str:
         return f"IntegratingSphere[{self.sphere_options.sphere.describe()}; {self.sphere_options.as_dict()}]"

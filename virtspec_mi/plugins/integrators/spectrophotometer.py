@@ -2,16 +2,21 @@
 ``spectrophotometer``: the virtual integrating-sphere instrument as a Mitsuba integrator
 ========================================================================================
 
-A thin adapter: it reads the measurement settings (and the goniophotometer's options)
+A thin adapter: it reads the measurement settings and the options of its instrument
 from its XML/dict parameters with the one reader
 (:meth:`virtspec_mi.settings.Options.from_parameters`) and, on ``mi.render``, measures
-the scene's specimen with the instrument of the registry
-(:data:`virtspec_mi.instruments.INSTRUMENTS`: ``hemispherical``, or ``goniophotometer``).
+the scene's specimen with that instrument of the registry
+(:data:`virtspec_mi.instruments.INSTRUMENTS`, chosen by the ``instrument`` parameter:
+any row, an outside instrument's too).
 The tracing itself — rays from the emitter disk, the specimen BSDF, fates and exact
 tallies — is :mod:`virtspec_mi.kernel.tracer`.
 
 Parameters
 ----------
+instrument : string, default "hemispherical"
+    The instrument of the registry that measures (``hemispherical``, ``goniophotometer``,
+    ``sphere``, ``gloss`` or an outside one); its options are parameters too. Without it,
+    a goniophotometer option makes it ``goniophotometer`` (scenes written before it).
 theta_i : float, default 0
     Polar incidence angle in degrees, 0 ≤ θi ≤ 90.
 phi_i : float, default 0
@@ -90,10 +95,9 @@ from virtspec_mi.checks import MAX_RAYS, shown_value
 from virtspec_mi.engine.bench import read_bench
 from virtspec_mi.instruments import INSTRUMENTS
 from virtspec_mi.instruments.base import take
-from virtspec_mi.instruments.goniophotometer import GonioOptions
 from virtspec_mi.settings import Settings
 
-__all__ = ["Spectrophotometer", "check_spp", "clear_render_errors"]
+__all__ = ["Spectrophotometer", "check_spp", "clear_render_errors", "instrument_of"]
 
 _WORD = 1 << 32
 
@@ -101,36 +105,62 @@ _WORD = 1 << 32
 class Spectrophotometer(mi.SamplingIntegrator):
     """The instrument as a Mitsuba integrator (see the module docstring)."""
 
+    plugin = "spectrophotometer"
+    """The plugin's name, in its messages."""
+
     def __init__(self, props: mi.Properties) -> None:
         super().__init__(props)
         try:
+            self.instrument = INSTRUMENTS[self.instrument_name(props)]
             self.settings = Settings.from_parameters(props)
-            self.gonio_options = GonioOptions.from_parameters(props) if GonioOptions.parameters_in(props) else None
-        except ValueError as error:
-            raise ValueError(f"spectrophotometer: {error}") from None
-        self.options = {Settings: self.settings, GonioOptions: self.gonio_options}
-        """The options the scene holds, by class: the API's defaults (:func:`virtspec_mi.gonio` …)."""
+            kind = self.instrument.options
+            self.instrument_options = None if kind is None else kind.from_parameters(props)
+        except (ValueError, TypeError) as error:
+            raise ValueError(f"{self.plugin}: {error}") from None
+        self.options = {Settings: self.settings, **({} if kind is None else {kind: self.instrument_options})}
+        """The options the scene holds, by class: the API's defaults (:func:`virtspec_mi.take` …)."""
         self.last_reading = None
+
+    def instrument_name(self, parameters: Any) -> str:
+        """The instrument of the registry this integrator measures with (:func:`instrument_of`)."""
+
+        return instrument_of(parameters)
 
     def render(self, scene, sensor=None, seed=0, spp=0, develop=True, evaluate=True):
         rays = check_spp(spp)
         settings = self.settings.updated(seed=(self.settings.seed + int(seed)) % _WORD, rays=rays or None)
-        bench = read_bench(scene)
-        if self.gonio_options is not None:
-            self.last_reading = take(INSTRUMENTS["goniophotometer"](), bench, settings, self.gonio_options)
-            reading = self.last_reading.result.squeeze()
-        else:
-            reading = take(INSTRUMENTS["hemispherical"](), bench, settings).squeeze()
-            self.last_reading = reading
-        reading.warn_if_uncertified(stacklevel=2)
-        table = np.stack([reading.reflectance, reading.transmittance, reading.absorptance], axis=1)
-        return mi.TensorXf(table.astype(np.float32))
+        instrument = self.instrument()
+        reading = take(instrument, read_bench(scene), settings, self.instrument_options).squeeze()  # one theta_i
+        instrument.warn_if_uncertified(reading, stacklevel=2)
+        self.last_reading = reading
+        return mi.TensorXf(self.last_reading.rendered())
 
     def sample(self, scene, sampler, ray, medium=None, active=True):
         return mi.Spectrum(0.0), mi.Bool(False), []
 
     def to_string(self) -> str:
-        return f"Spectrophotometer[{self.settings}]"
+        return f"Spectrophotometer[{self.instrument.name}; {self.settings}]"
+
+
+def instrument_of(parameters: Any) -> str:
+    """
+    The instrument an integrator's parameters name (``instrument``); without it, the one
+    instrument whose own options they give (a goniophotometer's bins: scenes written
+    before the parameter), else the first row of the registry (the spectrophotometer).
+    ``ValueError`` naming the registry's instruments for any other name, or the
+    instruments when the options of several are given.
+    """
+
+    if "instrument" in parameters:
+        name = parameters.get("instrument")
+        if name not in INSTRUMENTS:
+            raise ValueError(f"instrument must be one of {', '.join(INSTRUMENTS)} (got {name!r})")
+        return name
+    given = [row.name for row in INSTRUMENTS.values() if row.options is not None and row.options.parameters_in(parameters)]
+    if len(given) > 1:
+        raise ValueError(f"the parameters are options of several instruments ({', '.join(given)}): name one with "
+                         "the parameter instrument")
+    return given[0] if given else next(iter(INSTRUMENTS))
 
 
 def check_spp(spp: Any) -> int:

@@ -57,14 +57,16 @@ def test_the_wheel_and_the_sdist_hold_the_whole_package(built):
 
 @pytest.mark.slow
 def test_the_installed_wheel_measures_a_leaf_sweeps_and_runs_the_cli(built, tmp_path):
+    # nothing of the checkout on the path, pip included (a PYTHONPATH holding the source tree and its
+    # egg-info would make pip skip the wheel as "already satisfied")
+    env = {k: v for k, v in os.environ.items() if k not in ("VIRTSPEC_LEAF_DATA", "PYTHONPATH")}
     venv = tmp_path / "venv"
-    subprocess.run([sys.executable, "-m", "venv", str(venv)], check=True)
+    subprocess.run([sys.executable, "-m", "venv", str(venv)], check=True, env=env)
     python, virtspec = venv / "bin" / "python", venv / "bin" / "virtspec"
     subprocess.run([str(python), "-m", "pip", "install", "--quiet", str(built["wheel"])], check=True,
-                   capture_output=True)
+                   capture_output=True, env=env)
     away = tmp_path / "elsewhere"  # no source tree, no shared folder beside it: only the installed package
     away.mkdir()
-    env = {k: v for k, v in os.environ.items() if k not in ("VIRTSPEC_LEAF_DATA", "PYTHONPATH")}
     script = (
         "import virtspec_mi as vm\n"
         "assert 'site-packages' in vm.__file__, vm.__file__\n"

@@ -44,7 +44,7 @@ llvm: $(STAMP)
 	@$(PY) -m virtspec_mi llvm check
 
 demo: setup
-	$(VENV)/bin/virtspec measure scenes/diamond_conical.xml --theta-i 70
+	$(VENV)/bin/virtspec measure diamond_conical --theta-i 70
 
 # The whole suite, slow statistical tests included (plain `pytest` deselects them).
 test: setup

@@ -84,3 +84,29 @@ def test_shell_command_runs(item, workdir):
     env = dict(os.environ, PATH=f"{Path(sys.executable).parent}{os.pathsep}{os.environ['PATH']}")
     result = subprocess.run(["bash", "-c", item[1]], cwd=workdir, env=env, capture_output=True, text=True)
     assert result.returncode == 0, f"{item[1]}\n{result.stderr[-2000:]}"
+
+
+def test_the_sidebar_lists_each_page_once_and_no_caption_repeats_a_page():
+    """Every page is in one toctree entry only, and no toctree caption is the title of a page beside it."""
+
+    import re
+
+    toctree = re.compile(r"^```\{toctree\}\n(.*?)^```", re.M | re.S)
+    entries, captions = [], []
+    for page in DOCS.rglob("*.md"):
+        if "_build" in page.parts or "_generated" in page.parts or "notebooks" in page.parts:
+            continue
+        for body in toctree.findall(page.read_text()):
+            captions += re.findall(r"^:caption:\s*(.+)$", body, re.M)
+            for line in body.splitlines():
+                if line.strip() and not line.startswith(":"):
+                    name = line.strip()
+                    entries.append(name.lstrip("/") if name.startswith("/") else
+                                   str((page.parent / name).relative_to(DOCS)))
+    assert len(entries) == len(set(entries)), sorted(e for e in entries if entries.count(e) > 1)
+    titles = {}
+    for entry in entries:
+        source = DOCS / f"{entry}.md"
+        if source.is_file():
+            titles[entry] = source.read_text().splitlines()[0].lstrip("# ").strip()
+    assert not set(captions) & set(titles.values()), set(captions) & set(titles.values())

@@ -2,7 +2,9 @@
 The package anyone can install: the built wheel and sdist hold every subpackage, the
 plugins, the shipped scenes and the leaf data with its licence; the wheel installed with
 its dependencies into a fresh virtual environment outside the source tree (no editable
-finder, nothing beside it) takes a leaf reading, a sweep and runs the command line.
+finder, nothing beside it) takes a leaf reading, a sweep, runs the command line and runs
+the quick start page's commands (``docs/guide/quickstart.md``) from a folder of its own;
+the wheel's metadata holds the project's licence and the leaf data's.
 """
 
 from __future__ import annotations
@@ -15,6 +17,8 @@ import zipfile
 from pathlib import Path
 
 import pytest
+
+import code_blocks
 
 ROOT = Path(__file__).resolve().parents[1]
 PACKAGE = ROOT / "virtspec_mi"
@@ -53,14 +57,16 @@ def test_the_wheel_and_the_sdist_hold_the_whole_package(built):
 
 @pytest.mark.slow
 def test_the_installed_wheel_measures_a_leaf_sweeps_and_runs_the_cli(built, tmp_path):
+    # nothing of the checkout on the path, pip included (a PYTHONPATH holding the source tree and its
+    # egg-info would make pip skip the wheel as "already satisfied")
+    env = {k: v for k, v in os.environ.items() if k not in ("VIRTSPEC_LEAF_DATA", "PYTHONPATH")}
     venv = tmp_path / "venv"
-    subprocess.run([sys.executable, "-m", "venv", str(venv)], check=True)
+    subprocess.run([sys.executable, "-m", "venv", str(venv)], check=True, env=env)
     python, virtspec = venv / "bin" / "python", venv / "bin" / "virtspec"
     subprocess.run([str(python), "-m", "pip", "install", "--quiet", str(built["wheel"])], check=True,
-                   capture_output=True)
+                   capture_output=True, env=env)
     away = tmp_path / "elsewhere"  # no source tree, no shared folder beside it: only the installed package
     away.mkdir()
-    env = {k: v for k, v in os.environ.items() if k not in ("VIRTSPEC_LEAF_DATA", "PYTHONPATH")}
     script = (
         "import virtspec_mi as vm\n"
         "assert 'site-packages' in vm.__file__, vm.__file__\n"
@@ -77,3 +83,17 @@ def test_the_installed_wheel_measures_a_leaf_sweeps_and_runs_the_cli(built, tmp_
         assert run.returncode == 0, run.stderr
     assert "soybean_abmb" in subprocess.run([str(virtspec), "scenes"], cwd=away, env=env, capture_output=True,
                                             text=True).stdout
+    # the quick start's commands, as a newcomer runs them: from a folder of their own, the venv's bin on PATH
+    quickstart = ROOT / "docs" / "guide" / "quickstart.md"
+    newcomer = tmp_path / "newcomer"
+    newcomer.mkdir()
+    env["PATH"] = f"{venv / 'bin'}{os.pathsep}{env['PATH']}"
+    commands = code_blocks.shell_commands(quickstart)
+    assert any(c.startswith("virtspec measure diamond_conical") for c in commands), commands
+    for command in commands:
+        run = subprocess.run(["bash", "-c", command], cwd=newcomer, env=env, capture_output=True, text=True)
+        assert run.returncode == 0, f"{command}\n{run.stderr[-2000:]}"
+    for source in code_blocks.blocks(quickstart, "python"):
+        run = subprocess.run([str(python), "-c", source], cwd=newcomer, env=env, capture_output=True, text=True)
+        assert run.returncode == 0, f"{source}\n{run.stderr[-2000:]}"
+    assert {"leaf.png", "my_specimen.xml", "gold.nc", "gold.csv"} <= {p.name for p in newcomer.iterdir()}

@@ -31,7 +31,8 @@ from pathlib import Path
 from typing import Any
 
 __all__ = [
-    "FOLDER", "names", "path", "describe", "catalogue", "listing", "resolve", "hint", "copy", "include_folder", "answer",
+    "FOLDER", "names", "path", "describe", "catalogue", "listing", "resolve", "hint", "copy", "include_folder",
+    "answer",
 ]
 
 FOLDER: Path = Path(__file__).resolve().parent
@@ -75,7 +76,8 @@ def listing() -> str:
     """One line per shipped scene: its name, its file and what it holds (``virtspec scenes``)."""
 
     width = max(len(n) for n in names())
-    return "\n".join(f"{name:<{width}}  {describe(name)}\n{'':<{width}}  {path(name)}" for name in names())
+    return "\n".join(f"{name:<{width}}  {describe(name)}\n{'':<{width}}  {path(name)}"
+                     for name in names())
 
 
 def resolve(scene: Any) -> Any:

@@ -623,13 +623,12 @@ class TableComparison:
 def read_albedo_table(path: str | os.PathLike) -> AlbedoTable:
     """An :class:`AlbedoTable` from a NetCDF file written by :meth:`AlbedoTable.write`."""
 
-    import xarray as xr
-
     path = Path(path)
     if path.suffix.lower() != ".nc":
         raise ValueError(f"path must be a .nc file written by AlbedoTable.write (got {path.name!r})")
-    with xr.open_dataset(path) as dataset:
-        return AlbedoTable.from_dataset(dataset.load())
+    from virtspec_mi.files import read_netcdf
+
+    return AlbedoTable.from_dataset(read_netcdf(path, "albedo table"))
 
 
 def _own_table(published: Any) -> "AlbedoTable | None":

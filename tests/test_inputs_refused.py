@@ -146,3 +146,44 @@ def test_a_scheduler_address_dask_cannot_use_is_named(address, words):
 def test_numpy_float32_epsilon_and_delta_are_numbers(mi):
     table = vm.albedo_table(**{**SMALL, "epsilon": np.float32(0.05), "delta": np.float32(0.01)})
     assert table.epsilon == pytest.approx(0.05) and table.delta == pytest.approx(0.01)
+
+
+# --- result files whose settings disagree with their labels or counts ------------------------------------
+
+
+def _edited(tmp_path: Path, result, change) -> Path:
+    import json
+
+    path = tmp_path / "original.json"
+    result.write(path)
+    data = json.loads(path.read_text())
+    data.pop("checksum")  # as a file written by hand or by another program: the rules alone decide
+    change(data)
+    edited = tmp_path / "edited.json"
+    edited.write_text(json.dumps(data))
+    return edited
+
+
+def test_a_result_file_whose_theta_i_label_is_not_its_settings_is_refused(dielectric, tmp_path):
+    reading = vm.sweep(dielectric, theta_i=[0], rays=100, progress=False)
+    edited = _edited(tmp_path, reading, lambda data: data.__setitem__("theta_i", [45.0]))
+    with pytest.raises(ValueError, match="the settings' theta_i 0 is not the theta_i label 45"):
+        vm.read_result(edited)
+
+
+def test_a_result_file_whose_two_stage_mu_is_impossible_for_its_rays_is_refused(dielectric, tmp_path):
+    reading = vm.sweep(dielectric, theta_i=[0], mu=0.05, bound="two-stage", progress=False)
+    edited = _edited(tmp_path, reading, lambda data: data["settings"].__setitem__("mu", 1e-6))
+    with pytest.raises(ValueError, match="mu = 1e-06 \\(two-stage\\) cannot be certified with"):
+        vm.read_result(edited)
+
+
+def test_a_selection_restates_its_settings_and_its_file_reads_back(dielectric, tmp_path):
+    sweep = vm.sweep(dielectric, theta_i=[10, 20], wavelengths=[500, 600], rays=100, progress=False)
+    one = sweep.sel(theta_i=20, wavelength=600)
+    assert one.settings.theta_i == 20 and one.settings.wavelengths == (600.0,)
+    one.write(tmp_path / "one.json")
+    assert vm.read_result(tmp_path / "one.json").theta_i == 20
+    gonio = vm.gonio(dielectric, theta_i=[10, 20], rays=100, theta_o_bins=3, phi_o_bins=4, progress=False)
+    gonio.sel(theta_i=20).write(tmp_path / "one.nc")
+    assert vm.read_gonio(tmp_path / "one.nc").theta_i.tolist() == [20.0]

@@ -1098,6 +1098,8 @@ def _albedo_options(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--average", action="store_true", help="--compare E_avg instead of E")
     parser.add_argument("--rounding", type=float, default=0.0, help="--compare: the published values' rounding")
     parser.add_argument("--quiet", action="store_true", help="no progress bar")
+    parser.add_argument("--overwrite", action="store_true", help="let a .npy's NAME.json and NAME_avg.npy replace "
+                                                                 "files of those names that another program wrote")
 
 
 def _albedo_table(args: argparse.Namespace) -> int:
@@ -1107,7 +1109,9 @@ def _albedo_table(args: argparse.Namespace) -> int:
     if args.source:
         table = read_albedo_table(args.source)
         for path in args.out:
-            table.write(path)
+            table.check_output(path, overwrite=args.overwrite)  # every output's companions, before any is written
+        for path in args.out:
+            table.write(path, overwrite=args.overwrite)
     else:
         grid = {name: None if getattr(args, name) is None else list(parse_values(name, " ".join(getattr(args, name))))
                 for name in ("mu", "alpha", "roughness", "eta")}
@@ -1115,7 +1119,7 @@ def _albedo_table(args: argparse.Namespace) -> int:
         table = albedo_table(args.model, distribution=args.distribution, engine=None if engine == "none" else engine,
                              epsilon=args.epsilon, delta=args.delta, bound=args.bound, average=not args.no_average,
                              parts=args.parts, seed=args.seed, out=args.out or None, checkpoint=args.checkpoint,
-                             progress=False if args.quiet else None, **grid)
+                             progress=False if args.quiet else None, overwrite=args.overwrite, **grid)
     print(table.statement())
     print(f"rays {table.rays:,}; {table.provenance.get('seconds_wall', 0):g} s; grid {table.engine} "
           f"({' x '.join(f'{d} {len(getattr(table, d))}' for d in table.dims if d != 'side')})")

@@ -717,7 +717,8 @@ def _check_output(path: Path, average: bool, overwrite: bool) -> None:
     if path.suffix.lower() != ".npy":
         return
     companions = [path.with_suffix(".json")] + ([path.with_name(path.stem + "_avg.npy")] if average else [])
-    check_companions(path, companions, lambda companion: _ours(path), overwrite)
+    check_companions(path, companions, lambda companion: _ours(path), overwrite,
+                     flag="overwrite=True (virtspec albedo-table --overwrite)")
 
 
 def _check_epsilon(epsilon: Any) -> float:

@@ -187,3 +187,19 @@ def test_a_selection_restates_its_settings_and_its_file_reads_back(dielectric, t
     gonio = vm.gonio(dielectric, theta_i=[10, 20], rays=100, theta_o_bins=3, phi_o_bins=4, progress=False)
     gonio.sel(theta_i=20).write(tmp_path / "one.nc")
     assert vm.read_gonio(tmp_path / "one.nc").theta_i.tolist() == [20.0]
+
+
+@pytest.mark.parametrize("keywords, words", [({"seed": "abc"}, "seed must be a number"),
+                                             ({"rays": "x"}, "rays must be a number"),
+                                             ({"isotropic": "maybe"}, "isotropic must be true or false"),
+                                             ({"epsilon": "abc"}, "epsilon must be a number")])
+def test_a_klems_measurements_settings_are_named_not_raw_conversion_errors(keywords, words):
+    from virtspec_mi.exchange.klems_gonio import klems_measure
+
+    with pytest.raises(ValueError, match=words):
+        klems_measure("diamond_conical", basis="quarter", **keywords)
+
+
+def test_an_albedo_tables_wavelength_is_named():
+    with pytest.raises(ValueError, match="wavelength must be a number \\(got 'abc'\\)"):
+        vm.albedo_table(**{**SMALL, "wavelength": "abc"})

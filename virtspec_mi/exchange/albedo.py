@@ -1012,6 +1012,9 @@ def albedo_table(
     epsilon, delta = _check_epsilon(epsilon), check_delta(delta)  # any real number type (numpy's float32 too)
     average, parts = true_or_false("average")(average), true_or_false("parts")(parts)
     seed = _whole("seed", seed, 0, 2**32 - 1)
+    wavelength = number("wavelength", wavelength)
+    if not 0.0 < wavelength < float("inf"):
+        raise ValueError(f"wavelength must be a finite number of nm > 0 (got {shown_value(wavelength)})")
     if bound not in BOUNDS:
         raise ValueError(f"bound must be one of {', '.join(BOUNDS)} (got {bound!r})")
     if parts and model != "glass":

@@ -94,7 +94,8 @@ def test_every_guarantee_row_has_the_interface_and_gives_its_bins_number():
         assert rules.guarantee_of(name) is rule
         for mu, delta, k in [(0.01, 0.01, 216), (0.02, 0.05, 40), (0.005, 0.01, 1296)]:
             n = rule.rays(mu, delta, k, relative=0.5, floor=0.05, smallest_solid_angle=0.01)
-            assert n == formulas[name](mu, delta, k) and n == rules.gonio_rays(name, mu, delta, k, 0.5, 0.05, 0.01)
+            options = (0.5, 0.05) if rule.needs else (None, None)  # relative_tolerance, brdf_floor: where needed
+            assert n == formulas[name](mu, delta, k) and n == rules.gonio_rays(name, mu, delta, k, *options, 0.01)
             certified = rule.certified(rays, delta, mu, k)
             assert certified.shape == rays.shape and np.all(certified <= gb.bins_mu(rays, delta, k))
             target = rule.target(mu, k, 0.5, 0.05)
@@ -201,8 +202,12 @@ def test_format_budgets_checks_what_a_user_gives():
 @pytest.mark.parametrize("call, message", [
     (lambda: rules.check_gonio_options("maybe", 0.01, 10), "guarantee must be one of union, union-exact, dkw, relative"),
     (lambda: rules.check_gonio_options("relative", 0.01, 10, 0.1), "guarantee 'relative' needs relative_tolerance"),
-    (lambda: rules.check_gonio_options("union", 0.01, 10, floor=-1.0), "brdf_floor must be a finite BRDF value > 0"),
-    (lambda: rules.check_gonio_options("union", 0.01, 10, relative=2), "relative_tolerance must satisfy 0 < "),
+    (lambda: rules.check_gonio_options("relative", 0.01, 10, 0.5, floor=-1.0),
+     "brdf_floor must be a finite BRDF value > 0"),
+    (lambda: rules.check_gonio_options("relative", 0.01, 10, relative=2, floor=0.05),
+     "relative_tolerance must satisfy 0 < "),
+    (lambda: rules.check_gonio_options("union", 0.01, 10, relative=0.5),
+     "relative_tolerance applies only with guarantee='relative'"),
     (lambda: rules.check_gonio_options("union", 3e-308, 10), r"delta/K must satisfy 0 < delta/K < 1 and be at least"),
 ])
 def test_the_goniophotometer_options_are_checked_where_they_enter(call, message):

@@ -49,6 +49,10 @@ E_R = ∫ F_c f cos, the rays sent below E_T = ∫ (1 − F_c) f cos, and E = E_
 """
 
 
+GLASS_MODEL: tuple[str, str, str] = ("separable", "exact", "one")
+"""The one (shadowing, g1, fresnel) of a glass table: Mitsuba's roughdielectric (separable, exact G1, F = 1)."""
+
+
 def bsdf_model(model: str, distribution: str, engine: str, shadowing: str | None, g1: str,
                fresnel: str) -> tuple[dict[str, str], str, float]:
     """
@@ -69,7 +73,7 @@ def bsdf_model(model: str, distribution: str, engine: str, shadowing: str | None
             raise ValueError("distribution must be 'ggx' for model='glass': Mitsuba's Beckmann roughdielectric samples "
                              "with the exact Smith G1 but weighs with Walter's fit, so its count is not the integral "
                              "of f cos the table would state")
-        if shadowing not in (None, "separable") or g1 != "exact" or fresnel != "one":
+        if (shadowing or GLASS_MODEL[0], g1, fresnel) != GLASS_MODEL:  # glass: Mitsuba's model only
             raise ValueError("shadowing, g1 and fresnel are conductor parameters (model='glass' is Mitsuba's "
                              "roughdielectric: separable GGX)")
         words = ("Mitsuba roughdielectric, GGX, separable Smith G2 = G1(wi) G1(wo) (Walter et al. 2007, eq. 23), "

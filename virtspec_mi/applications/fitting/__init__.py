@@ -15,7 +15,19 @@ References
 Féret et al. (2017), RSE 193:204–215; Jacquemoud & Baret (1990), RSE 34:75–91.
 """
 
-from virtspec_mi.applications.fitting.inversion import LOSSES, fit
-from virtspec_mi.applications.fitting.result import FitResult, read_fit
+from __future__ import annotations
+
+import importlib
+from typing import Any
 
 __all__ = ["fit", "FitResult", "read_fit", "LOSSES"]
+
+_LAZY = {"fit": "inversion", "LOSSES": "inversion", "FitResult": "result", "read_fit": "result"}
+"""Where each name lives: imported on first use, so that ``virtspec``'s parser (which adds ``virtspec fit``
+from :mod:`.command`) does not import SciPy's optimisers."""
+
+
+def __getattr__(name: str) -> Any:
+    if name in _LAZY:
+        return getattr(importlib.import_module(f"{__name__}.{_LAZY[name]}"), name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -37,8 +37,6 @@ def _pair(text: str) -> tuple[str, str]:
 def add_fit_command(commands: Any) -> argparse.ArgumentParser:
     """Add ``fit`` to the subparsers ``commands`` (an ``add_subparsers`` object); returns its parser."""
 
-    from virtspec_mi.applications.fitting.inversion import LOSSES
-
     parser = commands.add_parser(
         "fit", help="a specimen's parameters from a measured spectrum (estimate, confidence set)",
         description="Fit the free parameters of a specimen to a measured reflectance and/or transmittance: a coarse "
@@ -61,7 +59,8 @@ def add_fit_command(commands: Any) -> argparse.ArgumentParser:
     parser.add_argument("--uncertainty", type=float, help="measurement uncertainty (a half-width) of every point, "
                                                           "overriding the files'")
     parser.add_argument("--wavelengths", help="wavelengths to fit, e.g. 400:2500:20 (default: the measured ones)")
-    parser.add_argument("--loss", choices=tuple(LOSSES), default="chi2", help="the loss minimised (default chi2)")
+    parser.add_argument("--loss", default="chi2", help="the loss minimised: chi2, rmse or max (default chi2; checked "
+                                                      "by vm.fit, which names them)")
     parser.add_argument("--delta", type=float, default=0.05, help="risk of each candidate's forward spectrum "
                                                                   "(default 0.05)")
     parser.add_argument("--mu-fraction", type=float, default=0.5,

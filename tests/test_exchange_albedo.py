@@ -218,7 +218,7 @@ def test_cli_albedo_table(mi, tmp_path, capsys):
     from virtspec_mi.cli import main
 
     out = tmp_path / "t.nc"
-    assert main(["albedo-table", "--engine", "none", "--mu", "1,0.5", "--alpha", "0.3", "--epsilon", "0.02",
+    assert main(["albedo-table", "--engine", "none", "--cosines", "1,0.5", "--alpha", "0.3", "--epsilon", "0.02",
                  "--out", str(out), str(tmp_path / "t.h"), "--quiet"]) == 0
     text = capsys.readouterr().out
     assert "within 0.02" in text and f"written: {out}" in text
@@ -254,3 +254,11 @@ def test_a_cell_with_invalid_directions_is_not_certified(ggx):
     assert np.isfinite(np.delete(broken.certified_epsilon().ravel(), 4)).all()  # (1, 1) of a 3 x 3 grid
     assert broken.statement().startswith("NOT CERTIFIED: 1 of 12 values")
     assert broken.compare(broken.E).outside[0]["index"] == (1, 1)  # no tolerance: reported as outside
+
+
+def test_the_cosines_are_cosines_and_mu_keeps_one_meaning(capsys):
+    from virtspec_mi.cli import main
+
+    assert main(["albedo-table", "--engine", "none", "--mu", "1,0.5", "--alpha", "0.3"]) == 1
+    err = capsys.readouterr().err
+    assert "--mu: the cosines of incidence are --cosines" in err and "a table's is --epsilon" in err

@@ -159,7 +159,7 @@ def test_a_second_run_on_one_checkpoint_refuses_and_leaves_the_firsts_parts(mi, 
 
 
 def test_the_command_line_names_the_albedo_checkpoint_and_the_rerun_says_what_it_reused(tmp_path):
-    command = [sys.executable, "-m", "virtspec_mi", "albedo-table", "--engine", "none", "--mu", "0.2:1:0.2",
+    command = [sys.executable, "-m", "virtspec_mi", "albedo-table", "--engine", "none", "--cosines", "0.2:1:0.2",
                "--alpha", "0.1:1:0.3", "--epsilon", "0.01", "--out", str(tmp_path / "t.nc")]
     parts = tmp_path / "t.nc.parts"
     process = subprocess.Popen(command, cwd=tmp_path, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)

@@ -39,7 +39,7 @@ PATHS: dict[str, tuple[list[str], str | None]] = {
                "--phi-o-bins", "8", "--json", "--out", "{out}"], "gonio.nc"),
     "sphere": (["sphere", "sphere_150mm_8d", "--rays", "4000000", "--wavelengths", "450", "550", "650", "750",
                 "--out", "{out}"], "sphere.json"),
-    "albedo-table": (["albedo-table", "--engine", "none", "--mu", "0.2:1:0.2", "--alpha", "0.1:1:0.3",
+    "albedo-table": (["albedo-table", "--engine", "none", "--cosines", "0.2:1:0.2", "--alpha", "0.1:1:0.3",
                       "--epsilon", "0.004", "--quiet", "--out", "{out}"], "table.nc"),
     "klems": (["gonio", "diamond_conical", "--klems", "{out}", "--klems-basis", "quarter", "--isotropic",
                "--rays", "3000000", "--quiet"], "klems.xml"),

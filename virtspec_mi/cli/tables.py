@@ -45,10 +45,12 @@ def albedo_options(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--fresnel", choices=("one", "fc", "one_minus_fc"), default="one",
                         help="conductor F: 1, Fc = (1 - wi.m)^5 or 1 - Fc (default one)")
     parser.add_argument("--engine", choices=("cycles", "filament", "unreal", "none"), default=None,
-                        help="grid and memory order of that engine (default cycles, or none with --mu/--alpha)")
-    for name, text in (("mu", "cosines of incidence"), ("alpha", "roughness alpha"),
-                       ("roughness", "roughness r (alpha = r^2)"), ("eta", "glass indices >= 1 (inside: 1/eta)")):
-        parser.add_argument(f"--{name}", nargs="+", help=f"{text}: numbers or start:stop:step")
+                        help="grid and memory order of that engine (default cycles, or none with --cosines/--alpha)")
+    for flag, name, text in (("--cosines", "mu", "cosines of incidence mu"), ("--alpha", "alpha", "roughness alpha"),
+                             ("--roughness", "roughness", "roughness r (alpha = r^2)"),
+                             ("--eta", "eta", "glass indices >= 1 (inside: 1/eta)")):
+        parser.add_argument(flag, dest=name, nargs="+", help=f"{text}: numbers or start:stop:step")
+    parser.add_argument("--mu", dest="tolerance_flag", nargs="*", help=argparse.SUPPRESS)  # one meaning per flag
     parser.add_argument("--epsilon", type=float, default=1e-3, help="tolerance of every value (default 0.001)")
     parser.add_argument("--delta", type=float, default=0.01, help="failure probability of the whole table (default 0.01)")
     parser.add_argument("--bound", choices=("two-stage", "hoeffding"), default="two-stage", help="(default two-stage)")
@@ -88,6 +90,9 @@ def albedo_table(args: argparse.Namespace) -> int:
         for path in args.out:
             table.write(path, overwrite=args.overwrite)
     else:
+        if args.tolerance_flag is not None:
+            raise ValueError("--mu: the cosines of incidence are --cosines (--mu is the certified tolerance of a "
+                             "reading everywhere else; a table's is --epsilon)")
         grid = {name: None if getattr(args, name) is None else list(parse_values(name, " ".join(getattr(args, name))))
                 for name in ("mu", "alpha", "roughness", "eta")}
         engine = args.engine if args.engine is not None else (None if grid["mu"] is not None else "cycles")

@@ -9,7 +9,10 @@ from virtspec_mi.results.kinds import KINDS
 
 
 def test_dir_lists_every_public_name_and_each_resolves():
-    assert dir(vm) == sorted(vm.__all__)
+    from virtspec_mi.api import aliases
+
+    assert dir(vm) == sorted({*vm.__all__, *aliases()})  # the API functions generated from the registry too
+    assert "gloss" in aliases() and callable(vm.gloss)
     assert len(set(vm.__all__)) == len(vm.__all__)
     for name in vm.__all__:
         assert getattr(vm, name) is not None, name

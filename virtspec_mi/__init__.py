@@ -142,12 +142,16 @@ from virtspec_mi import scenes  # noqa: E402  (the shipped scenes by name: paths
 
 
 def __dir__() -> list[str]:
-    """The public names (lazy ones included), for ``dir(vm)`` and tab completion."""
+    """The public names (lazy ones included, and the API functions generated from the registry)."""
 
-    return sorted(__all__)
+    return sorted({*__all__, *importlib.import_module(_LAZY["take"]).aliases()})
 
 
 def __getattr__(name: str) -> Any:
     if name in _LAZY:
         return getattr(importlib.import_module(_LAZY[name]), name)
+    if not name.startswith("_"):  # an instrument's subcommand without a function of its own: generated (vm.gloss)
+        api = importlib.import_module(_LAZY["take"])  # the API, resolved on access as every lazy name
+        if name in api.aliases():
+            return api.alias(name)
     raise AttributeError(f"module 'virtspec_mi' has no attribute {name!r}")

@@ -65,7 +65,8 @@ from virtspec_mi.results.zarr import ZarrTable
 from virtspec_mi.scene import find_bench, scene_fingerprint, scene_source
 from virtspec_mi.settings import Settings, keywords, resolve, true_or_false
 
-__all__ = ["measure", "sweep", "gonio", "read_result", "read_gonio", "fluctuation", "sphere_measure", "take"]
+__all__ = ["measure", "sweep", "gonio", "read_result", "read_gonio", "fluctuation", "sphere_measure", "take", "alias",
+           "aliases"]
 
 
 def measure(scene: Any, *, parameters: dict[str, Any] | None = None, defines: dict[str, Any] | None = None,
@@ -534,3 +535,41 @@ def _reading(name: str, caller: str, what: str, scene: Any, given: dict[str, Any
     settings, *options = resolve(caller, given, _scene_options(bench, Settings),
                                  *(() if declared is None else (_scene_options(bench, declared),)))
     return _keyed(name, what, scene, bench, settings, options[0] if options else None, defines=defines, **run)
+
+
+def aliases() -> dict[str, str]:
+    """
+    The generated API functions: for each subcommand of an instrument of the registry that
+    names no function of its own (:attr:`~virtspec_mi.instruments.command.Command.function`,
+    e.g. the gloss meter's ``gloss``), the subcommand's name → its instrument's name.
+    """
+
+    return {command.name: name for name, instrument in INSTRUMENTS.items() for command in instrument.commands
+            if command.function is None and command.name not in __all__}
+
+
+def alias(name: str) -> Any:
+    """
+    The API function ``name`` of :func:`aliases`: :func:`take` with its instrument, its
+    signature the settings and the instrument's options (``vm.gloss(scene, cone=2, …)`` is
+    ``vm.take("gloss", scene, cone=2, …)``), its docstring the subcommand's description.
+    """
+
+    instrument = INSTRUMENTS[aliases()[name]]
+    command = next(c for c in instrument.commands if c.name == name)
+
+    def reading(scene: Any, *, theta_i: Any = None, parameters: dict[str, Any] | None = None, points: bool = False,
+                defines: dict[str, Any] | None = None, checkpoint: str | os.PathLike | None = None,
+                out: str | os.PathLike | None = None, progress: bool | None = None, workers: Any = None,
+                task_readings: int | None = None, **options: Any) -> Any:
+        return take(instrument.name, scene, theta_i=theta_i, parameters=parameters, points=points, defines=defines,
+                    checkpoint=checkpoint, out=out, progress=progress, workers=workers, task_readings=task_readings,
+                    **options)
+
+    reading.__name__ = reading.__qualname__ = name
+    reading.__doc__ = (f"{command.description}\n\nGenerated from the registry: ``take({instrument.name!r}, scene, "
+                       "...)`` (:func:`virtspec_mi.take`; keywords as for :func:`virtspec_mi.sweep`, and the "
+                       "instrument's options).")
+    kinds = (Settings,) if instrument.options is None else (Settings, instrument.options)
+    reading.__signature__ = keywords(reading, *kinds)  # type: ignore[attr-defined]
+    return reading

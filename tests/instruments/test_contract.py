@@ -85,6 +85,17 @@ def test_every_instrument_declares_a_subcommand_a_result_kind_and_an_example():
         assert "long" in instrument.example and "readings" in instrument.example["long"], name
 
 
+def test_every_subcommand_is_an_api_function_with_the_instruments_options():
+    import inspect
+
+    for instrument in INSTRUMENTS.values():
+        for command in instrument.commands:
+            function = getattr(vm, command.function or command.name)  # a generated alias where none is written
+            names = set(inspect.signature(function).parameters)
+            assert set(vm.Settings.names()) - {"theta_i"} <= names, command.name
+            assert instrument.options is None or set(instrument.options.names()) <= names, command.name
+
+
 @pytest.mark.parametrize("name", ROWS)
 def test_the_api_and_the_command_line_give_the_same_counts(name, readings, tmp_path, capsys):
     scene, keywords = example(name)

@@ -54,7 +54,7 @@ def _simd() -> str:
 def _projection(table, epsilon: float, rate_per_core: float, workers: int, call_seconds: float) -> tuple:
     """Second-stage rays at ``epsilon`` from the table's values (see the module docstring) and the time on workers."""
 
-    from virtspec_mi.exchange.sizing import binomial_rays, pilot_intervals, stage_two_shares
+    from virtspec_mi.budgets.binomial import binomial_rays, pilot_intervals, stage_two_shares
 
     values = [table.E.ravel()] + ([] if table.E_avg is None else [table.E_avg.ravel()])
     cells = sum(v.size for v in values)
@@ -82,7 +82,7 @@ def main() -> None:
     import virtspec_mi as vm
     from virtspec_mi.exchange.albedo import albedo_table
     from virtspec_mi.exchange.klems_gonio import klems_measure
-    from virtspec_mi.exchange.sizing import union_hoeffding_rays
+    from virtspec_mi.budgets.binomial import union_hoeffding_rays
 
     vm.mitsuba()
     print(f"# albedo tables and Klems files — {datetime.datetime.now(datetime.timezone.utc):%Y-%m-%d %H:%M} UTC")

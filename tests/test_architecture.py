@@ -57,11 +57,18 @@ LAYERS: list[tuple[str, tuple[str, ...]]] = [
     ("api", ("virtspec_mi.api", "virtspec_mi.comparison", "virtspec_mi.scaleout", "virtspec_mi.validation",
              "virtspec_mi.scene", "virtspec_mi.runtime",
              # the exchange formats that take their readings through the API
-             "virtspec_mi.exchange.albedo", "virtspec_mi.exchange.klems_gonio", "virtspec_mi.exchange.flip")),
+             "virtspec_mi.exchange.albedo", "virtspec_mi.exchange.klems_gonio", "virtspec_mi.exchange.flip",
+             "virtspec_mi.exchange.engine_tables", "virtspec_mi.exchange.audit",
+             # applications: clients of the API and the engine that answer a user's question (fits,
+             # derived quantities; the maths that results read is below)
+             "virtspec_mi.applications")),
     # the integrators: Mitsuba's entry (mi.render), thin adapters over the instruments
     ("adapter", ("virtspec_mi.plugins.integrators",)),
     ("instruments", ("virtspec_mi.instruments",)),
-    ("results", ("virtspec_mi.results",)),
+    ("results", ("virtspec_mi.results",
+                 # the derived quantities' maths that Result.colour() reads (issue 30)
+                 "virtspec_mi.applications.derived.functionals", "virtspec_mi.applications.derived.delta_e",
+                 "virtspec_mi.applications.derived.colour")),
     ("engine", ("virtspec_mi.engine",)),
     ("settings", ("virtspec_mi.settings",)),
     # exchange: the file formats and their sizing (the modules that measure are in the api layer)
@@ -71,7 +78,8 @@ LAYERS: list[tuple[str, tuple[str, ...]]] = [
     ("kernel", ("virtspec_mi.kernel",)),
     # the root package imports llvm and scenes (its public names load lazily: not counted);
     # virtspec_mi.scenes (the shipped scene files by name) imports nothing of the package
-    ("base", ("virtspec_mi.checks", "virtspec_mi.files", "virtspec_mi.llvm", "virtspec_mi.scenes", "=virtspec_mi")),
+    ("base", ("virtspec_mi.checks", "virtspec_mi.files", "virtspec_mi.llvm", "virtspec_mi.scenes", "=virtspec_mi",
+              "=virtspec_mi.applications", "=virtspec_mi.applications.derived")),
 ]
 """
 The layers of the package, top to bottom (issue 21). An entry names a module and everything

@@ -16,7 +16,7 @@ PROGRAM = """
 #include "table.h"
 int main(void) {
     int i;
-    printf("%.17g %.17g %llu\\n", VIRTSPEC_ALBEDO_EPSILON, VIRTSPEC_ALBEDO_DELTA, VIRTSPEC_ALBEDO_RAYS);
+    printf("%.17g %.17g %llu\\n", TABLE_GGX_EPSILON, TABLE_GGX_DELTA, TABLE_GGX_RAYS);
     for (i = 0; i < TABLE_GGX_E_SIZE; i++) printf("%.9g\\n", (double)table_ggx_E[i]);
     for (i = 0; i < TABLE_GGX_EAVG_SIZE; i++) printf("%.9g\\n", (double)table_ggx_Eavg[i]);
     printf("%.17g\\n", TABLE_GGX_E_EPSILON);
@@ -76,3 +76,22 @@ def test_reading_published_headers(tmp_path):
         read_table_values(path, array="table_c")
     with pytest.raises(ValueError, match="3 values; this table has 2 cells"):
         read_table_values(path, array="table_a", expected=2)
+
+
+@pytest.mark.parametrize("compiler, flags, source", [("gcc", ["-std=c99", "-Wall", "-Werror", "-pedantic"], "main.c"),
+                                                     ("g++", ["-std=c++11", "-Wall", "-Werror"], "main.cpp")])
+def test_two_tables_headers_compile_in_one_translation_unit(table, tmp_path, compiler, flags, source):
+    """Each header's macros carry its table's prefix (TABLE_GGX_…, TABLE_BECKMANN_…): none redefined (issue 33)."""
+
+    if shutil.which(compiler) is None:
+        pytest.skip(f"the system compiler {compiler} is not installed on this machine")
+    other = albedo_table("conductor", distribution="beckmann", engine=None, mu=[1.0, 0.5], alpha=[0.3], epsilon=0.05,
+                         seed=3, progress=False)
+    (tmp_path / "ggx.h").write_text(write_header(table))
+    (tmp_path / "beckmann.h").write_text(write_header(other))
+    (tmp_path / source).write_text('#include <stdio.h>\n#include "ggx.h"\n#include "beckmann.h"\n#include "ggx.h"\n'
+                                   'int main(void) { printf("%.17g %.17g\\n", TABLE_GGX_EPSILON, '
+                                   "TABLE_BECKMANN_EPSILON); return (int)(table_ggx_E[0] + table_beckmann_E[0]) - 2; }\n")
+    subprocess.run([compiler, *flags, source, "-o", "check"], cwd=tmp_path, check=True, capture_output=True)
+    printed = subprocess.run([str(tmp_path / "check")], capture_output=True, text=True).stdout.split()
+    assert [float(v) for v in printed] == [table.epsilon, other.epsilon]

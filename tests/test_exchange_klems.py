@@ -145,6 +145,7 @@ def test_isotropic_shortcut_and_gonio_result_to_klems(mi, tmp_path):
                        theta_o_bins=b.theta_edges().tolist(), phi_o_bins=b.phi_bins())
     out = reading.to_klems(tmp_path / "g.xml", basis="quarter", isotropic=True)
     assert check_klems(out, reader="xml")["passed"]
+    assert "Mitsuba None" not in out.read_text() and f"Mitsuba {mi.__version__}" in out.read_text()
     from_reading = read_klems_sidecar(sidecar_path(out))
     assert np.all(np.abs(from_reading.fraction - rotated.fraction)
                   < (from_reading.certified_epsilon + rotated.certified_epsilon)[..., None, None])

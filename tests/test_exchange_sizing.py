@@ -1,4 +1,4 @@
-"""Ray budgets of many cells (virtspec_mi.exchange.sizing): each rule against the exact binomial law."""
+"""Ray budgets of many cells (virtspec_mi.budgets.binomial): each rule against the exact binomial law."""
 
 from __future__ import annotations
 
@@ -8,7 +8,8 @@ from scipy.special import ndtr
 from scipy.stats import binom
 
 from virtspec_mi.budgets.bounds import max_miss_probability
-from virtspec_mi.exchange.sizing import (bernoulli_kl, binomial_rays, chernoff_rays, clopper_pearson_each,
+from virtspec_mi.budgets.intervals import clopper_pearson_each
+from virtspec_mi.budgets.binomial import (bernoulli_kl, binomial_rays, chernoff_rays,
                                          stage_two_shares, union_hoeffding_rays, upper_exponent)
 from virtspec_mi.budgets.intervals import clopper_pearson
 

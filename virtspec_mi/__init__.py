@@ -58,6 +58,16 @@ __all__ = [
     "Comparison",
     "MeasuredSpectrum",
     "GlossResult",
+    "colour",
+    "band",
+    "fapar",
+    "index",
+    "colour_difference",
+    "albedo",
+    "DerivedResult",
+    "fit",
+    "read_fit",
+    "FitResult",
 ]
 
 _LAZY = {
@@ -101,6 +111,16 @@ _LAZY = {
     "Comparison": "virtspec_mi.comparison",
     "MeasuredSpectrum": "virtspec_mi.comparison",
     "GlossResult": "virtspec_mi.instruments.gloss",
+    "colour": "virtspec_mi.applications.derived.targets",
+    "band": "virtspec_mi.applications.derived.targets",
+    "fapar": "virtspec_mi.applications.derived.targets",
+    "index": "virtspec_mi.applications.derived.targets",
+    "colour_difference": "virtspec_mi.applications.derived.difference",
+    "albedo": "virtspec_mi.applications.derived.targets",
+    "DerivedResult": "virtspec_mi.applications.derived.result",
+    "fit": "virtspec_mi.applications.fitting",
+    "read_fit": "virtspec_mi.applications.fitting",
+    "FitResult": "virtspec_mi.applications.fitting",
 }
 
 

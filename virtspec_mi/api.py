@@ -62,13 +62,13 @@ from virtspec_mi.results.sphere import SphereResult
 from virtspec_mi.results.zarr import SUFFIX as ZARR_SUFFIX
 from virtspec_mi.results.zarr import ZarrTable
 from virtspec_mi.scene import find_bench, scene_fingerprint, scene_source
-from virtspec_mi.settings import Settings, keywords, resolve
+from virtspec_mi.settings import Settings, keywords, resolve, true_or_false
 
 __all__ = ["measure", "sweep", "gonio", "read_result", "read_gonio", "fluctuation", "sphere_measure", "take"]
 
 
 def measure(scene: Any, *, parameters: dict[str, Any] | None = None, defines: dict[str, Any] | None = None,
-            progress: bool | None = None, **settings: Any) -> Result:
+            progress: bool | None = None, target: Any = None, **settings: Any) -> Any:
     """
     Measure the specimen of ``scene`` and return a certified :class:`~virtspec_mi.results.hemispherical.Result`
     over wavelength (θi a scalar label).
@@ -92,6 +92,14 @@ def measure(scene: Any, *, parameters: dict[str, Any] | None = None, defines: di
         ``True``: always a tqdm bar of the readings on stderr; ``False``: never; ``None``
         (default): only when stderr is a terminal and the readings are expected to last
         more than ~2 s (a spectrum of many wavelengths).
+    target
+        A derived quantity to certify instead of a spectrum (``vm.colour(...)``,
+        ``vm.band(...)``, ``vm.index(...)``, ``vm.fapar(...)``): the instrument picks the
+        wavelengths and the rays of each (Nₖ ∝ |wₖ|) for the target's tolerance at δ and
+        returns a :class:`~virtspec_mi.applications.derived.result.DerivedResult`
+        (:mod:`virtspec_mi.applications.derived`). ``wavelengths``, ``mu``, ``rays``,
+        ``bound``, ``pilot_rays``, ``pilot_delta`` and ``joint`` are then the target's to
+        decide (giving one is an error); ``parameters`` are not taken.
 
     References
     ----------
@@ -99,6 +107,8 @@ def measure(scene: Any, *, parameters: dict[str, Any] | None = None, defines: di
     """
 
     bench = find_bench(scene, defines)
+    if target is not None:
+        return _measure_target(scene, bench, defines, parameters, target, settings)
     settings, = resolve("measure", settings, _scene_options(bench, Settings))
     space = parameter_space(bench, parameters or {})
     if space is not None and space.size != 1:
@@ -108,6 +118,24 @@ def measure(scene: Any, *, parameters: dict[str, Any] | None = None, defines: di
     result = result.squeeze("theta_i", *([] if space is None else space.dims))  # one reading: scalar labels
     instrument.warn_if_uncertified(result)
     return result
+
+
+def _measure_target(scene: Any, bench: Bench, defines: dict[str, Any] | None, parameters: Any, target: Any,
+                    settings: dict[str, Any]) -> Any:
+    """:func:`measure` of a derived quantity (:func:`virtspec_mi.applications.derived.measure.take_target`)."""
+
+    from virtspec_mi.applications.derived.measure import REFUSED_SETTINGS, take_target
+
+    given = sorted(name for name in REFUSED_SETTINGS if settings.get(name) is not None)
+    if given:
+        raise ValueError(f"{', '.join(given)}: a target picks its own wavelengths and rays (give its tolerance to the "
+                         "target, e.g. vm.band('B04', tolerance=0.002)); leave them out")
+    if parameters:
+        raise ValueError("parameters: a target is measured at the scene's own specimen parameters (set them in the "
+                         "scene or with defines)")
+    resolved, = resolve("measure", settings, _scene_options(bench, Settings))
+    return take_target(bench, resolved, target, scene=scene_fingerprint(scene, bench, defines),
+                       source=scene_source(scene, bench, defines))
 
 
 def sweep(
@@ -122,8 +150,9 @@ def sweep(
     progress: bool | None = None,
     workers: Any = None,
     task_readings: int | None = None,
+    target: Any = None,
     **settings: Any,
-) -> Result:
+) -> Any:
     """
     Certified readings of ``scene`` over every (wavelength, θi) pair.
 
@@ -183,12 +212,31 @@ def sweep(
         As for :func:`measure` (one value for the whole sweep); ``wavelengths`` must be
         distinct. With ``bound="two-stage"`` each reading is sized by its own pilot, all
         of them batched.
+    target
+        A derived quantity (as for :func:`measure`) certified at every θi: a
+        :class:`~virtspec_mi.applications.derived.result.DerivedSweep`, each angle at δ
+        (``parameters``, ``checkpoint``, ``out`` and ``workers`` are not taken with it).
 
     References
     ----------
     Baranoski et al. (2001), eq. (23), Fig. 5.
     """
 
+    if target is not None:
+        given = [name for name, value in (("parameters", parameters), ("checkpoint", checkpoint), ("out", out),
+                                          ("workers", workers)) if value]
+        if given:
+            raise ValueError(f"{', '.join(given)}: not taken with a target (each angle is one vm.measure(target=...))")
+        from virtspec_mi.applications.derived.result import DerivedSweep
+
+        bench = find_bench(scene, defines)
+        resolved, = resolve("sweep", {k: v for k, v in settings.items() if k not in ("wavelengths", "mu", "rays",
+                                                                                    "bound", "pilot_rays",
+                                                                                    "pilot_delta", "joint")},
+                            _scene_options(bench, Settings))
+        angles = _angles(resolved, theta_i, "a sweep")
+        return DerivedSweep(tuple(float(t) for t in angles), tuple(
+            _measure_target(scene, bench, defines, None, target, {**settings, "theta_i": float(t)}) for t in angles))
     return _reading("hemispherical", "sweep", "a sweep", scene, settings, theta_i=theta_i, parameters=parameters,
                     points=points, defines=defines, checkpoint=checkpoint, out=out, progress=progress, workers=workers,
                     task_readings=task_readings)
@@ -212,7 +260,7 @@ def _keyed(name: str, what: str, scene: Any, bench: Bench, settings: Settings, o
     if out is not None:
         check_output(out)
         checkpoint = checkpoint if checkpoint is not None else checkpoint_for(out)
-    space = parameter_space(bench, parameters or {}, points=points)
+    space = parameter_space(bench, parameters or {}, points=true_or_false("points")(points))
     angles = _angles(settings, theta_i, what)
     if len(np.unique(settings.wavelengths)) != len(settings.wavelengths):
         raise ValueError(f"wavelengths of {what} must be distinct (got repeated values)")

@@ -34,9 +34,9 @@ import shutil
 import uuid
 from contextlib import contextmanager
 from pathlib import Path
-from typing import Any, Iterator
+from typing import Any, Callable, Iterator
 
-__all__ = ["WriteError", "IN_MEMORY", "atomic_file", "cause_of", "temporary_name", "flush_directory"]
+__all__ = ["WriteError", "IN_MEMORY", "atomic_file", "atomic_write", "cause_of", "temporary_name", "flush_directory"]
 
 _FULL = 1 << 20  # a write failing with less free space than this is reported as a full disk
 
@@ -156,6 +156,19 @@ def atomic_file(path: str | os.PathLike) -> Iterator[Path]:
             raise WriteError(path, cause, code=code) from error
         raise
     flush_directory(path.parent)
+
+
+def atomic_write(path: str | os.PathLike, write: Callable[[str], Any]) -> Path:
+    """
+    Call ``write(temporary_path)``, then rename the temporary file onto ``path``
+    (:func:`atomic_file`: a temporary created here, removed on failure; a failed write —
+    a full disk, a missing folder — a ``WriteError`` naming ``path``).
+    """
+
+    path = Path(path)
+    with atomic_file(path) as temporary:
+        write(str(temporary))
+    return path
 
 
 def _flush(path: Path) -> None:

@@ -25,6 +25,8 @@ name                    kind         module (under :mod:`virtspec_mi.plugins`)
 ``abm_b``               BSDF         :mod:`.bsdfs.abm_b` (walk: :mod:`.bsdfs.abm_walk`)
 ``abm_u``               BSDF         :mod:`.bsdfs.abm_u` (walk: :mod:`.bsdfs.abm_walk`)
 ``tabulated``           BSDF         :mod:`.bsdfs.tabulated` (a goniophotometer table)
+``microfacet``          BSDF         :mod:`.bsdfs.microfacet` (the engines' albedo models)
+``prospect_d``          BSDF         :mod:`.bsdfs.prospect_d` (model: :mod:`.bsdfs.prospect_model`)
 ``spectrophotometer``   integrator   :mod:`.integrators.spectrophotometer`
 ``integrating_sphere``  integrator   :mod:`.integrators.integrating_sphere`
 ======================  ===========  ===============================================
@@ -47,6 +49,8 @@ PLUGINS: dict[str, tuple[str, str, str]] = {
     "abm_b": ("bsdf", "virtspec_mi.plugins.bsdfs.abm_b", "ABMB"),
     "abm_u": ("bsdf", "virtspec_mi.plugins.bsdfs.abm_u", "ABMU"),
     "tabulated": ("bsdf", "virtspec_mi.plugins.bsdfs.tabulated", "Tabulated"),
+    "microfacet": ("bsdf", "virtspec_mi.plugins.bsdfs.microfacet", "Microfacet"),
+    "prospect_d": ("bsdf", "virtspec_mi.plugins.bsdfs.prospect_d", "ProspectD"),
     "spectrophotometer": ("integrator", "virtspec_mi.plugins.integrators.spectrophotometer", "Spectrophotometer"),
     "integrating_sphere": ("integrator", "virtspec_mi.plugins.integrators.integrating_sphere",
                            "IntegratingSphereIntegrator"),
@@ -66,13 +70,24 @@ def mitsuba() -> ModuleType:
     """Return the ``mitsuba`` module, set up for virtspec-mi (idempotent)."""
 
     name = variant()
-    if name.startswith("llvm"):
-        select_libllvm()
-        check_loaded_llvm()
-    import mitsuba as mi
+    if name in _registered:
+        import mitsuba as mi
 
-    if mi.variant() != name:
-        mi.set_variant(name)
+        if mi.variant() == name:
+            return mi
+    from virtspec_mi.engine import interrupts
+
+    # Importing Dr.Jit and Mitsuba's variant (C extensions, about half a second) must not be cut by a
+    # KeyboardInterrupt: it would come out as a SystemError or NameError and leave the modules half made; a
+    # Ctrl-C waits for its end instead (the plugins' Python modules after it take a KeyboardInterrupt as any)
+    with interrupts.deferred():
+        if name.startswith("llvm"):
+            select_libllvm()
+            check_loaded_llvm()
+        import mitsuba as mi
+
+        if mi.variant() != name:
+            mi.set_variant(name)
     if name not in _registered:
         from virtspec_mi.plugins.integrators.spectrophotometer import clear_render_errors
 

@@ -41,6 +41,7 @@ from virtspec_mi.geometry.disks import (
     InstrumentGeometry,
 )
 from virtspec_mi.engine.bench import EMITTER_ID, SPECIMEN_ID, Bench, SceneError, read_bench
+from virtspec_mi.engine import interrupts
 from virtspec_mi import scenes
 from virtspec_mi.runtime import mitsuba
 from virtspec_mi.settings import SETTING_NAMES
@@ -71,10 +72,12 @@ def load_scene(scene: Any, defines: dict[str, Any] | None = None) -> Any:
                 raise SceneError(f"scene file not found: {path}{scenes.hint(path)}")
             _check_defined(path, defines)
             scenes.include_folder(mi.file_resolver())  # <include filename="diamond_conical.xml"/> finds it
-            return mi.load_file(str(path), **defines)
+            with interrupts.deferred():  # a Ctrl-C in a plugin's Python would come out as Mitsuba's RuntimeError
+                return mi.load_file(str(path), **defines)
         if isinstance(scene, dict):
             _check_dict(scene)
-            return mi.load_dict(scene)
+            with interrupts.deferred():
+                return mi.load_dict(scene)
     except SceneError:
         raise
     except Exception as error:  # Mitsuba raises RuntimeError/ValueError with its parser text

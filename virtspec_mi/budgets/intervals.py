@@ -24,7 +24,7 @@ import numpy as np
 
 from virtspec_mi.checks import check_delta, validated
 
-__all__ = ["clopper_pearson"]
+__all__ = ["clopper_pearson", "clopper_pearson_each"]
 
 
 @validated(delta=check_delta)
@@ -46,11 +46,30 @@ def clopper_pearson(k: Any, n: Any, delta: float) -> tuple[np.ndarray, np.ndarra
     (0.0, 0.003793)
     """
 
-    from scipy.special import betainccinv, betaincinv  # scipy.stats would add ~1 s to a cold start
-
     k, n = np.broadcast_arrays(np.asarray(k, dtype=np.float64), np.asarray(n, dtype=np.float64))
     if np.any(n < 1) or np.any(k < 0) or np.any(k > n) or np.any(k != np.floor(k)):
         raise ValueError("clopper_pearson needs whole counts with 0 <= k <= n and n >= 1")
+    return _beta_bounds(k, n, delta)
+
+
+def clopper_pearson_each(k: Any, n: Any, delta: Any) -> tuple[np.ndarray, np.ndarray]:
+    """
+    :func:`clopper_pearson` with a δ per element (the cells of a table carry their own
+    share of δ): the same beta quantiles, broadcast over ``delta`` too.
+    """
+
+    k, n, delta = np.broadcast_arrays(np.asarray(k, dtype=np.float64), np.asarray(n, dtype=np.float64),
+                                      np.asarray(delta, dtype=np.float64))
+    if np.any(n < 1) or np.any(k < 0) or np.any(k > n) or not np.all((delta > 0) & (delta < 1)):
+        raise ValueError("clopper_pearson_each needs whole counts 0 <= k <= n, n >= 1 and 0 < delta < 1")
+    return _beta_bounds(k, n, delta)
+
+
+def _beta_bounds(k: np.ndarray, n: np.ndarray, delta: Any) -> tuple[np.ndarray, np.ndarray]:
+    """The Clopper–Pearson bounds of checked counts: the beta quantiles at δ/2 (0 at k = 0, 1 at k = n)."""
+
+    from scipy.special import betainccinv, betaincinv  # scipy.stats would add ~1 s to a cold start
+
     with np.errstate(invalid="ignore"):
         lower = np.where(k > 0, betaincinv(np.maximum(k, 1), n - k + 1, delta / 2), 0.0)
         upper = np.where(k < n, betainccinv(k + 1, np.maximum(n - k, 1), delta / 2), 1.0)

@@ -499,6 +499,11 @@ def check_gonio_options(guarantee: Any, delta: float, bins: int, relative: Any =
     check_delta(delta / bins, name="delta/K")
     if rule.needs and (relative is None or floor is None):
         raise ValueError(f"guarantee {rule.name!r} needs {rule.needs}")
+    given = [name for name, value in (("relative_tolerance", relative), ("brdf_floor", floor)) if value is not None]
+    if given and not rule.needs:
+        relative_rules = [name for name, row in GUARANTEES.items() if row.needs]
+        raise ValueError(f"{given[0]} applies only with guarantee={relative_rules[0]!r} (got guarantee={rule.name!r}); "
+                         f"drop {' and '.join(given)}, or set guarantee={relative_rules[0]!r}")
     relative = None if relative is None else check_relative_tolerance(relative)
     floor = None if floor is None else check_brdf_floor(floor)
     return rule, relative, floor

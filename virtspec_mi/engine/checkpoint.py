@@ -39,9 +39,11 @@ or, with ``out=``, once the output file is written and flushed to disk.
 
 from __future__ import annotations
 
+import hashlib
 import json
 import math
 import os
+import re
 import time
 import warnings
 from contextlib import contextmanager
@@ -51,7 +53,7 @@ from typing import Any, Iterator
 import numpy as np
 
 from virtspec_mi import __version__
-from virtspec_mi.files import IN_MEMORY, WriteError, atomic_file
+from virtspec_mi.files import IN_MEMORY, WriteError, atomic_file, atomic_write
 from virtspec_mi.engine.tally import Tally
 from virtspec_mi.kernel.counts import Counts
 
@@ -60,7 +62,7 @@ try:
 except ImportError:  # not a POSIX system: checkpoints are not locked
     fcntl = None  # type: ignore[assignment]
 
-__all__ = ["CheckpointError", "Checkpoint", "checkpoint_for", "claim", "remove", "kept_in"]
+__all__ = ["CheckpointError", "Checkpoint", "checkpoint_for", "claim", "remove", "kept_in", "locked", "ResultStore"]
 
 _FORMAT = "virtspec-mi sweep checkpoint 4"  # 3: invalid_directions counted; 4: bins and sums kept
 _FORMAT_WITHOUT_BINS = "virtspec-mi sweep checkpoint 3"  # read for runs without bins or sums
@@ -108,6 +110,23 @@ def claim(path: str | os.PathLike) -> Iterator[Path]:
 
     path = Path(path)
     _check_writable(path)
+    handle = _lock(path)
+    try:
+        yield path
+    finally:
+        _unlock(path, handle)
+
+
+@contextmanager
+def locked(path: str | os.PathLike) -> Iterator[Path]:
+    """
+    An exclusive OS lock on ``PATH.lock`` (beside ``path``: a checkpoint file or folder)
+    until the block ends, as :func:`claim` takes it: ``CheckpointError`` naming the
+    path and the pid when another run holds it (a second run on one output refuses,
+    never touching the first's files).
+    """
+
+    path = Path(path)
     handle = _lock(path)
     try:
         yield path
@@ -474,3 +493,71 @@ def _weights(values: list, what: str) -> np.ndarray:
         if value is not None and (type(value) not in (int, float) or math.isnan(value)):
             raise _Corrupt(f"{what} holds {value!r}, not a number or null")
     return np.array([np.nan if v is None else float(v) for v in values], dtype=np.float64)
+
+
+class ResultStore:
+    """
+    The checkpoint of a run made of several API calls (an albedo table's groups of cells):
+    each finished call's result kept as a file in a directory — ``identity.json`` (what
+    the run is: a rerun of another run is refused, naming what differs) and one
+    ``<16 hex>.nc`` per label, each written whole under its name (a temporary
+    ``.<name>.<random>.tmp`` beside it, renamed) — so that a rerun reuses them. Held by
+    one run at a time with :func:`locked`.
+    """
+
+    _OURS = re.compile(r"identity\.json|[0-9a-f]{16}\.nc")
+    _TEMPORARY = re.compile(r"\.(identity\.json|[0-9a-f]{16}\.nc)\.[0-9a-z]+\.tmp")
+
+    def __init__(self, directory: Path | None, identity: dict[str, Any]) -> None:
+        self.directory = directory
+        self.reused = 0
+        self.saved = 0
+        if directory is None:
+            return
+        if directory.exists() and not directory.is_dir():
+            raise ValueError(f"checkpoint must be a directory (got the file {directory})")
+        directory.mkdir(parents=True, exist_ok=True)
+        stamp = directory / "identity.json"
+        text = json.dumps(identity, sort_keys=True)
+        if stamp.exists():
+            if stamp.read_text() != text:
+                old = json.loads(stamp.read_text())
+                differ = sorted(k for k in set(old) | set(identity) if old.get(k) != identity.get(k))
+                raise ValueError(f"checkpoint {directory} belongs to a different table (differs in: "
+                                 f"{', '.join(differ)}); re-run with the same settings, or delete it")
+            self.saved = sum(1 for path in directory.iterdir() if self._OURS.fullmatch(path.name)) - 1
+        else:
+            atomic_write(stamp, lambda tmp: Path(tmp).write_text(text))
+
+    def path(self, label: str) -> Path | None:
+        if self.directory is None:
+            return None
+        return self.directory / (hashlib.blake2b(label.encode(), digest_size=8).hexdigest() + ".nc")
+
+    def load(self, label: str, read: Any) -> Any:
+        """The result kept for ``label`` (``read(path)``), or ``None``."""
+
+        path = self.path(label)
+        if path is not None and path.exists():
+            self.reused += 1
+            return read(path)
+        return None
+
+    def save(self, label: str, result: Any) -> None:
+        path = self.path(label)
+        if path is not None:
+            result.write(path)
+            self.saved += 1
+
+    def remove(self) -> None:
+        """Remove the folder: what this store writes (identity.json, <16 hex>.nc, their temporaries), not more."""
+
+        if self.directory is None:
+            return
+        for path in self.directory.iterdir():
+            if self._OURS.fullmatch(path.name) or self._TEMPORARY.fullmatch(path.name):
+                path.unlink()
+        try:
+            self.directory.rmdir()
+        except OSError:
+            pass

@@ -36,7 +36,7 @@ from contextlib import contextmanager
 from pathlib import Path
 from typing import Any, Iterator
 
-__all__ = ["SIGNALS", "Interrupted", "catching", "deferred", "check", "exit_status"]
+__all__ = ["SIGNALS", "Interrupted", "catching", "deferred", "check", "exit_status", "received"]
 
 SIGNALS: tuple[int, ...] = (signal.SIGINT, signal.SIGTERM)
 """The signals that stop a run."""
@@ -86,11 +86,15 @@ class _State:
     """Runs under way (nested: a sweep of sweeps)."""
     catching: bool = False
     """The command line catches SIGINT and SIGTERM for its whole command."""
+    received: int | None = None
+    """The last signal received under :func:`catching` (kept: an interrupt raised inside an import or a C
+    extension may come out as another error, e.g. ``SystemError``, or be swallowed by a library)."""
 
 
 def _handler(signum: int, frame: Any) -> None:
     """Inside a run: keep the signal for the next safe point (a second one acts at once); outside: stop now."""
 
+    _State.received = signum
     if _State.depth > 0 and _State.pending is None:
         _State.pending = signum
         return
@@ -112,13 +116,13 @@ def catching() -> Iterator[None]:
     previous = {s: signal.getsignal(s) for s in SIGNALS}
     for s in SIGNALS:
         signal.signal(s, _handler)
-    _State.catching, _State.pending = True, None
+    _State.catching, _State.pending, _State.received = True, None, None
     try:
         yield
     finally:
         for s, handler in previous.items():
             signal.signal(s, handler)
-        _State.catching, _State.pending = False, None
+        _State.catching, _State.pending, _State.received = False, None, None
 
 
 @contextmanager
@@ -160,6 +164,16 @@ def deferred() -> Iterator[None]:
         if ended is not None:  # as the default SIGTERM would have, once the checkpoint is saved
             print(f"virtspec-mi: {ended}", file=sys.stderr, flush=True)
             os.kill(os.getpid(), signal.SIGTERM)
+
+
+def received() -> int | None:
+    """
+    The signal received under :func:`catching` (``None`` if none): an error that comes out of a command after
+    one (an interrupt raised inside an import of a C extension becomes ``SystemError`` or ``NameError``) is
+    that interrupt.
+    """
+
+    return _State.received
 
 
 def check() -> None:

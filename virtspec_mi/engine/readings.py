@@ -60,7 +60,8 @@ from virtspec_mi.engine.progress import Progress
 from virtspec_mi.engine.tally import Tally
 from virtspec_mi.settings import Settings
 
-__all__ = ["BatchRunner", "run", "take_keyed_readings", "trace_readings", "in_process_runner", "shares_wavelengths"]
+__all__ = ["BatchRunner", "run", "take_keyed_readings", "trace_readings", "trace_allocated", "in_process_runner",
+           "shares_wavelengths", "check_specimen"]
 
 BatchRunner = Callable[[list[np.ndarray]], Iterable[tuple[np.ndarray, Tally]]]
 """
@@ -188,6 +189,33 @@ def trace_readings(bench: Any, plan: Plan, group: int, readings: Sequence[tuple[
     return Tally(tally.counts, None if pilot is None else pilot.counts, tally.bins, tally.sums).take(back)
 
 
+def trace_allocated(bench: Any, settings: Settings, readings: Sequence[tuple[float, float, float]],
+                    rays: Sequence[int] | np.ndarray, offsets: Sequence[int] | np.ndarray | None = None) -> Tally:
+    """
+    Trace every (wavelength nm, θi, φi) of ``readings`` with its own number of rays
+    ``rays[i]`` (an allocation among wavelengths, e.g. Nₖ ∝ |wₖ| of a derived quantity:
+    :mod:`virtspec_mi.applications.derived`) in one batched kernel call with ``settings``'
+    seed, beam, sampling and chunk size, and return their
+    :class:`~virtspec_mi.engine.tally.Tally`. Every reading has rays of its own — never
+    shared across wavelengths, even for a wavelength-independent specimen — from global
+    index ``offsets[i]`` (default: consecutive ranges), so the readings are independent.
+    The specimen's wavelength checks and the limits on readings and rays apply as for
+    :func:`trace_readings`.
+    """
+
+    rays = np.asarray(rays, dtype=np.int64)
+    if len(rays) != len(readings) or np.any(rays < 1):
+        raise ValueError(f"rays must hold one positive count per reading ({len(readings)}), got {rays.tolist()[:8]}")
+    if offsets is not None and len(offsets) != len(readings):
+        raise ValueError(f"offsets must hold one start per reading ({len(readings)}), got {len(offsets)}")
+    readings, _, _ = _traced_readings(bench, readings, False)
+    check_readings(len(readings), int(rays.sum()))
+    for n in np.unique(rays):
+        check_rays_needed(int(n), "the allocation")
+    tally = _fixed(bench, readings, settings, rays, None if offsets is None else np.asarray(offsets))
+    return Tally(tally.counts, None, tally.bins, tally.sums)
+
+
 def in_process_runner(bench: Any, plan: Plan) -> BatchRunner:
     """
     The default :data:`BatchRunner`: every batch here, one after the other, traced by
@@ -231,7 +259,7 @@ def _traced_readings(bench: Any, readings: Sequence[tuple[float, float, float]],
     """
 
     check_readings(len(readings), 0)
-    _check_specimen(bench.bsdf, sorted({float(r[0]) for r in readings}))
+    check_specimen(bench.bsdf, sorted({float(r[0]) for r in readings}))
     readings = [(float(w), float(t), float(p)) for w, t, p in readings]
     if shared:
         first: dict[tuple[float, float], int] = {}
@@ -242,7 +270,7 @@ def _traced_readings(bench: Any, readings: Sequence[tuple[float, float, float]],
     return readings, source, traced
 
 
-def _check_specimen(bsdf: Any, wavelengths: list[float]) -> None:
+def check_specimen(bsdf: Any, wavelengths: list[float]) -> None:
     """
     Refuse, before tracing, wavelengths the specimen does not take: outside its
     ``wavelength_range`` (the ABM leaves' data, a measured table's), outside the data of

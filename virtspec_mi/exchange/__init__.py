@@ -6,17 +6,20 @@ Exchange formats renderers and simulation tools read: certified tables and BSDF 
   E_avg(α) (and E(μ, α, η) of rough glass) for energy compensation, on the grids of
   Cycles, Filament and Unreal (:mod:`~virtspec_mi.exchange.conventions`); NetCDF,
   ``.npy`` and C headers (:mod:`~virtspec_mi.exchange.header`); a comparison with a
-  published table.
+  published table. Each engine's own model (:mod:`~virtspec_mi.exchange.engine_models`),
+  its channels certified together and written as the engine's drop-in file
+  (:mod:`~virtspec_mi.exchange.engine_tables`), and the audit of an engine's published
+  table (:mod:`~virtspec_mi.exchange.audit`).
 - :mod:`~virtspec_mi.exchange.klems`: certified Klems BSDF matrices (WINDOW 6 XML, read
   by Radiance), measured by :mod:`~virtspec_mi.exchange.klems_gonio` with the
   goniophotometer, on the bases of
   :mod:`~virtspec_mi.exchange.klems_basis`, the back side through
   :mod:`~virtspec_mi.exchange.flip`.
-- :mod:`~virtspec_mi.exchange.sizing`: the ray budgets of many cells at once;
-  :mod:`~virtspec_mi.exchange.microfacet_reference`: the independent quadrature the
+- :mod:`~virtspec_mi.exchange.microfacet_reference`: the independent quadrature the
   tables are tested against.
 
-Names are imported on first use (this package imports nothing heavy).
+The rays of many cells at once are sized by the budgets (:mod:`virtspec_mi.budgets.binomial`),
+files written by :mod:`virtspec_mi.files`. Names are imported on first use (this package imports nothing heavy).
 """
 
 from __future__ import annotations
@@ -26,7 +29,7 @@ from typing import Any
 
 __all__ = ["albedo_table", "AlbedoTable", "TableComparison", "read_albedo_table", "klems_measure",
            "klems_from_gonio", "KlemsMeasurement", "read_klems", "read_klems_sidecar", "check_klems", "klems_basis",
-           "KlemsBasis", "convention", "ENGINES"]
+           "KlemsBasis", "convention", "ENGINES", "engine_tables", "EngineTables", "audit", "Audit"]
 
 _LAZY = {
     "albedo_table": "virtspec_mi.exchange.albedo",
@@ -43,6 +46,10 @@ _LAZY = {
     "KlemsBasis": "virtspec_mi.exchange.klems_basis",
     "convention": "virtspec_mi.exchange.conventions",
     "ENGINES": "virtspec_mi.exchange.conventions",
+    "engine_tables": "virtspec_mi.exchange.engine_tables",
+    "EngineTables": "virtspec_mi.exchange.engine_tables",
+    "audit": "virtspec_mi.exchange.audit",
+    "Audit": "virtspec_mi.exchange.audit",
 }
 
 

@@ -21,8 +21,14 @@ near grazing incidence, where E changes fastest).
 :func:`albedo_table` measures, on the user's grid or on an engine's
 (:mod:`virtspec_mi.exchange.conventions`):
 
-- ``model="conductor"``: Mitsuba's ``roughconductor`` with Fresnel = 1
-  (``material="none"``), ``distribution`` ``ggx`` or ``beckmann``: E = reflected;
+- ``model="conductor"``: the project's ``microfacet`` plugin
+  (:mod:`virtspec_mi.plugins.bsdfs.microfacet`), ``distribution`` ``ggx`` or
+  ``beckmann``, ``shadowing`` ``separable`` / ``height_correlated`` / ``unreal``, Beckmann
+  ``g1`` ``exact`` or ``walter``, ``fresnel`` ``one`` (E) or a split-sum half
+  (:mod:`virtspec_mi.exchange.engine_models`: each engine's own model is the default on
+  its grid): E = reflected. Its sampler and its evaluation use the same G, so the count
+  *is* ∫ f cos (Mitsuba's ``roughconductor`` with Beckmann counts
+  G₁,exact(ω_i)/G₁,fit(ω_i) × ∫ f cos instead, which is why it is not used);
 - ``model="glass"``: Mitsuba's ``roughdielectric``: E = reflected + transmitted (the
   energy *not lost* by single scattering — for a smooth dielectric nothing is lost, but
   the masking term of a rough one loses energy), for light from outside (relative index
@@ -36,7 +42,7 @@ N = ⌈ln(2C|Q|/δ)/(2ε²)⌉ rays (δ split evenly); ``bound="two-stage"`` (de
 pilot per cell (δ/10 split evenly over the pilots) and sizes a fresh second batch by the
 binomial tail bounds of Zubkov & Serov (2013) over the pilot's interval, the other 9δ/10
 shared among the cells in proportion to the variance their pilot allows
-(:mod:`virtspec_mi.exchange.sizing`); cells near 0 or 1 (low roughness: E ≈ 1) then need
+(:mod:`virtspec_mi.budgets.binomial`); cells near 0 or 1 (low roughness: E ≈ 1) then need
 a small fraction of Hoeffding's rays. A BSDF weight rounded into [0, 1] adds its largest bias to the cell's
 tolerance (``certified_epsilon``: Mitsuba's Beckmann G₁ overshoots 1 by 6·10⁻⁵);
 weight violations or invalid directions leave a cell uncertified (NaN).
@@ -69,13 +75,12 @@ Baranoski, G.V.G., Rokne, J.G., Xu, G. (2001). The Visual Computer 17, 506–518
 
 from __future__ import annotations
 
-import hashlib
 import json
 import math
 import os
-import re
 import time
 import warnings
+from contextlib import nullcontext
 from dataclasses import dataclass, field
 from datetime import datetime, timezone
 from pathlib import Path
@@ -84,16 +89,22 @@ from typing import Any, Sequence
 import numpy as np
 
 from virtspec_mi import __version__
-from virtspec_mi.exchange.common import atomic_write, derived_seed
+from virtspec_mi.checks import check_delta, number, shown_value
+from virtspec_mi.engine import interrupts
+from virtspec_mi.engine.checkpoint import ResultStore, locked
+from virtspec_mi.settings import true_or_false, whole_number
+from virtspec_mi.exchange.common import check_companions, derived_seed
+from virtspec_mi.files import atomic_write
 from virtspec_mi.exchange.conventions import Convention, convention
-from virtspec_mi.exchange.sizing import (binomial_rays, clopper_pearson_each, pilot_intervals, stage_two_shares,
+from virtspec_mi.budgets.intervals import clopper_pearson_each
+from virtspec_mi.budgets.binomial import (binomial_rays, pilot_intervals, stage_two_shares,
                                          union_hoeffding_rays, union_hoeffding_rays_array)
 
 __all__ = ["MODELS", "DISTRIBUTIONS", "BOUNDS", "TableBudget", "AlbedoTable", "TableComparison", "albedo_table",
            "read_albedo_table"]
 
 MODELS: dict[str, str] = {
-    "conductor": "Mitsuba roughconductor, Fresnel = 1 (material none): E = reflected",
+    "conductor": "virtspec-mi microfacet reflector (sampling consistent with eval): E = reflected",
     "glass": "Mitsuba roughdielectric: E = reflected + transmitted, light from outside (eta) and inside (1/eta)",
 }
 """Models a table can hold, and what E counts."""
@@ -122,7 +133,7 @@ BOUNDS: dict[str, TableBudget] = {
     "hoeffding": TableBudget("every cell N = ceil(ln(2 C |Q| / delta) / (2 epsilon^2)) rays", False,
                              "delta split evenly over {cells:,} cells x {quantities} quantities"),
 }
-"""Ray budgets of a table, by name (:mod:`virtspec_mi.exchange.sizing`)."""
+"""Ray budgets of a table, by name (:mod:`virtspec_mi.budgets.binomial`)."""
 
 SIDES: tuple[str, ...] = ("outside", "inside")
 """Glass: light arriving from outside (relative index η) or from inside (1/η)."""
@@ -170,7 +181,14 @@ class AlbedoTable:
     quantities : tuple of str
         Quantities certified per cell: ``E`` and, for glass with ``parts=True``, ``E_R``, ``E_T``.
     provenance : dict
-        Seed, wavelength, Mitsuba and virtspec-mi versions, seconds, creation time, rays.
+        Seed, wavelength, Mitsuba and virtspec-mi versions, seconds, creation time, rays,
+        and ``bsdf_model``: the model in words (which G₂, which G₁, which F).
+    bsdf : dict
+        Conductor: ``shadowing``, ``g1``, ``fresnel`` of the ``microfacet`` plugin (empty
+        for glass: Mitsuba's ``roughdielectric``).
+    count_scale : float
+        c: each value is c × count/N (c = 1 except Beckmann ``g1="walter"``, whose weights
+        are divided by c = 1.0032 to stay ≤ 1); intervals and tolerances scale with it.
     """
 
     model: str
@@ -188,6 +206,8 @@ class AlbedoTable:
     bound: str
     quantities: tuple[str, ...] = ("E",)
     provenance: dict[str, Any] = field(default_factory=dict)
+    bsdf: dict[str, str] = field(default_factory=dict)
+    count_scale: float = 1.0
 
     # -- dims ------------------------------------------------------------------------
 
@@ -211,7 +231,7 @@ class AlbedoTable:
     def interval_delta(self, average: bool = False) -> np.ndarray:
         """
         Per cell, δ of each quantity's estimating batch: δ/(C|Q|) for ``hoeffding``; for
-        ``two-stage`` the cell's share of 0.9δ (:func:`~virtspec_mi.exchange.sizing.stage_two_shares`,
+        ``two-stage`` the cell's share of 0.9δ (:func:`~virtspec_mi.budgets.binomial.stage_two_shares`,
         its pilots having 0.1δ). They add up to at most δ over the table.
         """
 
@@ -233,7 +253,7 @@ class AlbedoTable:
             hits = counts["transmitted"]
         else:
             raise ValueError(f"quantity must be one of E, E_R, E_T (got {quantity!r})")
-        return hits / counts["rays"]
+        return self.count_scale * hits / counts["rays"]
 
     @property
     def E(self) -> np.ndarray:
@@ -281,7 +301,7 @@ class AlbedoTable:
         counts = self.average_counts if average else self.counts
         if counts is None:
             raise ValueError("this table has no E_avg (made with average=False)")
-        bias = counts["rounded_weights"] * WEIGHT_ROUNDING / counts["rays"]
+        bias = self.count_scale * counts["rounded_weights"] * WEIGHT_ROUNDING / counts["rays"]
         return np.where(self._certified(counts), self.epsilon + bias, np.nan)
 
     @property
@@ -298,9 +318,10 @@ class AlbedoTable:
         """
 
         counts = self.average_counts if average else self.counts
-        values = self.quantity(quantity, average)
+        values = self.quantity(quantity, average) / self.count_scale
         hits = np.rint(values * counts["rays"]).astype(np.int64)
-        return clopper_pearson_each(hits, counts["rays"], counts["interval_delta"])
+        lower, upper = clopper_pearson_each(hits, counts["rays"], counts["interval_delta"])
+        return self.count_scale * lower, self.count_scale * upper
 
     @property
     def rays(self) -> int:
@@ -400,6 +421,12 @@ class AlbedoTable:
         target = (["side"] if self.model == "glass" else []) + list(self.order)
         return np.transpose(values, [dims.index(d) for d in target])
 
+    @property
+    def _parts_names(self) -> tuple[str, ...]:
+        """The quantities a file carries: E, and E_R, E_T for glass or a ``split`` conductor."""
+
+        return ("E", "E_R", "E_T") if self.model == "glass" or "E_R" in self.quantities else ("E",)
+
     def to_dataset(self) -> Any:
         """The table as an ``xarray.Dataset`` (canonical dims), counts and certificate included."""
 
@@ -414,7 +441,7 @@ class AlbedoTable:
             coords["relative_eta"] = (("side", "eta"), np.stack([self.eta, 1.0 / self.eta]))
         data: dict[str, Any] = {}
         dims, adims = self.dims, self.average_dims
-        for name in ("E", "E_R", "E_T") if self.model == "glass" else ("E",):
+        for name in self._parts_names:
             data[name] = (dims, self.quantity(name))
             lower, upper = self.interval(name)
             data[f"{name}_lower"], data[f"{name}_upper"] = (dims, lower), (dims, upper)
@@ -422,7 +449,7 @@ class AlbedoTable:
         for key, value in self.counts.items():
             data[key] = (dims, value)
         if self.average_counts is not None:
-            for name in ("E", "E_R", "E_T") if self.model == "glass" else ("E",):
+            for name in self._parts_names:
                 data[f"{name}_avg"] = (adims, self.quantity(name, average=True))
                 lower, upper = self.interval(name, average=True)
                 data[f"{name}_avg_lower"], data[f"{name}_avg_upper"] = (adims, lower), (adims, upper)
@@ -433,7 +460,8 @@ class AlbedoTable:
                  "order": " ".join(self.order), "epsilon": self.epsilon, "delta": self.delta, "bound": self.bound,
                  "quantities": " ".join(self.quantities),
                  "certificate": self.statement(), "rays_total": self.rays,
-                 "provenance": json.dumps(self.provenance, sort_keys=True)}
+                 "provenance": json.dumps(self.provenance, sort_keys=True),
+                 "bsdf": json.dumps(self.bsdf, sort_keys=True), "count_scale": self.count_scale}
         return xr.Dataset(data, coords=coords, attrs=attrs)
 
     @classmethod
@@ -456,20 +484,29 @@ class AlbedoTable:
                    np.asarray(dataset["roughness"].values, dtype=np.float64) if "roughness" in dataset.coords else None,
                    str(attrs["engine"]), tuple(str(attrs["order"]).split()), counts, average,
                    float(attrs["epsilon"]), float(attrs["delta"]), str(attrs["bound"]),
-                   tuple(str(attrs["quantities"]).split()), json.loads(str(attrs["provenance"])))
+                   tuple(str(attrs["quantities"]).split()), json.loads(str(attrs["provenance"])),
+                   json.loads(str(attrs.get("bsdf", "{}"))), float(attrs.get("count_scale", 1.0)))
 
-    def write(self, path: str | os.PathLike) -> Path:
+    def check_output(self, path: str | os.PathLike, overwrite: bool = False) -> None:
+        """Refuse companions of ``path`` that would replace a file not written by this format (see :meth:`write`)."""
+
+        _check_output(Path(path), self.E_avg is not None, overwrite)
+
+    def write(self, path: str | os.PathLike, overwrite: bool = False) -> Path:
         """
         Write the table: ``.nc`` (NetCDF of :meth:`to_dataset`), ``.npy`` (Ê as float32 in
         the engine's memory order; E_avg in ``NAME_avg.npy``; provenance and certificate in
         ``NAME.json``) or ``.h`` / ``.hpp`` (a C header in Cycles' layout,
-        :mod:`virtspec_mi.exchange.header`).
+        :mod:`virtspec_mi.exchange.header`). A ``.npy``'s companions replace files of their
+        names only when those are an albedo table's (its ``NAME.json`` says so) or with
+        ``overwrite=True`` (else ``ValueError``, before anything is written).
         """
 
         from virtspec_mi.exchange.header import write_header
 
         path = Path(path)
         suffix = path.suffix.lower()
+        self.check_output(path, overwrite)
         if suffix == ".nc":
             atomic_write(path, lambda tmp: self.to_dataset().to_netcdf(tmp))
         elif suffix == ".npy":
@@ -498,7 +535,7 @@ class AlbedoTable:
                 "epsilon": self.epsilon, "delta": self.delta, "bound": self.bound, "quantities": list(self.quantities),
                 "certificate": self.statement(), "rays_total": self.rays,
                 "worst_certified_epsilon": float(np.nanmax(self.certified_epsilon())),
-                "provenance": self.provenance}
+                "bsdf": self.bsdf, "count_scale": self.count_scale, "provenance": self.provenance}
 
     # -- reading and comparing -----------------------------------------------------------
 
@@ -533,6 +570,9 @@ class AlbedoTable:
 
         if side not in SIDES:
             raise ValueError(f"side must be one of {', '.join(SIDES)} (got {side!r})")
+        if side != "outside" and self.model != "glass":
+            raise ValueError(f"side={side!r} names a glass table's block; a {self.model} table has one side (leave side "
+                             "as 'outside')")
         if not (np.isfinite(rounding) and rounding >= 0):
             raise ValueError(f"rounding must be a finite number >= 0 (got {rounding!r})")
         mine = self.layout(average=average)
@@ -541,11 +581,20 @@ class AlbedoTable:
             tol = self.layout(tol)
         if self.model == "glass":
             mine, tol = mine[SIDES.index(side)], tol[SIDES.index(side)]
-        if array is None and not isinstance(published, np.ndarray):
-            from virtspec_mi.exchange.header import array_name
+        own = _own_table(published) if array is None else None
+        if own is not None:  # an albedo table's .nc: canonical (mu, alpha) order, put in this table's memory order
+            values = own.E_avg if average else self.layout(np.asarray(own.E))
+            if values is None or np.shape(values) != np.shape(self.layout(average=average)):
+                raise ValueError(f"the published table {published} is an albedo table of another grid "
+                                 f"(shape {np.shape(own.E)}; this table's {np.shape(self.E)})")
+            if self.model == "glass" and not average:
+                values = values[SIDES.index(side)]
+        else:
+            if array is None and not isinstance(published, np.ndarray):
+                from virtspec_mi.exchange.header import array_name
 
-            array = array_name(self, average=average, side=side)
-        values = read_table_values(published, array=array, expected=mine.size)
+                array = array_name(self, average=average, side=side)
+            values = read_table_values(published, array=array, expected=mine.size)
         values = np.asarray(values, dtype=np.float64).reshape(mine.shape)
         outside = ~(np.abs(values - mine) < tol + rounding)  # NaN tolerance (uncertified): reported too
         dims = list(self.average_dims if average else (["side"] if self.model == "glass" else []) + list(self.order))
@@ -607,6 +656,59 @@ def read_albedo_table(path: str | os.PathLike) -> AlbedoTable:
         return AlbedoTable.from_dataset(dataset.load())
 
 
+def _own_table(published: Any) -> "AlbedoTable | None":
+    """The :class:`AlbedoTable` of a published ``.nc`` written by :meth:`AlbedoTable.write` (else ``None``)."""
+
+    if not isinstance(published, (str, os.PathLike)) or Path(published).suffix.lower() != ".nc":
+        return None
+    if not Path(published).is_file():
+        return None
+    import xarray as xr
+
+    try:
+        with xr.open_dataset(published) as dataset:
+            if dataset.attrs.get("format") != _FORMAT:
+                return None
+    except Exception:  # not a NetCDF file: read_table_values says so
+        return None
+    return read_albedo_table(published)
+
+
+def _check_output(path: Path, average: bool, overwrite: bool) -> None:
+    """A ``.npy`` output's companions (``NAME.json``, ``NAME_avg.npy``) replace only an albedo table's files."""
+
+    if path.suffix.lower() != ".npy":
+        return
+    companions = [path.with_suffix(".json")] + ([path.with_name(path.stem + "_avg.npy")] if average else [])
+    check_companions(path, companions, lambda companion: _ours(path), overwrite)
+
+
+def _check_epsilon(epsilon: Any) -> float:
+    """ε of a table: a real number, 0 < ε < 0.5 (as μ: :func:`virtspec_mi.checks.check_mu`, named ``epsilon``)."""
+
+    value = number("epsilon", epsilon)
+    if not 0.0 < value < 0.5:
+        raise ValueError(f"epsilon must satisfy 0 < epsilon < 0.5 (got {shown_value(epsilon)})")
+    return value
+
+
+def _whole(name: str, value: Any, low: int, high: int) -> int:
+    """A whole number given as a number (a string or a boolean refused), ``low`` <= value <= ``high``."""
+
+    if isinstance(value, str):
+        raise ValueError(f"{name} must be a whole number, not a string (got {value!r})")
+    return whole_number(name, low, high, f"{low} <= {name} <= {high}")(value)
+
+
+def _ours(npy: Path) -> bool:
+    """Whether ``NAME.json`` beside a table's ``NAME.npy`` is an albedo table's sidecar (so are its companions)."""
+
+    try:
+        return json.loads(npy.with_suffix(".json").read_text(encoding="utf-8")).get("format") == _FORMAT
+    except (OSError, ValueError, AttributeError):
+        return False
+
+
 def _save_npy(path: str, values: np.ndarray) -> None:
     with open(path, "wb") as handle:
         np.save(handle, values)
@@ -655,6 +757,8 @@ class _Grid:
 
 
 def _check_nodes(name: str, values: Any, low: float, high: float, open_low: bool = False) -> np.ndarray:
+    if any(isinstance(value, (bool, np.bool_, str)) for value in np.ravel(np.asarray(values, dtype=object))):
+        raise ValueError(f"{name} must be a sequence of numbers (got {values!r})")
     try:
         array = np.atleast_1d(np.asarray(values, dtype=np.float64))
     except (TypeError, ValueError):
@@ -705,11 +809,11 @@ def _grid(model: str, distribution: str, engine: str | None, mu: Any, alpha: Any
     return _Grid(model, distribution, mu, alpha, etas, rough, "grid", order)
 
 
-def _scene(grid: _Grid) -> dict[str, Any]:
+def _scene(grid: _Grid, model: dict[str, str]) -> dict[str, Any]:
     from virtspec_mi.scene import instrument_scene
 
     if grid.model == "conductor":
-        bsdf = {"type": "roughconductor", "distribution": grid.distribution, "material": "none", "alpha": 0.5}
+        bsdf = {"type": "microfacet", "distribution": grid.distribution, "alpha": 0.5, **model}
     else:
         bsdf = {"type": "roughdielectric", "distribution": grid.distribution, "alpha": 0.5, "int_ior": 1.5,
                 "ext_ior": 1.0}
@@ -720,64 +824,14 @@ def _scene(grid: _Grid) -> dict[str, Any]:
 _KEYS = ("reflected", "transmitted", "rounded_weights", "weight_violations", "invalid_directions", "capped")
 
 
-class _Store:
-    """Finished groups of a table, kept as result files in a directory (resume)."""
-
-    def __init__(self, directory: Path | None, identity: dict[str, Any]) -> None:
-        self.directory = directory
-        self.reused = 0
-        if directory is None:
-            return
-        if directory.exists() and not directory.is_dir():
-            raise ValueError(f"checkpoint must be a directory (got the file {directory})")
-        directory.mkdir(parents=True, exist_ok=True)
-        stamp = directory / "identity.json"
-        text = json.dumps(identity, sort_keys=True)
-        if stamp.exists():
-            if stamp.read_text() != text:
-                old = json.loads(stamp.read_text())
-                differ = sorted(k for k in set(old) | set(identity) if old.get(k) != identity.get(k))
-                raise ValueError(f"checkpoint {directory} belongs to a different table (differs in: "
-                                 f"{', '.join(differ)}); re-run with the same settings, or delete it")
-        else:
-            atomic_write(stamp, lambda tmp: Path(tmp).write_text(text))
-
-    def path(self, label: str) -> Path | None:
-        if self.directory is None:
-            return None
-        return self.directory / (hashlib.blake2b(label.encode(), digest_size=8).hexdigest() + ".nc")
-
-    def load(self, label: str) -> Any:
-        path = self.path(label)
-        if path is not None and path.exists():
-            from virtspec_mi.results.hemispherical import Result
-
-            self.reused += 1
-            return Result.read(path)
-        return None
-
-    def save(self, label: str, result: Any) -> None:
-        path = self.path(label)
-        if path is not None:
-            result.write(path)
-
-    def remove(self) -> None:
-        if self.directory is None:
-            return
-        for path in self.directory.iterdir():  # only what this store wrote: identity.json and <16 hex>.nc
-            if path.name == "identity.json" or re.fullmatch(r"[0-9a-f]{16}\.nc", path.name):
-                path.unlink()
-        try:
-            self.directory.rmdir()
-        except OSError:
-            pass
-
-
 def albedo_table(
     model: str = "conductor",
     *,
     distribution: str = "ggx",
     engine: str | None = "cycles",
+    shadowing: str | None = None,
+    g1: str = "exact",
+    fresnel: str = "one",
     mu: Sequence[float] | None = None,
     alpha: Sequence[float] | None = None,
     roughness: Sequence[float] | None = None,
@@ -794,6 +848,7 @@ def albedo_table(
     out: str | os.PathLike | Sequence[str | os.PathLike] | None = None,
     progress: bool | None = None,
     chunk_size: int | None = None,
+    overwrite: bool = False,
 ) -> AlbedoTable:
     """
     Measure a certified albedo table (see the module docstring).
@@ -804,6 +859,12 @@ def albedo_table(
         ``conductor`` (``roughconductor``, Fresnel = 1) or ``glass`` (``roughdielectric``).
     distribution
         ``ggx`` or ``beckmann``.
+    shadowing, g1, fresnel
+        Conductor: the ``microfacet`` plugin's G₂ (``separable``, ``height_correlated``,
+        ``unreal``; default: the engine's own, :data:`~virtspec_mi.exchange.engine_models.ENGINE_SHADOWING`,
+        ``separable`` on a user grid), Beckmann's G₁ (``exact`` or ``walter``) and F
+        (``one``, ``fc``, ``one_minus_fc``). Glass (Mitsuba's ``roughdielectric``) takes
+        none of them and only ``ggx``.
     engine
         ``cycles`` (default), ``filament`` or ``unreal``: that engine's grid and memory
         order (:mod:`virtspec_mi.exchange.conventions`); ``None`` with ``mu`` and ``alpha``
@@ -818,7 +879,8 @@ def albedo_table(
     average
         Also measure E_avg (diffuse beam) per α (and η, side).
     parts
-        Glass: certify E_R and E_T too (three quantities per cell; more rays).
+        Glass, or a conductor with ``fresnel="split"``: certify E_R and E_T too (three
+        quantities per cell, on the same rays; split: E_R = ∫ F_c f cos, E_T = ∫ (1 − F_c) f cos).
     pilot_rays
         Two-stage pilot per cell (default ⌈10/ε⌉).
     seed
@@ -835,6 +897,9 @@ def albedo_table(
         terminal and the run is expected to last more than ~2 s.
     chunk_size
         Rays per kernel launch (memory only; the counts do not depend on it).
+    overwrite
+        Let a ``.npy`` output's companions (``NAME.json``, ``NAME_avg.npy``) replace files of those names that
+        this table's format did not write (refused otherwise, before anything is traced).
 
     Returns
     -------
@@ -845,29 +910,33 @@ def albedo_table(
     Kulla & Conty (2017); Hoeffding (1963), Theorem 1; Baranoski et al. (2001), eq. (23).
     """
 
-    from virtspec_mi.api import sweep
+    from virtspec_mi.api import read_result, sweep
     from virtspec_mi.engine.progress import Progress
     from virtspec_mi.runtime import mitsuba
+    from virtspec_mi.scene import load_scene
+
+    from virtspec_mi.exchange.engine_models import bsdf_model
 
     grid = _grid(model, distribution, engine, mu, alpha, roughness, eta)
-    if not (isinstance(epsilon, (int, float)) and not isinstance(epsilon, bool) and 0 < epsilon < 0.5):
-        raise ValueError(f"epsilon must satisfy 0 < epsilon < 0.5 (got {epsilon!r})")
-    if not (isinstance(delta, (int, float)) and not isinstance(delta, bool) and 0 < delta < 1):
-        raise ValueError(f"delta must satisfy 0 < delta < 1 (got {delta!r})")
+    bsdf_parameters, model_words, count_scale = bsdf_model(model, distribution, grid.engine, shadowing, g1, fresnel)
+    epsilon, delta = _check_epsilon(epsilon), check_delta(delta)  # any real number type (numpy's float32 too)
+    average, parts = true_or_false("average")(average), true_or_false("parts")(parts)
+    seed = _whole("seed", seed, 0, 2**32 - 1)
     if bound not in BOUNDS:
         raise ValueError(f"bound must be one of {', '.join(BOUNDS)} (got {bound!r})")
-    if parts and model != "glass":
-        raise ValueError("parts=True certifies E_R and E_T of a glass table (model='glass')")
+    if parts and model != "glass" and fresnel != "split":
+        raise ValueError("parts=True certifies E_R and E_T of a glass table (model='glass') or of a conductor with "
+                         "fresnel='split'")
     epsilon, delta = float(epsilon), float(delta)
-    n1 = math.ceil(40.0 / epsilon - 1e-9) if pilot_rays is None else int(pilot_rays)
-    if not 1 <= n1 <= 2**32 - 1:
-        raise ValueError(f"pilot_rays must satisfy 1 <= pilot_rays <= 4294967295 (got {pilot_rays!r})")
+    sized = epsilon / count_scale  # the counts estimate E/c: held to ε/c, the values c × count/N to ε
+    n1 = math.ceil(40.0 / epsilon - 1e-9) if pilot_rays is None else _whole("pilot_rays", pilot_rays, 1, 2**32 - 1)
     outs = [] if out is None else [Path(out)] if isinstance(out, (str, os.PathLike)) else [Path(p) for p in out]
     for path in outs:
         if path.suffix.lower() not in (".nc", ".npy", ".h", ".hpp"):
             raise ValueError(f"out must end in .nc, .npy, .h or .hpp (got {path.name!r})")
         if not path.parent.exists():
             raise ValueError(f"out {path}: the directory {path.parent} does not exist")
+        _check_output(path, bool(average), bool(overwrite))
     if checkpoint is None and outs:
         checkpoint = outs[0].with_name(outs[0].name + ".parts")
     quantities = ("E", "E_R", "E_T") if parts else ("E",)
@@ -882,109 +951,127 @@ def albedo_table(
     identity = {"format": _FORMAT, "model": model, "distribution": distribution, "mu": grid.mu.tolist(),
                 "alpha": grid.alpha.tolist(), "eta": None if grid.eta is None else grid.eta.tolist(),
                 "epsilon": epsilon, "delta": delta, "bound": bound, "average": bool(average), "parts": bool(parts),
-                "pilot_rays": n1, "seed": int(seed), "wavelength": float(wavelength), "version": __version__}
-    store = _Store(None if checkpoint is None else Path(checkpoint), identity)
-    scene = mi.load_dict(_scene(grid))
-    started = time.perf_counter()
-    traced_seconds = 0.0
-    groups = 0
-    adaptive = BOUNDS[bound].adaptive
-    bar = Progress(progress, n_cells * (2 if adaptive else 1), desc="albedo table")
+                "pilot_rays": n1, "seed": int(seed), "wavelength": float(wavelength), "version": __version__,
+                "bsdf": bsdf_parameters}
+    # One run at a time on a checkpoint (a second refuses; it never touches the first's groups), and signals
+    # acted on at safe points only: never inside a write (a KeyboardInterrupt inside xarray's file lock hung
+    # the process, and left a temporary file)
+    if checkpoint is not None:  # the parts' writer, imported here (a second or more), not between two safe points
+        from virtspec_mi.results.io import warm_writer
 
-    def run(label: str, beam: str, angles: Sequence[float], pts: np.ndarray, rays: int) -> Any:
-        nonlocal traced_seconds, groups
-        groups += 1
-        result = store.load(label)
-        if result is None:
-            with warnings.catch_warnings():  # a group's uncertified readings are reported once, for the table
-                warnings.simplefilter("ignore", RuntimeWarning)
-                result = sweep(scene, theta_i=list(angles), beam=beam, rays=int(rays), wavelengths=[wavelength],
-                               parameters={n: pts[:, k].tolist() for k, n in enumerate(names)}, points=True,
-                               seed=derived_seed(seed, label), sampling="random", progress=False,
-                               **({} if chunk_size is None else {"chunk_size": chunk_size}))
-            store.save(label, result)
-        traced_seconds += result.seconds
-        bar.reach(bar.done + len(angles) * len(pts))
-        return result
+        warm_writer()
+    with (nullcontext() if checkpoint is None else locked(Path(checkpoint))), interrupts.deferred():
+            store = ResultStore(None if checkpoint is None else Path(checkpoint), identity)
+            scene = load_scene(_scene(grid, bsdf_parameters))
+            started = time.perf_counter()
+            traced_seconds = 0.0
+            groups = 0
+            adaptive = BOUNDS[bound].adaptive
+            bar = Progress(progress, n_cells * (2 if adaptive else 1), desc="albedo table")
 
-    def counts_of(result: Any) -> dict[str, np.ndarray]:  # (θ, point) arrays of one wavelength
-        return {k: np.asarray(getattr(result, k))[0] for k in ("rays",) + _KEYS}
+            def run(label: str, beam: str, angles: Sequence[float], pts: np.ndarray, rays: int) -> Any:
+                nonlocal traced_seconds, groups
+                groups += 1
+                result = store.load(label, read_result)
+                if result is None:
+                    with warnings.catch_warnings():  # a group's uncertified readings are reported once, for the table
+                        warnings.simplefilter("ignore", RuntimeWarning)
+                        result = sweep(scene, theta_i=list(angles), beam=beam, rays=int(rays), wavelengths=[wavelength],
+                                       parameters={n: pts[:, k].tolist() for k, n in enumerate(names)}, points=True,
+                                       seed=derived_seed(seed, label), sampling="random", progress=False,
+                                       **({} if chunk_size is None else {"chunk_size": chunk_size}))
+                    store.save(label, result)
+                    interrupts.check()  # a safe point: the group is saved, none is being written
+                traced_seconds += result.seconds
+                bar.reach(bar.done + len(angles) * len(pts))
+                return result
 
-    beams = [("collimated", theta, n_mu)] + ([("diffuse", np.array([0.0]), 1)] if average else [])
-    assembled: dict[str, dict[str, np.ndarray]] = {}
-    try:
-        pilots = {}
-        for beam, angles, rows in beams:
-            shape = (rows, n_p)
-            totals = {k: np.zeros(shape, dtype=np.int64) for k in ("rays",) + _KEYS}
-            totals["pilot_rays"] = np.zeros(shape, dtype=np.int64)
-            totals["pilot_violations"] = np.zeros(shape, dtype=np.int64)
-            totals["interval_delta"] = np.full(shape, delta / (n_cells * q))
-            if not adaptive:
-                rays = union_hoeffding_rays(epsilon, delta, n_cells * q)
-                found = counts_of(run(f"hoeffding:{beam}", beam, angles, points, rays))
-                for k in found:
-                    totals[k][:] = found[k]
-            else:
-                pilot = counts_of(run(f"pilot:{beam}", beam, angles, points, n1))
-                totals["pilot_rays"][:] = pilot["rays"]
-                totals["pilot_violations"][:] = (pilot["weight_violations"] + pilot["invalid_directions"]
-                                                 + pilot["capped"])
-                hits = [pilot["reflected"] + pilot["transmitted"]]
-                if parts:
-                    hits += [pilot["reflected"], pilot["transmitted"]]
-                pilots[beam] = [pilot_intervals(h, n1, delta / 10.0 / (n_cells * q)) for h in hits]
-            assembled[beam] = totals
-        if adaptive:
-            shares = stage_two_shares({beam: intervals for beam, intervals in pilots.items()}, delta * 0.9)
-            for beam, angles, rows in beams:
-                totals = assembled[beam]
-                share = shares[beam]  # δ of each quantity's second batch, per cell
-                totals["interval_delta"] = share
-                need = np.max([binomial_rays(lo, hi, epsilon, share) for lo, hi in pilots[beam]], axis=0)
-                classes = np.minimum(np.ceil(_CLASS_STEP ** np.ceil(np.log(need) / np.log(_CLASS_STEP) - 1e-9)),
-                                     union_hoeffding_rays_array(epsilon, share)).astype(np.int64)
-                for rays in np.unique(classes):
-                    rows_in, cols_in = np.nonzero(classes == rays)
-                    if len(np.unique(rows_in)) <= len(np.unique(cols_in)):  # fewer sweeps: one per θ row …
-                        for row in np.unique(rows_in):
-                            members = cols_in[rows_in == row]
-                            label = f"stage2:{beam}:{int(rays)}:row{row}:" + ",".join(map(str, members.tolist()))
-                            found = counts_of(run(label, beam, [angles[row]], points[members], int(rays)))
-                            for k in found:
-                                totals[k][row, members] = found[k][0]
-                    else:  # … or one per parameter point (a column of θ rows)
-                        for col in np.unique(cols_in):
-                            members = rows_in[cols_in == col]
-                            label = f"stage2:{beam}:{int(rays)}:col{col}:" + ",".join(map(str, members.tolist()))
-                            found = counts_of(run(label, beam, angles[members], points[[col]], int(rays)))
-                            for k in found:
-                                totals[k][members, col] = found[k][:, 0]
-    finally:
-        bar.close()
-    if store.reused:
-        bar.note(f"resumed from {store.directory}: {store.reused} finished group(s) reused")
+            def counts_of(result: Any) -> dict[str, np.ndarray]:  # (θ, point) arrays of one wavelength
+                return {k: np.asarray(getattr(result, k))[0] for k in ("rays",) + _KEYS}
 
-    import mitsuba as _mitsuba_module
+            beams = [("collimated", theta, n_mu)] + ([("diffuse", np.array([0.0]), 1)] if average else [])
+            assembled: dict[str, dict[str, np.ndarray]] = {}
+            try:  # an interrupt: at a kernel chunk of a group's sweep or between two groups, the finished ones kept
+                pilots = {}
+                for beam, angles, rows in beams:
+                    shape = (rows, n_p)
+                    totals = {k: np.zeros(shape, dtype=np.int64) for k in ("rays",) + _KEYS}
+                    totals["pilot_rays"] = np.zeros(shape, dtype=np.int64)
+                    totals["pilot_violations"] = np.zeros(shape, dtype=np.int64)
+                    totals["interval_delta"] = np.full(shape, delta / (n_cells * q))
+                    if not adaptive:
+                        rays = union_hoeffding_rays(sized, delta, n_cells * q)
+                        found = counts_of(run(f"hoeffding:{beam}", beam, angles, points, rays))
+                        for k in found:
+                            totals[k][:] = found[k]
+                    else:
+                        pilot = counts_of(run(f"pilot:{beam}", beam, angles, points, n1))
+                        totals["pilot_rays"][:] = pilot["rays"]
+                        totals["pilot_violations"][:] = (pilot["weight_violations"] + pilot["invalid_directions"]
+                                                         + pilot["capped"])
+                        hits = [pilot["reflected"] + pilot["transmitted"]]
+                        if parts:
+                            hits += [pilot["reflected"], pilot["transmitted"]]
+                        pilots[beam] = [pilot_intervals(h, n1, delta / 10.0 / (n_cells * q)) for h in hits]
+                    assembled[beam] = totals
+                if adaptive:
+                    shares = stage_two_shares({beam: intervals for beam, intervals in pilots.items()}, delta * 0.9)
+                    for beam, angles, rows in beams:
+                        totals = assembled[beam]
+                        share = shares[beam]  # δ of each quantity's second batch, per cell
+                        totals["interval_delta"] = share
+                        need = np.max([binomial_rays(lo, hi, sized, share) for lo, hi in pilots[beam]], axis=0)
+                        classes = np.minimum(np.ceil(_CLASS_STEP ** np.ceil(np.log(need) / np.log(_CLASS_STEP) - 1e-9)),
+                                             union_hoeffding_rays_array(sized, share)).astype(np.int64)
+                        for rays in np.unique(classes):
+                            rows_in, cols_in = np.nonzero(classes == rays)
+                            if len(np.unique(rows_in)) <= len(np.unique(cols_in)):  # fewer sweeps: one per θ row …
+                                for row in np.unique(rows_in):
+                                    members = cols_in[rows_in == row]
+                                    label = f"stage2:{beam}:{int(rays)}:row{row}:" + ",".join(map(str, members.tolist()))
+                                    found = counts_of(run(label, beam, [angles[row]], points[members], int(rays)))
+                                    for k in found:
+                                        totals[k][row, members] = found[k][0]
+                            else:  # … or one per parameter point (a column of θ rows)
+                                for col in np.unique(cols_in):
+                                    members = rows_in[cols_in == col]
+                                    label = f"stage2:{beam}:{int(rays)}:col{col}:" + ",".join(map(str, members.tolist()))
+                                    found = counts_of(run(label, beam, angles[members], points[[col]], int(rays)))
+                                    for k in found:
+                                        totals[k][members, col] = found[k][:, 0]
+            except interrupts.Interrupted as stop:
+                stop.checkpoint = store.directory if store.directory is not None and store.saved else None
+                raise
+            finally:
+                bar.close()
+            if store.reused:
+                bar.note(f"resumed from {store.directory}: {store.reused} finished group(s) reused")
 
-    collimated = {k: grid.canonical(v) for k, v in assembled["collimated"].items()}
-    averaged = None
-    if average:
-        averaged = {k: grid.canonical_average(v[0]) for k, v in assembled["diffuse"].items()}
-    provenance = {"seed": int(seed), "wavelength_nm": float(wavelength), "mitsuba": _mitsuba_module.__version__,
-                  "variant": mi.variant(), "virtspec_mi": __version__, "pilot_rays": n1 if adaptive else 0,
-                  "seconds_wall": round(time.perf_counter() - started, 3), "seconds_traced": round(traced_seconds, 3),
-                  "groups": groups,
-                  "created": datetime.now(timezone.utc).isoformat(timespec="seconds"),
-                  "bsdf": "roughconductor (material none, Fresnel = 1)" if model == "conductor" else "roughdielectric",
-                  "beam": "collimated (E), diffuse cosine-weighted (E_avg)",
-                  "alpha_clamp": "Mitsuba clamps alpha >= 1e-4 (MicrofacetDistribution::configure)"}
-    table = AlbedoTable(model, distribution, grid.mu, grid.alpha, grid.eta, grid.roughness, grid.engine, grid.order,
-                        collimated, averaged, epsilon, delta, bound, quantities, provenance)
-    if not table.certified:
-        warnings.warn(f"albedo table: {table.statement()}", RuntimeWarning, stacklevel=2)
-    for path in outs:
-        table.write(path)
-    store.remove()  # the table is returned (and written to every out): its groups are safe
-    return table
+            import mitsuba as _mitsuba_module
+
+            collimated = {k: grid.canonical(v) for k, v in assembled["collimated"].items()}
+            averaged = None
+            if average:
+                averaged = {k: grid.canonical_average(v[0]) for k, v in assembled["diffuse"].items()}
+            provenance = {"seed": int(seed), "wavelength_nm": float(wavelength), "mitsuba": _mitsuba_module.__version__,
+                          "variant": mi.variant(), "virtspec_mi": __version__, "pilot_rays": n1 if adaptive else 0,
+                          "seconds_wall": round(time.perf_counter() - started, 3), "seconds_traced": round(traced_seconds, 3),
+                          "groups": groups,
+                          "created": datetime.now(timezone.utc).isoformat(timespec="seconds"),
+                          "bsdf": "microfacet" if model == "conductor" else "roughdielectric",
+                          "bsdf_model": model_words,
+                          "beam": "collimated (E), diffuse cosine-weighted (E_avg)",
+                          "alpha_clamp": ("none: GGX visible normals are sampled for any alpha > 0"
+                                          if model == "conductor" and distribution == "ggx" else
+                                          "Mitsuba clamps alpha >= 1e-4 (MicrofacetDistribution::configure)")}
+            table = AlbedoTable(model, distribution, grid.mu, grid.alpha, grid.eta, grid.roughness, grid.engine, grid.order,
+                                collimated, averaged, epsilon, delta, bound, quantities, provenance,
+                                bsdf_parameters if model == "conductor" else {}, count_scale)
+            if not table.certified:
+                warnings.warn(f"albedo table: {table.statement()}", RuntimeWarning, stacklevel=2)
+            interrupts.check()  # the last safe point before the outputs are written
+            for path in outs:
+                table.write(path, overwrite=overwrite)
+            store.remove()  # the table is returned (and written to every out): its groups are safe
+            return table
 

@@ -1,11 +1,13 @@
 """
-Small pieces the exchange modules share: atomic file writes and derived seeds
-=============================================================================
+Small pieces the exchange modules share: companion files and derived seeds
+===========================================================================
 
-- :func:`atomic_write`: a file written through a temporary file beside it and renamed
-  onto its name in one step, so a reader never sees half a file and an interrupted
-  write leaves the old file (or none) — the rule every result file of the project
-  follows (the manual, docs/guide/files.md).
+Their files are written as every file of the project is
+(:func:`virtspec_mi.files.atomic_write`).
+
+- :func:`check_companions`: a companion file an output brings with it (a sidecar of
+  another suffix, an average beside a table) never replaces a file of that name that
+  the format did not write, unless told to (``overwrite``), and never an input.
 - :func:`derived_seed`: the seed of one group of readings of a larger run (a table's
   group of cells, a Klems file's incidence azimuth), a hash of the run's seed and the
   group's label, so every group has its own random numbers and a resumed run traces the
@@ -22,23 +24,32 @@ from __future__ import annotations
 import hashlib
 import os
 from pathlib import Path
-from typing import Any, Callable
+from typing import Callable, Iterable
 
-__all__ = ["atomic_write", "derived_seed"]
+__all__ = ["check_companions", "derived_seed"]
 
 
-def atomic_write(path: str | os.PathLike, write: Callable[[str], Any]) -> Path:
-    """Call ``write(temporary_path)``, then rename the temporary file onto ``path``."""
+def check_companions(output: str | os.PathLike, companions: Iterable[str | os.PathLike], ours: Callable[[Path], bool],
+                     overwrite: bool = False, inputs: Iterable[str | os.PathLike] = (),
+                     flag: str = "overwrite=True") -> None:
+    """
+    Refuse (``ValueError``, before anything is measured or written) a companion of
+    ``output`` whose name is an input of the run (``inputs``: a scene file), the output
+    itself, or an existing file that ``ours(path)`` does not recognise as written by
+    this format — unless ``overwrite`` (its name in ``flag``).
+    """
 
-    path = Path(path)
-    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-    try:
-        write(str(tmp))
-        os.replace(tmp, path)
-    finally:
-        if tmp.exists():
-            tmp.unlink()
-    return path
+    output = Path(output)
+    taken = {os.path.realpath(path) for path in inputs if Path(path).exists()}
+    for companion in map(Path, companions):
+        real = os.path.realpath(companion)
+        if real in taken or real == os.path.realpath(output):
+            raise ValueError(f"{output}: its companion file {companion} would replace "
+                             f"{'an input of this run' if real in taken else 'the output itself'}; choose another "
+                             "output name")
+        if companion.is_dir() or (companion.exists() and not overwrite and not ours(companion)):
+            raise ValueError(f"{output}: its companion file {companion} already exists and was not written by "
+                             f"virtspec-mi for this output; move it, choose another output name, or pass {flag}")
 
 
 def derived_seed(seed: int, label: str) -> int:

@@ -26,17 +26,17 @@ module (their generators, not their documentation, were read):
 ``unreal`` — Unreal Engine 4, ``Engine/Source/Runtime/Renderer/Private/SystemTextures.cpp``
     (``PreintegratedGF``) 128 × 32 texture: column x is μ = (x + ½)/128, row y the
     roughness r = (y + ½)/32 (texel centres), **α = r²**. Memory order
-    ``table[y][x]`` = [roughness][μ]; 16-bit unorm channels; the Schlick-form GGX
-    visibility. (The issue that asked for this module quotes a 32² table with 2¹⁴
+    ``table[y][x]`` = [roughness][μ]; 16-bit unorm channels; GGX with the
+    ``Vis_SmithJointApprox`` visibility. (The issue that asked for this module quotes a 32² table with 2¹⁴
     samples per texel for Unreal; that generator was not available to read, so it is
     not reproduced here: give ``mu`` and ``roughness`` for it.)
 
-The instrument measures *Mitsuba's* ``roughconductor`` / ``roughdielectric`` (separable
-Smith masking, :mod:`virtspec_mi.exchange.microfacet_reference`) on these grids; a
-table made on an engine's grid is that engine's layout filled with Mitsuba's model,
-not the engine's own model (Cycles and Filament use the height-correlated Smith
-masking, whose albedo is higher). Mitsuba clamps α ≥ 10⁻⁴ (``MicrofacetDistribution``),
-so Cycles' first roughness column (α = 10⁻⁸) measures α = 10⁻⁴.
+On an engine's grid a conductor table measures the engine's own model by default
+(:mod:`virtspec_mi.exchange.engine_models`: the ``microfacet`` plugin with the engine's
+G₂, height-correlated for Cycles and Filament); glass tables measure Mitsuba's
+``roughdielectric`` (separable), which is not Cycles' glass model. GGX visible normals
+are sampled for any α > 0, so Cycles' first roughness column (α = 10⁻⁸) is measured as
+such; Mitsuba clamps α ≥ 10⁻⁴ in its own samplers (Beckmann, glass).
 
 References
 ----------

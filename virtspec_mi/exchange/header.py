@@ -74,11 +74,15 @@ def write_header(table: Any) -> str:
 
     description = table.description()
     prov = description["provenance"]
-    guard = _macro(f"VIRTSPEC_{table.distribution}_{table.model}_ALBEDO_H")
+    # every macro carries the table's own prefix (its arrays' base name, TABLE_GGX_GLASS …) and the guard its grid,
+    # so that headers of several tables compile in one translation unit, with -Werror too
+    prefix = _macro(array_name(table)[:-len("_E")])
+    guard = _macro(f"VIRTSPEC_{prefix}_{table.engine}_ALBEDO_H")
     order = description["order"]
     lines = [
         "/* Certified directional-albedo table made by virtspec-mi (a virtual spectrophotometer).",
         f" *   model:        {description['model_description']}, distribution {table.distribution}",
+        f" *   G and F:      {prov.get('bsdf_model', 'Mitsuba ' + str(prov.get('bsdf')))}",
         f" *   measured:     Mitsuba {prov.get('mitsuba')} ({prov.get('variant')}), virtspec-mi {prov.get('virtspec_mi')},"
         f" {prov.get('created')}",
         f" *   grid:         engine convention '{table.engine}'; memory order {' '.join(order)} (last index fastest)",
@@ -91,9 +95,9 @@ def write_header(table: Any) -> str:
         f"#ifndef {guard}",
         f"#define {guard}",
         "",
-        f"#define VIRTSPEC_ALBEDO_EPSILON {table.epsilon!r}",
-        f"#define VIRTSPEC_ALBEDO_DELTA {table.delta!r}",
-        f"#define VIRTSPEC_ALBEDO_RAYS {table.rays}ULL",
+        f"#define {prefix}_EPSILON {table.epsilon!r}",
+        f"#define {prefix}_DELTA {table.delta!r}",
+        f"#define {prefix}_RAYS {table.rays}ULL",
         "",
     ]
     sides = ("outside", "inside") if table.model == "glass" else ("outside",)

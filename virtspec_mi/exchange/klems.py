@@ -30,7 +30,7 @@ transmittance (m/N of the same rays, exactly).
 **Certificate.** Every patch fraction m_io/N_i of the file — all four matrices, every
 wavelength — and every hemispherical R and T is within ε of its true value at once with
 probability ≥ 1 − δ: N_i = ⌈ln(2S/δ)/(2ε²)⌉ rays per incidence for the S statements
-(Hoeffding + union, :func:`virtspec_mi.exchange.sizing.union_hoeffding_rays`); the
+(Hoeffding + union, :func:`virtspec_mi.budgets.binomial.union_hoeffding_rays`); the
 sidecar (NetCDF) holds the counts, fractions, the patch values with their simultaneous
 Clopper–Pearson bounds (each at δ/S) and the statement.
 
@@ -70,12 +70,13 @@ from xml.sax.saxutils import escape
 import numpy as np
 
 from virtspec_mi import __version__
-from virtspec_mi.exchange.common import atomic_write
+from virtspec_mi.exchange.common import check_companions
+from virtspec_mi.files import atomic_write
 from virtspec_mi.exchange.klems_basis import KlemsBasis, klems_basis
 from virtspec_mi.budgets.intervals import clopper_pearson
 
 __all__ = ["SIDES", "KINDS", "KlemsMeasurement", "klems_from_gonio", "aggregate", "check_escaped", "read_klems",
-           "read_klems_sidecar", "sidecar_path", "check_klems"]
+           "read_klems_sidecar", "sidecar_path", "check_klems", "check_klems_output"]
 
 SIDES: tuple[str, ...] = ("front", "back")
 """Sides of incidence: the specimen's front (+z, lit by the instrument) and its back."""
@@ -308,15 +309,16 @@ class KlemsMeasurement:
                    float(dataset.attrs["epsilon"]), float(dataset.attrs["delta"]), bool(dataset.attrs["isotropic"]),
                    json.loads(str(dataset.attrs["provenance"])))
 
-    def write(self, path: str | os.PathLike, name: str = "virtspec-mi specimen") -> Path:
+    def write(self, path: str | os.PathLike, name: str = "virtspec-mi specimen", overwrite: bool = False) -> Path:
         """
         Write the Klems XML to ``path`` (``.xml``) and the certified sidecar to the same
-        name with ``.nc`` (:func:`sidecar_path`); both atomically.
+        name with ``.nc`` (:func:`sidecar_path`); both atomically. The sidecar replaces
+        a file of its name only when that is a Klems sidecar or with ``overwrite=True``
+        (:func:`check_klems_output`).
         """
 
         path = Path(path)
-        if path.suffix.lower() != ".xml":
-            raise ValueError(f"path must end in .xml (got {path.name!r})")
+        check_klems_output(path, overwrite=overwrite)
         sidecar = sidecar_path(path)
         measured = KlemsMeasurement(**{**self.__dict__, "provenance": {**self.provenance, "sidecar": sidecar.name}})
         atomic_write(sidecar, lambda tmp: measured.to_dataset().to_netcdf(tmp))
@@ -329,6 +331,38 @@ def sidecar_path(path: str | os.PathLike) -> Path:
 
     return Path(path).with_suffix(".nc")
 
+
+
+def check_klems_output(path: str | os.PathLike, overwrite: bool = False, inputs: Sequence[Any] = ()) -> Path:
+    """
+    Refuse (``ValueError``, before anything is measured) a Klems output ``path`` that
+    does not end in ``.xml``, whose folder does not exist, that is one of ``inputs``
+    (the scene file measured), or whose sidecar ``.nc`` would replace an input or a
+    file that is not a Klems sidecar (unless ``overwrite``).
+    """
+
+    path = Path(path)
+    if path.suffix.lower() != ".xml":
+        raise ValueError(f"out must end in .xml (got {path.name!r})")
+    if not path.parent.is_dir():
+        raise ValueError(f"out {path}: the folder {path.parent} does not exist")
+    given = [Path(item) for item in inputs if isinstance(item, (str, os.PathLike)) and Path(item).exists()]
+    if any(os.path.realpath(path) == os.path.realpath(item) for item in given):
+        raise ValueError(f"out {path} is the scene file being measured; choose another name for the Klems file")
+    check_companions(path, [sidecar_path(path)], _is_sidecar, overwrite, inputs=given)
+    return path
+
+
+def _is_sidecar(path: Path) -> bool:
+    """Whether ``path`` is a Klems sidecar written by virtspec-mi (its ``format`` attribute)."""
+
+    try:
+        import xarray as xr
+
+        with xr.open_dataset(path) as dataset:
+            return dataset.attrs.get("format") == _FORMAT
+    except Exception:  # not NetCDF, unreadable: not ours
+        return False
 
 
 def read_klems_sidecar(path: str | os.PathLike) -> KlemsMeasurement:
@@ -434,9 +468,20 @@ def klems_from_gonio(front: Any, back: Any = None, basis: str = "full", isotropi
     result = KlemsMeasurement(klems, SIDES[:len(readings)], np.asarray(front.wavelengths, dtype=np.float64), counts,
                               rays_arr, np.stack(refl), np.stack(trans), 0.0, float(front.delta), True,
                               {"virtspec_mi": __version__, "scene": front.result.scene, "source": "GonioResult",
+                               "mitsuba": _installed_mitsuba(),
                                "created": datetime.now(timezone.utc).isoformat(timespec="seconds")})
     eps = float(np.max(result.certified_epsilon)) if epsilon is None else float(epsilon)
     return KlemsMeasurement(**{**result.__dict__, "epsilon": eps})
+
+
+def _installed_mitsuba() -> str:
+    """The Mitsuba version installed now, labelled so (a GonioResult does not record the one that traced it)."""
+
+    try:
+        import mitsuba
+    except ImportError:  # pragma: no cover - the package needs Mitsuba
+        return "unknown (not installed)"
+    return f"{mitsuba.__version__} (installed when this file was made from the reading)"
 
 
 @dataclass(frozen=True)

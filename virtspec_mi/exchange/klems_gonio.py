@@ -35,16 +35,18 @@ import os
 import time
 from dataclasses import dataclass
 from datetime import datetime, timezone
-from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from virtspec_mi import __version__
 from virtspec_mi.exchange.common import derived_seed
-from virtspec_mi.exchange.klems import SIDES, KlemsMeasurement, aggregate, check_escaped
+from virtspec_mi.checks import check_delta, number, shown_value
+from virtspec_mi.engine import interrupts
+from virtspec_mi.engine.readings import check_specimen
+from virtspec_mi.exchange.klems import SIDES, KlemsMeasurement, aggregate, check_escaped, check_klems_output
 from virtspec_mi.exchange.klems_basis import klems_basis
-from virtspec_mi.exchange.sizing import union_hoeffding_rays
+from virtspec_mi.budgets.binomial import union_hoeffding_rays
 
 __all__ = ["klems_measure", "respond"]
 
@@ -64,6 +66,7 @@ def klems_measure(
     out: str | os.PathLike | None = None,
     name: str = "virtspec-mi specimen",
     progress: bool | None = None,
+    overwrite: bool = False,
 ) -> KlemsMeasurement:
     """
     Measure Klems matrices of ``scene``'s specimen (see the module docstring).
@@ -98,6 +101,9 @@ def klems_measure(
         The specimen's name in the file.
     progress
         A tqdm bar of the readings (``None``: when stderr is a terminal and it takes > 2 s).
+    overwrite
+        Let the sidecar ``OUT.nc`` replace a file of that name that is not a Klems sidecar
+        (refused otherwise, before anything is measured, as is ``out`` naming the scene file).
 
     References
     ----------
@@ -111,15 +117,18 @@ def klems_measure(
     from virtspec_mi.scene import find_bench, instrument_scene
 
     klems = klems_basis(basis)
-    if not (isinstance(epsilon, (int, float)) and not isinstance(epsilon, bool) and 0 < epsilon < 0.5):
-        raise ValueError(f"epsilon must satisfy 0 < epsilon < 0.5 (got {epsilon!r})")
-    if not (isinstance(delta, (int, float)) and not isinstance(delta, bool) and 0 < delta < 1):
-        raise ValueError(f"delta must satisfy 0 < delta < 1 (got {delta!r})")
-    if out is not None and Path(out).suffix.lower() != ".xml":
-        raise ValueError(f"out must end in .xml (got {Path(out).name!r})")
+    epsilon, delta = number("epsilon", epsilon), check_delta(delta)  # any real number type (numpy's too)
+    if not 0.0 < epsilon < 0.5:
+        raise ValueError(f"epsilon must satisfy 0 < epsilon < 0.5 (got {shown_value(epsilon)})")
     lams = np.array(parse_wavelengths(wavelengths), dtype=np.float64)
+    if out is not None:  # before anything is measured: the folder, the scene itself, the sidecar's name
+        from virtspec_mi import scenes as shipped
+
+        check_klems_output(out, overwrite=overwrite, inputs=[_resolved(scene, shipped), _resolved(back, shipped)])
     mi = mitsuba()
     scenes = [scene]
+    for each in scenes + ([back] if back not in (None, False) else []):
+        check_specimen(find_bench(each).bsdf, lams.tolist())  # wavelengths outside its data: before any reading
     if back is None:
         from virtspec_mi.exchange.flip import flipped
 
@@ -142,46 +151,60 @@ def klems_measure(
         if isotropic and klems.index_in_ring[p] != 0:
             continue
         groups.setdefault(round((klems.phi[p] + 180.0) % 360.0, 9), []).append(p)
-    bar = Progress(progress, n_sides * sum(len(v) for v in groups.values()), desc="klems")
-    try:
-        for s, side_scene in enumerate(scenes):
-            loaded = find_bench(side_scene).scene  # loaded once per side
-            for phi_i, patches in sorted(groups.items()):
-                label = f"{SIDES[s]}:{phi_i:.9g}"
-                reading = gonio(loaded, theta_i=[float(klems.theta[p]) for p in patches], phi_i=phi_i,
-                                beam="collimated", wavelengths=lams.tolist(), rays=n_rays,
-                                seed=derived_seed(seed, label), theta_o_bins=edges.tolist(), phi_o_bins=phi_bins)
-                patch_counts = aggregate(reading, klems)
-                r = np.asarray(reading.result.reflected)
-                t = np.asarray(reading.result.transmitted)
-                check_escaped(patch_counts, r, t)
-                for column, p in enumerate(patches):
-                    targets = [p]
-                    if isotropic:
-                        ring = klems.ring[p]
-                        targets = list(np.nonzero(klems.ring == ring)[0])
-                    for q in targets:
-                        shift = int(round((klems.phi[q] - klems.phi[p]) / width))
-                        counts[s, :, q] = (aggregate(_Single(reading, column, shift), klems)[:, 0] if shift
-                                           else patch_counts[:, column])
-                        ray_counts[s, :, q] = np.asarray(reading.rays)[:, column]
-                        refl[s, :, q], trans[s, :, q] = r[:, column], t[:, column]
-                bar.reach(bar.done + len(patches))
-    finally:
-        bar.close()
-    import mitsuba as _mitsuba_module
+    # signals act at the readings' safe points only (never inside the files' writes)
+    with interrupts.deferred():
+        bar = Progress(progress, n_sides * sum(len(v) for v in groups.values()), desc="klems")
+        try:
+            for s, side_scene in enumerate(scenes):
+                loaded = find_bench(side_scene).scene  # loaded once per side
+                for phi_i, patches in sorted(groups.items()):
+                    label = f"{SIDES[s]}:{phi_i:.9g}"
+                    reading = gonio(loaded, theta_i=[float(klems.theta[p]) for p in patches], phi_i=phi_i,
+                                    beam="collimated", wavelengths=lams.tolist(), rays=n_rays,
+                                    seed=derived_seed(seed, label), theta_o_bins=edges.tolist(), phi_o_bins=phi_bins)
+                    patch_counts = aggregate(reading, klems)
+                    r = np.asarray(reading.result.reflected)
+                    t = np.asarray(reading.result.transmitted)
+                    check_escaped(patch_counts, r, t)
+                    for column, p in enumerate(patches):
+                        targets = [p]
+                        if isotropic:
+                            ring = klems.ring[p]
+                            targets = list(np.nonzero(klems.ring == ring)[0])
+                        for q in targets:
+                            shift = int(round((klems.phi[q] - klems.phi[p]) / width))
+                            counts[s, :, q] = (aggregate(_Single(reading, column, shift), klems)[:, 0] if shift
+                                               else patch_counts[:, column])
+                            ray_counts[s, :, q] = np.asarray(reading.rays)[:, column]
+                            refl[s, :, q], trans[s, :, q] = r[:, column], t[:, column]
+                    bar.reach(bar.done + len(patches))
+        finally:
+            bar.close()
+        import mitsuba as _mitsuba_module
 
-    provenance = {"seed": int(seed), "mitsuba": _mitsuba_module.__version__, "variant": mi.variant(),
-                  "virtspec_mi": __version__, "scene": str(scene) if isinstance(scene, (str, os.PathLike)) else
-                  type(scene).__name__, "back": "turned over (virtspec_flipped)" if back is None else
-                  ("none" if back is False else "given scene"), "beam": "collimated at each patch centre",
-                  "seconds_wall": round(time.perf_counter() - started, 3),
-                  "created": datetime.now(timezone.utc).isoformat(timespec="seconds")}
-    measurement = KlemsMeasurement(klems, SIDES[:n_sides], lams, counts, ray_counts, refl, trans, float(epsilon),
-                                   float(delta), bool(isotropic), provenance)
-    if out is not None:
-        measurement.write(out, name=name)
+        provenance = {"seed": int(seed), "mitsuba": _mitsuba_module.__version__, "variant": mi.variant(),
+                      "virtspec_mi": __version__, "scene": str(scene) if isinstance(scene, (str, os.PathLike)) else
+                      type(scene).__name__, "back": "turned over (virtspec_flipped)" if back is None else
+                      ("none" if back is False else "given scene"), "beam": "collimated at each patch centre",
+                      "seconds_wall": round(time.perf_counter() - started, 3),
+                      "created": datetime.now(timezone.utc).isoformat(timespec="seconds")}
+        measurement = KlemsMeasurement(klems, SIDES[:n_sides], lams, counts, ray_counts, refl, trans, float(epsilon),
+                                       float(delta), bool(isotropic), provenance)
+        if out is not None:
+            interrupts.check()  # the last safe point before the files are written
+            measurement.write(out, name=name, overwrite=overwrite)
     return measurement
+
+
+def _resolved(scene: Any, shipped: Any) -> Any:
+    """The file of a scene given by path or shipped name (else ``None``: a dict or a loaded scene)."""
+
+    if not isinstance(scene, (str, os.PathLike)):
+        return None
+    try:
+        return shipped.resolve(scene)
+    except Exception:  # the scene's own loading reports a bad name
+        return scene
 
 
 @dataclass(frozen=True)

@@ -27,7 +27,7 @@ Python documentation, ``argparse`` (sub-commands); xarray's backend entry points
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any, Callable, ContextManager, Protocol, Sequence
 
 __all__ = ["Command", "Figure", "Session"]
@@ -45,6 +45,8 @@ class Figure:
     """What it draws (the flag's help)."""
     dim: str = ""
     """One figure per label of this dim when the result has several (``FIG_550nm.png``), or ``""``: one figure."""
+    keywords: dict[str, Any] = field(default_factory=dict)
+    """Keywords of the method (e.g. the quantities a spectrum figure draws)."""
 
 
 @dataclass(frozen=True)

@@ -252,6 +252,9 @@ class GlossMeter(Instrument):
              parameters: ParameterSpace | None) -> Plan:
         if len(theta_i) != 1:
             raise ValueError(f"a gloss meter reads at one theta_i, its geometry (got {len(theta_i)} angles)")
+        if settings.beam == "diffuse":  # no incidence direction: no mirror direction for the receptor's cone
+            raise ValueError("beam must be collimated or conical for a gloss meter (got 'diffuse': a diffuse beam has "
+                             "no mirror direction for the receptor's cone about it)")
         self.bench, self.gloss_options = bench, options
         self.plan = Plan(settings.updated(theta_i=float(theta_i[0])), theta_i, parameters,
                          hooks=(MirrorCone(float(theta_i[0]), options.cone),),

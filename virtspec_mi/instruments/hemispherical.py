@@ -42,7 +42,7 @@ from virtspec_mi.instruments.command import Command, Figure, Session
 from virtspec_mi.results.hemispherical import Result, fluctuation
 from virtspec_mi.settings import Options, Settings, option
 
-__all__ = ["Hemispherical", "hemispherical_result", "SweepFlags"]
+__all__ = ["Hemispherical", "hemispherical_result", "SweepFlags", "MeasureFlags"]
 
 
 def _check_densities(value: Any) -> tuple[float, ...]:
@@ -73,6 +73,24 @@ class SweepFlags(Options):
                                 "eq. (24)", words=True)
 
 
+def _check_target(value: Any) -> str:
+    if not isinstance(value, str) or not value.strip():
+        raise ValueError(f"target must be a text such as colour,dE00=0.5 (got {value!r})")
+    return value
+
+
+@dataclass(frozen=True)
+class MeasureFlags(Options):
+    """``virtspec measure``'s own flag: a derived quantity certified instead of the spectrum."""
+
+    title: ClassVar[str] = "derived quantity"
+
+    target: str | None = option(
+        None, _check_target, "certify a derived quantity instead of a spectrum, e.g. colour,dE00=0.5 | "
+        "band:B04:B08,tolerance=0.002 | index:NDVI,tolerance=0.002 | fapar,tolerance=0.002 (the instrument picks "
+        "the wavelengths and the rays of each)")
+
+
 def _respond_sweep(session: Session) -> int:
     """``virtspec sweep``: without ``--out`` (or ``--json``) the CSV table on stdout, the summary on stderr."""
 
@@ -87,7 +105,7 @@ def _respond_sweep(session: Session) -> int:
         return session.report(result, result.summary(), figures)
     if not args.quiet:  # the summary on stderr, so that the table can be piped
         session.report(result, result.summary(), figures, stream=sys.stderr)
-    elif args.csv_plain:  # the report writes it otherwise
+    elif args.csv_plain:
         result.write(args.csv_plain, plain=True)
     print(csv_text(result.to_dataset()), end="")
     return 0
@@ -140,8 +158,10 @@ _MEASURE = Command(
      "virtspec measure soybean_abmb --wavelengths 400:2500:5 --bound two-stage --json",
      "virtspec measure soybean_abmb --wavelengths 400:700:10 --param specimen.thickness=2e-4 --plot leaf.png"),
     figures=(Figure("--plot", "plot_spectra", "reflectance and transmittance over wavelength, each with the band of "
-                                              "its certified tolerance"),),
-    one_reading=True, function="sweep")
+                                              "its certified tolerance",
+                    keywords={"quantities": ("reflectance", "transmittance")}),),
+    one_reading=True, function="sweep", flags=MeasureFlags,
+    respond="virtspec_mi.applications.derived.parse:respond")
 
 _SWEEP = Command(
     "sweep", "certified readings over theta_i x wavelength (x parameters)",

@@ -213,6 +213,13 @@ class ResultBase:
     RENDERED: ClassVar[tuple[str, ...]] = ("reflectance", "transmittance", "absorptance")
     """The quantities :meth:`rendered` returns, in its columns."""
 
+    def plot_spectra(self, path: str | os.PathLike | None = None, **options: Any) -> Any:
+        """Quantities of the result over wavelength at one θi (:func:`virtspec_mi.results.plot.plot_spectra`)."""
+
+        from virtspec_mi.results.plot import plot_spectra
+
+        return plot_spectra(self, path, **options)
+
     def drawn_note(self, quantity: str | None = None) -> str:
         """
         What :meth:`plot` of ``quantity`` leaves out, for the reader (a figure of one
@@ -460,11 +467,15 @@ class ResultBase:
         return spectral_distribution(self, quantity, theta_i)
 
     def colour(self, quantity: str | None = None, theta_i: float | None = None, **options: Any) -> Any:
-        """CIE XYZ, L*a*b* and sRGB of one quantity at one θi (``illuminant=``, ``observer=``)."""
+        """
+        CIE XYZ, L*a*b* and sRGB of one quantity at one θi (``illuminant=``, ``observer=``):
+        with certified intervals from the rays spent where the readings allow it
+        (:func:`virtspec_mi.applications.derived.colour.result_colour`).
+        """
 
-        from virtspec_mi.results.colorimetry import colorimetry
+        from virtspec_mi.applications.derived.colour import result_colour
 
-        return colorimetry(self.to_sd(quantity, theta_i), **options)
+        return result_colour(self, quantity, theta_i, **options)
 
     def to_msds(self, theta_i: float | None = None) -> Any:
         """R, T and A at one θi as a ``colour.MultiSpectralDistributions`` (kinds that have all three)."""

@@ -495,12 +495,16 @@ class GonioResult(ResultBase):
         return self.result._quantity(quantity)
 
     def to_klems(self, path: str | os.PathLike, back: "GonioResult | None" = None, basis: str = "full",
-                 isotropic: bool = False) -> Path:
-        """Write a WINDOW 6 Klems XML (and its NetCDF sidecar): :func:`virtspec_mi.exchange.klems.klems_from_gonio`."""
+                 isotropic: bool = False, overwrite: bool = False) -> Path:
+        """
+        Write a WINDOW 6 Klems XML (and its NetCDF sidecar): :func:`virtspec_mi.exchange.klems.klems_from_gonio`;
+        the sidecar replaces no other file of its name unless ``overwrite=True``.
+        """
 
-        from virtspec_mi.exchange.klems import klems_from_gonio
+        from virtspec_mi.exchange.klems import check_klems_output, klems_from_gonio
 
-        return klems_from_gonio(self, back, basis, isotropic).write(path)
+        check_klems_output(path, overwrite=overwrite)
+        return klems_from_gonio(self, back, basis, isotropic).write(path, overwrite=overwrite)
 
     def to_sd(self, quantity: str | None = None, theta_i: float | None = None, *, theta_o: float | None = None,
               phi_o: float | None = None) -> Any:

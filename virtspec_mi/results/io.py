@@ -65,6 +65,7 @@ __all__ = [
     "check_plain_csv",
     "csv_text",
     "write",
+    "warm_writer",
     "read",
     "write_spectra_csv",
     "read_spectra_csv",
@@ -76,6 +77,27 @@ SUFFIXES: tuple[str, ...] = (".nc", ".csv", ".json", ".zarr")
 """Result file formats understood by :func:`write` and :func:`read`."""
 
 _CSV_HEADER = "# virtspec-mi result "
+
+
+def warm_writer() -> None:
+    """
+    Import now what the first NetCDF write imports (xarray, pandas, netCDF4, dask's scheduler
+    lookup and distributed: a second or more), so that a run writing parts between its safe
+    points (an albedo table's checkpoint) answers an interrupt within a second.
+    """
+
+    import numpy as np
+    import xarray as xr
+
+    import netCDF4  # noqa: F401
+
+    xr.Dataset({"v": ("x", np.zeros(1))}, coords={"x": [0.0]})
+    try:
+        from xarray.backends.locks import get_dask_scheduler
+
+        get_dask_scheduler()
+    except Exception:  # no dask: nothing more to import
+        pass
 
 
 def write(result: Any, path: str | os.PathLike, *, plain: bool = False) -> Path:

@@ -1,5 +1,5 @@
 """
-Rays for many cells at once: union budgets and a two-stage Chernoff rule
+Rays for many cells at once: union budgets and a two-stage binomial rule
 ========================================================================
 
 A table of C cells is certified *jointly*, |Ê_c − E_c| < ε for every cell at once with
@@ -67,7 +67,7 @@ from virtspec_mi.checks import MAX_RAYS, check_delta, check_mu
 from virtspec_mi.budgets.intervals import clopper_pearson
 
 __all__ = ["bernoulli_kl", "upper_exponent", "chernoff_rays", "binomial_rays", "union_hoeffding_rays",
-           "union_hoeffding_rays_array", "pilot_intervals", "clopper_pearson_each", "stage_two_shares",
+           "union_hoeffding_rays_array", "pilot_intervals", "stage_two_shares",
            "stage_two_rays"]
 
 
@@ -201,24 +201,6 @@ def union_hoeffding_rays_array(epsilon: float, delta: ArrayLike) -> NDArray[np.i
 
     delta = np.asarray(delta, dtype=np.float64)
     return np.ceil(np.log(2.0 / delta) / (2.0 * epsilon * epsilon) * (1 - 1e-12)).astype(np.int64)
-
-
-def clopper_pearson_each(k: ArrayLike, n: ArrayLike, delta: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
-    """
-    :func:`virtspec_mi.budgets.intervals.clopper_pearson` with a δ per element (cells of a table
-    carry their own share of δ): the same beta quantiles, broadcast over ``delta`` too.
-    """
-
-    from scipy.special import betainccinv, betaincinv
-
-    k, n, delta = np.broadcast_arrays(np.asarray(k, dtype=np.float64), np.asarray(n, dtype=np.float64),
-                                      np.asarray(delta, dtype=np.float64))
-    if np.any(n < 1) or np.any(k < 0) or np.any(k > n) or not np.all((delta > 0) & (delta < 1)):
-        raise ValueError("clopper_pearson_each needs whole counts 0 <= k <= n, n >= 1 and 0 < delta < 1")
-    with np.errstate(invalid="ignore"):
-        lower = np.where(k > 0, betaincinv(np.maximum(k, 1), n - k + 1, delta / 2), 0.0)
-        upper = np.where(k < n, betainccinv(k + 1, np.maximum(n - k, 1), delta / 2), 1.0)
-    return lower, upper
 
 
 def stage_two_shares(intervals: dict[str, list[tuple[np.ndarray, np.ndarray]]], total: float) -> dict[str, np.ndarray]:

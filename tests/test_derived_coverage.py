@@ -1,0 +1,142 @@
+"""
+Coverage of the certified derived quantities (issue 30): over many seeds, the exact value
+of an analytic specimen lies inside the certified interval at least 1 − δ of the time.
+
+The specimen is a Lambertian reflector (Mitsuba ``diffuse``) whose albedo is a regular
+spectrum: every ray is reflected with probability ρ(λ) — its hemispherical reflectance
+— and absorbed otherwise, so ρ(λ) (linear interpolation of the spectrum's values),
+τ = 0 and α = 1 − ρ are exact, and so is every functional of them (a band, fAPAR, the
+colour through the same ASTM E308 weights) and every index.
+
+δ = 0.2, so that the test has power. Each trial is one ``vm.measure(scene, target=...,
+seed=s)``; a target's statement is joint (all its intervals at once), and a trial
+*covers* when every one of them holds. With n trials and a true coverage p ≥ 1 − δ, the
+hits are Binomial(n, p): the test asks for at least :func:`least_hits` (n, 0.8), the
+number below which a correct certificate falls with probability ≤ 10⁻³ (one-sided
+binomial quantile) — so a correct implementation fails it at most once in a thousand
+seed sets, and the planted error below (coverage far below 0.8) fails it.
+
+The planted error: rays allocated inversely to the weights while the certificate assumes
+Nₖ ∝ |wₖ| (it states (Σ|w|)²/N for Σ w²/Nₖ): the same coverage check catches it.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from scipy.stats import binom
+
+import virtspec_mi as vm
+from virtspec_mi.applications.derived import functionals as functionals_module
+from virtspec_mi.applications.derived import measure as measure_module
+
+DELTA = 0.2
+TRIALS = 40
+VALUES = np.array([0.1, 0.3, 0.7, 0.4, 0.2, 0.6, 0.8, 0.5])
+SPAN = (300.0, 1000.0)
+
+
+def least_hits(trials: int, coverage: float, risk: float = 1e-3) -> int:
+    """The least k with P(Binomial(trials, coverage) < k) ≤ risk."""
+
+    return int(binom.ppf(risk, trials, coverage))
+
+
+def rho(wavelengths: np.ndarray) -> np.ndarray:
+    """The exact hemispherical reflectance of the specimen."""
+
+    return np.interp(wavelengths, np.linspace(*SPAN, len(VALUES)), VALUES)
+
+
+@pytest.fixture(scope="module")
+def scene(mi):
+    return vm.instrument_scene({"type": "diffuse", "reflectance": {
+        "type": "regular", "wavelength_min": SPAN[0], "wavelength_max": SPAN[1],
+        "values": ", ".join(f"{v:g}" for v in VALUES)}})
+
+
+def _truth(target, functional) -> float:
+    exact = rho(functional.wavelengths)
+    exact = 1 - exact if functional.quantity == "absorptance" else exact
+    return functional.value(exact)
+
+
+def _covers(result) -> bool:
+    """Every interval of the result holds the exact value (the joint statement)."""
+
+    target = result.target
+    truths = {f.name: _truth(target, f) for f in target.functionals()}
+    if result.colour is not None:
+        XYZ = np.array([truths[n] for n in "XYZ"])
+        box = result.colour.XYZ_interval
+        inside = bool(np.all((box[:, 0] <= XYZ) & (XYZ <= box[:, 1])))
+        if inside:  # then the propagated statements must hold too (they are images of the box)
+            import colour
+
+            from virtspec_mi.applications.derived.targets import colour_of
+
+            exact = colour_of(XYZ, target.functionals(), target)
+            lab = result.colour.Lab_interval
+            assert np.all((lab[:, 0] - 1e-9 <= exact.Lab) & (exact.Lab <= lab[:, 1] + 1e-9))
+            de00 = float(colour.delta_E(exact.Lab, result.colour.Lab, method="CIE 2000"))
+            assert de00 <= result.colour.dE00_radius + 1e-9
+        return inside
+    if target.kind == "index":
+        a, b = truths[result.values[1].name], truths[result.values[2].name]
+        truths[result.values[0].name] = target.index.value(a, b)
+    return all(v.lower <= truths[v.name] <= v.upper for v in result.values)
+
+
+def coverage(scene, target, trials: int = TRIALS) -> int:
+    """Trials (seeds 0 … trials − 1) whose certified intervals hold the exact values."""
+
+    return sum(_covers(vm.measure(scene, target=target, delta=DELTA, seed=seed, theta_i=8, beam="collimated"))
+               for seed in range(trials))
+
+
+TARGETS = {
+    "band": lambda: vm.band((450, 520), {600: 1.0, 650: 2.0, 700: 1.0}, tolerance=0.02),
+    "fapar": lambda: vm.fapar(tolerance=0.02),
+    "index": lambda: vm.index("NDVI", tolerance=0.05),
+    "colour": lambda: vm.colour(tolerance_dE00=4.0),
+    "albedo": lambda: vm.albedo(tolerance=0.02, low=350, high=780),
+}
+
+
+@pytest.mark.parametrize("kind", sorted(TARGETS))
+def test_the_exact_value_lies_inside_the_certified_interval_at_least_1_minus_delta_of_the_time(scene, kind):
+    hits = coverage(scene, TARGETS[kind]())
+    assert hits >= least_hits(TRIALS, 1 - DELTA), (kind, hits)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("kind", sorted(TARGETS))
+def test_coverage_over_400_seeds(scene, kind):
+    trials = 400
+    assert coverage(scene, TARGETS[kind](), trials) >= least_hits(trials, 1 - DELTA)
+
+
+def test_a_planted_wrong_allocation_is_caught_by_the_coverage_check(scene, monkeypatch):
+    """
+    Rays inversely proportional to the weights (the heavy wavelength starved) while the
+    certificate states the proportional allocation's (Σ|w|)²/N: the coverage collapses
+    and the same check as above fails — and with the right allocation it passes.
+    """
+
+    target = vm.band({500: 1.0, **{510 + 10 * i: 0.02 for i in range(10)}}, tolerance=0.02)
+    assert coverage(scene, target) >= least_hits(TRIALS, 1 - DELTA)
+
+    def inverse(weights, tolerances, delta):
+        right = functionals_module.allocate_jointly(weights, tolerances, delta)
+        w = np.abs(np.atleast_2d(np.asarray(weights, dtype=np.float64))).max(axis=0)
+        share = np.where(w > 0, 1 / np.where(w > 0, w, 1), 0)
+        return np.maximum(np.where(w > 0, 1, 0), np.round(right.sum() * share / share.sum())).astype(np.int64)
+
+    def assumes_proportional(weights, rays, delta, shared=False):
+        weights, rays = np.asarray(weights, dtype=np.float64), np.asarray(rays, dtype=np.float64)
+        return float(np.sqrt(np.abs(weights).sum() ** 2 / rays[weights != 0].sum() * np.log(2 / delta) / 2))
+
+    monkeypatch.setattr(measure_module, "allocate_jointly", inverse)
+    monkeypatch.setattr(functionals_module, "hoeffding_tolerance", assumes_proportional)
+    hits = coverage(scene, target)
+    assert hits < least_hits(TRIALS, 1 - DELTA), hits

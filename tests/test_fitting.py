@@ -1,0 +1,184 @@
+"""Tests of the fitting application (virtspec_mi/applications/fitting/): vm.fit and `virtspec fit`.
+
+The specimen is PROSPECT-D (``prospect_d``, cheap rays), whose model gives the exact spectrum a
+synthetic measurement is made from: the measured values are the model's plus noise drawn uniformly
+within +-u, so the measurement's uncertainty u is a sure bound and the confidence set's level is
+1 - delta (the forward readings' risk) exactly as the fit states it.
+"""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+from scipy.stats import binom
+
+import virtspec_mi as vm
+from virtspec_mi.applications.fitting import read_fit
+from virtspec_mi.applications.fitting.inversion import intervals
+from virtspec_mi.plugins.bsdfs.prospect_model import prospect_d
+
+pytest.importorskip("prosail")  # the PROSPECT-D coefficients (test extra)
+
+WAVELENGTHS = np.array([450.0, 530.0, 560.0, 600.0, 650.0, 680.0, 700.0, 720.0, 800.0, 1200.0, 1450.0, 1650.0,
+                        1950.0, 2200.0])
+FAST = dict(evaluations=(8, 4, 2), profile_points=3, table_points=5, theta_i=8.0, beam="collimated")
+
+
+def synthetic(truth: dict, u: float, seed: int, bias: float = 0.0, wavelengths=WAVELENGTHS) -> dict:
+    """Reflectance and transmittance of PROSPECT-D at ``truth`` + uniform noise within +-u (+ a planted bias)."""
+
+    rng = np.random.default_rng(seed)
+    reflectance, transmittance = prospect_d(wavelengths, **truth)
+    n = len(wavelengths)
+    return {"reflectance": (wavelengths, reflectance + rng.uniform(-u, u, n) + bias, np.full(n, u)),
+            "transmittance": (wavelengths, transmittance + rng.uniform(-u, u, n), np.full(n, u))}
+
+
+def inside(result, truth: dict) -> bool:
+    return all(result.intervals[i, 0] <= truth[name] <= result.intervals[i, 1] for i, name in enumerate(result.names))
+
+
+def test_round_trip_recovers_the_leaf_inside_its_confidence_set():
+    truth = {"Cab": 52.0, "Cm": 0.008}
+    result = vm.fit(synthetic(truth, 0.02, seed=1), "prospect_d", {"Cab": (10, 90), "Cm": (0.002, 0.02)},
+                    delta=0.1, seed=4, **FAST)
+    assert result.consistent and result.statistic <= 1.0
+    assert inside(result, truth), (result.intervals, truth)
+    assert result.estimate[0] == pytest.approx(52.0, abs=10.0)
+    # rays raised as the fit converged: the optimum read at mu* = mu_fraction x u, certified
+    assert result.forward_mu == pytest.approx(0.01)
+    assert result.forward_tolerance <= 0.01 + 1e-9
+    assert set(result.candidate_mu) == {0.02, 0.01}  # table and stage 1 at 0.02 (4 mu* capped), then 2 mu*, mu*
+    assert not any(result.unconstrained)
+    assert "confidence set" in result.summary()
+
+
+def test_a_planted_bias_makes_an_inconsistent_fit():
+    truth = {"Cab": 40.0, "Cm": 0.01}
+    result = vm.fit(synthetic(truth, 0.01, seed=2, bias=0.05), "prospect_d", {"Cab": (10, 90), "Cm": (0.002, 0.02)},
+                    delta=0.1, **FAST)
+    assert not result.consistent
+    assert np.all(np.isnan(result.intervals))
+    assert "INCONSISTENT" in result.summary()
+
+
+def test_data_that_do_not_see_a_parameter_leave_it_unconstrained():
+    near_infrared = np.array([800.0, 1000.0, 1300.0, 1600.0, 2000.0, 2300.0])  # anthocyanins absorb below 700 nm
+    truth = {"Anth": 10.0, "Cm": 0.01}
+    result = vm.fit(synthetic(truth, 0.02, seed=3, wavelengths=near_infrared), "prospect_d",
+                    {"Anth": (0, 40), "Cm": (0.002, 0.02)}, delta=0.1, **FAST)
+    assert result.consistent and inside(result, truth)
+    assert result.unconstrained == (True, False)
+    assert "UNCONSTRAINED" in result.summary()
+
+
+def test_intervals_carry_each_end_to_the_next_tested_value():
+    values = np.array([[0.0], [1.0], [2.0], [3.0], [4.0]])
+    consistent = np.array([False, True, True, False, False])
+    np.testing.assert_array_equal(intervals(values, consistent, np.array([[0.0, 4.0]])), [[0.0, 3.0]])
+    np.testing.assert_array_equal(intervals(values, ~consistent, np.array([[-1.0, 5.0]])), [[-1.0, 5.0]])
+    assert np.all(np.isnan(intervals(values, consistent & False, np.array([[0.0, 4.0]]))))
+
+
+def test_bad_input_is_refused_by_name():
+    measured = synthetic({"Cab": 40.0}, 0.02, seed=0)
+    with pytest.raises(ValueError, match=r"no parameter 'Chl'.*Cab"):
+        vm.fit(measured, "prospect_d", {"Chl": (10, 80)})
+    with pytest.raises(ValueError, match=r"'Cab'.*0 <= Cab <= 150"):
+        vm.fit(measured, "prospect_d", {"Cab": (10, 500)})
+    with pytest.raises(ValueError, match="lowest < highest"):
+        vm.fit(measured, "prospect_d", {"Cab": (80, 10)})
+    with pytest.raises(ValueError, match="outside the data range of the specimen"):
+        vm.fit((np.array([350.0, 500.0]), np.array([0.1, 0.1]), np.array([0.01, 0.01])), "prospect_d",
+               {"Cab": (10, 80)})
+    with pytest.raises(ValueError, match="has no uncertainty"):
+        vm.fit((WAVELENGTHS, np.full(len(WAVELENGTHS), 0.1)), "prospect_d", {"Cab": (10, 80)})
+    with pytest.raises(ValueError, match="sets mu of its forward readings itself"):
+        vm.fit(measured, "prospect_d", {"Cab": (10, 80)}, mu=0.01)
+    with pytest.raises(ValueError, match="loss must be one of chi2, rmse, max"):
+        vm.fit(measured, "prospect_d", {"Cab": (10, 80)}, loss="l1")
+    with pytest.raises(ValueError, match="reach outside the measured"):
+        vm.fit(measured, "prospect_d", {"Cab": (10, 80)}, wavelengths=[420.0, 2400.0])
+
+
+def test_a_fit_resumes_from_its_directory_and_reuses_its_table(tmp_path):
+    truth = {"Cab": 30.0}
+    measured = synthetic(truth, 0.02, seed=5)
+    options = dict(FAST, delta=0.1)
+    first = vm.fit(measured, "prospect_d", {"Cab": (10, 90)}, directory=tmp_path / "work", **options)
+    assert (tmp_path / "work" / "table.zarr").exists() and first.traced_rays == first.rays
+    files = sorted((tmp_path / "work").glob("reading-*.nc"))
+    files[len(files) // 2].unlink()  # as if interrupted before that reading
+    again = vm.fit(measured, "prospect_d", {"Cab": (10, 90)}, directory=tmp_path / "work", **options)
+    np.testing.assert_array_equal(again.estimate, first.estimate)  # common random numbers: the same path
+    np.testing.assert_array_equal(again.candidate_statistic, first.candidate_statistic)
+    assert 0 < again.traced_rays < first.traced_rays / 5
+    # the table, reused by a fit with another loss
+    other = vm.fit(measured, "prospect_d", {"Cab": (10, 90)}, table=tmp_path / "work" / "table.zarr", loss="rmse",
+                   **options)
+    assert other.consistent and inside(other, truth)
+    with pytest.raises(ValueError, match="no grid over specimen.Cm"):
+        vm.fit(measured, "prospect_d", {"Cm": (0.002, 0.02)}, table=tmp_path / "work" / "table.zarr", **options)
+
+
+def test_fit_files_and_figure(tmp_path):
+    result = vm.fit(synthetic({"Cab": 45.0}, 0.02, seed=6), "prospect_d", {"Cab": (10, 90)}, delta=0.1, **FAST)
+    for name in ("fit.json", "fit.nc"):
+        back = read_fit(result.write(tmp_path / name))
+        assert back.names == result.names and back.consistent == result.consistent
+        np.testing.assert_allclose(back.intervals, result.intervals)
+        np.testing.assert_allclose(back.fitted["transmittance"], result.fitted["transmittance"])
+        assert back.candidate_stage == result.candidate_stage
+    values, statistic = result.profile("Cab")
+    assert len(values) >= 3 and statistic.min() <= 1.0
+    result.plot(tmp_path / "fit.png")
+    assert (tmp_path / "fit.png").stat().st_size > 10_000
+    with pytest.raises(ValueError, match="a fit file is"):
+        result.write(tmp_path / "fit.csv")
+
+
+def test_cli_fit(tmp_path, capsys):
+    from virtspec_mi.cli import main
+
+    w = WAVELENGTHS
+    reflectance, transmittance = prospect_d(w, Cab=35.0)
+    path = tmp_path / "leaf.csv"
+    rows = ["wavelength,reflectance,reflectance_uncertainty,transmittance,transmittance_uncertainty"]
+    rows += [f"{a},{r},0.02,{t},0.02" for a, r, t in zip(w, reflectance, transmittance)]
+    path.write_text("\n".join(rows) + "\n")
+    status = main(["fit", str(path), "--specimen", "prospect_d", "--free", "Cab=10:90", "--quantity", "both",
+                   "--delta", "0.1", "--profile-points", "3", "--theta-i", "8", "--beam", "collimated",
+                   "--out", str(tmp_path / "fit.json"), "--json"])
+    assert status == 0
+    data = json.loads(capsys.readouterr().out)
+    assert data["consistent"] and data["intervals"][0][0] <= 35.0 <= data["intervals"][0][1]
+    assert read_fit(tmp_path / "fit.json").names == ("Cab",)
+    assert main(["fit", str(path), "--specimen", "prospect_d", "--free", "Chl=10:90"]) == 1
+    assert "no parameter 'Chl'" in capsys.readouterr().err
+
+
+@pytest.mark.slow
+def test_confidence_sets_cover_the_truth_and_biases_are_detected():
+    """
+    Coverage: over T seeded round trips with random true leaves, the number of confidence sets
+    missing the truth is Binomial(T, p) with p <= delta; the test fails when it exceeds the
+    binomial's 0.999 quantile at p = delta. Power: a planted bias of 2.5 u on the reflectance
+    must be flagged inconsistent in most trials.
+    """
+
+    trials, delta = 12, 0.1
+    rng = np.random.default_rng(2026)
+    misses, flagged = 0, 0
+    for trial in range(trials):
+        truth = {"Cab": float(rng.uniform(15, 85)), "Cm": float(rng.uniform(0.003, 0.018))}
+        bounds = {"Cab": (10, 90), "Cm": (0.002, 0.02)}
+        result = vm.fit(synthetic(truth, 0.02, seed=100 + trial), "prospect_d", bounds, delta=delta,
+                        seed=trial, **FAST)
+        misses += not (result.consistent and inside(result, truth))
+        biased = vm.fit(synthetic(truth, 0.02, seed=200 + trial, bias=0.05), "prospect_d", bounds, delta=delta,
+                        seed=trial, **FAST)
+        flagged += not biased.consistent
+    assert misses <= binom.ppf(0.999, trials, delta), misses
+    assert flagged >= trials - 2, flagged

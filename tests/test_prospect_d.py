@@ -1,0 +1,122 @@
+"""Tests of the PROSPECT-D model (plugins/bsdfs/prospect_model.py) and its plugin (plugins/bsdfs/prospect_d.py).
+
+The reference is the ``prosail`` package (PyPI 2.0.5, in the ``test`` extra): its ``run_prospect``
+(J. Gomez-Dans' Python port of Feret et al.'s ``prospect_DB.m``, Feret et al. 2017) on its own
+coefficient table ``prospect_d_spectra.txt`` (``dataSpec_PDB.m`` of 16 January 2017, six significant
+digits). Both implementations read the same table, so they must agree to float64 rounding.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import virtspec_mi as vm
+from virtspec_mi.plugins.bsdfs import prospect_model
+from virtspec_mi.plugins.bsdfs.prospect_model import (
+    ENVIRONMENT_VARIABLE,
+    ProspectDataError,
+    prospect_coefficients,
+    prospect_d,
+    tav,
+)
+from virtspec_mi.references.quadrature import fresnel_reflectance
+from virtspec_mi.scene import instrument_scene
+
+prosail = pytest.importorskip("prosail")  # in the test extra; skipped only where it is not installed
+
+LEAVES = [  # (N, Cab, Car, Cbrown, Cw, Cm, Anth): a green leaf, a thick dark one, a thin pale one, a red one
+    (1.5, 40.0, 8.0, 0.0, 0.01, 0.009, 0.0),
+    (2.5, 80.0, 15.0, 0.5, 0.03, 0.02, 5.0),
+    (1.0, 5.0, 1.0, 0.0, 0.002, 0.001, 1.0),
+    (1.8, 30.0, 10.0, 0.2, 0.015, 0.006, 20.0),
+]
+
+
+@pytest.mark.parametrize("leaf", LEAVES)
+def test_reproduces_prosail_run_prospect(leaf):
+    n, cab, car, cbrown, cw, cm, anth = leaf
+    wavelengths, r, t = prosail.run_prospect(n, cab, car, cbrown, cw, cm, ant=anth)
+    reflectance, transmittance = prospect_d(N=n, Cab=cab, Car=car, Cbrown=cbrown, Cw=cw, Cm=cm, Anth=anth)
+    assert reflectance.shape == (2101,)
+    np.testing.assert_allclose(prospect_coefficients().wavelengths, wavelengths)
+    np.testing.assert_allclose(reflectance, r, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(transmittance, t, rtol=0, atol=1e-12)
+
+
+def test_vectorised_over_parameter_sets_and_wavelengths():
+    cab = np.array([[10.0, 40.0], [60.0, 90.0]])
+    reflectance, transmittance = prospect_d([450.0, 550.5, 800.0], Cab=cab, N=1.7)
+    assert reflectance.shape == transmittance.shape == (2, 2, 3)
+    one, _ = prospect_d([450.0, 550.5, 800.0], Cab=60.0, N=1.7)
+    np.testing.assert_allclose(reflectance[1, 0], one, rtol=0, atol=1e-15)
+    full, _ = prospect_d(Cab=60.0, N=1.7)  # 550.5 nm: halfway between the 1 nm grid's points
+    assert one[1] == pytest.approx((full[150] + full[151]) / 2, abs=1e-3)
+    assert np.all((reflectance > 0) & (transmittance >= 0) & (reflectance + transmittance < 1))
+
+
+@pytest.mark.parametrize("alpha", [40.0, 90.0])
+@pytest.mark.parametrize("n", [1.3, 1.5])
+def test_tav_is_the_fresnel_transmissivity_averaged_over_the_cone(alpha, n):
+    # Stern (1964): tav = (1 / sin^2 a) * integral_0^a (1 - F(theta)) sin(2 theta) d theta, F unpolarised Fresnel
+    theta = np.linspace(0.0, alpha, 20001)
+    integrand = (1.0 - np.array([fresnel_reflectance(t, n) for t in theta])) * np.sin(2 * np.radians(theta))
+    expected = np.trapezoid(integrand, np.radians(theta)) / np.sin(np.radians(alpha)) ** 2
+    assert tav(alpha, n) == pytest.approx(expected, abs=1e-6)
+    with pytest.raises(ValueError, match="alpha"):
+        tav(0.0, n)
+
+
+def test_bad_parameters_are_refused_by_name():
+    with pytest.raises(ValueError, match=r"'Cab'.*0 <= Cab <= 150"):
+        prospect_d(Cab=-1.0)
+    with pytest.raises(ValueError, match=r"no parameter 'Cx'"):
+        prospect_d(Cx=1.0)
+    with pytest.raises(ValueError, match="400-2500 nm"):
+        prospect_d([350.0], Cab=10.0)
+
+
+def test_coefficients_from_a_path_and_a_clear_error_without_them(tmp_path, monkeypatch):
+    table = tmp_path / "coefficients.txt"
+    data = prospect_coefficients()
+    rows = np.column_stack([data.wavelengths, data.n, *data.absorption.values()])[::100]
+    np.savetxt(table, rows)
+    mine = prospect_coefficients(table)
+    assert len(mine.wavelengths) == len(rows) and mine.source == str(table)
+    monkeypatch.setenv(ENVIRONMENT_VARIABLE, str(table))
+    assert len(prospect_coefficients().wavelengths) == len(rows)
+    (tmp_path / "bad.txt").write_text("400 1.5 0.1\n")
+    with pytest.raises(ProspectDataError, match="eight columns|8 columns"):
+        prospect_coefficients(tmp_path / "bad.txt")
+    monkeypatch.delenv(ENVIRONMENT_VARIABLE)
+    monkeypatch.setattr(prospect_model.importlib.util, "find_spec", lambda name: None)
+    with pytest.raises(ProspectDataError, match=r"pip install prosail.*VIRTSPEC_PROSPECT_DATA"):
+        prospect_coefficients()
+
+
+WAVELENGTHS = [450.0, 550.0, 680.0, 800.0, 1450.0, 1940.0, 2200.0]
+
+
+@pytest.mark.parametrize("theta_i", [0.0, 45.0])
+def test_plugin_measures_the_model_within_its_certificate(mi, theta_i):
+    leaf = {"N": 1.8, "Cab": 55.0, "Car": 9.0, "Anth": 2.0, "Cw": 0.02, "Cm": 0.007}
+    scene = instrument_scene({"type": "prospect_d", **leaf})
+    result = vm.measure(scene, wavelengths=WAVELENGTHS, theta_i=theta_i, mu=0.005, delta=1e-3, seed=3)
+    reflectance, transmittance = prospect_d(WAVELENGTHS, **leaf)
+    for quantity, model in (("reflectance", reflectance), ("transmittance", transmittance)):
+        spectrum = result.spectrum(quantity)
+        assert np.all(np.abs(spectrum.values - model) <= spectrum.tolerance), quantity
+
+
+def test_plugin_parameters_through_traverse_and_refusals(mi):
+    scene = mi.load_dict(instrument_scene({"type": "prospect_d"}))
+    assert set(vm.engine.parameters.known_parameters(scene)) >= {"specimen.Cab", "specimen.N", "specimen.Cm"}
+    result = vm.measure(scene, parameters={"specimen.Cab": 10.0}, wavelengths=[550.0], mu=0.01, delta=1e-3)
+    model, _ = prospect_d([550.0], Cab=10.0)
+    assert abs(result.spectrum("reflectance").values[0] - model[0]) <= 0.01
+    with pytest.raises(ValueError, match="'N'.*1 <= N <= 4"):
+        vm.measure(scene, parameters={"specimen.N": 0.5}, wavelengths=[550.0], mu=0.05)
+    with pytest.raises(ValueError, match="400"):
+        vm.measure(scene, wavelengths=[380.0], mu=0.05)
+    with pytest.raises((ValueError, RuntimeError), match="'Cab' must be a number"):  # Mitsuba wraps it
+        mi.load_dict({"type": "prospect_d", "Cab": "lots"})

@@ -1,0 +1,24 @@
+"""
+Certified derived quantities: colour, sensor bands, indices, fAPAR
+==================================================================
+
+A question in the user's own units — a colour and its ΔE₀₀, a band's reflectance, an
+index, the absorbed share of PAR — is a *target* the instrument sizes its rays for: a
+linear functional of the spectrum costs the rays of one reading at its tolerance
+(Hoeffding 1963 with Nₖ ∝ |wₖ|), nonlinear maps get intervals by propagating the
+certified box. Modules, one job each:
+
+- :mod:`.functionals` — linear functionals, their Hoeffding tolerance and allocation;
+- :mod:`.delta_e` — L*a*b* boxes, exact ΔE*ab and a rigorous ΔE₀₀ enclosure;
+- :mod:`.colour` — certified XYZ, L*a*b*, sRGB (``Result.colour()``);
+- :mod:`.bands`, :mod:`.indices` — response functions, Sentinel-2 bands, indices;
+- :mod:`.targets` — ``vm.colour``, ``vm.band``, ``vm.fapar``, ``vm.index``;
+- :mod:`.measure` — a target's rays traced through the engine; :mod:`.result` — its result;
+- :mod:`.difference` — ``vm.colour_difference``; :mod:`.parse` — ``--target`` strings.
+
+This package's ``__init__`` imports nothing (the results layer reads :mod:`.colour`).
+"""
+
+from __future__ import annotations
+
+__all__: list[str] = []

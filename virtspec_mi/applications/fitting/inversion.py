@@ -1,0 +1,420 @@
+"""
+``fit``: a specimen's parameters from a measured spectrum, with an honest confidence set
+========================================================================================
+
+:func:`fit` finds the free parameters of a specimen (a leaf's pigments, water and dry
+matter, a slab's μa and μs, a rough surface's α …) whose certified forward spectrum
+matches a measured reflectance and/or transmittance, and says which parameters the
+measurement cannot tell apart from them.
+
+The forward model is the instrument itself (:mod:`.forward`): noisy, but certified, and
+on common random numbers across candidates. The fit goes
+
+1. **table**: a coarse grid over the box of bounds, one sweep at a coarse tolerance
+   (a Zarr store, reusable by a later fit: a look-up-table inversion);
+2. **refinement**: from the table's best point, Nelder–Mead (``scipy.optimize``) on the
+   chosen ``loss`` in stages whose tolerance shrinks (4 μ*, 2 μ*, μ*; never coarser than
+   the table's), each stage starting
+   from the last one's best, the simplex shrinking with it: rays are raised as the fit
+   converges, and the **estimate** is the best candidate of the last stage, read at
+   μ* = ``mu_fraction`` × the smallest measurement uncertainty (or ``forward_mu``);
+3. **profiles**: along each free parameter through the estimate (the others held), at μ*:
+   ``profile_points`` over the bounds, then each end of the consistent stretch bisected
+   :data:`PROFILE_BISECTIONS` times;
+4. **confirmation**: a candidate that makes an end of an interval while judged only at a
+   coarser tolerance (the table's, an early stage's) is read again at μ* and judged by that
+   reading, until every end is judged at μ* (``confirm``).
+
+**The confidence set.** A candidate θ is *consistent* with the measurement when its
+certified spectrum F̂(θ) lies within the combined tolerance at every fitted point:
+s(θ) = max |F̂(θ) − m| / (μ'(θ) + u) ≤ 1, with μ'(θ) its certified tolerance and u the
+measurement's uncertainty. For the true parameters θ₀ the test fails with probability
+≤ δ (the forward readings' joint risk, :mod:`.forward`) plus the measurement's own risk
+(that |m − truth| > u somewhere), so the consistent candidates are a confidence set of
+level ≥ 1 − δ less that risk — the test is the one :func:`virtspec_mi.comparison.compare`
+counts, made simultaneous. Each parameter's **interval** runs from its smallest to its
+largest value among consistent candidates, each end carried out to the next value of that
+parameter any candidate was tested at (or the bound): the search's resolution, not a
+continuity assumption hidden in the answer. A parameter whose interval covers ≥ 90 % of
+its bounds is flagged **unconstrained** (the data do not tell its values apart). When no
+candidate is consistent the fit is reported **inconsistent**: the specimen model cannot
+reproduce the measurement within its stated uncertainty (a model of another material, a
+biased instrument, an uncertainty too small).
+
+Losses: ``chi2`` (mean squared residual in units of the measurement uncertainty, the
+default), ``rmse`` (unweighted) and ``max`` (the largest normalised residual).
+
+References
+----------
+J.A. Nelder, R. Mead (1965), *A simplex method for function minimization*, Comput. J. 7,
+308–313; G. Casella, R.L. Berger (2002), *Statistical Inference*, 2nd ed., Sect. 9.2.1
+(confidence sets by inverting a test); Féret et al. (2017), RSE 193:204–215 and
+Jacquemoud & Baret (1990) (PROSPECT inversion by minimising a spectral loss).
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+import time
+from pathlib import Path
+from typing import Any, Callable, Mapping, Sequence
+
+import numpy as np
+from scipy.optimize import minimize
+
+from virtspec_mi.applications.fitting.forward import Forward, Reading, note
+from virtspec_mi.applications.fitting.problem import FitProblem, describe, fit_problem
+from virtspec_mi.applications.fitting.result import FitResult
+from virtspec_mi.checks import number
+from virtspec_mi.engine.parameters import apply_point, known_parameters
+
+__all__ = ["fit", "LOSSES", "UNCONSTRAINED_SHARE", "PROFILE_BISECTIONS", "consistency", "intervals", "verdicts"]
+
+UNCONSTRAINED_SHARE: float = 0.9
+"""A parameter whose interval covers at least this share of its bounds is flagged unconstrained."""
+
+PROFILE_BISECTIONS: int = 4
+"""Bisections at each end of a profile's consistent stretch."""
+
+_STAGES = (4.0, 2.0, 1.0)  # the refinement's tolerances, in units of mu*
+_TABLE_MU = 0.02  # the table's tolerance (unless mu* is larger)
+
+
+def _chi2(reading: Reading, problem: FitProblem) -> float:
+    return float(np.mean([np.mean(((reading.predicted[q] - problem.measured[q]) / problem.uncertainty[q]) ** 2)
+                          for q in problem.quantities]))
+
+
+def _rmse(reading: Reading, problem: FitProblem) -> float:
+    return float(np.sqrt(np.mean([np.mean((reading.predicted[q] - problem.measured[q]) ** 2)
+                                  for q in problem.quantities])))
+
+
+def _largest(reading: Reading, problem: FitProblem) -> float:
+    return float(max(np.max(np.abs(reading.predicted[q] - problem.measured[q]) / problem.uncertainty[q])
+                     for q in problem.quantities))
+
+
+LOSSES: dict[str, Callable[[Reading, FitProblem], float]] = {"chi2": _chi2, "rmse": _rmse, "max": _largest}
+"""The losses a fit minimises, by name."""
+
+
+def consistency(reading: Reading, problem: FitProblem) -> float:
+    """s = max |F̂ − m| / (μ' + u) over every fitted point (≤ 1: consistent; NaN tolerance: inf)."""
+
+    worst = 0.0
+    for q in problem.quantities:
+        tolerance = reading.tolerance[q] + problem.uncertainty[q]
+        ratio = np.abs(reading.predicted[q] - problem.measured[q]) / tolerance
+        worst = max(worst, float(np.max(np.where(np.isnan(ratio), np.inf, ratio))))
+    return worst
+
+
+def verdicts(readings: Sequence[Reading], statistic: np.ndarray) -> np.ndarray:
+    """
+    Whether each reading's candidate is consistent: the verdict of the finest reading of the
+    same parameter values (a candidate read again at a smaller tolerance is judged by that).
+    """
+
+    finest: dict[tuple, tuple[float, float]] = {}
+    for reading, s in zip(readings, statistic):
+        key = tuple(reading.values.tolist())
+        if key not in finest or reading.mu < finest[key][0]:
+            finest[key] = (reading.mu, float(s))
+    return np.array([finest[tuple(r.values.tolist())][1] <= 1.0 for r in readings], dtype=bool)
+
+
+def intervals(values: np.ndarray, consistent: np.ndarray, bounds: np.ndarray) -> np.ndarray:
+    """
+    (n, 2): each parameter's interval from the consistent candidates' values, each end
+    carried out to the next value of that parameter tested (the bound when none); NaN when
+    no candidate is consistent.
+    """
+
+    found = np.full((values.shape[1], 2), np.nan)
+    if not consistent.any():
+        return found
+    for i in range(values.shape[1]):
+        tested = np.unique(values[:, i])
+        inside = values[consistent, i]
+        low, high = inside.min(), inside.max()
+        below, above = tested[tested < low], tested[tested > high]
+        found[i] = (below.max() if below.size else bounds[i, 0], above.min() if above.size else bounds[i, 1])
+    return found
+
+
+def _table_points(count: int) -> int:
+    return {1: 9, 2: 5, 3: 4}.get(count, 3)
+
+
+def _check_choices(loss: str, delta: float, mu_fraction: float, forward_mu: float | None, table_points: int | None,
+                   profile_points: int, evaluations: Sequence[int] | None) -> None:
+    if loss not in LOSSES:
+        raise ValueError(f"loss must be one of {', '.join(LOSSES)} (got {loss!r})")
+    if not 0.0 < delta < 1.0:
+        raise ValueError(f"delta must satisfy 0 < delta < 1 (got {delta!r})")
+    if not 0.0 < mu_fraction <= 1.0:
+        raise ValueError(f"mu_fraction must satisfy 0 < mu_fraction <= 1 (got {mu_fraction!r})")
+    if forward_mu is not None and not 0.0 < forward_mu < 0.5:
+        raise ValueError(f"forward_mu must satisfy 0 < forward_mu < 0.5 (got {forward_mu!r})")
+    if table_points is not None and not (isinstance(table_points, int) and 2 <= table_points <= 100):
+        raise ValueError(f"table_points must be a whole number, 2 <= table_points <= 100 (got {table_points!r})")
+    if not (isinstance(profile_points, int) and (profile_points == 0 or 2 <= profile_points <= 100)):
+        raise ValueError(f"profile_points must be 0 (none) or a whole number 2 ... 100 (got {profile_points!r})")
+    if evaluations is not None and (len(evaluations) != len(_STAGES)
+                                    or not all(isinstance(e, int) and e >= 0 for e in evaluations)):
+        raise ValueError(f"evaluations must be {len(_STAGES)} whole numbers >= 0, one per refinement stage "
+                         f"(got {evaluations!r})")
+
+
+def fit(measured: Any, specimen: Any, parameters: Mapping[str, Any], *, quantities: Sequence[str] | None = None,
+        measurement_uncertainty: Any = None, wavelengths: Any = None, loss: str = "chi2", delta: float = 0.05,
+        mu_fraction: float = 0.5, forward_mu: float | None = None, table: str | os.PathLike | None = None,
+        table_points: int | None = None, evaluations: Sequence[int] | None = None, profile_points: int = 5,
+        confirm: bool = True, seed: int = 0, directory: str | os.PathLike | None = None,
+        defines: dict[str, Any] | None = None,
+        workers: Any = None, progress: bool | None = None, **settings: Any) -> FitResult:
+    """
+    Fit the free ``parameters`` of ``specimen`` to a measured spectrum (see the module docstring).
+
+    Parameters
+    ----------
+    measured
+        A measured spectrum (any :func:`~virtspec_mi.comparison.read_measured` source: a
+        ``wavelength,value,uncertainty`` CSV, a NetCDF file, a ``(wavelengths, values,
+        uncertainty)`` tuple, a result), read as each of ``quantities``; or a dict
+        quantity → source (``{"reflectance": ..., "transmittance": ...}``).
+    specimen
+        A BSDF plugin's name (``"abm_b"``, ``"prospect_d"``: the paper's instrument around
+        it), a shipped scene's name, an XML path, a scene dict or an ``mi.Scene``.
+    parameters
+        Free parameter → (lowest, highest) (or ``"lo:hi"``), named as the specimen shows
+        them (``"Cab"`` or ``"specimen.Cab"``); both bounds are checked by the specimen.
+    quantities
+        What ``measured`` holds when it is not a dict: ``("reflectance",)`` (default),
+        ``("transmittance",)`` or both (a file with both columns).
+    measurement_uncertainty
+        A number or one value per measured point: the measurement's uncertainty (a
+        half-width), overriding the file's. Required when the file has none.
+    wavelengths
+        The wavelengths to fit (nm, inside the measured range; the measurement is
+        interpolated onto them); default the measured ones.
+    loss
+        ``chi2`` (default), ``rmse`` or ``max`` (:data:`LOSSES`).
+    delta
+        Risk of the forward readings for one candidate's whole spectrum (the confidence
+        set's level is 1 − δ less the measurement's own risk).
+    mu_fraction, forward_mu
+        The tolerance of the forward readings at the optimum: ``mu_fraction`` × the
+        smallest measurement uncertainty, or ``forward_mu`` when given.
+    table
+        A Zarr store of the coarse table (:func:`virtspec_mi.api.sweep` over the free
+        parameters as a grid named ``specimen.NAME``, on the fit's wavelengths, each reading
+        at δ / n_λ or better): read when it exists, else written there. Default:
+        ``DIRECTORY/table.zarr`` with ``directory``, else kept in memory.
+    table_points
+        Values per parameter in the table (default 9, 5, 4, then 3 for 1, 2, 3, more parameters).
+    evaluations
+        Forward readings per refinement stage (default 12, 6, 3 per free parameter).
+    profile_points
+        Points of each parameter's profile at μ* (0: none).
+    confirm
+        Read the candidates that make the intervals' ends while judged only at a coarser
+        tolerance again at μ*, and judge them by that reading (default ``True``; ``False``
+        keeps the coarse verdicts: still a valid, wider confidence set).
+    seed
+        The seed of every forward reading (common random numbers).
+    directory
+        Work directory: the table and every forward reading are kept there, so that the
+        same call, run again, resumes (:mod:`.forward`).
+    workers
+        Dask workers for the table's sweep (as :func:`virtspec_mi.api.sweep`).
+    progress
+        ``True``: a line on stderr per stage; default: when stderr is a terminal.
+    **settings
+        The forward readings' other settings (``theta_i``, ``beam``, ``bound`` …,
+        :class:`~virtspec_mi.settings.Settings`); ``mu``, ``delta``, ``seed``, ``joint``,
+        ``rays`` and ``wavelengths`` are the fit's own.
+
+    Raises
+    ------
+    ValueError
+        Bad input: a parameter the specimen does not have, bounds outside its validity, a
+        measured spectrum outside the specimen's data range or without uncertainty, …
+    """
+
+    started = time.perf_counter()
+    delta = number("delta", delta)
+    mu_fraction = number("mu_fraction", mu_fraction)
+    forward_mu = None if forward_mu is None else number("forward_mu", forward_mu)
+    _check_choices(loss, delta, mu_fraction, forward_mu, table_points, profile_points, evaluations)
+    problem = fit_problem(measured, specimen, parameters, quantities=quantities, wavelengths=wavelengths,
+                          measurement_uncertainty=measurement_uncertainty, defines=defines)
+    progress = sys.stderr.isatty() if progress is None else bool(progress)
+    smallest = min(float(problem.uncertainty[q].min()) for q in problem.quantities)
+    target = forward_mu if forward_mu is not None else mu_fraction * smallest
+    if not 0.0 < target < 0.5:
+        raise ValueError(f"the forward tolerance at the optimum, {target:g}, must lie in (0, 0.5)")
+    work = None if directory is None else Path(directory)
+    if work is not None:
+        work.mkdir(parents=True, exist_ok=True)
+    table_path = Path(table) if table is not None else (None if work is None else work / "table.zarr")
+    forward = Forward(problem, delta=delta, seed=seed, settings=settings, directory=work, workers=workers,
+                      progress=progress)
+    measure_loss = LOSSES[loss]
+    count = len(problem.names)
+    try:
+        points = table_points or _table_points(count)
+        grid = [np.linspace(low, high, points) for low, high in problem.bounds]
+        table_mu = max(_TABLE_MU, target)
+        readings = forward.table(grid, table_mu, table_path)
+        best = min(readings, key=lambda r: measure_loss(r, problem))
+        budget = evaluations if evaluations is not None else tuple(k * count for k in (12, 6, 3))
+        estimate = _refine(forward, problem, best, target, table_mu, budget, 0.5 / (points - 1), measure_loss)
+        if profile_points:
+            for i, name in enumerate(problem.names):
+                count_read = _profile(forward, problem, estimate, i, target, profile_points)
+                note(progress, f"fit: profile of {name} ({count_read} points at mu = {target:g})")
+        if confirm:
+            confirmed = _confirm_ends(forward, problem, target)
+            note(progress, f"fit: {confirmed} candidates at the confidence set's ends read again at mu = {target:g}")
+    finally:
+        keys = known_parameters(problem.scene)
+        apply_point(_Holder(problem.scene), [keys.get(k, k) for k in problem.keys], problem.start)
+    return _result(problem, forward, estimate, loss, measure_loss, delta, target, mu_fraction, seed, started)
+
+
+class _Holder:
+    def __init__(self, scene: Any) -> None:
+        self.scene = scene
+
+
+def _refine(forward: Forward, problem: FitProblem, best: Reading, target: float, ceiling: float,
+            budget: Sequence[int], step: float,
+            measure_loss: Callable[[Reading, FitProblem], float]) -> Reading:
+    """Nelder–Mead in stages of shrinking tolerance (module docstring); the best reading at ``target``."""
+
+    x = problem.normalised(best.values)
+    count = len(x)
+    final = None
+    for stage, (factor, evaluations) in enumerate(zip(_STAGES, budget), start=1):
+        mu = min(target * factor, ceiling)  # never coarser than the table
+        last = stage == len(_STAGES)
+        tried: list[Reading] = []
+
+        def objective(point: np.ndarray, mu: float = mu, tried: list = tried) -> float:
+            reading = forward.reading(problem.denormalised(point), mu, f"refine {stage}")
+            tried.append(reading)
+            return measure_loss(reading, problem)
+
+        objective(x)  # the stage's start, at its own tolerance
+        if evaluations > 1:
+            simplex = np.vstack([x, *(np.clip(x + step * np.eye(count)[i] * (1 if x[i] <= 0.5 else -1), 0, 1)
+                                      for i in range(count))])
+            minimize(objective, x, method="Nelder-Mead", bounds=[(0.0, 1.0)] * count,
+                     options={"maxfev": max(1, evaluations - 1), "initial_simplex": simplex, "xatol": 1e-4,
+                              "fatol": 0.0})
+        stage_best = min(tried, key=lambda r: measure_loss(r, problem))
+        note(forward.progress, f"fit: stage {stage}/{len(_STAGES)} at mu = {mu:g}: {len(tried)} readings, "
+                               f"best loss {measure_loss(stage_best, problem):.4g}")
+        x = problem.normalised(stage_best.values)
+        step /= 2.0
+        if last:
+            final = stage_best
+    assert final is not None
+    return final
+
+
+def _confirm_ends(forward: Forward, problem: FitProblem, target: float) -> int:
+    """
+    Read again at ``target`` every candidate that makes an end of an interval while judged
+    only at a coarser tolerance, until every end is a candidate judged at ``target``.
+    Returns the readings taken.
+    """
+
+    taken = 0
+    while True:
+        readings = forward.readings
+        values = np.array([r.values for r in readings])
+        consistent = verdicts(readings, np.array([consistency(r, problem) for r in readings]))
+        if not consistent.any():
+            return taken
+        finest: dict[tuple, float] = {}
+        for r in readings:
+            key = tuple(r.values.tolist())
+            finest[key] = min(finest.get(key, np.inf), r.mu)
+        ends = []
+        for i in range(values.shape[1]):
+            chosen = np.flatnonzero(consistent)
+            for j in (chosen[np.argmin(values[chosen, i])], chosen[np.argmax(values[chosen, i])]):
+                if finest[tuple(values[j].tolist())] > target:
+                    ends.append(j)
+        if not ends:
+            return taken
+        for j in dict.fromkeys(ends):
+            forward.reading(values[j], target, "confirm")
+            taken += 1
+
+
+def _profile(forward: Forward, problem: FitProblem, estimate: Reading, i: int, target: float, points: int) -> int:
+    """
+    The test statistic along parameter ``i`` through the estimate (the others held): ``points``
+    evenly over the bounds, then each end of the consistent stretch around the estimate found
+    to 1/2^PROFILE_BISECTIONS of the step by bisection. Returns the readings taken.
+    """
+
+    stage = f"profile {problem.names[i]}"
+
+    def statistic(value: float) -> float:
+        values = estimate.values.copy()
+        values[i] = value
+        return consistency(forward.reading(values, target, stage), problem)
+
+    centre = float(estimate.values[i])
+    scanned = {float(v): statistic(float(v)) for v in np.linspace(*problem.bounds[i], points)}
+    taken = len(scanned)
+    if consistency(estimate, problem) > 1.0:
+        return taken
+    for side in (-1.0, 1.0):
+        outside = sorted((v for v, s in scanned.items() if s > 1.0 and (v - centre) * side > 0),
+                         key=lambda v: abs(v - centre))
+        if not outside:
+            continue
+        reach = abs(outside[0] - centre)
+        inside_values = [v for v, s in scanned.items() if s <= 1.0 and 0 <= (v - centre) * side < reach]
+        good = max(inside_values, key=lambda v: abs(v - centre), default=centre)
+        bad = outside[0]
+        for _ in range(PROFILE_BISECTIONS):
+            middle = 0.5 * (good + bad)
+            if statistic(middle) <= 1.0:
+                good = middle
+            else:
+                bad = middle
+            taken += 1
+    return taken
+
+
+def _result(problem: FitProblem, forward: Forward, estimate: Reading, loss: str,
+            measure_loss: Callable[[Reading, FitProblem], float], delta: float, target: float, mu_fraction: float,
+            seed: int, started: float) -> FitResult:
+    readings = forward.readings
+    values = np.array([r.values for r in readings])
+    statistic = np.array([consistency(r, problem) for r in readings])
+    consistent = verdicts(readings, statistic)
+    found = intervals(values, consistent, problem.bounds)
+    span = problem.bounds[:, 1] - problem.bounds[:, 0]
+    unconstrained = tuple(bool(np.isfinite(w) and w >= UNCONSTRAINED_SHARE * s)
+                          for w, s in zip(found[:, 1] - found[:, 0], span))
+    return FitResult(
+        names=problem.names, bounds=problem.bounds, estimate=estimate.values, intervals=found,
+        unconstrained=unconstrained, consistent=bool(consistent.any()), statistic=consistency(estimate, problem),
+        loss_name=loss, loss=measure_loss(estimate, problem), delta=delta, mu_fraction=mu_fraction,
+        forward_mu=target, wavelengths=problem.wavelengths, quantities=problem.quantities,
+        measured=problem.measured, uncertainty=problem.uncertainty, fitted=estimate.predicted,
+        fitted_tolerance=estimate.tolerance, candidate_values=values, candidate_mu=np.array([r.mu for r in readings]),
+        candidate_statistic=statistic, candidate_loss=np.array([measure_loss(r, problem) for r in readings]),
+        candidate_stage=tuple(r.stage for r in readings), candidate_consistent=consistent,
+        rays=int(sum(r.rays for r in readings)),
+        traced_rays=forward.traced_rays, seconds=time.perf_counter() - started, specimen=describe(problem),
+        seed=int(seed), reading_delta=forward.reading_delta)

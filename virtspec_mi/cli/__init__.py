@@ -1,0 +1,246 @@
+"""
+Command line: ``virtspec``
+==========================
+
+``virtspec --help`` lists the subcommands, one line each; ``virtspec COMMAND --help``
+gives a subcommand's description, every flag and examples.
+
+**Measuring** (:mod:`virtspec_mi.cli.measuring`) — one subcommand per command of every
+instrument of the registry (:data:`virtspec_mi.instruments.INSTRUMENTS`: each declares
+its :class:`~virtspec_mi.instruments.command.Command`), each the keyed readings of the
+instrument through the API (:data:`MEASURING` lists them), e.g.:
+
+- ``virtspec measure SCENE``: one certified reading at one θi, over the scene's
+  wavelengths (a spectrum) — :func:`virtspec_mi.measure`: the keyed readings of
+  :func:`virtspec_mi.sweep` at that θi and one specimen parameter point, printed as one
+  reading;
+- ``virtspec sweep SCENE``: readings over θi × wavelength (× specimen parameters),
+  :func:`virtspec_mi.sweep`; ``--densities`` (the paper's Fig. 6);
+- ``virtspec gonio SCENE``: the goniophotometer, :func:`virtspec_mi.gonio` (R and T with
+  their certificate and the per-θo table; ``--plot`` draws each wavelength;
+  ``--plot-series``; ``--klems``: :mod:`virtspec_mi.exchange.klems_gonio`);
+- ``virtspec sphere SCENE``: the integrating sphere, :func:`virtspec_mi.sphere_measure`
+  (``--correct``: the reading corrected by the sphere theory, beside it);
+- ``virtspec gloss SCENE``: the gloss meter, ``vm.take("gloss", …)``; an outside
+  package's instrument (entry-point group ``virtspec_mi.instruments``) likewise.
+
+Each takes one flag per setting of :class:`~virtspec_mi.settings.Settings` and per
+option of its instrument's ``Options`` and of its command's own flags
+(:func:`~virtspec_mi.cli.flags.option_flags`, the one flag builder: the field's help,
+choices and default; a flag left out takes the scene's value) and the same common flags
+(:data:`~virtspec_mi.cli.flags.COMMON_FLAGS`, added by
+:func:`~virtspec_mi.cli.measuring.common_flags`, the one place they are defined): ``-D NAME=VALUE`` (the XML scene's ``$NAME``, as ``mitsuba -D``),
+``--param NAME=VALUES`` (repeatable; VALUES ``v1,v2,v3`` or ``start:stop:step``) and
+``--points`` (:mod:`virtspec_mi.engine.parameters`), ``--out FILE`` (written atomically;
+resumable: finished readings are kept in ``FILE.partial.json``,
+:mod:`virtspec_mi.engine.checkpoint`), ``--plot FIG``, ``--json``, ``--quiet`` (else a
+progress bar on a terminal), ``--workers N`` / ``--scheduler ADDRESS`` /
+``--task-readings K`` (Dask: :mod:`virtspec_mi.scaleout`; the same counts).
+
+**Files** (:mod:`virtspec_mi.cli.files`) — ``virtspec plot|colour|compare FILE``: every kind of result file (a
+hemispherical reading or sweep, a goniophotometer reading: its R and T, or its lobes; a
+sphere reading: its reading, corrected or hemispherical value), ``--sel NAME=VALUE``
+(repeatable): the label of a dim nearest VALUE (a parameter point, θi, a wavelength).
+
+**Others** — ``virtspec bounds`` (the paper's Table 1 and every ``bound=`` rule),
+``virtspec albedo-table`` (:mod:`virtspec_mi.cli.tables`), ``virtspec fit``
+(:mod:`virtspec_mi.applications.fitting`), ``virtspec scenes`` (the
+shipped scenes: every ``SCENE`` argument takes their names, :mod:`virtspec_mi.scenes`),
+``virtspec llvm {find,check}`` (the libLLVM Dr.Jit uses; ``make setup`` calls it).
+
+Errors in the input (bad ranges, unreadable scenes, a bad libLLVM) print one line
+``virtspec: error: …`` naming the flag (``--theta-i: theta_i must satisfy …``) and exit
+with status 1; errors of the command line itself (an unknown flag, a bad choice) are
+argparse's usage errors, status 2.
+
+References
+----------
+Baranoski et al. (2001), eqs. (23), (24); Figs. 5 and 6.
+"""
+
+from __future__ import annotations
+
+import argparse
+import signal
+import sys
+import textwrap
+from pathlib import Path
+from typing import Any, Sequence
+
+from virtspec_mi.cli.files import add_file_commands, colour, compare, plot
+from virtspec_mi.cli.flags import COMMON_FLAGS, Flag, option_flags
+from virtspec_mi.cli.measuring import Measuring, common_flags, measuring, measuring_flags, respond, unrecognized_hint
+from virtspec_mi.cli.tables import add_table_command, albedo_table
+
+__all__ = ["main", "build_parser", "Measuring", "MEASURING", "measuring", "Flag", "COMMON_FLAGS", "common_flags",
+           "option_flags"]
+
+
+_EXAMPLES = {
+    "bounds": "example: virtspec bounds --mu 0.005 --delta 0.001 0.01 0.1",
+    "llvm": "example: virtspec llvm check",
+    "scenes": "examples:\n  virtspec scenes\n  virtspec scenes --path sphere_150mm_8d\n"
+              "  virtspec scenes --copy sphere_150mm_8d my_sphere.xml\n"
+              "  virtspec measure soybean_abmb --wavelengths 400:2500:5",
+}
+"""The examples of the subcommands defined here (the others carry their own)."""
+
+
+def __getattr__(name: str) -> Any:
+    if name == "MEASURING":  # the table, generated from the registry when first asked for
+        return measuring()
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+class _Listing(argparse.HelpFormatter):
+    """``virtspec --help``: every subcommand with its summary on one line (``albedo-table`` included)."""
+
+    def __init__(self, prog: str) -> None:
+        super().__init__(prog, max_help_position=30)
+
+    def _format_action(self, action: argparse.Action) -> str:
+        self._action_max_length = max(self._action_max_length, 18)  # the longest subcommand, indented
+        return super()._format_action(action)
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The ``virtspec`` argument parser (the measurement flags come from the options' fields)."""
+
+    from virtspec_mi import __version__
+    from virtspec_mi.applications.fitting.command import add_fit_command
+
+    parser = argparse.ArgumentParser(
+        prog="virtspec", description="Virtual spectrophotometer: certified reflectance, transmittance and "
+                                     "absorptance readings of Mitsuba BSDFs (Baranoski, Rokne & Xu 2001).",
+        epilog="virtspec COMMAND --help: its flags and examples.",
+        formatter_class=_Listing)
+    parser.add_argument("--version", action="version", version=f"virtspec-mi {__version__}")
+    commands = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
+
+    def command(name: str, summary: str, description: str, examples: str | None = None) -> argparse.ArgumentParser:
+        return commands.add_parser(name, help=summary, description=textwrap.fill(description, 100),
+                                   epilog=_EXAMPLES[name] if examples is None else examples,
+                                   formatter_class=argparse.RawDescriptionHelpFormatter)
+
+
+    bounds = command("bounds", "rays per reading under every ray budget (Table 1)",
+                     "Rays per reading that certify |m/N - rho| < mu with probability >= 1 - delta: the "
+                     "paper's Table 1 (eqs. 15 and 23), then every rule of bound=.")
+    bounds.add_argument("--mu", type=float, default=0.005, help="certified tolerance (default 0.005)")
+    bounds.add_argument("--delta", type=float, nargs="+", default=[0.001, 0.01, 0.1],
+                        help="failure probabilities (default 0.001 0.01 0.1)")
+
+    for row in measuring().values():
+        measuring_flags(command(row.name, row.command.summary, row.command.description,
+                                "examples:\n" + "\n".join(f"  {line}" for line in row.command.examples)), row)
+    add_file_commands(command)
+    add_fit_command(commands)  # virtspec fit: its flags live with the fitting package
+    add_table_command(command)
+
+    shipped = command("scenes", "the shipped scenes (every SCENE argument takes their names)",
+                      "List the scenes shipped with virtspec-mi and their files. Every subcommand that takes a "
+                      "SCENE takes a shipped scene's name as well as a file path (e.g. virtspec measure "
+                      "soybean_abmb). --copy NAME [DEST] copies one as a template to edit (never over an "
+                      "existing file).")
+    asked = shipped.add_mutually_exclusive_group()
+    asked.add_argument("--path", metavar="NAME", help="print the file of the shipped scene NAME")
+    asked.add_argument("--copy", metavar="NAME", help="copy the shipped scene NAME to DEST (a file or a folder; "
+                                                      "default ./NAME.xml) and print the copy's path")
+    shipped.add_argument("destination", nargs="?", metavar="DEST", help="where --copy puts its copy")
+
+    llvm = command("llvm", "find or check the libLLVM Dr.Jit uses (set-up)",
+                   "find: print a libLLVM >= 17 on this machine (exit 1 if none); check: load it in Dr.Jit "
+                   "and print its version, or say how to fix it.")
+    llvm.add_argument("action", choices=["find", "check"])
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Entry point of ``virtspec``; returns the exit status."""
+
+    signal.signal(signal.SIGPIPE, signal.SIG_DFL)  # a closed pipe (virtspec bounds | head) ends us quietly
+    from virtspec_mi.engine.interrupts import catching, exit_status
+
+    # SIGINT and SIGTERM stop a run at its next safe point, its checkpoint saved; taken from the start, so a
+    # Ctrl-C while the modules load (the parser imports numpy) is an interrupt too, never a traceback
+    with catching():
+        try:
+            parser = build_parser()
+            args, extra = parser.parse_known_args(argv)
+            if extra:
+                parser.error(f"unrecognized arguments: {' '.join(extra)}{unrecognized_hint(args, extra)}")
+        except KeyboardInterrupt as stop:
+            return _interrupted(stop, argparse.Namespace(), exit_status)
+        return _command(args, exit_status)
+
+
+def _command(args: argparse.Namespace, exit_status: Any) -> int:
+    """Run the command of ``args``; an error or an interrupt becomes a one-line message and the exit status."""
+
+    try:
+        if args.command == "bounds":
+            from virtspec_mi.budgets.bounds import format_table_1
+            from virtspec_mi.budgets.rules import format_budgets
+
+            print(format_table_1(args.mu, args.delta))
+            print()
+            print(format_budgets(args.mu, args.delta))
+            return 0
+        if args.command == "scenes":
+            from virtspec_mi.scenes import answer
+
+            print(answer(args.path, args.copy, args.destination))
+            return 0
+        if args.command == "llvm":
+            from virtspec_mi.llvm import main as llvm_main
+
+            return llvm_main([args.action])
+        if args.command == "fit":
+            from virtspec_mi.applications.fitting.command import run_fit
+
+            return run_fit(args)
+        handlers = {"colour": colour, "compare": compare, "plot": plot, "albedo-table": albedo_table}
+        if args.command in handlers:
+            return handlers[args.command](args)
+        return respond(args, measuring()[args.command])
+    except KeyboardInterrupt as stop:  # Ctrl-C (SIGINT) or SIGTERM: virtspec_mi.engine.interrupts.Interrupted
+        return _interrupted(stop, args, exit_status)
+    except Exception as error:
+        from virtspec_mi.engine.interrupts import received
+
+        if received() is not None:  # an interrupt raised inside an import or a C extension comes out as another error
+            return _interrupted(KeyboardInterrupt(received()), args, exit_status, received())
+        if not isinstance(error, (ValueError, RuntimeError, OSError)):
+            raise
+        print(f"virtspec: error: {_rescued(error)}", file=sys.stderr)
+        return 1
+
+
+def _interrupted(stop: BaseException, args: argparse.Namespace, exit_status: Any, signum: int | None = None) -> int:
+    """The one line and the exit status (130, 143) of a command stopped by a signal, naming its checkpoint."""
+
+    signum = signum or getattr(stop, "signum", signal.SIGINT)
+    # the checkpoint of the run under way: named by the run, else the one the command set (_sweep)
+    partial = getattr(stop, "checkpoint", None) or getattr(args, "checkpoint", None)
+    kept = "" if partial is None else (
+        f" (finished readings are kept in {partial}: re-run the same command to resume)" if Path(partial).exists()
+        else " (no reading had finished: nothing to resume)")
+    word = "interrupted" if signum == signal.SIGINT else f"terminated by {signal.Signals(signum).name}"
+    print(f"virtspec: {word}{kept}", file=sys.stderr)
+    return exit_status(signum)
+
+
+def _rescued(error: BaseException) -> Any:
+    """The error; for a result kept only in memory (its file could not be written), where it was written instead."""
+
+    from virtspec_mi.files import IN_MEMORY
+
+    if getattr(error, "result", None) is None or not error.kept.endswith(IN_MEMORY):  # type: ignore[attr-defined]
+        return error
+    from virtspec_mi.results.io import rescue
+
+    kept = error.kept[:-len(IN_MEMORY)] + rescue(error.result, error.path)  # type: ignore[attr-defined]
+    return error.keeping(kept)  # type: ignore[attr-defined]
+
+
+# --- the measuring subcommands ---------------------------------------------------------------

@@ -1,0 +1,138 @@
+"""
+``virtspec albedo-table``: certified directional-albedo tables and engines' drop-in files
+========================================================================================
+
+The flags of :func:`virtspec_mi.exchange.albedo.albedo_table` and of an engine's
+channels (:func:`virtspec_mi.exchange.engine_tables.engine_tables`, ``--audit``).
+"""
+
+from __future__ import annotations
+
+import argparse
+from typing import Callable
+
+__all__ = ["add_table_command", "albedo_table"]
+
+EXAMPLES = ("examples:\n  virtspec albedo-table --engine cycles --epsilon 1e-3 --out ggx_E.nc ggx_E.h\n"
+            "  virtspec albedo-table --model glass --engine cycles --out glass.nc --checkpoint glass.parts\n"
+            "  virtspec albedo-table --from ggx_E.nc --compare published_tables.h --rounding 5e-7\n"
+            "  virtspec albedo-table --engine filament --out dfg.inc\n"
+            "  virtspec albedo-table --engine unreal --audit PreintegratedGF.png --figure audit.png")
+"""Its examples (its ``--help``)."""
+
+
+def add_table_command(command: Callable[..., argparse.ArgumentParser]) -> None:
+    """Add ``albedo-table`` through ``command(name, summary, description, examples)``."""
+
+    albedo = command("albedo-table", "certified directional-albedo tables E(mu, alpha)",
+                     "Measure Mitsuba's rough conductor (Fresnel = 1) or rough glass on an engine's grid (or "
+                     "your own): every E(mu, alpha[, eta]) and E_avg within --epsilon of the model's value, the "
+                     "whole table at once with probability >= 1 - delta; NetCDF, .npy and a C header in Cycles' "
+                     "layout; --compare lists every cell of a published table outside the certified interval.",
+                     EXAMPLES)
+    albedo_options(albedo)
+
+
+def albedo_options(parser: argparse.ArgumentParser) -> None:
+    """The flags of ``virtspec albedo-table`` (:func:`virtspec_mi.exchange.albedo.albedo_table`)."""
+
+    parser.add_argument("--model", choices=("conductor", "glass"), default="conductor",
+                        help="roughconductor with Fresnel = 1, or roughdielectric (default conductor)")
+    parser.add_argument("--distribution", choices=("ggx", "beckmann"), default="ggx", help="(default ggx)")
+    parser.add_argument("--shadowing", choices=("separable", "height_correlated", "unreal"), default=None,
+                        help="conductor G2 (default: the engine's own; separable on a user grid)")
+    parser.add_argument("--g1", choices=("exact", "walter"), default="exact", help="Beckmann G1 (default exact)")
+    parser.add_argument("--fresnel", choices=("one", "fc", "one_minus_fc"), default="one",
+                        help="conductor F: 1, Fc = (1 - wi.m)^5 or 1 - Fc (default one)")
+    parser.add_argument("--engine", choices=("cycles", "filament", "unreal", "none"), default=None,
+                        help="grid and memory order of that engine (default cycles, or none with --mu/--alpha)")
+    for name, text in (("mu", "cosines of incidence"), ("alpha", "roughness alpha"),
+                       ("roughness", "roughness r (alpha = r^2)"), ("eta", "glass indices >= 1 (inside: 1/eta)")):
+        parser.add_argument(f"--{name}", nargs="+", help=f"{text}: numbers or start:stop:step")
+    parser.add_argument("--epsilon", type=float, default=1e-3, help="tolerance of every value (default 0.001)")
+    parser.add_argument("--delta", type=float, default=0.01, help="failure probability of the whole table (default 0.01)")
+    parser.add_argument("--bound", choices=("two-stage", "hoeffding"), default="two-stage", help="(default two-stage)")
+    parser.add_argument("--no-average", action="store_true", help="do not measure E_avg (diffuse beam)")
+    parser.add_argument("--parts", action="store_true", help="glass: certify E_R and E_T too")
+    parser.add_argument("--seed", type=int, default=0, help="seed of the run (default 0)")
+    parser.add_argument("--out", nargs="+", default=[], help="files to write: .nc, .npy, .h")
+    parser.add_argument("--checkpoint", help="directory keeping finished groups (resume; default OUT.parts)")
+    parser.add_argument("--from", dest="source", metavar="TABLE", help="a table .nc to read instead of measuring")
+    parser.add_argument("--compare", metavar="PUBLISHED", help="published table (.npy, .nc, .csv, C header) to hold "
+                                                               "to the certified intervals")
+    parser.add_argument("--array", help="--compare: the array (header) or variable (.nc) to read")
+    parser.add_argument("--side", choices=("outside", "inside"), default="outside", help="--compare, glass")
+    parser.add_argument("--average", action="store_true", help="--compare E_avg instead of E")
+    parser.add_argument("--rounding", type=float, default=0.0, help="--compare: the published values' rounding")
+    parser.add_argument("--audit", metavar="PUBLISHED", help="an engine's published table in its native layout "
+                        "(cycles .h, filament dfg.inc, unreal .raw/.png) to audit against certified tables of its "
+                        "model (--engine cycles|filament|unreal)")
+    parser.add_argument("--figure", help="--audit: write the heat map of (published - certified)/epsilon here "
+                        "(--from TABLE.nc: audit against a certified engine table written before)")
+    parser.add_argument("--quiet", action="store_true", help="no progress bar")
+
+
+def albedo_table(args: argparse.Namespace) -> int:
+    from virtspec_mi.checks import parse_values
+    from virtspec_mi.exchange.albedo import albedo_table, read_albedo_table
+
+    native = (".inc", ".raw", ".png")
+    if args.audit or (args.engine in ("filament", "unreal") and any(p.lower().endswith(native) for p in args.out)):
+        return engine_tables(args)
+    if args.source:
+        table = read_albedo_table(args.source)
+        for path in args.out:
+            table.write(path)
+    else:
+        grid = {name: None if getattr(args, name) is None else list(parse_values(name, " ".join(getattr(args, name))))
+                for name in ("mu", "alpha", "roughness", "eta")}
+        engine = args.engine if args.engine is not None else (None if grid["mu"] is not None else "cycles")
+        table = albedo_table(args.model, distribution=args.distribution, engine=None if engine == "none" else engine,
+                             shadowing=args.shadowing, g1=args.g1, fresnel=args.fresnel,
+                             epsilon=args.epsilon, delta=args.delta, bound=args.bound, average=not args.no_average,
+                             parts=args.parts, seed=args.seed, out=args.out or None, checkpoint=args.checkpoint,
+                             progress=False if args.quiet else None, **grid)
+    print(table.statement())
+    print(f"rays {table.rays:,}; {table.provenance.get('seconds_wall', 0):g} s; grid {table.engine} "
+          f"({' x '.join(f'{d} {len(getattr(table, d))}' for d in table.dims if d != 'side')})")
+    for path in args.out:
+        print(f"written: {path}")
+    if args.compare:
+        comparison = table.compare(args.compare, average=args.average, side=args.side, array=args.array,
+                                   rounding=args.rounding)
+        print(comparison.summary())
+    return 0
+
+
+def engine_tables(args: argparse.Namespace) -> int:
+    """``--audit`` (and an engine's drop-in files): every channel of the engine's model certified at once."""
+
+    from virtspec_mi.exchange.audit import audit
+    from virtspec_mi.exchange.engine_tables import engine_tables
+
+    if args.engine not in ("cycles", "filament", "unreal"):
+        raise ValueError("--audit needs --engine cycles, filament or unreal (the published table's layout)")
+    native = (".h", ".hpp", ".inc", ".raw", ".png", ".nc")
+    for path in args.out:
+        if not path.lower().endswith(native):
+            raise ValueError(f"--out {path}: an engine table is written as the engine's file or .nc")
+    if args.source:  # a certified engine table written before (--out TABLE.nc)
+        from virtspec_mi.exchange.albedo import read_albedo_table
+        from virtspec_mi.exchange.engine_tables import EngineTables
+
+        tables = EngineTables.from_table(read_albedo_table(args.source))
+    else:
+        tables = engine_tables(args.engine, epsilon=args.epsilon, delta=args.delta, seed=args.seed, bound=args.bound,
+                               progress=False if args.quiet else None, checkpoint=args.checkpoint)
+    print(tables.statement())
+    print(f"rays {tables.rays:,}; {tables.seconds:g} s")
+    for path in args.out:
+        tables.write(path)
+        print(f"written: {path} (provenance: {path}.json)")
+    if args.audit:
+        report = audit(args.audit, tables)
+        print(report.summary())
+        if args.figure:
+            report.figure(args.figure)
+            print(f"written: {args.figure}")
+    return 0

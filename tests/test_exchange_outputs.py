@@ -197,3 +197,26 @@ def test_a_table_compared_with_its_own_nc_in_any_memory_order_flags_nothing(mi, 
             assert comparison.outside == [] and comparison.cells == (2 if average else 6)
     with pytest.raises(ValueError, match="side='inside' names a glass table's block"):
         table.compare(tmp_path / "own.nc", side="inside")
+
+
+# --- an albedo table's file read as strictly as a result file -------------------------------------------
+
+
+@pytest.mark.parametrize("edit, words", [
+    (lambda d: d["reflected"].values.__setitem__((0, 0), d["rays"].values[0, 0] + 5), "'reflected' holds a count above"),
+    (lambda d: d["rays"].values.__setitem__((0, 0), 0), "'rays' holds 0"),
+    (lambda d: d["E"].values.__setitem__((0, 0), 0.5), "'E' disagrees with the counts"),
+    (lambda d: d.attrs.__setitem__("epsilon", 1e-9), "epsilon = 1e-09 cannot be certified"),
+    (lambda d: d.attrs.__setitem__("certificate", "all exact"), "'certificate' disagrees"),
+])
+def test_an_edited_albedo_table_file_is_refused_not_stated_as_certified(mi, tmp_path, edit, words):
+    import xarray as xr
+
+    vm.albedo_table(**SMALL, out=tmp_path / "t.nc")
+    assert vm.read_albedo_table(tmp_path / "t.nc").certified  # as written: read
+    with xr.open_dataset(tmp_path / "t.nc") as opened:
+        dataset = opened.load()
+    edit(dataset)
+    dataset.to_netcdf(tmp_path / "edited.nc")
+    with pytest.raises(ValueError, match=f"albedo table {tmp_path / 'edited.nc'}: .*{words}"):
+        vm.read_albedo_table(tmp_path / "edited.nc")

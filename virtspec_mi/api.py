@@ -46,6 +46,7 @@ import numpy as np
 
 from virtspec_mi.checks import parse_theta_i
 from virtspec_mi.engine.bench import Bench
+from virtspec_mi.engine import interrupts
 from virtspec_mi.engine.checkpoint import checkpoint_for, claim, kept_in, remove
 from virtspec_mi.engine.parameters import parameter_space
 from virtspec_mi.files import WriteError
@@ -279,9 +280,7 @@ def _keyed(name: str, what: str, scene: Any, bench: Bench, settings: Settings, o
         result = instrument.postprocess(instrument.process(plan, checkpoint=checkpoint, progress=progress,
                                                            runner=runner))
         if checkpoint is not None:
-            if out is not None:
-                _write(result, out, checkpoint)
-            remove(checkpoint)  # the readings are safe: returned, and written to out when given
+            _finish(result, out, checkpoint)
     instrument.warn_if_uncertified(result, stacklevel=3)  # at the caller of sweep, gonio, sphere_measure
     return result
 
@@ -299,7 +298,7 @@ def _naming(checkpoint: Path | None) -> Iterator[None]:
     try:
         yield
     except KeyboardInterrupt as stop:
-        if getattr(stop, "checkpoint", None) is None:
+        if getattr(stop, "checkpoint", None) is None and getattr(stop, "written", None) is None:
             stop.checkpoint = checkpoint  # type: ignore[attr-defined]
         raise
 
@@ -332,6 +331,24 @@ def _file_path(value: Any, name: str) -> Path | None:
         raise ValueError(f"{name} must be a file path (str or os.PathLike) or None (got {type(value).__name__} "
                          f"{value!r})")
     return Path(value)
+
+
+def _finish(result: Any, out: Path | None, checkpoint: Path) -> None:
+    """
+    Write ``result`` to ``out`` (when given), then remove the checkpoint — with signals held
+    (a KeyboardInterrupt inside the NetCDF writer's file lock can hang the process): one that
+    came meanwhile acts once the file is whole, the interrupt then naming the file written
+    (``written``), nothing to resume.
+    """
+
+    try:
+        with interrupts.deferred():
+            if out is not None:
+                _write(result, out, checkpoint)
+            remove(checkpoint)  # the readings are safe: returned, and written to out when given
+    except KeyboardInterrupt as stop:
+        stop.checkpoint, stop.written = None, out  # type: ignore[attr-defined]
+        raise
 
 
 def _write(result: Result, out: Path, checkpoint: Path) -> None:

@@ -57,6 +57,7 @@ CIE 142-2001 / CIE 015:2018 (CIEDE2000); colour-science ``colour.delta_E``.
 from __future__ import annotations
 
 import math
+import re
 import os
 from dataclasses import dataclass
 from pathlib import Path
@@ -64,7 +65,7 @@ from typing import Any
 
 import numpy as np
 
-from virtspec_mi.checks import check_nanometres, number
+from virtspec_mi.checks import NANOMETRE_FLOOR, check_nanometres, number
 from virtspec_mi.kernel.counts import QUANTITIES
 from virtspec_mi.results.base import ResultBase, plain_data, round_up
 from virtspec_mi.results.colorimetry import DEFAULT_ILLUMINANT, DEFAULT_OBSERVER, Colour, colorimetry
@@ -247,9 +248,43 @@ def _from_result(result: ResultBase, quantity: str, theta_i: float | None, sourc
                                source=source, fractions=False)  # a reading (a sphere's ratio may pass 1): its rules
 
 
+_DECIMAL_COMMA = re.compile(r"[-+]?\d*,\d+(?:[eE][-+]?\d+)?")
+
+
 def _split(line: str) -> list[str]:
-    separator = "," if "," in line else ";" if ";" in line else None
-    return [field.strip().strip('"').strip("'") for field in line.split(separator)]
+    """
+    A row's fields: separated by ``;`` or a tab where the row has one (then a decimal comma,
+    ``0,52``, is read as the number it writes: the CSV of a spreadsheet in many locales),
+    else by ``,``, else by white space.
+    """
+
+    separator = ";" if ";" in line else "\t" if "\t" in line else "," if "," in line else None
+    fields = [field.strip().strip('"').strip("'") for field in line.split(separator)]
+    if separator in (";", "\t"):
+        fields = [field.replace(",", ".") if _DECIMAL_COMMA.fullmatch(field) else field for field in fields]
+    return fields
+
+
+def _check_rows(path: Path, lines: list[int], texts: list[list[str]], table: np.ndarray, header: bool) -> None:
+    """
+    Refuse rows read as something else: numbers written with decimal commas in a comma-separated file (``400,0,52``:
+    three fields, none with a point, the second 0 or 1), and a first row of numbers that is a header (its
+    wavelength not in nm like the others').
+    """
+
+    if not header and all("." not in field for row in texts for field in row) \
+            and all(len(row) == 3 and row[1] in ("0", "1") for row in texts):
+        raise ValueError(f"measured file {path.name}: its numbers look written with decimal commas in a comma-"
+                         f"separated file (line {lines[0]}: {','.join(texts[0])!r}); separate the columns with ';' "
+                         "or write decimal points")
+    wavelengths = table[:, 0]
+    if len(wavelengths) > 1 and wavelengths.max() >= NANOMETRE_FLOOR:
+        stray = np.nonzero(wavelengths < NANOMETRE_FLOOR)[0]
+        if stray.size:
+            k = int(stray[0])
+            raise ValueError(f"measured file {path.name}, line {lines[k]}: {','.join(texts[k])!r} is not a row of "
+                             f"a wavelength in nm like the others (a header row of numbers?); name the columns "
+                             "(wavelength,reflectance) or comment the line out with #")
 
 
 def _numbers(fields: list[str]) -> list[float] | None:
@@ -264,6 +299,8 @@ def _read_table(path: Path, quantity: str) -> MeasuredSpectrum:
 
     header: list[str] | None = None
     rows: list[list[float]] = []
+    lines: list[int] = []
+    texts: list[list[str]] = []
     for number, line in enumerate(path.read_text().splitlines(), 1):
         line = line.strip()
         if not line or line.startswith("#"):
@@ -276,12 +313,15 @@ def _read_table(path: Path, quantity: str) -> MeasuredSpectrum:
         if values is None:
             raise ValueError(f"measured file {path.name}, line {number}: expected numbers (got {line!r})")
         rows.append(values)
+        lines.append(number)
+        texts.append(fields)
     width = len(header) if header is not None else (len(rows[0]) if rows else 0)
     if not rows:
         raise ValueError(f"measured file {path.name} holds no rows of numbers")
     if any(len(row) != width for row in rows):
         raise ValueError(f"measured file {path.name}: every row must have {width} columns")
     table = np.array(rows, dtype=np.float64)
+    _check_rows(path, lines, texts, table, header is not None)
     value, uncertainty = _columns(header, width, quantity, path.name)
     keep = ~np.isnan(table[:, value])
     note = "" if keep.all() else f"{int((~keep).sum())} rows without a {quantity} value skipped"

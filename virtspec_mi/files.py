@@ -18,7 +18,9 @@ reaches the disk, written once:
   object itself attached (:attr:`WriteError.result`: a result whose file could not be
   written is not lost with the file).
 
-Nothing here removes a file or a directory it did not create.
+Nothing here removes a file or a directory it did not create. And one reader:
+:func:`read_netcdf` (a NetCDF file whole in memory, or a ``ValueError`` naming the file
+and what it holds instead — never xarray's list of backends or a bare library text).
 
 References
 ----------
@@ -36,7 +38,8 @@ from contextlib import contextmanager
 from pathlib import Path
 from typing import Any, Callable, Iterator
 
-__all__ = ["WriteError", "IN_MEMORY", "atomic_file", "atomic_write", "cause_of", "temporary_name", "flush_directory"]
+__all__ = ["WriteError", "IN_MEMORY", "atomic_file", "atomic_write", "cause_of", "temporary_name", "flush_directory",
+           "read_netcdf"]
 
 _FULL = 1 << 20  # a write failing with less free space than this is reported as a full disk
 
@@ -188,3 +191,28 @@ def flush_directory(path: Path) -> None:
         _flush(path)
     except OSError:  # not every system opens or syncs directories
         pass
+
+
+def read_netcdf(path: str | os.PathLike, what: str) -> Any:
+    """
+    The ``xarray.Dataset`` of the NetCDF file ``path``, loaded (the file closed); a file
+    that is not NetCDF (plain text, random bytes, another format) or cannot be read is a
+    ``ValueError`` naming ``what`` it should be, the path and the cause.
+    """
+
+    import xarray as xr
+
+    path = Path(path)
+    if not path.is_file():
+        raise ValueError(f"{what} {path} is not a file")
+    with open(path, "rb") as handle:
+        magic = handle.read(8)
+    if not (magic.startswith(b"CDF") or magic.startswith(b"\x89HDF\r\n\x1a\n")):
+        text = bool(magic) and all(32 <= b < 127 or b in b"\t\r\n" for b in magic)
+        holds = "plain text" if text else "its first bytes are not those of NetCDF or HDF5"
+        raise ValueError(f"{what} {path} is not a NetCDF file ({holds}); give the .nc file virtspec-mi wrote")
+    try:
+        with xr.open_dataset(path, engine="netcdf4") as dataset:
+            return dataset.load()
+    except (OSError, ValueError, RuntimeError, KeyError, IndexError, TypeError) as error:
+        raise ValueError(f"{what} {path} could not be read as NetCDF ({type(error).__name__}: {error})") from None

@@ -219,10 +219,17 @@ def _scheduler_address(address: str) -> str:
     from distributed.comm import parse_address
     from distributed.comm.addressing import parse_host_port
 
+    from distributed.comm.registry import backends
+
     try:
         scheme, location = parse_address(address)
+        if scheme not in backends:
+            raise ValueError(f"no Dask transport {scheme!r}; one of {', '.join(sorted(backends))}")
         if scheme in ("tcp", "tls", "ws", "wss"):
             parse_host_port(location)
+        if scheme == "inproc" and len(location.split("/")) != 3:  # Dask's own form: inproc://HOST/PID/N
+            raise ValueError("an in-process address is inproc://HOST/PID/N, the address of a scheduler started in "
+                             "this process (scheduler.address)")
     except ValueError as error:
         raise ValueError(f"workers must be a whole number of local worker processes or a scheduler address such as "
                          f"'tcp://host:8786' (got {address!r}: {error})") from None

@@ -222,7 +222,9 @@ def _interrupted(stop: BaseException, args: argparse.Namespace, exit_status: Any
     signum = signum or getattr(stop, "signum", signal.SIGINT)
     # the checkpoint of the run under way: named by the run, else the one the command set (_sweep)
     partial = getattr(stop, "checkpoint", None) or getattr(args, "checkpoint", None)
-    kept = "" if partial is None else (
+    written = getattr(stop, "written", None)  # the run had finished: its file written whole, nothing to resume
+    kept = f" (the run had finished: its result is written to {written})" if written is not None else \
+        "" if partial is None else (
         f" (finished readings are kept in {partial}: re-run the same command to resume)" if Path(partial).exists()
         else " (no reading had finished: nothing to resume)")
     word = "interrupted" if signum == signal.SIGINT else f"terminated by {signal.Signals(signum).name}"

@@ -70,6 +70,8 @@ def albedo_options(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--figure", help="--audit: write the heat map of (published - certified)/epsilon here "
                         "(--from TABLE.nc: audit against a certified engine table written before)")
     parser.add_argument("--quiet", action="store_true", help="no progress bar")
+    parser.add_argument("--overwrite", action="store_true", help="let a .npy's NAME.json and NAME_avg.npy replace "
+                                                                 "files of those names that another program wrote")
 
 
 def albedo_table(args: argparse.Namespace) -> int:
@@ -82,7 +84,9 @@ def albedo_table(args: argparse.Namespace) -> int:
     if args.source:
         table = read_albedo_table(args.source)
         for path in args.out:
-            table.write(path)
+            table.check_output(path, overwrite=args.overwrite)  # every output's companions, before any is written
+        for path in args.out:
+            table.write(path, overwrite=args.overwrite)
     else:
         grid = {name: None if getattr(args, name) is None else list(parse_values(name, " ".join(getattr(args, name))))
                 for name in ("mu", "alpha", "roughness", "eta")}
@@ -91,7 +95,7 @@ def albedo_table(args: argparse.Namespace) -> int:
                              shadowing=args.shadowing, g1=args.g1, fresnel=args.fresnel,
                              epsilon=args.epsilon, delta=args.delta, bound=args.bound, average=not args.no_average,
                              parts=args.parts, seed=args.seed, out=args.out or None, checkpoint=args.checkpoint,
-                             progress=False if args.quiet else None, **grid)
+                             progress=False if args.quiet else None, overwrite=args.overwrite, **grid)
     print(table.statement())
     print(f"rays {table.rays:,}; {table.provenance.get('seconds_wall', 0):g} s; grid {table.engine} "
           f"({' x '.join(f'{d} {len(getattr(table, d))}' for d in table.dims if d != 'side')})")

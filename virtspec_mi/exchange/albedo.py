@@ -472,12 +472,59 @@ class AlbedoTable:
         model = str(attrs["model"])
         keys = ("rays", "reflected", "transmitted", "rounded_weights", "weight_violations", "invalid_directions",
                 "capped", "pilot_rays", "pilot_violations")
-        counts = {k: np.asarray(dataset[k].values, dtype=np.int64) for k in keys}
+        missing = [k for k in keys + ("interval_delta", "mu", "alpha") if k not in dataset.variables]
+        if missing:
+            raise ValueError(f"albedo table: {', '.join(map(repr, missing))} missing")
+        counts = {k: _table_counts(dataset[k].values, k) for k in keys}
         counts["interval_delta"] = np.asarray(dataset["interval_delta"].values, dtype=np.float64)
         average = None
         if "avg_rays" in dataset:
-            average = {k: np.asarray(dataset[f"avg_{k}"].values, dtype=np.int64) for k in keys}
+            average = {k: _table_counts(dataset[f"avg_{k}"].values, f"avg_{k}") for k in keys}
             average["interval_delta"] = np.asarray(dataset["avg_interval_delta"].values, dtype=np.float64)
+        table = cls._built(dataset, attrs, model, counts, average)
+        table._check_read(dataset)
+        return table
+
+    def _check_read(self, dataset: Any) -> None:
+        """
+        A table file read as strictly as a result file (:mod:`virtspec_mi.results.integrity`): counts that add up
+        (each part within its rays, rays >= 1), an ε the rays can hold (N > 1/ε: no N smaller holds a fraction within
+        ε), and every value it shows besides its counts — E, the intervals, ε' per cell, the certificate — equal to
+        what the counts and settings give (an edited value is refused, not stated as certified).
+        """
+
+        for prefix, counts in (("", self.counts), ("avg_", self.average_counts)):
+            if counts is None:
+                continue
+            rays = counts["rays"]
+            if np.any(rays < 1):
+                raise ValueError(f"albedo table: '{prefix}rays' holds {int(rays.min())}: every cell needs rays >= 1")
+            for part, whole in (("reflected", "rays"), ("transmitted", "rays"), ("rounded_weights", "rays"),
+                                ("weight_violations", "rays"), ("invalid_directions", "rays"), ("capped", "rays"),
+                                ("pilot_violations", "pilot_rays")):
+                if np.any(counts[part] > counts[whole]):
+                    raise ValueError(f"albedo table: '{prefix}{part}' holds a count above '{prefix}{whole}'")
+            if np.any(counts["reflected"] + counts["transmitted"] > rays):
+                raise ValueError(f"albedo table: '{prefix}reflected' + '{prefix}transmitted' exceed '{prefix}rays'")
+            if np.any(rays * self.epsilon <= 1.0):
+                raise ValueError(f"albedo table: epsilon = {self.epsilon:g} cannot be certified with "
+                                 f"{int(rays.min()):,} rays a cell (N > 1/epsilon is needed)")
+            delta = counts["interval_delta"]
+            if not np.all((delta > 0) & (delta <= self.delta)):
+                raise ValueError(f"albedo table: '{prefix}interval_delta' must lie in (0, delta = {self.delta:g}]")
+        shown = self.to_dataset()
+        for name in shown.data_vars:
+            if name in dataset and not np.array_equal(np.asarray(dataset[name].values), np.asarray(shown[name].values),
+                                                      equal_nan=True):
+                raise ValueError(f"albedo table: '{name}' disagrees with the counts and settings it is made from "
+                                 "(edited?)")
+        for name in ("certificate", "rays_total"):
+            if str(dataset.attrs.get(name)) != str(shown.attrs[name]):
+                raise ValueError(f"albedo table: the attribute '{name}' disagrees with the counts and settings "
+                                 "(edited?)")
+
+    @classmethod
+    def _built(cls, dataset: Any, attrs: Any, model: str, counts: dict, average: dict | None) -> "AlbedoTable":
         return cls(model, str(attrs["distribution"]), np.asarray(dataset["mu"].values, dtype=np.float64),
                    np.asarray(dataset["alpha"].values, dtype=np.float64),
                    np.asarray(dataset["eta"].values, dtype=np.float64) if model == "glass" else None,
@@ -647,13 +694,16 @@ class TableComparison:
 def read_albedo_table(path: str | os.PathLike) -> AlbedoTable:
     """An :class:`AlbedoTable` from a NetCDF file written by :meth:`AlbedoTable.write`."""
 
-    import xarray as xr
-
     path = Path(path)
     if path.suffix.lower() != ".nc":
         raise ValueError(f"path must be a .nc file written by AlbedoTable.write (got {path.name!r})")
-    with xr.open_dataset(path) as dataset:
-        return AlbedoTable.from_dataset(dataset.load())
+    from virtspec_mi.files import read_netcdf
+
+    try:
+        return AlbedoTable.from_dataset(read_netcdf(path, "albedo table"))
+    except ValueError as error:
+        text = str(error)
+        raise ValueError(text.replace("albedo table:", f"albedo table {path}:", 1)) from None
 
 
 def _own_table(published: Any) -> "AlbedoTable | None":
@@ -674,13 +724,25 @@ def _own_table(published: Any) -> "AlbedoTable | None":
     return read_albedo_table(published)
 
 
+def _table_counts(values: Any, name: str) -> np.ndarray:
+    """A table file's counts: whole numbers >= 0 (:func:`virtspec_mi.results.integrity.whole_counts`)."""
+
+    from virtspec_mi.results.integrity import whole_counts
+
+    try:
+        return whole_counts(values, name)
+    except ValueError as error:
+        raise ValueError(f"albedo table: {error}") from None
+
+
 def _check_output(path: Path, average: bool, overwrite: bool) -> None:
     """A ``.npy`` output's companions (``NAME.json``, ``NAME_avg.npy``) replace only an albedo table's files."""
 
     if path.suffix.lower() != ".npy":
         return
     companions = [path.with_suffix(".json")] + ([path.with_name(path.stem + "_avg.npy")] if average else [])
-    check_companions(path, companions, lambda companion: _ours(path), overwrite)
+    check_companions(path, companions, lambda companion: _ours(path), overwrite,
+                     flag="overwrite=True (virtspec albedo-table --overwrite)")
 
 
 def _check_epsilon(epsilon: Any) -> float:
@@ -922,6 +984,9 @@ def albedo_table(
     epsilon, delta = _check_epsilon(epsilon), check_delta(delta)  # any real number type (numpy's float32 too)
     average, parts = true_or_false("average")(average), true_or_false("parts")(parts)
     seed = _whole("seed", seed, 0, 2**32 - 1)
+    wavelength = number("wavelength", wavelength)
+    if not 0.0 < wavelength < float("inf"):
+        raise ValueError(f"wavelength must be a finite number of nm > 0 (got {shown_value(wavelength)})")
     if bound not in BOUNDS:
         raise ValueError(f"bound must be one of {', '.join(BOUNDS)} (got {bound!r})")
     if parts and model != "glass" and fresnel != "split":

@@ -143,6 +143,16 @@ def _header_values(text: str, array: str | None) -> np.ndarray:
     return np.array([float(x) for x in _NUMBER.findall(found[array])], dtype=np.float64)
 
 
+def _text(path: Path) -> str:
+    """A published table's text (``ValueError`` naming the file for bytes that are not UTF-8 text)."""
+
+    try:
+        return path.read_text(encoding="utf-8")
+    except UnicodeDecodeError as error:
+        raise ValueError(f"published table {path} is not text (byte {error.start}: {error.reason}); give a .npy, "
+                         ".nc, .csv/.txt of numbers or a C/C++ header") from None
+
+
 def read_table_values(published: Any, array: str | None = None, expected: int | None = None) -> np.ndarray:
     """
     The numbers of a published table, flat in the file's order.
@@ -167,20 +177,23 @@ def read_table_values(published: Any, array: str | None = None, expected: int | 
             raise ValueError(f"published table {path} is not a file")
         suffix = path.suffix.lower()
         if suffix == ".npy":
-            values = np.load(path, allow_pickle=False).astype(np.float64).ravel()
+            try:
+                values = np.load(path, allow_pickle=False).astype(np.float64).ravel()
+            except (OSError, ValueError, TypeError, EOFError) as error:  # random bytes, a pickle, strings
+                raise ValueError(f"published table {path} is not a .npy array of numbers ({error})") from None
         elif suffix == ".nc":
-            import xarray as xr
+            from virtspec_mi.files import read_netcdf
 
-            with xr.open_dataset(path) as dataset:
-                name = array or "E"
-                if name not in dataset:
-                    raise ValueError(f"variable {name!r} is not in {path.name} (it holds: {', '.join(dataset.data_vars)})")
-                values = np.asarray(dataset[name].values, dtype=np.float64).ravel()
+            dataset = read_netcdf(path, "published table")
+            name = array or "E"
+            if name not in dataset:
+                raise ValueError(f"variable {name!r} is not in {path.name} (it holds: {', '.join(dataset.data_vars)})")
+            values = np.asarray(dataset[name].values, dtype=np.float64).ravel()
         elif suffix in (".csv", ".txt"):
-            text = "\n".join(line.split("#", 1)[0] for line in path.read_text().splitlines())
+            text = "\n".join(line.split("#", 1)[0] for line in _text(path).splitlines())
             values = np.array([float(x) for x in _NUMBER.findall(text)], dtype=np.float64)
         elif suffix in (".h", ".hpp", ".c", ".cpp", ".cc", ".inc"):
-            values = _header_values(path.read_text(), array)
+            values = _header_values(_text(path), array)
         else:
             raise ValueError(f"published table must be .npy, .nc, .csv, .txt or a C/C++ header (got {path.name!r})")
     else:

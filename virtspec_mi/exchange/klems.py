@@ -368,10 +368,9 @@ def _is_sidecar(path: Path) -> bool:
 def read_klems_sidecar(path: str | os.PathLike) -> KlemsMeasurement:
     """The :class:`KlemsMeasurement` of a sidecar written by :meth:`KlemsMeasurement.write`."""
 
-    import xarray as xr
+    from virtspec_mi.files import read_netcdf
 
-    with xr.open_dataset(path) as dataset:
-        return KlemsMeasurement.from_dataset(dataset.load())
+    return KlemsMeasurement.from_dataset(read_netcdf(path, "Klems sidecar"))
 
 
 # ------------------------------------------------------------------------------ aggregation

@@ -41,8 +41,9 @@ import numpy as np
 
 from virtspec_mi import __version__
 from virtspec_mi.exchange.common import derived_seed
-from virtspec_mi.checks import check_delta, number, shown_value
+from virtspec_mi.checks import check_delta, check_rays, number, shown_value
 from virtspec_mi.engine import interrupts
+from virtspec_mi.settings import true_or_false, whole_number
 from virtspec_mi.engine.readings import check_specimen
 from virtspec_mi.exchange.klems import SIDES, KlemsMeasurement, aggregate, check_escaped, check_klems_output
 from virtspec_mi.exchange.klems_basis import klems_basis
@@ -118,6 +119,9 @@ def klems_measure(
 
     klems = klems_basis(basis)
     epsilon, delta = number("epsilon", epsilon), check_delta(delta)  # any real number type (numpy's too)
+    seed = whole_number("seed", 0, 2**32 - 1, "0 <= seed < 2**32")(seed)
+    rays = None if rays is None else check_rays(rays)
+    isotropic = true_or_false("isotropic")(isotropic)
     if not 0.0 < epsilon < 0.5:
         raise ValueError(f"epsilon must satisfy 0 < epsilon < 0.5 (got {shown_value(epsilon)})")
     lams = np.array(parse_wavelengths(wavelengths), dtype=np.float64)

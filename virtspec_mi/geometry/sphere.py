@@ -403,7 +403,11 @@ def parse_wall_reflectance(value: Any) -> float | tuple[tuple[float, ...], tuple
     if isinstance(value, str):
         text = value.replace(",", " ").split()
         if len(text) == 1 and ":" not in text[0]:
-            value = float(text[0])
+            try:
+                value = number("wall_reflectance", text[0])
+            except ValueError:
+                raise ValueError("wall_reflectance must be a number 0 <= rho_w <= 1 or 'nm:value' pairs such as "
+                                 f"'400:0.97, 700:0.99' (got {value!r})") from None
         else:
             try:
                 pairs = [tuple(float(v) for v in token.split(":")) for token in text]

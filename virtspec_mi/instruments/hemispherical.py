@@ -105,7 +105,7 @@ def _respond_sweep(session: Session) -> int:
         return session.report(result, result.summary(), figures)
     if not args.quiet:  # the summary on stderr, so that the table can be piped
         session.report(result, result.summary(), figures, stream=sys.stderr)
-    elif args.csv_plain:
+    elif args.csv_plain:  # the report writes it otherwise
         result.write(args.csv_plain, plain=True)
     print(csv_text(result.to_dataset()), end="")
     return 0

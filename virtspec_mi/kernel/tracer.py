@@ -740,7 +740,7 @@ class _Kernel:
         """The specimen BSDF's ``sample`` (importance transport)."""
 
         context = mi.BSDFContext(mi.TransportMode.Importance)
-        return self._unsupported(lambda: self.bsdf.sample(context, si, sample1, sample2, True))
+        return _sample_pair(self.bsdf, self._unsupported(lambda: self.bsdf.sample(context, si, sample1, sample2, True)))
 
     def _unsupported(self, call: Callable[[], Any]) -> Any:
         """``call()``; a feature the specimen needs that the instrument lacks is a ``ValueError``."""
@@ -756,6 +756,21 @@ class _Kernel:
                 "normal, shading frame, uv and wavelength, but no uv partials (dp_du, dp_dv) and no ray "
                 "differentials, so features that differentiate a texture over the surface — bumpmap, or "
                 "normalmap and textures that need gradients or footprints — are not supported") from None
+
+
+def _sample_pair(bsdf: Any, sampled: Any) -> tuple[Any, Any]:
+    """
+    What a BSDF's ``sample()`` returned, as Mitsuba's ``(BSDFSample3f, weight)`` pair; another value (a Python
+    BSDF that returns the sample alone, or three values) is a ``ValueError`` naming the BSDF and the fix.
+    """
+
+    if isinstance(sampled, (tuple, list)) and len(sampled) == 2 and isinstance(sampled[0], mi.BSDFSample3f):
+        return sampled[0], sampled[1]
+    name = type(bsdf).__name__  # a Python BSDF's own class (Mitsuba's class_name() says "BSDF")
+    got = (f"a {type(sampled).__name__} of {len(sampled)} values" if isinstance(sampled, (tuple, list))
+           else f"one {type(sampled).__name__}")
+    raise ValueError(f"the specimen BSDF {name}: sample() must return the pair (mi.BSDFSample3f, weight), as Mitsuba's "
+                     f"BSDF.sample does (got {got}); return bs, weight where weight = f * cos(theta_o) / pdf")
 
 
 class _RaySource:

@@ -331,7 +331,7 @@ class ResultBase:
                     arrays[name] = (array_dims, values)
             if np.ndim(key) == 0:
                 dims = tuple(d for d in dims if d != dim)
-        return self._relabelled(dims, coords, {name: values for name, (_, values) in arrays.items()})
+        return _restated(self._relabelled(dims, coords, {name: values for name, (_, values) in arrays.items()}))
 
     def sel(self, labels: Mapping[str, Any] | None = None, method: str | None = None, **more: Any) -> Any:
         """
@@ -748,3 +748,22 @@ def _label_slice(dim: str, values: np.ndarray, label: slice) -> np.ndarray:
         raise ValueError(f"the slice {label.start!r}..{label.stop!r} of {dim} holds none of the result's labels "
                          f"{values.tolist()}")
     return positions
+
+
+def _restated(result: Any) -> Any:
+    """A selection's settings restated for its readings: its wavelengths, its first θi (rule of
+    :func:`~virtspec_mi.results.integrity.check_settings`)."""
+
+    import dataclasses
+
+    settings = getattr(result, "settings", None)
+    if not (dataclasses.is_dataclass(result) and hasattr(settings, "updated") and "wavelength" in result.coords):
+        return result
+    fields = {f.name for f in dataclasses.fields(result)}
+    if "settings" not in fields:  # a kind that holds its settings in a reading of its own (a goniophotometer's)
+        inner = next((name for name in fields if getattr(getattr(result, name), "settings", None) is settings), None)
+        return result if inner is None else dataclasses.replace(result, **{inner: _restated(getattr(result, inner))})
+    theta = result.coords.get("theta_i")
+    return dataclasses.replace(result, settings=settings.updated(
+        wavelengths=tuple(float(w) for w in np.atleast_1d(result.coords["wavelength"])),
+        theta_i=None if theta is None else float(np.atleast_1d(theta)[0])))

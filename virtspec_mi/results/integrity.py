@@ -72,6 +72,7 @@ __all__ = [
     "check_counts",
     "reading_at",
     "check_result",
+    "check_settings",
     "CHECKSUM",
     "checksum",
     "sealed_text",
@@ -436,6 +437,33 @@ def check_result(result: Any) -> None:
     check_shapes(result._labelled(), sizes)
     for group, counts, rules, dims in result._count_groups():
         check_counts(group, counts, rules, reading_at(dims, result.coords))
+    check_settings(result)
+
+
+def check_settings(result: Any) -> None:
+    """
+    The settings a result states agree with its labels and counts: its wavelengths are the
+    wavelength labels, its θi the θi label of readings at one incidence (a selection of readings restates both:
+    :meth:`~virtspec_mi.results.base.ResultBase.isel`), and a μ the rays it sized can
+    certify — no rule of :mod:`virtspec_mi.budgets` holds a fraction within μ with N ≤ 1/μ
+    rays (the binomial bound's ε − 1/N > 0; Hoeffding's N = ln(2/δ)/(2μ²) is larger).
+    """
+
+    settings = getattr(result, "settings", None)
+    if settings is None or not hasattr(settings, "wavelengths") or "wavelength" not in result.coords:
+        return
+    labels = [float(w) for w in np.atleast_1d(result.coords["wavelength"])]
+    if [float(w) for w in settings.wavelengths] != labels:
+        raise ValueError(f"the settings' wavelengths {_short(list(settings.wavelengths))} are not the wavelength "
+                         f"labels {_short(labels)}")
+    angles = np.atleast_1d(result.coords.get("theta_i", []))
+    if len(angles) == 1 and float(settings.theta_i) != float(angles[0]):  # one incidence: the settings' own
+        raise ValueError(f"the settings' theta_i {settings.theta_i:g} is not the theta_i label {float(angles[0]):g} "
+                         "of the readings")
+    rays = np.asarray(getattr(result, "rays", np.array([])), dtype=np.float64)
+    if getattr(settings, "rays", 0) is None and rays.size and np.any(rays * float(settings.mu) <= 1.0):
+        raise ValueError(f"mu = {float(settings.mu):g} ({settings.bound}) cannot be certified with "
+                         f"{int(rays.min()):,} rays a reading (no rule holds a fraction within mu with N <= 1/mu)")
 
 
 # -- 6. agreement ---------------------------------------------------------------------

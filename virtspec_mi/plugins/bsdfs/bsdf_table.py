@@ -253,8 +253,9 @@ def read_table(source: Any) -> BSDFTable:
         path = Path(source)
         if not path.is_file():
             raise ValueError(f"BSDF table: filename {str(path)!r} is not a file")
-        with xr.open_dataset(path) as opened:
-            dataset = opened.load()
+        from virtspec_mi.files import read_netcdf
+
+        dataset = read_netcdf(path, "BSDF table: filename (a goniophotometer table)")
     elif hasattr(source, "to_dataset") and not isinstance(source, xr.Dataset):
         dataset = source.to_dataset()
     else:

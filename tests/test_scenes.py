@@ -153,3 +153,16 @@ def test_copy_gives_a_template_and_never_replaces_a_file(tmp_path, monkeypatch):
         scenes.copy("mcml_slab", "nowhere/x.xml")
     with pytest.raises(ValueError, match="no shipped scene"):
         scenes.copy("nothing")
+
+
+@pytest.mark.slow
+def test_virtspec_measure_of_a_named_scene_on_workers_from_any_folder(mi, tmp_path, monkeypatch, capsys):
+    import json
+
+    from virtspec_mi.cli import main
+
+    monkeypatch.chdir(tmp_path)  # no scenes/ here: the workers must find the shipped file
+    assert main(["measure", "diamond_conical", "--theta-i", "70", "--rays", "2000", "--workers", "2", "--json"]) == 0
+    there = json.loads(capsys.readouterr().out)
+    here = vm.measure("diamond_conical", theta_i=70, rays=2000)
+    assert there["reflected"] == here.reflected.tolist()

@@ -573,18 +573,6 @@ class Result(ResultBase):
 
         return plot_sweep(self, path, quantity=self.check_quantity(quantity), **options)
 
-    def plot_spectra(self, path: str | os.PathLike | None = None,
-                     quantities: tuple[str, ...] = ("reflectance", "transmittance"), **options: Any) -> Any:
-        """
-        Reflectance and transmittance (or ``quantities``) over wavelength at one θi, each with
-        its certified band (:func:`virtspec_mi.results.plot.plot_spectra`; ``theta_i=``,
-        ``name=`` …): what ``virtspec measure --plot`` draws.
-        """
-
-        from virtspec_mi.results.plot import plot_spectra
-
-        return plot_spectra(self, path, quantities=[self.check_quantity(q) for q in quantities], **options)
-
 
 def fluctuation(a: Result | np.ndarray, b: Result | np.ndarray, quantity: str = "reflectance") -> float:
     """

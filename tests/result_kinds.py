@@ -1,5 +1,5 @@
 """
-Results of every kind for the tests of :mod:`virtspec_mi.results` (``tests/test_results_*.py``):
+Results of every kind for the tests of :mod:`virtspec_mi.results` (``tests/results/``):
 made from counts (no tracing) where the labels matter, traced (a few hundred rays) where
 the kind's own machinery does.
 """
@@ -11,6 +11,7 @@ from dataclasses import replace
 import numpy as np
 
 import virtspec_mi as vm
+from virtspec_mi.geometry.bins import make_bins
 from virtspec_mi.kernel.counts import Counts
 
 WAVELENGTHS = [400.0, 550.0, 700.0]
@@ -83,3 +84,33 @@ def sphere_reading() -> vm.SphereResult:
     """The 150 mm 8°/d sphere reading its grey specimen at 3 wavelengths (a few hundred rays)."""
 
     return vm.sphere_measure("scenes/sphere_150mm_8d.xml", rays=800, wavelengths="400, 550, 700")
+
+
+def gonio_from_counts(seed: int = 0) -> vm.GonioResult:
+    """A goniophotometer reading over 3 wavelengths x 2 theta_i, 2 x 3 bins, from random exact counts."""
+
+    rng = np.random.default_rng(seed)
+    shape = (len(WAVELENGTHS), 2)
+    rays = np.full(shape, 5000, dtype=np.int64)
+    reflected, transmitted = rng.integers(500, 2000, shape), rng.integers(500, 2000, shape)
+    counts = Counts.zeros(shape)
+    counts = Counts(**{**{n: getattr(counts, n) for n in Counts.names()}, "rays": rays, "reflected": reflected,
+                       "transmitted": transmitted, "specular_reflected": reflected // 3})
+    result = vm.Result(("wavelength", "theta_i"), {"wavelength": np.array(WAVELENGTHS), "theta_i": np.array([10., 50.])},
+                       counts, None, vm.Settings(wavelengths=WAVELENGTHS, rays=5000), vm.InstrumentGeometry(8, 12.5, 100),
+                       0.25, scene="sha256:0123")
+    bins = make_bins(1, 3)  # one theta_o bin per hemisphere, 3 phi_o bins
+    bin_counts = np.zeros((*shape, 2, 3), dtype=np.int64)
+    bin_counts[..., 0, :] = np.stack([reflected // 3, reflected // 3, reflected - 2 * (reflected // 3)], axis=-1)
+    bin_counts[..., 1, :] = np.stack([transmitted // 3, transmitted // 3, transmitted // 3], axis=-1)
+    return vm.GonioResult(result=result, bin_counts=bin_counts, bins=bins, guarantee="union")
+
+
+def counts(data: dict) -> dict:
+    """The exact counts of a result's ``as_dict()``, whatever its kind."""
+
+    if data["format"].startswith("virtspec-mi gonio"):
+        return {"bin_counts": data["bin_counts"], **counts(data["result"])}
+    if data["format"].startswith("virtspec-mi sphere"):
+        return data["counts"]
+    return {name: data[name] for name in ("rays", "reflected", "transmitted", "absorbed", "capped")}

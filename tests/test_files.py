@@ -22,7 +22,7 @@ import pytest
 import virtspec_mi as vm
 import virtspec_mi.files as files
 from result_kinds import hemispherical_grid, sphere_grid
-from test_results_files_fuzz import gonio_from_counts
+from result_kinds import gonio_from_counts
 from virtspec_mi.files import IN_MEMORY, WriteError, atomic_file, cause_of
 
 SUFFIXES = (".nc", ".csv", ".json", ".zarr")

@@ -41,7 +41,7 @@ J. Amer. Statist. Assoc. 58, 13–30 (the exponential bound behind eq. (23)).
 The exact failure probability, its lattice jump points and the exact rule's N (66,501
 at μ = 0.005, δ = 0.01) are computed by this module (:func:`max_miss_probability`,
 :func:`exact_rays`); ``tools/budget_tables.py`` tabulates them into
-:mod:`virtspec_mi.budgets.tables` and ``tests/test_bounds.py`` recomputes the tables.
+:mod:`virtspec_mi.budgets.tables` and ``tests/budgets/test_bounds.py`` recomputes the tables.
 """
 
 from __future__ import annotations
@@ -143,7 +143,7 @@ def max_miss_probability(rays: int, mu: float, lo: float = 0.0, hi: float = 1.0)
     ``P(m ≥ b, ρ) = P(N − m ≤ N − b, 1 − ρ)`` makes it symmetric about ρ = ½, so only
     half of the interval is evaluated when it straddles ½.
 
-    ``tests/test_bounds.py`` checks the supremum against the whole binomial pmf on a
+    ``tests/budgets/test_bounds.py`` checks the supremum against the whole binomial pmf on a
     dense grid of ρ.
     """
 
@@ -214,7 +214,7 @@ def exact_rays(mu: float, delta: float, lo: float = 0.0, hi: float = 1.0) -> int
     μ ≥ 0.02, seconds at μ = 0.005, about 30 s at μ = 0.001).
 
     At μ = 0.005, δ = 0.01 it gives 66,501 rays, 37.2 % fewer than eq. (23)'s 105,967
-    (``tests/test_bounds.py`` checks N − 1 and every N up to Hoeffding's by brute force).
+    (``tests/budgets/test_bounds.py`` checks N − 1 and every N up to Hoeffding's by brute force).
     """
 
     lo, hi = max(0.0, float(lo)), min(1.0, float(hi))

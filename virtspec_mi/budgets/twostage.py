@@ -36,7 +36,7 @@ Clopper, C.J., Pearson, E.S. (1934). Biometrika 26, 404–413 (the pilot's inter
 Baranoski et al. (2001), eq. (23), for comparison. The expected rays and the exact
 miss probability are computed by :func:`two_stage_law` (the mixture over the pilot
 count); ``tools/budget_tables.py`` tabulates the sizing at the defaults and
-``tests/test_twostage.py`` recomputes it.
+``tests/budgets/test_twostage.py`` recomputes it.
 """
 
 from __future__ import annotations
@@ -204,7 +204,7 @@ def two_stage_law(
     total mass is added to ``miss_probability`` (an upper bound, not an estimate).
 
     The two-stage design and these two sums are those of Clopper & Pearson's interval
-    followed by the exact rule; ``tests/test_twostage.py`` checks them against the
+    followed by the exact rule; ``tests/budgets/test_twostage.py`` checks them against the
     expected rays 19,393 / 50,524 / 70,401 at ρ = 0.05 / 0.2 / 0.5 (μ = 0.005, δ = 0.01).
     """
 

@@ -17,7 +17,7 @@ already in [0, 1]).
 A comment block and ``#define`` constants carry the provenance and the certificate
 (model, Mitsuba version, ε, δ, bound, rays, seed, grid, memory order, the statement),
 and per table the largest certified tolerance ``<NAME>_EPSILON`` (ε plus rounding
-bias). The header compiles as C99 and C++ (``tests/test_exchange_header.py`` compiles
+bias). The header compiles as C99 and C++ (``tests/exchange/test_header.py`` compiles
 it with the system compiler).
 
 :func:`read_table_values` reads a published table for

@@ -30,7 +30,7 @@ apart by the caller, exact): with n the index seen by the ray, a = n² − 1 = (
 and c = |cos θi|, cos²θt = (a + c²)/n², r_s = −a/(c + n cos θt)²,
 r_p = a(c²(n² + 1) − 1)/(n²(n c + cos θt)²); on the same grid it agrees with float64
 within 1.3·10⁻⁵ everywhere (|η − 1| from 10⁻⁶ to 0.1) except within 10⁻³ degrees of a
-critical angle, where F itself has an infinite slope (``tests/test_kernel_walk_optics.py``).
+critical angle, where F itself has an infinite slope (``tests/kernel/test_walk_optics.py``).
 Beyond :data:`NEAR_ONE`, and at η = 1 exactly (F = 0), ``mi.fresnel`` is used as before,
 bit for bit.
 

@@ -18,7 +18,7 @@ import virtspec_mi as vm
 from result_kinds import gonio_reading, hemispherical_grid, sphere_grid, sphere_reading
 from virtspec_mi.results.kinds import KINDS, read_result
 
-BEFORE = Path(__file__).parent / "data" / "results_before_21"
+BEFORE = Path(__file__).resolve().parents[1] / "data" / "results_before_21"
 SUFFIXES = (".nc", ".csv", ".json", ".zarr")
 
 

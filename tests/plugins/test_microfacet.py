@@ -1,7 +1,7 @@
 """
 The ``microfacet`` plugin (virtspec_mi.plugins.bsdfs.microfacet): its sample weight is its
 own eval()/pdf() divided by c, never above 1, and what it counts is ∫ f cos (the tables'
-tests hold the counts to an independent quadrature: tests/test_exchange_engine_models.py).
+tests hold the counts to an independent quadrature: tests/exchange/test_engine_models.py).
 """
 
 from __future__ import annotations

@@ -13,7 +13,7 @@ import pytest
 import virtspec_mi as vm
 from virtspec_mi.cli import main
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 
 
 def printed_json(capsys, *args) -> dict:

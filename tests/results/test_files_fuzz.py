@@ -32,8 +32,7 @@ from hypothesis import HealthCheck, event, given, settings  # noqa: E402
 from hypothesis import strategies as st  # noqa: E402
 
 import virtspec_mi as vm  # noqa: E402
-from result_kinds import WAVELENGTHS, hemispherical_grid, sphere_grid  # noqa: E402
-from virtspec_mi.geometry.bins import make_bins  # noqa: E402
+from result_kinds import gonio_from_counts, hemispherical_grid, sphere_grid  # noqa: E402
 from virtspec_mi.kernel.counts import Counts  # noqa: E402
 
 PROFILE = dict(derandomize=True, deadline=None, database=None,
@@ -53,26 +52,6 @@ COUNT_CHANGES: list[Callable[[Any], Any]] = [
 ]
 TAGS = ["virtspec-mi result 2", "virtspec-mi gonio 9", "virtspec-mi sphere 0", "virtspec-mi result", "nonsense", 1,
         None, "virtspec-mi weird 1"]
-
-
-def gonio_from_counts(seed: int = 0) -> vm.GonioResult:
-    """A goniophotometer reading over 3 wavelengths x 2 theta_i, 2 x 3 bins, from random exact counts."""
-
-    rng = np.random.default_rng(seed)
-    shape = (len(WAVELENGTHS), 2)
-    rays = np.full(shape, 5000, dtype=np.int64)
-    reflected, transmitted = rng.integers(500, 2000, shape), rng.integers(500, 2000, shape)
-    counts = Counts.zeros(shape)
-    counts = Counts(**{**{n: getattr(counts, n) for n in Counts.names()}, "rays": rays, "reflected": reflected,
-                       "transmitted": transmitted, "specular_reflected": reflected // 3})
-    result = vm.Result(("wavelength", "theta_i"), {"wavelength": np.array(WAVELENGTHS), "theta_i": np.array([10., 50.])},
-                       counts, None, vm.Settings(wavelengths=WAVELENGTHS, rays=5000), vm.InstrumentGeometry(8, 12.5, 100),
-                       0.25, scene="sha256:0123")
-    bins = make_bins(1, 3)  # one theta_o bin per hemisphere, 3 phi_o bins
-    bin_counts = np.zeros((*shape, 2, 3), dtype=np.int64)
-    bin_counts[..., 0, :] = np.stack([reflected // 3, reflected // 3, reflected - 2 * (reflected // 3)], axis=-1)
-    bin_counts[..., 1, :] = np.stack([transmitted // 3, transmitted // 3, transmitted // 3], axis=-1)
-    return vm.GonioResult(result=result, bin_counts=bin_counts, bins=bins, guarantee="union")
 
 
 @pytest.fixture(scope="module")

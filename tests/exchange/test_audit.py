@@ -4,7 +4,7 @@ files (virtspec_mi.exchange.engine_tables).
 
 The "published" Cycles table is generated here: the independent quadrature of the tests
 (tests/microfacet_quadrature.py) on Cycles' grid, printed with six decimals in Cycles'
-header layout, with Cycles' own table_ggx_Eavg (quoted in test_exchange_engine_models.py).
+header layout, with Cycles' own table_ggx_Eavg (quoted in tests/published_tables.py).
 A clean table is flagged nowhere (probability ≥ 1 − δ per seed; fixed seeds); a value
 moved by 2ε in one cell is caught (|v − Ê| ≥ 2ε − ε > ε′ whenever the certificate holds).
 """
@@ -20,7 +20,7 @@ import numpy as np
 import pytest
 
 from microfacet_quadrature import albedo
-from test_exchange_engine_models import CYCLES_GGX_EAVG
+from published_tables import CYCLES_GGX_EAVG
 from virtspec_mi.exchange.audit import audit
 from virtspec_mi.exchange.conventions import convention
 from virtspec_mi.exchange.engine_tables import (engine_tables, read_engine_file, read_filament_inc, read_unreal,

@@ -26,7 +26,7 @@ from virtspec_mi.geometry.sphere import Port, Sphere
 from virtspec_mi.instruments.sphere import SphereOptions
 from virtspec_mi.references.sphere_model import correct_readings, disk_share, invertible_range, theory_inputs
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 LAB, LEAF = "scenes/sphere_150mm_8d.xml", "scenes/sphere_leaf_60mm.xml"
 RAYS, DELTA = 105_967, 1e-3
 SLAB = {"type": "turbid_slab", "mu_a": 1.0, "mu_s": 100.0, "g": 0.75, "thickness": 0.1, "eta": 1.4}

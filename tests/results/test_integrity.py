@@ -19,7 +19,7 @@ import pytest
 
 import virtspec_mi as vm
 from result_kinds import hemispherical_grid, sphere_grid
-from test_results_files_fuzz import gonio_from_counts
+from result_kinds import gonio_from_counts
 from virtspec_mi.results.integrity import MissingFile, checksum, whole_counts
 
 KINDS = {"sweep": hemispherical_grid, "gonio": gonio_from_counts, "sphere": sphere_grid}

@@ -16,6 +16,7 @@ import numpy as np
 import pytest
 
 import virtspec_mi as vm
+from result_kinds import counts
 from virtspec_mi.cli import COMMON_FLAGS, MEASURING, build_parser, main
 from virtspec_mi.engine.checkpoint import checkpoint_for
 from virtspec_mi.settings import Settings
@@ -54,16 +55,6 @@ def run(capsys, *args):
     status = main([str(a) for a in args])
     out, err = capsys.readouterr()
     return status, out, err
-
-
-def counts(data: dict) -> dict:
-    """The exact counts of a result's ``as_dict()``, whatever its kind."""
-
-    if data["format"].startswith("virtspec-mi gonio"):
-        return {"bin_counts": data["bin_counts"], **counts(data["result"])}
-    if data["format"].startswith("virtspec-mi sphere"):
-        return data["counts"]
-    return {name: data[name] for name in ("rays", "reflected", "transmitted", "absorbed", "capped")}
 
 
 def api(command: str, scene: str, **keywords) -> dict:

@@ -13,9 +13,9 @@ import pytest
 
 import virtspec_mi as vm
 from killed_runs import kill_then_resume
-from test_cli_measuring import counts
+from result_kinds import counts
 
-SCENES = Path(__file__).resolve().parents[1] / "scenes"
+SCENES = Path(__file__).resolve().parents[2] / "scenes"
 
 RUNS = {
     "gonio": (["--theta-i", "0:90:1", "--rays", "200000", "--theta-o-bins", "6", "--phi-o-bins", "8",

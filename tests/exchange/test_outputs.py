@@ -26,7 +26,7 @@ from virtspec_mi.engine.checkpoint import CheckpointError, locked
 from virtspec_mi.files import atomic_write
 from virtspec_mi.files import WriteError
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 SMALL = dict(model="conductor", engine=None, mu=[0.5, 1.0], alpha=[0.3], epsilon=0.05, progress=False)
 """A table of a few groups, traced in about a second."""
 

@@ -20,7 +20,7 @@ from virtspec_mi.references import sphere_theory as st
 
 import iadpython as iad  # noqa: E402  (a declared test dependency: no skip)
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 WALLS = (0.90, 0.95, 0.98, 0.99)
 FRACTIONS = (0.01, 0.05, 0.10)
 GREYS = np.linspace(0.05, 0.95, 19)

@@ -22,7 +22,7 @@ import virtspec_mi as vm
 from killed_runs import ROUGH_XML, kill_then_resume
 from virtspec_mi.engine.checkpoint import CheckpointError, checkpoint_for, claim
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 KWARGS = dict(theta_i="0:90:10", rays=2000, seed=3, chunk_size=1024 * 2)  # 10 readings, 1 per batch
 
 

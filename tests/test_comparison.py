@@ -80,7 +80,7 @@ def synthetic(values, wavelengths, rays=10**6, violations=0) -> vm.Result:
                      weight_violations=np.full(shape, violations, dtype=np.int64))
     return vm.Result(("wavelength", "theta_i"), {"wavelength": np.asarray(wavelengths, float),
                                                  "theta_i": np.array([8.0])},
-                     counts, None, vm.Settings(wavelengths=wavelengths), vm.InstrumentGeometry(8, 12.5, 100), 0.0,
+                     counts, None, vm.Settings(wavelengths=wavelengths, theta_i=8.0), vm.InstrumentGeometry(8, 12.5, 100), 0.0,
                      scene="sha256:0123456789abcdef")
 
 

@@ -8,7 +8,7 @@ side by side in one run:
 
 1. **Mitsuba** — ``virtspec_mi.measure`` of ``turbid_slab`` in the instrument: the
    fused integrator kernel running the plugin's walk (its steps on queued SIMD lanes,
-   ``virtspec_mi.kernel.tracer.WalkQueue``). Warm (a small call compiles the kernel first); best of 3.
+   ``virtspec_mi.kernel.queue.WalkQueue``). Warm (a small call compiles the kernel first); best of 3.
 2. **NumPy** — :func:`virtspec_mi.references.slab.walk_slab`, the same analog walk in
    float64 NumPy, vectorised over rays (compacting the live photons every step).
 

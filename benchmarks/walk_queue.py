@@ -23,9 +23,9 @@ Three parts, printed as one report:
    ``--case NAME`` (repeatable) runs only those cases.
 
 2. **Occupancy** (working tree only, ``tally_readings`` with its ``walk_stats``): for a
-   grid of :class:`~virtspec_mi.kernel.tracer.WalkQueue` settings (lanes, queue, refill,
+   grid of :class:`~virtspec_mi.kernel.queue.WalkQueue` settings (lanes, queue, refill,
    prestart; the default's refill and prestart come from the specimen's declared mean walk
-   length, :func:`~virtspec_mi.kernel.tracer.walk_plan`) and chunk sizes, the CPU time and
+   length, :func:`~virtspec_mi.kernel.queue.walk_plan`) and chunk sizes, the CPU time and
    the share of lane-iterations that stepped no walk
    ("idle": a lane waiting for its refill, or past the end of its queue while its packet
    still runs), counted per SIMD packet of 16 lanes. ``lanes = 0`` is the one-loop walk

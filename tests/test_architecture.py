@@ -57,7 +57,8 @@ LAYERS: list[tuple[str, tuple[str, ...]]] = [
     ("api", ("virtspec_mi.api", "virtspec_mi.comparison", "virtspec_mi.scaleout", "virtspec_mi.validation",
              "virtspec_mi.scene", "virtspec_mi.runtime",
              # the exchange formats that take their readings through the API
-             "virtspec_mi.exchange.albedo", "virtspec_mi.exchange.klems_gonio", "virtspec_mi.exchange.flip",
+             "virtspec_mi.exchange.albedo", "virtspec_mi.exchange.tables", "virtspec_mi.exchange.klems_gonio",
+             "virtspec_mi.exchange.flip",
              "virtspec_mi.exchange.engine_tables", "virtspec_mi.exchange.audit",
              # applications: clients of the API and the engine that answer a user's question (fits,
              # derived quantities; the maths that results read is below)

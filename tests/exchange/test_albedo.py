@@ -15,7 +15,8 @@ import numpy as np
 import pytest
 
 import virtspec_mi as vm
-from virtspec_mi.exchange.albedo import albedo_table, read_albedo_table
+from virtspec_mi.exchange.albedo import albedo_table
+from virtspec_mi.exchange.tables import read_albedo_table
 from virtspec_mi.exchange.conventions import convention, cycles_ior
 from virtspec_mi.exchange.microfacet_reference import average_albedo, directional_albedo
 

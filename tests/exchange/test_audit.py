@@ -205,7 +205,7 @@ def test_the_command_line_audit(published, tmp_path):
 
 
 def test_an_engine_table_read_back(certified, tmp_path):
-    from virtspec_mi.exchange.albedo import read_albedo_table
+    from virtspec_mi.exchange.tables import read_albedo_table
     from virtspec_mi.exchange.engine_tables import EngineTables
 
     certified.write(tmp_path / "t.nc")

@@ -162,7 +162,7 @@ def _tally(instrument, readings, settings, rays, **queue):
 def test_queued_walks_count_as_one_loop_per_ray(mi, case):
     """Bit-identical counts: sample() per ray (one loop) vs queued lanes of any count, queue and chunk size."""
 
-    from virtspec_mi.kernel.tracer import WalkQueue
+    from virtspec_mi.kernel.queue import WalkQueue
     from virtspec_mi.scene import find_bench
     from virtspec_mi.settings import Settings
 
@@ -294,7 +294,7 @@ def test_any_specimen_declaring_the_steps_runs_queued(mi, coin_walk):
 
 
 def test_the_walk_queue_refuses_bad_values():
-    from virtspec_mi.kernel.tracer import WalkQueue
+    from virtspec_mi.kernel.queue import WalkQueue
 
     for bad, match in (({"lanes": -1}, "lanes"), ({"queue": "lifo"}, "queue"), ({"refill": 3}, "refill"),
                        ({"refill": 0}, "refill")):

@@ -1,5 +1,5 @@
 """Tests of how the kernel queues a walk specimen's rays from its declared walk length
-(:func:`virtspec_mi.kernel.tracer.walk_plan`, ``WalkQueue.prestart``): counts never depend on it."""
+(:func:`virtspec_mi.kernel.queue.walk_plan`, ``WalkQueue.prestart``): counts never depend on it."""
 
 import numpy as np
 import pytest
@@ -15,7 +15,7 @@ def mi():
 def test_walk_plan_rule(mi):
     """Long declared walks: refill every 4th iteration; short or undeclared: 2; starts computed in the refill."""
 
-    from virtspec_mi.kernel.tracer import LONG_WALK_STEPS, WalkQueue, walk_plan
+    from virtspec_mi.kernel.queue import LONG_WALK_STEPS, WalkQueue, walk_plan
 
     assert walk_plan(None) == (2, False)
     assert walk_plan(LONG_WALK_STEPS - 0.5) == (2, False)
@@ -29,7 +29,7 @@ def test_walk_plan_rule(mi):
 def test_walk_specimens_declare_their_length(mi):
     """The leaves declare long walks (the measured mean over the soybean spectrum); the slab declares none."""
 
-    from virtspec_mi.kernel.tracer import LONG_WALK_STEPS
+    from virtspec_mi.kernel.queue import LONG_WALK_STEPS
     from virtspec_mi.kernel.walk import walk_steps
     from virtspec_mi.scene import find_bench
 
@@ -39,7 +39,7 @@ def test_walk_specimens_declare_their_length(mi):
 
 
 def test_prestart_is_checked(mi):
-    from virtspec_mi.kernel.tracer import WalkQueue
+    from virtspec_mi.kernel.queue import WalkQueue
 
     with pytest.raises(ValueError, match="prestart"):
         WalkQueue(prestart="yes")

@@ -78,7 +78,8 @@ def albedo_options(parser: argparse.ArgumentParser) -> None:
 
 def albedo_table(args: argparse.Namespace) -> int:
     from virtspec_mi.checks import parse_values
-    from virtspec_mi.exchange.albedo import albedo_table, read_albedo_table
+    from virtspec_mi.exchange.albedo import albedo_table
+    from virtspec_mi.exchange.tables import read_albedo_table
 
     native = (".inc", ".raw", ".png")
     if args.audit or (args.engine in ("filament", "unreal") and any(p.lower().endswith(native) for p in args.out)):
@@ -126,7 +127,7 @@ def engine_tables(args: argparse.Namespace) -> int:
         if not path.lower().endswith(native):
             raise ValueError(f"--out {path}: an engine table is written as the engine's file or .nc")
     if args.source:  # a certified engine table written before (--out TABLE.nc)
-        from virtspec_mi.exchange.albedo import read_albedo_table
+        from virtspec_mi.exchange.tables import read_albedo_table
         from virtspec_mi.exchange.engine_tables import EngineTables
 
         tables = EngineTables.from_table(read_albedo_table(args.source))

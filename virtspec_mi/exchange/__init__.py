@@ -2,7 +2,8 @@
 Exchange formats renderers and simulation tools read: certified tables and BSDF files
 =====================================================================================
 
-- :mod:`~virtspec_mi.exchange.albedo`: certified directional-albedo tables E(μ, α),
+- :mod:`~virtspec_mi.exchange.albedo` measures certified directional-albedo tables E(μ, α)
+  (:mod:`~virtspec_mi.exchange.tables`: the table, its files and its comparison),
   E_avg(α) (and E(μ, α, η) of rough glass) for energy compensation, on the grids of
   Cycles, Filament and Unreal (:mod:`~virtspec_mi.exchange.conventions`); NetCDF,
   ``.npy`` and C headers (:mod:`~virtspec_mi.exchange.header`); a comparison with a
@@ -33,9 +34,9 @@ __all__ = ["albedo_table", "AlbedoTable", "TableComparison", "read_albedo_table"
 
 _LAZY = {
     "albedo_table": "virtspec_mi.exchange.albedo",
-    "AlbedoTable": "virtspec_mi.exchange.albedo",
-    "TableComparison": "virtspec_mi.exchange.albedo",
-    "read_albedo_table": "virtspec_mi.exchange.albedo",
+    "AlbedoTable": "virtspec_mi.exchange.tables",
+    "TableComparison": "virtspec_mi.exchange.tables",
+    "read_albedo_table": "virtspec_mi.exchange.tables",
     "klems_measure": "virtspec_mi.exchange.klems_gonio",
     "klems_from_gonio": "virtspec_mi.exchange.klems",
     "KlemsMeasurement": "virtspec_mi.exchange.klems",

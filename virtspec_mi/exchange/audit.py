@@ -196,7 +196,7 @@ def audit(published: str | os.PathLike | dict[str, np.ndarray], certified: Any, 
         A file in the engine's native layout, or arrays by channel (engine memory order).
     certified
         :class:`~virtspec_mi.exchange.engine_tables.EngineTables` of that engine (or a
-        Cycles :class:`~virtspec_mi.exchange.albedo.AlbedoTable`: channel ``E`` and ``E_avg``).
+        Cycles :class:`~virtspec_mi.exchange.tables.AlbedoTable`: channel ``E`` and ``E_avg``).
     engine
         ``cycles``, ``filament`` or ``unreal`` (default: the certified table's).
     rounding

@@ -69,7 +69,7 @@ __all__ = ["EngineTables", "engine_tables",
 @dataclass(frozen=True, eq=False)
 class EngineTables:
     """
-    An engine's table: one :class:`~virtspec_mi.exchange.albedo.AlbedoTable` of the
+    An engine's table: one :class:`~virtspec_mi.exchange.tables.AlbedoTable` of the
     engine's model on its grid whose certified quantities hold the engine's channels
     (:data:`~virtspec_mi.exchange.engine_models.ENGINE_CHANNELS`): every cell of every
     channel within its tolerance at once with probability ≥ 1 − δ.
@@ -82,7 +82,7 @@ class EngineTables:
     @classmethod
     def from_table(cls, table: Any) -> "EngineTables":
         """
-        An :class:`~virtspec_mi.exchange.albedo.AlbedoTable` read back (``.nc``) as the
+        An :class:`~virtspec_mi.exchange.tables.AlbedoTable` read back (``.nc``) as the
         engine's table it was made as (``ValueError`` when it is not one: another grid,
         model or Fresnel mode).
         """

@@ -2,7 +2,7 @@
 Albedo tables as C/C++ headers, and published tables read back
 ==============================================================
 
-:func:`write_header` prints a certified :class:`~virtspec_mi.exchange.albedo.AlbedoTable`
+:func:`write_header` prints a certified :class:`~virtspec_mi.exchange.tables.AlbedoTable`
 as a C/C++ header in the layout of Blender Cycles' generated tables
 (``intern/cycles/app/cycles_precompute.cpp``): one ``static const float
 table_<name>[<size>] = { … };`` per table, flat, in the engine's memory order
@@ -21,7 +21,7 @@ bias). The header compiles as C99 and C++ (``tests/exchange/test_header.py`` com
 it with the system compiler).
 
 :func:`read_table_values` reads a published table for
-:meth:`~virtspec_mi.exchange.albedo.AlbedoTable.compare`: ``.npy``, ``.nc``, ``.csv`` /
+:meth:`~virtspec_mi.exchange.tables.AlbedoTable.compare`: ``.npy``, ``.nc``, ``.csv`` /
 ``.txt`` or a C/C++ header (the numbers between the braces of the named array,
 ``f`` suffixes and comments allowed).
 

@@ -75,22 +75,15 @@ import mitsuba as mi
 import numpy as np
 
 from virtspec_mi.kernel.counts import DIRECTION_TOLERANCE, WEIGHT_ROUNDING, Counts, Fate
-from virtspec_mi.kernel.disk import jittered_cell, sample_disk
 from virtspec_mi.kernel.hooks import ChunkRays, ExitHook
 from virtspec_mi.kernel.incidence import incidence_frame
-from virtspec_mi.kernel.rng import chunk_root, dimension_key, dimension_keys, hash32, to_unit
+from virtspec_mi.kernel.queue import LONG_WALK_STEPS, WALK_GROUP, WALK_QUEUES, WalkQueue, walk_plan
+from virtspec_mi.kernel.sources import WAVELENGTH, WORD, RaySource, full, gather_tree, segment_sums
 from virtspec_mi.kernel.walk import CAPPED_COMPONENT, is_random_walk, walk_steps
 
 __all__ = ["CHUNK_SECONDS", "FIRST_CHUNK", "KernelTally", "LONG_WALK_STEPS", "ReadingPlan", "WALK_GROUP",
            "WALK_QUEUES", "WalkQueue", "first_interactions", "tally_readings", "trace_rays", "walk_plan"]
 
-_WORD = 1 << 32
-# Dimensions of the random numbers: 0–1 emitter, 2–3 specimen, 4–6 BSDF, 7 survival;
-# eq. (3) rejection draws from dimension 8 on (attempt k: 8 + 4k + 2·disk, +1).
-_REJECTION_BASE = 8
-# Columns of the per-reading table: wavelength, emitter centre D·ω, emitter axes e_u and
-# e_v, incidence direction ω (towards the emitter), strata per side of the jittered grid.
-_WAVELENGTH, _CENTRE, _E_U, _E_V, _OMEGA, _STRATA = 0, 1, 4, 7, 10, 13
 # Bits of the per-ray code of rare events (almost always all zero: one reduction skips them).
 _VIOLATION, _CAPPED, _ROUNDED, _INVALID = 1, 2, 4, 8
 _RARE_COUNTS = (("weight_violations", _VIOLATION), ("capped", _CAPPED), ("rounded_weights", _ROUNDED),
@@ -108,89 +101,6 @@ sized from the measured ray rate to end within this (see :class:`_Pace`).
 
 FIRST_CHUNK: int = 1 << 14
 """Rays of a call's first chunk, before any rate is measured (and the smallest a chunk is made)."""
-
-WALK_GROUP: int = 16
-"""Lanes that share one queue under ``queue = "group"`` (the widest SIMD packet, AVX-512)."""
-
-WALK_QUEUES: tuple[str, ...] = ("counter", "group", "stride")
-"""How a lane picks its next ray: ``counter`` — one atomic counter for all lanes hands out
-the next ray of the chunk; ``group`` — each group of :data:`WALK_GROUP` lanes shares a
-counter over its own contiguous range of the chunk's rays; ``stride`` — lane l runs rays
-l, l + L, l + 2L, … (no atomics, but a packet waits for its lane with the longest queue)."""
-
-
-@dataclass(frozen=True)
-class WalkQueue:
-    """
-    How the kernel runs a random-walk specimen's steps (see :meth:`_Kernel.walk`); counts
-    never depend on it. The defaults were chosen by measurement (``benchmarks/walk_queue.py``,
-    benchmarks/RESULTS.md, issue 14).
-
-    - ``lanes``: SIMD lanes working through a chunk's rays (0: one ``sample()`` per ray,
-      the walk as one loop). Dr.Jit's LLVM backend runs a kernel's packets of lanes one
-      after another on each thread, so under the shared ``counter`` the first packet of
-      each thread walks almost every ray and the others only their first one: a few
-      packets per thread are enough (1024 lanes: 64 packets of 16, up to 64 threads).
-    - ``queue``: how a lane picks its next ray (:data:`WALK_QUEUES`). The shared counter
-      also balances the threads: all of them draw from one queue until it is empty.
-    - ``refill``: loop iterations between two refills of a lane whose walk ended (a power
-      of two). A refill (the finished ray's tally, the next ray's start) runs for a whole
-      SIMD packet when any of its lanes needs it; refilling every P-th iteration divides
-      that cost by P for about (P − 1)/2 iterations of idling per ray.
-    - ``prestart``: every ray's start (incident ray and ``walk_start``: the generator's seeding,
-      spectral look-ups …) computed in one kernel over the whole chunk before the walk
-      loop, at full SIMD use; a refill then only gathers its ray's start state (a memory
-      read per state array) instead of computing it for the whole packet.
-
-    ``None`` (the default of both): from the specimen's declared mean walk length
-    (:func:`walk_plan`, one rule for every walk specimen).
-    """
-
-    lanes: int = 1024
-    queue: str = "counter"
-    refill: int | None = None
-    prestart: bool | None = None
-
-    def __post_init__(self) -> None:
-        if not (isinstance(self.lanes, int) and 0 <= self.lanes < 2**31):
-            raise ValueError(f"lanes must be a whole number, 0 <= lanes < 2**31 (got {self.lanes!r})")
-        if self.queue not in WALK_QUEUES:
-            raise ValueError(f"queue must be one of {', '.join(WALK_QUEUES)} (got {self.queue!r})")
-        if self.refill is not None and not (
-                isinstance(self.refill, int) and 1 <= self.refill <= 1024 and self.refill & (self.refill - 1) == 0):
-            raise ValueError(f"refill must be None or a power of two, 1 <= refill <= 1024 (got {self.refill!r})")
-        if self.prestart not in (None, True, False):
-            raise ValueError(f"prestart must be None, True or False (got {self.prestart!r})")
-
-    def planned(self, walk_steps: float | None) -> WalkQueue:
-        """This queue with ``refill`` and ``prestart`` that are ``None`` taken from :func:`walk_plan`."""
-
-        refill, prestart = walk_plan(walk_steps)
-        return WalkQueue(self.lanes, self.queue, refill if self.refill is None else self.refill,
-                         prestart if self.prestart is None else self.prestart)
-
-
-LONG_WALK_STEPS: float = 6.0
-"""Mean events per walk from which a walk counts as long for :func:`walk_plan`."""
-
-
-def walk_plan(walk_steps: float | None) -> tuple[int, bool]:
-    """
-    The queue's ``refill`` period and ``prestart`` for a specimen whose walks take
-    ``walk_steps`` events on average (:func:`virtspec_mi.kernel.walk.walk_steps`; ``None``:
-    not declared). Long walks (≥ :data:`LONG_WALK_STEPS`): refill every 4th iteration;
-    short or undeclared: every 2nd; starts computed in the refill for both. Chosen by
-    measurement (benchmarks/RESULTS.md, issues 14 and 25): on the ABM leaf (10.2 events per
-    ray over the soybean spectrum, 15.7 at 800 nm) refill 4 saves up to 8 % against 2; on the
-    MCML slab (3.2 events) refill 4 loses 5–7 %. Precomputed starts (``prestart``) saved
-    8–11 % on the leaf while its walk generator was a TEA-seeded PCG32; with the hashed Weyl
-    sequence of :func:`~virtspec_mi.kernel.walk.walk_rng` a start costs little more than
-    gathering it: the soybean two-stage and corn spectra run 5 % and 11 % faster without, 800 nm
-    4 % (issue 25), so no walk length gets it by default.
-    """
-
-    return (4 if walk_steps is not None and walk_steps >= LONG_WALK_STEPS else 2), False
-
 
 @dataclass(frozen=True)
 class ReadingPlan:
@@ -282,7 +192,7 @@ def tally_readings(
             np.searchsorted(starts, first + size, side="left"),
         )
         began = time.perf_counter()
-        kernel.run(_RaySource(kernel, first, size, slots, starts, offsets), tally)
+        kernel.run(RaySource(kernel, first, size, slots, starts, offsets), tally)
         pace.update(size, time.perf_counter() - began)
         first += size
         if on_chunk is not None:  # how many readings are complete (for a progress bar)
@@ -329,9 +239,9 @@ def _cuts(starts: np.ndarray, offsets: np.ndarray, rays: np.ndarray) -> np.ndarr
     previous reading ended in. O(readings), NumPy only.
     """
 
-    first_block, last_block = offsets // _WORD, (offsets + rays - 1) // _WORD
+    first_block, last_block = offsets // WORD, (offsets + rays - 1) // WORD
     crossing = last_block > first_block
-    inside = starts[:-1][crossing] + (first_block[crossing] + 1) * _WORD - offsets[crossing]
+    inside = starts[:-1][crossing] + (first_block[crossing] + 1) * WORD - offsets[crossing]
     new_block = starts[1:-1][first_block[1:] != last_block[:-1]]
     return np.unique(np.concatenate([starts[-1:], inside, new_block]).astype(np.int64))
 
@@ -367,7 +277,7 @@ def trace_rays(bench: Any, plan: ReadingPlan, count: int, *, seed: int, beam: st
     """
 
     kernel = _Kernel(bench, [plan], seed, beam, sampling, hook)
-    source = _RaySource(kernel, 0, count, np.array([0]), np.array([0, plan.rays]), np.array([0]))
+    source = RaySource(kernel, 0, count, np.array([0]), np.array([0, plan.rays]), np.array([0]))
     lanes = kernel.trace(source)
     dr.eval(lanes)
     return {name: np.array(value).T if np.ndim(value) > 1 else np.array(value)
@@ -388,7 +298,7 @@ def first_interactions(bench: Any, plan: ReadingPlan, first: int, size: int, off
     """
 
     kernel = _Kernel(bench, [plan], seed, beam, sampling)
-    source = _RaySource(kernel, first, size, np.array([0]), np.array([0, plan.rays]),
+    source = RaySource(kernel, first, size, np.array([0]), np.array([0, plan.rays]),
                         np.array([offset], dtype=np.int64))
     return kernel.trace(source)
 
@@ -431,7 +341,7 @@ class _Kernel:
 
     # -- one chunk ---------------------------------------------------------------------
 
-    def run(self, source: _RaySource, tally: KernelTally) -> None:
+    def run(self, source: RaySource, tally: KernelTally) -> None:
         """
         Add the tallies of the chunk's packed lanes (``source``) to its readings
         (``source.slots``) of ``tally``: fate counts, and with a hook its bins and sums.
@@ -446,19 +356,19 @@ class _Kernel:
             dr.eval(*(lanes[name] for name in ("wo", "target", "fate", "rare", "specular", "regular")))
             slot = lanes["slot"]
             exits = hook.exits(ChunkRays(lanes=lanes, slot=slot, root=source.root,
-                                         wavelengths=source.rows[:, _WAVELENGTH], specimen=self.specimen,
+                                         wavelengths=source.rows[:, WAVELENGTH], specimen=self.specimen,
                                          column=source.column, ray_index=source.ray_index))
             lanes["bin"], sums = exits
         fate = lanes["fate"]
         # Two 32-bit counts per UInt64 lane: (reflected, transmitted), (specular, regular).
         code = dr.select(fate == int(Fate.REFLECTED), mi.UInt64(1), mi.UInt64(0)) | dr.select(
-            fate == int(Fate.TRANSMITTED), mi.UInt64(_WORD), mi.UInt64(0)
+            fate == int(Fate.TRANSMITTED), mi.UInt64(WORD), mi.UInt64(0)
         )
         rare = lanes["rare"]
         packed_codes = {("reflected", "transmitted"): code}
         if self.delta_lobes == "mixed":
             packed_codes[("specular_reflected", "regular_transmitted")] = dr.select(
-                lanes["specular"], mi.UInt64(1), mi.UInt64(0)) | dr.select(lanes["regular"], mi.UInt64(_WORD), mi.UInt64(0))
+                lanes["specular"], mi.UInt64(1), mi.UInt64(0)) | dr.select(lanes["regular"], mi.UInt64(WORD), mi.UInt64(0))
         if hook is None:
             dr.eval(*packed_codes.values(), rare)  # the one fused ray kernel
         else:
@@ -476,8 +386,8 @@ class _Kernel:
             if len(slots) == 1:
                 packed = np.array([int(dr.sum(packed_code).numpy()[0])], dtype=np.uint64)
             else:
-                packed = _segment_sums(dr.cumsum(packed_code), bounds, ends)
-            getattr(counts, low)[slots] += (packed & np.uint64(_WORD - 1)).astype(np.int64)
+                packed = segment_sums(dr.cumsum(packed_code), bounds, ends)
+            getattr(counts, low)[slots] += (packed & np.uint64(WORD - 1)).astype(np.int64)
             getattr(counts, high)[slots] += (packed >> np.uint64(32)).astype(np.int64)
         if self.delta_lobes == "all":  # every event is a delta event: nothing to count
             counts.specular_reflected[slots] = counts.reflected[slots]
@@ -486,10 +396,10 @@ class _Kernel:
             return
         for name, bit in _RARE_COUNTS:
             flags = mi.UInt64(dr.select((rare & bit) != 0, 1, 0))
-            getattr(counts, name)[slots] += _segment_sums(dr.cumsum(flags), bounds, ends).astype(np.int64)
+            getattr(counts, name)[slots] += segment_sums(dr.cumsum(flags), bounds, ends).astype(np.int64)
         self._largest_weights(lanes["weight"], rare, bounds, slots, counts)
 
-    def _bin_table(self, source: _RaySource, code: Any, slot: Any) -> Any:
+    def _bin_table(self, source: RaySource, code: Any, slot: Any) -> Any:
         """
         The chunk's histogram of the hook's codes (symbolic): two bins per UInt64 word
         (32-bit fields: a chunk holds < 2³² rays, so no field overflows), scatter-added into
@@ -505,7 +415,7 @@ class _Kernel:
         table = dr.zeros(mi.UInt64, (readings * block + 1) // 2)
         shift = source.column(self.pairing[source.slots], mi.UInt32, slot)
         where = code + shift if readings == 1 else slot * block + code + shift
-        value = dr.select((where & 1) != 0, mi.UInt64(_WORD), mi.UInt64(1))
+        value = dr.select((where & 1) != 0, mi.UInt64(WORD), mi.UInt64(1))
         dr.scatter_reduce(dr.ReduceOp.Add, table, value, where >> 1, code < self.hook.size,
                           mode=dr.ReduceMode.Expand)
         return table
@@ -515,7 +425,7 @@ class _Kernel:
 
         size = self.hook.size
         words = np.array(table, dtype=np.uint64)
-        fields = np.stack([words & np.uint64(_WORD - 1), words >> np.uint64(32)], axis=1).reshape(-1)
+        fields = np.stack([words & np.uint64(WORD - 1), words >> np.uint64(32)], axis=1).reshape(-1)
         blocks = fields[: len(slots) * (size + 1)].astype(np.int64).reshape(len(slots), size + 1)
         first = self.pairing[slots].astype(np.int64)
         return blocks[np.arange(len(slots))[:, None], first[:, None] + np.arange(size)[None, :]]
@@ -539,7 +449,7 @@ class _Kernel:
         where = np.searchsorted(bounds.astype(np.int64), np.array(lanes, dtype=np.int64), side="right") - 1
         np.fmax.at(counts.largest_weight, slots[where], values)  # fmax skips NaN weights
 
-    def trace(self, source: _RaySource) -> dict:
+    def trace(self, source: RaySource) -> dict:
         """Symbolic per-lane quantities of the chunk's packed lanes (nothing evaluated)."""
 
         size = source.size
@@ -554,7 +464,7 @@ class _Kernel:
             lanes["bin"] = self._reading_bin(source, slot, judged["wo"], judged["fate"])
         return lanes
 
-    def walk(self, source: _RaySource) -> dict:
+    def walk(self, source: RaySource) -> dict:
         """
         The packed lanes [first, first + size) of a :class:`~virtspec_mi.kernel.walk.RandomWalk`
         specimen, with rays queued on SIMD lanes (see :class:`WalkQueue`).
@@ -620,7 +530,7 @@ class _Kernel:
             dr.eval(started)
 
             def start(cursor: dict) -> tuple[Any, Any, Any]:
-                return _gather_tree(started, cursor["position"])
+                return gather_tree(started, cursor["position"])
         else:
             def start(cursor: dict) -> tuple[Any, Any, Any]:
                 return begin(cursor["position"], None if source.single else cursor["slot"])
@@ -703,9 +613,9 @@ class _Kernel:
         """
 
         # Per ray, at the chunk's width (a BSDF may return width-1 literals).
-        w = _full(mi.Spectrum(weight)[0], size)
-        wo = mi.Vector3f(*(_full(c, size) for c in (bs.wo.x, bs.wo.y, bs.wo.z)))
-        sampled_type, component = _full(bs.sampled_type, size), _full(bs.sampled_component, size)
+        w = full(mi.Spectrum(weight)[0], size)
+        wo = mi.Vector3f(*(full(c, size) for c in (bs.wo.x, bs.wo.y, bs.wo.z)))
+        sampled_type, component = full(bs.sampled_type, size), full(bs.sampled_component, size)
         survives = survival < w
         # wo·n = 0 exactly (grazing exit): the sampled event decides — transmission crosses.
         crossed = mi.has_flag(sampled_type, mi.BSDFFlags.Transmission)
@@ -730,7 +640,7 @@ class _Kernel:
         return {"wo": wo, "fate": fate, "weight": w, "rare": rare, "sampled_type": sampled_type,
                 "specular": specular, "regular": regular}
 
-    def _reading_bin(self, source: _RaySource, slot: Any, wo: Any, fate: Any) -> Any:
+    def _reading_bin(self, source: RaySource, slot: Any, wo: Any, fate: Any) -> Any:
         """The hook's bin of rays of readings ``slot`` of the chunk (``None``: a single reading), with their φi."""
 
         phi_i = source.column(self.phi_i[source.slots].astype(np.float32), mi.Float, slot)
@@ -771,179 +681,3 @@ def _sample_pair(bsdf: Any, sampled: Any) -> tuple[Any, Any]:
            else f"one {type(sampled).__name__}")
     raise ValueError(f"the specimen BSDF {name}: sample() must return the pair (mi.BSDFSample3f, weight), as Mitsuba's "
                      f"BSDF.sample does (got {got}); return bs, weight where weight = f * cos(theta_o) / pdf")
-
-
-class _RaySource:
-    """
-    The incident rays of one chunk, the packed lanes [first, first + size): host-side
-    keys and per-reading rows once per chunk, then any ray's quantities from its
-    position p in the chunk (:meth:`incident`, :meth:`uniform`) — the same whether all
-    positions run at once (:meth:`_Kernel.trace`) or a lane works through a queue of them
-    (:meth:`_Kernel.walk`).
-    """
-
-    def __init__(self, kernel: _Kernel, first: int, size: int, slots: np.ndarray, starts: np.ndarray,
-                 offsets: np.ndarray) -> None:
-        self.kernel, self.size = kernel, size
-        # Position p of reading k has global ray index g = offsets[k] + (first + p − starts[k]); the
-        # chunk never crosses a 2³² boundary of g, so one root and a per-reading low-word shift.
-        self.shift = (offsets[slots] - starts[slots] + first) % _WORD
-        self.root = chunk_root(kernel.seed, int(offsets[slots[0]] + first - starts[slots[0]]) // _WORD)
-        # Per-reading parameters: width-1 opaque values for a single reading, else gathered.
-        self.bounds, self.j0 = _lane_ranges(first, size, slots, starts)
-        self.slots, self.rows = slots, kernel.readings[slots]
-        self.single = len(slots) == 1
-        self.keys = [dr.opaque(mi.UInt32, k) for k in dimension_keys(self.root)]
-        # Queued walks: a column equal for every reading of the chunk is one opaque value.
-        self.fold_constant = kernel.queued
-        # End (chunk position) of each reading's lanes, for a lane that moves along its queue.
-        self.ends = mi.UInt32(np.append(self.bounds[1:], size).astype(np.uint32))
-
-    def slot(self, lane: Any) -> Any:
-        """Index of each position's reading in the chunk (``None`` for a single reading)."""
-
-        return None if self.single else _find_slot(self.bounds, lane)
-
-    def column(self, values: np.ndarray, kind: Any, slot: Any) -> Any:
-        """Per-reading ``values`` (one per slot of the chunk) at positions of readings ``slot``."""
-
-        if slot is None or (self.fold_constant and np.all(values == values[0])):
-            return dr.opaque(kind, values[0].item())
-        return dr.gather(kind, kind(values), slot)
-
-    def ray_index(self, lane: Any, slot: Any) -> Any:
-        """Low word of the global ray index of each position."""
-
-        if np.all(self.shift == self.shift[0]):  # consecutive readings (the default layout): one scalar
-            return lane + dr.opaque(mi.UInt32, int(self.shift[0]))
-        return lane + self.column(self.shift.astype(np.uint32), mi.UInt32, slot)
-
-    def incident(self, lane: Any, slot: Any = False) -> dict:
-        """Emitter point ``origin``, specimen point ``target``, the surface interaction ``si``,
-        the BSDF's ``sample1``/``sample2`` and the roulette's ``survival`` uniform of the rays at
-        positions ``lane`` (their readings ``slot``: found by a binary search when not given)."""
-
-        kernel, rows, root = self.kernel, self.rows, self.root
-        slot = self.slot(lane) if slot is False else slot
-
-        def column(values: np.ndarray, kind: Any) -> Any:
-            return self.column(values, kind, slot)
-
-        ray = lane + column(self.j0, mi.UInt32) if slot is None else (
-            lane - column(self.bounds, mi.UInt32) + column(self.j0, mi.UInt32))
-        ray_index = self.ray_index(lane, slot)
-
-        def uniform(dimension: int) -> mi.Float:
-            return to_unit(hash32(ray_index ^ self.keys[dimension]), mi.Float)
-
-        def vector(index: int) -> mi.Vector3f:
-            return mi.Vector3f(*(column(rows[:, index + k], mi.Float) for k in range(3)))
-
-        wavelength = column(rows[:, _WAVELENGTH], mi.Float)
-
-        if kernel.beam == "diffuse":
-            u0, u1 = uniform(0), uniform(1)
-            if kernel.sampling == "jittered":
-                u0, u1 = jittered_cell(mi, u0, u1, ray, column(rows[:, _STRATA].astype(np.uint32), mi.UInt32))
-            wi = mi.warp.square_to_cosine_hemisphere(mi.Point2f(u0, u1))
-            target = sample_disk(mi, kernel.sampling, uniform(2), uniform(3), kernel.specimen_radius,
-                                 lambda r: _rejection(ray_index, root, r, 1))
-            origin = mi.Point3f(target.x, target.y, 0.0) + wi * kernel.distance
-        elif kernel.beam == "collimated":
-            wi = vector(_OMEGA)
-            target = mi.Point2f(0.0, 0.0)
-            origin = mi.Point3f(wi)
-        else:
-            u0, u1 = uniform(0), uniform(1)
-            if kernel.sampling == "jittered":
-                u0, u1 = jittered_cell(mi, u0, u1, ray, column(rows[:, _STRATA].astype(np.uint32), mi.UInt32))
-            emitter = sample_disk(mi, kernel.sampling, u0, u1, kernel.emitter_radius,
-                                  lambda r: _rejection(ray_index, root, r, 0))
-            target = sample_disk(mi, kernel.sampling, uniform(2), uniform(3), kernel.specimen_radius,
-                                 lambda r: _rejection(ray_index, root, r, 1))
-            origin = mi.Point3f(vector(_CENTRE) + emitter.x * vector(_E_U) + emitter.y * vector(_E_V))
-            wi = dr.normalize(origin - mi.Point3f(target.x, target.y, 0.0))
-
-        si = dr.zeros(mi.SurfaceInteraction3f)
-        si.wi = wi
-        si.wavelengths = mi.Spectrum(wavelength)
-        si.sh_frame = kernel.frame
-        si.n = kernel.frame.n
-        si.p = kernel.centre + kernel.frame.s * target.x + kernel.frame.t * target.y
-        radius = dr.norm(target)
-        azimuth = dr.atan2(target.y, target.x) * dr.inv_two_pi
-        si.uv = mi.Point2f(radius / kernel.specimen_radius, dr.select(azimuth < 0, azimuth + 1.0, azimuth))
-        return {"origin": origin, "target": target, "si": si, "sample1": uniform(4),
-                "sample2": mi.Point2f(uniform(5), uniform(6)), "survival": uniform(7)}
-
-
-@dr.syntax
-def _rejection(ray_index: mi.UInt32, root: int, radius: mi.Float, disk: int) -> mi.Point2f:
-    """Eq. (3): uniform points of the square [−r, r]² until one falls in the disk."""
-
-    key = dr.opaque(mi.UInt32, root)
-    dimension = mi.UInt32(_REJECTION_BASE + 2 * disk)
-    x = mi.Float(1.0)
-    y = mi.Float(1.0)
-    while dr.hint(x * x + y * y > 1.0, label="rejection"):
-        kx = dimension_key(key, dimension)
-        ky = dimension_key(key, dimension + 1)
-        x = dr.fma(2.0, to_unit(hash32(ray_index ^ kx), mi.Float), -1.0)
-        y = dr.fma(2.0, to_unit(hash32(ray_index ^ ky), mi.Float), -1.0)
-        dimension += 4
-    return mi.Point2f(x * radius, y * radius)
-
-
-def _gather_tree(tree: Any, index: Any) -> Any:
-    """Entries ``index`` of every array of a PyTree (tuples, lists, dicts, Dr.Jit arrays and
-    structs); a width-1 value (a literal, a scalar) is the same for every entry and kept."""
-
-    if isinstance(tree, (tuple, list)):
-        return type(tree)(_gather_tree(item, index) for item in tree)
-    if isinstance(tree, dict):
-        return {key: _gather_tree(item, index) for key, item in tree.items()}
-    if not dr.is_array_v(tree) and not hasattr(type(tree), "DRJIT_STRUCT"):
-        return tree
-    if dr.width(tree) <= 1:
-        return tree
-    return dr.gather(type(tree), tree, index)
-
-
-def _full(value: Any, size: int) -> Any:
-    """``value`` at width ``size``: a width-1 array broadcast (e.g. a constant BSDF weight), else as is."""
-
-    return value if dr.width(value) == size else value + dr.zeros(type(value), size)
-
-
-def _lane_ranges(first: int, size: int, slots: np.ndarray, starts: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Per reading of a chunk: its first lane in the chunk, and the index of that lane's ray."""
-
-    bounds = np.clip(starts[slots] - first, 0, size).astype(np.uint32)
-    first_ray = np.maximum(first - starts[slots], 0).astype(np.uint32)
-    return bounds, first_ray
-
-
-def _find_slot(bounds: np.ndarray, lane: mi.UInt32) -> mi.UInt32:
-    """Index of the last reading whose first lane is ≤ ``lane`` (binary lifting, padded to 2^k)."""
-
-    steps = max(1, int(np.ceil(np.log2(len(bounds)))))
-    padded = np.full(1 << steps, 0xFFFFFFFF, dtype=np.uint32)
-    padded[: len(bounds)] = bounds
-    table = mi.UInt32(padded)
-    slot = mi.UInt32(0)
-    for step in reversed(range(steps)):
-        probe = slot + (1 << step)
-        slot = dr.select(dr.gather(mi.UInt32, table, probe) <= lane, probe, slot)
-    return slot
-
-
-def _segment_sums(cumulative: Any, bounds: np.ndarray, ends: np.ndarray) -> np.ndarray:
-    """Sums over lane ranges [bounds, ends) from an inclusive cumulative sum."""
-
-    bounds, ends = bounds.astype(np.int64), ends.astype(np.int64)
-
-    last = dr.gather(type(cumulative), cumulative, mi.UInt32(np.maximum(ends - 1, 0).astype(np.uint32)))
-    before = dr.gather(type(cumulative), cumulative, mi.UInt32(np.maximum(bounds - 1, 0).astype(np.uint32)))
-    last, before = np.array(last, dtype=np.uint64), np.array(before, dtype=np.uint64)
-    before[bounds == 0] = 0
-    return last - before

@@ -86,7 +86,7 @@ def walk_steps(bsdf: Any) -> float | None:
     """
     The mean number of events per walk that a walk specimen declares (optional attribute
     ``walk_steps``; ``None`` when it declares none): a hint for how the kernel queues its
-    rays (:func:`virtspec_mi.kernel.tracer.walk_plan`), never for a count.
+    rays (:func:`virtspec_mi.kernel.queue.walk_plan`), never for a count.
     """
 
     steps = getattr(bsdf, "walk_steps", None)

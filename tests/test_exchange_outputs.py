@@ -220,3 +220,11 @@ def test_an_edited_albedo_table_file_is_refused_not_stated_as_certified(mi, tmp_
     dataset.to_netcdf(tmp_path / "edited.nc")
     with pytest.raises(ValueError, match=f"albedo table {tmp_path / 'edited.nc'}: .*{words}"):
         vm.read_albedo_table(tmp_path / "edited.nc")
+
+
+def test_a_glass_table_compared_with_its_own_nc_on_either_side_flags_nothing(mi, tmp_path):
+    table = vm.albedo_table(model="glass", engine=None, mu=[0.5, 1.0], alpha=[0.3], eta=[1.5], epsilon=0.05,
+                            progress=False, out=tmp_path / "g.nc")
+    for average in (False, True):
+        for side in ("outside", "inside"):
+            assert table.compare(tmp_path / "g.nc", average=average, side=side).outside == []

@@ -35,14 +35,14 @@ PATHS: dict[str, tuple[list[str], str | None]] = {
     "measure": (["measure", "diamond_conical", "--rays", "400000000", "--quiet"], None),
     "sweep": (["sweep", "diamond_conical", "--theta-i", "0:80:10", "--rays", "40000000", "--quiet", "--out",
                "{out}"], "sweep.nc"),
-    "gonio": (["gonio", "diamond_conical", "--theta-i", "0:80:20", "--rays", "8000000", "--theta-o-bins", "6",
+    "gonio": (["gonio", "diamond_conical", "--theta-i", "0:80:20", "--rays", "16000000", "--theta-o-bins", "6",
                "--phi-o-bins", "8", "--json", "--out", "{out}"], "gonio.nc"),
     "sphere": (["sphere", "sphere_150mm_8d", "--rays", "4000000", "--wavelengths", "450", "550", "650", "750",
                 "--out", "{out}"], "sphere.json"),
     "albedo-table": (["albedo-table", "--engine", "none", "--mu", "0.2:1:0.2", "--alpha", "0.1:1:0.3",
                       "--epsilon", "0.004", "--quiet", "--out", "{out}"], "table.nc"),
     "klems": (["gonio", "diamond_conical", "--klems", "{out}", "--klems-basis", "quarter", "--isotropic",
-               "--rays", "3000000", "--quiet"], "klems.xml"),
+               "--rays", "30000000", "--quiet"], "klems.xml"),
 }
 
 

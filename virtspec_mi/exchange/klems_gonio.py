@@ -167,6 +167,10 @@ def klems_measure(
                 "back": str(back) if isinstance(back, (str, os.PathLike)) else repr(type(back).__name__),
                 "version": __version__}
     parts = None if out is None else _Parts(Path(out).with_name(Path(out).name + ".parts"), identity)
+    if parts is not None:  # the parts' writer, imported here (a second or more), not between two safe points
+        from virtspec_mi.results.io import warm_writer
+
+        warm_writer()
     # signals act at the readings' safe points only (never inside the files' writes); one run at a time on the
     # parts folder, where each finished group of readings is kept (a re-run reuses them)
     with (nullcontext() if parts is None else locked(parts.folder)), interrupts.deferred():
@@ -202,8 +206,9 @@ def klems_measure(
                             ray_counts[s, :, q] = np.asarray(reading.rays)[:, column]
                             refl[s, :, q], trans[s, :, q] = r[:, column], t[:, column]
                     bar.reach(bar.done + len(patches))
-        except interrupts.Interrupted as stop:
+        except interrupts.Interrupted as stop:  # the parts folder is this run's checkpoint (a group's file is not)
             stop.checkpoint = parts.folder if parts is not None and parts.kept() else None
+            stop.written = None  # type: ignore[attr-defined]
             raise
         finally:
             bar.close()

@@ -190,3 +190,33 @@ def test_a_signal_during_the_result_files_write_waits_for_it_and_names_the_file(
         vm.sweep(scene, theta_i=[0, 30], rays=1000, out=out, progress=False)
     assert stop.value.written == out and out.exists() and vm.read_result(out).rays.shape == (1, 2)
     assert not (tmp_path / "r.nc.partial.json").exists() and not list(tmp_path.glob("*.tmp"))
+
+
+PROGRAM = """
+import os, sys
+os.write(1, b"R")
+try:
+    import virtspec_mi as vm
+    vm.gonio("diamond_conical", theta_i="0:80:10", rays=20000000, theta_o_bins=6, phi_o_bins=8, progress=False)
+    print("returned")
+except KeyboardInterrupt as stop:
+    print("KeyboardInterrupt", type(stop).__name__)
+"""
+"""A Python program measuring with the API: a Ctrl-C reaches it as ``KeyboardInterrupt`` wherever it lands."""
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_the_api_interrupted_at_a_random_moment_raises_keyboard_interrupt_to_the_caller(seed, tmp_path, loaded):
+    """While Dr.Jit and Mitsuba load it came out as SystemError or NameError (issue 33)."""
+
+    after = random.Random(f"api:{seed}").uniform(0.05, 1.2)  # 0.94, 0.2, 0.66, 0.52, 0.2, 0.59 s: imports too
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")])}
+    process = subprocess.Popen([sys.executable, "-c", PROGRAM], cwd=tmp_path, env=env, stdout=subprocess.PIPE,
+                               stderr=subprocess.PIPE)
+    assert process.stdout.read(1) == b"R"
+    time.sleep(after)
+    sent = time.monotonic()
+    process.send_signal(signal.SIGINT)
+    stdout, stderr = process.communicate(timeout=120)
+    assert b"KeyboardInterrupt" in stdout and process.returncode == 0, (after, stdout, stderr)
+    assert b"Error" not in stderr and time.monotonic() - sent < LATENCY_S, (after, stderr)

@@ -342,6 +342,10 @@ def _finish(result: Any, out: Path | None, checkpoint: Path) -> None:
     (``written``), nothing to resume.
     """
 
+    if out is not None and out.suffix.lower() == ".nc":  # the writer's imports (seconds) before signals are held
+        from virtspec_mi.results.io import warm_writer
+
+        warm_writer()
     try:
         with interrupts.deferred():
             if out is not None:

@@ -220,3 +220,41 @@ def test_an_edited_albedo_table_file_is_refused_not_stated_as_certified(mi, tmp_
     dataset.to_netcdf(tmp_path / "edited.nc")
     with pytest.raises(ValueError, match=f"albedo table {tmp_path / 'edited.nc'}: .*{words}"):
         vm.read_albedo_table(tmp_path / "edited.nc")
+
+
+def test_a_glass_table_compared_with_its_own_nc_on_either_side_flags_nothing(mi, tmp_path):
+    table = vm.albedo_table(model="glass", engine=None, mu=[0.5, 1.0], alpha=[0.3], eta=[1.5], epsilon=0.05,
+                            progress=False, out=tmp_path / "g.nc")
+    for average in (False, True):
+        for side in ("outside", "inside"):
+            assert table.compare(tmp_path / "g.nc", average=average, side=side).outside == []
+
+
+def test_an_interrupted_klems_run_names_its_parts_and_resumes_to_the_same_counts(mi, tmp_path, monkeypatch):
+    from virtspec_mi.exchange.klems_gonio import klems_measure
+
+    run = dict(basis="quarter", rays=2000, isotropic=True, progress=False)
+    whole = klems_measure("diamond_conical", **run)
+    out, parts = tmp_path / "k.xml", tmp_path / "k.xml.parts"
+    real = interrupts.check
+
+    def check():
+        if parts.is_dir() and len(list(parts.glob("*.nc"))) == 2:
+            os.kill(os.getpid(), signal.SIGINT)
+            time.sleep(0.01)
+        real()
+
+    monkeypatch.setattr(interrupts, "check", check)
+    with interrupts.catching(), pytest.raises(interrupts.Interrupted) as stop:
+        klems_measure("diamond_conical", **run, out=out)
+    monkeypatch.undo()
+    assert stop.value.checkpoint == parts and str(parts) in str(stop.value) and not out.exists()
+    resumed = klems_measure("diamond_conical", **run, out=out)
+    for name in ("counts", "rays", "reflected", "transmitted"):
+        np.testing.assert_array_equal(getattr(resumed, name), getattr(whole, name), err_msg=name)
+    assert out.exists() and (tmp_path / "k.nc").exists() and not parts.exists()
+    (tmp_path / "k.xml").unlink()
+    parts.mkdir()
+    (parts / "identity.json").write_text("{}")  # another measurement's parts: refused, not mixed in
+    with pytest.raises(ValueError, match="holds the parts of another Klems measurement"):
+        klems_measure("diamond_conical", **run, out=out, overwrite=True)

@@ -564,7 +564,7 @@ class AlbedoTable:
             if values is None or np.shape(values) != np.shape(self.layout(average=average)):
                 raise ValueError(f"the published table {published} is an albedo table of another grid "
                                  f"(shape {np.shape(own.E)}; this table's {np.shape(self.E)})")
-            if self.model == "glass" and not average:
+            if self.model == "glass":  # one side's block, as the table's own values above
                 values = values[SIDES.index(side)]
         else:
             if array is None and not isinstance(published, np.ndarray):

@@ -193,8 +193,10 @@ def test_the_dask_flags_are_checked_before_any_tracing(command, capsys):
     (["gonio", "--param", "specimen.eta=1.5,2", "--plot", "g.png"], "--plot draws a sweep over wavelength x theta_i "
                                                                      "at one parameter point"),
     (["gonio", "--param", "specimen.eta=1.5", "--plot-series", "g.svg"], "--plot-series draws a sweep"),
-    (["gonio", "--klems", "k.xml", "--out", "g.nc", "--json"], "--klems measures readings of its own and writes FILE "
-                                                                "and FILE.nc: it takes none of --out, --json"),
+    (["gonio", "--klems", "k.xml", "--out", "g.nc", "--json"], "--klems measures readings of its own (every patch "
+                                                                "centre, its own bins) and writes FILE and FILE.nc: "
+                                                                "it takes none of --out, --json"),
+    (["gonio", "--klems", "k.xml", "--theta-i", "30"], "it takes none of --theta-i"),
     (["sweep", "--densities", "2", "3", "--json"], "--json prints one result and --densities a table"),
     (["sphere", "--out", "r.txt"], "--out: out must end in one of .nc, .csv, .json, .zarr"),
     (["measure", "--plot", "r.pdf"], "--plot: plot must end in one of .png, .svg"),

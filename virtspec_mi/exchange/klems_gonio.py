@@ -45,7 +45,8 @@ from typing import Any
 import numpy as np
 
 from virtspec_mi import __version__
-from virtspec_mi.exchange.common import atomic_write, derived_seed
+from virtspec_mi.exchange.common import derived_seed
+from virtspec_mi.files import atomic_write
 from virtspec_mi.checks import check_delta, check_rays, number, shown_value
 from virtspec_mi.engine import interrupts
 from virtspec_mi.engine.checkpoint import locked
@@ -313,6 +314,10 @@ class _Single:
         return np.roll(counts, self.shift, axis=-1)
 
 
+_COMMON = {"parameters", "points", "defines", "out", "progress", "workers", "task_readings"}
+"""The API keywords of the common flags (refused above by their flags when given)."""
+
+
 def respond(session: Any) -> int:
     """
     ``virtspec gonio``: its reading (:meth:`Session.default <virtspec_mi.instruments.command.Session.default>`),
@@ -329,9 +334,12 @@ def respond(session: Any) -> int:
               "--json": args.json, "--param": args.params, "--points": args.points, "-D": args.defines,
               "--workers": args.workers, "--scheduler": args.scheduler, "--task-readings": args.task_readings}
     unused = [flag for flag, value in common.items() if value not in (None, False, [])]
+    taken = {"wavelengths", "mu", "delta", "rays", "seed"}  # what the matrices take; the rest is theirs to decide
+    unused += [f"--{name.replace('_', '-')}" for name, value in session.keywords.items()
+               if name not in taken and name not in _COMMON and value is not None]
     if unused:
-        raise ValueError(f"--klems measures readings of its own and writes FILE and FILE.nc: it takes none of "
-                         f"{', '.join(unused)}")
+        raise ValueError(f"--klems measures readings of its own (every patch centre, its own bins) and writes FILE "
+                         f"and FILE.nc: it takes none of {', '.join(unused)}")
     given = session.keywords
     measured = klems_measure(args.scene, basis=flags.klems_basis, wavelengths=given.get("wavelengths", 551.0),
                              epsilon=float(given.get("mu", 0.01)), delta=float(given.get("delta", 0.01)),

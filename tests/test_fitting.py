@@ -16,7 +16,8 @@ from scipy.stats import binom
 
 import virtspec_mi as vm
 from virtspec_mi.applications.fitting import read_fit
-from virtspec_mi.applications.fitting.inversion import intervals
+from virtspec_mi.applications.fitting.forward import Reading
+from virtspec_mi.applications.fitting.inversion import intervals, verdicts
 from virtspec_mi.plugins.bsdfs.prospect_model import prospect_d
 
 pytest.importorskip("prosail")  # the PROSPECT-D coefficients (test extra)
@@ -80,6 +81,15 @@ def test_intervals_carry_each_end_to_the_next_tested_value():
     np.testing.assert_array_equal(intervals(values, consistent, np.array([[0.0, 4.0]])), [[0.0, 3.0]])
     np.testing.assert_array_equal(intervals(values, ~consistent, np.array([[-1.0, 5.0]])), [[-1.0, 5.0]])
     assert np.all(np.isnan(intervals(values, consistent & False, np.array([[0.0, 4.0]]))))
+
+
+def test_a_candidate_is_judged_by_its_finest_reading():
+    def reading(value, mu):
+        return Reading(values=np.array([value]), mu=mu, predicted={}, tolerance={}, rays=1, stage="")
+
+    readings = [reading(1.0, 0.02), reading(2.0, 0.02), reading(1.0, 0.005), reading(3.0, 0.005)]
+    # 1.0 consistent at 0.02 but not at 0.005: judged inconsistent in both rows; 2.0 only coarse: consistent
+    np.testing.assert_array_equal(verdicts(readings, np.array([0.8, 0.9, 1.3, 0.5])), [False, True, False, True])
 
 
 def test_bad_input_is_refused_by_name():

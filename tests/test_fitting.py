@@ -192,3 +192,11 @@ def test_confidence_sets_cover_the_truth_and_biases_are_detected():
         flagged += not biased.consistent
     assert misses <= binom.ppf(0.999, trials, delta), misses
     assert flagged >= trials - 2, flagged
+
+
+def test_the_table_on_two_dask_workers_gives_the_same_fit():
+    measured = synthetic({"Cab": 40.0}, 0.02, seed=1)
+    here = vm.fit(measured, "prospect_d", {"Cab": (10, 90)}, delta=0.1, **FAST)
+    there = vm.fit(measured, "prospect_d", {"Cab": (10, 90)}, delta=0.1, workers=2, **FAST)
+    np.testing.assert_array_equal(there.candidate_statistic, here.candidate_statistic)
+    np.testing.assert_array_equal(there.intervals, here.intervals)

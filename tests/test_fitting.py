@@ -107,6 +107,10 @@ def test_bad_input_is_refused_by_name():
         vm.fit((WAVELENGTHS, np.full(len(WAVELENGTHS), 0.1)), "prospect_d", {"Cab": (10, 80)})
     with pytest.raises(ValueError, match="sets mu of its forward readings itself"):
         vm.fit(measured, "prospect_d", {"Cab": (10, 80)}, mu=0.01)
+    with pytest.raises(TypeError, match=r"fit\(\) got unexpected keyword argument\(s\) colour"):
+        vm.fit(measured, "prospect_d", {"Cab": (10, 80)}, colour="green")
+    with pytest.raises(ValueError, match="theta_i"):
+        vm.fit(measured, "prospect_d", {"Cab": (10, 80)}, theta_i=95.0)
     with pytest.raises(ValueError, match="loss must be one of chi2, rmse, max"):
         vm.fit(measured, "prospect_d", {"Cab": (10, 80)}, loss="l1")
     with pytest.raises(ValueError, match="reach outside the measured"):

@@ -14,6 +14,7 @@ the 1-minute load average (the machine may be shared: every figure is then slowe
 Run::
 
     .venv/bin/python benchmarks/fit_abm.py [--step 20] [--evaluations 24,9,3] [--bound hoeffding] [--workers N]
+        [--no-confirm]
 """
 
 from __future__ import annotations
@@ -44,6 +45,7 @@ def main() -> None:
     parser.add_argument("--bound", default="hoeffding")
     parser.add_argument("--forward-mu", type=float, default=0.002)
     parser.add_argument("--workers", type=int, default=None)
+    parser.add_argument("--no-confirm", action="store_true", help="keep the coarse verdicts (fit(confirm=False))")
     args = parser.parse_args()
     import virtspec_mi as vm
 
@@ -55,11 +57,12 @@ def main() -> None:
     started, cpu = time.perf_counter(), time.process_time()
     result = vm.fit({"reflectance": measured, "transmittance": measured}, "soybean_abmb", BOUNDS,
                     forward_mu=args.forward_mu, evaluations=evaluations, profile_points=0, seed=1, delta=0.05,
-                    bound=args.bound, workers=args.workers, progress=True)
+                    bound=args.bound, workers=args.workers, confirm=not args.no_confirm, progress=True)
     seconds, cpu = time.perf_counter() - started, time.process_time() - cpu
     print(f"# ABM-B 3-parameter fit ({datetime.datetime.now(datetime.timezone.utc):%Y-%m-%d %H:%M} UTC, "
           f"{os.cpu_count()} CPUs, {simd_width()}, load {os.getloadavg()[0]:.2f}); "
-          f"{len(wavelengths)} wavelengths 400-2500 nm, R and T, bound {args.bound}, evaluations {evaluations}")
+          f"{len(wavelengths)} wavelengths 400-2500 nm, R and T, bound {args.bound}, evaluations {evaluations}, "
+          f"confirm {not args.no_confirm}")
     print(f"measured spectrum (mu 0.004): {measuring:.1f} s")
     print(result.summary())
     for i, name in enumerate(result.names):

@@ -16,7 +16,8 @@ from scipy.stats import binom
 
 import virtspec_mi as vm
 from virtspec_mi.applications.fitting import read_fit
-from virtspec_mi.applications.fitting.inversion import intervals
+from virtspec_mi.applications.fitting.forward import Reading
+from virtspec_mi.applications.fitting.inversion import intervals, verdicts
 from virtspec_mi.plugins.bsdfs.prospect_model import prospect_d
 
 pytest.importorskip("prosail")  # the PROSPECT-D coefficients (test extra)
@@ -82,6 +83,15 @@ def test_intervals_carry_each_end_to_the_next_tested_value():
     assert np.all(np.isnan(intervals(values, consistent & False, np.array([[0.0, 4.0]]))))
 
 
+def test_a_candidate_is_judged_by_its_finest_reading():
+    def reading(value, mu):
+        return Reading(values=np.array([value]), mu=mu, predicted={}, tolerance={}, rays=1, stage="")
+
+    readings = [reading(1.0, 0.02), reading(2.0, 0.02), reading(1.0, 0.005), reading(3.0, 0.005)]
+    # 1.0 consistent at 0.02 but not at 0.005: judged inconsistent in both rows; 2.0 only coarse: consistent
+    np.testing.assert_array_equal(verdicts(readings, np.array([0.8, 0.9, 1.3, 0.5])), [False, True, False, True])
+
+
 def test_bad_input_is_refused_by_name():
     measured = synthetic({"Cab": 40.0}, 0.02, seed=0)
     with pytest.raises(ValueError, match=r"no parameter 'Chl'.*Cab"):
@@ -97,6 +107,10 @@ def test_bad_input_is_refused_by_name():
         vm.fit((WAVELENGTHS, np.full(len(WAVELENGTHS), 0.1)), "prospect_d", {"Cab": (10, 80)})
     with pytest.raises(ValueError, match="sets mu of its forward readings itself"):
         vm.fit(measured, "prospect_d", {"Cab": (10, 80)}, mu=0.01)
+    with pytest.raises(TypeError, match=r"fit\(\) got unexpected keyword argument\(s\) colour"):
+        vm.fit(measured, "prospect_d", {"Cab": (10, 80)}, colour="green")
+    with pytest.raises(ValueError, match="theta_i"):
+        vm.fit(measured, "prospect_d", {"Cab": (10, 80)}, theta_i=95.0)
     with pytest.raises(ValueError, match="loss must be one of chi2, rmse, max"):
         vm.fit(measured, "prospect_d", {"Cab": (10, 80)}, loss="l1")
     with pytest.raises(ValueError, match="reach outside the measured"):
@@ -182,3 +196,11 @@ def test_confidence_sets_cover_the_truth_and_biases_are_detected():
         flagged += not biased.consistent
     assert misses <= binom.ppf(0.999, trials, delta), misses
     assert flagged >= trials - 2, flagged
+
+
+def test_the_table_on_two_dask_workers_gives_the_same_fit():
+    measured = synthetic({"Cab": 40.0}, 0.02, seed=1)
+    here = vm.fit(measured, "prospect_d", {"Cab": (10, 90)}, delta=0.1, **FAST)
+    there = vm.fit(measured, "prospect_d", {"Cab": (10, 90)}, delta=0.1, workers=2, **FAST)
+    np.testing.assert_array_equal(there.candidate_statistic, here.candidate_statistic)
+    np.testing.assert_array_equal(there.intervals, here.intervals)

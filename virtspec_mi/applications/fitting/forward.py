@@ -49,6 +49,7 @@ import numpy as np
 from virtspec_mi import api
 from virtspec_mi.applications.fitting.problem import FitProblem
 from virtspec_mi.engine.checkpoint import checkpoint_for
+from virtspec_mi.settings import Settings, resolve
 
 __all__ = ["Reading", "Forward", "FIT_OWNS", "note"]
 
@@ -83,6 +84,7 @@ class Forward:
         if owned:
             raise ValueError(f"a fit sets {', '.join(owned)} of its forward readings itself (the fit's own keywords: "
                              "delta, seed, mu_fraction/forward_mu, and the measured wavelengths)")
+        resolve("fit", settings, Settings())  # an unknown name: TypeError listing the settings; a bad value: ValueError
         self.problem = problem
         self.delta = float(delta)
         self.seed = int(seed)

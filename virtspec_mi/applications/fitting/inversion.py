@@ -32,11 +32,15 @@ measurement's uncertainty. For the true parameters θ₀ the test fails with pro
 ≤ δ (the forward readings' joint risk, :mod:`.forward`) plus the measurement's own risk
 (that |m − truth| > u somewhere), so the consistent candidates are a confidence set of
 level ≥ 1 − δ less that risk — the test is the one :func:`virtspec_mi.comparison.compare`
-counts, made simultaneous. Each parameter's **interval** runs from its smallest to its
-largest value among consistent candidates, each end carried out to the next value of that
-parameter any candidate was tested at (or the bound): the search's resolution, not a
-continuity assumption hidden in the answer. A parameter whose interval covers ≥ 90 % of
-its bounds is flagged **unconstrained** (the data do not tell its values apart). When no
+counts, made simultaneous. The set is exact for the candidates tested (each passed or failed
+its own test); each parameter's **interval** summarises it, running from the parameter's
+smallest to its largest value among consistent candidates, each end carried out to the next
+value of that parameter any candidate was tested at (or the bound). The intervals cover the
+true parameters only as well as the search sampled near them: the profiles and the
+confirmation (below) sample the ends, and an estimate that is itself inconsistent (s > 1
+while other candidates pass) means the search has not converged — the summary says so;
+raise ``evaluations``. A parameter whose interval covers ≥ 90 % of its bounds is flagged
+**unconstrained** (the data do not tell its values apart). When no
 candidate is consistent the fit is reported **inconsistent**: the specimen model cannot
 reproduce the measurement within its stated uncertainty (a model of another material, a
 biased instrument, an uncertainty too small).

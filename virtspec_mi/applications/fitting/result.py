@@ -131,6 +131,9 @@ class FitResult:
         if self.consistent:
             lines.append(f"confidence set (level >= {self.level:g}, less the measurement's own risk): "
                          f"{self.consistent_candidates} of {len(self.candidate_statistic)} readings consistent")
+            if self.statistic > 1.0:
+                lines.append(f"NOT CONVERGED: the estimate itself is inconsistent (s = {self.statistic:.3g} > 1) while "
+                             "other candidates pass: the intervals may miss the truth; raise evaluations")
         else:
             lines.append(f"INCONSISTENT: no candidate's certified spectrum lies within the measurement uncertainty "
                          f"+ its tolerance (the estimate's largest normalised residual s = {self.statistic:.3g} > 1): "

@@ -1,6 +1,6 @@
 """
 The PROSPECT-D leaf model (NumPy): reflectance and transmittance of a pile of N plates
-=====================================================================================
+======================================================================================
 
 PROSPECT represents a leaf as N homogeneous absorbing plates separated by N − 1 air
 spaces (Jacquemoud & Baret 1990). The first plate's surfaces reflect as a dielectric of

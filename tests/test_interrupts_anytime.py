@@ -180,10 +180,10 @@ def test_a_signal_during_the_result_files_write_waits_for_it_and_names_the_file(
     out = tmp_path / "r.nc"
     real = io.write
 
-    def write(result, path):
+    def write(result, path, **keywords):
         os.kill(os.getpid(), signal.SIGINT)
         time.sleep(0.01)  # the handler runs here: held until the file is whole
-        return real(result, path)
+        return real(result, path, **keywords)
 
     monkeypatch.setattr(io, "write", write)
     with interrupts.catching(), pytest.raises(interrupts.Interrupted) as stop:

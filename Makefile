@@ -46,9 +46,13 @@ llvm: $(STAMP)
 demo: setup
 	$(VENV)/bin/virtspec measure diamond_conical --theta-i 70
 
-# The whole suite, slow statistical tests included (plain `pytest` deselects them).
+# The whole suite, slow statistical tests included (plain `pytest` deselects them): on two
+# pytest-xdist workers (whole files each), then, alone on the machine, the tests that time how
+# fast a signal is answered (their bound is a latency, so they must not share the cores).
+SERIAL := tests/test_interrupts_anytime.py tests/engine/test_interrupts.py
 test: setup
-	$(PY) -m pytest -m "slow or not slow" $(PYTEST_ARGS)
+	$(PY) -m pytest -m "slow or not slow" -n 2 --dist loadfile $(addprefix --ignore=,$(SERIAL)) $(PYTEST_ARGS)
+	$(PY) -m pytest -m "slow or not slow" $(SERIAL) $(PYTEST_ARGS)
 
 test-fast: setup
 	$(PY) -m pytest $(PYTEST_ARGS)

@@ -69,11 +69,12 @@ from typing import Any, Sequence
 
 from virtspec_mi.cli.files import add_file_commands, colour, compare, plot
 from virtspec_mi.cli.flags import COMMON_FLAGS, Flag, option_flags
-from virtspec_mi.cli.measuring import Measuring, common_flags, measuring, measuring_flags, respond, unrecognized_hint
+from virtspec_mi.cli.measuring import (Measuring, common_flags, measuring_commands, measuring_flags, respond,
+                                      unrecognized_hint)
 from virtspec_mi.cli.tables import add_table_command, albedo_table
 
-__all__ = ["main", "build_parser", "Measuring", "MEASURING", "measuring", "Flag", "COMMON_FLAGS", "common_flags",
-           "option_flags"]
+__all__ = ["main", "build_parser", "Measuring", "MEASURING", "measuring_commands", "Flag", "COMMON_FLAGS",
+           "common_flags", "option_flags"]
 
 
 _EXAMPLES = {
@@ -88,7 +89,7 @@ _EXAMPLES = {
 
 def __getattr__(name: str) -> Any:
     if name == "MEASURING":  # the table, generated from the registry when first asked for
-        return measuring()
+        return measuring_commands()
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
@@ -130,7 +131,7 @@ def build_parser() -> argparse.ArgumentParser:
     bounds.add_argument("--delta", type=float, nargs="+", default=[0.001, 0.01, 0.1],
                         help="failure probabilities (default 0.001 0.01 0.1)")
 
-    for row in measuring().values():
+    for row in measuring_commands().values():
         measuring_flags(command(row.name, row.command.summary, row.command.description,
                                 "examples:\n" + "\n".join(f"  {line}" for line in row.command.examples)), row)
     add_file_commands(command)
@@ -202,7 +203,7 @@ def _command(args: argparse.Namespace, exit_status: Any) -> int:
         handlers = {"colour": colour, "compare": compare, "plot": plot, "albedo-table": albedo_table}
         if args.command in handlers:
             return handlers[args.command](args)
-        return respond(args, measuring()[args.command])
+        return respond(args, measuring_commands()[args.command])
     except KeyboardInterrupt as stop:  # Ctrl-C (SIGINT) or SIGTERM: virtspec_mi.engine.interrupts.Interrupted
         return _interrupted(stop, args, exit_status)
     except Exception as error:

@@ -1,5 +1,6 @@
 """``python -m virtspec_mi.cli``: as ``python -m virtspec_mi`` (:func:`virtspec_mi.__main__.run`)."""
 
-import runpy
+if __name__ == "__main__":
+    import runpy
 
-runpy.run_module("virtspec_mi", run_name="__main__")
+    runpy.run_module("virtspec_mi", run_name="__main__")

@@ -1,6 +1,6 @@
 """
 The flags of the command line, defined once: the common flags and the one flag builder
-====================================================================================
+======================================================================================
 
 :data:`COMMON_FLAGS` are the flags every measuring subcommand takes (added by
 :func:`virtspec_mi.cli.measuring.common_flags`); :func:`option_flags` makes one flag per

@@ -24,7 +24,7 @@ from typing import Any, Callable, Iterator, Sequence
 
 from virtspec_mi.cli.flags import COMMON_FLAGS, SEVERAL, dest, flag_of, flagged, given, option_flags, pairs, settings_options
 
-__all__ = ["Measuring", "measuring", "OTHER_COMMANDS", "common_flags", "measuring_flags", "respond", "Session",
+__all__ = ["Measuring", "measuring_commands", "OTHER_COMMANDS", "common_flags", "measuring_flags", "respond", "Session",
            "one_angle", "unrecognized_hint", "report", "run", "drawn", "keywords_of"]
 
 
@@ -54,7 +54,7 @@ class Measuring:
         return self.command.one_reading
 
 
-def measuring() -> dict[str, Measuring]:
+def measuring_commands() -> dict[str, Measuring]:
     """
     The measuring subcommands, generated from the registry: one per
     :class:`~virtspec_mi.instruments.command.Command` of every instrument
@@ -129,7 +129,7 @@ def one_angle(name: str) -> str:
     of the same instrument that takes several (``measure`` → ``sweep``), if any.
     """
 
-    rows = measuring()
+    rows = measuring_commands()
     row = rows.get(name)
     if row is None or not row.one_reading:
         return ""

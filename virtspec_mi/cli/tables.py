@@ -1,6 +1,6 @@
 """
 ``virtspec albedo-table``: certified directional-albedo tables and engines' drop-in files
-========================================================================================
+=========================================================================================
 
 The flags of :func:`virtspec_mi.exchange.albedo.albedo_table` and of an engine's
 channels (:func:`virtspec_mi.exchange.engine_tables.engine_tables`, ``--audit``).

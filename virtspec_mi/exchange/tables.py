@@ -1,6 +1,6 @@
 """
 Certified directional-albedo tables: :class:`AlbedoTable`, its files and its comparison
-======================================================================================
+=======================================================================================
 
 A table of E(μ, α[, η]) (and E_avg) measured by :func:`virtspec_mi.exchange.albedo.albedo_table`:
 its exact counts per cell, the certificate they give (each value within ε, the whole table

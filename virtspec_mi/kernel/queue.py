@@ -1,6 +1,6 @@
 """
 How the kernel queues a random-walk specimen's rays: :class:`WalkQueue` and :func:`walk_plan`
-============================================================================================
+=============================================================================================
 
 A walk specimen's rays are run by lanes that each work through a queue of the chunk's
 rays (:meth:`virtspec_mi.kernel.tracer._Kernel.walk`): how many lanes, how a lane picks

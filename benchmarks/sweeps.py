@@ -93,7 +93,7 @@ def csv_grid(repeats: int) -> dict:
 
     from virtspec_mi.kernel.counts import Counts
     from virtspec_mi.geometry.disks import InstrumentGeometry
-    from virtspec_mi.results.hemispherical import Result
+    from virtspec_mi.results.readings import Result
     from virtspec_mi.results.io import csv_text
     from virtspec_mi.settings import Settings
 

@@ -233,7 +233,7 @@ def gonio(scale: int) -> list[list[str]]:
 
     vm.mitsuba()
     from virtspec_mi.engine.plan import kernel_options
-    from virtspec_mi.geometry.bins import make_bins
+    from virtspec_mi.instruments.goniophotometer.bins import make_bins
     from virtspec_mi.kernel.tracer import ReadingPlan, WalkQueue, tally_readings
     from virtspec_mi.scene import find_bench
     from virtspec_mi.settings import Settings

@@ -11,7 +11,7 @@ from dataclasses import replace
 import numpy as np
 
 import virtspec_mi as vm
-from virtspec_mi.geometry.bins import make_bins
+from virtspec_mi.instruments.goniophotometer.bins import make_bins
 from virtspec_mi.kernel.counts import Counts
 
 WAVELENGTHS = [400.0, 550.0, 700.0]

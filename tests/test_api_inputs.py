@@ -17,7 +17,7 @@ import pytest
 
 import virtspec_mi as vm
 from virtspec_mi.cli import main
-from virtspec_mi.geometry.sphere import Baffle, Port, Sphere
+from virtspec_mi.instruments.sphere.geometry import Baffle, Port, Sphere
 from virtspec_mi.instruments.goniophotometer import GonioOptions
 
 SPHERE_XML = os.path.join(os.path.dirname(__file__), "..", "scenes", "sphere_150mm_8d.xml")

@@ -331,8 +331,30 @@ def _in(module: str, prefixes: tuple[str, ...]) -> bool:
                for p in prefixes)
 
 
+INSTRUMENT_PARTS: dict[str, str] = {
+    "walk": "kernel", "hook": "kernel",
+    "geometry": "budgets/geometry/references", "bins": "budgets/geometry/references",
+    "model": "budgets/geometry/references", "theory": "budgets/geometry/references",
+    "result": "results", "plot": "results",
+    "integrator": "adapter",
+}
+"""
+The layer of each part of an instrument's folder (``virtspec_mi.instruments.<name>.<part>``),
+by the part's module name: its kernel-side exit hook (``walk``/``hook``: the kernel layer,
+importing only ``virtspec_mi.kernel``), its geometry, bins and physics references, its result
+and plots, its integrator; the folder's ``__init__`` (the instrument) is in the instruments layer.
+"""
+
+
 def layer_of(module: str) -> int | None:
-    """Index into :data:`LAYERS` (0 = top) of the most specific matching prefix, or None."""
+    """
+    Index into :data:`LAYERS` (0 = top) of the most specific matching prefix, or None; a
+    part of an instrument's folder by :data:`INSTRUMENT_PARTS`.
+    """
+
+    parts = module.split(".")
+    if len(parts) == 4 and parts[:2] == ["virtspec_mi", "instruments"] and parts[3] in INSTRUMENT_PARTS:
+        return [name for name, _ in LAYERS].index(INSTRUMENT_PARTS[parts[3]])
 
     best: tuple[int, int] | None = None  # (prefix length, layer)
     for i, (_, prefixes) in enumerate(LAYERS):
@@ -472,11 +494,16 @@ class C:
 
 
 def test_the_kernel_imports_nothing_above_it(project_graph):
-    """The kernel takes plain values: no module of ``virtspec_mi.kernel`` imports a package module outside it."""
+    """
+    The kernel takes plain values: no module of ``virtspec_mi.kernel``, nor an instrument's
+    kernel-side exit hook, imports a package module outside ``virtspec_mi.kernel``.
+    """
 
     graph, sites = project_graph
-    kernel = [name for name in graph if name == "virtspec_mi.kernel" or name.startswith("virtspec_mi.kernel.")]
-    assert {"virtspec_mi.kernel.tracer", "virtspec_mi.kernel.sphere_walk", "virtspec_mi.kernel.bins"} <= set(kernel)
+    bottom = [name for name, _ in LAYERS].index("kernel")
+    kernel = [name for name in graph if layer_of(name) == bottom]
+    assert {"virtspec_mi.kernel.tracer", "virtspec_mi.instruments.sphere.walk",
+            "virtspec_mi.instruments.goniophotometer.hook"} <= set(kernel)
     outside = sorted(f"{a} -> {b}  ({', '.join(f'{p}:{line}' for p, line in sites.get((a, b), []))})"
                      for a in kernel for b in graph[a]
                      if not (b == "virtspec_mi.kernel" or b.startswith("virtspec_mi.kernel.")))

@@ -285,8 +285,8 @@ SPHERE = mostly_valid(VALID_SPHERE, ODD_SPHERE)
 @settings(PROFILE, max_examples=40)
 @given(spec=SPHERE)
 def test_a_sphere_gives_readings_whose_fates_add_up_or_names_what_is_wrong(spec):
-    from virtspec_mi.geometry.sphere import Port, Sphere
-    from virtspec_mi.kernel.sphere_walk import FATES
+    from virtspec_mi.instruments.sphere.geometry import Port, Sphere
+    from virtspec_mi.instruments.sphere.walk import FATES
 
     geometry = {name: spec.pop(name) for name in list(spec) if name in ODD_SPHERE and name not in (
         "standard", "max_bounces", "specular", "measurement", "method")}

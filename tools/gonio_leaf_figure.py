@@ -5,7 +5,7 @@ beam at θi = 0, 30, 60°, 551 nm, 2 × 9 θo bins × 12 folded φo bins (K = 21
 the union bound at μ = 0.01, δ = 0.01 (53,368 rays per reading), seed 0 — the manual's
 reading. ``gonio_leaf.png`` is ``GonioResult.plot`` (polar, log scale: f in the plane of
 incidence and across it with the certified band); ``gonio_leaf_series.png`` is
-:func:`virtspec_mi.results.angular_plot.plot_series` (the distribution over θi as a series). The
+:func:`virtspec_mi.instruments.goniophotometer.plot.plot_series` (the distribution over θi as a series). The
 reading's summary is printed.
 
 Run: VIRTSPEC_LEAF_DATA=DIR python tools/gonio_leaf_figure.py [--out-dir docs/figures], DIR holding the
@@ -18,7 +18,7 @@ import argparse
 from pathlib import Path
 
 import virtspec_mi as vm
-from virtspec_mi.results.angular_plot import plot_series
+from virtspec_mi.instruments.goniophotometer.plot import plot_series
 
 ROOT = Path(__file__).resolve().parents[1]
 

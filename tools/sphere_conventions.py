@@ -1,5 +1,5 @@
 """
-Print the manual's port-fraction convention table (docs/guide/sphere.md) (``virtspec_mi.references.sphere_theory``).
+Print the manual's port-fraction convention table (docs/guide/sphere.md) (``virtspec_mi.instruments.sphere.theory``).
 
 Grid: wall reflectance ρw ∈ {0.90, 0.95, 0.98, 0.99} × port fraction f ∈ {1 %, 5 %, 10 %},
 where the sphere has three ports (entrance, sample, detector) whose exact cap fraction is
@@ -15,13 +15,13 @@ A second table gives the single-beam substitution error and the comparison metho
 residual for grey Lambertian specimens (SCE, standard 0.99) on two illustrative spheres
 (:data:`EXAMPLE_SPHERES`; dimensions for illustration, not a particular instrument).
 
-The manual's tables (docs/guide/sphere.md) must equal this script's output (``tests/references/test_sphere_theory.py``).
+The manual's tables (docs/guide/sphere.md) must equal this script's output (``tests/instruments/sphere/test_sphere_theory.py``).
 Run: ``.venv/bin/python tools/sphere_conventions.py``.
 """
 
 from __future__ import annotations
 
-from virtspec_mi.references import sphere_theory as st
+from virtspec_mi.instruments.sphere import theory as st
 
 WALL_REFLECTANCES = (0.90, 0.95, 0.98, 0.99)
 PORT_FRACTIONS = (0.01, 0.05, 0.10)

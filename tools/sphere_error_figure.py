@@ -3,8 +3,8 @@ The figure docs/figures/sphere_error.png: the instrument error (reading − hemi
 the same rays) of the shipped spheres against the reflectance of a grey Lambertian sample,
 single-beam substitution and (150 mm sphere) comparison method, with each reading's
 certified interval (105,967 rays per configuration, δ = 0.01), and the sphere theory's
-curve for the same sphere (``virtspec_mi.references.sphere_theory.instrument_reading`` with the
-inputs of ``virtspec_mi.references.sphere_model.theory_inputs``: flat model, exact cap fractions;
+curve for the same sphere (``virtspec_mi.instruments.sphere.theory.instrument_reading`` with the
+inputs of ``virtspec_mi.instruments.sphere.model.theory_inputs``: flat model, exact cap fractions;
 the theory models no baffle, the 150 mm sphere has one).
 
 Run: python tools/sphere_error_figure.py [--rays N] [--out docs/figures/sphere_error.png]
@@ -19,7 +19,7 @@ from pathlib import Path
 import numpy as np
 
 import virtspec_mi as vm
-from virtspec_mi.references import sphere_theory as st
+from virtspec_mi.instruments.sphere import theory as st
 
 ROOT = Path(__file__).resolve().parents[1]
 SCENES = {"150 mm, 8°/d (SCI)": "scenes/sphere_150mm_8d.xml", "60 mm leaf sphere": "scenes/sphere_leaf_60mm.xml"}

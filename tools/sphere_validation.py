@@ -1,11 +1,11 @@
 """
-Print the manual's sphere validation tables (docs/guide/sphere.md): the simulation against ``virtspec_mi.references.sphere_theory``
-(through the one mapping, ``virtspec_mi.references.sphere_model.theory_inputs``) and the correction of
+Print the manual's sphere validation tables (docs/guide/sphere.md): the simulation against ``virtspec_mi.instruments.sphere.theory``
+(through the one mapping, ``virtspec_mi.instruments.sphere.model.theory_inputs``) and the correction of
 instrument readings. The manual's tables (docs/guide/sphere.md) must equal this script's output
-(``tests/references/test_sphere_model.py``, a slow test). The same cases are asserted, one by one,
-by ``tests/kernel/test_sphere_walk.py`` and ``tests/references/test_sphere_model.py``.
+(``tests/instruments/sphere/test_sphere_model.py``, a slow test). The same cases are asserted, one by one,
+by ``tests/instruments/sphere/test_sphere_walk.py`` and ``tests/instruments/sphere/test_sphere_model.py``.
 
-1. The ideal sphere (``tests/kernel/test_sphere_walk.py``'s grid): 150 mm, three ports
+1. The ideal sphere (``tests/instruments/sphere/test_sphere_walk.py``'s grid): 150 mm, three ports
    (sample, entrance, detector) of cap fraction f each, a 0.5 grey Lambertian lit by a
    conical beam, N = 105,967 rays: the detector fraction simulated, against the flat
    model (exact cap fractions, the simulation's geometry), the cap model with cap
@@ -29,12 +29,12 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 
 import virtspec_mi as vm  # noqa: E402
-from virtspec_mi.references import sphere_theory as st  # noqa: E402
+from virtspec_mi.instruments.sphere import theory as st  # noqa: E402
 from virtspec_mi.budgets.bounds import hoeffding_mu  # noqa: E402
 from virtspec_mi.settings import Settings  # noqa: E402
-from virtspec_mi.geometry.sphere import Port, Sphere  # noqa: E402
+from virtspec_mi.instruments.sphere.geometry import Port, Sphere  # noqa: E402
 from virtspec_mi.instruments.sphere import SphereOptions  # noqa: E402
-from virtspec_mi.references.sphere_model import theory_inputs  # noqa: E402
+from virtspec_mi.instruments.sphere.model import theory_inputs  # noqa: E402
 
 RAYS, DELTA = 105_967, 1e-3
 LAB, LEAF = ROOT / "scenes/sphere_150mm_8d.xml", ROOT / "scenes/sphere_leaf_60mm.xml"
@@ -50,7 +50,7 @@ def ideal_table() -> str:
     """Table 1: the ideal sphere's detector fraction, simulated and in three models."""
 
     from virtspec_mi.engine.plan import kernel_options
-    from virtspec_mi.kernel.sphere_walk import SPECIMEN, Holder, holder_frame
+    from virtspec_mi.instruments.sphere.walk import SPECIMEN, Holder, holder_frame
     from virtspec_mi.kernel.tracer import ReadingPlan, tally_readings
     from virtspec_mi.scene import find_bench
 

@@ -5,7 +5,7 @@ The measurement API: :func:`measure`, :func:`sweep`, :func:`gonio`, :func:`spher
 :func:`measure` takes a scene (XML path, dict or ``mi.Scene``), resolves the settings
 (explicit keywords, then the scene's ``spectrophotometer`` integrator, then the
 defaults of :class:`~virtspec_mi.settings.Settings`), sizes each reading with the ray
-budget and returns a :class:`~virtspec_mi.results.hemispherical.Result` with the dim ``wavelength``:
+budget and returns a :class:`~virtspec_mi.results.readings.Result` with the dim ``wavelength``:
 reflectance ρ = m/N (eq. 2), transmittance τ and absorptance α = 1 − ρ − τ per
 wavelength, with the exact counts behind them and the certificate they give.
 
@@ -56,10 +56,10 @@ from virtspec_mi.instruments import INSTRUMENTS
 from virtspec_mi.instruments import base as instruments_base
 from virtspec_mi.instruments.goniophotometer import GonioOptions
 from virtspec_mi.instruments.sphere import SphereOptions
-from virtspec_mi.results.goniophotometer import GonioResult
-from virtspec_mi.results.hemispherical import Result, fluctuation
+from virtspec_mi.instruments.goniophotometer.result import GonioResult
+from virtspec_mi.results.readings import Result, fluctuation
 from virtspec_mi.results.io import check_output
-from virtspec_mi.results.sphere import SphereResult
+from virtspec_mi.instruments.sphere.result import SphereResult
 from virtspec_mi.results.zarr import SUFFIX as ZARR_SUFFIX
 from virtspec_mi.results.zarr import ZarrTable
 from virtspec_mi.scene import find_bench, scene_fingerprint, scene_source
@@ -72,7 +72,7 @@ __all__ = ["measure", "sweep", "gonio", "read_result", "read_gonio", "fluctuatio
 def measure(scene: Any, *, parameters: dict[str, Any] | None = None, defines: dict[str, Any] | None = None,
             progress: bool | None = None, target: Any = None, **settings: Any) -> Any:
     """
-    Measure the specimen of ``scene`` and return a certified :class:`~virtspec_mi.results.hemispherical.Result`
+    Measure the specimen of ``scene`` and return a certified :class:`~virtspec_mi.results.readings.Result`
     over wavelength (θi a scalar label).
 
     Parameters
@@ -393,7 +393,7 @@ def gonio(scene: Any, *, theta_i: Any = None, parameters: dict[str, Any] | None 
     A certified goniophotometer reading of ``scene``: the spectrophotometer's readings
     over every (wavelength, θi, specimen parameter point), with every escaping ray also
     binned by its outgoing direction (θo, φo) in the specimen frame
-    (:class:`~virtspec_mi.results.goniophotometer.GonioResult`), keyed as a sweep's:
+    (:class:`~virtspec_mi.instruments.goniophotometer.result.GonioResult`), keyed as a sweep's:
     reading k traces the global rays [k·N, k·N + N) (counts depend on (seed, k) only), so
     it resumes from a checkpoint and runs on Dask workers with the same counts.
 
@@ -456,7 +456,7 @@ def sphere_measure(scene: Any, *, theta_i: Any = None, parameters: dict[str, Any
                    task_readings: int | None = None, **settings: Any) -> SphereResult:
     """
     Read the specimen of ``scene`` as a physical integrating sphere would: a
-    :class:`~virtspec_mi.results.sphere.SphereResult` over wavelength (and θi and specimen
+    :class:`~virtspec_mi.instruments.sphere.result.SphereResult` over wavelength (and θi and specimen
     parameters when several are given): the reading ρ_std·p_sample/p_standard with its
     certified interval, the hemispherical reading of the same rays, the instrument error,
     every count of both configurations. Keyed as a sweep's (reading k of a configuration
@@ -474,7 +474,7 @@ def sphere_measure(scene: Any, *, theta_i: Any = None, parameters: dict[str, Any
         Any setting of :class:`~virtspec_mi.settings.Settings` and any option of
         :class:`~virtspec_mi.instruments.sphere.SphereOptions` (``measurement``,
         ``specular``, ``method``, ``standard``, ``max_bounces``, and ``sphere``: a
-        :class:`~virtspec_mi.geometry.sphere.Sphere` that overrides the scene's); ``None``
+        :class:`~virtspec_mi.instruments.sphere.geometry.Sphere` that overrides the scene's); ``None``
         keeps the scene's value. ``bound="two-stage"`` sizes each configuration's reading
         from its pilot's detector fraction (each at δ/2).
 

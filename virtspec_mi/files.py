@@ -51,7 +51,7 @@ class WriteError(OSError):
     """
     A file could not be written: ``path``, ``cause`` (in words) and, when known, where
     the readings being written are kept (``kept``) and the object that was being written
-    (``result``: e.g. the :class:`~virtspec_mi.results.hemispherical.Result` whose file
+    (``result``: e.g. the :class:`~virtspec_mi.results.readings.Result` whose file
     failed, still whole in memory). ``errno`` is the cause's (e.g. ``errno.ENOSPC``).
     """
 

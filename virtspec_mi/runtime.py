@@ -28,8 +28,10 @@ name                    kind         module (under :mod:`virtspec_mi.plugins`)
 ``microfacet``          BSDF         :mod:`.bsdfs.microfacet` (the engines' albedo models)
 ``prospect_d``          BSDF         :mod:`.bsdfs.prospect_d` (model: :mod:`.bsdfs.prospect_model`)
 ``spectrophotometer``   integrator   :mod:`.integrators.spectrophotometer`
-``integrating_sphere``  integrator   :mod:`.integrators.integrating_sphere`
 ======================  ===========  ===============================================
+
+and the integrators the instruments declare (:attr:`~virtspec_mi.instruments.base.Instrument.integrators`,
+e.g. the integrating sphere's ``integrating_sphere``), registered with them.
 """
 
 from __future__ import annotations
@@ -52,10 +54,8 @@ PLUGINS: dict[str, tuple[str, str, str]] = {
     "microfacet": ("bsdf", "virtspec_mi.plugins.bsdfs.microfacet", "Microfacet"),
     "prospect_d": ("bsdf", "virtspec_mi.plugins.bsdfs.prospect_d", "ProspectD"),
     "spectrophotometer": ("integrator", "virtspec_mi.plugins.integrators.spectrophotometer", "Spectrophotometer"),
-    "integrating_sphere": ("integrator", "virtspec_mi.plugins.integrators.integrating_sphere",
-                           "IntegratingSphereIntegrator"),
 }
-"""Every plugin of the project: Mitsuba name → (kind, module, class)."""
+"""The project's plugins beside the instruments: Mitsuba name → (kind, module, class)."""
 
 _registered: set[str] = set()
 
@@ -98,13 +98,20 @@ def mitsuba() -> ModuleType:
 
 
 def register() -> None:
-    """Register every plugin of :data:`PLUGINS` under the current Mitsuba variant."""
+    """
+    Register every plugin of :data:`PLUGINS`, and every integrator an instrument of the
+    registry declares (``"module:Class"``), under the current Mitsuba variant.
+    """
 
     import importlib
 
     import mitsuba as mi
 
+    from virtspec_mi.instruments import INSTRUMENTS
+
+    declared = {name: ("integrator", *target.split(":")) for instrument in INSTRUMENTS.values()
+                for name, target in instrument.integrators.items()}
     registrars = {"bsdf": mi.register_bsdf, "integrator": mi.register_integrator}
-    for name, (kind, module, cls) in PLUGINS.items():
+    for name, (kind, module, cls) in {**PLUGINS, **declared}.items():
         plugin = getattr(importlib.import_module(module), cls)
         registrars[kind](name, lambda props, plugin=plugin: plugin(props))

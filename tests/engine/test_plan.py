@@ -19,8 +19,8 @@ from virtspec_mi.engine.checkpoint import CheckpointError
 from virtspec_mi.engine.plan import Columns, Plan
 from virtspec_mi.engine.readings import run, take_keyed_readings
 from virtspec_mi.engine.tally import Tally
-from virtspec_mi.geometry.bins import make_bins
-from virtspec_mi.kernel.sphere_walk import SphereFate
+from virtspec_mi.instruments.goniophotometer.bins import make_bins
+from virtspec_mi.instruments.sphere.walk import SphereFate
 from virtspec_mi.scene import find_bench
 from virtspec_mi.settings import Settings
 
@@ -48,7 +48,7 @@ def sphere(mi):
     """The shipped 8/d sphere: its bench, the two configurations' layouts and settings."""
 
     from virtspec_mi.instruments.sphere import configurations
-    from virtspec_mi.results.sphere import CONFIGURATIONS
+    from virtspec_mi.instruments.sphere.result import CONFIGURATIONS
 
     scene = mi.load_file(SPHERE)
     integrator = scene.integrator()

@@ -58,7 +58,7 @@ def test_prestart_counts_as_one_loop_per_ray(mi, case):
     """Bit-identical counts and bins: starts computed in the refill or before the loop, any chunk size."""
 
     from virtspec_mi.engine.plan import kernel_options
-    from virtspec_mi.geometry.bins import make_bins
+    from virtspec_mi.instruments.goniophotometer.bins import make_bins
     from virtspec_mi.kernel.tracer import ReadingPlan, WalkQueue, tally_readings
     from virtspec_mi.scene import find_bench
     from virtspec_mi.settings import Settings

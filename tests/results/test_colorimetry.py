@@ -21,7 +21,7 @@ def _sweep_of(values, wavelengths, **kwargs):
 
     from virtspec_mi.kernel.counts import Counts
     from virtspec_mi.geometry.disks import InstrumentGeometry
-    from virtspec_mi.results.hemispherical import Result
+    from virtspec_mi.results.readings import Result
     from virtspec_mi.settings import Settings
 
     shape = (len(wavelengths), 1)

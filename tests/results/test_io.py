@@ -83,7 +83,7 @@ def _grid_result(n_lam: int, n_theta: int, seed: int = 0):
     from dataclasses import replace
 
     from virtspec_mi.kernel.counts import Counts
-    from virtspec_mi.results.hemispherical import Result
+    from virtspec_mi.results.readings import Result
     from virtspec_mi.settings import Settings
 
     rng = np.random.default_rng(seed)

@@ -217,7 +217,7 @@ def gonio(mi):
 
 
 def test_the_polar_radial_labels_lie_on_the_horizon_clear_of_every_curve(gonio):
-    from virtspec_mi.results.angular_plot import HORIZON, plot_polar
+    from virtspec_mi.instruments.goniophotometer.plot import HORIZON, plot_polar
 
     for log in (False, True):
         for axes in plot_polar(gonio, log=log).axes:
@@ -233,7 +233,7 @@ def test_the_polar_plots_are_large_and_their_labels_do_not_collide(gonio, tmp_pa
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from PIL import Image
 
-    from virtspec_mi.results.angular_plot import plot_polar
+    from virtspec_mi.instruments.goniophotometer.plot import plot_polar
 
     figure = plot_polar(gonio, tmp_path / "polar.png", name="soybean_abmb")
     assert Image.open(tmp_path / "polar.png").size[0] >= 1100  # was 691 x 345 px
@@ -289,7 +289,7 @@ def test_no_figure_clips_a_title(angular, gonio):
     from result_kinds import sphere_grid
 
     from virtspec_mi.comparison import compare
-    from virtspec_mi.results.angular_plot import plot_hemisphere, plot_polar, plot_series
+    from virtspec_mi.instruments.goniophotometer.plot import plot_hemisphere, plot_polar, plot_series
 
     wavelengths = np.arange(400, 701, 10)
     sweep = grid_result(np.linspace(0.1, 0.5, 31 * 3), wavelengths, [0, 30, 60])

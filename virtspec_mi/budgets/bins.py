@@ -3,7 +3,7 @@ Certificates of a goniophotometer reading: CDFs, bin fractions, BRDF values
 ===========================================================================
 
 A goniophotometer reading of N rays tallies the escaping rays in K direction bins
-(:mod:`virtspec_mi.geometry.bins`): m_k rays in bin k, an estimate m_k/N of the bin's
+(:mod:`virtspec_mi.instruments.goniophotometer.bins`): m_k rays in bin k, an estimate m_k/N of the bin's
 probability p_k and f_k = (m_k/N)/Ω_k of its mean BRDF/BTDF (Ω_k = ∫_bin |cos θo| dωo).
 The paper (Baranoski et al. 2001, Sect. 6) names the ray-density analysis of such
 *spatial* readings as future work; the certificates below are derived here. Every
@@ -64,7 +64,7 @@ floor are validated where they enter (the goniophotometer's options,
 
 A printed certificate is what the spent rays give: the μ (or ε) for the reading's N,
 rounded up; a reading whose R/T are not certified (weight violations, capped walks,
-invalid directions: :attr:`virtspec_mi.results.hemispherical.Result.certified`) carries none, and a
+invalid directions: :attr:`virtspec_mi.results.readings.Result.certified`) carries none, and a
 bound ≥ 1 (too few rays) certifies nothing; both say "not certified". Rounded BSDF
 weights add their bias (rounded_weights·ε_w/N) to μ, as for R and T.
 

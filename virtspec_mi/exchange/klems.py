@@ -414,7 +414,7 @@ def klems_from_gonio(front: Any, back: Any = None, basis: str = "full", isotropi
     Parameters
     ----------
     front, back
-        :class:`~virtspec_mi.results.goniophotometer.GonioResult` of the front (and, optionally, of the
+        :class:`~virtspec_mi.instruments.goniophotometer.result.GonioResult` of the front (and, optionally, of the
         back) side: θi must include every ring centre of the basis, θo edges every ring
         bound in both hemispheres, φo a uniform grid with every patch boundary on an edge
         (:meth:`KlemsBasis.phi_bins`), not folded. A reading holds one φi: its rings'

@@ -3,8 +3,9 @@ Geometry descriptions
 =====================
 
 Plain descriptions, checked when built and computed on the host with NumPy: the
-emitter and specimen disks and the incidence frame (:mod:`.disks`), the
-goniophotometer's bins of outgoing directions (:mod:`.bins`) and the integrating
-sphere with its ports and baffle (:mod:`.sphere`). The kernel receives arrays derived
-from them.
+emitter and specimen disks and the incidence frame (:mod:`.disks`), which every
+instrument shares. An instrument's own geometry lives in its folder (the
+goniophotometer's bins: :mod:`virtspec_mi.instruments.goniophotometer.bins`; the
+integrating sphere: :mod:`virtspec_mi.instruments.sphere.geometry`). The kernel receives
+arrays derived from them.
 """

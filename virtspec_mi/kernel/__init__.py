@@ -17,7 +17,8 @@ that one.
 - :mod:`~virtspec_mi.kernel.tracer` — the ray kernel itself: rays → specimen BSDF →
   fate → exact integer counts, with an optional exit hook (driven by
   :mod:`virtspec_mi.engine.readings`);
-- :mod:`~virtspec_mi.kernel.hooks` — the exit-hook protocol;
-  :mod:`~virtspec_mi.kernel.bins` — the goniophotometer's bins;
-  :mod:`~virtspec_mi.kernel.sphere_walk` — the integrating sphere's walk.
+- :mod:`~virtspec_mi.kernel.hooks` — the exit-hook protocol. An instrument's own hook
+  lives in its folder and imports only this package
+  (:mod:`virtspec_mi.instruments.goniophotometer.hook`, the goniophotometer's bins;
+  :mod:`virtspec_mi.instruments.sphere.walk`, the integrating sphere's walk).
 """

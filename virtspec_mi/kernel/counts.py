@@ -5,7 +5,7 @@ Exact ray counts by name: the fates and the counts record
 Every ray of a reading has one :class:`Fate`; a reading's counts are exact integers
 (``int64``) held by name in :class:`Counts` — never columns by position. The kernel
 produces them (:mod:`virtspec_mi.kernel.tracer`), the engine sums and reshapes them and
-the result (:mod:`virtspec_mi.results.hemispherical`) derives every quantity from them.
+the result (:mod:`virtspec_mi.results.readings`) derives every quantity from them.
 
 References
 ----------

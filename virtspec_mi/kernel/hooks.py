@@ -15,10 +15,10 @@ A hook is one of two kinds (:attr:`ExitHook.needs_rays`):
 - ``False``: a per-ray function of the ray's outgoing direction, fate and its reading's
   φi (:meth:`ExitHook.bin`), compiled into the ray kernel itself — and, for a random-walk
   specimen on queued lanes, run when each ray's walk ends
-  (:class:`virtspec_mi.kernel.bins.BinLayout`, the goniophotometer's bins);
+  (:class:`virtspec_mi.instruments.goniophotometer.hook.BinLayout`, the goniophotometer's bins);
 - ``True``: the kernel traces every ray's first interaction on its own lane (no queued
   walk) and hands the hook those lanes (:class:`ChunkRays`); the hook continues them
-  (:meth:`ExitHook.exits`: :class:`virtspec_mi.kernel.sphere_walk.SphereLayout`, the
+  (:meth:`ExitHook.exits`: :class:`virtspec_mi.instruments.sphere.walk.SphereLayout`, the
   integrating sphere's walk).
 
 A fourth instrument plugs in a new hook type with the same members.

@@ -45,11 +45,11 @@ Conventions
 - One tally path with an optional **exit hook** (:mod:`virtspec_mi.kernel.hooks`): a
   call with a hook also gives every ray a bin code in [0, K) (K: not binned), tallied per
   reading into an exact ``int64`` histogram of K bins, and per-ray values summed per
-  reading. A goniophotometer's :class:`~virtspec_mi.kernel.bins.BinLayout` bins every
+  reading. A goniophotometer's :class:`~virtspec_mi.instruments.goniophotometer.hook.BinLayout` bins every
   reflected or transmitted ray by its outgoing direction in the same fused kernel (a
   random walk on queued lanes: when its walk ends, the bin kept in the ray's slot and
   tallied after the walk loop); an integrating sphere's
-  :class:`~virtspec_mi.kernel.sphere_walk.SphereLayout` continues every ray's first
+  :class:`~virtspec_mi.instruments.sphere.walk.SphereLayout` continues every ray's first
   interaction through the sphere. Without a hook none of this is compiled: the plain
   kernel and its counts are unchanged.
 - The kernel takes plain values (the bench, the readings, seed, chunk size, beam,

@@ -4,7 +4,7 @@ Independent references
 
 Code that checks the instrument, kept apart from the code it checks: NumPy quadrature
 of Fresnel and microfacet models (:mod:`.quadrature`), the slab walk and exact clear
-slabs (:mod:`.slab`), BSDF tables of known models (:mod:`.analytic_tables`), and the
-integrating-sphere theory (:mod:`.sphere_theory`, with its inputs from a sphere
-description: :mod:`.sphere_model`). None of it traces a ray through the instrument.
+slabs (:mod:`.slab`) and BSDF tables of known models (:mod:`.analytic_tables`). None of
+it traces a ray through the instrument. An instrument's own physics references live in
+its folder (the integrating sphere's theory: :mod:`virtspec_mi.instruments.sphere.theory`).
 """

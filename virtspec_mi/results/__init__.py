@@ -3,9 +3,11 @@ Results
 =======
 
 What the instruments return, and what is derived from it: one family of result kinds
-(:mod:`.base`: labels, ``sel`` / ``isel``, files, spectra) — hemispherical readings
-(:mod:`.hemispherical`), goniophotometer readings (:mod:`.goniophotometer`), integrating
-sphere readings (:mod:`.sphere`) — read back by their format tags (:mod:`.kinds`,
-:mod:`.formats`); files (:mod:`.io`, :mod:`.zarr`), colour-science spectra
-(:mod:`.colorimetry`) and plots (:mod:`.plot`, :mod:`.angular_plot`).
+(:mod:`.base`: labels, ``sel`` / ``isel``, files, spectra) and the readings result every
+counting instrument returns or extends (:mod:`.readings`: reflectance and transmittance
+per reading), read back by their format tags (:mod:`.kinds`, :mod:`.formats`); files
+(:mod:`.io`, :mod:`.zarr`), colour-science spectra (:mod:`.colorimetry`) and plots
+(:mod:`.plot`). An instrument's own result kind lives in its folder
+(``virtspec_mi.instruments.<name>.result``) and registers itself in
+:data:`~virtspec_mi.results.base.KINDS`.
 """

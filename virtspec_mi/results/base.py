@@ -2,9 +2,9 @@
 The result family: :class:`ResultBase`
 ======================================
 
-Every result kind — the hemispherical reading (:class:`~virtspec_mi.results.hemispherical.Result`),
-the goniophotometer reading (:class:`~virtspec_mi.results.goniophotometer.GonioResult`) and the
-integrating-sphere reading (:class:`~virtspec_mi.results.sphere.SphereResult`) — is an
+Every result kind — the hemispherical reading (:class:`~virtspec_mi.results.readings.Result`),
+the goniophotometer reading (:class:`~virtspec_mi.instruments.goniophotometer.result.GonioResult`) and the
+integrating-sphere reading (:class:`~virtspec_mi.instruments.sphere.result.SphereResult`) — is an
 immutable set of exact counts over labelled dimensions (xarray conventions) with
 everything else derived from them. This module holds what they share, written once:
 

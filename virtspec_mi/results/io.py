@@ -3,7 +3,7 @@ Result files: NetCDF, CSV and JSON, and colour-science CSV spectra
 ==================================================================
 
 The file formats of every result kind (:class:`~virtspec_mi.results.base.ResultBase`: a
-:class:`~virtspec_mi.results.hemispherical.Result`, a goniophotometer or a sphere
+:class:`~virtspec_mi.results.readings.Result`, a goniophotometer or a sphere
 reading; each builds its dataset and its plain data, and carries its format tag; this
 module only writes and reads them, by suffix):
 

@@ -4,10 +4,10 @@ Every result kind, by its format tag: :func:`read_result`
 
 The result kinds (:data:`virtspec_mi.results.base.KINDS`: every class that declares a
 format tag registers itself there when defined — hemispherical
-(:class:`~virtspec_mi.results.hemispherical.Result`, format ``"virtspec-mi result 1"``),
-goniophotometer (:class:`~virtspec_mi.results.goniophotometer.GonioResult`,
+(:class:`~virtspec_mi.results.readings.Result`, format ``"virtspec-mi result 1"``),
+goniophotometer (:class:`~virtspec_mi.instruments.goniophotometer.result.GonioResult`,
 ``"virtspec-mi gonio 1"``), integrating sphere
-(:class:`~virtspec_mi.results.sphere.SphereResult`, ``"virtspec-mi sphere 1"``) and any
+(:class:`~virtspec_mi.instruments.sphere.result.SphereResult`, ``"virtspec-mi sphere 1"``) and any
 instrument's own, e.g. the gloss meter's) and :func:`read_result`, which reads a file of
 any of them (NetCDF, CSV, JSON, Zarr; also ``virtspec measure --json`` output and files
 written before every kind had a tag) by the tag it carries
@@ -25,7 +25,7 @@ import os
 from typing import Any
 
 from virtspec_mi.results import io as results_io
-from virtspec_mi.results import goniophotometer, hemispherical, sphere  # noqa: F401  (the kinds register)
+from virtspec_mi.results import readings  # noqa: F401  (the shared kind registers; the instruments register theirs)
 from virtspec_mi.results.base import KINDS, ResultBase
 from virtspec_mi.results.formats import format_parts, tagged
 from virtspec_mi.results.integrity import read_file

@@ -3,7 +3,7 @@ Zarr result tables, written region by region
 ============================================
 
 A sweep written to ``out="table.zarr"`` (:func:`virtspec_mi.sweep`) creates a Zarr store
-of the result's grid when it starts — the dims of its :class:`~virtspec_mi.results.hemispherical.Result`,
+of the result's grid when it starts — the dims of its :class:`~virtspec_mi.results.readings.Result`,
 ``wavelength`` × ``theta_i`` and, for a parameter sweep, one dim per parameter of a grid
 or the dim ``point`` of explicit points (:mod:`virtspec_mi.engine.parameters`), with their
 coordinates; one variable per count (``rays``, ``reflected`` …; the two-stage pilot's as

@@ -19,7 +19,7 @@ bound (δ/m each, :func:`union_delta`); when they share readings each reading ta
 most rays any of them asks for, which only shrinks every Σₖ wₖ²/Nₖ.
 
 When the readings of different wavelengths are one set of rays (a wavelength-independent
-specimen: :attr:`~virtspec_mi.results.hemispherical.Result.wavelength_independent`), ray j
+specimen: :attr:`~virtspec_mi.results.readings.Result.wavelength_independent`), ray j
 adds (Σₖ wₖ)/N·{0, 1} and (1) holds with Σₖ wₖ²/Nₖ replaced by (Σₖ wₖ)²/N.
 
 References

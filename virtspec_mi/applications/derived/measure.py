@@ -25,7 +25,7 @@ target=...)`` calls it):
    intervals, or the ΔE₀₀ bound of :mod:`.delta_e`): a :class:`~.result.DerivedResult`.
 
 The per-wavelength readings are returned too (``result.readings``, a hemispherical
-:class:`~virtspec_mi.results.hemispherical.Result`): they are the rays spent, and carry
+:class:`~virtspec_mi.results.readings.Result`): they are the rays spent, and carry
 no joint per-wavelength certificate — each alone has the Hoeffding tolerance of its own
 N, which for most of them is wide.
 

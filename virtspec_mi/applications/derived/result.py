@@ -7,7 +7,7 @@ quantity (:class:`~.targets.Value`) with its interval, all of them together with
 probability ≥ 1 − δ — the rays spent (the pilot's apart), the tolerance each linear
 functional was certified to, and the per-wavelength readings
 (:attr:`DerivedResult.readings`, a hemispherical
-:class:`~virtspec_mi.results.hemispherical.Result`), which carry no joint per-wavelength
+:class:`~virtspec_mi.results.readings.Result`), which carry no joint per-wavelength
 certificate of their own. :meth:`DerivedResult.summary`, :meth:`DerivedResult.as_dict`
 (JSON) and :meth:`DerivedResult.to_dataset` (xarray: one variable per quantity with
 ``units``, ``long_name`` and its ``<name>_lower`` / ``<name>_upper`` bounds, and the

@@ -61,7 +61,7 @@ this list is checked against it by the tests).
 Goniophotometer parameters (the options of
 :class:`virtspec_mi.instruments.goniophotometer.GonioOptions`, the one definition; any of
 them makes ``mi.render`` take a goniophotometer reading, kept in
-``integrator.last_reading`` as a :class:`~virtspec_mi.results.goniophotometer.GonioResult`;
+``integrator.last_reading`` as a :class:`~virtspec_mi.instruments.goniophotometer.result.GonioResult`;
 :func:`virtspec_mi.gonio` on the scene uses them as its defaults):
 ``theta_o_bins`` (integer or string of edges, default 18 per hemisphere),
 ``phi_o_bins`` (integer or string of edges, default 36), ``binning`` (``uniform`` or
@@ -72,7 +72,7 @@ them makes ``mi.render`` take a goniophotometer reading, kept in
 returns a ``TensorXf`` of shape ``(len(wavelengths), 3)``: per wavelength (rows, in the
 order given) the reflectance, transmittance and absorptance. ``spp`` > 0 sets the rays
 per reading (0 ≤ ``spp`` ≤ 2³² − 1; 0: from the settings); ``seed`` is added to the
-``seed`` parameter. The full :class:`~virtspec_mi.results.hemispherical.Result` is kept in
+``seed`` parameter. The full :class:`~virtspec_mi.results.readings.Result` is kept in
 ``integrator.last_reading``. The scene needs a sensor for ``mi.render`` (any; it is not
 used).
 

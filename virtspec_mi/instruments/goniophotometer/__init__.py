@@ -4,7 +4,7 @@ The goniophotometer: the spectrophotometer's rays binned by their outgoing direc
 
 :class:`GonioOptions` is the one definition of the goniophotometer's options beside the
 common :class:`~virtspec_mi.settings.Settings`: how the escaping rays are binned by
-their outgoing direction (θo, φo) in the specimen frame (:mod:`virtspec_mi.geometry.bins`)
+their outgoing direction (θo, φo) in the specimen frame (:mod:`virtspec_mi.instruments.goniophotometer.bins`)
 and how N is sized over the K bins (``guarantee``, :mod:`virtspec_mi.budgets.bins`).
 :func:`virtspec_mi.gonio` takes them as keywords, ``virtspec gonio`` as flags and the
 ``spectrophotometer`` integrator as parameters; a bad value raises ``ValueError`` naming
@@ -29,11 +29,11 @@ from virtspec_mi.checks import check_brdf_floor, check_relative_tolerance
 from virtspec_mi.engine.parameters import ParameterSpace
 from virtspec_mi.engine.plan import Columns, Plan
 from virtspec_mi.engine.tally import Tally
-from virtspec_mi.geometry.bins import BINNINGS, HEMISPHERES, GonioBins, make_bins, parse_edges
+from virtspec_mi.instruments.goniophotometer.bins import BINNINGS, HEMISPHERES, GonioBins, make_bins, parse_edges
 from virtspec_mi.instruments.base import Instrument, reading_grid
 from virtspec_mi.instruments.command import Command, Figure
 from virtspec_mi.instruments.hemispherical import hemispherical_result
-from virtspec_mi.results.goniophotometer import GonioResult
+from virtspec_mi.instruments.goniophotometer.result import GonioResult
 from virtspec_mi.settings import Options, Settings, one_of, option, true_or_false
 
 __all__ = ["GonioOptions", "Goniophotometer", "KlemsFlags"]
@@ -85,7 +85,7 @@ class GonioOptions(Options):
 
     @property
     def bins(self) -> GonioBins:
-        """The θo × φo bins these options lay out (:func:`virtspec_mi.geometry.bins.make_bins`)."""
+        """The θo × φo bins these options lay out (:func:`virtspec_mi.instruments.goniophotometer.bins.make_bins`)."""
 
         return self._bins  # type: ignore[attr-defined]
 
@@ -152,8 +152,8 @@ class Goniophotometer(Instrument):
     """
     The goniophotometer (see the module docstring): the spectrophotometer's readings
     over every (wavelength, θi, parameter point), every escaping ray also binned by its
-    outgoing direction (the kernel hook :class:`~virtspec_mi.kernel.bins.BinLayout`); the
-    result is a :class:`~virtspec_mi.results.goniophotometer.GonioResult`.
+    outgoing direction (the kernel hook :class:`~virtspec_mi.instruments.goniophotometer.hook.BinLayout`); the
+    result is a :class:`~virtspec_mi.instruments.goniophotometer.result.GonioResult`.
 
     N is ``settings.rays``, or sized by ``guarantee`` over the K bins (a row of
     :data:`virtspec_mi.budgets.rules.GUARANTEES`), or — a two-stage rule — sized per

@@ -3,7 +3,7 @@ Goniophotometer bins in the kernel: a ray's outgoing direction → its bin
 ========================================================================
 
 :class:`BinLayout` holds the plain arrays of a goniophotometer's θo × φo bins
-(:meth:`virtspec_mi.geometry.bins.GonioBins.layout` makes one) and is the kernel's exit
+(:meth:`virtspec_mi.instruments.goniophotometer.bins.GonioBins.layout` makes one) and is the kernel's exit
 hook (:mod:`virtspec_mi.kernel.hooks`) that bins every reflected or transmitted ray by
 its outgoing direction in the specimen frame, in the ray kernel itself:
 

@@ -4,7 +4,7 @@ The sphere's readout: sample over standard, certified, beside the hemispherical 
 
 A real integrating-sphere instrument reads a detector signal and ratios it against a
 reference standard of known reflectance ρ_std. :class:`IntegratingSphere` simulates both
-configurations with the sphere walk (:mod:`virtspec_mi.kernel.sphere_walk`) and returns
+configurations with the sphere walk (:mod:`virtspec_mi.instruments.sphere.walk`) and returns
 a :class:`SphereResult` (:class:`SphereOptions`: its options, the sphere among them):
 
 - **single-beam substitution** (``method="substitution"``): the sample in the sample
@@ -33,8 +33,8 @@ hemisphere, :mod:`virtspec_mi.kernel.tracer`) comes from the sample configuratio
 rays; the instrument error is reading − hemispherical.
 
 **Correction:** :meth:`SphereResult.corrected` / :meth:`SphereResult.corrected_interval`
-invert the sphere theory's readout model (:mod:`virtspec_mi.references.sphere_theory` with the inputs
-of :func:`virtspec_mi.references.sphere_model.theory_inputs`, from the sphere description the result
+invert the sphere theory's readout model (:mod:`virtspec_mi.instruments.sphere.theory` with the inputs
+of :func:`virtspec_mi.instruments.sphere.model.theory_inputs`, from the sphere description the result
 keeps) to recover the hemispherical value from the reading.
 
 References
@@ -57,11 +57,11 @@ from virtspec_mi.budgets.rules import DETECTOR_COLUMNS
 from virtspec_mi.engine.parameters import ParameterSpace
 from virtspec_mi.engine.plan import Columns, Plan
 from virtspec_mi.engine.tally import Tally
-from virtspec_mi.geometry.sphere import Sphere, is_sphere_parameter, sphere_from_parameters
+from virtspec_mi.instruments.sphere.geometry import Sphere, is_sphere_parameter, sphere_from_parameters
 from virtspec_mi.instruments.base import Instrument, reading_grid, reading_labels
 from virtspec_mi.instruments.command import Command, Figure, Session
-from virtspec_mi.kernel.sphere_walk import FATES, HEMISPHERES, SPECIMEN, Holder, SphereFate, holder_frame
-from virtspec_mi.results.sphere import CONFIGURATIONS, SphereResult
+from virtspec_mi.instruments.sphere.walk import FATES, HEMISPHERES, SPECIMEN, Holder, SphereFate, holder_frame
+from virtspec_mi.instruments.sphere.result import CONFIGURATIONS, SphereResult
 from virtspec_mi.checks import number, shown_value
 from virtspec_mi.results.base import plain_data
 from virtspec_mi.settings import Options, Settings, one_of, option, share, true_or_false, whole_number
@@ -96,7 +96,7 @@ class SphereOptions(Options):
     CLI flags and the ``integrating_sphere`` integrator's parameters derive from these
     fields; the sphere is read from the integrator's flat parameters ``diameter``,
     ``wall_reflectance``, ``port_<name>`` and ``baffle``:
-    :func:`virtspec_mi.geometry.sphere.sphere_from_parameters`).
+    :func:`virtspec_mi.instruments.sphere.geometry.sphere_from_parameters`).
     """
 
     title: ClassVar[str] = "sphere options"
@@ -137,9 +137,9 @@ def configurations(sphere: Sphere, options: SphereOptions, specimen_radius: floa
                    specimen_bsdf: Any = SPECIMEN) -> dict[str, tuple[list, list]]:
     """
     Per configuration: the holders (port index, BSDF, disk radius, frame) — holder 0 in
-    the beam — and each port's cap fate (a :class:`~virtspec_mi.kernel.sphere_walk.SphereFate`
+    the beam — and each port's cap fate (a :class:`~virtspec_mi.instruments.sphere.walk.SphereFate`
     code, ``None`` for a plugged port). The specimen's BSDF is ``specimen_bsdf`` (by
-    default :data:`~virtspec_mi.kernel.sphere_walk.SPECIMEN`: the bench's), the standard
+    default :data:`~virtspec_mi.instruments.sphere.walk.SPECIMEN`: the bench's), the standard
     a Lambertian of reflectance ``options.standard`` and the open port a null BSDF, as
     Mitsuba plugin dicts.
     """
@@ -240,7 +240,7 @@ def _fraction(name: str) -> Any:
 class SphereCorrection(Options):
     """
     ``virtspec sphere``'s own flags: the reading corrected by the sphere theory
-    (:meth:`~virtspec_mi.results.sphere.SphereResult.corrected`) and what the correction
+    (:meth:`~virtspec_mi.instruments.sphere.result.SphereResult.corrected`) and what the correction
     assumes (each of those implies ``--correct``).
     """
 
@@ -284,8 +284,8 @@ def _respond_sphere(session: Session) -> int:
 
 def _corrected(result: Any, assumptions: dict[str, float]) -> tuple[Any, Any]:
     """
-    :meth:`~virtspec_mi.results.sphere.SphereResult.corrected` and
-    :meth:`~virtspec_mi.results.sphere.SphereResult.corrected_interval` of every reading
+    :meth:`~virtspec_mi.instruments.sphere.result.SphereResult.corrected` and
+    :meth:`~virtspec_mi.instruments.sphere.result.SphereResult.corrected_interval` of every reading
     of ``result`` (one spectrum per θi and parameter point), over its reading dims.
     """
 
@@ -354,13 +354,15 @@ class IntegratingSphere(Instrument):
     seed, the same rays in both (two reading groups of one plan) — each with the settings'
     rule's N at (μ, δ/2) (or ``settings.rays``), or sized per reading by a two-stage pilot
     of its detector fraction at δ/2; the result is a
-    :class:`~virtspec_mi.results.sphere.SphereResult`.
+    :class:`~virtspec_mi.instruments.sphere.result.SphereResult`.
     """
 
     name: ClassVar[str] = "sphere"
     options: ClassVar[type[Options] | None] = SphereOptions
     result: ClassVar[type] = SphereResult
     commands: ClassVar[tuple[Command, ...]] = (SPHERE_COMMAND,)
+    integrators: ClassVar[dict[str, str]] = {
+        "integrating_sphere": "virtspec_mi.instruments.sphere.integrator:IntegratingSphereIntegrator"}
     example: ClassVar[dict[str, Any]] = {
         "scene": "sphere_150mm_8d", "wavelengths": [450, 650], "rays": 4000, "seed": 3,
         "long": {"wavelengths": "400:2500:20", "rays": 40_000, "method": "comparison", "readings": 212}}

@@ -3,9 +3,9 @@ Goniophotometer readings: :class:`GonioResult`
 ==============================================
 
 A goniophotometer reading (:func:`virtspec_mi.gonio`) is a spectrophotometer reading
-— a :class:`~virtspec_mi.results.hemispherical.Result` over (wavelength, θi) with its exact counts and
+— a :class:`~virtspec_mi.results.readings.Result` over (wavelength, θi) with its exact counts and
 R/T certificate — whose escaping rays were also tallied by outgoing direction
-(:mod:`virtspec_mi.geometry.bins`). :class:`GonioResult` shares that result's machinery
+(:mod:`virtspec_mi.instruments.goniophotometer.bins`). :class:`GonioResult` shares that result's machinery
 (it holds it, and its file formats) and adds the dims ``theta_o`` and ``phi_o``:
 
 - ``bin_counts`` m_k (exact ``int64``; Σ_k m_k + ``outside`` = reflected + transmitted);
@@ -48,12 +48,12 @@ import numpy as np
 
 from virtspec_mi.budgets import bins as gonio_bounds
 from virtspec_mi.budgets.rules import guarantee_of
-from virtspec_mi.geometry.bins import GonioBins
+from virtspec_mi.instruments.goniophotometer.bins import GonioBins
 from virtspec_mi.kernel.counts import QUANTITIES
 from virtspec_mi.results.base import ResultBase, plain_data, round_up, span
 from virtspec_mi.results.formats import annotate
 from virtspec_mi.results.integrity import CountRules, field_value, whole_counts
-from virtspec_mi.results.hemispherical import Result
+from virtspec_mi.results.readings import Result
 
 __all__ = ["GonioResult"]
 
@@ -549,20 +549,20 @@ class GonioResult(ResultBase):
     def plot(self, path: str | os.PathLike | None = None, quantity: str | None = None, **options: Any) -> Any:
         """
         Polar plot of f in the plane of incidence and across it, with the certified band
-        (:func:`~virtspec_mi.results.angular_plot.plot_polar`; ``wavelength=``, ``log=``,
+        (:func:`~virtspec_mi.instruments.goniophotometer.plot.plot_polar`; ``wavelength=``, ``log=``,
         ``name=``); with ``quantity`` (reflectance, transmittance, absorptance) the reading's
         R, T or A against θi or wavelength instead (:func:`~virtspec_mi.results.plot.plot_sweep`).
         """
 
         if quantity not in (None, "brdf"):
             return self.result.plot(path, quantity=self.check_quantity(quantity), **options)
-        from virtspec_mi.results.angular_plot import plot_polar
+        from virtspec_mi.instruments.goniophotometer.plot import plot_polar
 
         return plot_polar(self.as_grid(), path, **options)
 
     def plot_series(self, path: str | os.PathLike | None = None, **options: Any) -> Any:
-        """The angular distribution over θi as a series, with the certified bands (:func:`~virtspec_mi.results.angular_plot.plot_series`)."""
+        """The angular distribution over θi as a series, with the certified bands (:func:`~virtspec_mi.instruments.goniophotometer.plot.plot_series`)."""
 
-        from virtspec_mi.results.angular_plot import plot_series
+        from virtspec_mi.instruments.goniophotometer.plot import plot_series
 
         return plot_series(self.as_grid(), path, **options)

@@ -3,7 +3,7 @@
 ==============================================================================================
 
 The ``spectrophotometer`` integrator's settings plus a sphere description: the sphere
-of :mod:`virtspec_mi.geometry.sphere` and how it is read: the fields of
+of :mod:`virtspec_mi.instruments.sphere.geometry` and how it is read: the fields of
 :class:`virtspec_mi.instruments.sphere.SphereOptions`, the one definition.
 A thin adapter: it reads its parameters with the one reader
 (:meth:`virtspec_mi.settings.Options.from_parameters`), :func:`virtspec_mi.sphere_measure`
@@ -40,7 +40,7 @@ Notes
 ``mi.render(scene)`` returns a ``TensorXf`` of shape ``(len(wavelengths), 4)``: per
 wavelength the reading, the hemispherical reading of the same rays, and the detector
 fractions with the sample and with the standard; the full
-:class:`~virtspec_mi.results.sphere.SphereResult` is kept in ``integrator.last_reading``.
+:class:`~virtspec_mi.instruments.sphere.result.SphereResult` is kept in ``integrator.last_reading``.
 """
 
 from __future__ import annotations
@@ -51,7 +51,7 @@ import mitsuba as mi
 
 from virtspec_mi.instruments.sphere import IntegratingSphere
 
-from .spectrophotometer import Spectrophotometer
+from virtspec_mi.plugins.integrators.spectrophotometer import Spectrophotometer
 
 __all__ = ["IntegratingSphereIntegrator"]
 

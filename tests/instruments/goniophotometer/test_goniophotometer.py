@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 import virtspec_mi as vm
-from virtspec_mi.geometry.bins import make_bins
+from virtspec_mi.instruments.goniophotometer.bins import make_bins
 from virtspec_mi.settings import Settings
 
 ROUGH = {"type": "roughdielectric", "alpha": 0.3, "int_ior": 1.5}
@@ -225,6 +225,8 @@ def test_every_gonio_parameter_is_a_keyword_a_flag_and_an_integrator_parameter(c
 
     from virtspec_mi.cli import build_parser
     from virtspec_mi.instruments.goniophotometer import GonioOptions
+
+    vm.mitsuba()  # the integrator's module needs the variant
     from virtspec_mi.plugins.integrators import spectrophotometer
     from virtspec_mi.settings import SETTING_NAMES
 
@@ -265,7 +267,7 @@ def test_cli_gonio_prints_the_certificate_and_writes_the_file(rough, tmp_path, c
 
 
 def test_plots_and_spectra_per_bin(rough, tmp_path):
-    from virtspec_mi.results.angular_plot import plane_bins, plot_hemisphere, plot_polar, plot_series
+    from virtspec_mi.instruments.goniophotometer.plot import plane_bins, plot_hemisphere, plot_polar, plot_series
 
     reading = vm.gonio(rough, theta_i=[0, 50], wavelengths=[500, 600], theta_o_bins=6, phi_o_bins=8, rays=4000)
     assert plane_bins(reading) == (4, 0) and plane_bins(reading, across=True) == (2, 6)  # 180 / 0; 90 / 270

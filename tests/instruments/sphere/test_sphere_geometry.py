@@ -1,4 +1,4 @@
-"""Tests of virtspec_mi.geometry.sphere: the sphere description, its validation and exact cap fractions."""
+"""Tests of virtspec_mi.instruments.sphere.geometry: the sphere description, its validation and exact cap fractions."""
 
 from __future__ import annotations
 
@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from virtspec_mi.geometry.sphere import Baffle, Port, Sphere, parse_wall_reflectance, sphere_from_parameters
+from virtspec_mi.instruments.sphere.geometry import Baffle, Port, Sphere, parse_wall_reflectance, sphere_from_parameters
 
 
 def small_sphere(**changes):

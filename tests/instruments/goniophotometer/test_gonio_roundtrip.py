@@ -126,7 +126,7 @@ def test_the_manual_round_trip_block_prints_what_the_manual_says():
     import re
     from pathlib import Path
 
-    text = (Path(__file__).resolve().parents[2] / "docs" / "guide" / "goniophotometer.md").read_text()
+    text = (Path(__file__).resolve().parents[3] / "docs" / "guide" / "goniophotometer.md").read_text()
     section = text[text.index("**Round trip**"):]
     code, printed = re.findall(r"^```(?:python)?\n(.*?)^```", section, re.M | re.S)[:2]
     output = io.StringIO()

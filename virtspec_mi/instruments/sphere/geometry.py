@@ -5,7 +5,7 @@ An integrating sphere: wall, ports, baffle (the description, validated)
 :class:`Sphere` describes a physical integrating sphere the way a data sheet does: an
 inner diameter, a diffuse wall of reflectance ρw (a constant or a spectrum), circular
 ports on the sphere surface each with a role, and optionally a baffle. Everything is
-exact geometry; :mod:`virtspec_mi.kernel.sphere_walk` walks rays through it
+exact geometry; :mod:`virtspec_mi.instruments.sphere.walk` walks rays through it
 (:meth:`Sphere.layout` gives it the plain values it walks).
 
 Geometry and conventions
@@ -358,14 +358,14 @@ class Sphere:
                wavelengths: Sequence[float]) -> Any:
         """
         One configuration of this sphere as the kernel walks it
-        (:class:`~virtspec_mi.kernel.sphere_walk.SphereLayout`, plain values): the
-        ``holders`` (:class:`~virtspec_mi.kernel.sphere_walk.Holder`; holder 0 in the
-        beam), each port's cap fate (a :class:`~virtspec_mi.kernel.sphere_walk.SphereFate`
+        (:class:`~virtspec_mi.instruments.sphere.walk.SphereLayout`, plain values): the
+        ``holders`` (:class:`~virtspec_mi.instruments.sphere.walk.Holder`; holder 0 in the
+        beam), each port's cap fate (a :class:`~virtspec_mi.instruments.sphere.walk.SphereFate`
         code, or ``None`` for a plugged port, which is wall), the step cap and ρw at
         ``wavelengths`` (nm).
         """
 
-        from virtspec_mi.kernel.sphere_walk import SphereLayout
+        from virtspec_mi.instruments.sphere.walk import SphereLayout
 
         radius = self.radius
         grid = np.unique(np.asarray(wavelengths, dtype=np.float64))

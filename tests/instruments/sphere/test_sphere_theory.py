@@ -1,4 +1,4 @@
-"""Tests of virtspec_mi.references.sphere_theory: port fractions, gain, readouts, corrections.
+"""Tests of virtspec_mi.instruments.sphere.theory: port fractions, gain, readouts, corrections.
 
 Independent references: iadpython's ``Sphere`` (cap model), a Markov-chain solve of the
 sphere written here from the landing rules (not from the closed forms), and a NumPy
@@ -16,11 +16,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from virtspec_mi.references import sphere_theory as st
+from virtspec_mi.instruments.sphere import theory as st
 
 import iadpython as iad  # noqa: E402  (a declared test dependency: no skip)
 
-ROOT = Path(__file__).resolve().parents[2]
+ROOT = Path(__file__).resolve().parents[3]
 WALLS = (0.90, 0.95, 0.98, 0.99)
 FRACTIONS = (0.01, 0.05, 0.10)
 GREYS = np.linspace(0.05, 0.95, 19)

@@ -7,9 +7,9 @@ import numpy as np
 import pytest
 
 import virtspec_mi as vm
-from virtspec_mi.references import sphere_theory as st
+from virtspec_mi.instruments.sphere import theory as st
 from virtspec_mi.budgets.bounds import hoeffding_mu
-from virtspec_mi.results.sphere import SphereResult
+from virtspec_mi.instruments.sphere.result import SphereResult
 
 SCENE = "scenes/sphere_150mm_8d.xml"
 

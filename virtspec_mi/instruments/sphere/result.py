@@ -18,8 +18,8 @@ The hemispherical reading (the first specimen interaction's hemisphere) comes fr
 sample configuration's very rays; the instrument error is reading − hemispherical.
 
 **Correction:** :meth:`SphereResult.corrected` / :meth:`SphereResult.corrected_interval`
-invert the sphere theory's readout model (:mod:`virtspec_mi.references.sphere_theory` with
-the inputs of :func:`virtspec_mi.references.sphere_model.theory_inputs`, from the sphere
+invert the sphere theory's readout model (:mod:`virtspec_mi.instruments.sphere.theory` with
+the inputs of :func:`virtspec_mi.instruments.sphere.model.theory_inputs`, from the sphere
 description the result keeps) to recover the hemispherical value from the reading.
 
 It is a result like the others (:class:`~virtspec_mi.results.base.ResultBase`): ``sel`` /
@@ -48,12 +48,12 @@ import numpy as np
 from virtspec_mi import __version__
 from virtspec_mi.budgets.bounds import hoeffding_mu
 from virtspec_mi.budgets.intervals import clopper_pearson
-from virtspec_mi.geometry.sphere import Sphere, sphere_from_parameters
-from virtspec_mi.references.sphere_model import correct_readings, theory_inputs
+from virtspec_mi.instruments.sphere.geometry import Sphere, sphere_from_parameters
+from virtspec_mi.instruments.sphere.model import correct_readings, theory_inputs
 from virtspec_mi.results.base import ResultBase, per_count, plain_data, round_up, span
 from virtspec_mi.results.formats import annotate
 from virtspec_mi.results.integrity import CountRules, field_value, finite_labels, whole_counts
-from virtspec_mi.kernel.sphere_walk import FATES
+from virtspec_mi.instruments.sphere.walk import FATES
 from virtspec_mi.settings import Settings
 
 __all__ = ["CONFIGURATIONS", "COUNT_RULES", "SphereResult"]
@@ -91,7 +91,7 @@ class SphereResult(ResultBase):
         when not given): the kind's own dim, which :meth:`sel` keeps whole.
     coords : dict of str to ndarray
         Labels: ``wavelength`` (nm), ``theta_i`` (degrees; a 0-d array for one angle),
-        parameters as for :class:`~virtspec_mi.results.hemispherical.Result`,
+        parameters as for :class:`~virtspec_mi.results.readings.Result`,
         ``configuration`` (``sample``, ``standard``; added when not given).
     counts : dict
         Per configuration (``"sample"``, ``"standard"``): every count by name, ``int64``
@@ -113,13 +113,13 @@ class SphereResult(ResultBase):
     scene : str
         Fingerprint of the scene, or "".
     sphere_parameters : dict
-        The sphere's description (:meth:`~virtspec_mi.geometry.sphere.Sphere.parameters`).
+        The sphere's description (:meth:`~virtspec_mi.instruments.sphere.geometry.Sphere.parameters`).
     specimen_radius : float or None
         Radius of the specimen disk (mm).
     version : str
         virtspec-mi version that made the result.
     parameters : dict or None
-        Swept specimen parameters (as :class:`~virtspec_mi.results.hemispherical.Result`'s).
+        Swept specimen parameters (as :class:`~virtspec_mi.results.readings.Result`'s).
     pilot : dict or None
         Two-stage pilot counts per configuration (spent, not in the estimates); ``None``
         for budgets sized in advance.
@@ -339,7 +339,7 @@ class SphereResult(ResultBase):
 
     @property
     def sphere_description(self) -> Sphere:
-        """The :class:`~virtspec_mi.geometry.sphere.Sphere` this result was read with."""
+        """The :class:`~virtspec_mi.instruments.sphere.geometry.Sphere` this result was read with."""
 
         if not self.sphere_parameters:
             raise ValueError("this sphere result carries no sphere description (sphere_parameters is empty: "
@@ -348,8 +348,8 @@ class SphereResult(ResultBase):
 
     def theory_inputs(self) -> dict[str, Any]:
         """
-        The :mod:`virtspec_mi.references.sphere_theory` keywords of this reading
-        (:func:`virtspec_mi.references.sphere_model.theory_inputs` of its sphere, its reading
+        The :mod:`virtspec_mi.instruments.sphere.theory` keywords of this reading
+        (:func:`virtspec_mi.instruments.sphere.model.theory_inputs` of its sphere, its reading
         mode — the ``measurement``, ``specular``, ``method`` and ``standard`` it was read with,
         as plain values — and its specimen radius).
         """
@@ -362,7 +362,7 @@ class SphereResult(ResultBase):
                   collimated_transmittance: Any = 0.0) -> np.ndarray:
         """
         The hemispherical value recovered from :attr:`reading` by the sphere theory's
-        inverse (:func:`virtspec_mi.references.sphere_model.correct_readings`; keywords there): what
+        inverse (:func:`virtspec_mi.instruments.sphere.model.correct_readings`; keywords there): what
         a user computes from an instrument's reading and its sphere's description. It
         assumes the theory's sphere (flat disks, no baffle) and a Lambertian specimen
         (unless ``sample_reflectance``, its reflectance for diffuse light, is given; required

@@ -9,7 +9,7 @@ absorptance α = 1 − ρ − τ per reading, with the certificate of the ray bu
 (:mod:`virtspec_mi.budgets.rules`). :func:`virtspec_mi.measure` and
 :func:`virtspec_mi.sweep` take their readings with :class:`Hemispherical`: no options
 beside the :class:`~virtspec_mi.settings.Settings` and no exit hook (the fates are what
-it tallies); the result is a :class:`~virtspec_mi.results.hemispherical.Result` over
+it tallies); the result is a :class:`~virtspec_mi.results.readings.Result` over
 (wavelength, θi, parameter dims). A two-stage rule sizes each reading from its pilot's
 R, T and A (or R and T together, ``joint``).
 
@@ -39,7 +39,7 @@ from virtspec_mi.engine.readings import shares_wavelengths
 from virtspec_mi.engine.tally import Tally
 from virtspec_mi.instruments.base import Instrument, reading_grid, reading_labels
 from virtspec_mi.instruments.command import Command, Figure, Session
-from virtspec_mi.results.hemispherical import Result, fluctuation
+from virtspec_mi.results.readings import Result, fluctuation
 from virtspec_mi.settings import Options, Settings, option
 
 __all__ = ["Hemispherical", "hemispherical_result", "SweepFlags", "MeasureFlags"]
@@ -210,7 +210,7 @@ def hemispherical_result(bench: Any, plan: Plan, tally: Tally, scene: str = "", 
                          ) -> Result:
     """
     The hemispherical reading of ``plan``'s readings (one group) from their tallies: a
-    :class:`~virtspec_mi.results.hemispherical.Result` over (wavelength, θi, parameter dims),
+    :class:`~virtspec_mi.results.readings.Result` over (wavelength, θi, parameter dims),
     recording the scene's fingerprint ``scene`` and its ``source``.
     """
 

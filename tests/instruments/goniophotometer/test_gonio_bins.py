@@ -1,11 +1,11 @@
-"""Goniophotometer bins (virtspec_mi.geometry.bins): layouts, projected solid angles, bad specifications."""
+"""Goniophotometer bins (virtspec_mi.instruments.goniophotometer.bins): layouts, projected solid angles, bad specifications."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from virtspec_mi.geometry.bins import MAX_BINS, make_bins, parse_edges
+from virtspec_mi.instruments.goniophotometer.bins import MAX_BINS, make_bins, parse_edges
 
 
 def test_uniform_bins_cover_both_hemispheres_with_90_as_an_edge():
@@ -65,7 +65,7 @@ def test_too_many_bins_is_refused():
 
 
 def test_round_trip_of_the_bins_as_plain_data():
-    from virtspec_mi.geometry.bins import GonioBins
+    from virtspec_mi.instruments.goniophotometer.bins import GonioBins
 
     bins = make_bins(5, 7, "projected", True, "reflection")
     again = GonioBins.from_dict(bins.as_dict())

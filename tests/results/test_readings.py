@@ -1,5 +1,5 @@
 """
-Tests of virtspec_mi.results.hemispherical: one result type for a reading or a sweep, and the truth of
+Tests of virtspec_mi.results.readings: one result type for a reading or a sweep, and the truth of
 every certificate it prints (issue "One result, one engine, one set of settings").
 """
 

@@ -2,16 +2,16 @@
 A sphere description in the terms of the sphere theory (the one rule that ties them)
 ====================================================================================
 
-:mod:`virtspec_mi.geometry.sphere` describes a physical sphere (ports with roles, wall, baffle),
+:mod:`virtspec_mi.instruments.sphere.geometry` describes a physical sphere (ports with roles, wall, baffle),
 the sphere's options say how it is read (:class:`ReadingMode`: plain values, whatever
 options class carries them);
-:mod:`virtspec_mi.references.sphere_theory` predicts readings from port *fractions*. This module is
+:mod:`virtspec_mi.instruments.sphere.theory` predicts readings from port *fractions*. This module is
 the single place where the one becomes the other: :func:`theory_inputs` maps a sphere,
 its reading mode and the specimen disk's radius to the keywords of
-:func:`~virtspec_mi.references.sphere_theory.instrument_reading` /
-:func:`~virtspec_mi.references.sphere_theory.correct_reading` (reflectance) or
-:func:`~virtspec_mi.references.sphere_theory.transmittance_reading` /
-:func:`~virtspec_mi.references.sphere_theory.correct_transmittance` (transmittance), exactly as the
+:func:`~virtspec_mi.instruments.sphere.theory.instrument_reading` /
+:func:`~virtspec_mi.instruments.sphere.theory.correct_reading` (reflectance) or
+:func:`~virtspec_mi.instruments.sphere.theory.transmittance_reading` /
+:func:`~virtspec_mi.instruments.sphere.theory.correct_transmittance` (transmittance), exactly as the
 simulation (:func:`virtspec_mi.instruments.sphere.configurations`) treats each port:
 
 =========  ==========================================  ===========================
@@ -30,7 +30,7 @@ open       ``open_fraction``                           ``open_fraction``
 =========  ==========================================  ===========================
 
 **Port convention:** the fractions are the exact cap fractions h/2R
-(:meth:`virtspec_mi.geometry.sphere.Sphere.cap_fraction`) and ``port_surface="flat"``: the
+(:meth:`virtspec_mi.instruments.sphere.geometry.Sphere.cap_fraction`) and ``port_surface="flat"``: the
 specimen and the standards are flat disks in their port planes, as simulated. A disk
 smaller than its port (radius ρ < r) receives on average the share ρ²/(4R²(1 − a)) of
 wall emission (a: the port's cap fraction; exact for a uniformly bright wall, equal to
@@ -40,12 +40,12 @@ reflectance at the reading's wavelengths (an array).
 **Not modelled by the theory:** a baffle (it shades the detector from the first
 emission of the specimen, the 1/G share of the signal detected before any wall bounce);
 non-Lambertian specimens (their first emission does not land uniformly); a narrow beam
-spot (:func:`~virtspec_mi.references.sphere_theory.spot_landing_density`). The readings of the
+spot (:func:`~virtspec_mi.instruments.sphere.theory.spot_landing_density`). The readings of the
 simulation differ from the theory by these, which is what the validation tests measure.
 
 References
 ----------
-Goebel (1967), eq. 2 (port fractions); :mod:`virtspec_mi.references.sphere_theory` (the models).
+Goebel (1967), eq. 2 (port fractions); :mod:`virtspec_mi.instruments.sphere.theory` (the models).
 """
 
 from __future__ import annotations
@@ -54,8 +54,9 @@ from typing import Any, Protocol, Sequence
 
 import numpy as np
 
-from virtspec_mi.geometry.sphere import Sphere
-from virtspec_mi.references import sphere_theory as st
+from virtspec_mi.instruments.sphere.geometry import Sphere
+from virtspec_mi.instruments.sphere.theory import (correct_reading, correct_transmittance, detected_fraction,
+                                                  instrument_reading, transmittance_reading)
 
 __all__ = ["REFLECTANCE_ROLES", "TRANSMITTANCE_ROLES", "ReadingMode", "disk_share", "theory_inputs",
            "invertible_range", "correct_readings"]
@@ -81,13 +82,13 @@ REFLECTANCE_ROLES: dict[str, str] = {
     "sample": "sample_fraction", "entrance": "open_fraction", "reference": "reference_fraction",
     "detector": "detector_fraction", "specular": "trap_fraction", "open": "open_fraction",
 }
-"""Port role → keyword of :func:`~virtspec_mi.references.sphere_theory.instrument_reading` (reflectance)."""
+"""Port role → keyword of :func:`~virtspec_mi.instruments.sphere.theory.instrument_reading` (reflectance)."""
 
 TRANSMITTANCE_ROLES: dict[str, str | None] = {
     "sample": "sample_fraction", "entrance": "entrance_fraction", "reference": "open_fraction",
     "detector": "detector_fraction", "specular": "open_fraction", "open": "open_fraction",
 }
-"""Port role → keyword of :func:`~virtspec_mi.references.sphere_theory.transmittance_reading`
+"""Port role → keyword of :func:`~virtspec_mi.instruments.sphere.theory.transmittance_reading`
 (the specular port: open in SCE, wall in SCI)."""
 
 
@@ -111,7 +112,7 @@ def disk_share(sphere: Sphere, port: Any, disk_radius: float) -> float:
 def theory_inputs(sphere: Sphere, options: ReadingMode, wavelengths: Sequence[float],
                   specimen_radius: float | None = None) -> dict[str, Any]:
     """
-    The :mod:`~virtspec_mi.references.sphere_theory` keywords of a sphere reading (see the module
+    The :mod:`~virtspec_mi.instruments.sphere.theory` keywords of a sphere reading (see the module
     docstring for the rule).
 
     Parameters
@@ -202,7 +203,7 @@ def _linear_reflectance(inputs: dict[str, Any], specular_reflectance: Any,
     """
     ``(slope, offset)`` of a reflectance reading ``M = slope · x + offset`` when the
     specimen returns the sphere's diffuse light with a *given* reflectance u (not x + r):
-    the throughputs of :func:`~virtspec_mi.references.sphere_theory.detected_fraction` (flat model)
+    the throughputs of :func:`~virtspec_mi.instruments.sphere.theory.detected_fraction` (flat model)
     with u fixed, ``M = (x T_A(u) + [SCI] r ρw T_wall(u)) / T_std``, T_std the standard's
     (in the sample port for substitution, in the reference port for comparison).
     """
@@ -217,11 +218,11 @@ def _linear_reflectance(inputs: dict[str, Any], specular_reflectance: Any,
               open_fraction=open_fraction, port_surface=inputs["port_surface"])
     if inputs["method"] == "comparison":
         kw.update(second_fraction=inputs["reference_fraction"], second_reflectance=rho_std)
-        t_std = st.detected_fraction(rho_w, u, start="second", **kw)
+        t_std = detected_fraction(rho_w, u, start="second", **kw)
     else:  # the reference port (a plug) and, in SCI, the specular plug are wall: not in kw
-        t_std = st.detected_fraction(rho_w, rho_std, start="sample", **kw)
-    t_a = st.detected_fraction(rho_w, u, start="sample", **kw)
-    t_wall = st.detected_fraction(rho_w, u, start="wall", **kw)
+        t_std = detected_fraction(rho_w, rho_std, start="sample", **kw)
+    t_a = detected_fraction(rho_w, u, start="sample", **kw)
+    t_wall = detected_fraction(rho_w, u, start="wall", **kw)
     sci = 1.0 if inputs["mode"] == "SCI" else 0.0
     return np.asarray(t_a / t_std), np.asarray(sci * r * rho_w * t_wall / t_std)
 
@@ -237,22 +238,22 @@ def invertible_range(inputs: dict[str, Any], *, specular_reflectance: Any = 0.0,
     kw = _assumptions(inputs, specular_reflectance, sample_reflectance, collimated_transmittance)
     if _transmittance(inputs):
         t_c = np.asarray(collimated_transmittance, dtype=float)
-        return (np.asarray(st.transmittance_reading(0.0, **kw), dtype=float),
-                np.asarray(st.transmittance_reading(1.0 - t_c, **kw), dtype=float))
+        return (np.asarray(transmittance_reading(0.0, **kw), dtype=float),
+                np.asarray(transmittance_reading(1.0 - t_c, **kw), dtype=float))
     r = np.asarray(specular_reflectance, dtype=float)
     if sample_reflectance is not None:
         slope, offset = _linear_reflectance(inputs, specular_reflectance, sample_reflectance)
         return offset, slope * (1.0 - r) + offset
-    return (np.asarray(st.instrument_reading(0.0, **kw), dtype=float),
-            np.asarray(st.instrument_reading(1.0 - r, **kw), dtype=float))
+    return (np.asarray(instrument_reading(0.0, **kw), dtype=float),
+            np.asarray(instrument_reading(1.0 - r, **kw), dtype=float))
 
 
 def correct_readings(readings: Any, inputs: dict[str, Any], *, specular_reflectance: Any = 0.0,
                      sample_reflectance: Any = None, collimated_transmittance: Any = 0.0) -> np.ndarray:
     """
     The hemispherical values behind instrument readings: the theory's exact inverse
-    (:func:`~virtspec_mi.references.sphere_theory.correct_reading`, or
-    :func:`~virtspec_mi.references.sphere_theory.correct_transmittance`) with the sphere's
+    (:func:`~virtspec_mi.instruments.sphere.theory.correct_reading`, or
+    :func:`~virtspec_mi.instruments.sphere.theory.correct_transmittance`) with the sphere's
     ``inputs`` (:func:`theory_inputs`).
 
     Parameters
@@ -267,7 +268,7 @@ def correct_readings(readings: Any, inputs: dict[str, Any], *, specular_reflecta
         :func:`theory_inputs` of the sphere and the reading.
     specular_reflectance
         Reflectance: r, the specimen's specular (mirror) reflectance at the beam's angle
-        (e.g. :func:`~virtspec_mi.references.sphere_theory.fresnel_reflectance`); 0 for a matte one.
+        (e.g. :func:`~virtspec_mi.instruments.sphere.theory.fresnel_reflectance`); 0 for a matte one.
     sample_reflectance
         The specimen's reflectance for diffuse light reaching it from inside the sphere
         (0 … 1, per wavelength). Transmittance: required. Reflectance: optional — by
@@ -295,7 +296,7 @@ def correct_readings(readings: Any, inputs: dict[str, Any], *, specular_reflecta
     bad = np.isnan(values)
     clipped = np.where(bad, low, np.clip(values, low, high))
     if _transmittance(inputs):
-        out = st.correct_transmittance(clipped, **kw)
+        out = correct_transmittance(clipped, **kw)
     elif sample_reflectance is not None:
         slope, offset = _linear_reflectance(inputs, specular_reflectance, sample_reflectance)
         r = np.asarray(specular_reflectance, dtype=float)
@@ -304,5 +305,5 @@ def correct_readings(readings: Any, inputs: dict[str, Any], *, specular_reflecta
             r = r[..., None] if r.ndim else r
         out = (clipped - offset) / slope + r
     else:
-        out = st.correct_reading(clipped, **kw)
+        out = correct_reading(clipped, **kw)
     return np.where(bad, np.nan, np.asarray(out, dtype=float))

@@ -51,7 +51,7 @@ from virtspec_mi.instruments.hemispherical import hemispherical_result
 from virtspec_mi.kernel.counts import Fate
 from virtspec_mi.kernel.hooks import ExitHook
 from virtspec_mi.results.base import plain_data
-from virtspec_mi.results.hemispherical import Result
+from virtspec_mi.results.readings import Result
 from virtspec_mi.results.integrity import CountRules, whole_counts
 from virtspec_mi.settings import Options, Settings, option
 
@@ -110,7 +110,7 @@ _GLOSS_RULES = CountRules(None, parts={"glossy": "reflected"})
 class GlossResult(Result):
     """
     Gloss readings over the readings' dims (wavelength, θi, parameters): the hemispherical
-    reading of the same rays (:class:`~virtspec_mi.results.hemispherical.Result`, every
+    reading of the same rays (:class:`~virtspec_mi.results.readings.Result`, every
     field and method of it) with the receptor's exact counts and its certificate; a result
     kind of its own (format ``"virtspec-mi gloss 1"``: files, ``sel``, plots, colour).
 

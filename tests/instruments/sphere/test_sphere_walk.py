@@ -1,7 +1,7 @@
 """
-Tests of virtspec_mi.kernel.sphere_walk: reproducibility, chunk independence, conservation,
+Tests of virtspec_mi.instruments.sphere.walk: reproducibility, chunk independence, conservation,
 the hemispherical fates of the same rays, exact limits and the ideal sphere against
-virtspec_mi.references.sphere_theory.
+virtspec_mi.instruments.sphere.theory.
 """
 
 from __future__ import annotations
@@ -15,10 +15,10 @@ import virtspec_mi as vm
 from virtspec_mi.budgets.bounds import hoeffding_mu
 from virtspec_mi.scene import find_bench
 from virtspec_mi.settings import Settings
-from virtspec_mi.references import sphere_theory as st
-from virtspec_mi.geometry.sphere import Baffle, Port, Sphere
+from virtspec_mi.instruments.sphere import theory as st
+from virtspec_mi.instruments.sphere.geometry import Baffle, Port, Sphere
 from virtspec_mi.instruments.sphere import SphereOptions
-from virtspec_mi.references.sphere_model import theory_inputs
+from virtspec_mi.instruments.sphere.model import theory_inputs
 
 R = 75.0
 
@@ -30,7 +30,7 @@ def walk_counts(sphere, bsdf, radius, rho_w, rays, *, actions, settings=None, ma
     from dataclasses import replace
 
     from virtspec_mi.engine.plan import kernel_options
-    from virtspec_mi.kernel.sphere_walk import SPECIMEN, Holder, holder_frame
+    from virtspec_mi.instruments.sphere.walk import SPECIMEN, Holder, holder_frame
     from virtspec_mi.kernel.tracer import ReadingPlan, tally_readings
 
     vm.mitsuba()
@@ -104,8 +104,8 @@ def three_port_sphere(fraction, rho_w):
 
 def theory(sphere, rho_s, rho_w, port_surface="flat", convention="cap"):
     """
-    ρs · T_sample of :mod:`virtspec_mi.references.sphere_theory` with the fractions of
-    :func:`virtspec_mi.references.sphere_model.theory_inputs` (exact caps h/2R, or the same ports'
+    ρs · T_sample of :mod:`virtspec_mi.instruments.sphere.theory` with the fractions of
+    :func:`virtspec_mi.instruments.sphere.model.theory_inputs` (exact caps h/2R, or the same ports'
     r²/4R² with ``convention="projected"``).
     """
 
@@ -124,7 +124,7 @@ GRID = [(rho_w, f) for rho_w in (0.98, 0.90, 0.95, 0.99) for f in (0.10, 0.01, 0
 @pytest.mark.parametrize("rho_w, f", [*GRID[:2], *(pytest.param(*case, marks=pytest.mark.slow) for case in GRID[2:])])
 def test_ideal_sphere_detector_fraction_matches_the_theory(rho_w, f):
     """
-    The walk against :func:`virtspec_mi.references.sphere_theory.detected_fraction` in its flat model
+    The walk against :func:`virtspec_mi.instruments.sphere.theory.detected_fraction` in its flat model
     (the simulation's geometry: the specimen a flat disk filling its port), exact cap
     fractions. The beam is conical, so it lights the disk uniformly and a Lambertian
     sample's first emission is uniform over the disk, as the theory assumes (a collimated

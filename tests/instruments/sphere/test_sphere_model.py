@@ -1,6 +1,6 @@
 """
-Tests of virtspec_mi.references.sphere_model: the one rule from a sphere description to the sphere
-theory's inputs, and the simulation validated against virtspec_mi.references.sphere_theory with it —
+Tests of virtspec_mi.instruments.sphere.model: the one rule from a sphere description to the sphere
+theory's inputs, and the simulation validated against virtspec_mi.instruments.sphere.theory with it —
 readings of grey samples (substitution error, comparison residual), the leaf sphere's
 transmittance, and the correction of instrument readings (SphereResult.corrected) on the
 ABM leaf and the turbid slab.
@@ -21,12 +21,12 @@ import numpy as np
 import pytest
 
 import virtspec_mi as vm
-from virtspec_mi.references import sphere_theory as st
-from virtspec_mi.geometry.sphere import Port, Sphere
+from virtspec_mi.instruments.sphere import theory as st
+from virtspec_mi.instruments.sphere.geometry import Port, Sphere
 from virtspec_mi.instruments.sphere import SphereOptions
-from virtspec_mi.references.sphere_model import correct_readings, disk_share, invertible_range, theory_inputs
+from virtspec_mi.instruments.sphere.model import correct_readings, disk_share, invertible_range, theory_inputs
 
-ROOT = Path(__file__).resolve().parents[2]
+ROOT = Path(__file__).resolve().parents[3]
 LAB, LEAF = "scenes/sphere_150mm_8d.xml", "scenes/sphere_leaf_60mm.xml"
 RAYS, DELTA = 105_967, 1e-3
 SLAB = {"type": "turbid_slab", "mu_a": 1.0, "mu_s": 100.0, "g": 0.75, "thickness": 0.1, "eta": 1.4}

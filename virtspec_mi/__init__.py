@@ -76,18 +76,11 @@ _LAZY = {
     "read_result": "virtspec_mi.api",
     "gonio": "virtspec_mi.api",
     "read_gonio": "virtspec_mi.api",
-    "GonioResult": "virtspec_mi.instruments.goniophotometer.result",
     "fluctuation": "virtspec_mi.results.readings",
     "sphere_measure": "virtspec_mi.api",
     "take": "virtspec_mi.api",
-    "Sphere": "virtspec_mi.instruments.sphere.geometry",
-    "Port": "virtspec_mi.instruments.sphere.geometry",
-    "Baffle": "virtspec_mi.instruments.sphere.geometry",
-    "SphereResult": "virtspec_mi.instruments.sphere.result",
     "Result": "virtspec_mi.results.readings",
     "Settings": "virtspec_mi.settings",
-    "GonioOptions": "virtspec_mi.instruments.goniophotometer",
-    "SphereOptions": "virtspec_mi.instruments.sphere",
     "INSTRUMENTS": "virtspec_mi.instruments",
     "InstrumentGeometry": "virtspec_mi.geometry.disks",
     "instrument_scene": "virtspec_mi.scene",
@@ -110,7 +103,6 @@ _LAZY = {
     "read_measured": "virtspec_mi.comparison",
     "Comparison": "virtspec_mi.comparison",
     "MeasuredSpectrum": "virtspec_mi.comparison",
-    "GlossResult": "virtspec_mi.instruments.gloss",
     "colour": "virtspec_mi.applications.derived.targets",
     "band": "virtspec_mi.applications.derived.targets",
     "fapar": "virtspec_mi.applications.derived.targets",
@@ -144,7 +136,8 @@ from virtspec_mi import scenes  # noqa: E402  (the shipped scenes by name: paths
 def __dir__() -> list[str]:
     """The public names (lazy ones included, and the API functions generated from the registry)."""
 
-    return sorted({*__all__, *importlib.import_module(_LAZY["take"]).aliases()})
+    api = importlib.import_module(_LAZY["take"])
+    return sorted({*__all__, *api.aliases(), *api.exports()})
 
 
 def __getattr__(name: str) -> Any:
@@ -154,4 +147,6 @@ def __getattr__(name: str) -> Any:
         api = importlib.import_module(_LAZY["take"])  # the API, resolved on access as every lazy name
         if name in api.aliases():
             return api.alias(name)
+        if name in api.exports():  # an instrument's own public names (vm.GonioResult, vm.Sphere …)
+            return api.exported(name)
     raise AttributeError(f"module 'virtspec_mi' has no attribute {name!r}")

@@ -52,21 +52,17 @@ from virtspec_mi.engine.parameters import parameter_space
 from virtspec_mi.files import WriteError
 from virtspec_mi.engine.plan import Plan
 from virtspec_mi.engine.readings import in_process_runner
-from virtspec_mi.instruments import INSTRUMENTS
+from virtspec_mi.instruments import INSTRUMENTS, commanding, exported, exports
 from virtspec_mi.instruments import base as instruments_base
-from virtspec_mi.instruments.goniophotometer import GonioOptions
-from virtspec_mi.instruments.sphere import SphereOptions
-from virtspec_mi.instruments.goniophotometer.result import GonioResult
 from virtspec_mi.results.readings import Result, fluctuation
 from virtspec_mi.results.io import check_output
-from virtspec_mi.instruments.sphere.result import SphereResult
 from virtspec_mi.results.zarr import SUFFIX as ZARR_SUFFIX
 from virtspec_mi.results.zarr import ZarrTable
 from virtspec_mi.scene import find_bench, scene_fingerprint, scene_source
 from virtspec_mi.settings import Settings, keywords, resolve, true_or_false
 
 __all__ = ["measure", "sweep", "gonio", "read_result", "read_gonio", "fluctuation", "sphere_measure", "take", "alias",
-           "aliases"]
+           "aliases", "exported", "exports"]
 
 
 def measure(scene: Any, *, parameters: dict[str, Any] | None = None, defines: dict[str, Any] | None = None,
@@ -115,7 +111,7 @@ def measure(scene: Any, *, parameters: dict[str, Any] | None = None, defines: di
     space = parameter_space(bench, parameters or {})
     if space is not None and space.size != 1:
         raise ValueError("measure takes one value per parameter (a sweep takes several: use sweep)")
-    instrument = _instrument("hemispherical", scene, bench, defines)
+    instrument = _instrument(commanding("measure").name, scene, bench, defines)
     result = instruments_base.take(instrument, bench, settings, parameters=space, progress=progress)
     result = result.squeeze("theta_i", *([] if space is None else space.dims))  # one reading: scalar labels
     instrument.warn_if_uncertified(result)
@@ -239,7 +235,7 @@ def sweep(
         angles = _angles(resolved, theta_i, "a sweep")
         return DerivedSweep(tuple(float(t) for t in angles), tuple(
             _measure_target(scene, bench, defines, None, target, {**settings, "theta_i": float(t)}) for t in angles))
-    return _reading("hemispherical", "sweep", "a sweep", scene, settings, theta_i=theta_i, parameters=parameters,
+    return _reading(commanding("sweep").name, "sweep", "a sweep", scene, settings, theta_i=theta_i, parameters=parameters,
                     points=points, defines=defines, checkpoint=checkpoint, out=out, progress=progress, workers=workers,
                     task_readings=task_readings)
 
@@ -388,7 +384,7 @@ sweep.__signature__ = keywords(sweep, Settings)  # type: ignore[attr-defined]
 def gonio(scene: Any, *, theta_i: Any = None, parameters: dict[str, Any] | None = None, points: bool = False,
           defines: dict[str, Any] | None = None, checkpoint: str | os.PathLike | None = None,
           out: str | os.PathLike | None = None, progress: bool | None = None, workers: Any = None,
-          task_readings: int | None = None, **options: Any) -> GonioResult:
+          task_readings: int | None = None, **options: Any) -> Any:
     """
     A certified goniophotometer reading of ``scene``: the spectrophotometer's readings
     over every (wavelength, θi, specimen parameter point), with every escaping ray also
@@ -423,18 +419,18 @@ def gonio(scene: Any, *, theta_i: Any = None, parameters: dict[str, Any] | None 
     Baranoski et al. (2001), eq. (23), Sect. 6; :mod:`virtspec_mi.budgets.bins`.
     """
 
-    return _reading("goniophotometer", "gonio", "a goniophotometer reading", scene, options, theta_i=theta_i,
+    return _reading(commanding("gonio").name, "gonio", "a goniophotometer reading", scene, options, theta_i=theta_i,
                     parameters=parameters, points=points, defines=defines, checkpoint=checkpoint, out=out,
                     progress=progress, workers=workers, task_readings=task_readings)
 
 
-gonio.__signature__ = keywords(gonio, GonioOptions, Settings)  # type: ignore[attr-defined]
+gonio.__signature__ = keywords(gonio, commanding("gonio").options, Settings)  # type: ignore[attr-defined]
 
 
-def read_gonio(path: str | os.PathLike) -> GonioResult:
+def read_gonio(path: str | os.PathLike) -> Any:
     """A goniophotometer reading from a file written by its ``write`` (any kind: :func:`read_result`)."""
 
-    return GonioResult.read(path)
+    return commanding("gonio").result.read(path)
 
 
 def read_result(path: str | os.PathLike) -> Any:
@@ -453,7 +449,7 @@ def read_result(path: str | os.PathLike) -> Any:
 def sphere_measure(scene: Any, *, theta_i: Any = None, parameters: dict[str, Any] | None = None, points: bool = False,
                    defines: dict[str, Any] | None = None, checkpoint: str | os.PathLike | None = None,
                    out: str | os.PathLike | None = None, progress: bool | None = None, workers: Any = None,
-                   task_readings: int | None = None, **settings: Any) -> SphereResult:
+                   task_readings: int | None = None, **settings: Any) -> Any:
     """
     Read the specimen of ``scene`` as a physical integrating sphere would: a
     :class:`~virtspec_mi.instruments.sphere.result.SphereResult` over wavelength (and θi and specimen
@@ -483,12 +479,12 @@ def sphere_measure(scene: Any, *, theta_i: Any = None, parameters: dict[str, Any
     Baranoski et al. (2001), eqs. (2), (23); Goebel (1967).
     """
 
-    return _reading("sphere", "sphere_measure", "a sphere reading", scene, settings, theta_i=theta_i,
+    return _reading(commanding("sphere_measure").name, "sphere_measure", "a sphere reading", scene, settings, theta_i=theta_i,
                     parameters=parameters, points=points, defines=defines, checkpoint=checkpoint, out=out,
                     progress=progress, workers=workers, task_readings=task_readings)
 
 
-sphere_measure.__signature__ = keywords(sphere_measure, Settings, SphereOptions)  # type: ignore[attr-defined]
+sphere_measure.__signature__ = keywords(sphere_measure, Settings, commanding("sphere_measure").options)  # type: ignore[attr-defined]
 
 
 def take(instrument: str, scene: Any, *, theta_i: Any = None, parameters: dict[str, Any] | None = None,

@@ -151,7 +151,7 @@ def coverage(
 
     from virtspec_mi.budgets.intervals import clopper_pearson
     from virtspec_mi.engine.readings import trace_readings
-    from virtspec_mi.instruments.hemispherical import Hemispherical
+    from virtspec_mi.instruments import commanding
     from virtspec_mi.scene import find_bench, instrument_scene
 
     if readings < 1:
@@ -161,7 +161,7 @@ def coverage(
                       delta=delta, bound=bound, seed=seed, **settings)
     instrument = find_bench(instrument_scene(specimen.bsdf))
     start = time.perf_counter()
-    plan = Hemispherical().init(instrument, config, None, np.array([config.theta_i]), None)
+    plan = commanding("measure")().init(instrument, config, None, np.array([config.theta_i]), None)
     tally = trace_readings(instrument, plan, 0, [(551.0, config.theta_i, phi) for phi in azimuths])
     tallies, pilot = tally.counts, tally.pilot
     seconds = time.perf_counter() - start

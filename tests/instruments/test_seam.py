@@ -2,9 +2,9 @@
 The registry is the one place that knows the instruments (virtspec_mi.instruments): no module
 outside an instrument's own module looks one up by its name, branches on its name, or asks
 a result which kind it is. The command line, the result files, the integrator and the
-contract test are generated from the rows (a static reading of every module; the API's
-documented thin aliases, ``measure``/``sweep``/``gonio``/``sphere_measure``, name their
-instrument once each).
+contract test are generated from the rows (a static reading of every module). The API's
+documented functions (``measure``/``sweep``/``gonio``/``sphere_measure``) find their
+instrument by their own word (:func:`virtspec_mi.instruments.commanding`).
 """
 
 from __future__ import annotations
@@ -16,8 +16,6 @@ from virtspec_mi.instruments import INSTRUMENTS
 from virtspec_mi.results.base import KINDS
 
 PACKAGE = Path(__file__).resolve().parents[2] / "virtspec_mi"
-ALIASES = PACKAGE / "api.py"
-"""The API's hand-written aliases of take(name, …): each names its instrument once."""
 
 
 def outside_instruments() -> list[Path]:
@@ -52,10 +50,52 @@ def test_no_module_asks_a_result_which_kind_it_is():
     assert found == []
 
 
-def test_the_api_names_each_instrument_in_its_alias_only():
-    text = ALIASES.read_text()
-    for name in ("goniophotometer", "sphere"):
-        assert text.count(f'_reading("{name}"') == 1, name
+def test_no_module_outside_an_instruments_folder_names_it():
+    """
+    The done-when of issue 29: outside ``instruments/<name>/`` (and the registry, which lists
+    the rows) no module imports an instrument's folder, writes its module path, or passes its
+    registry name as a value (an argument, ``instrument=``, an ``INSTRUMENTS`` key). Docstrings
+    and comments may name it (documentation); a word that is also a physical quantity (a
+    sphere result's ``hemispherical`` reading of the same rays) is not passed as a name.
+    """
+
+    names = set(INSTRUMENTS)
+    found = []
+    for path in sorted(PACKAGE.rglob("*.py")):
+        parts = path.relative_to(PACKAGE).parts
+        if parts == ("instruments", "__init__.py"):
+            continue  # the registry
+        own = parts[1] if parts[0] == "instruments" and len(parts) > 2 else None
+        tree = ast.parse(path.read_text())
+        where = f"{path.relative_to(PACKAGE)}"
+        for node in ast.walk(tree):
+            if isinstance(node, (ast.Import, ast.ImportFrom)):
+                modules = [a.name for a in node.names] if isinstance(node, ast.Import) else [node.module or ""]
+                found += [f"{where}:{node.lineno} imports {m}" for m in modules if _folder(m, names, own)]
+            elif isinstance(node, ast.Constant) and isinstance(node.value, str) and _folder(node.value, names, own):
+                found.append(f"{where}:{node.lineno} writes the module path {node.value!r}")
+            elif isinstance(node, ast.Call):
+                values = [*node.args, *(k.value for k in node.keywords)]
+                found += [f"{where}:{node.lineno} passes the name {v.value!r}" for v in values
+                          if isinstance(v, ast.Constant) and v.value in names - {own}]
+    assert found == []
+
+
+def test_the_grep_finds_what_it_forbids():
+    """The rule above is not vacuous: the old API's alias and import are caught."""
+
+    names = set(INSTRUMENTS)
+    assert _folder("virtspec_mi.instruments.sphere.result", names, None)
+    assert not _folder("virtspec_mi.instruments.sphere.result", names, "sphere")
+    assert not _folder("virtspec_mi.instruments.base", names, None)
+    assert "goniophotometer" in names and "sphere" in names
+
+
+def _folder(module: str, names: set[str], own: str | None) -> bool:
+    """True when ``module`` (a dotted or slashed path) is inside the folder of an instrument other than ``own``."""
+
+    parts = module.replace("/", ".").split(".")
+    return len(parts) >= 3 and parts[:2] == ["virtspec_mi", "instruments"] and parts[2] in names - {own}
 
 
 def _key(node: ast.AST) -> bool:

@@ -33,8 +33,10 @@ backend" (the ``xarray.backends`` entry-point group).
 
 from __future__ import annotations
 
+import sys
 import warnings
 from importlib.metadata import entry_points
+from typing import Any
 
 from virtspec_mi.instruments.base import Instrument
 from virtspec_mi.instruments.gloss import GlossMeter
@@ -42,7 +44,7 @@ from virtspec_mi.instruments.goniophotometer import Goniophotometer
 from virtspec_mi.instruments.hemispherical import Hemispherical
 from virtspec_mi.instruments.sphere import IntegratingSphere
 
-__all__ = ["INSTRUMENTS", "ENTRY_POINTS", "discovered"]
+__all__ = ["INSTRUMENTS", "ENTRY_POINTS", "discovered", "commanding", "exported", "exports"]
 
 ENTRY_POINTS = "virtspec_mi.instruments"
 """The entry-point group of outside instruments."""
@@ -77,3 +79,37 @@ def discovered(builtin: tuple[type[Instrument], ...]) -> dict[str, type[Instrume
 
 INSTRUMENTS: dict[str, type[Instrument]] = discovered((Hemispherical, Goniophotometer, IntegratingSphere, GlossMeter))
 """Every instrument by name (its ``name``): the built-in ones, then the outside ones (:data:`ENTRY_POINTS`)."""
+
+
+def commanding(word: str) -> type[Instrument]:
+    """
+    The instrument of :data:`INSTRUMENTS` that has the subcommand ``word``, or whose
+    subcommand's API function is ``word`` (``measure``, ``sweep``, ``gonio``,
+    ``sphere_measure``, ``gloss`` …): how the API and the command line find the instrument
+    behind one of their words without naming it. ``ValueError`` for any other word.
+    """
+
+    for instrument in INSTRUMENTS.values():
+        if any(word in (command.name, command.function) for command in instrument.commands):
+            return instrument
+    words = sorted({w for i in INSTRUMENTS.values() for c in i.commands for w in (c.name, c.function) if w})
+    raise ValueError(f"no instrument has the command or API function {word!r} (known: {', '.join(words)})")
+
+
+def exported(name: str) -> Any:
+    """
+    The public name ``name`` that an instrument of :data:`INSTRUMENTS` exports at the top
+    level (:attr:`~virtspec_mi.instruments.base.Instrument.exports`: ``vm.GonioResult``,
+    ``vm.Sphere`` …), from its own module; ``AttributeError`` when none does.
+    """
+
+    for instrument in INSTRUMENTS.values():
+        if name in instrument.exports:
+            return getattr(sys.modules[instrument.__module__], name)
+    raise AttributeError(name)
+
+
+def exports() -> list[str]:
+    """Every name the instruments of :data:`INSTRUMENTS` export at the top level."""
+
+    return [name for instrument in INSTRUMENTS.values() for name in instrument.exports]

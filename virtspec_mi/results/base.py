@@ -153,6 +153,11 @@ class ResultBase:
 
     FORMAT: ClassVar[str]
     """The format tag of this kind's files: ``"virtspec-mi <word> <version>"``."""
+    VARIABLES: ClassVar[dict[str, tuple[str, str]]] = {}
+    """
+    ``(units, long_name)`` of this kind's own dataset variables and coordinates, beside
+    those every kind shares (:data:`virtspec_mi.results.formats.VARIABLES`); none by default.
+    """
     LEGACY: ClassVar[tuple[str, ...]] = ()
     """Older tags of this kind that :meth:`from_tagged` still reads."""
     KIND: ClassVar[str]

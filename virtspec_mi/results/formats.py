@@ -10,7 +10,8 @@ What a result file carries: format tags, units and long names
   had one (a goniophotometer dataset's ``gonio_json``; a sphere result's
   ``"kind": "sphere_result"`` layout, tagged ``"virtspec-mi sphere 0"``).
 - **Units and long names** (:data:`VARIABLES`, :func:`annotate`): one table of
-  ``(units, long_name)`` for every variable and coordinate a result's dataset may hold
+  ``(units, long_name)`` for the variables and coordinates every result shares, and each
+  kind's own table of its variables (its ``VARIABLES``, in its instrument's folder)
   (UDUNITS spellings: ``nm``, ``degree``, ``sr``, ``1/sr``, ``1`` for fractions and counts).
 
 References
@@ -36,15 +37,6 @@ VARIABLES: dict[str, tuple[str, str]] = {
     "wavelength": ("nm", "wavelength"),
     "theta_i": ("degree", "polar angle of incidence"),
     "point": ("1", "parameter point"),
-    "configuration": ("1", "sphere configuration (sample or standard in the beam)"),
-    "theta_o": ("degree", "polar angle of the outgoing direction, bin centre"),
-    "theta_o_lower": ("degree", "polar angle of the outgoing direction, bin lower edge"),
-    "theta_o_upper": ("degree", "polar angle of the outgoing direction, bin upper edge"),
-    "phi_o": ("degree", "azimuth of the outgoing direction, bin centre"),
-    "phi_o_lower": ("degree", "azimuth of the outgoing direction, bin lower edge"),
-    "phi_o_upper": ("degree", "azimuth of the outgoing direction, bin upper edge"),
-    "theta_o_edge": ("degree", "polar angle of the outgoing direction, bin edge"),
-    "phi_o_edge": ("degree", "azimuth of the outgoing direction, bin edge"),
     # hemispherical estimates and their parts
     "reflectance": ("1", "hemispherical reflectance m/N"),
     "transmittance": ("1", "hemispherical transmittance t/N"),
@@ -75,69 +67,40 @@ VARIABLES: dict[str, tuple[str, str]] = {
     "absorptance_lower": ("1", "Clopper-Pearson lower bound of the absorptance"),
     "absorptance_upper": ("1", "Clopper-Pearson upper bound of the absorptance"),
     "done": ("1", "the reading has finished (1) or not yet (0)"),
-    # the goniophotometer
-    "bin_counts": (_COUNT, "rays that left into the bin (exact)"),
-    "fraction": ("1", "bin_counts / rays"),
-    "brdf": ("1/sr", "BRDF (BTDF beyond theta_o = 90 deg) averaged over the bin: fraction / solid_angle"),
-    "brdf_lower": ("1/sr", "simultaneous Clopper-Pearson lower bound of brdf (all bins at once)"),
-    "brdf_upper": ("1/sr", "simultaneous Clopper-Pearson upper bound of brdf (all bins at once)"),
-    "solid_angle": ("sr", "projected solid angle of the bin, integral of |cos theta_o|"),
-    "cdf_theta_o": ("1", "empirical CDF of theta_o at the bin edges"),
-    "cdf_phi_o": ("1", "empirical CDF of phi_o at the bin edges"),
-    "outside": (_COUNT, "escaping rays in no bin"),
-    "bins_mu": ("1", "every bin fraction within bins_mu at once at delta (NaN: not certified)"),
-    "cdf_mu": ("1", "DKW-Massart sup error of cdf_theta_o and cdf_phi_o at delta (NaN: not certified)"),
-    # the integrating sphere
-    "detected": (_COUNT, "rays that reached the detector"),
-    "absorbed_wall": (_COUNT, "rays absorbed by the sphere wall"),
-    "absorbed_specimen": (_COUNT, "rays absorbed by the specimen"),
-    "absorbed_other": (_COUNT, "rays absorbed by the standard or another holder"),
-    "hemispherical_reflected": (_COUNT, "rays the specimen reflected at its first interaction"),
-    "hemispherical_specular": (_COUNT, "rays the specimen reflected by a delta event at its first interaction"),
-    "hemispherical_transmitted": (_COUNT, "rays the specimen transmitted at its first interaction"),
-    "detected_from_upper": (_COUNT, "detected rays the specimen had first reflected"),
-    "wall_reflections": (_COUNT, "wall (and baffle) reflections, summed over the rays"),
-    "wall_reflectance": ("1", "reflectance of the sphere wall"),
-    "detector_fraction": ("1", "detected fraction with the sample: detected/rays"),
-    "standard_fraction": ("1", "detected fraction with the reference standard: detected/rays"),
-    "reading": ("1", "the instrument's reading: standard value * detector_fraction / standard_fraction"),
-    "reading_lower": ("1", "lower end of the reading's certified interval (probability >= 1 - delta)"),
-    "reading_upper": ("1", "upper end of the reading's certified interval (probability >= 1 - delta)"),
-    "hemispherical": ("1", "hemispherical value of the same rays (the specimen's first interaction)"),
-    "hemispherical_lower": ("1", "Clopper-Pearson lower bound of the hemispherical value at delta"),
-    "hemispherical_upper": ("1", "Clopper-Pearson upper bound of the hemispherical value at delta"),
-    "instrument_error": ("1", "reading - hemispherical"),
-    "fraction_mu": ("1", "tolerance of each detector fraction at delta/2 (NaN: not certified)"),
 }
-"""``(units, long_name)`` of every variable and coordinate a result's dataset may hold."""
+"""``(units, long_name)`` of the variables and coordinates that every result kind shares."""
 
 
-def describe_variable(name: str, parameters: Mapping[str, str] | None = None) -> tuple[str, str]:
+def describe_variable(name: str, parameters: Mapping[str, str] | None = None,
+                      own: Mapping[str, tuple[str, str]] | None = None) -> tuple[str, str]:
     """
-    ``(units, long_name)`` of a dataset variable or coordinate: from :data:`VARIABLES`, a
-    two-stage pilot's ``pilot_<count>``, a sphere port's ``lost_<port>``, or a swept
-    specimen parameter (``parameters``: name → ``mi.traverse`` key; its unit is the
-    specimen plugin's own, not known here). ``KeyError`` for any other name.
+    ``(units, long_name)`` of a dataset variable or coordinate: from :data:`VARIABLES` or
+    the kind's ``own`` table, a two-stage pilot's ``pilot_<count>``, or a swept specimen
+    parameter (``parameters``: name → ``mi.traverse`` key; its unit is the specimen
+    plugin's own, not known here). ``KeyError`` for any other name.
     """
 
-    if name in VARIABLES:
-        return VARIABLES[name]
-    if name.startswith("pilot_") and name[6:] in VARIABLES:
-        units, long_name = VARIABLES[name[6:]]
+    table = {**VARIABLES, **(own or {})}
+    if name in table:
+        return table[name]
+    if name.startswith("pilot_") and name[6:] in table:
+        units, long_name = table[name[6:]]
         return units, f"two-stage pilot (spent, not in the estimates): {long_name}"
-    if name.startswith("lost_"):
-        return _COUNT, f"rays lost through port {name[5:]!r}"
     if parameters is not None and name in parameters:
         return "as in the specimen plugin", f"specimen parameter {name} (mi.traverse key {parameters[name]})"
     raise KeyError(f"no units and long_name for the dataset variable {name!r}: add it to "
-                   "virtspec_mi.results.base.VARIABLES")
+                   "virtspec_mi.results.formats.VARIABLES or the kind's own VARIABLES")
 
 
-def annotate(dataset: Any, parameters: Mapping[str, str] | None = None) -> Any:
-    """``dataset`` with ``units`` and ``long_name`` on every variable and coordinate (:func:`describe_variable`)."""
+def annotate(dataset: Any, parameters: Mapping[str, str] | None = None,
+             own: Mapping[str, tuple[str, str]] | None = None) -> Any:
+    """
+    ``dataset`` with ``units`` and ``long_name`` on every variable and coordinate
+    (:func:`describe_variable`; ``own``: the result kind's own table).
+    """
 
     for name in (*dataset.data_vars, *dataset.coords):
-        units, long_name = describe_variable(str(name), parameters)
+        units, long_name = describe_variable(str(name), parameters, own)
         dataset[name].attrs.update(units=units, long_name=long_name)
     return dataset
 

@@ -546,7 +546,7 @@ class Result(ResultBase):
                  "wavelength_independent": int(self.wavelength_independent), "version": self.version,
                  **({} if self.parameters is None else {"parameters": json.dumps(self.parameters)}),
                  **self._dataset_attrs()}
-        dataset = annotate(xr.Dataset(variables, coords=coords, attrs=attrs), self._parameter_keys())
+        dataset = annotate(xr.Dataset(variables, coords=coords, attrs=attrs), self._parameter_keys(), self.VARIABLES)
         dataset["certified_mu"].attrs["meaning"] = ("tolerance the rays guarantee at interval_delta under the "
                                                     "rule used; NaN: not certified")
         return dataset

@@ -300,7 +300,7 @@ def _table(result: Any, identity: str) -> Any:
         for name in Counts.names():
             dataset[f"pilot_{name}"] = (dims, np.asarray(getattr(result.pilot, name)))
     dataset["done"] = (dims, np.ones(result.shape, dtype=bool))
-    annotate(dataset, result._parameter_keys())
+    annotate(dataset, result._parameter_keys(), result.VARIABLES)
     attrs = {k: v for k, v in dataset.attrs.items() if k != "result_json"}
     dataset.attrs = {**attrs, TABLE_ATTRIBUTE: json.dumps(meta), **({_IDENTITY: identity} if identity else {})}
     dataset.attrs[TABLE_ATTRIBUTE] = json.dumps({**meta, CHECKSUM: checksum(as_plain(dataset))})

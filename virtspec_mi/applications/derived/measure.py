@@ -49,7 +49,7 @@ from virtspec_mi.applications.derived.targets import ColourTarget, Target, Value
 from virtspec_mi.budgets.twostage import stage_two_seed
 from virtspec_mi.engine.plan import Plan
 from virtspec_mi.engine.readings import trace_allocated
-from virtspec_mi.instruments.hemispherical import hemispherical_result
+from virtspec_mi.instruments.base import readings_result
 from virtspec_mi.settings import Settings
 
 __all__ = ["take_target", "plan_target", "TargetPlan", "PILOT_TOLERANCE", "PILOT_DELTA", "REFUSED_SETTINGS"]
@@ -183,7 +183,7 @@ def take_target(bench: Any, settings: Settings, target: Target, *, scene: str = 
     quantity = functionals[0].quantity
     used, tally = _trace(bench, settings, grid, rays, stage_two_seed(settings.seed))
     plan = Plan(settings.updated(wavelengths=[float(w) for w in grid[used]]), (float(settings.theta_i),), scene=scene)
-    readings = hemispherical_result(bench, plan, tally, scene, source).squeeze("theta_i")
+    readings = readings_result(bench, plan, tally, scene, source).squeeze("theta_i")
     spent = rays[used]
     values = _fates(tally.counts, quantity) / spent
     if not np.all(readings.certified):

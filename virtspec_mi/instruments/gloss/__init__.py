@@ -45,9 +45,8 @@ from virtspec_mi.checks import number, shown_value
 from virtspec_mi.engine.parameters import ParameterSpace
 from virtspec_mi.engine.plan import Columns, Plan
 from virtspec_mi.engine.tally import Tally
-from virtspec_mi.instruments.base import Instrument, reading_grid
+from virtspec_mi.instruments.base import Instrument, reading_grid, readings_result
 from virtspec_mi.instruments.command import Command, Figure
-from virtspec_mi.instruments.hemispherical import hemispherical_result
 from virtspec_mi.kernel.counts import Fate
 from virtspec_mi.kernel.hooks import ExitHook
 from virtspec_mi.results.base import plain_data
@@ -230,6 +229,7 @@ class GlossMeter(Instrument):
     """
 
     name: ClassVar[str] = "gloss"
+    exports: ClassVar[tuple[str, ...]] = ("GlossResult",)
     options: ClassVar[type[Options] | None] = GlossOptions
     result: ClassVar[type] = GlossResult
     commands: ClassVar[tuple[Command, ...]] = (Command(
@@ -263,7 +263,7 @@ class GlossMeter(Instrument):
         return self.plan
 
     def postprocess(self, tally: Tally) -> GlossResult:
-        reading = hemispherical_result(self.bench, self.plan, tally, self.scene, self.source)
+        reading = readings_result(self.bench, self.plan, tally, self.scene, self.source)
         fields = {item.name: getattr(reading, item.name) for item in dataclass_fields(reading)}
         return GlossResult(**fields, glossy=reading_grid(self.plan, tally.bins[:, 0]), cone=self.gloss_options.cone)
 

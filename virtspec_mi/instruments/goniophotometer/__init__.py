@@ -30,13 +30,12 @@ from virtspec_mi.engine.parameters import ParameterSpace
 from virtspec_mi.engine.plan import Columns, Plan
 from virtspec_mi.engine.tally import Tally
 from virtspec_mi.instruments.goniophotometer.bins import BINNINGS, HEMISPHERES, GonioBins, make_bins, parse_edges
-from virtspec_mi.instruments.base import Instrument, reading_grid
+from virtspec_mi.instruments.base import Instrument, reading_grid, readings_result
 from virtspec_mi.instruments.command import Command, Figure
-from virtspec_mi.instruments.hemispherical import hemispherical_result
 from virtspec_mi.instruments.goniophotometer.result import GonioResult
 from virtspec_mi.settings import Options, Settings, one_of, option, true_or_false
 
-__all__ = ["GonioOptions", "Goniophotometer", "KlemsFlags"]
+__all__ = ["GonioOptions", "Goniophotometer", "KlemsFlags", "GonioResult"]
 
 
 def _bin_spec(name: str) -> Any:
@@ -165,6 +164,7 @@ class Goniophotometer(Instrument):
     """
 
     name: ClassVar[str] = "goniophotometer"
+    exports: ClassVar[tuple[str, ...]] = ("GonioResult", "GonioOptions")
     options: ClassVar[type[Options] | None] = GonioOptions
     result: ClassVar[type] = GonioResult
     commands: ClassVar[tuple[Command, ...]] = (GONIO_COMMAND,)
@@ -206,7 +206,7 @@ class Goniophotometer(Instrument):
         """The hemispherical reading of the same rays and its per-bin counts over the readings' dims."""
 
         plan, options = self.plan, self.gonio_options
-        result = hemispherical_result(self.bench, plan, tally, self.scene, self.source)
+        result = readings_result(self.bench, plan, tally, self.scene, self.source)
         bin_counts = reading_grid(plan, tally.bins.reshape(-1, *options.bins.shape))
         return GonioResult(result=result, bin_counts=bin_counts, bins=options.bins, guarantee=self.guarantee,
                            relative_tolerance=options.relative_tolerance, brdf_floor=options.brdf_floor)

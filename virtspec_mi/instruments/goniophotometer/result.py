@@ -92,6 +92,28 @@ class GonioResult(ResultBase):
     brdf_floor: float | None = None
 
     FORMAT: ClassVar[str] = "virtspec-mi gonio 1"
+    VARIABLES: ClassVar[dict[str, tuple[str, str]]] = {
+        "theta_o": ("degree", "polar angle of the outgoing direction, bin centre"),
+        "theta_o_lower": ("degree", "polar angle of the outgoing direction, bin lower edge"),
+        "theta_o_upper": ("degree", "polar angle of the outgoing direction, bin upper edge"),
+        "phi_o": ("degree", "azimuth of the outgoing direction, bin centre"),
+        "phi_o_lower": ("degree", "azimuth of the outgoing direction, bin lower edge"),
+        "phi_o_upper": ("degree", "azimuth of the outgoing direction, bin upper edge"),
+        "theta_o_edge": ("degree", "polar angle of the outgoing direction, bin edge"),
+        "phi_o_edge": ("degree", "azimuth of the outgoing direction, bin edge"),
+        "bin_counts": ("1", "rays that left into the bin (exact)"),
+        "fraction": ("1", "bin_counts / rays"),
+        "brdf": ("1/sr", "BRDF (BTDF beyond theta_o = 90 deg) averaged over the bin: fraction / solid_angle"),
+        "brdf_lower": ("1/sr", "simultaneous Clopper-Pearson lower bound of brdf (all bins at once)"),
+        "brdf_upper": ("1/sr", "simultaneous Clopper-Pearson upper bound of brdf (all bins at once)"),
+        "solid_angle": ("sr", "projected solid angle of the bin, integral of |cos theta_o|"),
+        "cdf_theta_o": ("1", "empirical CDF of theta_o at the bin edges"),
+        "cdf_phi_o": ("1", "empirical CDF of phi_o at the bin edges"),
+        "outside": ("1", "escaping rays in no bin"),
+        "bins_mu": ("1", "every bin fraction within bins_mu at once at delta (NaN: not certified)"),
+        "cdf_mu": ("1", "DKW-Massart sup error of cdf_theta_o and cdf_phi_o at delta (NaN: not certified)"),
+    }
+    """``(units, long_name)`` of this kind's own variables and coordinates (beside :data:`~virtspec_mi.results.formats.VARIABLES`)."""
     KIND: ClassVar[str] = "goniophotometer reading"
     KIND_DIMS: ClassVar[tuple[str, ...]] = _BINS
     KIND_DIMS_REASON: ClassVar[str] = (
@@ -482,7 +504,7 @@ class GonioResult(ResultBase):
             "phi_folded": int(b.fold_phi), "phi_i": self.phi_i, "binning": b.binning, "guarantee": self.guarantee,
             "bins": self.size, "bins_delta": self.delta, **self._dataset_attrs(),
         })
-        return annotate(dataset, self._parameter_keys())
+        return annotate(dataset, self._parameter_keys(), self.VARIABLES)
 
     def csv_dataset(self) -> Any:
         """What a ``.csv`` file holds, one row per bin: :meth:`to_dataset` without the CDFs over bin edges."""

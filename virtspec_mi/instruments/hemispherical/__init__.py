@@ -35,14 +35,13 @@ from virtspec_mi.checks import MAX_RAYS
 
 from virtspec_mi.engine.parameters import ParameterSpace
 from virtspec_mi.engine.plan import Columns, Plan
-from virtspec_mi.engine.readings import shares_wavelengths
 from virtspec_mi.engine.tally import Tally
-from virtspec_mi.instruments.base import Instrument, reading_grid, reading_labels
+from virtspec_mi.instruments.base import Instrument, readings_result
 from virtspec_mi.instruments.command import Command, Figure, Session
 from virtspec_mi.results.readings import Result, fluctuation
 from virtspec_mi.settings import Options, Settings, option
 
-__all__ = ["Hemispherical", "hemispherical_result", "SweepFlags", "MeasureFlags"]
+__all__ = ["Hemispherical", "SweepFlags", "MeasureFlags"]
 
 
 def _check_densities(value: Any) -> tuple[float, ...]:
@@ -200,26 +199,9 @@ class Hemispherical(Instrument):
         return self.plan
 
     def postprocess(self, tally: Tally) -> Result:
-        return hemispherical_result(self.bench, self.plan, tally, self.scene, self.source)
+        return readings_result(self.bench, self.plan, tally, self.scene, self.source)
 
     def warn_if_uncertified(self, result: Result, stacklevel: int = 2) -> None:
         result.warn_if_uncertified(stacklevel=stacklevel + 2)
 
 
-def hemispherical_result(bench: Any, plan: Plan, tally: Tally, scene: str = "", source: dict | None = None
-                         ) -> Result:
-    """
-    The hemispherical reading of ``plan``'s readings (one group) from their tallies: a
-    :class:`~virtspec_mi.results.readings.Result` over (wavelength, θi, parameter dims),
-    recording the scene's fingerprint ``scene`` and its ``source``.
-    """
-
-    space = plan.parameters
-    dims, coords = reading_labels(plan)
-    return Result(
-        dims=dims, coords=coords,
-        counts=tally.counts.map(lambda v: reading_grid(plan, v)),
-        pilot=None if tally.pilot is None else tally.pilot.map(lambda v: reading_grid(plan, v)),
-        settings=plan.settings, geometry=bench.geometry, seconds=tally.seconds, scene=scene,
-        wavelength_independent=shares_wavelengths(bench),
-        parameters=None if space is None else space.as_dict(), source=source)

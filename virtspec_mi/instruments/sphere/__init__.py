@@ -57,7 +57,7 @@ from virtspec_mi.budgets.rules import DETECTOR_COLUMNS
 from virtspec_mi.engine.parameters import ParameterSpace
 from virtspec_mi.engine.plan import Columns, Plan
 from virtspec_mi.engine.tally import Tally
-from virtspec_mi.instruments.sphere.geometry import Sphere, is_sphere_parameter, sphere_from_parameters
+from virtspec_mi.instruments.sphere.geometry import Baffle, Port, Sphere, is_sphere_parameter, sphere_from_parameters
 from virtspec_mi.instruments.base import Instrument, reading_grid, reading_labels
 from virtspec_mi.instruments.command import Command, Figure, Session
 from virtspec_mi.instruments.sphere.walk import FATES, HEMISPHERES, SPECIMEN, Holder, SphereFate, holder_frame
@@ -358,6 +358,7 @@ class IntegratingSphere(Instrument):
     """
 
     name: ClassVar[str] = "sphere"
+    exports: ClassVar[tuple[str, ...]] = ("Sphere", "Port", "Baffle", "SphereResult", "SphereOptions")
     options: ClassVar[type[Options] | None] = SphereOptions
     result: ClassVar[type] = SphereResult
     commands: ClassVar[tuple[Command, ...]] = (SPHERE_COMMAND,)

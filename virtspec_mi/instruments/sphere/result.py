@@ -145,6 +145,30 @@ class SphereResult(ResultBase):
     source: dict | None = None
 
     FORMAT: ClassVar[str] = "virtspec-mi sphere 1"
+    VARIABLES: ClassVar[dict[str, tuple[str, str]]] = {
+        "configuration": ("1", "sphere configuration (sample or standard in the beam)"),
+        "detected": ("1", "rays that reached the detector"),
+        "absorbed_wall": ("1", "rays absorbed by the sphere wall"),
+        "absorbed_specimen": ("1", "rays absorbed by the specimen"),
+        "absorbed_other": ("1", "rays absorbed by the standard or another holder"),
+        "hemispherical_reflected": ("1", "rays the specimen reflected at its first interaction"),
+        "hemispherical_specular": ("1", "rays the specimen reflected by a delta event at its first interaction"),
+        "hemispherical_transmitted": ("1", "rays the specimen transmitted at its first interaction"),
+        "detected_from_upper": ("1", "detected rays the specimen had first reflected"),
+        "wall_reflections": ("1", "wall (and baffle) reflections, summed over the rays"),
+        "wall_reflectance": ("1", "reflectance of the sphere wall"),
+        "detector_fraction": ("1", "detected fraction with the sample: detected/rays"),
+        "standard_fraction": ("1", "detected fraction with the reference standard: detected/rays"),
+        "reading": ("1", "the instrument's reading: standard value * detector_fraction / standard_fraction"),
+        "reading_lower": ("1", "lower end of the reading's certified interval (probability >= 1 - delta)"),
+        "reading_upper": ("1", "upper end of the reading's certified interval (probability >= 1 - delta)"),
+        "hemispherical": ("1", "hemispherical value of the same rays (the specimen's first interaction)"),
+        "hemispherical_lower": ("1", "Clopper-Pearson lower bound of the hemispherical value at delta"),
+        "hemispherical_upper": ("1", "Clopper-Pearson upper bound of the hemispherical value at delta"),
+        "instrument_error": ("1", "reading - hemispherical"),
+        "fraction_mu": ("1", "tolerance of each detector fraction at delta/2 (NaN: not certified)"),
+    }
+    """``(units, long_name)`` of this kind's own variables and coordinates (beside :data:`~virtspec_mi.results.formats.VARIABLES`; a port's ``lost_<port>``: :meth:`to_dataset`)."""
     LEGACY: ClassVar[tuple[str, ...]] = ("virtspec-mi sphere 0",)
     KIND: ClassVar[str] = "integrating-sphere reading"
     KIND_DIMS: ClassVar[tuple[str, ...]] = ("configuration",)
@@ -608,7 +632,9 @@ class SphereResult(ResultBase):
                  "version": self.version, **({} if self.parameters is None else
                                              {"parameters": json.dumps(self.parameters)}),
                  **self._dataset_attrs()}
-        return annotate(xr.Dataset(variables, coords=coords, attrs=attrs), self._parameter_keys())
+        own = {**self.VARIABLES, **{name: ("1", f"rays lost through port {name[5:]!r}") for name in variables
+                                   if name.startswith("lost_")}}
+        return annotate(xr.Dataset(variables, coords=coords, attrs=attrs), self._parameter_keys(), own)
 
 
 def _from_layout_0(data: Any) -> dict[str, Any]:

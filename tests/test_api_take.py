@@ -1,7 +1,7 @@
 """
 Tests of ``virtspec_mi.api.take``: any instrument of the registry by name, through the API's
 keyed path — the same counts as its own entry (``gonio``) or as the engine's in-process
-``instruments.base.take``, a checkpoint and Dask workers as for a sweep, errors at the boundary.
+``Instrument.run``, a checkpoint and Dask workers as for a sweep, errors at the boundary.
 """
 
 from __future__ import annotations
@@ -11,7 +11,6 @@ import pytest
 
 import virtspec_mi as vm
 from virtspec_mi.instruments import INSTRUMENTS
-from virtspec_mi.instruments.base import take
 
 ROUGH = {"type": "roughconductor", "alpha": 0.05}
 
@@ -24,7 +23,7 @@ def mirror(mi):
 def test_a_gloss_reading_by_name_counts_as_the_engines_own(mirror):
     reading = vm.take("gloss", mirror, theta_i=60, cone=3, rays=20_000, wavelengths=[450, 650])
     meter = INSTRUMENTS["gloss"]
-    own = take(meter(), vm.find_bench(mirror), vm.Settings(rays=20_000, wavelengths=[450, 650]), meter.options(cone=3),
+    own = meter().run(vm.find_bench(mirror), vm.Settings(rays=20_000, wavelengths=[450, 650]), meter.options(cone=3),
                theta_i=[60])
     assert np.array_equal(reading.glossy, own.glossy) and np.array_equal(reading.reflected, own.reflected)
     assert reading.source == {"scene": "scene dict, specimen RoughConductor", "defines": {}}

@@ -53,12 +53,11 @@ from virtspec_mi.files import WriteError
 from virtspec_mi.engine.plan import Plan
 from virtspec_mi.engine.readings import in_process_runner
 from virtspec_mi.instruments import INSTRUMENTS, commanding, exported, exports
-from virtspec_mi.instruments import base as instruments_base
 from virtspec_mi.results.readings import Result, fluctuation
 from virtspec_mi.results.io import check_output
 from virtspec_mi.results.zarr import SUFFIX as ZARR_SUFFIX
 from virtspec_mi.results.zarr import ZarrTable
-from virtspec_mi.scene import find_bench, scene_fingerprint, scene_source
+from virtspec_mi.scene import LoadedScene, loaded
 from virtspec_mi.settings import Settings, keywords, resolve, true_or_false
 
 __all__ = ["measure", "sweep", "gonio", "read_result", "read_gonio", "fluctuation", "sphere_measure", "take", "alias",
@@ -104,22 +103,22 @@ def measure(scene: Any, *, parameters: dict[str, Any] | None = None, defines: di
     Baranoski et al. (2001), eqs. (2), (23).
     """
 
-    bench = find_bench(scene, defines)
+    scene = loaded(scene, defines)
+    bench = scene.bench
     if target is not None:
-        return _measure_target(scene, bench, defines, parameters, target, settings)
+        return _measure_target(scene, parameters, target, settings)
     settings, = resolve("measure", settings, _scene_options(bench, Settings))
     space = parameter_space(bench, parameters or {})
     if space is not None and space.size != 1:
         raise ValueError("measure takes one value per parameter (a sweep takes several: use sweep)")
-    instrument = _instrument(commanding("measure").name, scene, bench, defines)
-    result = instruments_base.take(instrument, bench, settings, parameters=space, progress=progress)
+    instrument = _instrument(commanding("measure").name, scene)
+    result = instrument.run(bench, settings, parameters=space, progress=progress)
     result = result.squeeze("theta_i", *([] if space is None else space.dims))  # one reading: scalar labels
     instrument.warn_if_uncertified(result)
     return result
 
 
-def _measure_target(scene: Any, bench: Bench, defines: dict[str, Any] | None, parameters: Any, target: Any,
-                    settings: dict[str, Any]) -> Any:
+def _measure_target(scene: LoadedScene, parameters: Any, target: Any, settings: dict[str, Any]) -> Any:
     """:func:`measure` of a derived quantity (:func:`virtspec_mi.applications.derived.measure.take_target`)."""
 
     from virtspec_mi.applications.derived.measure import REFUSED_SETTINGS, take_target
@@ -131,9 +130,8 @@ def _measure_target(scene: Any, bench: Bench, defines: dict[str, Any] | None, pa
     if parameters:
         raise ValueError("parameters: a target is measured at the scene's own specimen parameters (set them in the "
                          "scene or with defines)")
-    resolved, = resolve("measure", settings, _scene_options(bench, Settings))
-    return take_target(bench, resolved, target, scene=scene_fingerprint(scene, bench, defines),
-                       source=scene_source(scene, bench, defines))
+    resolved, = resolve("measure", settings, _scene_options(scene.bench, Settings))
+    return take_target(scene.bench, resolved, target, scene=scene.fingerprint, source=scene.source)
 
 
 def sweep(
@@ -227,22 +225,22 @@ def sweep(
             raise ValueError(f"{', '.join(given)}: not taken with a target (each angle is one vm.measure(target=...))")
         from virtspec_mi.applications.derived.result import DerivedSweep
 
-        bench = find_bench(scene, defines)
+        scene = loaded(scene, defines)
         resolved, = resolve("sweep", {k: v for k, v in settings.items() if k not in ("wavelengths", "mu", "rays",
                                                                                     "bound", "pilot_rays",
                                                                                     "pilot_delta", "joint")},
-                            _scene_options(bench, Settings))
+                            _scene_options(scene.bench, Settings))
         angles = _angles(resolved, theta_i, "a sweep")
         return DerivedSweep(tuple(float(t) for t in angles), tuple(
-            _measure_target(scene, bench, defines, None, target, {**settings, "theta_i": float(t)}) for t in angles))
+            _measure_target(scene, None, target, {**settings, "theta_i": float(t)}) for t in angles))
     return _reading(commanding("sweep").name, "sweep", "a sweep", scene, settings, theta_i=theta_i, parameters=parameters,
                     points=points, defines=defines, checkpoint=checkpoint, out=out, progress=progress, workers=workers,
                     task_readings=task_readings)
 
 
-def _keyed(name: str, what: str, scene: Any, bench: Bench, settings: Settings, options: Any, *, theta_i: Any,
-           parameters: dict[str, Any] | None, points: bool, defines: dict[str, Any] | None, checkpoint: Any, out: Any,
-           progress: bool | None, workers: Any, task_readings: int | None) -> Any:
+def _keyed(name: str, what: str, scene: LoadedScene, settings: Settings, options: Any, *, theta_i: Any,
+           parameters: dict[str, Any] | None, points: bool, checkpoint: Any, out: Any, progress: bool | None,
+           workers: Any, task_readings: int | None) -> Any:
     """
     One keyed measurement (``what``, in messages) with the instrument ``name`` of the registry, as
     :func:`sweep`, :func:`gonio` and :func:`sphere_measure` take it: the call's
@@ -258,17 +256,18 @@ def _keyed(name: str, what: str, scene: Any, bench: Bench, settings: Settings, o
     if out is not None:
         check_output(out)
         checkpoint = checkpoint if checkpoint is not None else checkpoint_for(out)
+    bench = scene.bench
     space = parameter_space(bench, parameters or {}, points=true_or_false("points")(points))
     angles = _angles(settings, theta_i, what)
     if len(np.unique(settings.wavelengths)) != len(settings.wavelengths):
         raise ValueError(f"wavelengths of {what} must be distinct (got repeated values)")
-    instrument = _instrument(name, scene, bench, defines)
+    instrument = _instrument(name, scene)
     plan = instrument.init(bench, settings, options, angles, space)
     with ExitStack() as held:
         held.enter_context(_naming(checkpoint))  # an interrupt (SIGINT/SIGTERM) names the file to resume from
         if checkpoint is not None:  # one run per checkpoint, writable: checked before any cluster or tracing
             held.enter_context(claim(checkpoint))
-        runner = held.enter_context(_runner(scene, defines, workers, task_readings, instrument.scene, plan))
+        runner = held.enter_context(_runner(scene, workers, task_readings, plan))
         if out is not None and out.suffix.lower() == ZARR_SUFFIX and plan.hooks is None:  # fills as batches finish
             identity = {"scene": instrument.scene, **plan.settings.as_dict(), "theta_i": [float(t) for t in angles],
                         **({} if space is None else {"parameters": space.as_dict()})}
@@ -282,10 +281,10 @@ def _keyed(name: str, what: str, scene: Any, bench: Bench, settings: Settings, o
     return result
 
 
-def _instrument(name: str, scene: Any, bench: Bench, defines: dict[str, Any] | None) -> Any:
+def _instrument(name: str, scene: LoadedScene) -> Any:
     """The instrument ``name`` of the registry for ``scene``: its fingerprint and its source recorded."""
 
-    return INSTRUMENTS[name](scene_fingerprint(scene, bench, defines), scene_source(scene, bench, defines))
+    return INSTRUMENTS[name](scene.fingerprint, scene.source)
 
 
 @contextmanager
@@ -301,8 +300,7 @@ def _naming(checkpoint: Path | None) -> Iterator[None]:
 
 
 @contextmanager
-def _runner(scene: Any, defines: dict[str, Any] | None, workers: Any, task_readings: int | None, fingerprint: str,
-            plan: Plan) -> Iterator[Any]:
+def _runner(scene: LoadedScene, workers: Any, task_readings: int | None, plan: Plan) -> Iterator[Any]:
     """``None`` (the engine's in-process default) or a Dask runner of ``plan`` on ``workers``, held for the run."""
 
     if workers is None:
@@ -314,9 +312,9 @@ def _runner(scene: Any, defines: dict[str, Any] | None, workers: Any, task_readi
 
     scaleout.check_workers(workers)
     scaleout.check_task_readings(task_readings)
-    scaleout.portable_scene(scene)  # refused before any cluster starts
+    scaleout.portable_scene(scene.given)  # refused before any cluster starts
     with scaleout.connect(workers) as client:
-        yield scaleout.dask_runner(client, scene, fingerprint, plan, task_readings, defines=defines)
+        yield scaleout.dask_runner(client, scene.given, scene.fingerprint, plan, task_readings, defines=scene.defines)
 
 
 def _file_path(value: Any, name: str) -> Path | None:
@@ -530,11 +528,11 @@ def _reading(name: str, caller: str, what: str, scene: Any, given: dict[str, Any
     ``given`` of ``caller`` over the scene's settings and the instrument's options.
     """
 
-    bench = find_bench(scene, defines)
+    scene = loaded(scene, defines)
     declared = INSTRUMENTS[name].options
-    settings, *options = resolve(caller, given, _scene_options(bench, Settings),
-                                 *(() if declared is None else (_scene_options(bench, declared),)))
-    return _keyed(name, what, scene, bench, settings, options[0] if options else None, defines=defines, **run)
+    settings, *options = resolve(caller, given, _scene_options(scene.bench, Settings),
+                                 *(() if declared is None else (_scene_options(scene.bench, declared),)))
+    return _keyed(name, what, scene, settings, options[0] if options else None, **run)
 
 
 def aliases() -> dict[str, str]:

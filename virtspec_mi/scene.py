@@ -28,7 +28,7 @@ import difflib
 import hashlib
 import os
 import re
-from dataclasses import asdict
+from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Any
 
@@ -47,6 +47,8 @@ from virtspec_mi.runtime import mitsuba
 from virtspec_mi.settings import SETTING_NAMES
 
 __all__ = [
+    "LoadedScene",
+    "loaded",
     "load_scene", "check_defines", "find_bench", "instrument_scene", "placeholder_sensor", "scene_fingerprint",
     "scene_source", "tabulated_bsdf",
 ]
@@ -351,3 +353,43 @@ def tabulated_bsdf(source: Any) -> dict:
         else:
             entry[name] = value
     return entry
+
+
+@dataclass(frozen=True)
+class LoadedScene:
+    """
+    A scene resolved once, where it enters the API: what was given (a shipped scene's name
+    resolved to its path, an XML path, a scene dict or a loaded ``mi.Scene``), the XML
+    parameters set (``defines``), its bench (:func:`find_bench`), its fingerprint
+    (:func:`scene_fingerprint`: checkpoints and results) and its source
+    (:func:`scene_source`: what a result records for people). Made by :func:`loaded`;
+    a Dask worker receives ``given`` and ``defines`` and loads its own bench.
+    """
+
+    given: Any
+    """The scene as given, a shipped name resolved to its path."""
+    defines: dict[str, Any] | None
+    """The values of an XML scene's ``$name`` parameters (``mitsuba -D``), or ``None``."""
+    bench: Bench
+    """The emitter and specimen disks of the loaded scene."""
+    fingerprint: str
+    """:func:`scene_fingerprint` of the scene."""
+    source: dict[str, Any]
+    """:func:`scene_source` of the scene."""
+
+
+def loaded(scene: Any, defines: dict[str, Any] | None = None) -> LoadedScene:
+    """
+    ``scene`` (XML path, shipped name, dict or ``mi.Scene``; ``defines`` for an XML file)
+    loaded and described once (:class:`LoadedScene`); a :class:`LoadedScene` is returned
+    as it is (``defines`` must then be left out).
+    """
+
+    if isinstance(scene, LoadedScene):
+        if defines:
+            raise ValueError("defines: give them when the scene is loaded (vm.scene.loaded(scene, defines)), "
+                             "not with a loaded scene")
+        return scene
+    bench = find_bench(scene, defines)
+    return LoadedScene(scenes.resolve(scene), defines, bench, scene_fingerprint(scene, bench, defines),
+                       scene_source(scene, bench, defines))

@@ -159,10 +159,10 @@ def coverage(
     azimuths = 360.0 * np.arange(readings) / readings
     config = Settings(theta_i=specimen.theta_i, beam=specimen.beam, wavelengths=551.0, mu=mu,
                       delta=delta, bound=bound, seed=seed, **settings)
-    instrument = find_bench(instrument_scene(specimen.bsdf))
+    bench = find_bench(instrument_scene(specimen.bsdf))
     start = time.perf_counter()
-    plan = commanding("measure")().init(instrument, config, None, np.array([config.theta_i]), None)
-    tally = trace_readings(instrument, plan, 0, [(551.0, config.theta_i, phi) for phi in azimuths])
+    plan = commanding("measure")().init(bench, config, None, np.array([config.theta_i]), None)
+    tally = trace_readings(bench, plan, 0, [(551.0, config.theta_i, phi) for phi in azimuths])
     tallies, pilot = tally.counts, tally.pilot
     seconds = time.perf_counter() - start
     n, m, rho = tallies.rays, tallies.reflected, specimen.reflectance

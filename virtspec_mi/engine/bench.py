@@ -1,6 +1,6 @@
 """
-The instrument inside a loaded scene
-====================================
+The bench inside a loaded scene: its emitter and specimen disks
+===============================================================
 
 A virtspec-mi scene is an ordinary Mitsuba scene holding two ``disk`` shapes with ids
 ``emitter`` and ``specimen`` (the specimen carries the BSDF under test), and optionally

@@ -180,11 +180,11 @@ def _resolve(name: Any, known: dict[str, str]) -> str:
     raise ValueError(f"parameter {name!r} is not a parameter of the specimen (known: {listed}){hint}")
 
 
-def parameter_space(instrument: Any, parameters: Mapping[str, Any], points: bool = False) -> ParameterSpace | None:
+def parameter_space(bench: Any, parameters: Mapping[str, Any], points: bool = False) -> ParameterSpace | None:
     """
     The :class:`ParameterSpace` of ``parameters`` (name → values: a number, a sequence or a
     string of numbers and ``start:stop:step`` ranges, stop included within rounding) on
-    the instrument's scene, every value checked by the specimen before any tracing;
+    the bench's scene, every value checked by the specimen before any tracing;
     ``None`` for no parameters. A grid needs distinct values per parameter; points need
     equal-length lists.
     """
@@ -193,7 +193,7 @@ def parameter_space(instrument: Any, parameters: Mapping[str, Any], points: bool
         return None
     if not isinstance(parameters, Mapping):
         raise ValueError(f"parameters must be a dict of name -> values (got {type(parameters).__name__})")
-    known = known_parameters(instrument.scene)
+    known = known_parameters(bench.scene)
     keys = [_resolve(name, known) for name in parameters]
     for key in set(keys):
         same = [name for name, k in zip(parameters, keys) if k == key]
@@ -211,33 +211,33 @@ def parameter_space(instrument: Any, parameters: Mapping[str, Any], points: bool
             if len(np.unique(v)) != len(v):
                 raise ValueError(f"the values of parameter {name!r} in a grid must be distinct (got repeated values)")
     space = ParameterSpace(names, tuple(keys), values, bool(points))
-    _check_values(instrument, space)
+    _check_values(bench, space)
     return space
 
 
-def _check_values(instrument: Any, space: ParameterSpace) -> None:
+def _check_values(bench: Any, space: ParameterSpace) -> None:
     """Let the specimen check every value (grid: each value of each parameter; points: each point), then restore."""
 
-    original = current_values(instrument, space.keys)
+    original = current_values(bench, space.keys)
     try:
         if space.points:
             for index in range(space.size):
-                apply_point(instrument, space.keys, space.point(index))
+                apply_point(bench, space.keys, space.point(index))
         else:
             for key, values in zip(space.keys, space.values):
                 for value in values:
-                    apply_point(instrument, (key,), (float(value),))
-                apply_point(instrument, (key,), (original[space.keys.index(key)],))
+                    apply_point(bench, (key,), (float(value),))
+                apply_point(bench, (key,), (original[space.keys.index(key)],))
     finally:
-        apply_point(instrument, space.keys, original)
+        apply_point(bench, space.keys, original)
 
 
-def current_values(instrument: Any, keys: Sequence[str]) -> tuple[float, ...]:
+def current_values(bench: Any, keys: Sequence[str]) -> tuple[float, ...]:
     """The values the scene's parameters ``keys`` hold now."""
 
     import mitsuba as mi
 
-    params = mi.traverse(instrument.scene)
+    params = mi.traverse(bench.scene)
     return tuple(_as_float(params[key]) for key in keys)
 
 
@@ -245,7 +245,7 @@ def _as_float(value: Any) -> float:
     return float(value) if isinstance(value, (int, float)) else float(value[0])
 
 
-def apply_point(instrument: Any, keys: Sequence[str], values: Sequence[float]) -> None:
+def apply_point(bench: Any, keys: Sequence[str], values: Sequence[float]) -> None:
     """
     Set the scene's parameters ``keys`` to ``values`` and let the nodes update
     (``SceneParameters.update``: the plugins' ``parameters_changed``, which range-check
@@ -254,7 +254,7 @@ def apply_point(instrument: Any, keys: Sequence[str], values: Sequence[float]) -
 
     import mitsuba as mi
 
-    params = mi.traverse(instrument.scene)
+    params = mi.traverse(bench.scene)
     for key, value in zip(keys, values):
         current = params[key]
         params[key] = value if isinstance(current, (int, float)) else type(current)(float(value))

@@ -19,7 +19,8 @@ Every instrument declares, as class attributes, its ``name`` (its key in
 ``result`` (the result class it returns). A new instrument is one module of
 :mod:`virtspec_mi.instruments` with one such class, and one row of the registry.
 
-:func:`take` runs the three steps.
+:meth:`Instrument.run` runs the three steps (the API's :func:`virtspec_mi.take` loads the
+scene, checks the keywords and runs it with checkpoints and workers).
 
 References
 ----------
@@ -41,7 +42,7 @@ from virtspec_mi.engine.tally import Tally
 from virtspec_mi.results.readings import Result
 from virtspec_mi.settings import Options, Settings
 
-__all__ = ["Instrument", "take", "reading_labels", "reading_grid", "readings_result"]
+__all__ = ["Instrument", "reading_labels", "reading_grid", "readings_result"]
 
 
 class Instrument(ABC):
@@ -110,6 +111,21 @@ class Instrument(ABC):
     def postprocess(self, tally: Tally) -> Any:
         """The instrument's result from the tallies of :meth:`process`."""
 
+    def run(self, bench: Any, settings: Settings, options: Options | None = None, theta_i: Any = None,
+            parameters: ParameterSpace | None = None, **tracing: Any) -> Any:
+        """
+        One measurement, as Eradiate's ``run`` of an experiment: :meth:`init`,
+        :meth:`process` (``tracing``: ``checkpoint``, ``progress``, ``runner``) and
+        :meth:`postprocess`. ``theta_i``: the incidence angles (default:
+        ``settings.theta_i``); ``options``: the instrument's (default: their defaults).
+        """
+
+        angles = np.atleast_1d(np.asarray(settings.theta_i if theta_i is None else theta_i, dtype=np.float64))
+        if options is None and self.options is not None:
+            options = self.options()
+        plan = self.init(bench, settings, options, angles, parameters)
+        return self.postprocess(self.process(plan, **tracing))
+
     def warn_if_uncertified(self, result: Any, stacklevel: int = 2) -> None:
         """
         A ``RuntimeWarning`` for every reason a reading of ``result`` escaped its
@@ -117,22 +133,6 @@ class Instrument(ABC):
         the caller; 2, the default: its caller). None by default: an instrument whose
         result says so in its summary.
         """
-
-
-def take(instrument: Instrument, bench: Any, settings: Settings, options: Options | None = None,
-         theta_i: Any = None, parameters: ParameterSpace | None = None, **run: Any) -> Any:
-    """
-    One measurement with ``instrument``: :meth:`~Instrument.init`,
-    :meth:`~Instrument.process` (``run``: ``checkpoint``, ``progress``,
-    ``runner``) and :meth:`~Instrument.postprocess`. ``theta_i``: the incidence angles
-    (default: ``settings.theta_i``); ``options``: the instrument's (default: their defaults).
-    """
-
-    angles = np.atleast_1d(np.asarray(settings.theta_i if theta_i is None else theta_i, dtype=np.float64))
-    if options is None and instrument.options is not None:
-        options = instrument.options()
-    plan = instrument.init(bench, settings, options, angles, parameters)
-    return instrument.postprocess(instrument.process(plan, **run))
 
 
 def reading_labels(plan: Plan, theta_dim: bool = True) -> tuple[tuple[str, ...], dict[str, np.ndarray]]:

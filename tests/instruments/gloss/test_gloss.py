@@ -16,7 +16,6 @@ import pytest
 
 import virtspec_mi as vm
 from virtspec_mi.instruments import INSTRUMENTS
-from virtspec_mi.instruments.base import take
 from virtspec_mi.settings import Settings
 
 
@@ -47,7 +46,7 @@ def test_the_gloss_meter_is_one_registry_row_with_its_options():
 @pytest.mark.parametrize("theta, seed", [(20.0, 1), (60.0, 2), (85.0, 3)])
 def test_a_smooth_dielectric_reads_its_fresnel_reflectance_within_the_certificate(glass, theta, seed):
     meter = INSTRUMENTS["gloss"]
-    reading = take(meter(), glass, Settings(theta_i=theta, beam="collimated", seed=seed), meter.options(cone=1))
+    reading = meter().run(glass, Settings(theta_i=theta, beam="collimated", seed=seed), meter.options(cone=1))
     assert isinstance(reading, meter.result)
     assert np.array_equal(reading.glossy, reading.reflected)  # every reflected ray is in the cone
     expected = fresnel(theta, 1.5)
@@ -60,16 +59,16 @@ def test_a_smooth_dielectric_reads_its_fresnel_reflectance_within_the_certificat
 
 def test_spread_directions_reach_the_receptor_only_in_part(mi, glass):
     meter = INSTRUMENTS["gloss"]
-    conical = take(meter(), glass, Settings(theta_i=60, rays=20_000), meter.options(cone=2))
+    conical = meter().run(glass, Settings(theta_i=60, rays=20_000), meter.options(cone=2))
     assert 0 < conical.glossy[0, 0] < conical.reflected[0, 0]  # a conical beam spreads the mirror directions
     rough = vm.find_bench(vm.instrument_scene({"type": "roughdielectric", "alpha": 0.2, "int_ior": 1.5}))
-    wide = take(meter(), rough, Settings(theta_i=60, beam="collimated", rays=20_000, seed=5), meter.options(cone=5))
+    wide = meter().run(rough, Settings(theta_i=60, beam="collimated", rays=20_000, seed=5), meter.options(cone=5))
     assert 0 < wide.glossy[0, 0] < wide.reflected[0, 0]
 
 
 def test_two_stage_sizes_the_gloss_fraction_from_its_pilot(glass):
     meter = INSTRUMENTS["gloss"]
-    reading = take(meter(), glass, Settings(theta_i=60, beam="collimated", bound="two-stage", mu=0.01, seed=4),
+    reading = meter().run(glass, Settings(theta_i=60, beam="collimated", bound="two-stage", mu=0.01, seed=4),
                    meter.options(cone=1))
     assert reading.pilot is not None and reading.pilot.rays[0, 0] == 1000  # ceil(10/mu)
     assert reading.certified_mu[0, 0] == pytest.approx(0.01)
@@ -79,4 +78,4 @@ def test_two_stage_sizes_the_gloss_fraction_from_its_pilot(glass):
 def test_a_gloss_meter_reads_at_one_angle(glass):
     meter = INSTRUMENTS["gloss"]
     with pytest.raises(ValueError, match="one theta_i"):
-        take(meter(), glass, Settings(rays=100), theta_i=[20, 60])
+        meter().run(glass, Settings(rays=100), theta_i=[20, 60])

@@ -94,7 +94,6 @@ import numpy as np
 from virtspec_mi.checks import MAX_RAYS, shown_value
 from virtspec_mi.engine.bench import read_bench
 from virtspec_mi.instruments import INSTRUMENTS
-from virtspec_mi.instruments.base import take
 from virtspec_mi.settings import Settings
 
 __all__ = ["Spectrophotometer", "check_spp", "clear_render_errors", "instrument_of"]
@@ -130,7 +129,7 @@ class Spectrophotometer(mi.SamplingIntegrator):
         rays = check_spp(spp)
         settings = self.settings.updated(seed=(self.settings.seed + int(seed)) % _WORD, rays=rays or None)
         instrument = self.instrument()
-        reading = take(instrument, read_bench(scene), settings, self.instrument_options).squeeze()  # one theta_i
+        reading = instrument.run(read_bench(scene), settings, self.instrument_options).squeeze()  # one theta_i
         instrument.warn_if_uncertified(reading, stacklevel=2)
         self.last_reading = reading
         return mi.TensorXf(self.last_reading.rendered())

@@ -41,6 +41,8 @@ from pathlib import Path
 
 import pytest
 
+from source_trees import parse
+
 ROOT = Path(__file__).resolve().parents[1]
 
 # ---------------------------------------------------------------------------------------
@@ -163,7 +165,7 @@ def imports_of(source: str, module: str, is_package: bool, known: set[str]) -> l
 
     package = module if is_package else module.rpartition(".")[0]
     requested: list[tuple[str, int]] = []
-    for node in ast.walk(ast.parse(source)):
+    for node in ast.walk(parse(source)):
         if isinstance(node, ast.Import):
             requested += [(alias.name, node.lineno) for alias in node.names]
         elif isinstance(node, ast.ImportFrom):
@@ -216,7 +218,7 @@ def import_graph() -> tuple[Graph, dict[tuple[str, str], list[Site]]]:
 def registered_plugins(files: dict[str, tuple[Path, bool]]) -> list[tuple[str, int]]:
     """The modules ``virtspec_mi.runtime.register()`` imports: its ``PLUGINS`` table, as a literal."""
 
-    tree = ast.parse(files["virtspec_mi.runtime"][0].read_text(encoding="utf-8"))
+    tree = parse(files["virtspec_mi.runtime"][0].read_text(encoding="utf-8"))
     for node in ast.walk(tree):
         targets = [node.target] if isinstance(node, ast.AnnAssign) else getattr(node, "targets", [])
         if any(isinstance(t, ast.Name) and t.id == "PLUGINS" for t in targets) and node.value is not None:

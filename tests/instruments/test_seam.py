@@ -15,6 +15,8 @@ from pathlib import Path
 from virtspec_mi.instruments import INSTRUMENTS
 from virtspec_mi.results.base import KINDS
 
+from source_trees import parse
+
 PACKAGE = Path(__file__).resolve().parents[2] / "virtspec_mi"
 
 
@@ -26,7 +28,7 @@ def test_no_module_outside_the_instruments_looks_one_up_or_branches_on_its_name(
     names = set(INSTRUMENTS)
     found = []
     for path in outside_instruments():
-        for node in ast.walk(ast.parse(path.read_text())):
+        for node in ast.walk(parse(path.read_text())):
             if isinstance(node, ast.Subscript) and isinstance(node.value, ast.Name) and node.value.id == "INSTRUMENTS" \
                     and isinstance(node.slice, ast.Constant) and node.slice.value in names:
                 found.append(f"{path.relative_to(PACKAGE)}:{node.lineno} INSTRUMENTS[{node.slice.value!r}]")
@@ -40,7 +42,7 @@ def test_no_module_asks_a_result_which_kind_it_is():
     kinds = {kind.__name__ for kind in KINDS.values()}
     found = []
     for path in outside_instruments():
-        for node in ast.walk(ast.parse(path.read_text())):
+        for node in ast.walk(parse(path.read_text())):
             if isinstance(node, ast.Call) and isinstance(node.func, ast.Name) and node.func.id == "isinstance" \
                     and len(node.args) == 2:
                 classes = node.args[1].elts if isinstance(node.args[1], ast.Tuple) else [node.args[1]]
@@ -66,7 +68,7 @@ def test_no_module_outside_an_instruments_folder_names_it():
         if parts == ("instruments", "__init__.py"):
             continue  # the registry
         own = parts[1] if parts[0] == "instruments" and len(parts) > 2 else None
-        tree = ast.parse(path.read_text())
+        tree = parse(path.read_text())
         where = f"{path.relative_to(PACKAGE)}"
         for node in ast.walk(tree):
             if isinstance(node, (ast.Import, ast.ImportFrom)):
@@ -108,6 +110,6 @@ def _key(node: ast.AST) -> bool:
 def _defines(path: Path, classes: list[str]) -> bool:
     """True when ``path`` defines the classes it asks about (a kind's own module)."""
 
-    tree = ast.parse(path.read_text())
+    tree = parse(path.read_text())
     defined = {node.name for node in tree.body if isinstance(node, ast.ClassDef)}
     return set(classes) <= defined

@@ -66,7 +66,7 @@ from typing import Any, Sequence
 
 import numpy as np
 
-from virtspec_mi.budgets import bins as gonio_bounds
+from virtspec_mi.budgets import bins as histogram_bounds
 from virtspec_mi.budgets import twostage
 from virtspec_mi.budgets.bounds import (
     chebyshev_mu,
@@ -357,7 +357,7 @@ class Guarantee:
         smaller of the union μ and twice the DKW μ (:func:`virtspec_mi.budgets.bins.bins_mu`).
         """
 
-        return gonio_bounds.bins_mu(rays, delta, bins)
+        return histogram_bounds.bins_mu(rays, delta, bins)
 
     def target(self, mu: float, bins: int, relative: float | None, floor: float | None) -> str | None:
         """What N was sized for, in words (``None`` when the rays were given)."""
@@ -392,7 +392,7 @@ class Union(Guarantee):
     """The rule behind each bin's share δ/K, as :meth:`target` names it."""
 
     def _rays(self, mu: float, delta: float, bins: int) -> int:
-        return gonio_bounds.union_rays(mu, delta, bins)
+        return histogram_bounds.union_rays(mu, delta, bins)
 
     def target(self, mu: float, bins: int, relative: float | None, floor: float | None) -> str:
         return f"every bin fraction within mu = {mu:g} at once ({self.rule_words} over K = {bins})"
@@ -408,12 +408,12 @@ class UnionExact(Union):
     rule_words = "exact binomial at delta/K"
 
     def _rays(self, mu: float, delta: float, bins: int) -> int:
-        return gonio_bounds.union_exact_rays(mu, delta, bins)
+        return histogram_bounds.union_exact_rays(mu, delta, bins)
 
     def certified(self, rays: Any, delta: float, mu: float, bins: int) -> Any:
         """The exact rule's μ at δ/K (μ itself where N is its N for μ), or the union/DKW μ where smaller."""
 
-        return np.minimum(gonio_bounds.union_exact_mu(rays, delta, bins, mu), gonio_bounds.bins_mu(rays, delta, bins))
+        return np.minimum(histogram_bounds.union_exact_mu(rays, delta, bins, mu), histogram_bounds.bins_mu(rays, delta, bins))
 
 
 class DKW(Guarantee):
@@ -427,7 +427,7 @@ class DKW(Guarantee):
                "'union-exact', or a fixed bound")
 
     def _rays(self, mu: float, delta: float, bins: int) -> int:
-        return gonio_bounds.dkw_rays(mu, delta)
+        return histogram_bounds.dkw_rays(mu, delta)
 
     def target(self, mu: float, bins: int, relative: float | None, floor: float | None) -> str:
         return f"the CDFs of theta_o and phi_o within mu = {mu:g} (DKW-Massart)"
@@ -444,7 +444,7 @@ class Relative(Guarantee):
 
     def rays(self, mu: float, delta: float, bins: int, *, relative: float | None = None, floor: float | None = None,
              smallest_solid_angle: float | None = None) -> int:
-        return gonio_bounds.relative_rays(relative, floor, delta, bins, smallest_solid_angle)
+        return histogram_bounds.relative_rays(relative, floor, delta, bins, smallest_solid_angle)
 
     def target(self, mu: float, bins: int, relative: float | None, floor: float | None) -> str:
         return (f"f_k within relative {relative:g} for every bin with f_k >= {floor:g}/sr "

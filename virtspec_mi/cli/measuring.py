@@ -175,7 +175,7 @@ def keywords_of(args: argparse.Namespace, command: Measuring) -> dict[str, Any]:
         flagged(flag, check_figure_path, path)
     settings = given(args, settings_options(), several=several(command), hint=one_angle(args.command))
     options = instrument_options(command)
-    parameters = pairs(args.params, "--param")
+    parameters = parsed_parameters(pairs(args.params, "--param"))
     if command.one_reading:
         check_one_reading(command, parameters)
     else:
@@ -191,13 +191,24 @@ def keywords_of(args: argparse.Namespace, command: Measuring) -> dict[str, Any]:
             "task_readings": args.task_readings}
 
 
-def check_one_reading(command: Measuring, parameters: dict[str, str]) -> None:
-    """``measure`` reads one value of each specimen parameter (``sweep`` takes several; its one θi: one flag value)."""
+def parsed_parameters(parameters: dict[str, str]) -> dict[str, tuple[float, ...]]:
+    """
+    The values of each ``--param NAME=VALUES`` (:func:`virtspec_mi.checks.parse_values`:
+    numbers and ``start:stop:step`` ranges), parsed once here and handed to the API as
+    numbers; a bad one is refused naming its flag.
+    """
 
     from virtspec_mi.checks import parse_values
 
+    return {name: flagged(f"--param {name}", lambda text, name=name: parse_values(name, text), values)
+            for name, values in parameters.items()}
+
+
+def check_one_reading(command: Measuring, parameters: dict[str, tuple[float, ...]]) -> None:
+    """``measure`` reads one value of each specimen parameter (``sweep`` takes several; its one θi: one flag value)."""
+
     for name, values in parameters.items():
-        count = len(parse_values(name, values))
+        count = len(values)
         if count != 1:
             raise ValueError(f"--param {name}: {command.name} takes one value per parameter (got {count}; virtspec "
                              "sweep takes several)")

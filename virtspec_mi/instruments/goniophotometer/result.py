@@ -46,7 +46,7 @@ from typing import Any, ClassVar, Mapping
 
 import numpy as np
 
-from virtspec_mi.budgets import bins as gonio_bounds
+from virtspec_mi.budgets import bins as histogram_bounds
 from virtspec_mi.budgets.rules import guarantee_of
 from virtspec_mi.instruments.goniophotometer.bins import GonioBins
 from virtspec_mi.kernel.counts import QUANTITIES
@@ -229,7 +229,7 @@ class GonioResult(ResultBase):
 
     @cached_property
     def _band(self) -> tuple[np.ndarray, np.ndarray]:
-        lower, upper = gonio_bounds.brdf_intervals(self.bin_counts, self.rays[..., None, None], self.solid_angles,
+        lower, upper = histogram_bounds.brdf_intervals(self.bin_counts, self.rays[..., None, None], self.solid_angles,
                                                    self.delta, self.size)
         return lower, upper
 
@@ -295,7 +295,7 @@ class GonioResult(ResultBase):
     def cdf_mu(self) -> np.ndarray:
         """DKW–Massart μ: sup |F̂ − F| < μ for the CDF of θo (and of φo) at δ (NaN: not certified)."""
 
-        return self._certified(gonio_bounds.dkw_mu(self.rays, self.delta))
+        return self._certified(histogram_bounds.dkw_mu(self.rays, self.delta))
 
     @property
     def relative_mu(self) -> np.ndarray | None:
@@ -303,7 +303,7 @@ class GonioResult(ResultBase):
 
         if self.brdf_floor is None:
             return None
-        eps = gonio_bounds.relative_tolerance(self.rays, self.brdf_floor, self.delta, self.size,
+        eps = histogram_bounds.relative_tolerance(self.rays, self.brdf_floor, self.delta, self.size,
                                               float(self.solid_angles.min()))
         return np.where(self.result.certified, eps, np.nan)
 

@@ -134,3 +134,19 @@ def test_every_file_of_cff7fea_reads():
     for path in sorted(BEFORE.iterdir()):
         if path.suffix in SUFFIXES:
             assert vm.read_result(path).summary(), path.name
+
+
+LAST = Path(__file__).resolve().parents[1] / "data" / "results_d42bf42"
+"""Files of every instrument's kind written by d42bf42, the main before the instruments' folders (issue 29)."""
+
+
+@pytest.mark.parametrize("file", sorted(json.loads((LAST / "manifest.json").read_text())["files"]))
+def test_every_file_of_the_last_release_reads_as_the_same_kind_with_the_same_content(file):
+    import virtspec_mi.api  # noqa: F401  (the registry: every instrument's kind is known)
+
+    manifest = json.loads((LAST / "manifest.json").read_text())
+    back = vm.read_result(LAST / file)
+    assert type(back).__name__ == manifest["files"][file]["class"]
+    assert type(back).FORMAT == manifest["files"][file]["format"]
+    written = manifest[file.rsplit(".", 1)[0]]
+    assert json.dumps(back.as_dict(), sort_keys=True, default=lambda v: np.asarray(v).tolist()) == written, file

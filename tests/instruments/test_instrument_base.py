@@ -7,7 +7,7 @@ import pytest
 
 import virtspec_mi as vm
 from virtspec_mi.instruments import INSTRUMENTS
-from virtspec_mi.instruments.base import Instrument, take
+from virtspec_mi.instruments.base import Instrument
 from virtspec_mi.settings import Options, Settings
 
 
@@ -19,15 +19,15 @@ def test_the_registry_holds_each_instrument_under_its_name():
         assert isinstance(instrument.result, type)
 
 
-def test_take_runs_init_process_postprocess_and_gives_the_apis_counts(mi):
+def test_run_runs_init_process_postprocess_and_gives_the_apis_counts(mi):
     scene = vm.instrument_scene({"type": "roughdielectric", "alpha": 0.3, "int_ior": 1.5})
     bench = vm.find_bench(scene)
     settings = Settings(theta_i=30, rays=3000, seed=4)
-    reading = take(INSTRUMENTS["hemispherical"](), bench, settings).squeeze()
+    reading = INSTRUMENTS["hemispherical"]().run(bench, settings).squeeze()
     assert isinstance(reading, INSTRUMENTS["hemispherical"].result)
     assert np.array_equal(reading.reflected, vm.measure(scene, theta_i=30, rays=3000, seed=4).reflected)
     gonio = INSTRUMENTS["goniophotometer"]
-    binned = take(gonio(), bench, settings, gonio.options(theta_o_bins=2, phi_o_bins=3))
+    binned = gonio().run(bench, settings, gonio.options(theta_o_bins=2, phi_o_bins=3))
     assert isinstance(binned, gonio.result) and binned.bins.shape == (4, 3)
     assert np.array_equal(binned.result.reflected[:, 0], reading.reflected)
 
@@ -37,6 +37,6 @@ def test_each_instrument_refuses_what_it_cannot_take(mi):
     gonio = INSTRUMENTS["goniophotometer"]
     with pytest.raises(ValueError, match="bound='two-stage' cannot size these readings: bound 'two-stage' cannot "
                                          "size guarantee 'dkw'"):  # the rule row's reason, before any tracing
-        take(gonio(), bench, Settings(bound="two-stage"), gonio.options(guarantee="dkw"))
+        gonio().run(bench, Settings(bound="two-stage"), gonio.options(guarantee="dkw"))
     with pytest.raises(ValueError, match="needs a sphere"):
-        take(INSTRUMENTS["sphere"](), bench, Settings(rays=10), INSTRUMENTS["sphere"].options())
+        INSTRUMENTS["sphere"]().run(bench, Settings(rays=10), INSTRUMENTS["sphere"].options())

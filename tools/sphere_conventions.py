@@ -15,7 +15,8 @@ A second table gives the single-beam substitution error and the comparison metho
 residual for grey Lambertian specimens (SCE, standard 0.99) on two illustrative spheres
 (:data:`EXAMPLE_SPHERES`; dimensions for illustration, not a particular instrument).
 
-The manual's tables (docs/guide/sphere.md) must equal this script's output (``tests/instruments/sphere/test_sphere_theory.py``).
+The manual's tables (docs/guide/sphere.md) must equal this script's output
+(``tests/instruments/sphere/test_sphere_theory.py``).
 Run: ``.venv/bin/python tools/sphere_conventions.py``.
 """
 

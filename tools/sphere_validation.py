@@ -1,6 +1,6 @@
 """
-Print the manual's sphere validation tables (docs/guide/sphere.md): the simulation against ``virtspec_mi.instruments.sphere.theory``
-(through the one mapping, ``virtspec_mi.instruments.sphere.model.theory_inputs``) and the correction of
+Print the manual's sphere validation tables (docs/guide/sphere.md): the simulation against
+``virtspec_mi.instruments.sphere.theory`` (through the one mapping, ``virtspec_mi.instruments.sphere.model.theory_inputs``) and the correction of
 instrument readings. The manual's tables (docs/guide/sphere.md) must equal this script's output
 (``tests/instruments/sphere/test_sphere_model.py``, a slow test). The same cases are asserted, one by one,
 by ``tests/instruments/sphere/test_sphere_walk.py`` and ``tests/instruments/sphere/test_sphere_model.py``.

@@ -233,8 +233,8 @@ def sweep(
         angles = _angles(resolved, theta_i, "a sweep")
         return DerivedSweep(tuple(float(t) for t in angles), tuple(
             _measure_target(scene, None, target, {**settings, "theta_i": float(t)}) for t in angles))
-    return _reading(commanding("sweep").name, "sweep", "a sweep", scene, settings, theta_i=theta_i, parameters=parameters,
-                    points=points, defines=defines, checkpoint=checkpoint, out=out, progress=progress, workers=workers,
+    return _reading(commanding("sweep").name, "sweep", "a sweep", scene, settings, theta_i=theta_i,
+                    parameters=parameters, points=points, defines=defines, checkpoint=checkpoint, out=out, progress=progress, workers=workers,
                     task_readings=task_readings)
 
 
@@ -477,12 +477,14 @@ def sphere_measure(scene: Any, *, theta_i: Any = None, parameters: dict[str, Any
     Baranoski et al. (2001), eqs. (2), (23); Goebel (1967).
     """
 
-    return _reading(commanding("sphere_measure").name, "sphere_measure", "a sphere reading", scene, settings, theta_i=theta_i,
+    return _reading(commanding("sphere_measure").name, "sphere_measure", "a sphere reading", scene, settings,
+                    theta_i=theta_i,
                     parameters=parameters, points=points, defines=defines, checkpoint=checkpoint, out=out,
                     progress=progress, workers=workers, task_readings=task_readings)
 
 
-sphere_measure.__signature__ = keywords(sphere_measure, Settings, commanding("sphere_measure").options)  # type: ignore[attr-defined]
+sphere_measure.__signature__ = keywords(  # type: ignore[attr-defined]
+    sphere_measure, Settings, commanding("sphere_measure").options)
 
 
 def take(instrument: str, scene: Any, *, theta_i: Any = None, parameters: dict[str, Any] | None = None,

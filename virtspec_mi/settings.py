@@ -166,7 +166,8 @@ def option(default: Any, check: Callable[[Any], Any], help: str, choices: Mappin
     unset
         What an unset ``None`` default means, in words (``"from the rule"``).
     flag
-        ``False``: no command-line flag (a value no one types, e.g. a :class:`~virtspec_mi.instruments.sphere.geometry.Sphere`).
+        ``False``: no command-line flag (a value no one types, e.g. a
+        :class:`~virtspec_mi.instruments.sphere.geometry.Sphere`).
     """
 
     return field(default=default, metadata={"check": check, "help": help, "choices": choices, "words": words,

@@ -413,7 +413,8 @@ class UnionExact(Union):
     def certified(self, rays: Any, delta: float, mu: float, bins: int) -> Any:
         """The exact rule's μ at δ/K (μ itself where N is its N for μ), or the union/DKW μ where smaller."""
 
-        return np.minimum(histogram_bounds.union_exact_mu(rays, delta, bins, mu), histogram_bounds.bins_mu(rays, delta, bins))
+        return np.minimum(histogram_bounds.union_exact_mu(rays, delta, bins, mu),
+                          histogram_bounds.bins_mu(rays, delta, bins))
 
 
 class DKW(Guarantee):

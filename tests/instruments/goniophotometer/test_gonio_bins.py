@@ -1,4 +1,7 @@
-"""Goniophotometer bins (virtspec_mi.instruments.goniophotometer.bins): layouts, projected solid angles, bad specifications."""
+"""
+Goniophotometer bins (virtspec_mi.instruments.goniophotometer.bins): layouts, projected solid angles,
+bad specifications.
+"""
 
 from __future__ import annotations
 

@@ -84,7 +84,10 @@ class GonioOptions(Options):
 
     @property
     def bins(self) -> GonioBins:
-        """The θo × φo bins these options lay out (:func:`virtspec_mi.instruments.goniophotometer.bins.make_bins`)."""
+        """
+        The θo × φo bins these options lay out
+        (:func:`virtspec_mi.instruments.goniophotometer.bins.make_bins`).
+        """
 
         return self._bins  # type: ignore[attr-defined]
 

@@ -36,8 +36,8 @@ Projected solid angle of bin (θ₁, θ₂) × (φ₁, φ₂), per hemisphere pa
 
 (× 2 when folded); Σ_k Ω_k = π per hemisphere.
 
-The kernel (:mod:`virtspec_mi.instruments.goniophotometer.hook`, from :meth:`GonioBins.layout`) finds a ray's bin by searching the
-float32 *keys* of the θo edges, key(θ) = sin²θ for θ ≤ 90° and 2 − sin²θ beyond (a
+The kernel (:mod:`virtspec_mi.instruments.goniophotometer.hook`, from
+:meth:`GonioBins.layout`) finds a ray's bin by searching the float32 *keys* of the θo edges, key(θ) = sin²θ for θ ≤ 90° and 2 − sin²θ beyond (a
 monotone map of θ ∈ [0, 180] onto [0, 2] that is exact at the poles and at 90°); the
 hemisphere is the ray's fate (reflected or transmitted), so the bins of each
 hemisphere add up exactly to the reflected and transmitted counts when they cover it.
@@ -160,7 +160,10 @@ class GonioBins:
         return _theta_keys(self.theta_edges)
 
     def layout(self) -> BinLayout:
-        """The plain arrays the kernel bins rays with (:class:`~virtspec_mi.instruments.goniophotometer.hook.BinLayout`)."""
+        """
+        The plain arrays the kernel bins rays with
+        (:class:`~virtspec_mi.instruments.goniophotometer.hook.BinLayout`).
+        """
 
         return BinLayout(shape=self.shape, theta_keys=self.theta_keys(), regular_theta=self.regular_theta,
                          projected=self.binning == "projected", phi_edges=self.phi_edges.astype(np.float32),

@@ -113,7 +113,10 @@ class GonioResult(ResultBase):
         "bins_mu": ("1", "every bin fraction within bins_mu at once at delta (NaN: not certified)"),
         "cdf_mu": ("1", "DKW-Massart sup error of cdf_theta_o and cdf_phi_o at delta (NaN: not certified)"),
     }
-    """``(units, long_name)`` of this kind's own variables and coordinates (beside :data:`~virtspec_mi.results.formats.VARIABLES`)."""
+    """
+    ``(units, long_name)`` of this kind's own variables and coordinates (beside
+    :data:`~virtspec_mi.results.formats.VARIABLES`).
+    """
     KIND: ClassVar[str] = "goniophotometer reading"
     KIND_DIMS: ClassVar[tuple[str, ...]] = _BINS
     KIND_DIMS_REASON: ClassVar[str] = (
@@ -583,7 +586,10 @@ class GonioResult(ResultBase):
         return plot_polar(self.as_grid(), path, **options)
 
     def plot_series(self, path: str | os.PathLike | None = None, **options: Any) -> Any:
-        """The angular distribution over θi as a series, with the certified bands (:func:`~virtspec_mi.instruments.goniophotometer.plot.plot_series`)."""
+        """
+        The angular distribution over θi as a series, with the certified bands
+        (:func:`~virtspec_mi.instruments.goniophotometer.plot.plot_series`).
+        """
 
         from virtspec_mi.instruments.goniophotometer.plot import plot_series
 

@@ -168,7 +168,10 @@ class SphereResult(ResultBase):
         "instrument_error": ("1", "reading - hemispherical"),
         "fraction_mu": ("1", "tolerance of each detector fraction at delta/2 (NaN: not certified)"),
     }
-    """``(units, long_name)`` of this kind's own variables and coordinates (beside :data:`~virtspec_mi.results.formats.VARIABLES`; a port's ``lost_<port>``: :meth:`to_dataset`)."""
+    """
+    ``(units, long_name)`` of this kind's own variables and coordinates (beside
+    :data:`~virtspec_mi.results.formats.VARIABLES`; a port's ``lost_<port>``: :meth:`to_dataset`).
+    """
     LEGACY: ClassVar[tuple[str, ...]] = ("virtspec-mi sphere 0",)
     KIND: ClassVar[str] = "integrating-sphere reading"
     KIND_DIMS: ClassVar[tuple[str, ...]] = ("configuration",)

@@ -46,7 +46,9 @@ reproduce the measurement within its stated uncertainty (a model of another mate
 biased instrument, an uncertainty too small).
 
 Losses: ``chi2`` (mean squared residual in units of the measurement uncertainty, the
-default), ``rmse`` (unweighted) and ``max`` (the largest normalised residual).
+default), ``rmse`` (unweighted), ``max`` (the largest normalised residual) and ``windows``
+(each parameter estimated on its own optimal spectral window, Féret et al. 2019, 2021,
+Spafford et al. 2021: :mod:`.windows`; the default when ``windows=`` is given).
 
 References
 ----------
@@ -70,10 +72,12 @@ from scipy.optimize import minimize
 from virtspec_mi.applications.fitting.forward import Forward, Reading, note
 from virtspec_mi.applications.fitting.problem import FitProblem, describe, fit_problem
 from virtspec_mi.applications.fitting.result import FitResult
+from virtspec_mi.applications.fitting.windows import FitWindows, fit_windows, window_loss
 from virtspec_mi.checks import number
 from virtspec_mi.engine.parameters import apply_point, known_parameters
 
-__all__ = ["fit", "LOSSES", "UNCONSTRAINED_SHARE", "PROFILE_BISECTIONS", "consistency", "intervals", "verdicts"]
+__all__ = ["fit", "LOSSES", "LOSS_NAMES", "UNCONSTRAINED_SHARE", "PROFILE_BISECTIONS", "consistency", "intervals",
+           "verdicts"]
 
 UNCONSTRAINED_SHARE: float = 0.9
 """A parameter whose interval covers at least this share of its bounds is flagged unconstrained."""
@@ -101,7 +105,10 @@ def _largest(reading: Reading, problem: FitProblem) -> float:
 
 
 LOSSES: dict[str, Callable[[Reading, FitProblem], float]] = {"chi2": _chi2, "rmse": _rmse, "max": _largest}
-"""The losses a fit minimises, by name."""
+"""The losses over the whole fitted spectrum, by name."""
+
+LOSS_NAMES: tuple[str, ...] = (*LOSSES, "windows")
+"""Every loss a fit minimises: :data:`LOSSES` and ``windows`` (one window per parameter, :mod:`.windows`)."""
 
 
 def consistency(reading: Reading, problem: FitProblem) -> float:
@@ -154,8 +161,8 @@ def _table_points(count: int) -> int:
 
 def _check_choices(loss: str, delta: float, mu_fraction: float, forward_mu: float | None, table_points: int | None,
                    profile_points: int, evaluations: Sequence[int] | None) -> None:
-    if loss not in LOSSES:
-        raise ValueError(f"loss must be one of {', '.join(LOSSES)} (got {loss!r})")
+    if loss not in LOSS_NAMES:
+        raise ValueError(f"loss must be one of {', '.join(LOSS_NAMES)} (got {loss!r})")
     if not 0.0 < delta < 1.0:
         raise ValueError(f"delta must satisfy 0 < delta < 1 (got {delta!r})")
     if not 0.0 < mu_fraction <= 1.0:
@@ -173,7 +180,8 @@ def _check_choices(loss: str, delta: float, mu_fraction: float, forward_mu: floa
 
 
 def fit(measured: Any, specimen: Any, parameters: Mapping[str, Any], *, quantities: Sequence[str] | None = None,
-        measurement_uncertainty: Any = None, wavelengths: Any = None, loss: str = "chi2", delta: float = 0.05,
+        measurement_uncertainty: Any = None, wavelengths: Any = None, loss: str | None = None,
+        windows: Mapping[str, Any] | None = None, delta: float = 0.05,
         mu_fraction: float = 0.5, forward_mu: float | None = None, table: str | os.PathLike | None = None,
         table_points: int | None = None, evaluations: Sequence[int] | None = None, profile_points: int = 5,
         confirm: bool = True, seed: int = 0, directory: str | os.PathLike | None = None,
@@ -205,7 +213,15 @@ def fit(measured: Any, specimen: Any, parameters: Mapping[str, Any], *, quantiti
         The wavelengths to fit (nm, inside the measured range; the measurement is
         interpolated onto them); default the measured ones.
     loss
-        ``chi2`` (default), ``rmse`` or ``max`` (:data:`LOSSES`).
+        ``chi2`` (the default without ``windows``), ``rmse``, ``max`` (:data:`LOSSES`) or
+        ``windows`` (the default with ``windows``): each parameter with a window estimated by a
+        refinement on the chi-square over its window only, the others on the full range
+        (:mod:`.windows`).
+    windows
+        Free parameter → its window(s) in nm, ``(lowest, highest)`` or a list of them, for
+        ``loss="windows"``; each inside the fitted wavelengths. Free parameters named as
+        PROSPECT-D's (``Cab``, ``Car``, ``Anth``, ``Cw``, ``Cm``) not given take the published
+        optimal windows (:data:`.windows.OPTIMAL_WINDOWS`).
     delta
         Risk of the forward readings for one candidate's whole spectrum (the confidence
         set's level is 1 − δ less the measurement's own risk).
@@ -252,9 +268,13 @@ def fit(measured: Any, specimen: Any, parameters: Mapping[str, Any], *, quantiti
     delta = number("delta", delta)
     mu_fraction = number("mu_fraction", mu_fraction)
     forward_mu = None if forward_mu is None else number("forward_mu", forward_mu)
+    loss = ("windows" if windows is not None else "chi2") if loss is None else loss
+    if windows is not None and loss != "windows":
+        raise ValueError(f"windows= chooses the windows of loss='windows' (got loss={loss!r})")
     _check_choices(loss, delta, mu_fraction, forward_mu, table_points, profile_points, evaluations)
     problem = fit_problem(measured, specimen, parameters, quantities=quantities, wavelengths=wavelengths,
                           measurement_uncertainty=measurement_uncertainty, defines=defines)
+    chosen = fit_windows(windows, problem.names, problem.wavelengths) if loss == "windows" else None
     progress = sys.stderr.isatty() if progress is None else bool(progress)
     smallest = min(float(problem.uncertainty[q].min()) for q in problem.quantities)
     target = forward_mu if forward_mu is not None else mu_fraction * smallest
@@ -266,16 +286,21 @@ def fit(measured: Any, specimen: Any, parameters: Mapping[str, Any], *, quantiti
     table_path = Path(table) if table is not None else (None if work is None else work / "table.zarr")
     forward = Forward(problem, delta=delta, seed=seed, settings=settings, directory=work, workers=workers,
                       progress=progress)
-    measure_loss = LOSSES[loss]
+    measure_loss = LOSSES[loss] if chosen is None else chosen.loss()
+    loss_name = loss if chosen is None else chosen.describe(problem.names)
     count = len(problem.names)
     try:
         points = table_points or _table_points(count)
         grid = [np.linspace(low, high, points) for low, high in problem.bounds]
         table_mu = max(_TABLE_MU, target)
         readings = forward.table(grid, table_mu, table_path)
-        best = min(readings, key=lambda r: measure_loss(r, problem))
         budget = evaluations if evaluations is not None else tuple(k * count for k in (12, 6, 3))
-        estimate = _refine(forward, problem, best, target, table_mu, budget, 0.5 / (points - 1), measure_loss)
+        step = 0.5 / (points - 1)
+        if chosen is None:
+            best = min(readings, key=lambda r: measure_loss(r, problem))
+            estimate = _refine(forward, problem, best, target, table_mu, budget, step, measure_loss)
+        else:
+            estimate = _refine_windows(forward, problem, chosen, readings, target, table_mu, budget, step)
         if profile_points:
             for i, name in enumerate(problem.names):
                 count_read = _profile(forward, problem, estimate, i, target, profile_points)
@@ -286,7 +311,7 @@ def fit(measured: Any, specimen: Any, parameters: Mapping[str, Any], *, quantiti
     finally:
         keys = known_parameters(problem.scene)
         apply_point(_Holder(problem.scene), [keys.get(k, k) for k in problem.keys], problem.start)
-    return _result(problem, forward, estimate, loss, measure_loss, delta, target, mu_fraction, seed, started)
+    return _result(problem, forward, estimate, loss_name, measure_loss, delta, target, mu_fraction, seed, started)
 
 
 class _Holder:
@@ -294,9 +319,32 @@ class _Holder:
         self.scene = scene
 
 
+def _refine_windows(forward: Forward, problem: FitProblem, chosen: FitWindows, readings: list[Reading],
+                    target: float, ceiling: float, budget: Sequence[int], step: float) -> Reading:
+    """
+    One refinement per window (all free parameters free, the loss over that window only), keeping
+    its parameter's value; the parameters without a window from a refinement on the full range
+    (``chi2``). The estimate: that combination, read at ``target`` (:mod:`.windows`).
+    """
+
+    values = np.full(len(problem.names), np.nan)
+    for i, mask in chosen.masks.items():
+        loss = window_loss(mask)
+        best = min(readings, key=lambda r: loss(r, problem))
+        found = _refine(forward, problem, best, target, ceiling, budget, step, loss,
+                        label=f"window {problem.names[i]}")
+        values[i] = found.values[i]
+    rest = np.isnan(values)
+    if rest.any():
+        best = min(readings, key=lambda r: _chi2(r, problem))
+        found = _refine(forward, problem, best, target, ceiling, budget, step, _chi2, label="full range")
+        values[rest] = found.values[rest]
+    return forward.reading(values, target, "windows estimate")
+
+
 def _refine(forward: Forward, problem: FitProblem, best: Reading, target: float, ceiling: float,
             budget: Sequence[int], step: float,
-            measure_loss: Callable[[Reading, FitProblem], float]) -> Reading:
+            measure_loss: Callable[[Reading, FitProblem], float], label: str = "refine") -> Reading:
     """Nelder–Mead in stages of shrinking tolerance (module docstring); the best reading at ``target``."""
 
     x = problem.normalised(best.values)
@@ -308,7 +356,7 @@ def _refine(forward: Forward, problem: FitProblem, best: Reading, target: float,
         tried: list[Reading] = []
 
         def objective(point: np.ndarray, mu: float = mu, tried: list = tried) -> float:
-            reading = forward.reading(problem.denormalised(point), mu, f"refine {stage}")
+            reading = forward.reading(problem.denormalised(point), mu, f"{label} {stage}")
             tried.append(reading)
             return measure_loss(reading, problem)
 
@@ -320,7 +368,7 @@ def _refine(forward: Forward, problem: FitProblem, best: Reading, target: float,
                      options={"maxfev": max(1, evaluations - 1), "initial_simplex": simplex, "xatol": 1e-4,
                               "fatol": 0.0})
         stage_best = min(tried, key=lambda r: measure_loss(r, problem))
-        note(forward.progress, f"fit: stage {stage}/{len(_STAGES)} at mu = {mu:g}: {len(tried)} readings, "
+        note(forward.progress, f"fit: {label} stage {stage}/{len(_STAGES)} at mu = {mu:g}: {len(tried)} readings, "
                                f"best loss {measure_loss(stage_best, problem):.4g}")
         x = problem.normalised(stage_best.values)
         step /= 2.0

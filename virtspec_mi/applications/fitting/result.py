@@ -131,7 +131,11 @@ class FitResult:
         if self.consistent:
             lines.append(f"confidence set (level >= {self.level:g}, less the measurement's own risk): "
                          f"{self.consistent_candidates} of {len(self.candidate_statistic)} readings consistent")
-            if self.statistic > 1.0:
+            if self.statistic > 1.0 and self.loss_name.startswith("windows"):
+                lines.append(f"the estimate (each parameter from its window) is inconsistent elsewhere in the "
+                             f"spectrum (s = {self.statistic:.3g} > 1) while other candidates pass: the model "
+                             "matches the windows and the rest of the spectrum at different parameters")
+            elif self.statistic > 1.0:
                 lines.append(f"NOT CONVERGED: the estimate itself is inconsistent (s = {self.statistic:.3g} > 1) while "
                              "other candidates pass: the intervals may miss the truth; raise evaluations")
         else:

@@ -12,18 +12,22 @@ on common random numbers across candidates. The fit goes
 
 1. **table**: a coarse grid over the box of bounds, one sweep at a coarse tolerance
    (a Zarr store, reusable by a later fit: a look-up-table inversion);
-2. **refinement**: from the table's best point, Nelder–Mead (``scipy.optimize``) on the
-   chosen ``loss`` in stages whose tolerance shrinks (4 μ*, 2 μ*, μ*; never coarser than
-   the table's), each stage starting
-   from the last one's best, the simplex shrinking with it: rays are raised as the fit
-   converges, and the **estimate** is the best candidate of the last stage, read at
-   μ* = ``mu_fraction`` × the smallest measurement uncertainty (or ``forward_mu``);
+2. **refinement**: from the minimum of the table's multilinear interpolation (no rays;
+   :func:`.search.table_start`), Nelder–Mead (``scipy.optimize``) on the chosen ``loss`` in
+   stages whose tolerance shrinks (4 μ*, 2 μ*, μ*; never coarser than the table's), each
+   stage starting from the last one's best, the simplex shrinking with it: rays are raised as
+   the fit converges, and the **estimate** is the best candidate of the last stage, read at
+   μ* = ``mu_fraction`` × the smallest measurement uncertainty (or ``forward_mu``). With more
+   than ``search_wavelengths`` fitted wavelengths the stages read an evenly spread subset of
+   them (:func:`.search.search_problem`: candidates judged on their own wavelengths) and the
+   estimate is read again on all;
 3. **profiles**: along each free parameter through the estimate (the others held), at μ*:
    ``profile_points`` over the bounds, then each end of the consistent stretch bisected
    :data:`PROFILE_BISECTIONS` times;
 4. **confirmation**: a candidate that makes an end of an interval while judged only at a
    coarser tolerance (the table's, an early stage's) is read again at μ* and judged by that
-   reading, until every end is judged at μ* (``confirm``).
+   reading, until every end is judged at μ* (``confirm``); one judged coarser than 2 μ* is read
+   at 2 μ* first (a quarter of the rays: most such candidates fail there and drop out).
 
 **The confidence set.** A candidate θ is *consistent* with the measurement when its
 certified spectrum F̂(θ) lies within the combined tolerance at every fitted point:
@@ -72,12 +76,13 @@ from scipy.optimize import minimize
 from virtspec_mi.applications.fitting.forward import Forward, Reading, note
 from virtspec_mi.applications.fitting.problem import FitProblem, describe, fit_problem
 from virtspec_mi.applications.fitting.result import FitResult
+from virtspec_mi.applications.fitting.search import search_problem, table_start
 from virtspec_mi.applications.fitting.windows import FitWindows, fit_windows, window_loss
 from virtspec_mi.checks import number
 from virtspec_mi.engine.parameters import apply_point, known_parameters
 
-__all__ = ["fit", "LOSSES", "LOSS_NAMES", "UNCONSTRAINED_SHARE", "PROFILE_BISECTIONS", "consistency", "intervals",
-           "verdicts"]
+__all__ = ["fit", "LOSSES", "LOSS_NAMES", "SEARCH_WAVELENGTHS", "UNCONSTRAINED_SHARE", "PROFILE_BISECTIONS",
+           "consistency", "intervals", "verdicts"]
 
 UNCONSTRAINED_SHARE: float = 0.9
 """A parameter whose interval covers at least this share of its bounds is flagged unconstrained."""
@@ -85,23 +90,34 @@ UNCONSTRAINED_SHARE: float = 0.9
 PROFILE_BISECTIONS: int = 4
 """Bisections at each end of a profile's consistent stretch."""
 
+SEARCH_WAVELENGTHS: int = 32
+"""The refinement's search reads at most this many of the fitted wavelengths (:mod:`.search`)."""
+
 _STAGES = (4.0, 2.0, 1.0)  # the refinement's tolerances, in units of mu*
 _TABLE_MU = 0.02  # the table's tolerance (unless mu* is larger)
 
 
+def _against(reading: Reading, problem: FitProblem, q: str) -> tuple[np.ndarray, np.ndarray]:
+    """The measurement and its uncertainty on the reading's own wavelengths (all, or a search reading's subset)."""
+
+    if reading.subset is None:
+        return problem.measured[q], problem.uncertainty[q]
+    return problem.measured[q][reading.subset], problem.uncertainty[q][reading.subset]
+
+
 def _chi2(reading: Reading, problem: FitProblem) -> float:
-    return float(np.mean([np.mean(((reading.predicted[q] - problem.measured[q]) / problem.uncertainty[q]) ** 2)
-                          for q in problem.quantities]))
+    return float(np.mean([np.mean(((reading.predicted[q] - m) / u) ** 2)
+                          for q in problem.quantities for m, u in [_against(reading, problem, q)]]))
 
 
 def _rmse(reading: Reading, problem: FitProblem) -> float:
-    return float(np.sqrt(np.mean([np.mean((reading.predicted[q] - problem.measured[q]) ** 2)
+    return float(np.sqrt(np.mean([np.mean((reading.predicted[q] - _against(reading, problem, q)[0]) ** 2)
                                   for q in problem.quantities])))
 
 
 def _largest(reading: Reading, problem: FitProblem) -> float:
-    return float(max(np.max(np.abs(reading.predicted[q] - problem.measured[q]) / problem.uncertainty[q])
-                     for q in problem.quantities))
+    return float(max(np.max(np.abs(reading.predicted[q] - m) / u)
+                     for q in problem.quantities for m, u in [_against(reading, problem, q)]))
 
 
 LOSSES: dict[str, Callable[[Reading, FitProblem], float]] = {"chi2": _chi2, "rmse": _rmse, "max": _largest}
@@ -112,12 +128,16 @@ LOSS_NAMES: tuple[str, ...] = (*LOSSES, "windows")
 
 
 def consistency(reading: Reading, problem: FitProblem) -> float:
-    """s = max |F̂ − m| / (μ' + u) over every fitted point (≤ 1: consistent; NaN tolerance: inf)."""
+    """
+    s = max |F̂ − m| / (μ' + u) over every point of the reading (≤ 1: consistent; NaN tolerance:
+    inf): all the fitted wavelengths, or a search reading's subset of them.
+    """
 
     worst = 0.0
     for q in problem.quantities:
-        tolerance = reading.tolerance[q] + problem.uncertainty[q]
-        ratio = np.abs(reading.predicted[q] - problem.measured[q]) / tolerance
+        measured, uncertainty = _against(reading, problem, q)
+        tolerance = reading.tolerance[q] + uncertainty
+        ratio = np.abs(reading.predicted[q] - measured) / tolerance
         worst = max(worst, float(np.max(np.where(np.isnan(ratio), np.inf, ratio))))
     return worst
 
@@ -128,11 +148,12 @@ def verdicts(readings: Sequence[Reading], statistic: np.ndarray) -> np.ndarray:
     same parameter values (a candidate read again at a smaller tolerance is judged by that).
     """
 
-    finest: dict[tuple, tuple[float, float]] = {}
+    finest: dict[tuple, tuple[tuple[float, bool], float]] = {}
     for reading, s in zip(readings, statistic):
         key = tuple(reading.values.tolist())
-        if key not in finest or reading.mu < finest[key][0]:
-            finest[key] = (reading.mu, float(s))
+        rank = (reading.mu, reading.subset is not None)  # at one tolerance, a reading of every wavelength first
+        if key not in finest or rank < finest[key][0]:
+            finest[key] = (rank, float(s))
     return np.array([finest[tuple(r.values.tolist())][1] <= 1.0 for r in readings], dtype=bool)
 
 
@@ -184,8 +205,8 @@ def fit(measured: Any, specimen: Any, parameters: Mapping[str, Any], *, quantiti
         windows: Mapping[str, Any] | None = None, delta: float = 0.05,
         mu_fraction: float = 0.5, forward_mu: float | None = None, table: str | os.PathLike | None = None,
         table_points: int | None = None, evaluations: Sequence[int] | None = None, profile_points: int = 5,
-        confirm: bool = True, seed: int = 0, directory: str | os.PathLike | None = None,
-        defines: dict[str, Any] | None = None,
+        confirm: bool = True, search_wavelengths: int | None = SEARCH_WAVELENGTHS, seed: int = 0,
+        directory: str | os.PathLike | None = None, defines: dict[str, Any] | None = None,
         workers: Any = None, progress: bool | None = None, **settings: Any) -> FitResult:
     """
     Fit the free ``parameters`` of ``specimen`` to a measured spectrum (see the module docstring).
@@ -239,6 +260,12 @@ def fit(measured: Any, specimen: Any, parameters: Mapping[str, Any], *, quantiti
         Forward readings per refinement stage (default 12, 6, 3 per free parameter).
     profile_points
         Points of each parameter's profile at μ* (0: none).
+    search_wavelengths
+        The refinement's stages and the confirmation read at most this many of the fitted
+        wavelengths (evenly spread, each window's kept; default :data:`SEARCH_WAVELENGTHS`;
+        ``None``: all). Those readings are candidates judged on their own wavelengths (a test
+        on fewer wavelengths rejects less: still valid, the set wider); the estimate is the
+        search's best point read again on every fitted wavelength at μ* (:mod:`.search`).
     confirm
         Read the candidates that make the intervals' ends while judged only at a coarser
         tolerance again at μ*, and judge them by that reading (default ``True``; ``False``
@@ -272,6 +299,8 @@ def fit(measured: Any, specimen: Any, parameters: Mapping[str, Any], *, quantiti
     if windows is not None and loss != "windows":
         raise ValueError(f"windows= chooses the windows of loss='windows' (got loss={loss!r})")
     _check_choices(loss, delta, mu_fraction, forward_mu, table_points, profile_points, evaluations)
+    if search_wavelengths is not None and not (isinstance(search_wavelengths, int) and search_wavelengths >= 2):
+        raise ValueError(f"search_wavelengths must be None (all) or a whole number >= 2 (got {search_wavelengths!r})")
     problem = fit_problem(measured, specimen, parameters, quantities=quantities, wavelengths=wavelengths,
                           measurement_uncertainty=measurement_uncertainty, defines=defines)
     chosen = fit_windows(windows, problem.names, problem.wavelengths) if loss == "windows" else None
@@ -289,6 +318,10 @@ def fit(measured: Any, specimen: Any, parameters: Mapping[str, Any], *, quantiti
     measure_loss = LOSSES[loss] if chosen is None else chosen.loss()
     loss_name = loss if chosen is None else chosen.describe(problem.names)
     count = len(problem.names)
+    keep = None if chosen is None else np.logical_or.reduce(list(chosen.masks.values()))
+    subset = search_problem(problem, search_wavelengths, keep)
+    search = forward if subset is None else Forward(subset[0], delta=delta, seed=seed, settings=settings,
+                                                     directory=work, progress=progress, subset=subset[1])
     try:
         points = table_points or _table_points(count)
         grid = [np.linspace(low, high, points) for low, high in problem.bounds]
@@ -297,21 +330,23 @@ def fit(measured: Any, specimen: Any, parameters: Mapping[str, Any], *, quantiti
         budget = evaluations if evaluations is not None else tuple(k * count for k in (12, 6, 3))
         step = 0.5 / (points - 1)
         if chosen is None:
-            best = min(readings, key=lambda r: measure_loss(r, problem))
-            estimate = _refine(forward, problem, best, target, table_mu, budget, step, measure_loss)
+            start = table_start(readings, problem, measure_loss)
+            found = _refine(search, problem, start, target, table_mu, budget, step, measure_loss)
+            estimate = found if search is forward else forward.reading(found.values, target, "estimate")
         else:
-            estimate = _refine_windows(forward, problem, chosen, readings, target, table_mu, budget, step)
+            estimate = _refine_windows(forward, problem, chosen, readings, search, target, table_mu, budget, step)
         if profile_points:
             for i, name in enumerate(problem.names):
                 count_read = _profile(forward, problem, estimate, i, target, profile_points)
                 note(progress, f"fit: profile of {name} ({count_read} points at mu = {target:g})")
         if confirm:
-            confirmed = _confirm_ends(forward, problem, target)
+            confirmed = _confirm_ends(forward, search, problem, target)
             note(progress, f"fit: {confirmed} candidates at the confidence set's ends read again at mu = {target:g}")
     finally:
         keys = known_parameters(problem.scene)
         apply_point(_Holder(problem.scene), [keys.get(k, k) for k in problem.keys], problem.start)
-    return _result(problem, forward, estimate, loss_name, measure_loss, delta, target, mu_fraction, seed, started)
+    return _result(problem, forward, estimate, loss_name, measure_loss, delta, target, mu_fraction, seed, started,
+                   None if search is forward else search)
 
 
 class _Holder:
@@ -320,7 +355,7 @@ class _Holder:
 
 
 def _refine_windows(forward: Forward, problem: FitProblem, chosen: FitWindows, readings: list[Reading],
-                    target: float, ceiling: float, budget: Sequence[int], step: float) -> Reading:
+                    search: Forward, target: float, ceiling: float, budget: Sequence[int], step: float) -> Reading:
     """
     One refinement per window (all free parameters free, the loss over that window only), keeping
     its parameter's value; the parameters without a window from a refinement on the full range
@@ -329,25 +364,27 @@ def _refine_windows(forward: Forward, problem: FitProblem, chosen: FitWindows, r
 
     values = np.full(len(problem.names), np.nan)
     for i, mask in chosen.masks.items():
-        loss = window_loss(mask)
-        best = min(readings, key=lambda r: loss(r, problem))
-        found = _refine(forward, problem, best, target, ceiling, budget, step, loss,
+        start = table_start(readings, problem, window_loss(mask))
+        found = _refine(search, problem, start, target, ceiling, budget, step, window_loss(mask),
                         label=f"window {problem.names[i]}")
         values[i] = found.values[i]
     rest = np.isnan(values)
     if rest.any():
-        best = min(readings, key=lambda r: _chi2(r, problem))
-        found = _refine(forward, problem, best, target, ceiling, budget, step, _chi2, label="full range")
+        start = table_start(readings, problem, _chi2)
+        found = _refine(search, problem, start, target, ceiling, budget, step, _chi2, label="full range")
         values[rest] = found.values[rest]
     return forward.reading(values, target, "windows estimate")
 
 
-def _refine(forward: Forward, problem: FitProblem, best: Reading, target: float, ceiling: float,
-            budget: Sequence[int], step: float,
-            measure_loss: Callable[[Reading, FitProblem], float], label: str = "refine") -> Reading:
-    """Nelder–Mead in stages of shrinking tolerance (module docstring); the best reading at ``target``."""
+def _refine(forward: Forward, problem: FitProblem, start: np.ndarray, target: float, ceiling: float,
+            budget: Sequence[int], step: float, measure_loss: Callable[[Reading, FitProblem], float],
+            label: str = "refine") -> Reading:
+    """
+    Nelder–Mead from ``start`` in stages of shrinking tolerance (module docstring), on ``forward``'s
+    readings (the fit's, or the search's on fewer wavelengths); the best reading at ``target``.
+    """
 
-    x = problem.normalised(best.values)
+    x = problem.normalised(start)
     count = len(x)
     final = None
     for stage, (factor, evaluations) in enumerate(zip(_STAGES, budget), start=1):
@@ -378,16 +415,18 @@ def _refine(forward: Forward, problem: FitProblem, best: Reading, target: float,
     return final
 
 
-def _confirm_ends(forward: Forward, problem: FitProblem, target: float) -> int:
+def _confirm_ends(forward: Forward, search: Forward, problem: FitProblem, target: float) -> int:
     """
-    Read again at ``target`` every candidate that makes an end of an interval while judged
-    only at a coarser tolerance, until every end is a candidate judged at ``target``.
-    Returns the readings taken.
+    Read again at ``target`` (on the search's wavelengths) every candidate that makes an end of
+    an interval while judged only at a coarser tolerance, until every end is a candidate judged
+    at ``target``; a candidate judged only coarser than 2 × ``target`` is read at 2 × ``target``
+    first (a quarter of the rays), which most candidates far from the estimate fail. Returns the
+    readings taken.
     """
 
     taken = 0
     while True:
-        readings = forward.readings
+        readings = forward.readings + (search.readings if search is not forward else [])
         values = np.array([r.values for r in readings])
         consistent = verdicts(readings, np.array([consistency(r, problem) for r in readings]))
         if not consistent.any():
@@ -405,7 +444,8 @@ def _confirm_ends(forward: Forward, problem: FitProblem, target: float) -> int:
         if not ends:
             return taken
         for j in dict.fromkeys(ends):
-            forward.reading(values[j], target, "confirm")
+            coarse = finest[tuple(values[j].tolist())] > 2.0 * target * (1.0 + 1e-9)
+            search.reading(values[j], 2.0 * target if coarse else target, "confirm")
             taken += 1
 
 
@@ -449,8 +489,8 @@ def _profile(forward: Forward, problem: FitProblem, estimate: Reading, i: int, t
 
 def _result(problem: FitProblem, forward: Forward, estimate: Reading, loss: str,
             measure_loss: Callable[[Reading, FitProblem], float], delta: float, target: float, mu_fraction: float,
-            seed: int, started: float) -> FitResult:
-    readings = forward.readings
+            seed: int, started: float, searched: Forward | None) -> FitResult:
+    readings = forward.readings + ([] if searched is None else searched.readings)
     values = np.array([r.values for r in readings])
     statistic = np.array([consistency(r, problem) for r in readings])
     consistent = verdicts(readings, statistic)
@@ -468,5 +508,8 @@ def _result(problem: FitProblem, forward: Forward, estimate: Reading, loss: str,
         candidate_statistic=statistic, candidate_loss=np.array([measure_loss(r, problem) for r in readings]),
         candidate_stage=tuple(r.stage for r in readings), candidate_consistent=consistent,
         rays=int(sum(r.rays for r in readings)),
-        traced_rays=forward.traced_rays, seconds=time.perf_counter() - started, specimen=describe(problem),
+        traced_rays=forward.traced_rays + (0 if searched is None else searched.traced_rays),
+        search_wavelengths=0 if searched is None else len(searched.problem.wavelengths),
+        seconds=time.perf_counter() - started,
+        specimen=describe(problem),
         seed=int(seed), reading_delta=forward.reading_delta)

@@ -94,8 +94,10 @@ def window_loss(mask: np.ndarray) -> Callable[[Reading, FitProblem], float]:
     """The chi-square (mean squared residual in units of the uncertainty) over the wavelengths of ``mask``."""
 
     def loss(reading: Reading, problem: FitProblem) -> float:
-        return float(np.mean([np.mean(((reading.predicted[q][mask] - problem.measured[q][mask])
-                                       / problem.uncertainty[q][mask]) ** 2) for q in problem.quantities]))
+        inside = mask if reading.subset is None else mask[reading.subset]  # over the reading's own wavelengths
+        chosen = inside if reading.subset is None else reading.subset & mask
+        return float(np.mean([np.mean(((reading.predicted[q][inside] - problem.measured[q][chosen])
+                                       / problem.uncertainty[q][chosen]) ** 2) for q in problem.quantities]))
 
     return loss
 

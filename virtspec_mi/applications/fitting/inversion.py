@@ -26,8 +26,9 @@ on common random numbers across candidates. The fit goes
    :data:`PROFILE_BISECTIONS` times;
 4. **confirmation**: a candidate that makes an end of an interval while judged only at a
    coarser tolerance (the table's, an early stage's) is read again at μ* and judged by that
-   reading, until every end is judged at μ* (``confirm``); one judged coarser than 2 μ* is read
-   at 2 μ* first (a quarter of the rays: most such candidates fail there and drop out).
+   reading, until every end is judged at μ* (``confirm``), each read on the way at the
+   refinement's tolerances below its own (4 μ*, 2 μ*: a sixteenth and a quarter of the rays —
+   most such candidates fail there and drop out).
 
 **The confidence set.** A candidate θ is *consistent* with the measurement when its
 certified spectrum F̂(θ) lies within the combined tolerance at every fitted point:
@@ -419,9 +420,9 @@ def _confirm_ends(forward: Forward, search: Forward, problem: FitProblem, target
     """
     Read again at ``target`` (on the search's wavelengths) every candidate that makes an end of
     an interval while judged only at a coarser tolerance, until every end is a candidate judged
-    at ``target``; a candidate judged only coarser than 2 × ``target`` is read at 2 × ``target``
-    first (a quarter of the rays), which most candidates far from the estimate fail. Returns the
-    readings taken.
+    at ``target``. Each is read at the next of the refinement's tolerances (4, 2, 1 × ``target``)
+    below its finest so far: a candidate far from the estimate fails at 4 or 2 × ``target`` for a
+    sixteenth or a quarter of the rays of a reading at ``target``. Returns the readings taken.
     """
 
     taken = 0
@@ -444,8 +445,9 @@ def _confirm_ends(forward: Forward, search: Forward, problem: FitProblem, target
         if not ends:
             return taken
         for j in dict.fromkeys(ends):
-            coarse = finest[tuple(values[j].tolist())] > 2.0 * target * (1.0 + 1e-9)
-            search.reading(values[j], 2.0 * target if coarse else target, "confirm")
+            judged = finest[tuple(values[j].tolist())]
+            mu = max((target * f for f in _STAGES if target * f * (1.0 + 1e-9) < judged), default=target)
+            search.reading(values[j], mu, "confirm")
             taken += 1
 
 

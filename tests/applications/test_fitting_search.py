@@ -5,6 +5,8 @@ The specimen is PROSPECT-D, whose model makes the synthetic measurement (as in t
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 
@@ -18,12 +20,17 @@ WAVELENGTHS = np.arange(450.0, 2451.0, 40.0)  # 51 wavelengths
 FAST = dict(evaluations=(8, 4, 2), profile_points=3, table_points=5, theta_i=8.0, beam="collimated", delta=0.1)
 
 
+@dataclasses.dataclass(frozen=True)
 class _Problem:
-    """What the losses need of a problem: the measurement on its wavelengths."""
+    """What the losses and the search need of a problem: the measurement on its wavelengths."""
 
-    def __init__(self, wavelengths, measured, uncertainty):
-        self.wavelengths, self.measured, self.uncertainty = wavelengths, measured, uncertainty
-        self.quantities = tuple(measured)
+    wavelengths: np.ndarray
+    measured: dict
+    uncertainty: dict
+
+    @property
+    def quantities(self) -> tuple:
+        return tuple(self.measured)
 
 
 def test_the_table_interpolated_starts_between_its_nodes():
@@ -57,6 +64,27 @@ def test_the_search_wavelengths_are_spread_and_keep_the_windows():
     assert set(problem.wavelengths[keep]) <= set(sub.wavelengths) and 8 <= len(sub.wavelengths) <= 9
     np.testing.assert_array_equal(sub.measured["reflectance"], problem.measured["reflectance"][mask])
     assert search_problem(problem, 51, None) is None and search_problem(problem, None, None) is None
+
+
+def test_the_search_wavelengths_are_where_each_parameter_changes_the_table():
+    # a 3 x 3 table over two parameters on 40 wavelengths: the first changes R only at 1000 nm, the second only
+    # at 2000 nm (and T nowhere); 6 search wavelengths: 2 evenly spread (the ends), 2 per parameter
+    wavelengths = np.linspace(450.0, 2400.0, 40)
+    at_1000, at_2000 = np.argmin(np.abs(wavelengths - 1000)), np.argmin(np.abs(wavelengths - 2000))
+    readings = []
+    for a in (0.0, 1.0, 2.0):
+        for b in (0.0, 1.0, 2.0):
+            r = np.full(40, 0.3)
+            r[at_1000] += 0.05 * a
+            r[at_2000] += 0.03 * b
+            readings.append(Reading(values=np.array([a, b]), mu=0.02, predicted={"reflectance": r,
+                                                                                  "transmittance": np.full(40, 0.4)},
+                                    tolerance={}, rays=1, stage="table"))
+    problem = _Problem(wavelengths, {"reflectance": np.full(40, 0.3), "transmittance": np.full(40, 0.4)},
+                       {"reflectance": np.full(40, 0.01), "transmittance": np.full(40, 0.01)})
+    sub, mask = search_problem(problem, 6, None, readings)
+    chosen = set(np.flatnonzero(mask))
+    assert {0, 39, at_1000, at_2000} <= chosen and len(chosen) == 6
 
 
 def test_a_candidate_read_both_ways_is_judged_by_its_full_reading():

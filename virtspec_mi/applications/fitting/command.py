@@ -82,6 +82,9 @@ def add_fit_command(commands: Any) -> argparse.ArgumentParser:
     parser.add_argument("--table", help="Zarr store of the coarse table (read when it exists, else written)")
     parser.add_argument("--table-points", type=int, help="values per parameter in the table")
     parser.add_argument("--profile-points", type=int, default=5, help="points of each profile (0: none)")
+    parser.add_argument("--search-wavelengths", type=int, metavar="N",
+                        help="wavelengths the search and the confirmation read when fewer than the fitted ones "
+                             "(default 16; 0: all)")
     parser.add_argument("--seed", type=int, default=0, help="seed of every forward reading (default 0)")
     parser.add_argument("--directory", help="work directory: readings kept there; the same command resumes")
     parser.add_argument("--workers", type=int, metavar="N", help="Dask workers for the table")
@@ -124,6 +127,7 @@ def run_fit(args: argparse.Namespace) -> int:
         defines[name] = value
     settings = {name: value for name, value in (("theta_i", args.theta_i), ("beam", args.beam),
                                                 ("bound", args.bound)) if value is not None}
+    search = {} if args.search_wavelengths is None else {"search_wavelengths": args.search_wavelengths or None}
     args.checkpoint = args.directory  # an interrupt's message names where the readings are kept
     result = fit(measured, args.specimen, dict(args.free), quantities=quantities,
                  measurement_uncertainty=args.uncertainty,
@@ -132,7 +136,7 @@ def run_fit(args: argparse.Namespace) -> int:
                  mu_fraction=args.mu_fraction, forward_mu=args.forward_mu,
                  table=args.table, table_points=args.table_points, profile_points=args.profile_points,
                  seed=args.seed, directory=args.directory, defines=defines or None, workers=args.workers,
-                 progress=True if args.progress else None, **settings)
+                 progress=True if args.progress else None, **search, **settings)
     if args.out:
         result.write(args.out)
     if args.plot:

@@ -18,8 +18,9 @@ on common random numbers across candidates. The fit goes
    stage starting from the last one's best, the simplex shrinking with it: rays are raised as
    the fit converges, and the **estimate** is the best candidate of the last stage, read at
    μ* = ``mu_fraction`` × the smallest measurement uncertainty (or ``forward_mu``). With more
-   than ``search_wavelengths`` fitted wavelengths the stages read an evenly spread subset of
-   them (:func:`.search.search_problem`: candidates judged on their own wavelengths) and the
+   than ``search_wavelengths`` fitted wavelengths the stages read a subset of them — where the
+   table's spectra change most along each parameter, the rest evenly spread
+   (:func:`.search.search_problem`; candidates judged on their own wavelengths) — and the
    estimate is read again on all;
 3. **profiles**: along each free parameter through the estimate (the others held), at μ*:
    ``profile_points`` over the bounds, then each end of the consistent stretch bisected
@@ -91,7 +92,7 @@ UNCONSTRAINED_SHARE: float = 0.9
 PROFILE_BISECTIONS: int = 4
 """Bisections at each end of a profile's consistent stretch."""
 
-SEARCH_WAVELENGTHS: int = 32
+SEARCH_WAVELENGTHS: int = 16
 """The refinement's search reads at most this many of the fitted wavelengths (:mod:`.search`)."""
 
 _STAGES = (4.0, 2.0, 1.0)  # the refinement's tolerances, in units of mu*
@@ -262,9 +263,9 @@ def fit(measured: Any, specimen: Any, parameters: Mapping[str, Any], *, quantiti
     profile_points
         Points of each parameter's profile at μ* (0: none).
     search_wavelengths
-        The refinement's stages and the confirmation read at most this many of the fitted
-        wavelengths (evenly spread, each window's kept; default :data:`SEARCH_WAVELENGTHS`;
-        ``None``: all). Those readings are candidates judged on their own wavelengths (a test
+        The refinement's stages and the confirmation read about this many of the fitted
+        wavelengths (where the table's spectra change most along each free parameter, the rest
+        evenly spread, each window's kept; default :data:`SEARCH_WAVELENGTHS`; ``None``: all). Those readings are candidates judged on their own wavelengths (a test
         on fewer wavelengths rejects less: still valid, the set wider); the estimate is the
         search's best point read again on every fitted wavelength at μ* (:mod:`.search`).
     confirm
@@ -319,15 +320,15 @@ def fit(measured: Any, specimen: Any, parameters: Mapping[str, Any], *, quantiti
     measure_loss = LOSSES[loss] if chosen is None else chosen.loss()
     loss_name = loss if chosen is None else chosen.describe(problem.names)
     count = len(problem.names)
-    keep = None if chosen is None else np.logical_or.reduce(list(chosen.masks.values()))
-    subset = search_problem(problem, search_wavelengths, keep)
-    search = forward if subset is None else Forward(subset[0], delta=delta, seed=seed, settings=settings,
-                                                     directory=work, progress=progress, subset=subset[1])
     try:
         points = table_points or _table_points(count)
         grid = [np.linspace(low, high, points) for low, high in problem.bounds]
         table_mu = max(_TABLE_MU, target)
         readings = forward.table(grid, table_mu, table_path)
+        keep = None if chosen is None else np.logical_or.reduce(list(chosen.masks.values()))
+        subset = search_problem(problem, search_wavelengths, keep, readings)
+        search = forward if subset is None else Forward(subset[0], delta=delta, seed=seed, settings=settings,
+                                                         directory=work, progress=progress, subset=subset[1])
         budget = evaluations if evaluations is not None else tuple(k * count for k in (12, 6, 3))
         step = 0.5 / (points - 1)
         if chosen is None:

@@ -11,14 +11,16 @@ touching what the fit certifies:
   table's best node alone would start one table step away from the optimum at worst. The
   interpolation only chooses where to look: no reading, no verdict comes from it.
 - :func:`search_problem`: when the measurement has many wavelengths, the refinement's
-  stages and the confirmation of the intervals' ends read a subset of them (at most
-  ``count``, evenly spread over the fitted ones, the first and last and each window's own
-  wavelengths kept). A reading's rays grow with its wavelengths (each is certified at
+  stages and the confirmation of the intervals' ends read a subset of them (about ``count``):
+  for each free parameter the wavelengths where the table's spectra change most along it, in
+  units of the measurement's uncertainty — where the data can tell its values apart — and the
+  rest evenly spread over the fitted range (its first and last, and each window's own
+  wavelengths, kept). A reading's rays grow with its wavelengths (each is certified at
   δ / (n_λ n_q), so a wavelength costs a little less when there are fewer), so these stages
   cost about ``count / n_λ`` of full ones. Their readings are candidates of the confidence set
-  **judged on their own wavelengths**: the true parameters pass that test whenever they pass
-  the full one, so the set keeps its level and is only wider (a test on fewer wavelengths
-  rejects less). The estimate is the search's best point read again on every fitted
+  **judged on their own wavelengths**: such a reading is certified jointly at the same δ, so
+  the true parameters pass its test with the same probability; it rejects less than a test on
+  every wavelength, so the set keeps its level and is only wider. The estimate is the search's best point read again on every fitted
   wavelength at μ*; a candidate read both ways at one tolerance is judged by the full reading.
 
 References
@@ -52,18 +54,12 @@ def table_start(readings: Sequence[Reading], problem: FitProblem,
     (the table's best node when the readings are not a full grid of at least 2 values each).
     """
 
-    values = np.array([r.values for r in readings])
     best = min(readings, key=lambda r: loss(r, problem)).values
-    axes = [np.unique(values[:, i]) for i in range(values.shape[1])]
-    shape = tuple(len(a) for a in axes)
-    if min(shape) < 2 or int(np.prod(shape)) != len(readings):
+    grid = _grid(readings, problem)
+    if grid is None:
         return best
-    index = tuple(np.searchsorted(axis, values[:, i]) for i, axis in enumerate(axes))
-    interpolators = {}
-    for quantity in problem.quantities:
-        spectra = np.empty(shape + (len(problem.wavelengths),))
-        spectra[index] = np.array([r.predicted[quantity] for r in readings])
-        interpolators[quantity] = RegularGridInterpolator(axes, spectra)
+    axes, spectra = grid
+    interpolators = {q: RegularGridInterpolator(axes, spectra[q]) for q in problem.quantities}
     per_axis = max(3, int(round(SURROGATE_POINTS ** (1.0 / len(axes)))))
     fine = np.stack(np.meshgrid(*(np.linspace(a[0], a[-1], per_axis) for a in axes), indexing="ij"), axis=-1)
     fine = fine.reshape(-1, len(axes))
@@ -73,19 +69,55 @@ def table_start(readings: Sequence[Reading], problem: FitProblem,
     return fine[int(np.argmin(scores))] if np.isfinite(np.min(scores)) else best
 
 
-def search_problem(problem: FitProblem, count: int | None,
-                   keep: np.ndarray | None = None) -> tuple[FitProblem, np.ndarray] | None:
+def _grid(readings: Sequence[Reading], problem: FitProblem) -> tuple[list[np.ndarray], dict[str, np.ndarray]] | None:
+    """The table's axes and spectra (quantity → array of shape grid + (n_λ,)); ``None``: not a full grid."""
+
+    if not readings or any(r.subset is not None for r in readings):
+        return None
+    values = np.array([r.values for r in readings])
+    axes = [np.unique(values[:, i]) for i in range(values.shape[1])]
+    shape = tuple(len(a) for a in axes)
+    if min(shape) < 2 or int(np.prod(shape)) != len(readings):
+        return None
+    index = tuple(np.searchsorted(axis, values[:, i]) for i, axis in enumerate(axes))
+    spectra = {}
+    for quantity in problem.quantities:
+        spectra[quantity] = np.empty(shape + (len(problem.wavelengths),))
+        spectra[quantity][index] = np.array([r.predicted[quantity] for r in readings])
+    return axes, spectra
+
+
+def search_problem(problem: FitProblem, count: int | None, keep: np.ndarray | None = None,
+                   table: Sequence[Reading] = ()) -> tuple[FitProblem, np.ndarray] | None:
     """
-    The fit's problem on at most ``count`` of its wavelengths (evenly spread, the first and last
-    kept, and those where ``keep`` is true) and the mask of those, or ``None`` when that would be
-    all of them.
+    The fit's problem on at most ``count`` of its wavelengths and the mask of those, or ``None``
+    when that would be all of them. Chosen: with a ``table`` (a full grid), for each free
+    parameter the ``count`` / (n + 1) wavelengths where the table's spectra change most along that
+    parameter, in units of the measurement's uncertainty (mean |step| between neighbouring
+    nodes), the rest evenly spread (the first and last included); without, all evenly spread.
+    Those where ``keep`` is true are added.
     """
 
     size = len(problem.wavelengths)
     if count is None or size <= count:
         return None
     chosen = np.zeros(size, dtype=bool)
-    chosen[np.unique(np.round(np.linspace(0, size - 1, count)).astype(int))] = True
+    grid = _grid(table, problem)
+    parameters = 0 if grid is None else len(grid[0])
+    share = count // (parameters + 1)
+    chosen[np.unique(np.round(np.linspace(0, size - 1, count - parameters * share)).astype(int))] = True
+    if grid is not None:
+        spectra = grid[1]
+        for i in range(parameters):
+            change = sum(np.mean(np.abs(np.diff(spectra[q], axis=i)), axis=tuple(range(parameters)))
+                         / problem.uncertainty[q] for q in problem.quantities)
+            taken = 0
+            for k in np.argsort(-change, kind="stable"):
+                if taken == share:
+                    break
+                if not chosen[k]:
+                    chosen[k] = True
+                    taken += 1
     if keep is not None:
         chosen |= keep
     if chosen.all():

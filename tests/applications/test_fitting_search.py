@@ -106,7 +106,7 @@ def synthetic(truth: dict, u: float, seed: int) -> dict:
             "transmittance": (WAVELENGTHS, transmittance + rng.uniform(-u, u, n), np.full(n, u))}
 
 
-def test_a_fit_searches_on_fewer_wavelengths_and_reads_its_estimate_on_all():
+def test_a_fit_searches_on_fewer_wavelengths_and_reads_its_estimate_on_all(tmp_path):
     truth = {"Cab": 47.0, "Cm": 0.011}
     measured = synthetic(truth, 0.02, seed=8)
     free = {"Cab": (10, 90), "Cm": (0.002, 0.02)}
@@ -124,5 +124,7 @@ def test_a_fit_searches_on_fewer_wavelengths_and_reads_its_estimate_on_all():
         for i, name in enumerate(result.names):
             assert result.intervals[i, 0] <= truth[name] <= result.intervals[i, 1], (name, result.intervals)
     assert fewer.rays < 0.8 * every.rays  # the search is cheaper (the table and the estimate read every wavelength)
+    for name in ("fit.json", "fit.nc"):
+        assert vm.read_fit(fewer.write(tmp_path / name)).search_wavelengths == 12
     with pytest.raises(ValueError, match="search_wavelengths must be None"):
         vm.fit(measured, "prospect_d", free, search_wavelengths=1)

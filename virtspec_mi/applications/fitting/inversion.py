@@ -93,7 +93,7 @@ PROFILE_BISECTIONS: int = 4
 """Bisections at each end of a profile's consistent stretch."""
 
 SEARCH_WAVELENGTHS: int = 16
-"""The refinement's search reads at most this many of the fitted wavelengths (:mod:`.search`)."""
+"""The refinement's search and the confirmation read about this many of the fitted wavelengths (:mod:`.search`)."""
 
 _STAGES = (4.0, 2.0, 1.0)  # the refinement's tolerances, in units of mu*
 _TABLE_MU = 0.02  # the table's tolerance (unless mu* is larger)
@@ -265,9 +265,10 @@ def fit(measured: Any, specimen: Any, parameters: Mapping[str, Any], *, quantiti
     search_wavelengths
         The refinement's stages and the confirmation read about this many of the fitted
         wavelengths (where the table's spectra change most along each free parameter, the rest
-        evenly spread, each window's kept; default :data:`SEARCH_WAVELENGTHS`; ``None``: all). Those readings are candidates judged on their own wavelengths (a test
-        on fewer wavelengths rejects less: still valid, the set wider); the estimate is the
-        search's best point read again on every fitted wavelength at μ* (:mod:`.search`).
+        evenly spread, each window's kept; default :data:`SEARCH_WAVELENGTHS`; ``None``: all).
+        Those readings are candidates judged on their own wavelengths (a test on fewer
+        wavelengths rejects less: still valid, the set wider); the estimate is the search's best
+        point read again on every fitted wavelength at μ* (:mod:`.search`).
     confirm
         Read the candidates that make the intervals' ends while judged only at a coarser
         tolerance again at μ*, and judge them by that reading (default ``True``; ``False``

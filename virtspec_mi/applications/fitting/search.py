@@ -20,8 +20,9 @@ touching what the fit certifies:
   cost about ``count / n_λ`` of full ones. Their readings are candidates of the confidence set
   **judged on their own wavelengths**: such a reading is certified jointly at the same δ, so
   the true parameters pass its test with the same probability; it rejects less than a test on
-  every wavelength, so the set keeps its level and is only wider. The estimate is the search's best point read again on every fitted
-  wavelength at μ*; a candidate read both ways at one tolerance is judged by the full reading.
+  every wavelength, so the set keeps its level and is only wider. The estimate is the
+  search's best point read again on every fitted wavelength at μ*; a candidate read both ways
+  at one tolerance is judged by the full reading.
 
 References
 ----------

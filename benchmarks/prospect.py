@@ -3,8 +3,8 @@ PROSPECT-D forward spectra per second: virtspec-mi's NumPy model against ``prosa
 ==============================================================================================
 
 Both compute PROSPECT-D (Féret et al. 2017) at 400–2500 nm, 1 nm (2101 wavelengths) from the
-same coefficients (``prosail``'s ``prospect_d_spectra.txt``), side by side in one run, one thread
-each (``OMP_NUM_THREADS=1``):
+same numbers (``prosail``'s ``prospect_d_spectra.txt``, which virtspec-mi's shipped table copies), side
+by side in one run, one thread each (``OMP_NUM_THREADS=1``):
 
 1. **prosail** — ``prosail.run_prospect`` called once per leaf (its API: one leaf per call);
 2. **virtspec-mi, one leaf per call** — :func:`virtspec_mi.plugins.bsdfs.prospect_model.prospect_d`;

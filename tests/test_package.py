@@ -67,5 +67,9 @@ def test_the_project_has_a_bsd_3_clause_licence_in_its_metadata_and_the_leaf_dat
     assert "Neither the name of the copyright holder" in text
     project = tomllib.loads((root / "pyproject.toml").read_text())["project"]
     assert project["license"] == "BSD-3-Clause"
-    assert project["license-files"] == ["LICENSE", "virtspec_mi/data/abm-npsg/LICENSE"]
+    assert project["license-files"] == ["LICENSE", "virtspec_mi/data/abm-npsg/LICENSE",
+                                        "virtspec_mi/data/prospect-d/LICENSE"]
     assert "Natural Phenomena Simulation Group" in (root / "virtspec_mi/data/abm-npsg/LICENSE").read_text()
+    prospect = (root / "virtspec_mi/data/prospect-d/LICENSE").read_text()
+    assert "MIT License\n\nCopyright (c) 2020-present Jean-Baptiste Féret\n" in prospect
+    assert "prospect_d_coefficients.txt" in prospect.split("MIT License")[0]  # says what it covers

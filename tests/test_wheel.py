@@ -1,10 +1,11 @@
 """
 The package anyone can install: the built wheel and sdist hold every subpackage, the
-plugins, the shipped scenes and the leaf data with its licence; the wheel installed with
-its dependencies into a fresh virtual environment outside the source tree (no editable
-finder, nothing beside it) takes a leaf reading, a sweep, runs the command line and runs
-the quick start page's commands (``docs/guide/quickstart.md``) from a folder of its own;
-the wheel's metadata holds the project's licence and the leaf data's.
+plugins, the shipped scenes, the leaf data and the PROSPECT-D coefficients with their
+licences; the wheel installed with its dependencies into a fresh virtual environment outside
+the source tree (no editable finder, nothing beside it) takes a leaf reading (ABM-B, and
+PROSPECT-D without ``prosail``), a sweep, runs the command line and runs the quick start
+page's commands (``docs/guide/quickstart.md``) from a folder of its own; the wheel's metadata
+holds the project's licence and the data's.
 """
 
 from __future__ import annotations
@@ -42,12 +43,14 @@ def built(tmp_path_factory) -> dict[str, Path]:
 @pytest.mark.slow
 def test_the_wheel_and_the_sdist_hold_the_whole_package(built):
     expected = _expected_files()
-    assert {"virtspec_mi/data/abm-npsg/LICENSE", "virtspec_mi/scenes/soybean_abmb.xml",
+    assert {"virtspec_mi/data/abm-npsg/LICENSE", "virtspec_mi/data/prospect-d/LICENSE",
+            "virtspec_mi/data/prospect-d/prospect_d_coefficients.txt", "virtspec_mi/scenes/soybean_abmb.xml",
             "virtspec_mi/plugins/bsdfs/abm_b.py", "virtspec_mi/kernel/tracer.py"} <= expected
     wheel = set(zipfile.ZipFile(built["wheel"]).namelist())
     assert expected <= wheel, sorted(expected - wheel)
     info = next(name.split("/")[0] for name in wheel if name.endswith(".dist-info/METADATA"))
-    assert {f"{info}/licenses/LICENSE", f"{info}/licenses/virtspec_mi/data/abm-npsg/LICENSE"} <= wheel
+    assert {f"{info}/licenses/LICENSE", f"{info}/licenses/virtspec_mi/data/abm-npsg/LICENSE",
+            f"{info}/licenses/virtspec_mi/data/prospect-d/LICENSE"} <= wheel
     metadata = zipfile.ZipFile(built["wheel"]).read(f"{info}/METADATA").decode()
     assert "License-Expression: BSD-3-Clause" in metadata and "License-File: LICENSE" in metadata
     with tarfile.open(built["sdist"]) as sdist:
@@ -59,7 +62,8 @@ def test_the_wheel_and_the_sdist_hold_the_whole_package(built):
 def test_the_installed_wheel_measures_a_leaf_sweeps_and_runs_the_cli(built, tmp_path):
     # nothing of the checkout on the path, pip included (a PYTHONPATH holding the source tree and its
     # egg-info would make pip skip the wheel as "already satisfied")
-    env = {k: v for k, v in os.environ.items() if k not in ("VIRTSPEC_LEAF_DATA", "PYTHONPATH")}
+    env = {k: v for k, v in os.environ.items() if k not in ("VIRTSPEC_LEAF_DATA", "VIRTSPEC_PROSPECT_DATA",
+                                                            "PYTHONPATH")}
     venv = tmp_path / "venv"
     subprocess.run([sys.executable, "-m", "venv", str(venv)], check=True, env=env)
     python, virtspec = venv / "bin" / "python", venv / "bin" / "virtspec"
@@ -75,6 +79,12 @@ def test_the_installed_wheel_measures_a_leaf_sweeps_and_runs_the_cli(built, tmp_
         "table = vm.sweep(vm.instrument_scene({'type': 'abm_b'}), theta_i=[0, 40], wavelengths=[551], rays=2000,"
         " progress=False)\n"
         "assert table.reflectance.shape == (1, 2)\n"
+        "import importlib.util\n"  # PROSPECT-D from the shipped coefficients, prosail nowhere
+        "assert importlib.util.find_spec('prosail') is None\n"
+        "from virtspec_mi.plugins.bsdfs.prospect_model import prospect_coefficients\n"
+        "assert 'shipped' in prospect_coefficients().source\n"
+        "green = vm.measure(vm.instrument_scene({'type': 'prospect_d'}), wavelengths=[551, 800], rays=3000)\n"
+        "assert 0.03 < green.reflectance[0] < 0.2 < green.reflectance[1]\n"
         "print('ok')\n")
     run = subprocess.run([str(python), "-c", script], cwd=away, env=env, capture_output=True, text=True)
     assert run.returncode == 0 and run.stdout.strip() == "ok", run.stderr

@@ -20,8 +20,6 @@ from virtspec_mi.applications.fitting.forward import Reading
 from virtspec_mi.applications.fitting.inversion import intervals, verdicts
 from virtspec_mi.plugins.bsdfs.prospect_model import prospect_d
 
-pytest.importorskip("prosail")  # the PROSPECT-D coefficients (test extra)
-
 WAVELENGTHS = np.array([450.0, 530.0, 560.0, 600.0, 650.0, 680.0, 700.0, 720.0, 800.0, 1200.0, 1450.0, 1650.0,
                         1950.0, 2200.0])
 FAST = dict(evaluations=(8, 4, 2), profile_points=3, table_points=5, theta_i=8.0, beam="collimated")

@@ -1,12 +1,18 @@
 """Tests of the PROSPECT-D model (plugins/bsdfs/prospect_model.py) and its plugin (plugins/bsdfs/prospect_d.py).
 
-The reference is the ``prosail`` package (PyPI 2.0.5, in the ``test`` extra): its ``run_prospect``
+The coefficients are the package's own (``virtspec_mi/data/prospect-d``: Féret et al. 2017, MIT). The
+reference is the ``prosail`` package (PyPI 2.0.5, in the ``test`` extra): its ``run_prospect``
 (J. Gomez-Dans' Python port of Feret et al.'s ``prospect_DB.m``, Feret et al. 2017) on its own
 coefficient table ``prospect_d_spectra.txt`` (``dataSpec_PDB.m`` of 16 January 2017, six significant
-digits). Both implementations read the same table, so they must agree to float64 rounding.
+digits), which the shipped table copies number for number. Both implementations read the same numbers,
+so they must agree to float64 rounding. The tests that compare with prosail are skipped only where it
+is not installed; the others need nothing beside the package.
 """
 
 from __future__ import annotations
+
+import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -15,6 +21,7 @@ import virtspec_mi as vm
 from virtspec_mi.plugins.bsdfs import prospect_model
 from virtspec_mi.plugins.bsdfs.prospect_model import (
     ENVIRONMENT_VARIABLE,
+    SHIPPED,
     ProspectDataError,
     prospect_coefficients,
     prospect_d,
@@ -23,7 +30,11 @@ from virtspec_mi.plugins.bsdfs.prospect_model import (
 from virtspec_mi.references.quadrature import fresnel_reflectance
 from virtspec_mi.scene import instrument_scene
 
-prosail = pytest.importorskip("prosail")  # in the test extra; skipped only where it is not installed
+
+@pytest.fixture
+def prosail():
+    return pytest.importorskip("prosail")  # in the test extra; skipped only where it is not installed
+
 
 LEAVES = [  # (N, Cab, Car, Cbrown, Cw, Cm, Anth): a green leaf, a thick dark one, a thin pale one, a red one
     (1.5, 40.0, 8.0, 0.0, 0.01, 0.009, 0.0),
@@ -34,7 +45,7 @@ LEAVES = [  # (N, Cab, Car, Cbrown, Cw, Cm, Anth): a green leaf, a thick dark on
 
 
 @pytest.mark.parametrize("leaf", LEAVES)
-def test_reproduces_prosail_run_prospect(leaf):
+def test_reproduces_prosail_run_prospect(leaf, prosail):
     n, cab, car, cbrown, cw, cm, anth = leaf
     wavelengths, r, t = prosail.run_prospect(n, cab, car, cbrown, cw, cm, ant=anth)
     reflectance, transmittance = prospect_d(N=n, Cab=cab, Car=car, Cbrown=cbrown, Cw=cw, Cm=cm, Anth=anth)
@@ -76,21 +87,49 @@ def test_bad_parameters_are_refused_by_name():
         prospect_d([350.0], Cab=10.0)
 
 
-def test_coefficients_from_a_path_and_a_clear_error_without_them(tmp_path, monkeypatch):
+def test_the_shipped_table_loads_without_prosail_or_the_variable(monkeypatch):
+    monkeypatch.delenv(ENVIRONMENT_VARIABLE, raising=False)
+    monkeypatch.setitem(sys.modules, "prosail", None)  # `import prosail` fails: nothing may need it
+    prospect_model._cached.cache_clear()
+    data = prospect_coefficients()
+    assert "shipped with virtspec-mi" in data.source
+    assert SHIPPED.parent == Path(prospect_model.__file__).resolve().parents[2] / "data" / "prospect-d"
+    assert {p.name for p in SHIPPED.parent.iterdir()} >= {"LICENSE", "README.md", SHIPPED.name}
+    assert data.wavelengths[0] == 400.0 and data.wavelengths[-1] == 2500.0 and len(data.wavelengths) == 2101
+    np.testing.assert_array_equal(np.diff(data.wavelengths), 1.0)
+    # spot values of dataSpec_PDB.m (first and last rows of the table)
+    assert (data.n[0], data.absorption["Cab"][0], data.absorption["Cm"][0]) == (1.5115, 6.48815e-02, 1.09700e+02)
+    assert (data.n[-1], data.absorption["Cw"][-1], data.absorption["Cm"][-1]) == (1.2736, 9.53000e+01, 3.87100e+01)
+    reflectance, transmittance = prospect_d([550.0, 800.0], Cab=40.0)
+    assert 0.05 < reflectance[0] < 0.2 < reflectance[1] and 0.3 < transmittance[1] < 0.6
+
+
+def test_the_shipped_table_holds_prosails_numbers(prosail):
+    theirs = Path(prosail.__file__).parent / "prospect_d_spectra.txt"
+
+    def numbers(path: Path) -> list[list[str]]:
+        lines = path.read_text(encoding="utf-8").splitlines()
+        return [line.split() for line in lines if line.strip() and not line.lstrip().startswith("#")]
+
+    assert numbers(SHIPPED) == numbers(theirs)  # every number's text, row for row
+    np.testing.assert_array_equal(np.loadtxt(SHIPPED), np.loadtxt(theirs))
+
+
+def test_coefficients_from_a_path_the_variable_and_a_clear_error(tmp_path, monkeypatch):
     table = tmp_path / "coefficients.txt"
     data = prospect_coefficients()
     rows = np.column_stack([data.wavelengths, data.n, *data.absorption.values()])[::100]
     np.savetxt(table, rows)
     mine = prospect_coefficients(table)
     assert len(mine.wavelengths) == len(rows) and mine.source == str(table)
-    monkeypatch.setenv(ENVIRONMENT_VARIABLE, str(table))
+    monkeypatch.setenv(ENVIRONMENT_VARIABLE, str(table))  # the variable overrides the shipped table
     assert len(prospect_coefficients().wavelengths) == len(rows)
     (tmp_path / "bad.txt").write_text("400 1.5 0.1\n")
     with pytest.raises(ProspectDataError, match="eight columns|8 columns"):
         prospect_coefficients(tmp_path / "bad.txt")
     monkeypatch.delenv(ENVIRONMENT_VARIABLE)
-    monkeypatch.setattr(prospect_model.importlib.util, "find_spec", lambda name: None)
-    with pytest.raises(ProspectDataError, match=r"pip install prosail.*VIRTSPEC_PROSPECT_DATA"):
+    monkeypatch.setattr(prospect_model, "SHIPPED", tmp_path / "absent.txt")  # an incomplete installation
+    with pytest.raises(ProspectDataError, match=r"shipped with virtspec-mi are missing.*VIRTSPEC_PROSPECT_DATA"):
         prospect_coefficients()
 
 

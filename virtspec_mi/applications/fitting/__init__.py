@@ -6,9 +6,10 @@ Fitting: a specimen's parameters from a measured spectrum
 pigments, PROSPECT-D's N, Cab, Car, Cw, Cm, a slab's μa and μs, a rough surface's α …)
 whose certified forward spectrum matches a measured reflectance and/or transmittance,
 with a confidence set and the parameters the data leave unconstrained
-(:mod:`.inversion`); the forward readings on common random numbers, kept for resuming
-(:mod:`.forward`); the inputs checked (:mod:`.problem`); the result, its files and
-figures (:mod:`.result`); the ``virtspec fit`` command (:mod:`.command`).
+(:mod:`.inversion`); each parameter estimated on its optimal spectral window
+(:mod:`.windows`, ``loss="windows"``); the forward readings on common random numbers, kept
+for resuming (:mod:`.forward`); the inputs checked (:mod:`.problem`); the result, its files
+and figures (:mod:`.result`); the ``virtspec fit`` command (:mod:`.command`).
 
 References
 ----------

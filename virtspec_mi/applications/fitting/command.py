@@ -23,7 +23,9 @@ EXAMPLES: str = (
     "  virtspec fit leaf.csv --specimen prospect_d --free Cab=10:80 --free Cm=0.002:0.02 --quantity both\n"
     "  virtspec fit leaf_R.csv --transmittance leaf_T.csv --specimen abm_b --free chlorophyll_a=5:40 \\\n"
     "      --free mesophyll_fraction=0.3:0.9 --theta-i 8 --beam collimated --directory fit-work \\\n"
-    "      --out fit.nc --plot fit.png"
+    "      --out fit.nc --plot fit.png\n"
+    "  virtspec fit leaf.csv --specimen prospect_d --free Cab=10:80 --free Cm=0.002:0.02 --quantity both \\\n"
+    "      --loss windows --window Cab=700:720   (Cm on its published window, 1700-2400 nm)"
 )
 
 
@@ -32,6 +34,14 @@ def _pair(text: str) -> tuple[str, str]:
     if not sep or not name or ":" not in bounds:
         raise argparse.ArgumentTypeError(f"--free takes NAME=LOWEST:HIGHEST (got {text!r})")
     return name.strip(), bounds.strip()
+
+
+def _window(text: str) -> tuple[str, str]:
+    name, sep, intervals = text.partition("=")
+    if not sep or not name or ":" not in intervals:
+        raise argparse.ArgumentTypeError(f"--window takes NAME=LOWEST:HIGHEST[,LOWEST:HIGHEST ...] in nm "
+                                         f"(got {text!r})")
+    return name.strip(), intervals.strip()
 
 
 def add_fit_command(commands: Any) -> argparse.ArgumentParser:
@@ -59,8 +69,11 @@ def add_fit_command(commands: Any) -> argparse.ArgumentParser:
     parser.add_argument("--uncertainty", type=float, help="measurement uncertainty (a half-width) of every point, "
                                                           "overriding the files'")
     parser.add_argument("--wavelengths", help="wavelengths to fit, e.g. 400:2500:20 (default: the measured ones)")
-    parser.add_argument("--loss", default="chi2", help="the loss minimised: chi2, rmse or max (default chi2; checked "
-                                                      "by vm.fit, which names them)")
+    parser.add_argument("--loss", help="the loss minimised: chi2, rmse, max or windows (default chi2, windows with "
+                                       "--window; checked by vm.fit, which names them)")
+    parser.add_argument("--window", type=_window, action="append", default=[], metavar="NAME=LOWEST:HIGHEST",
+                        help="the spectral window (nm) on which a free parameter is estimated (loss windows; repeat "
+                             "for several; PROSPECT-D's Cab, Car, Anth, Cw, Cm default to the published ones)")
     parser.add_argument("--delta", type=float, default=0.05, help="risk of each candidate's forward spectrum "
                                                                   "(default 0.05)")
     parser.add_argument("--mu-fraction", type=float, default=0.5,
@@ -69,6 +82,9 @@ def add_fit_command(commands: Any) -> argparse.ArgumentParser:
     parser.add_argument("--table", help="Zarr store of the coarse table (read when it exists, else written)")
     parser.add_argument("--table-points", type=int, help="values per parameter in the table")
     parser.add_argument("--profile-points", type=int, default=5, help="points of each profile (0: none)")
+    parser.add_argument("--search-wavelengths", type=int, metavar="N",
+                        help="wavelengths the search and the confirmation read when fewer than the fitted ones "
+                             "(default 16; 0: all)")
     parser.add_argument("--seed", type=int, default=0, help="seed of every forward reading (default 0)")
     parser.add_argument("--directory", help="work directory: readings kept there; the same command resumes")
     parser.add_argument("--workers", type=int, metavar="N", help="Dask workers for the table")
@@ -111,14 +127,16 @@ def run_fit(args: argparse.Namespace) -> int:
         defines[name] = value
     settings = {name: value for name, value in (("theta_i", args.theta_i), ("beam", args.beam),
                                                 ("bound", args.bound)) if value is not None}
+    search = {} if args.search_wavelengths is None else {"search_wavelengths": args.search_wavelengths or None}
     args.checkpoint = args.directory  # an interrupt's message names where the readings are kept
     result = fit(measured, args.specimen, dict(args.free), quantities=quantities,
                  measurement_uncertainty=args.uncertainty,
                  wavelengths=None if args.wavelengths is None else parse_wavelengths(args.wavelengths),
-                 loss=args.loss, delta=args.delta, mu_fraction=args.mu_fraction, forward_mu=args.forward_mu,
+                 loss=args.loss, windows=dict(args.window) or None, delta=args.delta,
+                 mu_fraction=args.mu_fraction, forward_mu=args.forward_mu,
                  table=args.table, table_points=args.table_points, profile_points=args.profile_points,
                  seed=args.seed, directory=args.directory, defines=defines or None, workers=args.workers,
-                 progress=True if args.progress else None, **settings)
+                 progress=True if args.progress else None, **search, **settings)
     if args.out:
         result.write(args.out)
     if args.plot:

@@ -73,13 +73,16 @@ class Reading:
     stage: str
     seconds: float = 0.0
     stats: dict[str, float] = field(default_factory=dict)
+    subset: np.ndarray | None = None
+    """Mask over the fit's wavelengths when the reading holds only those (a search reading); ``None``: all."""
 
 
 class Forward:
     """The forward readings of one fit (see the module docstring)."""
 
     def __init__(self, problem: FitProblem, *, delta: float, seed: int, settings: dict[str, Any],
-                 directory: Path | None, workers: Any = None, progress: bool = False) -> None:
+                 directory: Path | None, workers: Any = None, progress: bool = False,
+                 subset: np.ndarray | None = None) -> None:
         owned = sorted(set(settings) & set(FIT_OWNS))
         if owned:
             raise ValueError(f"a fit sets {', '.join(owned)} of its forward readings itself (the fit's own keywords: "
@@ -92,6 +95,7 @@ class Forward:
         self.directory = directory
         self.workers = workers
         self.progress = progress
+        self.subset = subset  # the problem is the fit's on these of its wavelengths (mask), or None: the fit's own
         count = len(problem.wavelengths) * len(problem.quantities)
         self.reading_delta = self.delta / count
         self.joint = len(problem.quantities) > 1
@@ -142,8 +146,10 @@ class Forward:
             spectrum = result.spectrum(quantity)
             predicted[quantity] = spectrum.values
             tolerance[quantity] = spectrum.tolerance
+        if self.subset is not None:
+            stage = f"{stage} ({len(self.problem.wavelengths)} wavelengths)"
         return Reading(values=values, mu=float(mu), predicted=predicted, tolerance=tolerance,
-                       rays=int(np.sum(result.rays_spent)), stage=stage, seconds=seconds)
+                       rays=int(np.sum(result.rays_spent)), stage=stage, seconds=seconds, subset=self.subset)
 
     # -- the table ---------------------------------------------------------------------
 

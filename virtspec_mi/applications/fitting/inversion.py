@@ -12,18 +12,24 @@ on common random numbers across candidates. The fit goes
 
 1. **table**: a coarse grid over the box of bounds, one sweep at a coarse tolerance
    (a Zarr store, reusable by a later fit: a look-up-table inversion);
-2. **refinement**: from the table's best point, Nelder–Mead (``scipy.optimize``) on the
-   chosen ``loss`` in stages whose tolerance shrinks (4 μ*, 2 μ*, μ*; never coarser than
-   the table's), each stage starting
-   from the last one's best, the simplex shrinking with it: rays are raised as the fit
-   converges, and the **estimate** is the best candidate of the last stage, read at
-   μ* = ``mu_fraction`` × the smallest measurement uncertainty (or ``forward_mu``);
+2. **refinement**: from the minimum of the table's multilinear interpolation (no rays;
+   :func:`.search.table_start`), Nelder–Mead (``scipy.optimize``) on the chosen ``loss`` in
+   stages whose tolerance shrinks (4 μ*, 2 μ*, μ*; never coarser than the table's), each
+   stage starting from the last one's best, the simplex shrinking with it: rays are raised as
+   the fit converges, and the **estimate** is the best candidate of the last stage, read at
+   μ* = ``mu_fraction`` × the smallest measurement uncertainty (or ``forward_mu``). With more
+   than ``search_wavelengths`` fitted wavelengths the stages read a subset of them — where the
+   table's spectra change most along each parameter, the rest evenly spread
+   (:func:`.search.search_problem`; candidates judged on their own wavelengths) — and the
+   estimate is read again on all;
 3. **profiles**: along each free parameter through the estimate (the others held), at μ*:
    ``profile_points`` over the bounds, then each end of the consistent stretch bisected
    :data:`PROFILE_BISECTIONS` times;
 4. **confirmation**: a candidate that makes an end of an interval while judged only at a
    coarser tolerance (the table's, an early stage's) is read again at μ* and judged by that
-   reading, until every end is judged at μ* (``confirm``).
+   reading, until every end is judged at μ* (``confirm``), each read on the way at the
+   refinement's tolerances below its own (4 μ*, 2 μ*: a sixteenth and a quarter of the rays —
+   most such candidates fail there and drop out).
 
 **The confidence set.** A candidate θ is *consistent* with the measurement when its
 certified spectrum F̂(θ) lies within the combined tolerance at every fitted point:
@@ -46,7 +52,9 @@ reproduce the measurement within its stated uncertainty (a model of another mate
 biased instrument, an uncertainty too small).
 
 Losses: ``chi2`` (mean squared residual in units of the measurement uncertainty, the
-default), ``rmse`` (unweighted) and ``max`` (the largest normalised residual).
+default), ``rmse`` (unweighted), ``max`` (the largest normalised residual) and ``windows``
+(each parameter estimated on its own optimal spectral window, Féret et al. 2019, 2021,
+Spafford et al. 2021: :mod:`.windows`; the default when ``windows=`` is given).
 
 References
 ----------
@@ -70,10 +78,13 @@ from scipy.optimize import minimize
 from virtspec_mi.applications.fitting.forward import Forward, Reading, note
 from virtspec_mi.applications.fitting.problem import FitProblem, describe, fit_problem
 from virtspec_mi.applications.fitting.result import FitResult
+from virtspec_mi.applications.fitting.search import search_problem, table_start
+from virtspec_mi.applications.fitting.windows import FitWindows, fit_windows, window_loss
 from virtspec_mi.checks import number
 from virtspec_mi.engine.parameters import apply_point, known_parameters
 
-__all__ = ["fit", "LOSSES", "UNCONSTRAINED_SHARE", "PROFILE_BISECTIONS", "consistency", "intervals", "verdicts"]
+__all__ = ["fit", "LOSSES", "LOSS_NAMES", "SEARCH_WAVELENGTHS", "UNCONSTRAINED_SHARE", "PROFILE_BISECTIONS",
+           "consistency", "intervals", "verdicts"]
 
 UNCONSTRAINED_SHARE: float = 0.9
 """A parameter whose interval covers at least this share of its bounds is flagged unconstrained."""
@@ -81,36 +92,54 @@ UNCONSTRAINED_SHARE: float = 0.9
 PROFILE_BISECTIONS: int = 4
 """Bisections at each end of a profile's consistent stretch."""
 
+SEARCH_WAVELENGTHS: int = 16
+"""The refinement's search and the confirmation read about this many of the fitted wavelengths (:mod:`.search`)."""
+
 _STAGES = (4.0, 2.0, 1.0)  # the refinement's tolerances, in units of mu*
 _TABLE_MU = 0.02  # the table's tolerance (unless mu* is larger)
 
 
+def _against(reading: Reading, problem: FitProblem, q: str) -> tuple[np.ndarray, np.ndarray]:
+    """The measurement and its uncertainty on the reading's own wavelengths (all, or a search reading's subset)."""
+
+    if reading.subset is None:
+        return problem.measured[q], problem.uncertainty[q]
+    return problem.measured[q][reading.subset], problem.uncertainty[q][reading.subset]
+
+
 def _chi2(reading: Reading, problem: FitProblem) -> float:
-    return float(np.mean([np.mean(((reading.predicted[q] - problem.measured[q]) / problem.uncertainty[q]) ** 2)
-                          for q in problem.quantities]))
+    return float(np.mean([np.mean(((reading.predicted[q] - m) / u) ** 2)
+                          for q in problem.quantities for m, u in [_against(reading, problem, q)]]))
 
 
 def _rmse(reading: Reading, problem: FitProblem) -> float:
-    return float(np.sqrt(np.mean([np.mean((reading.predicted[q] - problem.measured[q]) ** 2)
+    return float(np.sqrt(np.mean([np.mean((reading.predicted[q] - _against(reading, problem, q)[0]) ** 2)
                                   for q in problem.quantities])))
 
 
 def _largest(reading: Reading, problem: FitProblem) -> float:
-    return float(max(np.max(np.abs(reading.predicted[q] - problem.measured[q]) / problem.uncertainty[q])
-                     for q in problem.quantities))
+    return float(max(np.max(np.abs(reading.predicted[q] - m) / u)
+                     for q in problem.quantities for m, u in [_against(reading, problem, q)]))
 
 
 LOSSES: dict[str, Callable[[Reading, FitProblem], float]] = {"chi2": _chi2, "rmse": _rmse, "max": _largest}
-"""The losses a fit minimises, by name."""
+"""The losses over the whole fitted spectrum, by name."""
+
+LOSS_NAMES: tuple[str, ...] = (*LOSSES, "windows")
+"""Every loss a fit minimises: :data:`LOSSES` and ``windows`` (one window per parameter, :mod:`.windows`)."""
 
 
 def consistency(reading: Reading, problem: FitProblem) -> float:
-    """s = max |F̂ − m| / (μ' + u) over every fitted point (≤ 1: consistent; NaN tolerance: inf)."""
+    """
+    s = max |F̂ − m| / (μ' + u) over every point of the reading (≤ 1: consistent; NaN tolerance:
+    inf): all the fitted wavelengths, or a search reading's subset of them.
+    """
 
     worst = 0.0
     for q in problem.quantities:
-        tolerance = reading.tolerance[q] + problem.uncertainty[q]
-        ratio = np.abs(reading.predicted[q] - problem.measured[q]) / tolerance
+        measured, uncertainty = _against(reading, problem, q)
+        tolerance = reading.tolerance[q] + uncertainty
+        ratio = np.abs(reading.predicted[q] - measured) / tolerance
         worst = max(worst, float(np.max(np.where(np.isnan(ratio), np.inf, ratio))))
     return worst
 
@@ -121,11 +150,12 @@ def verdicts(readings: Sequence[Reading], statistic: np.ndarray) -> np.ndarray:
     same parameter values (a candidate read again at a smaller tolerance is judged by that).
     """
 
-    finest: dict[tuple, tuple[float, float]] = {}
+    finest: dict[tuple, tuple[tuple[float, bool], float]] = {}
     for reading, s in zip(readings, statistic):
         key = tuple(reading.values.tolist())
-        if key not in finest or reading.mu < finest[key][0]:
-            finest[key] = (reading.mu, float(s))
+        rank = (reading.mu, reading.subset is not None)  # at one tolerance, a reading of every wavelength first
+        if key not in finest or rank < finest[key][0]:
+            finest[key] = (rank, float(s))
     return np.array([finest[tuple(r.values.tolist())][1] <= 1.0 for r in readings], dtype=bool)
 
 
@@ -154,8 +184,8 @@ def _table_points(count: int) -> int:
 
 def _check_choices(loss: str, delta: float, mu_fraction: float, forward_mu: float | None, table_points: int | None,
                    profile_points: int, evaluations: Sequence[int] | None) -> None:
-    if loss not in LOSSES:
-        raise ValueError(f"loss must be one of {', '.join(LOSSES)} (got {loss!r})")
+    if loss not in LOSS_NAMES:
+        raise ValueError(f"loss must be one of {', '.join(LOSS_NAMES)} (got {loss!r})")
     if not 0.0 < delta < 1.0:
         raise ValueError(f"delta must satisfy 0 < delta < 1 (got {delta!r})")
     if not 0.0 < mu_fraction <= 1.0:
@@ -173,11 +203,12 @@ def _check_choices(loss: str, delta: float, mu_fraction: float, forward_mu: floa
 
 
 def fit(measured: Any, specimen: Any, parameters: Mapping[str, Any], *, quantities: Sequence[str] | None = None,
-        measurement_uncertainty: Any = None, wavelengths: Any = None, loss: str = "chi2", delta: float = 0.05,
+        measurement_uncertainty: Any = None, wavelengths: Any = None, loss: str | None = None,
+        windows: Mapping[str, Any] | None = None, delta: float = 0.05,
         mu_fraction: float = 0.5, forward_mu: float | None = None, table: str | os.PathLike | None = None,
         table_points: int | None = None, evaluations: Sequence[int] | None = None, profile_points: int = 5,
-        confirm: bool = True, seed: int = 0, directory: str | os.PathLike | None = None,
-        defines: dict[str, Any] | None = None,
+        confirm: bool = True, search_wavelengths: int | None = SEARCH_WAVELENGTHS, seed: int = 0,
+        directory: str | os.PathLike | None = None, defines: dict[str, Any] | None = None,
         workers: Any = None, progress: bool | None = None, **settings: Any) -> FitResult:
     """
     Fit the free ``parameters`` of ``specimen`` to a measured spectrum (see the module docstring).
@@ -205,7 +236,15 @@ def fit(measured: Any, specimen: Any, parameters: Mapping[str, Any], *, quantiti
         The wavelengths to fit (nm, inside the measured range; the measurement is
         interpolated onto them); default the measured ones.
     loss
-        ``chi2`` (default), ``rmse`` or ``max`` (:data:`LOSSES`).
+        ``chi2`` (the default without ``windows``), ``rmse``, ``max`` (:data:`LOSSES`) or
+        ``windows`` (the default with ``windows``): each parameter with a window estimated by a
+        refinement on the chi-square over its window only, the others on the full range
+        (:mod:`.windows`).
+    windows
+        Free parameter → its window(s) in nm, ``(lowest, highest)`` or a list of them, for
+        ``loss="windows"``; each inside the fitted wavelengths. Free parameters named as
+        PROSPECT-D's (``Cab``, ``Car``, ``Anth``, ``Cw``, ``Cm``) not given take the published
+        optimal windows (:data:`.windows.OPTIMAL_WINDOWS`).
     delta
         Risk of the forward readings for one candidate's whole spectrum (the confidence
         set's level is 1 − δ less the measurement's own risk).
@@ -223,6 +262,13 @@ def fit(measured: Any, specimen: Any, parameters: Mapping[str, Any], *, quantiti
         Forward readings per refinement stage (default 12, 6, 3 per free parameter).
     profile_points
         Points of each parameter's profile at μ* (0: none).
+    search_wavelengths
+        The refinement's stages and the confirmation read about this many of the fitted
+        wavelengths (where the table's spectra change most along each free parameter, the rest
+        evenly spread, each window's kept; default :data:`SEARCH_WAVELENGTHS`; ``None``: all).
+        Those readings are candidates judged on their own wavelengths (a test on fewer
+        wavelengths rejects less: still valid, the set wider); the estimate is the search's best
+        point read again on every fitted wavelength at μ* (:mod:`.search`).
     confirm
         Read the candidates that make the intervals' ends while judged only at a coarser
         tolerance again at μ*, and judge them by that reading (default ``True``; ``False``
@@ -252,9 +298,15 @@ def fit(measured: Any, specimen: Any, parameters: Mapping[str, Any], *, quantiti
     delta = number("delta", delta)
     mu_fraction = number("mu_fraction", mu_fraction)
     forward_mu = None if forward_mu is None else number("forward_mu", forward_mu)
+    loss = ("windows" if windows is not None else "chi2") if loss is None else loss
+    if windows is not None and loss != "windows":
+        raise ValueError(f"windows= chooses the windows of loss='windows' (got loss={loss!r})")
     _check_choices(loss, delta, mu_fraction, forward_mu, table_points, profile_points, evaluations)
+    if search_wavelengths is not None and not (isinstance(search_wavelengths, int) and search_wavelengths >= 2):
+        raise ValueError(f"search_wavelengths must be None (all) or a whole number >= 2 (got {search_wavelengths!r})")
     problem = fit_problem(measured, specimen, parameters, quantities=quantities, wavelengths=wavelengths,
                           measurement_uncertainty=measurement_uncertainty, defines=defines)
+    chosen = fit_windows(windows, problem.names, problem.wavelengths) if loss == "windows" else None
     progress = sys.stderr.isatty() if progress is None else bool(progress)
     smallest = min(float(problem.uncertainty[q].min()) for q in problem.quantities)
     target = forward_mu if forward_mu is not None else mu_fraction * smallest
@@ -266,27 +318,38 @@ def fit(measured: Any, specimen: Any, parameters: Mapping[str, Any], *, quantiti
     table_path = Path(table) if table is not None else (None if work is None else work / "table.zarr")
     forward = Forward(problem, delta=delta, seed=seed, settings=settings, directory=work, workers=workers,
                       progress=progress)
-    measure_loss = LOSSES[loss]
+    measure_loss = LOSSES[loss] if chosen is None else chosen.loss()
+    loss_name = loss if chosen is None else chosen.describe(problem.names)
     count = len(problem.names)
     try:
         points = table_points or _table_points(count)
         grid = [np.linspace(low, high, points) for low, high in problem.bounds]
         table_mu = max(_TABLE_MU, target)
         readings = forward.table(grid, table_mu, table_path)
-        best = min(readings, key=lambda r: measure_loss(r, problem))
+        keep = None if chosen is None else np.logical_or.reduce(list(chosen.masks.values()))
+        subset = search_problem(problem, search_wavelengths, keep, readings)
+        search = forward if subset is None else Forward(subset[0], delta=delta, seed=seed, settings=settings,
+                                                         directory=work, progress=progress, subset=subset[1])
         budget = evaluations if evaluations is not None else tuple(k * count for k in (12, 6, 3))
-        estimate = _refine(forward, problem, best, target, table_mu, budget, 0.5 / (points - 1), measure_loss)
+        step = 0.5 / (points - 1)
+        if chosen is None:
+            start = table_start(readings, problem, measure_loss)
+            found = _refine(search, problem, start, target, table_mu, budget, step, measure_loss)
+            estimate = found if search is forward else forward.reading(found.values, target, "estimate")
+        else:
+            estimate = _refine_windows(forward, problem, chosen, readings, search, target, table_mu, budget, step)
         if profile_points:
             for i, name in enumerate(problem.names):
                 count_read = _profile(forward, problem, estimate, i, target, profile_points)
                 note(progress, f"fit: profile of {name} ({count_read} points at mu = {target:g})")
         if confirm:
-            confirmed = _confirm_ends(forward, problem, target)
+            confirmed = _confirm_ends(forward, search, problem, target)
             note(progress, f"fit: {confirmed} candidates at the confidence set's ends read again at mu = {target:g}")
     finally:
         keys = known_parameters(problem.scene)
         apply_point(_Holder(problem.scene), [keys.get(k, k) for k in problem.keys], problem.start)
-    return _result(problem, forward, estimate, loss, measure_loss, delta, target, mu_fraction, seed, started)
+    return _result(problem, forward, estimate, loss_name, measure_loss, delta, target, mu_fraction, seed, started,
+                   None if search is forward else search)
 
 
 class _Holder:
@@ -294,12 +357,37 @@ class _Holder:
         self.scene = scene
 
 
-def _refine(forward: Forward, problem: FitProblem, best: Reading, target: float, ceiling: float,
-            budget: Sequence[int], step: float,
-            measure_loss: Callable[[Reading, FitProblem], float]) -> Reading:
-    """Nelder–Mead in stages of shrinking tolerance (module docstring); the best reading at ``target``."""
+def _refine_windows(forward: Forward, problem: FitProblem, chosen: FitWindows, readings: list[Reading],
+                    search: Forward, target: float, ceiling: float, budget: Sequence[int], step: float) -> Reading:
+    """
+    One refinement per window (all free parameters free, the loss over that window only), keeping
+    its parameter's value; the parameters without a window from a refinement on the full range
+    (``chi2``). The estimate: that combination, read at ``target`` (:mod:`.windows`).
+    """
 
-    x = problem.normalised(best.values)
+    values = np.full(len(problem.names), np.nan)
+    for i, mask in chosen.masks.items():
+        start = table_start(readings, problem, window_loss(mask))
+        found = _refine(search, problem, start, target, ceiling, budget, step, window_loss(mask),
+                        label=f"window {problem.names[i]}")
+        values[i] = found.values[i]
+    rest = np.isnan(values)
+    if rest.any():
+        start = table_start(readings, problem, _chi2)
+        found = _refine(search, problem, start, target, ceiling, budget, step, _chi2, label="full range")
+        values[rest] = found.values[rest]
+    return forward.reading(values, target, "windows estimate")
+
+
+def _refine(forward: Forward, problem: FitProblem, start: np.ndarray, target: float, ceiling: float,
+            budget: Sequence[int], step: float, measure_loss: Callable[[Reading, FitProblem], float],
+            label: str = "refine") -> Reading:
+    """
+    Nelder–Mead from ``start`` in stages of shrinking tolerance (module docstring), on ``forward``'s
+    readings (the fit's, or the search's on fewer wavelengths); the best reading at ``target``.
+    """
+
+    x = problem.normalised(start)
     count = len(x)
     final = None
     for stage, (factor, evaluations) in enumerate(zip(_STAGES, budget), start=1):
@@ -308,7 +396,7 @@ def _refine(forward: Forward, problem: FitProblem, best: Reading, target: float,
         tried: list[Reading] = []
 
         def objective(point: np.ndarray, mu: float = mu, tried: list = tried) -> float:
-            reading = forward.reading(problem.denormalised(point), mu, f"refine {stage}")
+            reading = forward.reading(problem.denormalised(point), mu, f"{label} {stage}")
             tried.append(reading)
             return measure_loss(reading, problem)
 
@@ -320,7 +408,7 @@ def _refine(forward: Forward, problem: FitProblem, best: Reading, target: float,
                      options={"maxfev": max(1, evaluations - 1), "initial_simplex": simplex, "xatol": 1e-4,
                               "fatol": 0.0})
         stage_best = min(tried, key=lambda r: measure_loss(r, problem))
-        note(forward.progress, f"fit: stage {stage}/{len(_STAGES)} at mu = {mu:g}: {len(tried)} readings, "
+        note(forward.progress, f"fit: {label} stage {stage}/{len(_STAGES)} at mu = {mu:g}: {len(tried)} readings, "
                                f"best loss {measure_loss(stage_best, problem):.4g}")
         x = problem.normalised(stage_best.values)
         step /= 2.0
@@ -330,16 +418,18 @@ def _refine(forward: Forward, problem: FitProblem, best: Reading, target: float,
     return final
 
 
-def _confirm_ends(forward: Forward, problem: FitProblem, target: float) -> int:
+def _confirm_ends(forward: Forward, search: Forward, problem: FitProblem, target: float) -> int:
     """
-    Read again at ``target`` every candidate that makes an end of an interval while judged
-    only at a coarser tolerance, until every end is a candidate judged at ``target``.
-    Returns the readings taken.
+    Read again at ``target`` (on the search's wavelengths) every candidate that makes an end of
+    an interval while judged only at a coarser tolerance, until every end is a candidate judged
+    at ``target``. Each is read at the next of the refinement's tolerances (4, 2, 1 × ``target``)
+    below its finest so far: a candidate far from the estimate fails at 4 or 2 × ``target`` for a
+    sixteenth or a quarter of the rays of a reading at ``target``. Returns the readings taken.
     """
 
     taken = 0
     while True:
-        readings = forward.readings
+        readings = forward.readings + (search.readings if search is not forward else [])
         values = np.array([r.values for r in readings])
         consistent = verdicts(readings, np.array([consistency(r, problem) for r in readings]))
         if not consistent.any():
@@ -357,7 +447,9 @@ def _confirm_ends(forward: Forward, problem: FitProblem, target: float) -> int:
         if not ends:
             return taken
         for j in dict.fromkeys(ends):
-            forward.reading(values[j], target, "confirm")
+            judged = finest[tuple(values[j].tolist())]
+            mu = max((target * f for f in _STAGES if target * f * (1.0 + 1e-9) < judged), default=target)
+            search.reading(values[j], mu, "confirm")
             taken += 1
 
 
@@ -401,8 +493,8 @@ def _profile(forward: Forward, problem: FitProblem, estimate: Reading, i: int, t
 
 def _result(problem: FitProblem, forward: Forward, estimate: Reading, loss: str,
             measure_loss: Callable[[Reading, FitProblem], float], delta: float, target: float, mu_fraction: float,
-            seed: int, started: float) -> FitResult:
-    readings = forward.readings
+            seed: int, started: float, searched: Forward | None) -> FitResult:
+    readings = forward.readings + ([] if searched is None else searched.readings)
     values = np.array([r.values for r in readings])
     statistic = np.array([consistency(r, problem) for r in readings])
     consistent = verdicts(readings, statistic)
@@ -420,5 +512,8 @@ def _result(problem: FitProblem, forward: Forward, estimate: Reading, loss: str,
         candidate_statistic=statistic, candidate_loss=np.array([measure_loss(r, problem) for r in readings]),
         candidate_stage=tuple(r.stage for r in readings), candidate_consistent=consistent,
         rays=int(sum(r.rays for r in readings)),
-        traced_rays=forward.traced_rays, seconds=time.perf_counter() - started, specimen=describe(problem),
+        traced_rays=forward.traced_rays + (0 if searched is None else searched.traced_rays),
+        search_wavelengths=0 if searched is None else len(searched.problem.wavelengths),
+        seconds=time.perf_counter() - started,
+        specimen=describe(problem),
         seed=int(seed), reading_delta=forward.reading_delta)

@@ -82,6 +82,8 @@ class FitResult:
     seed: int
     reading_delta: float
     version: str = __version__
+    search_wavelengths: int = 0
+    """Wavelengths of the search and confirmation readings when fewer than all (0: all; their stages say so)."""
 
     # -- derived -------------------------------------------------------------------------
 
@@ -131,7 +133,11 @@ class FitResult:
         if self.consistent:
             lines.append(f"confidence set (level >= {self.level:g}, less the measurement's own risk): "
                          f"{self.consistent_candidates} of {len(self.candidate_statistic)} readings consistent")
-            if self.statistic > 1.0:
+            if self.statistic > 1.0 and self.loss_name.startswith("windows"):
+                lines.append(f"the estimate (each parameter from its window) is inconsistent elsewhere in the "
+                             f"spectrum (s = {self.statistic:.3g} > 1) while other candidates pass: the model "
+                             "matches the windows and the rest of the spectrum at different parameters")
+            elif self.statistic > 1.0:
                 lines.append(f"NOT CONVERGED: the estimate itself is inconsistent (s = {self.statistic:.3g} > 1) while "
                              "other candidates pass: the intervals may miss the truth; raise evaluations")
         else:
@@ -148,8 +154,10 @@ class FitResult:
                      f"{self.forward_tolerance / min(float(self.uncertainty[q].min()) for q in self.quantities):.2f} x "
                      f"the smallest measurement uncertainty), each reading at delta {self.reading_delta:.3g}; "
                      f"s = {self.statistic:.3g}")
-        lines.append(f"{len(self.candidate_statistic)} forward readings, {self.rays:,} rays ({self.traced_rays:,} "
-                     f"traced now), {self.seconds:.1f} s, seed {self.seed}")
+        searched = (f" (the search and confirmation on {self.search_wavelengths} of the wavelengths, each judged on "
+                    "its own)" if self.search_wavelengths else "")
+        lines.append(f"{len(self.candidate_statistic)} forward readings{searched}, {self.rays:,} rays "
+                     f"({self.traced_rays:,} traced now), {self.seconds:.1f} s, seed {self.seed}")
         return "\n".join(lines)
 
     # -- files ---------------------------------------------------------------------------
@@ -161,7 +169,7 @@ class FitResult:
                                 "quantities": list(self.quantities), "candidate_stage": list(self.candidate_stage),
                                 "unconstrained": list(self.unconstrained)}
         for name in ("consistent", "statistic", "loss_name", "loss", "delta", "mu_fraction", "forward_mu", "rays",
-                     "traced_rays", "seconds", "specimen", "seed", "reading_delta"):
+                     "traced_rays", "seconds", "specimen", "seed", "reading_delta", "search_wavelengths"):
             data[name] = getattr(self, name)
         for name in _ARRAYS:
             data[name] = _plain(getattr(self, name))
@@ -193,7 +201,8 @@ class FitResult:
         spectra = {name: (("quantity", "wavelength"), np.array([getattr(self, name)[q] for q in self.quantities]))
                    for name in _SPECTRA}
         scalars = {name: getattr(self, name) for name in ("statistic", "loss", "delta", "mu_fraction", "forward_mu",
-                                                          "rays", "traced_rays", "seconds", "seed", "reading_delta")}
+                                                          "rays", "traced_rays", "seconds", "seed", "reading_delta",
+                                                          "search_wavelengths")}
         attrs = {"format": FIT_FORMAT, "version": self.version, "specimen": self.specimen, "loss_name": self.loss_name,
                  "consistent": int(self.consistent), **{k: (float(v) if isinstance(v, float) else int(v))
                                                         for k, v in scalars.items()}}
@@ -287,6 +296,7 @@ def read_fit(path: str | os.PathLike) -> FitResult:
                 unconstrained=tuple(bool(v) for v in dataset["unconstrained"].values),
                 consistent=bool(data["consistent"]), quantities=tuple(quantities), **fields,
                 candidate_stage=tuple(str(s) for s in dataset["candidate_stage"].values),
+                search_wavelengths=int(data.get("search_wavelengths", 0)),
                 **{k: data[k] for k in ("statistic", "loss_name", "loss", "delta", "mu_fraction", "forward_mu", "rays",
                                         "traced_rays", "seconds", "specimen", "seed", "reading_delta", "version")})
     try:
@@ -307,5 +317,6 @@ def read_fit(path: str | os.PathLike) -> FitResult:
         candidate_values=array("candidate_values"), candidate_mu=array("candidate_mu"),
         candidate_statistic=array("candidate_statistic"), candidate_loss=array("candidate_loss"),
         candidate_consistent=array("candidate_consistent").astype(bool), candidate_stage=tuple(data["candidate_stage"]),
+        search_wavelengths=int(data.get("search_wavelengths", 0)),
         **{k: data[k] for k in ("statistic", "loss_name", "loss", "delta", "mu_fraction", "forward_mu", "rays",
                                 "traced_rays", "seconds", "specimen", "seed", "reading_delta", "version")})

@@ -36,9 +36,8 @@ Cm : float, default 0.009
     Leaf mass per area (dry matter), g cm⁻², 0 … 0.05.
 data : string, default ""
     Path of the coefficient table (eight columns: wavelength, n, K_Cab, K_Car, K_Anth,
-    K_Cbrown, K_Cw, K_Cm); empty = ``$VIRTSPEC_PROSPECT_DATA``, else the ``prosail``
-    package's copy when installed (:func:`.prospect_model.prospect_coefficients`; the
-    coefficients are not shipped with virtspec-mi).
+    K_Cbrown, K_Cw, K_Cm); empty = ``$VIRTSPEC_PROSPECT_DATA``, else the table shipped
+    with virtspec-mi (Féret et al. 2017, MIT; :func:`.prospect_model.prospect_coefficients`).
 
 Every number is exposed to ``mi.traverse`` (``specimen.bsdf.Cab`` …; short form
 ``specimen.Cab``) and range-checked on update (``ValueError`` naming the parameter and its

@@ -20,19 +20,19 @@ one shape P and returns R and T of shape P + (n_λ,).
 The coefficients
 ----------------
 The specific absorption coefficients K_i(λ) and the refractive index n(λ) (400–2500 nm,
-1 nm) are the model's data. virtspec-mi does **not ship them**: no copy under a licence
-that allows redistribution with this package was found among the packages it can
-depend on. :func:`prospect_coefficients` reads them, in this order, from
+1 nm) are the model's data. virtspec-mi **ships them** (:data:`SHIPPED`,
+``virtspec_mi/data/prospect-d/``): Féret et al.'s (2017) PROSPECT-D coefficients, which
+their author distributes under the MIT licence (the R package ``prospect``); the folder
+holds that licence and a README with the copy's provenance (the PyPI package ``prosail``
+2.0.5). :func:`prospect_coefficients` reads them, in this order, from
 
 1. the ``source`` given (a path to a whitespace- or comma-separated table of eight columns:
    wavelength in nm, n, K_Cab, K_Car, K_Anth, K_Cbrown, K_Cw, K_Cm; ``#`` comments —
-   the layout of ``dataSpec_PDB.m``, Féret et al. 2017, as the ``prosail`` package's
-   ``prospect_d_spectra.txt``);
+   the layout of ``dataSpec_PDB.m``, Féret et al. 2017, as the shipped table);
 2. the environment variable ``VIRTSPEC_PROSPECT_DATA`` (such a path);
-3. the ``prosail`` package, when installed (``pip install prosail``): its
-   ``prospect_d_spectra.txt``;
+3. the shipped table :data:`SHIPPED`;
 
-and otherwise raises :class:`ProspectDataError` naming these fixes.
+and raises :class:`ProspectDataError` when the table it reads is missing or malformed.
 
 References
 ----------
@@ -53,7 +53,6 @@ isotropic light with a compact plant leaf*, J. Opt. Soc. Am. 59(10), 1376–1379
 from __future__ import annotations
 
 import functools
-import importlib.util
 import os
 from dataclasses import dataclass
 from pathlib import Path
@@ -63,10 +62,14 @@ import numpy as np
 from scipy.special import exp1
 
 __all__ = ["PROSPECT_PARAMETERS", "PROSPECT_DEFAULTS", "ProspectCoefficients", "ProspectDataError",
-           "prospect_coefficients", "prospect_d", "tav", "check_prospect_parameters", "ENVIRONMENT_VARIABLE"]
+           "prospect_coefficients", "prospect_d", "tav", "check_prospect_parameters", "ENVIRONMENT_VARIABLE",
+           "SHIPPED"]
 
 ENVIRONMENT_VARIABLE: str = "VIRTSPEC_PROSPECT_DATA"
 """Environment variable naming a PROSPECT-D coefficient table (see the module docstring)."""
+
+SHIPPED: Path = Path(__file__).resolve().parents[2] / "data" / "prospect-d" / "prospect_d_coefficients.txt"
+"""The coefficient table shipped with the package (Féret et al. 2017, MIT; its folder's LICENSE and README)."""
 
 # name: (default, lowest, highest, unit, meaning). The ranges are the model's domain of
 # validity as calibrated (Féret et al. 2017, Table 1 and Sect. 2), widened to round numbers.
@@ -149,13 +152,14 @@ def _cached(path: str, source: str) -> ProspectCoefficients:
 
 def prospect_coefficients(source: str | os.PathLike | None = None) -> ProspectCoefficients:
     """
-    The PROSPECT-D coefficients from ``source``, ``$VIRTSPEC_PROSPECT_DATA`` or the
-    ``prosail`` package (in this order; see the module docstring). Read once per path.
+    The PROSPECT-D coefficients from ``source``, ``$VIRTSPEC_PROSPECT_DATA`` or the table
+    shipped with the package (:data:`SHIPPED`; in this order, see the module docstring).
+    Read once per path.
 
     Raises
     ------
     ProspectDataError
-        None of them is there, or the table is not one of eight columns.
+        The table is missing, unreadable or not one of eight columns.
     """
 
     if source is not None and str(source) != "":
@@ -163,16 +167,12 @@ def prospect_coefficients(source: str | os.PathLike | None = None) -> ProspectCo
     given = os.environ.get(ENVIRONMENT_VARIABLE, "")
     if given:
         return _cached(str(Path(given).resolve()), f"${ENVIRONMENT_VARIABLE} = {given}")
-    spec = importlib.util.find_spec("prosail")
-    if spec is not None and spec.submodule_search_locations:
-        path = Path(list(spec.submodule_search_locations)[0]) / "prospect_d_spectra.txt"
-        if path.is_file():
-            return _cached(str(path), f"the prosail package ({path.name})")
-    raise ProspectDataError(
-        "PROSPECT-D needs its absorption coefficients and refractive index (Feret et al. 2017), which virtspec-mi "
-        "does not ship (no copy under a licence allowing it to). Fix: `pip install prosail` (its "
-        f"prospect_d_spectra.txt is read), or set ${ENVIRONMENT_VARIABLE} (or the plugin's data=...) to a table "
-        f"of eight columns: {', '.join(_COLUMNS)} (the layout of dataSpec_PDB.m)")
+    if not SHIPPED.is_file():
+        raise ProspectDataError(
+            f"the PROSPECT-D coefficients shipped with virtspec-mi are missing ({SHIPPED}): reinstall the package, "
+            f"or set ${ENVIRONMENT_VARIABLE} (or the plugin's data=...) to a table of eight columns: "
+            f"{', '.join(_COLUMNS)} (the layout of dataSpec_PDB.m)")
+    return _cached(str(SHIPPED), "the PROSPECT-D coefficients shipped with virtspec-mi (Feret et al. 2017, MIT)")
 
 
 def tav(alpha: float, n: Any) -> np.ndarray:

@@ -24,7 +24,6 @@ Baranoski et al. (2001), Sect. 5 (comparisons with measured data).
 from __future__ import annotations
 
 import math
-import types
 from dataclasses import dataclass
 from typing import Any, Mapping, Sequence
 
@@ -165,10 +164,9 @@ def fit_problem(measured: Any, specimen: Any, parameters: Mapping[str, Any], *,
             listed = ", ".join(sorted(k[len("specimen."):] for k in known)) or "none"
             raise ValueError(f"the specimen {label} has no parameter {name!r} (its parameters: {listed})")
     bounds = np.array([_bounds(name, parameters[name]) for name in names])
-    instrument = types.SimpleNamespace(scene=scene)
-    start = current_values(instrument, [known.get(key, key) for key in keys])
-    parameter_space(instrument, {key: list(row) for key, row in zip(keys, bounds)})  # the specimen checks both ends
-    apply_point(instrument, [known.get(key, key) for key in keys], start)
+    start = current_values(bench, [known.get(key, key) for key in keys])
+    parameter_space(bench, {key: list(row) for key, row in zip(keys, bounds)})  # the specimen checks both ends
+    apply_point(bench, [known.get(key, key) for key in keys], start)
     spectra = _spectra(measured, quantities)
     first = next(iter(spectra.values()))
     grid = first.wavelengths if wavelengths is None else np.unique(np.asarray(wavelengths, dtype=np.float64).ravel())

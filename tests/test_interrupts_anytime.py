@@ -29,20 +29,23 @@ ROOT = Path(__file__).resolve().parents[1]
 LATENCY_S = 1.0
 """The promise: a signalled command has exited within a second."""
 
-# A command of each path, long enough that a signal in its first seconds always finds it running. {out} is the
-# output (and what names its checkpoint); None: the path writes nothing to resume from.
+# A command of each path, long enough that a signal in its first seconds always finds it running: each lasts at
+# least 4.4 s on a quiet AVX-512 machine at about 300 Mray/s (measured 2026-11-28: measure 5.0 s, sweep 4.7,
+# gonio 4.5, sphere 7.6, albedo-table 6.3, Klems 4.4), against the latest moment drawn, 2.5 s; shorter ones
+# finished before the signal on a quiet machine. {out} is the output (and what names its checkpoint); None: the
+# path writes nothing to resume from.
 PATHS: dict[str, tuple[list[str], str | None]] = {
-    "measure": (["measure", "diamond_conical", "--rays", "400000000", "--quiet"], None),
-    "sweep": (["sweep", "diamond_conical", "--theta-i", "0:80:10", "--rays", "40000000", "--quiet", "--out",
+    "measure": (["measure", "diamond_conical", "--rays", "1200000000", "--quiet"], None),
+    "sweep": (["sweep", "diamond_conical", "--theta-i", "0:80:10", "--rays", "100000000", "--quiet", "--out",
                "{out}"], "sweep.nc"),
-    "gonio": (["gonio", "diamond_conical", "--theta-i", "0:80:20", "--rays", "16000000", "--theta-o-bins", "6",
+    "gonio": (["gonio", "diamond_conical", "--theta-i", "0:80:20", "--rays", "100000000", "--theta-o-bins", "6",
                "--phi-o-bins", "8", "--json", "--out", "{out}"], "gonio.nc"),
     "sphere": (["sphere", "sphere_150mm_8d", "--rays", "4000000", "--wavelengths", "450", "550", "650", "750",
                 "--out", "{out}"], "sphere.json"),
     "albedo-table": (["albedo-table", "--engine", "none", "--cosines", "0.2:1:0.2", "--alpha", "0.1:1:0.3",
-                      "--epsilon", "0.004", "--quiet", "--out", "{out}"], "table.nc"),
+                      "--epsilon", "0.0002", "--quiet", "--out", "{out}"], "table.nc"),
     "klems": (["gonio", "diamond_conical", "--klems", "{out}", "--klems-basis", "quarter", "--isotropic",
-               "--rays", "30000000", "--quiet"], "klems.xml"),
+               "--rays", "80000000", "--quiet"], "klems.xml"),
 }
 
 

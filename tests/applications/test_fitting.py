@@ -19,6 +19,7 @@ from virtspec_mi.applications.fitting import read_fit
 from virtspec_mi.applications.fitting.forward import Reading
 from virtspec_mi.applications.fitting.inversion import intervals, verdicts
 from virtspec_mi.plugins.bsdfs.prospect_model import prospect_d
+from measured_csv import write_measured
 
 WAVELENGTHS = np.array([450.0, 530.0, 560.0, 600.0, 650.0, 680.0, 700.0, 720.0, 800.0, 1200.0, 1450.0, 1650.0,
                         1950.0, 2200.0])
@@ -154,12 +155,7 @@ def test_fit_files_and_figure(tmp_path):
 def test_cli_fit(tmp_path, capsys):
     from virtspec_mi.cli import main
 
-    w = WAVELENGTHS
-    reflectance, transmittance = prospect_d(w, Cab=35.0)
-    path = tmp_path / "leaf.csv"
-    rows = ["wavelength,reflectance,reflectance_uncertainty,transmittance,transmittance_uncertainty"]
-    rows += [f"{a},{r},0.02,{t},0.02" for a, r, t in zip(w, reflectance, transmittance)]
-    path.write_text("\n".join(rows) + "\n")
+    path = write_measured(tmp_path / "leaf.csv", WAVELENGTHS, *prospect_d(WAVELENGTHS, Cab=35.0))
     status = main(["fit", str(path), "--specimen", "prospect_d", "--free", "Cab=10:90", "--quantity", "both",
                    "--delta", "0.1", "--profile-points", "3", "--theta-i", "8", "--beam", "collimated",
                    "--out", str(tmp_path / "fit.json"), "--json"])

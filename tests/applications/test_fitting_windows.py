@@ -14,6 +14,7 @@ import pytest
 import virtspec_mi as vm
 from virtspec_mi.applications.fitting.windows import OPTIMAL_WINDOWS, fit_windows
 from virtspec_mi.plugins.bsdfs.prospect_model import prospect_d
+from measured_csv import write_measured
 
 WAVELENGTHS = np.array([450.0, 530.0, 560.0, 600.0, 650.0, 680.0, 700.0, 705.0, 710.0, 715.0, 720.0, 800.0,
                         1200.0, 1450.0, 1650.0, 1800.0, 1950.0, 2200.0])
@@ -98,11 +99,7 @@ def test_bad_windows_are_refused_by_name():
 def test_cli_window(tmp_path, capsys):
     from virtspec_mi.cli import main
 
-    reflectance, transmittance = prospect_d(WAVELENGTHS, Cab=35.0)
-    path = tmp_path / "leaf.csv"
-    rows = ["wavelength,reflectance,reflectance_uncertainty,transmittance,transmittance_uncertainty"]
-    rows += [f"{a},{r},0.02,{t},0.02" for a, r, t in zip(WAVELENGTHS, reflectance, transmittance)]
-    path.write_text("\n".join(rows) + "\n")
+    path = write_measured(tmp_path / "leaf.csv", WAVELENGTHS, *prospect_d(WAVELENGTHS, Cab=35.0))
     status = main(["fit", str(path), "--specimen", "prospect_d", "--free", "Cab=10:90", "--quantity", "both",
                    "--window", "Cab=700:720", "--delta", "0.1", "--profile-points", "3", "--theta-i", "8",
                    "--beam", "collimated", "--json"])

@@ -234,8 +234,8 @@ def sweep(
         return DerivedSweep(tuple(float(t) for t in angles), tuple(
             _measure_target(scene, None, target, {**settings, "theta_i": float(t)}) for t in angles))
     return _reading(commanding("sweep").name, "sweep", "a sweep", scene, settings, theta_i=theta_i,
-                    parameters=parameters, points=points, defines=defines, checkpoint=checkpoint, out=out, progress=progress, workers=workers,
-                    task_readings=task_readings)
+                    parameters=parameters, points=points, defines=defines, checkpoint=checkpoint, out=out,
+                    progress=progress, workers=workers, task_readings=task_readings)
 
 
 def _keyed(name: str, what: str, scene: LoadedScene, settings: Settings, options: Any, *, theta_i: Any,

@@ -22,15 +22,19 @@ from contextlib import contextmanager
 from dataclasses import dataclass
 from typing import Any, Callable, Iterator, Sequence
 
-from virtspec_mi.cli.flags import COMMON_FLAGS, SEVERAL, dest, flag_of, flagged, given, option_flags, pairs, settings_options
+from virtspec_mi.cli.flags import (COMMON_FLAGS, SEVERAL, dest, flag_of, flagged, given, option_flags, pairs,
+                                   settings_options)
 
-__all__ = ["Measuring", "measuring_commands", "OTHER_COMMANDS", "common_flags", "measuring_flags", "respond", "Session",
-           "one_angle", "unrecognized_hint", "report", "run", "drawn", "keywords_of"]
+__all__ = ["Measuring", "measuring_commands", "OTHER_COMMANDS", "common_flags", "measuring_flags", "respond",
+           "Session", "one_angle", "unrecognized_hint", "report", "run", "drawn", "keywords_of"]
 
 
 @dataclass(frozen=True)
 class Measuring:
-    """A measuring subcommand: an instrument of the registry and one of its :class:`~virtspec_mi.instruments.command.Command`."""
+    """
+    A measuring subcommand: an instrument of the registry and one of its
+    :class:`~virtspec_mi.instruments.command.Command`.
+    """
 
     instrument: str
     """Its instrument's key in :data:`virtspec_mi.instruments.INSTRUMENTS` (the flags of its ``options``)."""
@@ -208,10 +212,9 @@ def check_one_reading(command: Measuring, parameters: dict[str, tuple[float, ...
     """``measure`` reads one value of each specimen parameter (``sweep`` takes several; its one θi: one flag value)."""
 
     for name, values in parameters.items():
-        count = len(values)
-        if count != 1:
-            raise ValueError(f"--param {name}: {command.name} takes one value per parameter (got {count}; virtspec "
-                             "sweep takes several)")
+        if len(values) != 1:
+            raise ValueError(f"--param {name}: {command.name} takes one value per parameter (got {len(values)}; "
+                             "virtspec sweep takes several)")
 
 
 KEYWORD_FLAGS = {"parameters": "--param", "defines": "-D", "progress": None}

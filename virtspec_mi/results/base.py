@@ -8,12 +8,15 @@ integrating-sphere reading (:class:`~virtspec_mi.instruments.sphere.result.Spher
 immutable set of exact counts over labelled dimensions (xarray conventions) with
 everything else derived from them. This module holds what they share, written once:
 
-- **labels**: ``dims`` (``wavelength``, ``theta_i``, the parameter dims of a sweep, then
-  the kind's own dims, e.g. the goniophotometer's ``theta_o`` and ``phi_o`` bins) and
-  ``coords`` (a coordinate that is not a dim is a 0-d array: a scalar label). Each kind
-  declares its stored arrays with their dims (``_labelled``) and how it is rebuilt from
-  them (``_relabelled``); :meth:`ResultBase.isel`, :meth:`ResultBase.sel`,
-  :meth:`ResultBase.squeeze` and :meth:`ResultBase.as_grid` work on those, for every kind;
+- **one Dataset**: a result *is* an ``xarray.Dataset`` (:attr:`ResultBase.data`): its exact
+  counts as integer variables over labelled dims (``wavelength``, ``theta_i``, the
+  parameter dims of a sweep, then the kind's own dims, e.g. the goniophotometer's
+  ``theta_o`` and ``phi_o`` bins; a coordinate that is not a dim is a 0-d scalar label),
+  what it was measured with (settings, geometry, scene, provenance) in its attributes.
+  Everything a kind shows is derived from it. A kind's constructor checks its labels and
+  shapes and stores them (:meth:`ResultBase._store`); :meth:`ResultBase.isel`,
+  :meth:`ResultBase.sel`, :meth:`ResultBase.squeeze` and :meth:`ResultBase.as_grid` are
+  xarray's selections of that Dataset, for every kind;
 - **files**: one format tag per kind (``"virtspec-mi result 1"``, ``"virtspec-mi gonio 1"``,
   ``"virtspec-mi sphere 1"``: a word and a version; :mod:`virtspec_mi.results.formats`),
   carried in the JSON object (``format``) and in every dataset (attributes ``format`` and
@@ -39,14 +42,16 @@ from __future__ import annotations
 import json
 import os
 from dataclasses import dataclass
+from functools import cached_property
 from pathlib import Path
 from typing import Any, ClassVar, Mapping
 
 import numpy as np
 
 from virtspec_mi.results.formats import format_parts, tagged
-from virtspec_mi.results.integrity import (CountRules, check_agreement, check_checksum, check_result, finite_labels,
-                                           parameters_of, read_file, sealed_text, source_of, whole_counts)
+from virtspec_mi.results.integrity import (CountRules, check_agreement, check_checksum, check_labels, check_result,
+                                           check_shapes, finite_labels, parameters_of, read_file, sealed_text,
+                                           source_of, whole_counts)
 
 __all__ = [
     "ResultBase",
@@ -144,11 +149,12 @@ class Spectrum:
 
 class ResultBase:
     """
-    What every result kind shares (see the module docstring). A kind is a frozen
-    dataclass that sets :attr:`FORMAT` (and :attr:`LEGACY`, tags it still reads),
-    :attr:`KIND`, :attr:`KIND_DIMS`, :attr:`QUANTITIES` and implements ``dims``,
-    ``coords``, ``parameters``, ``_labelled``, ``_relabelled``, ``_quantity``,
-    ``_count_groups``, ``summary``, ``as_dict``, ``_from_dict``, ``to_dataset`` and ``plot``.
+    What every result kind shares (see the module docstring): one ``xarray.Dataset``,
+    :attr:`data`, and what is derived from it. A kind sets :attr:`FORMAT` (and
+    :attr:`LEGACY`, tags it still reads), :attr:`KIND`, :attr:`KIND_DIMS`,
+    :attr:`QUANTITIES` and :attr:`SHAPED_BY`, stores its counts in its constructor
+    (:meth:`_store`) and derives its quantities from them (``_quantity``, ``_count_groups``,
+    ``summary``, ``as_dict``, ``_from_dict``, ``to_dataset``, ``plot``).
     """
 
     FORMAT: ClassVar[str]
@@ -167,26 +173,123 @@ class ResultBase:
     KIND_DIMS_REASON: ClassVar[str] = ""
     QUANTITIES: ClassVar[tuple[str, ...]] = ()
     """The quantities :meth:`spectrum` gives (the first is the default)."""
+    SHAPED_BY: ClassVar[str] = "rays"
+    """The stored variable that lies along every dim of the result: its dims are :attr:`dims`."""
 
-    dims: tuple[str, ...]
-    coords: dict[str, np.ndarray]
-    parameters: dict | None
-    source: dict | None
-    """The scene measured, for people (:func:`virtspec_mi.scene.scene_source`): its ``scene`` name and
-    ``defines``; ``None`` when not recorded (a result made outside the API, a file written before)."""
+    data: Any
+    """
+    The result itself: an ``xarray.Dataset`` of the exact counts over the labelled dims,
+    with the settings and provenance in its attributes (``settings``, ``scene``,
+    ``seconds``, ``version``, ``parameters``, ``source`` and the kind's own). Read-only:
+    a selection is a new result.
+    """
 
-    # -- what each kind declares ------------------------------------------------------
+    # -- the stored Dataset -------------------------------------------------------------
+
+    def _store(self, dims: tuple[str, ...], coords: Mapping[str, Any],
+               arrays: Mapping[str, tuple[tuple[str, ...], Any]], attrs: Mapping[str, Any],
+               checked: Mapping[str, tuple[tuple[str, ...], Any]] | None = None) -> None:
+        """
+        Check the labels and the shapes of ``arrays`` (name → (dims, values); ``checked``:
+        the same arrays as the kind names them in messages, when it stores them otherwise)
+        by the rules of :mod:`virtspec_mi.results.integrity`, then store them as
+        :attr:`data`. ``ValueError`` naming the coordinate or the array.
+        """
+
+        import xarray as xr
+
+        dims = tuple(dims)
+        coords = dict(coords)
+        check_labels(dims, coords, attrs.get("parameters"), self.KIND_DIMS)
+        check_shapes(arrays if checked is None else checked, {d: len(np.atleast_1d(coords[d])) for d in dims})
+        labels = {name: (_coord_dims(name, coords, dims), np.asarray(values)) for name, values in coords.items()}
+        variables = {name: (array_dims, np.asarray(values)) for name, (array_dims, values) in arrays.items()}
+        object.__setattr__(self, "data", xr.Dataset(variables, coords=labels, attrs=dict(attrs)))
+
+    def _extend(self, reading: "ResultBase", arrays: Mapping[str, tuple[tuple[str, ...], Any]],
+                coords: Mapping[str, Any], attrs: Mapping[str, Any]) -> None:
+        """
+        Store ``reading``'s Dataset with this kind's own ``arrays`` (name → (dims, values)),
+        the labels of its own dims (``coords``) and its own ``attrs``: a kind that extends
+        a reading of the same rays (a goniophotometer's bins, a gloss meter's receptor).
+        ``ValueError`` naming an array of the wrong shape.
+        """
+
+        sizes = {**reading.sizes, **{name: len(np.atleast_1d(values)) for name, values in coords.items()}}
+        check_shapes(arrays, sizes)
+        data = reading.data.assign_coords({name: (name, np.asarray(values)) for name, values in coords.items()})
+        data = data.assign({name: (dims, np.asarray(values)) for name, (dims, values) in arrays.items()})
+        object.__setattr__(self, "data", data.assign_attrs(dict(attrs)))
+
+    @classmethod
+    def _of(cls, data: Any) -> Any:
+        """The result of this kind whose stored Dataset is ``data`` (a selection of one already checked)."""
+
+        result = cls.__new__(cls)
+        object.__setattr__(result, "data", data)
+        return result
+
+    def __setattr__(self, name: str, value: Any) -> None:
+        raise AttributeError(f"a {self.KIND} is read-only (its {name!r} cannot be set): select or build a new one")
+
+    def __delattr__(self, name: str) -> None:
+        raise AttributeError(f"a {self.KIND} is read-only (its {name!r} cannot be deleted)")
+
+    @cached_property
+    def dims(self) -> tuple[str, ...]:
+        """The dims of the result, in order: those of its :attr:`SHAPED_BY` variable."""
+
+        return tuple(str(d) for d in self.data[self.SHAPED_BY].dims)
+
+    @cached_property
+    def coords(self) -> dict[str, np.ndarray]:
+        """Every label by name: 1-d along its dim (or along ``point``), 0-d for a scalar label."""
+
+        return {str(name): np.asarray(value.values) for name, value in self.data.coords.items()}
+
+    @property
+    def settings(self) -> Any:
+        """The settings used (:class:`~virtspec_mi.settings.Settings`; its ``theta_i`` is the first angle)."""
+
+        return self.data.attrs["settings"]
+
+    @property
+    def parameters(self) -> dict | None:
+        """The swept specimen parameters (``names``, ``keys``, ``values``, ``points``), or ``None``."""
+
+        return self.data.attrs.get("parameters")
+
+    @property
+    def source(self) -> dict | None:
+        """The scene measured, for people (:func:`virtspec_mi.scene.scene_source`): its ``scene`` name and
+        ``defines``; ``None`` when not recorded (a result made outside the API, a file written before)."""
+
+        return self.data.attrs.get("source")
+
+    @property
+    def seconds(self) -> float:
+        """Time spent tracing, summed over the batches (and over interrupted and resumed runs)."""
+
+        return float(self.data.attrs["seconds"])
+
+    @property
+    def scene(self) -> str:
+        """Fingerprint of the scene (``sha256:…``), or ``""``."""
+
+        return str(self.data.attrs["scene"])
+
+    @property
+    def version(self) -> str:
+        """The virtspec-mi version that made the result."""
+
+        return str(self.data.attrs["version"])
 
     def _labelled(self) -> dict[str, tuple[tuple[str, ...], np.ndarray]]:
-        """Every stored array over the dims, by name: ``(its dims, values)``."""
+        """Every stored array by name: ``(its dims, values)``."""
 
-        raise NotImplementedError
+        return {str(name): (tuple(str(d) for d in v.dims), v.values) for name, v in self.data.data_vars.items()}
 
-    def _relabelled(self, dims: tuple[str, ...], coords: dict[str, np.ndarray],
-                    arrays: dict[str, np.ndarray]) -> "ResultBase":
-        """The same kind with these dims, coordinates and arrays (names of :meth:`_labelled`)."""
-
-        raise NotImplementedError
+    # -- what each kind declares ------------------------------------------------------
 
     def _quantity(self, quantity: str) -> tuple[np.ndarray, np.ndarray, float]:
         """``(values, tolerance, delta)`` of a quantity over the readings' dims (see :class:`Spectrum`)."""
@@ -319,24 +422,11 @@ class ResultBase:
         """
 
         indexers = {**(indexers or {}), **more}
-        dims, coords, arrays = self.dims, dict(self.coords), self._labelled()
+        keys = {}
         for dim, index in indexers.items():
-            self._check_selectable(dim, dims)
-            size = len(coords[dim])
-            key = _positions(dim, index, size)
-            along = [name for name in coords if _coord_dims(name, coords, dims) == (dim,)]
-            for name in along:
-                coords[name] = np.asarray(np.asarray(coords[name])[key])
-            for name, (array_dims, values) in arrays.items():
-                if dim in array_dims:
-                    axis = array_dims.index(dim)
-                    values = np.take(values, key, axis=axis)
-                    if np.ndim(key) == 0:
-                        array_dims = tuple(d for d in array_dims if d != dim)
-                    arrays[name] = (array_dims, values)
-            if np.ndim(key) == 0:
-                dims = tuple(d for d in dims if d != dim)
-        return _restated(self._relabelled(dims, coords, {name: values for name, (_, values) in arrays.items()}))
+            self._check_selectable(dim, self.dims)
+            keys[dim] = _positions(dim, index, self.sizes[dim])
+        return self._of(_restated(self.data.isel(keys)))
 
     def sel(self, labels: Mapping[str, Any] | None = None, method: str | None = None, **more: Any) -> Any:
         """
@@ -405,10 +495,7 @@ class ResultBase:
         """The scalar coordinate ``name`` as a dim of one, at its place in ``(wavelength, theta_i, …)``."""
 
         at = sum(1 for d in _GRID[:_GRID.index(name)] if d in self.dims)
-        dims = (*self.dims[:at], name, *self.dims[at:])
-        coords = {**self.coords, name: np.atleast_1d(self.coords[name])}
-        arrays = {key: np.expand_dims(values, at) for key, (_, values) in self._labelled().items()}
-        return self._relabelled(dims, coords, arrays)
+        return self._of(self.data.expand_dims(name, axis=at))
 
     def _check_selectable(self, dim: str, dims: tuple[str, ...]) -> None:
         if dim in self.KIND_DIMS:
@@ -755,20 +842,14 @@ def _label_slice(dim: str, values: np.ndarray, label: slice) -> np.ndarray:
     return positions
 
 
-def _restated(result: Any) -> Any:
+def _restated(data: Any) -> Any:
     """A selection's settings restated for its readings: its wavelengths, its first θi (rule of
     :func:`~virtspec_mi.results.integrity.check_settings`)."""
 
-    import dataclasses
-
-    settings = getattr(result, "settings", None)
-    if not (dataclasses.is_dataclass(result) and hasattr(settings, "updated") and "wavelength" in result.coords):
-        return result
-    fields = {f.name for f in dataclasses.fields(result)}
-    if "settings" not in fields:  # a kind that holds its settings in a reading of its own (a goniophotometer's)
-        inner = next((name for name in fields if getattr(getattr(result, name), "settings", None) is settings), None)
-        return result if inner is None else dataclasses.replace(result, **{inner: _restated(getattr(result, inner))})
-    theta = result.coords.get("theta_i")
-    return dataclasses.replace(result, settings=settings.updated(
-        wavelengths=tuple(float(w) for w in np.atleast_1d(result.coords["wavelength"])),
+    settings = data.attrs.get("settings")
+    if not hasattr(settings, "updated") or "wavelength" not in data.coords:
+        return data
+    theta = data.coords["theta_i"].values if "theta_i" in data.coords else None
+    return data.assign_attrs(settings=settings.updated(
+        wavelengths=tuple(float(w) for w in np.atleast_1d(data.coords["wavelength"].values)),
         theta_i=None if theta is None else float(np.atleast_1d(theta)[0])))

@@ -29,7 +29,7 @@ from __future__ import annotations
 import json
 import os
 import warnings
-from dataclasses import asdict, dataclass, field, replace
+from dataclasses import asdict
 from functools import cached_property
 from typing import Any, ClassVar, Mapping
 
@@ -64,16 +64,25 @@ _STORED = CountRules(None, sums=((("reflected", "transmitted", "absorbed", "capp
 _PARTS = ("specular_reflectance", "diffuse_reflectance", "regular_transmittance", "diffuse_transmittance")
 
 
+def _stored_name(name: str) -> str:
+    """``counts.rays`` → ``rays``, ``pilot.rays`` → ``pilot_rays``: a count's variable in the stored Dataset."""
+
+    group, _, count = name.partition(".")
+    return count if group == "counts" else f"{group}_{count}"
+
+
 def _counts(name: str, doc: str) -> property:
     return property(lambda self: getattr(self.counts, name), doc=doc)
 
 
-@dataclass(frozen=True, eq=False)
 class Result(ResultBase):
     """
-    Certified hemispherical readings over labelled dimensions (see the module docstring).
+    Certified hemispherical readings over labelled dimensions (see the module docstring):
+    one ``xarray.Dataset`` (:attr:`data`) of the counts (``rays``, ``reflected`` …; a
+    two-stage pilot's as ``pilot_rays`` …) with the settings, geometry and provenance in
+    its attributes.
 
-    Attributes
+    Parameters
     ----------
     dims : tuple of str
         The dimensions of every per-reading array, e.g. ``("wavelength",)`` or
@@ -110,37 +119,47 @@ class Result(ResultBase):
         The scene's name and ``-D`` defines (:func:`virtspec_mi.scene.scene_source`), or ``None``.
     """
 
-    dims: tuple[str, ...]
-    coords: dict[str, np.ndarray]
-    counts: Counts
-    pilot: Counts | None
-    settings: Settings
-    geometry: InstrumentGeometry
-    seconds: float
-    scene: str = ""
-    wavelength_independent: bool = False
-    version: str = field(default=__version__)
-    parameters: dict | None = None
-    source: dict | None = None
-
     FORMAT: ClassVar[str] = "virtspec-mi result 1"
     KIND: ClassVar[str] = "hemispherical reading"
     QUANTITIES: ClassVar[tuple[str, ...]] = QUANTITIES
 
-    # -- labels ------------------------------------------------------------------------
+    def __init__(self, dims: tuple[str, ...], coords: Mapping[str, Any], counts: Counts, pilot: Counts | None,
+                 settings: Settings, geometry: InstrumentGeometry, seconds: float, scene: str = "",
+                 wavelength_independent: bool = False, version: str = __version__, parameters: dict | None = None,
+                 source: dict | None = None) -> None:
+        groups = {"counts": counts} if pilot is None else {"counts": counts, "pilot": pilot}
+        checked = {f"{group}.{name}": (tuple(dims), getattr(named, name)) for group, named in groups.items()
+                   for name in Counts.names()}
+        attrs = {"settings": settings, "geometry": geometry, "seconds": float(seconds), "scene": scene,
+                 "wavelength_independent": bool(wavelength_independent), "version": version,
+                 "parameters": parameters, "source": source}
+        self._store(dims, coords, {_stored_name(name): array for name, array in checked.items()}, attrs, checked)
 
-    def _labelled(self) -> dict[str, tuple[tuple[str, ...], np.ndarray]]:
-        sources = {"counts": self.counts} if self.pilot is None else {"counts": self.counts, "pilot": self.pilot}
-        return {f"{prefix}.{name}": (self.dims, getattr(counts, name))
-                for prefix, counts in sources.items() for name in Counts.names()}
+    @cached_property
+    def counts(self) -> Counts:
+        """Exact counts by name behind the estimates."""
 
-    def _relabelled(self, dims: tuple[str, ...], coords: dict[str, np.ndarray],
-                    arrays: dict[str, np.ndarray]) -> "Result":
-        def counts(prefix: str) -> Counts:
-            return Counts(**{name: arrays[f"{prefix}.{name}"] for name in Counts.names()})
+        return Counts(**{name: self.data[name].values for name in Counts.names()})
 
-        return replace(self, dims=dims, coords=coords, counts=counts("counts"),
-                       pilot=None if self.pilot is None else counts("pilot"))
+    @cached_property
+    def pilot(self) -> Counts | None:
+        """Two-stage pilot counts (spent, not in the estimates); ``None`` for a fixed budget."""
+
+        if "pilot_rays" not in self.data:
+            return None
+        return Counts(**{name: self.data[f"pilot_{name}"].values for name in Counts.names()})
+
+    @property
+    def geometry(self) -> InstrumentGeometry:
+        """r₁, r₂ and D of the scene."""
+
+        return self.data.attrs["geometry"]
+
+    @property
+    def wavelength_independent(self) -> bool:
+        """The specimen declared itself wavelength-independent: readings that differ only in wavelength share counts."""
+
+        return bool(self.data.attrs["wavelength_independent"])
 
     # -- counts by name ----------------------------------------------------------------
 

@@ -34,7 +34,6 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, replace
-from dataclasses import fields as dataclass_fields
 from functools import cached_property
 from typing import Any, ClassVar, Mapping
 
@@ -105,35 +104,42 @@ _GLOSS_RULES = CountRules(None, parts={"glossy": "reflected"})
 """The receptor's rays are reflected rays: 0 <= glossy <= reflected per reading."""
 
 
-@dataclass(frozen=True, eq=False)
 class GlossResult(Result):
     """
     Gloss readings over the readings' dims (wavelength, θi, parameters): the hemispherical
     reading of the same rays (:class:`~virtspec_mi.results.readings.Result`, every
     field and method of it) with the receptor's exact counts and its certificate; a result
     kind of its own (format ``"virtspec-mi gloss 1"``: files, ``sel``, plots, colour).
+    Its Dataset is the reading's with ``glossy`` beside the counts and ``cone`` in its attributes.
 
-    Attributes
+    Parameters
     ----------
+    reading : Result
+        The hemispherical reading of the same rays.
     glossy : ndarray
         Rays reflected into the receptor cone, per reading (``int64``, over ``dims``).
     cone : float
         Half-angle of the receptor cone, degrees.
     """
 
-    glossy: np.ndarray | None = None
-    cone: float = 2.0
-
     FORMAT: ClassVar[str] = "virtspec-mi gloss 1"
     KIND: ClassVar[str] = "gloss reading"
     QUANTITIES: ClassVar[tuple[str, ...]] = ("gloss", *Result.QUANTITIES)
 
-    def _labelled(self) -> dict[str, tuple[tuple[str, ...], np.ndarray]]:
-        return {**super()._labelled(), "glossy": (self.dims, self.glossy)}
+    def __init__(self, reading: Result, glossy: Any, cone: float = 2.0) -> None:
+        self._extend(reading, {"glossy": (reading.dims, glossy)}, {}, {"cone": _check_cone(cone)})
 
-    def _relabelled(self, dims: tuple[str, ...], coords: dict[str, np.ndarray],
-                    arrays: dict[str, np.ndarray]) -> "GlossResult":
-        return replace(super()._relabelled(dims, coords, arrays), glossy=arrays["glossy"])
+    @property
+    def glossy(self) -> np.ndarray:
+        """Rays reflected into the receptor cone, per reading (``int64``, over ``dims``)."""
+
+        return self.data["glossy"].values
+
+    @property
+    def cone(self) -> float:
+        """Half-angle of the receptor cone, degrees."""
+
+        return float(self.data.attrs["cone"])
 
     @property
     def gloss(self) -> np.ndarray:
@@ -191,8 +197,7 @@ class GlossResult(Result):
 
     @classmethod
     def _from_dict(cls, data: Mapping[str, Any]) -> "GlossResult":
-        result = super()._from_dict(data)
-        return replace(result, glossy=whole_counts(data["glossy"], "glossy"), cone=_check_cone(data["cone"]))
+        return cls(Result._from_dict(data), whole_counts(data["glossy"], "glossy"), data["cone"])
 
     def _count_groups(self) -> list[tuple[str, Mapping[str, np.ndarray], CountRules, tuple[str, ...]]]:
         receptor = ("", {"glossy": self.glossy, "reflected": self.reflected}, _GLOSS_RULES, self.dims)
@@ -264,8 +269,7 @@ class GlossMeter(Instrument):
 
     def postprocess(self, tally: Tally) -> GlossResult:
         reading = readings_result(self.bench, self.plan, tally, self.scene, self.source)
-        fields = {item.name: getattr(reading, item.name) for item in dataclass_fields(reading)}
-        return GlossResult(**fields, glossy=reading_grid(self.plan, tally.bins[:, 0]), cone=self.gloss_options.cone)
+        return GlossResult(reading, reading_grid(self.plan, tally.bins[:, 0]), self.gloss_options.cone)
 
     def warn_if_uncertified(self, result: GlossResult, stacklevel: int = 2) -> None:
         result.warn_if_uncertified(stacklevel=stacklevel + 2)

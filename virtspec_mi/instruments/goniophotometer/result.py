@@ -40,7 +40,6 @@ from __future__ import annotations
 
 import os
 from pathlib import Path
-from dataclasses import dataclass, replace
 from functools import cached_property
 from typing import Any, ClassVar, Mapping
 
@@ -65,12 +64,14 @@ _BIN_RULES = CountRules(None, parts={_REFLECTION_BINS: "reflected", _TRANSMISSIO
 is ``outside``: escaping rays in no bin)."""
 
 
-@dataclass(frozen=True, eq=False)
 class GonioResult(ResultBase):
     """
-    A goniophotometer reading over (wavelength, θi, θo, φo) (see the module docstring).
+    A goniophotometer reading over (wavelength, θi, θo, φo) (see the module docstring):
+    the Dataset of its spectrophotometer reading (:attr:`result`) with the bins' counts
+    ``bin_counts`` over ``theta_o`` and ``phi_o`` (the bin centres), the bins and the
+    guarantee in its attributes.
 
-    Attributes
+    Parameters
     ----------
     result : Result
         The spectrophotometer reading of the same rays, dims ``("wavelength", "theta_i")``.
@@ -83,13 +84,6 @@ class GonioResult(ResultBase):
     relative_tolerance, brdf_floor : float or None
         The relative certificate asked for (``guarantee="relative"``), else ``None``.
     """
-
-    result: Result
-    bin_counts: np.ndarray
-    bins: GonioBins
-    guarantee: str = "union"
-    relative_tolerance: float | None = None
-    brdf_floor: float | None = None
 
     FORMAT: ClassVar[str] = "virtspec-mi gonio 1"
     VARIABLES: ClassVar[dict[str, tuple[str, str]]] = {
@@ -128,53 +122,54 @@ class GonioResult(ResultBase):
 
     # -- labels and counts -------------------------------------------------------------
 
-    @property
-    def dims(self) -> tuple[str, ...]:  # type: ignore[override]
-        """The reading's dims (``wavelength``, ``theta_i``, parameter dims), then ``theta_o`` and ``phi_o``."""
+    SHAPED_BY: ClassVar[str] = "bin_counts"
 
-        return (*self.result.dims, *_BINS)
+    def __init__(self, result: Result, bin_counts: Any, bins: GonioBins, guarantee: str = "union",
+                 relative_tolerance: float | None = None, brdf_floor: float | None = None) -> None:
+        self._extend(result, {"bin_counts": ((*result.dims, *_BINS), bin_counts)},
+                     {"theta_o": bins.theta_centres, "phi_o": bins.phi_centres},
+                     {"bins": bins, "guarantee": guarantee, "relative_tolerance": relative_tolerance,
+                      "brdf_floor": brdf_floor})
 
-    @property
-    def coords(self) -> dict[str, np.ndarray]:  # type: ignore[override]
-        """The reading's coordinates and the bin centres ``theta_o``, ``phi_o`` (degrees)."""
+    @cached_property
+    def result(self) -> Result:
+        """The spectrophotometer reading of the same rays, dims ``("wavelength", "theta_i")``."""
 
-        return {**self.result.coords, "theta_o": self.bins.theta_centres, "phi_o": self.bins.phi_centres}
-
-    @property
-    def parameters(self) -> dict | None:  # type: ignore[override]
-        return self.result.parameters
-
-    @property
-    def settings(self) -> Any:
-        return self.result.settings
+        return Result._of(self.data.drop_dims(list(_BINS)))
 
     @property
-    def scene(self) -> str:
-        return self.result.scene
+    def bin_counts(self) -> np.ndarray:
+        """Exact per-bin counts, ``int64``, shape (wavelengths, θi, θo bins, φo bins)."""
+
+        return self.data["bin_counts"].values
 
     @property
-    def source(self) -> dict | None:  # type: ignore[override]
-        return self.result.source
+    def bins(self) -> GonioBins:
+        """The bins (edges in degrees, folding)."""
+
+        return self.data.attrs["bins"]
 
     @property
-    def seconds(self) -> float:
-        return self.result.seconds
+    def guarantee(self) -> str:
+        """How N was sized (:data:`~virtspec_mi.budgets.rules.GUARANTEES`), or ``"rays"`` when given."""
+
+        return str(self.data.attrs["guarantee"])
+
+    @property
+    def relative_tolerance(self) -> float | None:
+        """The relative certificate asked for (``guarantee="relative"``), else ``None``."""
+
+        return self.data.attrs["relative_tolerance"]
+
+    @property
+    def brdf_floor(self) -> float | None:
+        """The BRDF floor of the relative certificate (``guarantee="relative"``), else ``None``."""
+
+        return self.data.attrs["brdf_floor"]
 
     @property
     def interval_delta(self) -> float:
         return self.result.interval_delta
-
-    def _labelled(self) -> dict[str, tuple[tuple[str, ...], np.ndarray]]:
-        arrays = {f"result.{name}": value for name, value in self.result._labelled().items()}
-        arrays["bin_counts"] = (self.dims, self.bin_counts)
-        return arrays
-
-    def _relabelled(self, dims: tuple[str, ...], coords: dict[str, np.ndarray],
-                    arrays: dict[str, np.ndarray]) -> "GonioResult":
-        reading_dims = tuple(d for d in dims if d not in _BINS)
-        result = self.result._relabelled(reading_dims, {k: v for k, v in coords.items() if k not in _BINS},
-                                         {k[len("result."):]: v for k, v in arrays.items() if k.startswith("result.")})
-        return replace(self, result=result, bin_counts=arrays["bin_counts"])
 
     @property
     def theta_i(self) -> np.ndarray:

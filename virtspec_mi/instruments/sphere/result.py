@@ -38,7 +38,7 @@ from __future__ import annotations
 
 import json
 import os
-from dataclasses import asdict, dataclass, field, replace
+from dataclasses import asdict
 from functools import cached_property
 from types import SimpleNamespace
 from typing import Any, ClassVar, Mapping
@@ -78,13 +78,15 @@ hemispheres hold at most its rays. Sums over the walk (``wall_reflections``, ``w
 _FRACTION_RULES = CountRules(None, fractions=("wall_reflectance",))
 
 
-@dataclass(frozen=True, eq=False)
 class SphereResult(ResultBase):
     """
     Sphere readings over labelled dims: the exact counts of both configurations and
-    everything derived from them (see the module docstring).
+    everything derived from them (see the module docstring). One ``xarray.Dataset``
+    (:attr:`data`): every count over the readings' dims and ``configuration``, the
+    pilot's as ``pilot_<count>``, ``wall_reflectance`` over the readings' dims; the
+    sphere, options, settings and provenance in its attributes.
 
-    Attributes
+    Parameters
     ----------
     dims : tuple of str
         The dims of the readings, e.g. ``("wavelength",)``, then ``configuration`` (added
@@ -127,23 +129,6 @@ class SphereResult(ResultBase):
         The scene's name and ``-D`` defines (:func:`virtspec_mi.scene.scene_source`), or ``None``.
     """
 
-    dims: tuple[str, ...]
-    coords: dict[str, np.ndarray]
-    counts: dict[str, dict[str, np.ndarray]]
-    wall_reflectance: np.ndarray
-    sphere: str
-    cap_fractions: dict[str, float]
-    options: dict[str, Any]
-    settings: Settings
-    seconds: float = 0.0
-    scene: str = ""
-    sphere_parameters: dict[str, Any] = field(default_factory=dict)
-    specimen_radius: float | None = None
-    version: str = __version__
-    parameters: dict | None = None
-    pilot: dict[str, dict[str, np.ndarray]] | None = None
-    source: dict | None = None
-
     FORMAT: ClassVar[str] = "virtspec-mi sphere 1"
     VARIABLES: ClassVar[dict[str, tuple[str, str]]] = {
         "configuration": ("1", "sphere configuration (sample or standard in the beam)"),
@@ -181,38 +166,87 @@ class SphereResult(ResultBase):
     QUANTITIES: ClassVar[tuple[str, ...]] = ("reading", "corrected", "hemispherical")
     _QUANTITY_NOTE: ClassVar[str] = "a sphere reading has no R, T, A triple"
 
-    def __post_init__(self) -> None:
-        """The dim ``configuration`` (``sample``, ``standard``) after the readings' dims, and its labels."""
-
-        if "configuration" not in self.dims:
-            object.__setattr__(self, "dims", (*self.dims, "configuration"))
-        if "configuration" not in self.coords:
-            labels = np.array(CONFIGURATIONS, dtype=object)  # variable-length text (NetCDF, Zarr)
-            object.__setattr__(self, "coords", {**self.coords, "configuration": labels})
-
-    # -- labels -----------------------------------------------------------------------
-
-    def _labelled(self) -> dict[str, tuple[tuple[str, ...], np.ndarray]]:
-        arrays = {"wall_reflectance": (self.reading_dims, self.wall_reflectance)}
-        for prefix, groups in (("counts", self.counts), ("pilot", self.pilot or {})):
+    def __init__(self, dims: tuple[str, ...], coords: Mapping[str, Any], counts: dict[str, dict[str, Any]],
+                 wall_reflectance: Any, sphere: str, cap_fractions: dict[str, float], options: dict[str, Any],
+                 settings: Settings, seconds: float = 0.0, scene: str = "", sphere_parameters: dict | None = None,
+                 specimen_radius: float | None = None, version: str = __version__, parameters: dict | None = None,
+                 pilot: dict[str, dict[str, Any]] | None = None, source: dict | None = None) -> None:
+        readings = tuple(d for d in dims if d != "configuration")
+        checked = {"wall_reflectance": (readings, wall_reflectance)}
+        arrays = {"wall_reflectance": (readings, wall_reflectance)}
+        for prefix, groups in (("counts", counts), ("pilot", pilot or {})):
             for configuration, named in groups.items():
-                arrays.update({f"{prefix}.{configuration}.{name}": (self.reading_dims, values)
-                               for name, values in named.items()})
-        return arrays
+                checked.update({f"{prefix}.{configuration}.{name}": (readings, values) for name, values in named.items()})
+            if groups and set(groups) != set(CONFIGURATIONS):
+                raise ValueError(f"'{prefix}' must hold the counts of the configurations {', '.join(CONFIGURATIONS)} "
+                                 f"(got {sorted(groups)})")
+            names = list(groups.get("sample", {}))
+            if groups and set(groups["standard"]) != set(names):
+                raise ValueError(f"{prefix}['standard'] must count what {prefix}['sample'] counts "
+                                 f"({sorted(set(groups['standard']) ^ set(names))} in only one)")
+            arrays.update({("" if prefix == "counts" else "pilot_") + name: (
+                (*readings, "configuration"), np.stack([np.asarray(groups[c][name]) for c in CONFIGURATIONS], axis=-1))
+                for name in names})
+        labels = {**coords, "configuration": np.array(CONFIGURATIONS, dtype=object)}  # variable-length text
+        attrs = {"sphere": sphere, "cap_fractions": dict(cap_fractions), "options": dict(options),
+                 "settings": settings, "seconds": float(seconds), "scene": scene,
+                 "sphere_parameters": dict(sphere_parameters or {}), "specimen_radius": specimen_radius,
+                 "version": version, "parameters": parameters, "source": source}
+        self._store((*readings, "configuration"), labels, arrays, attrs, checked)
 
-    def _relabelled(self, dims: tuple[str, ...], coords: dict[str, np.ndarray],
-                    arrays: dict[str, np.ndarray]) -> "SphereResult":
-        def groups(prefix: str) -> dict[str, dict[str, np.ndarray]]:
-            out: dict[str, dict[str, np.ndarray]] = {}
-            for key, values in arrays.items():
-                head, _, rest = key.partition(".")
-                if head == prefix:
-                    configuration, _, name = rest.partition(".")
-                    out.setdefault(configuration, {})[name] = values
-            return out
+    @cached_property
+    def counts(self) -> dict[str, dict[str, np.ndarray]]:
+        """Per configuration (``"sample"``, ``"standard"``): every count by name over the readings' dims."""
 
-        return replace(self, dims=dims, coords=coords, counts=groups("counts"), wall_reflectance=arrays[
-            "wall_reflectance"], pilot=None if self.pilot is None else groups("pilot"))
+        return self._groups("")
+
+    @cached_property
+    def pilot(self) -> dict[str, dict[str, np.ndarray]] | None:
+        """Two-stage pilot counts per configuration (spent, not in the estimates); ``None`` for budgets sized ahead."""
+
+        return self._groups("pilot_") if "pilot_rays" in self.data else None
+
+    def _groups(self, prefix: str) -> dict[str, dict[str, np.ndarray]]:
+        names = [str(n) for n in self.data.data_vars if "configuration" in self.data[n].dims]
+        names = [n[len(prefix):] for n in names if n.startswith(prefix) and (prefix or not n.startswith("pilot_"))]
+        return {c: {name: self.data[prefix + name].isel(configuration=k).values for name in names}
+                for k, c in enumerate(CONFIGURATIONS)}
+
+    @property
+    def wall_reflectance(self) -> np.ndarray:
+        """ρw per reading (over the readings' dims)."""
+
+        return self.data["wall_reflectance"].values
+
+    @property
+    def sphere(self) -> str:
+        """The sphere in words."""
+
+        return str(self.data.attrs["sphere"])
+
+    @property
+    def cap_fractions(self) -> dict[str, float]:
+        """Each port's cap area over the sphere's."""
+
+        return self.data.attrs["cap_fractions"]
+
+    @property
+    def options(self) -> dict[str, Any]:
+        """How it was read (``measurement``, ``specular``, ``method``, ``standard``, ``max_bounces``)."""
+
+        return self.data.attrs["options"]
+
+    @property
+    def sphere_parameters(self) -> dict[str, Any]:
+        """The sphere's description (:meth:`~virtspec_mi.instruments.sphere.geometry.Sphere.parameters`)."""
+
+        return self.data.attrs["sphere_parameters"]
+
+    @property
+    def specimen_radius(self) -> float | None:
+        """Radius of the specimen disk (mm), or ``None``."""
+
+        return self.data.attrs["specimen_radius"]
 
     @property
     def rays(self) -> np.ndarray:

@@ -48,10 +48,11 @@ from typing import Any, ClassVar, Mapping
 
 import numpy as np
 
-from virtspec_mi.results.formats import format_parts, tagged
+from virtspec_mi.results.formats import annotate, format_parts, tagged
 from virtspec_mi.results.integrity import (CountRules, check_agreement, check_checksum, check_labels, check_result,
                                            check_shapes, finite_labels, parameters_of, read_file, sealed_text,
                                            source_of, whole_counts)
+from virtspec_mi.results.variables import Coordinate, Variable
 
 __all__ = [
     "ResultBase",
@@ -175,6 +176,13 @@ class ResultBase:
     """The quantities :meth:`spectrum` gives (the first is the default)."""
     SHAPED_BY: ClassVar[str] = "rays"
     """The stored variable that lies along every dim of the result: its dims are :attr:`dims`."""
+    DERIVED: ClassVar[dict[str, Variable]] = {}
+    """
+    What this kind derives from its counts, by name (:class:`~virtspec_mi.results.variables.Variable`):
+    the variables :meth:`to_dataset` adds to the stored ones, with their units and long names.
+    """
+    COORDS: ClassVar[dict[str, Coordinate]] = {}
+    """Labels :meth:`to_dataset` adds beside the stored ones (:class:`~virtspec_mi.results.variables.Coordinate`)."""
 
     data: Any
     """
@@ -355,19 +363,19 @@ class ResultBase:
     def phi_i(self) -> float:
         """Azimuth of incidence in degrees (the settings')."""
 
-        return float(self.settings.phi_i)  # type: ignore[attr-defined]
+        return float(self.settings.phi_i)
 
     @property
     def mu(self) -> float:
         """The tolerance asked for (the settings'; what the rays give is each kind's certificate)."""
 
-        return float(self.settings.mu)  # type: ignore[attr-defined]
+        return float(self.settings.mu)
 
     @property
     def delta(self) -> float:
         """The failure probability δ asked for (the settings')."""
 
-        return float(self.settings.delta)  # type: ignore[attr-defined]
+        return float(self.settings.delta)
 
     @property
     def shape(self) -> tuple[int, ...]:
@@ -665,9 +673,54 @@ class ResultBase:
         raise NotImplementedError
 
     def _count_variables(self) -> dict[str, tuple[tuple[str, ...], np.ndarray]]:
-        """The integer variables of ``to_dataset()`` by name: ``(dims, values)`` (what :func:`check_agreement` compares)."""
+        """
+        The exact counts of ``to_dataset()`` by name: ``(dims, int64 values)`` — the stored
+        integer variables and the derived counts (what :func:`check_agreement` compares).
+        """
 
-        raise NotImplementedError
+        stored = {name: (dims, values) for name, (dims, values) in self._labelled().items() if values.dtype.kind in "iu"}
+        derived = {name: (variable.dims_of(self), np.asarray(variable.values(self), dtype=np.int64))
+                   for name, variable in self.DERIVED.items() if variable.count}
+        return {**stored, **derived}
+
+    def to_dataset(self) -> Any:
+        """
+        An ``xarray.Dataset``: the stored one (the exact counts over the labelled dims),
+        every variable of the kind's :attr:`DERIVED` table and the labels of its
+        :attr:`COORDS`, each with ``units`` and ``long_name``
+        (:func:`~virtspec_mi.results.formats.annotate`); attributes: the kind's own (its
+        settings and provenance as numbers and text), the format tag (``format``) and the
+        whole result (``result_json``, from which :meth:`from_dataset` rebuilds it).
+        """
+
+        def derived(variable: Variable) -> tuple[tuple[str, ...], np.ndarray, dict[str, Any]]:
+            values = np.asarray(variable.values(self), dtype=np.int64 if variable.count else np.float64)
+            return variable.dims_of(self), values, dict(variable.attrs(self)) if variable.attrs else {}
+
+        import xarray as xr
+
+        stored = {name: (array.dims, array.values) for name, array in self.data.variables.items()}
+        variables = {name: derived(variable) for name, variable in self.DERIVED.items()}  # what is read first
+        variables.update({name: stored[name] for name in self.data.data_vars})
+        coords = {**{name: stored[name] for name in self.data.coords},
+                  **{name: (label.dims, np.asarray(label.values(self))) for name, label in self.COORDS.items()}}
+        dataset = xr.Dataset(variables, coords=coords, attrs={**self._file_attrs(), **self._dataset_attrs()})
+        return annotate(dataset, self._parameter_keys(), self.described())
+
+    def described(self) -> dict[str, tuple[str, str]]:
+        """
+        ``(units, long_name)`` of this kind's own variables and coordinates: its stored ones
+        (:attr:`VARIABLES`), its :attr:`DERIVED` and :attr:`COORDS` (beside those every kind
+        shares, :data:`virtspec_mi.results.formats.VARIABLES`).
+        """
+
+        tables = {**self.DERIVED, **self.COORDS}
+        return {**self.VARIABLES, **{name: (item.units, item.long_name) for name, item in tables.items()}}
+
+    def _file_attrs(self) -> dict[str, Any]:
+        """The attributes of this kind's dataset (numbers and text, for NetCDF) beside its format and result."""
+
+        return {}
 
     def _check_stored(self, data: Mapping[str, Any]) -> None:
         """Derived counts a JSON object of this kind also holds agree with the result built from it (none: nothing)."""
@@ -681,9 +734,10 @@ class ResultBase:
         return sealed_text(self.as_dict())
 
     def csv_dataset(self) -> Any:
-        """What a ``.csv`` file holds (one row per cell of it): ``to_dataset()``, unless a kind leaves some out."""
+        """What a ``.csv`` file holds (one row per cell of it): ``to_dataset()`` without what no row holds."""
 
-        return self.to_dataset()  # type: ignore[attr-defined]
+        left = [name for name, item in {**self.DERIVED, **self.COORDS}.items() if not item.csv]
+        return self.to_dataset().drop_vars(left)
 
     def _dataset_attrs(self) -> dict[str, Any]:
         """
@@ -759,7 +813,7 @@ class ResultBase:
 
         import html
 
-        dataset = self.to_dataset()  # type: ignore[attr-defined]
+        dataset = self.to_dataset()
         dataset.attrs.pop("result_json", None)  # the whole result as JSON: for files, not for reading
         return f"<p><code>{html.escape(repr(self))}</code></p>" + dataset._repr_html_()
 

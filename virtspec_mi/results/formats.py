@@ -37,19 +37,10 @@ VARIABLES: dict[str, tuple[str, str]] = {
     "wavelength": ("nm", "wavelength"),
     "theta_i": ("degree", "polar angle of incidence"),
     "point": ("1", "parameter point"),
-    # hemispherical estimates and their parts
-    "reflectance": ("1", "hemispherical reflectance m/N"),
-    "transmittance": ("1", "hemispherical transmittance t/N"),
-    "absorptance": ("1", "absorptance (absorbed rays)/N"),
-    "specular_reflectance": ("1", "specular reflectance (rays reflected by a delta event)/N"),
-    "diffuse_reflectance": ("1", "diffuse reflectance (reflected rays not by a delta event)/N"),
-    "regular_transmittance": ("1", "regular transmittance (rays transmitted by a delta event)/N"),
-    "diffuse_transmittance": ("1", "diffuse transmittance (transmitted rays not by a delta event)/N"),
     # exact counts
     "rays": (_COUNT, "rays traced per reading (N)"),
     "reflected": (_COUNT, "rays reflected into the upper hemisphere"),
     "transmitted": (_COUNT, "rays transmitted into the lower hemisphere"),
-    "absorbed": (_COUNT, "rays absorbed (rays - reflected - transmitted - capped - invalid_directions)"),
     "capped": (_COUNT, "random walks stopped by the specimen's step cap (in no fate)"),
     "invalid_directions": (_COUNT, "rays the BSDF sent in an invalid direction (in no fate)"),
     "weight_violations": (_COUNT, "rays whose BSDF weight was outside [0, 1] beyond rounding"),
@@ -57,18 +48,12 @@ VARIABLES: dict[str, tuple[str, str]] = {
     "specular_reflected": (_COUNT, "reflected rays whose sampled event was a delta event"),
     "regular_transmitted": (_COUNT, "transmitted rays whose sampled event was a delta event"),
     "largest_weight": ("1", "largest violating BSDF weight (NaN: none)"),
-    # certificates
-    "certified_mu": ("1", "tolerance the rays guarantee at interval_delta under the rule used (NaN: not certified)"),
-    "rounding_bias": ("1", "largest shift of the estimates by rounded BSDF weights"),
-    "reflectance_lower": ("1", "Clopper-Pearson lower bound of the reflectance"),
-    "reflectance_upper": ("1", "Clopper-Pearson upper bound of the reflectance"),
-    "transmittance_lower": ("1", "Clopper-Pearson lower bound of the transmittance"),
-    "transmittance_upper": ("1", "Clopper-Pearson upper bound of the transmittance"),
-    "absorptance_lower": ("1", "Clopper-Pearson lower bound of the absorptance"),
-    "absorptance_upper": ("1", "Clopper-Pearson upper bound of the absorptance"),
     "done": ("1", "the reading has finished (1) or not yet (0)"),
 }
-"""``(units, long_name)`` of the variables and coordinates that every result kind shares."""
+"""
+``(units, long_name)`` of the labels and the exact counts that every result kind shares
+(what a kind derives from them: its ``DERIVED`` table, :mod:`virtspec_mi.results.variables`).
+"""
 
 
 def describe_variable(name: str, parameters: Mapping[str, str] | None = None,

@@ -40,7 +40,7 @@ from virtspec_mi.kernel.counts import DIRECTION_TOLERANCE, QUANTITIES, WEIGHT_RO
 from virtspec_mi.geometry.disks import InstrumentGeometry, backlit_fraction
 from virtspec_mi.budgets.intervals import clopper_pearson
 from virtspec_mi.results.base import ResultBase, per_count, plain_data, round_up, span
-from virtspec_mi.results.formats import annotate
+from virtspec_mi.results.variables import Variable, bounds
 from virtspec_mi.results.integrity import (CountRules, check_counts, check_shapes, field_value, optional_numbers,
                                            reading_at, whole_counts)
 from virtspec_mi.settings import Settings
@@ -122,6 +122,31 @@ class Result(ResultBase):
     FORMAT: ClassVar[str] = "virtspec-mi result 1"
     KIND: ClassVar[str] = "hemispherical reading"
     QUANTITIES: ClassVar[tuple[str, ...]] = QUANTITIES
+    DERIVED: ClassVar[dict[str, Variable]] = {
+        "reflectance": Variable("1", "hemispherical reflectance m/N", lambda r: r.reflectance),
+        "transmittance": Variable("1", "hemispherical transmittance t/N", lambda r: r.transmittance),
+        "absorptance": Variable("1", "absorptance (absorbed rays)/N", lambda r: r.absorptance),
+        "specular_reflectance": Variable("1", "specular reflectance (rays reflected by a delta event)/N",
+                                         lambda r: r.specular_reflectance),
+        "diffuse_reflectance": Variable("1", "diffuse reflectance (reflected rays not by a delta event)/N",
+                                        lambda r: r.diffuse_reflectance),
+        "regular_transmittance": Variable("1", "regular transmittance (rays transmitted by a delta event)/N",
+                                          lambda r: r.regular_transmittance),
+        "diffuse_transmittance": Variable("1", "diffuse transmittance (transmitted rays not by a delta event)/N",
+                                          lambda r: r.diffuse_transmittance),
+        "absorbed": Variable("1", "rays absorbed (rays - reflected - transmitted - capped - invalid_directions)",
+                             lambda r: r.absorbed, count=True),
+        "certified_mu": Variable(
+            "1", "tolerance the rays guarantee at interval_delta under the rule used (NaN: not certified)",
+            lambda r: r.certified_mu,
+            attrs=lambda r: {"meaning": "tolerance the rays guarantee at interval_delta under the rule used; NaN: "
+                                        "not certified"}),
+        "rounding_bias": Variable("1", "largest shift of the estimates by rounded BSDF weights",
+                                  lambda r: r.rounding_bias),
+        **bounds({name: f"the {name}" for name in QUANTITIES}, lambda r, name: r.interval(name),
+                 lambda r: r.interval_delta),
+    }
+    """Every variable derived from the counts: R, T, A and their parts, the certificate and the intervals."""
 
     def __init__(self, dims: tuple[str, ...], coords: Mapping[str, Any], counts: Counts, pilot: Counts | None,
                  settings: Settings, geometry: InstrumentGeometry, seconds: float, scene: str = "",
@@ -517,10 +542,6 @@ class Result(ResultBase):
             version=field_value(data, "version", "text"),
         )
 
-    def _count_variables(self) -> dict[str, tuple[tuple[str, ...], np.ndarray]]:
-        return {name: (self.dims, np.asarray(values, dtype=np.int64)) for name, values in self.counts.as_dict().items()
-                if name != "largest_weight"}
-
     def _check_stored(self, data: Mapping[str, Any]) -> None:
         """The ``absorbed`` counts a JSON object holds (its own, and its pilot's) are the rest of the rays."""
 
@@ -536,39 +557,15 @@ class Result(ResultBase):
             groups.append(("pilot", self.pilot.as_dict(), COUNT_RULES, self.dims))
         return groups
 
-    def to_dataset(self) -> Any:
-        """
-        An ``xarray.Dataset`` over :attr:`dims`: the estimates and parts (float64), every
-        count (int64), each quantity's Clopper–Pearson bounds ``<quantity>_lower`` /
-        ``_upper`` and ``certified_mu``, each with ``units`` and ``long_name``
-        (:func:`~virtspec_mi.results.base.annotate`); attributes hold the settings,
-        geometry and provenance, the format tag (``format``) and the whole result
-        (``result_json``, from which :meth:`from_dataset` rebuilds it).
-        """
+    def _file_attrs(self) -> dict[str, Any]:
+        """The settings, geometry and provenance as numbers and text (a NetCDF file's attributes)."""
 
-        import xarray as xr
-
-        variables: dict[str, Any] = {}
-        counted = self._count_variables()
-        for name in (*QUANTITIES, *_PARTS, *Counts.names(), "absorbed", "certified_mu", "rounding_bias"):
-            variables[name] = counted.get(name) or (self.dims, np.asarray(getattr(self, name), dtype=np.float64))
-        for name in QUANTITIES:
-            lower, upper = self.interval(name)
-            bound = {"clopper_pearson_delta": self.interval_delta}
-            variables[f"{name}_lower"] = (self.dims, lower, bound)
-            variables[f"{name}_upper"] = (self.dims, upper, bound)
-        coords = {name: (self.coord_dims(name), values) for name, values in self.coords.items()}
         s = self.settings
-        attrs = {"mu": s.mu, "delta": s.delta, "bound": s.bound, "joint": int(s.joint), "beam": s.beam,
-                 "sampling": s.sampling, "seed": s.seed, "phi_i": s.phi_i, "interval_delta": self.interval_delta,
-                 **asdict(self.geometry), "seconds": self.seconds, "scene": self.scene,
-                 "wavelength_independent": int(self.wavelength_independent), "version": self.version,
-                 **({} if self.parameters is None else {"parameters": json.dumps(self.parameters)}),
-                 **self._dataset_attrs()}
-        dataset = annotate(xr.Dataset(variables, coords=coords, attrs=attrs), self._parameter_keys(), self.VARIABLES)
-        dataset["certified_mu"].attrs["meaning"] = ("tolerance the rays guarantee at interval_delta under the "
-                                                    "rule used; NaN: not certified")
-        return dataset
+        return {"mu": s.mu, "delta": s.delta, "bound": s.bound, "joint": int(s.joint), "beam": s.beam,
+                "sampling": s.sampling, "seed": s.seed, "phi_i": s.phi_i, "interval_delta": self.interval_delta,
+                **asdict(self.geometry), "seconds": self.seconds, "scene": self.scene,
+                "wavelength_independent": int(self.wavelength_independent), "version": self.version,
+                **({} if self.parameters is None else {"parameters": json.dumps(self.parameters)})}
 
     # -- spectra, colour and plots ------------------------------------------------------
 

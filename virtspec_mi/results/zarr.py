@@ -269,8 +269,8 @@ def write_result(result: Any, path: str | os.PathLike) -> Path:
     """
     Write ``result`` to the store ``path`` (:func:`replace_store`: into a new store beside
     it, then swapped in; a store of this project's there is replaced, anything else is
-    refused). A hemispherical result: every variable of ``result.to_dataset()``, the
-    pilot counts, ``done`` and the :data:`~virtspec_mi.results.formats.TABLE_ATTRIBUTE`
+    refused). A hemispherical result: every variable of ``result.to_dataset()`` (the
+    pilot counts among them), ``done`` and the :data:`~virtspec_mi.results.formats.TABLE_ATTRIBUTE`
     (with the counts' checksum); a result without the dim ``wavelength`` or ``theta_i`` (a
     reading, a selection) is written with it as a dim of one. Any other kind: its dataset as it is (``result_json`` rebuilds it).
     """
@@ -296,11 +296,8 @@ def _table(result: Any, identity: str) -> Any:
             "parameters", "source")  # the last two only when the result has them
     meta = {**{k: plain[k] for k in kept if k in plain},
             **({} if own_dims == dims else {"result_dims": list(own_dims)})}
-    if result.pilot is not None:
-        for name in Counts.names():
-            dataset[f"pilot_{name}"] = (dims, np.asarray(getattr(result.pilot, name)))
     dataset["done"] = (dims, np.ones(result.shape, dtype=bool))
-    annotate(dataset, result._parameter_keys(), result.VARIABLES)
+    annotate(dataset, result._parameter_keys(), result.described())
     attrs = {k: v for k, v in dataset.attrs.items() if k != "result_json"}
     dataset.attrs = {**attrs, TABLE_ATTRIBUTE: json.dumps(meta), **({_IDENTITY: identity} if identity else {})}
     dataset.attrs[TABLE_ATTRIBUTE] = json.dumps({**meta, CHECKSUM: checksum(as_plain(dataset))})

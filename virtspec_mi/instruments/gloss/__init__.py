@@ -51,6 +51,7 @@ from virtspec_mi.kernel.hooks import ExitHook
 from virtspec_mi.results.base import plain_data
 from virtspec_mi.results.readings import Result
 from virtspec_mi.results.integrity import CountRules, whole_counts
+from virtspec_mi.results.variables import Variable, bounds
 from virtspec_mi.settings import Options, Settings, option
 
 __all__ = ["GlossOptions", "MirrorCone", "GlossResult", "GlossMeter"]
@@ -125,6 +126,13 @@ class GlossResult(Result):
     FORMAT: ClassVar[str] = "virtspec-mi gloss 1"
     KIND: ClassVar[str] = "gloss reading"
     QUANTITIES: ClassVar[tuple[str, ...]] = ("gloss", *Result.QUANTITIES)
+    VARIABLES: ClassVar[dict[str, tuple[str, str]]] = {"glossy": ("1", "rays reflected into the receptor cone")}
+    DERIVED: ClassVar[dict[str, Variable]] = {
+        **Result.DERIVED,
+        "gloss": Variable("1", "gloss fraction m/N (rays into the receptor cone)", lambda r: r.gloss),
+        **bounds({"gloss": "the gloss fraction at delta"}, lambda r, name: r.interval(name), lambda r: r.interval_delta),
+    }
+    """The reading's variables, the gloss fraction and its Clopper-Pearson interval."""
 
     def __init__(self, reading: Result, glossy: Any, cone: float = 2.0) -> None:
         self._extend(reading, {"glossy": (reading.dims, glossy)}, {}, {"cone": _check_cone(cone)})
@@ -203,22 +211,8 @@ class GlossResult(Result):
         receptor = ("", {"glossy": self.glossy, "reflected": self.reflected}, _GLOSS_RULES, self.dims)
         return [*super()._count_groups(), receptor]
 
-    def to_dataset(self) -> Any:
-        """The hemispherical reading's dataset with the gloss fraction, its counts and its interval (``cone`` in attrs)."""
-
-        dataset = super().to_dataset()
-        lower, upper = self.interval("gloss")
-        bound = {"clopper_pearson_delta": self.interval_delta}
-        dataset["gloss"] = (self.dims, self.gloss, {"units": "1", "long_name": "gloss fraction m/N (rays into the "
-                                                                            "receptor cone)"})
-        dataset["glossy"] = (self.dims, np.asarray(self.glossy, dtype=np.int64),
-                             {"units": "count", "long_name": "rays reflected into the receptor cone"})
-        dataset["gloss_lower"] = (self.dims, lower, {"units": "1", "long_name": "Clopper-Pearson lower bound of "
-                                                                                "the gloss fraction at delta", **bound})
-        dataset["gloss_upper"] = (self.dims, upper, {"units": "1", "long_name": "Clopper-Pearson upper bound of "
-                                                                                "the gloss fraction at delta", **bound})
-        dataset.attrs["cone"] = self.cone
-        return dataset
+    def _file_attrs(self) -> dict[str, Any]:
+        return {**super()._file_attrs(), "cone": self.cone}
 
     def plot(self, path: Any = None, quantity: str | None = None, **options: Any) -> Any:
         """Plot ``quantity`` (default the gloss fraction) as a sweep is drawn (its certified band)."""

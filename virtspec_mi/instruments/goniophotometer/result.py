@@ -50,7 +50,7 @@ from virtspec_mi.budgets.rules import guarantee_of
 from virtspec_mi.instruments.goniophotometer.bins import GonioBins
 from virtspec_mi.kernel.counts import QUANTITIES
 from virtspec_mi.results.base import ResultBase, plain_data, round_up, span
-from virtspec_mi.results.formats import annotate
+from virtspec_mi.results.variables import READINGS, Coordinate, Variable, of_reading
 from virtspec_mi.results.integrity import CountRules, field_value, whole_counts
 from virtspec_mi.results.readings import Result
 
@@ -88,29 +88,45 @@ class GonioResult(ResultBase):
     FORMAT: ClassVar[str] = "virtspec-mi gonio 1"
     VARIABLES: ClassVar[dict[str, tuple[str, str]]] = {
         "theta_o": ("degree", "polar angle of the outgoing direction, bin centre"),
-        "theta_o_lower": ("degree", "polar angle of the outgoing direction, bin lower edge"),
-        "theta_o_upper": ("degree", "polar angle of the outgoing direction, bin upper edge"),
         "phi_o": ("degree", "azimuth of the outgoing direction, bin centre"),
-        "phi_o_lower": ("degree", "azimuth of the outgoing direction, bin lower edge"),
-        "phi_o_upper": ("degree", "azimuth of the outgoing direction, bin upper edge"),
-        "theta_o_edge": ("degree", "polar angle of the outgoing direction, bin edge"),
-        "phi_o_edge": ("degree", "azimuth of the outgoing direction, bin edge"),
         "bin_counts": ("1", "rays that left into the bin (exact)"),
-        "fraction": ("1", "bin_counts / rays"),
-        "brdf": ("1/sr", "BRDF (BTDF beyond theta_o = 90 deg) averaged over the bin: fraction / solid_angle"),
-        "brdf_lower": ("1/sr", "simultaneous Clopper-Pearson lower bound of brdf (all bins at once)"),
-        "brdf_upper": ("1/sr", "simultaneous Clopper-Pearson upper bound of brdf (all bins at once)"),
-        "solid_angle": ("sr", "projected solid angle of the bin, integral of |cos theta_o|"),
-        "cdf_theta_o": ("1", "empirical CDF of theta_o at the bin edges"),
-        "cdf_phi_o": ("1", "empirical CDF of phi_o at the bin edges"),
-        "outside": ("1", "escaping rays in no bin"),
-        "bins_mu": ("1", "every bin fraction within bins_mu at once at delta (NaN: not certified)"),
-        "cdf_mu": ("1", "DKW-Massart sup error of cdf_theta_o and cdf_phi_o at delta (NaN: not certified)"),
     }
-    """
-    ``(units, long_name)`` of this kind's own variables and coordinates (beside
-    :data:`~virtspec_mi.results.formats.VARIABLES`).
-    """
+    """``(units, long_name)`` of this kind's stored variables and coordinates (beside
+    :data:`~virtspec_mi.results.formats.VARIABLES`)."""
+    DERIVED: ClassVar[dict[str, Variable]] = {
+        **of_reading(Result.DERIVED),
+        "fraction": Variable("1", "bin_counts / rays", lambda g: g.fraction),
+        "brdf": Variable("1/sr", "BRDF (BTDF beyond theta_o = 90 deg) averaged over the bin: fraction / solid_angle",
+                         lambda g: g.brdf),
+        **{f"brdf_{side}": Variable("1/sr", f"simultaneous Clopper-Pearson {side} bound of brdf (all bins at once)",
+                                    lambda g, end=end: g._band[end],
+                                    attrs=lambda g: {"clopper_pearson_delta": g.delta / g.size})
+           for end, side in ((0, "lower"), (1, "upper"))},
+        "solid_angle": Variable("sr", "projected solid angle of the bin, integral of |cos theta_o|",
+                                lambda g: g.solid_angles, _BINS,
+                                lambda g: {"meaning": "both folded halves" if g.bins.fold_phi else "one bin"}),
+        "cdf_theta_o": Variable("1", "empirical CDF of theta_o at the bin edges", lambda g: g.cdf_theta_o,
+                                lambda g: (*g.reading_dims, "theta_o_edge"), csv=False),
+        "cdf_phi_o": Variable("1", "empirical CDF of phi_o at the bin edges", lambda g: g.cdf_phi_o,
+                              lambda g: (*g.reading_dims, "phi_o_edge"), csv=False),
+        "outside": Variable("1", "escaping rays in no bin", lambda g: g.outside, READINGS, count=True),
+        "bins_mu": Variable("1", "every bin fraction within bins_mu at once at delta (NaN: not certified)",
+                            lambda g: g.bins_mu, READINGS),
+        "cdf_mu": Variable("1", "DKW-Massart sup error of cdf_theta_o and cdf_phi_o at delta (NaN: not certified)",
+                           lambda g: g.cdf_mu, READINGS),
+    }
+    """Every variable derived from the counts: the reading's (R, T, A …), the bins' fractions and BRDF with their
+    simultaneous bounds, the solid angles, the CDFs over the bin edges and the certificates."""
+    COORDS: ClassVar[dict[str, Coordinate]] = {
+        **{f"{angle}_{side}": Coordinate("degree", f"{words} of the outgoing direction, bin {side} edge", (angle,),
+                                         lambda g, angle=angle, cut=cut: g._edges(angle)[cut])
+           for angle, words in (("theta_o", "polar angle"), ("phi_o", "azimuth"))
+           for side, cut in (("lower", slice(None, -1)), ("upper", slice(1, None)))},
+        **{f"{angle}_edge": Coordinate("degree", f"{words} of the outgoing direction, bin edge", (f"{angle}_edge",),
+                                       lambda g, angle=angle: g._edges(angle), csv=False)
+           for angle, words in (("theta_o", "polar angle"), ("phi_o", "azimuth"))},
+    }
+    """The bins' edges: each bin's lower and upper edge along ``theta_o`` / ``phi_o``, and every edge (the CDFs')."""
     KIND: ClassVar[str] = "goniophotometer reading"
     KIND_DIMS: ClassVar[tuple[str, ...]] = _BINS
     KIND_DIMS_REASON: ClassVar[str] = (
@@ -446,10 +462,6 @@ class GonioResult(ResultBase):
                    relative_tolerance=None if relative is None else float(relative),
                    brdf_floor=None if floor is None else float(floor))
 
-    def _count_variables(self) -> dict[str, tuple[tuple[str, ...], np.ndarray]]:
-        return {**self.result._count_variables(), "bin_counts": (self.dims, self.bin_counts.astype(np.int64)),
-                "outside": (self.result.dims, self.outside.astype(np.int64))}
-
     def _count_groups(self) -> list[tuple[str, Mapping[str, np.ndarray], CountRules, tuple[str, ...]]]:
         """The reading's counts, and its bins of each hemisphere against its reflected and transmitted rays."""
 
@@ -459,55 +471,17 @@ class GonioResult(ResultBase):
                        _TRANSMISSION_BINS: self.bin_counts[..., transmission, :].sum(axis=(-2, -1))}
         return [*self.result._count_groups(), ("", hemispheres, _BIN_RULES, self.result.dims)]
 
-    def to_dataset(self) -> Any:
-        """
-        The ``xarray.Dataset`` of the data contract (see the module docstring), plus the
-        spectrophotometer variables (reflectance …, over the reading's dims), ``fraction``,
-        ``brdf_lower`` / ``brdf_upper``, ``solid_angle``, ``cdf_theta_o`` / ``cdf_phi_o``
-        (over the edges ``theta_o_edge`` / ``phi_o_edge``), ``outside``, ``bins_mu`` and
-        ``cdf_mu``, each with ``units`` and ``long_name``; ``result_json`` rebuilds the
-        reading (:meth:`from_dataset`).
-        """
+    def _edges(self, angle: str) -> np.ndarray:
+        """The bins' edges along ``theta_o`` or ``phi_o`` (degrees)."""
 
-        base = self.result.to_dataset()
+        return self.bins.theta_edges if angle == "theta_o" else self.bins.phi_edges
+
+    def _file_attrs(self) -> dict[str, Any]:
+        """The reading's attributes and the bins': folding, binning, the guarantee, K and its δ."""
+
         b = self.bins
-        grid, reading = self.dims, self.result.dims
-        band = {"clopper_pearson_delta": self.delta / self.size}
-        counted = self._count_variables()
-        dataset = base.assign({
-            "bin_counts": counted["bin_counts"],
-            "fraction": (grid, self.fraction),
-            "brdf": (grid, self.brdf),
-            "brdf_lower": (grid, self.brdf_lower, band),
-            "brdf_upper": (grid, self.brdf_upper, band),
-            "solid_angle": (_BINS, self.solid_angles,
-                            {"meaning": "both folded halves" if b.fold_phi else "one bin"}),
-            "cdf_theta_o": ((*reading, "theta_o_edge"), self.cdf_theta_o),
-            "cdf_phi_o": ((*reading, "phi_o_edge"), self.cdf_phi_o),
-            "outside": counted["outside"],
-            "bins_mu": (reading, self.bins_mu),
-            "cdf_mu": (reading, self.cdf_mu),
-        })
-        dataset = dataset.assign_coords({
-            "theta_o": ("theta_o", b.theta_centres),
-            "theta_o_lower": ("theta_o", b.theta_edges[:-1]),
-            "theta_o_upper": ("theta_o", b.theta_edges[1:]),
-            "phi_o": ("phi_o", b.phi_centres),
-            "phi_o_lower": ("phi_o", b.phi_edges[:-1]),
-            "phi_o_upper": ("phi_o", b.phi_edges[1:]),
-            "theta_o_edge": ("theta_o_edge", b.theta_edges),
-            "phi_o_edge": ("phi_o_edge", b.phi_edges),
-        })
-        dataset.attrs.update({
-            "phi_folded": int(b.fold_phi), "phi_i": self.phi_i, "binning": b.binning, "guarantee": self.guarantee,
-            "bins": self.size, "bins_delta": self.delta, **self._dataset_attrs(),
-        })
-        return annotate(dataset, self._parameter_keys(), self.VARIABLES)
-
-    def csv_dataset(self) -> Any:
-        """What a ``.csv`` file holds, one row per bin: :meth:`to_dataset` without the CDFs over bin edges."""
-
-        return self.to_dataset().drop_vars(["cdf_theta_o", "cdf_phi_o", "theta_o_edge", "phi_o_edge"])
+        return {**self.result._file_attrs(), "phi_folded": int(b.fold_phi), "phi_i": self.phi_i,
+                "binning": b.binning, "guarantee": self.guarantee, "bins": self.size, "bins_delta": self.delta}
 
     # -- spectra, colour and plots -----------------------------------------------------
 

@@ -51,8 +51,8 @@ from virtspec_mi.budgets.intervals import clopper_pearson
 from virtspec_mi.instruments.sphere.geometry import Sphere, sphere_from_parameters
 from virtspec_mi.instruments.sphere.model import correct_readings, theory_inputs
 from virtspec_mi.results.base import ResultBase, per_count, plain_data, round_up, span
-from virtspec_mi.results.formats import annotate
 from virtspec_mi.results.integrity import CountRules, field_value, finite_labels, whole_counts
+from virtspec_mi.results.variables import READINGS, Variable, bounds
 from virtspec_mi.instruments.sphere.walk import FATES
 from virtspec_mi.settings import Settings
 
@@ -142,21 +142,33 @@ class SphereResult(ResultBase):
         "detected_from_upper": ("1", "detected rays the specimen had first reflected"),
         "wall_reflections": ("1", "wall (and baffle) reflections, summed over the rays"),
         "wall_reflectance": ("1", "reflectance of the sphere wall"),
-        "detector_fraction": ("1", "detected fraction with the sample: detected/rays"),
-        "standard_fraction": ("1", "detected fraction with the reference standard: detected/rays"),
-        "reading": ("1", "the instrument's reading: standard value * detector_fraction / standard_fraction"),
-        "reading_lower": ("1", "lower end of the reading's certified interval (probability >= 1 - delta)"),
-        "reading_upper": ("1", "upper end of the reading's certified interval (probability >= 1 - delta)"),
-        "hemispherical": ("1", "hemispherical value of the same rays (the specimen's first interaction)"),
-        "hemispherical_lower": ("1", "Clopper-Pearson lower bound of the hemispherical value at delta"),
-        "hemispherical_upper": ("1", "Clopper-Pearson upper bound of the hemispherical value at delta"),
-        "instrument_error": ("1", "reading - hemispherical"),
-        "fraction_mu": ("1", "tolerance of each detector fraction at delta/2 (NaN: not certified)"),
     }
     """
-    ``(units, long_name)`` of this kind's own variables and coordinates (beside
-    :data:`~virtspec_mi.results.formats.VARIABLES`; a port's ``lost_<port>``: :meth:`to_dataset`).
+    ``(units, long_name)`` of this kind's stored variables and coordinates (beside
+    :data:`~virtspec_mi.results.formats.VARIABLES`; a port's ``lost_<port>``: :meth:`described`).
     """
+    DERIVED: ClassVar[dict[str, Variable]] = {
+        "detector_fraction": Variable("1", "detected fraction with the sample: detected/rays",
+                                      lambda r: r.detector_fraction, READINGS),
+        "standard_fraction": Variable("1", "detected fraction with the reference standard: detected/rays",
+                                      lambda r: r.standard_fraction, READINGS),
+        "reading": Variable("1", "the instrument's reading: standard value * detector_fraction / standard_fraction",
+                            lambda r: r.reading, READINGS),
+        "reading_lower": Variable("1", "lower end of the reading's certified interval (probability >= 1 - delta)",
+                                  lambda r: r.reading_interval[..., 0], READINGS),
+        "reading_upper": Variable("1", "upper end of the reading's certified interval (probability >= 1 - delta)",
+                                  lambda r: r.reading_interval[..., 1], READINGS),
+        "hemispherical": Variable("1", "hemispherical value of the same rays (the specimen's first interaction)",
+                                  lambda r: r.hemispherical, READINGS),
+        **bounds({"hemispherical": "the hemispherical value at delta"},
+                 lambda r, _: (r.hemispherical_interval[..., 0], r.hemispherical_interval[..., 1]),
+                 lambda r: r.delta, READINGS),
+        "instrument_error": Variable("1", "reading - hemispherical", lambda r: r.instrument_error, READINGS),
+        "fraction_mu": Variable("1", "tolerance of each detector fraction at delta/2 (NaN: not certified)",
+                                lambda r: r.fraction_mu, READINGS),
+    }
+    """Every variable derived from the counts, over the readings' dims: the fractions, the reading and its interval,
+    the hemispherical value of the same rays, the instrument error and the certificate."""
     LEGACY: ClassVar[tuple[str, ...]] = ("virtspec-mi sphere 0",)
     KIND: ClassVar[str] = "integrating-sphere reading"
     KIND_DIMS: ClassVar[tuple[str, ...]] = ("configuration",)
@@ -607,13 +619,6 @@ class SphereResult(ResultBase):
             version=field_value(data, "version", "text"),
         )
 
-    def _count_variables(self) -> dict[str, tuple[tuple[str, ...], np.ndarray]]:
-        """Every count over the reading's dims and ``configuration``, the pilot's as ``pilot_<count>``."""
-
-        return {prefix + name: (self.dims, np.stack([groups[c][name] for c in CONFIGURATIONS], axis=-1))
-                for prefix, groups in (("", self.counts), ("pilot_", self.pilot or {}))
-                for name in groups.get("sample", {})}
-
     def _count_groups(self) -> list[tuple[str, Mapping[str, np.ndarray], CountRules, tuple[str, ...]]]:
         """Each configuration's counts (and its pilot's), and the wall reflectance of every reading."""
 
@@ -633,45 +638,22 @@ class SphereResult(ResultBase):
             raise ValueError(f"a field of the sphere result of layout 0 has the wrong type "
                              f"({' '.join(str(error).split())})") from None
 
-    def to_dataset(self) -> Any:
-        """
-        An ``xarray.Dataset``: every count over the reading's dims and ``configuration``
-        (``sample``, ``standard``), the pilot's as ``pilot_<count>``, ``wall_reflectance``,
-        ``detector_fraction``, ``standard_fraction``, ``reading`` with ``reading_lower`` /
-        ``reading_upper``, ``hemispherical`` with its bounds, ``instrument_error`` and
-        ``fraction_mu`` over the reading's dims, each with ``units`` and ``long_name``;
-        ``result_json`` rebuilds the result (:meth:`from_dataset`).
-        """
+    def _file_attrs(self) -> dict[str, Any]:
+        """The sphere, the options, settings and provenance as numbers and text (a NetCDF file's attributes)."""
 
-        import xarray as xr
-
-        variables: dict[str, Any] = self._count_variables()  # over the readings' dims, then configuration
-        interval, hemispherical = self.reading_interval, self.hemispherical_interval
-        band = {"clopper_pearson_delta": self.delta}
-        variables.update({
-            "wall_reflectance": (self.reading_dims, self.wall_reflectance),
-            "detector_fraction": (self.reading_dims, self.detector_fraction),
-            "standard_fraction": (self.reading_dims, self.standard_fraction),
-            "reading": (self.reading_dims, self.reading),
-            "reading_lower": (self.reading_dims, interval[..., 0]),
-            "reading_upper": (self.reading_dims, interval[..., 1]),
-            "hemispherical": (self.reading_dims, self.hemispherical),
-            "hemispherical_lower": (self.reading_dims, hemispherical[..., 0], band),
-            "hemispherical_upper": (self.reading_dims, hemispherical[..., 1], band),
-            "instrument_error": (self.reading_dims, self.instrument_error),
-            "fraction_mu": (self.reading_dims, self.fraction_mu),
-        })
-        coords = {name: (self.coord_dims(name), values) for name, values in self.coords.items()}
         s = self.settings
-        attrs = {"sphere": self.sphere, **{k: v for k, v in self.options.items() if k != "max_bounces"},
-                 "max_bounces": int(self.options.get("max_bounces", 0)), "mu": s.mu, "delta": s.delta,
-                 "beam": s.beam, "seed": s.seed, "phi_i": s.phi_i, "seconds": self.seconds, "scene": self.scene,
-                 "version": self.version, **({} if self.parameters is None else
-                                             {"parameters": json.dumps(self.parameters)}),
-                 **self._dataset_attrs()}
-        own = {**self.VARIABLES, **{name: ("1", f"rays lost through port {name[5:]!r}") for name in variables
-                                   if name.startswith("lost_")}}
-        return annotate(xr.Dataset(variables, coords=coords, attrs=attrs), self._parameter_keys(), own)
+        return {"sphere": self.sphere, **{k: v for k, v in self.options.items() if k != "max_bounces"},
+                "max_bounces": int(self.options.get("max_bounces", 0)), "mu": s.mu, "delta": s.delta,
+                "beam": s.beam, "seed": s.seed, "phi_i": s.phi_i, "seconds": self.seconds, "scene": self.scene,
+                "version": self.version, **({} if self.parameters is None else
+                                            {"parameters": json.dumps(self.parameters)})}
+
+    def described(self) -> dict[str, tuple[str, str]]:
+        """The kind's table (:meth:`ResultBase.described`) and each port's ``lost_<port>`` count."""
+
+        ports = {name: ("1", f"rays lost through port {name[5:]!r}") for name in self.counts["sample"]
+                 if name.startswith("lost_")}
+        return {**super().described(), **ports}
 
 
 def _from_layout_0(data: Any) -> dict[str, Any]:

@@ -5,7 +5,6 @@ input accepted (issue 33): each case one the held-out pass found.
 
 from __future__ import annotations
 
-import os
 from pathlib import Path
 
 import numpy as np

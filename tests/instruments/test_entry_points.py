@@ -12,11 +12,9 @@ import json
 import os
 import subprocess
 import sys
-import textwrap
 import warnings
 from importlib.metadata import EntryPoint
 
-import numpy as np
 import pytest
 
 import virtspec_mi as vm

@@ -320,11 +320,10 @@ class Session:
         import numpy as np
 
         paths: list[Any] = []
-        for figure in self.command.all_figures():
-            labels = np.atleast_1d(result.coords[figure.dim]) if figure.dim else ()
-            method = getattr(result, figure.method)
-            draw = functools.partial(method, **figure.keywords) if figure.keywords else method
-            paths += drawn(getattr(self.args, dest(figure.flag), None), draw, figure.dim, labels)
+        for flag in self.command.all_figures():
+            labels = np.atleast_1d(result.coords[flag.dim]) if flag.dim else ()
+            draw = functools.partial(result.plot, figure=flag.figure or None, **flag.keywords)
+            paths += drawn(getattr(self.args, dest(flag.flag), None), draw, flag.dim, labels)
         return paths
 
     def report(self, result: Any, text: str, figures: Sequence[Any] = (), data: dict[str, Any] | None = None,

@@ -11,8 +11,8 @@ option of the command's own ``flags`` (an :class:`~virtspec_mi.settings.Options`
 of :func:`~virtspec_mi.settings.option` fields: the one flag builder reads them), the
 common flags (``-D``, ``--param``/``--points``, ``--out`` with resume, ``--plot``,
 ``--json``, ``--quiet``, ``--workers``/``--scheduler``/``--task-readings``) and its
-figures (:class:`Figure`: a flag, the result's method that draws it, one figure per
-label of a dim). A command that prints more than the result's summary declares a
+figure flags (:class:`FigureFlag`: a flag, the figure of the result's ``FIGURES`` it draws,
+one figure per label of a dim). A command that prints more than the result's summary declares a
 ``respond`` hook: it receives a :class:`Session` (the command line's services: take the
 readings, draw, report) and returns the exit status.
 
@@ -30,17 +30,21 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Any, Callable, ContextManager, Protocol, Sequence
 
-__all__ = ["Command", "Figure", "Session"]
+__all__ = ["Command", "FigureFlag", "Session"]
 
 
 @dataclass(frozen=True)
-class Figure:
-    """A figure flag of a measuring subcommand: the result's method that draws it, per label of ``dim``."""
+class FigureFlag:
+    """
+    A figure flag of a measuring subcommand: the figure of the result's ``FIGURES``
+    (:mod:`virtspec_mi.results.figures`) it draws, ``result.plot(path, figure=figure,
+    **keywords, **{dim: label})``, per label of ``dim``.
+    """
 
     flag: str
     """The flag, e.g. ``--plot``."""
-    method: str
-    """The result's method that draws it (``plot``, ``plot_series``): ``method(path, **{dim: label})``."""
+    figure: str
+    """The name of the figure in the result's ``FIGURES`` (``polar``, ``series``), or ``""``: its first."""
     help: str
     """What it draws (the flag's help)."""
     dim: str = ""
@@ -61,7 +65,7 @@ class Command:
     """The head of ``virtspec NAME --help``."""
     examples: tuple[str, ...]
     """Command lines shown under ``--help`` (each runs as written from anywhere: shipped scenes by name)."""
-    figures: tuple[Figure, ...] = ()
+    figures: tuple[FigureFlag, ...] = ()
     """Its figure flags (the first is ``--plot``); none: the result's ``plot`` as ``--plot``."""
     one_reading: bool = False
     """One θi and one specimen parameter point, printed as one reading; else a grid of readings."""
@@ -85,10 +89,10 @@ class Command:
 
         return self.figures[0].help if self.figures else "the result's figure"
 
-    def all_figures(self) -> tuple[Figure, ...]:
-        """Its figure flags, ``--plot`` (the result's ``plot``) when it declares none."""
+    def all_figures(self) -> tuple[FigureFlag, ...]:
+        """Its figure flags, ``--plot`` (the result's first figure) when it declares none."""
 
-        return self.figures or (Figure("--plot", "plot", self.plot),)
+        return self.figures or (FigureFlag("--plot", "", self.plot),)
 
 
 class Session(Protocol):

@@ -27,6 +27,11 @@ everything else derived from them. This module holds what they share, written on
   up as the kind says, :meth:`ResultBase._count_groups`; finite labels; shapes; tags;
   the checksum of :meth:`ResultBase.sealed_json`); every variable and coordinate of
   ``to_dataset()`` has its ``units`` and ``long_name`` (:func:`virtspec_mi.results.formats.annotate`);
+- **tables, not methods**: what a kind shows besides its counts is declared in rows —
+  ``DERIVED`` and ``COORDS`` (:mod:`virtspec_mi.results.variables`: how each variable is
+  computed, its dims, units and long name) and ``FIGURES`` (:mod:`virtspec_mi.results.figures`);
+  :meth:`ResultBase.to_dataset`, :meth:`ResultBase.csv_dataset`, the counts a file is
+  checked against and :meth:`ResultBase.plot` are built from them here, for every kind;
 - **spectra**: :meth:`ResultBase.spectrum` — one quantity over wavelength at one θi with
   its certified tolerance (:class:`Spectrum`) — is what ``to_sd``, ``colour``,
   :func:`virtspec_mi.comparison.compare` and the spectrum plots read, for every kind.
@@ -48,6 +53,7 @@ from typing import Any, ClassVar, Mapping
 
 import numpy as np
 
+from virtspec_mi.results.figures import Figure, chosen_figure, spectra
 from virtspec_mi.results.formats import annotate, format_parts, tagged
 from virtspec_mi.results.integrity import (CountRules, check_agreement, check_checksum, check_labels, check_result,
                                            check_shapes, finite_labels, parameters_of, read_file, sealed_text,
@@ -153,9 +159,11 @@ class ResultBase:
     What every result kind shares (see the module docstring): one ``xarray.Dataset``,
     :attr:`data`, and what is derived from it. A kind sets :attr:`FORMAT` (and
     :attr:`LEGACY`, tags it still reads), :attr:`KIND`, :attr:`KIND_DIMS`,
-    :attr:`QUANTITIES` and :attr:`SHAPED_BY`, stores its counts in its constructor
-    (:meth:`_store`) and derives its quantities from them (``_quantity``, ``_count_groups``,
-    ``summary``, ``as_dict``, ``_from_dict``, ``to_dataset``, ``plot``).
+    :attr:`QUANTITIES`, :attr:`SHAPED_BY` and its tables (:attr:`VARIABLES`,
+    :attr:`DERIVED`, :attr:`COORDS`, :attr:`FIGURES`), stores its counts in its
+    constructor (:meth:`_store`, :meth:`_extend`) and writes what no table can say: its
+    certificate (``_quantity``, ``_count_groups``), its ``summary`` and its JSON object
+    (``as_dict``, ``_from_dict``: the format its files have had since format 1).
     """
 
     FORMAT: ClassVar[str]
@@ -183,6 +191,8 @@ class ResultBase:
     """
     COORDS: ClassVar[dict[str, Coordinate]] = {}
     """Labels :meth:`to_dataset` adds beside the stored ones (:class:`~virtspec_mi.results.variables.Coordinate`)."""
+    FIGURES: ClassVar[dict[str, Figure]] = {"spectra": spectra()}
+    """What :meth:`plot` draws, by name (:class:`~virtspec_mi.results.figures.Figure`): the first is the default."""
 
     data: Any
     """
@@ -329,12 +339,18 @@ class ResultBase:
     RENDERED: ClassVar[tuple[str, ...]] = ("reflectance", "transmittance", "absorptance")
     """The quantities :meth:`rendered` returns, in its columns."""
 
-    def plot_spectra(self, path: str | os.PathLike | None = None, **options: Any) -> Any:
-        """Quantities of the result over wavelength at one θi (:func:`virtspec_mi.results.plot.plot_spectra`)."""
+    def plot(self, path: str | os.PathLike | None = None, quantity: str | None = None, *, figure: str | None = None,
+             **options: Any) -> Any:
+        """
+        Draw one of the kind's figures (:attr:`FIGURES`): ``figure`` by name, else the first
+        that shows ``quantity`` (``None``: the kind's first figure, of its first quantity),
+        saved to ``path`` (``.png``/``.svg``) when given; ``options`` are the drawing's
+        (``name=``, ``theta_i=``, ``wavelength=`` …). Returns the ``matplotlib.figure.Figure``.
+        """
 
-        from virtspec_mi.results.plot import plot_spectra
-
-        return plot_spectra(self, path, **options)
+        if quantity is not None and not any(quantity in (item.quantities or ()) for item in self.FIGURES.values()):
+            quantity = self.check_quantity(quantity)
+        return chosen_figure(self.FIGURES, self.KIND, figure, quantity).draw(self, path, quantity, **options)
 
     def drawn_note(self, quantity: str | None = None) -> str:
         """

@@ -27,7 +27,6 @@ Baranoski et al. (2001), eqs. (2), (14), (19), (23); Clopper & Pearson (1934).
 from __future__ import annotations
 
 import json
-import os
 import warnings
 from dataclasses import asdict
 from functools import cached_property
@@ -40,6 +39,7 @@ from virtspec_mi.kernel.counts import DIRECTION_TOLERANCE, QUANTITIES, WEIGHT_RO
 from virtspec_mi.geometry.disks import InstrumentGeometry, backlit_fraction
 from virtspec_mi.budgets.intervals import clopper_pearson
 from virtspec_mi.results.base import ResultBase, per_count, plain_data, round_up, span
+from virtspec_mi.results.figures import Figure, spectra, sweep
 from virtspec_mi.results.variables import Variable, bounds
 from virtspec_mi.results.integrity import (CountRules, check_counts, check_shapes, field_value, optional_numbers,
                                            reading_at, whole_counts)
@@ -147,6 +147,8 @@ class Result(ResultBase):
                  lambda r: r.interval_delta),
     }
     """Every variable derived from the counts: R, T, A and their parts, the certificate and the intervals."""
+    FIGURES: ClassVar[dict[str, Figure]] = {"sweep": sweep, "spectra": spectra()}
+    """A quantity against θi or wavelength; quantities over wavelength at one θi."""
 
     def __init__(self, dims: tuple[str, ...], coords: Mapping[str, Any], counts: Counts, pilot: Counts | None,
                  settings: Settings, geometry: InstrumentGeometry, seconds: float, scene: str = "",
@@ -385,7 +387,7 @@ class Result(ResultBase):
         sizes = ", ".join(f"{d}: {n}" for d, n in zip(self.dims, self.shape))
         mu = self.certified_mu
         certified = "not certified" if np.all(np.isnan(mu)) else f"certified mu <= {round_up(float(np.nanmax(mu))):g}"
-        return (f"<virtspec_mi.Result ({sizes}) {self.settings.beam}, {self.bound} bound, "
+        return (f"<virtspec_mi.{type(self).__name__} ({sizes}) {self.settings.beam}, {self.bound} bound, "
                 f"N = {span(self.rays)}, {certified} at delta = {self.interval_delta:g}>")
 
     def summary(self, sized_by: str | None = None) -> str:
@@ -578,16 +580,6 @@ class Result(ResultBase):
         from virtspec_mi.results.colorimetry import multi_spectral_distributions
 
         return multi_spectral_distributions(self, theta_i)
-
-    def plot(self, path: str | os.PathLike | None = None, quantity: str | None = None, **options: Any) -> Any:
-        """
-        Plot ``quantity`` (default reflectance) against θi or wavelength with the certified
-        band (:func:`virtspec_mi.results.plot.plot_sweep`: ``wavelengths=``, ``theta_i=``, ``name=`` …).
-        """
-
-        from virtspec_mi.results.plot import plot_sweep
-
-        return plot_sweep(self, path, quantity=self.check_quantity(quantity), **options)
 
 
 def fluctuation(a: Result | np.ndarray, b: Result | np.ndarray, quantity: str = "reflectance") -> float:

@@ -1,6 +1,6 @@
 """
 A result kind's dataset as tables: :class:`Variable` and :class:`Coordinate`
-===========================================================================
+============================================================================
 
 A result is one ``xarray.Dataset`` of exact counts (:attr:`~virtspec_mi.results.base.ResultBase.data`);
 what its files and ``to_dataset()`` add is derived from it. A kind lists what it adds in

@@ -45,7 +45,7 @@ from virtspec_mi.engine.parameters import ParameterSpace
 from virtspec_mi.engine.plan import Columns, Plan
 from virtspec_mi.engine.tally import Tally
 from virtspec_mi.instruments.base import Instrument, reading_grid, readings_result
-from virtspec_mi.instruments.command import Command, Figure
+from virtspec_mi.instruments.command import Command, FigureFlag
 from virtspec_mi.kernel.counts import Fate
 from virtspec_mi.kernel.hooks import ExitHook
 from virtspec_mi.results.base import plain_data
@@ -214,11 +214,6 @@ class GlossResult(Result):
     def _file_attrs(self) -> dict[str, Any]:
         return {**super()._file_attrs(), "cone": self.cone}
 
-    def plot(self, path: Any = None, quantity: str | None = None, **options: Any) -> Any:
-        """Plot ``quantity`` (default the gloss fraction) as a sweep is drawn (its certified band)."""
-
-        return super().plot(path, quantity=quantity or "gloss", **options)
-
 
 class GlossMeter(Instrument):
     """
@@ -239,7 +234,7 @@ class GlossMeter(Instrument):
         "Clopper-Pearson interval, beside the hemispherical reading of the same rays.",
         ("virtspec gloss diamond_collimated --theta-i 60 --cone 2",
          "virtspec gloss soybean_abmb --theta-i 20 --wavelengths 450,550,650 --out gloss.nc --plot gloss.png"),
-        figures=(Figure("--plot", "plot", "the gloss fraction over wavelength with the band of its certified "
+        figures=(FigureFlag("--plot", "sweep", "the gloss fraction over wavelength with the band of its certified "
                                           "tolerance"),),
         one_reading=True),)
     example: ClassVar[dict[str, Any]] = {

@@ -31,7 +31,7 @@ from virtspec_mi.engine.plan import Columns, Plan
 from virtspec_mi.engine.tally import Tally
 from virtspec_mi.instruments.goniophotometer.bins import BINNINGS, HEMISPHERES, GonioBins, make_bins, parse_edges
 from virtspec_mi.instruments.base import Instrument, reading_grid, readings_result
-from virtspec_mi.instruments.command import Command, Figure
+from virtspec_mi.instruments.command import Command, FigureFlag
 from virtspec_mi.instruments.goniophotometer.result import GonioResult
 from virtspec_mi.settings import Options, Settings, one_of, option, true_or_false
 
@@ -140,10 +140,10 @@ GONIO_COMMAND = Command(
      "virtspec gonio diamond_collimated --theta-i 0 30 --binning projected --fold-phi --out brdf.nc --plot brdf.png",
      "virtspec gonio soybean_abmb --wavelengths 550 650 --theta-o-bins 9 --phi-o-bins 12 --fold-phi --mu 0.02 "
      "--plot leaf.png"),
-    figures=(Figure("--plot", "plot", "polar plots of f in and across the plane of incidence, one curve per theta_i "
+    figures=(FigureFlag("--plot", "polar", "polar plots of f in and across the plane of incidence, one curve per theta_i "
                                       "with its certified band; several wavelengths: one figure per wavelength, "
                                       "FIG_<nm>nm.png", dim="wavelength"),
-             Figure("--plot-series", "plot_series", "the distribution over theta_i as a series (f in the plane of "
+             FigureFlag("--plot-series", "series", "the distribution over theta_i as a series (f in the plane of "
                                                     "incidence and the CDF of theta_o, certified bands); several "
                                                     "wavelengths: one figure per wavelength", dim="wavelength")),
     flags=KlemsFlags, function="gonio", respond="virtspec_mi.exchange.klems_gonio:respond")

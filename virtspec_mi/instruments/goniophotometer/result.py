@@ -50,6 +50,7 @@ from virtspec_mi.budgets.rules import guarantee_of
 from virtspec_mi.instruments.goniophotometer.bins import GonioBins
 from virtspec_mi.kernel.counts import QUANTITIES
 from virtspec_mi.results.base import ResultBase, plain_data, round_up, span
+from virtspec_mi.results.figures import Figure, sweep
 from virtspec_mi.results.variables import READINGS, Coordinate, Variable, of_reading
 from virtspec_mi.results.integrity import CountRules, field_value, whole_counts
 from virtspec_mi.results.readings import Result
@@ -62,6 +63,18 @@ _TRANSMISSION_BINS = "bin_counts (theta_o > 90)"
 _BIN_RULES = CountRules(None, parts={_REFLECTION_BINS: "reflected", _TRANSMISSION_BINS: "transmitted"})
 """A reading's bins of each hemisphere add up to at most its reflected (θo < 90°) or transmitted rays (the rest
 is ``outside``: escaping rays in no bin)."""
+
+
+def _polar(result: "GonioResult", path: Any, quantity: str | None, **options: Any) -> Any:
+    from virtspec_mi.instruments.goniophotometer.plot import plot_polar
+
+    return plot_polar(result.as_grid(), path, **options)
+
+
+def _series(result: "GonioResult", path: Any, quantity: str | None, **options: Any) -> Any:
+    from virtspec_mi.instruments.goniophotometer.plot import plot_series
+
+    return plot_series(result.as_grid(), path, **options)
 
 
 class GonioResult(ResultBase):
@@ -127,6 +140,15 @@ class GonioResult(ResultBase):
            for angle, words in (("theta_o", "polar angle"), ("phi_o", "azimuth"))},
     }
     """The bins' edges: each bin's lower and upper edge along ``theta_o`` / ``phi_o``, and every edge (the CDFs')."""
+    FIGURES: ClassVar[dict[str, Figure]] = {
+        "polar": Figure(_polar, "polar plots of f in and across the plane of incidence, one curve per theta_i, with "
+                                "the simultaneous bands", ("brdf",)),
+        "series": Figure(_series, "the distribution over theta_i as a series (f in the plane of incidence, one column "
+                                  "per theta_i), with the simultaneous bands", ("brdf",)),
+        "sweep": Figure(lambda g, path, quantity, **options: sweep.draw(g.result, path, quantity, **options),
+                        "the reading's R, T or A against theta_i or wavelength", QUANTITIES),
+    }
+    """The lobes (polar and as a series over θi) and the reading's R, T and A."""
     KIND: ClassVar[str] = "goniophotometer reading"
     KIND_DIMS: ClassVar[tuple[str, ...]] = _BINS
     KIND_DIMS_REASON: ClassVar[str] = (
@@ -539,27 +561,3 @@ class GonioResult(ResultBase):
             return ""
         return (f"drew the lobes at {drawn[0]:g} nm, the first of {len(drawn)} wavelengths "
                 "(another: --sel wavelength=NM)")
-
-    def plot(self, path: str | os.PathLike | None = None, quantity: str | None = None, **options: Any) -> Any:
-        """
-        Polar plot of f in the plane of incidence and across it, with the certified band
-        (:func:`~virtspec_mi.instruments.goniophotometer.plot.plot_polar`; ``wavelength=``, ``log=``,
-        ``name=``); with ``quantity`` (reflectance, transmittance, absorptance) the reading's
-        R, T or A against θi or wavelength instead (:func:`~virtspec_mi.results.plot.plot_sweep`).
-        """
-
-        if quantity not in (None, "brdf"):
-            return self.result.plot(path, quantity=self.check_quantity(quantity), **options)
-        from virtspec_mi.instruments.goniophotometer.plot import plot_polar
-
-        return plot_polar(self.as_grid(), path, **options)
-
-    def plot_series(self, path: str | os.PathLike | None = None, **options: Any) -> Any:
-        """
-        The angular distribution over θi as a series, with the certified bands
-        (:func:`~virtspec_mi.instruments.goniophotometer.plot.plot_series`).
-        """
-
-        from virtspec_mi.instruments.goniophotometer.plot import plot_series
-
-        return plot_series(self.as_grid(), path, **options)

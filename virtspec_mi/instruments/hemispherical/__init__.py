@@ -37,7 +37,7 @@ from virtspec_mi.engine.parameters import ParameterSpace
 from virtspec_mi.engine.plan import Columns, Plan
 from virtspec_mi.engine.tally import Tally
 from virtspec_mi.instruments.base import Instrument, readings_result
-from virtspec_mi.instruments.command import Command, Figure, Session
+from virtspec_mi.instruments.command import Command, FigureFlag, Session
 from virtspec_mi.results.readings import Result, fluctuation
 from virtspec_mi.settings import Options, Settings, option
 
@@ -156,7 +156,7 @@ _MEASURE = Command(
     ("virtspec measure diamond_conical --theta-i 70",
      "virtspec measure soybean_abmb --wavelengths 400:2500:5 --bound two-stage --json",
      "virtspec measure soybean_abmb --wavelengths 400:700:10 --param specimen.thickness=2e-4 --plot leaf.png"),
-    figures=(Figure("--plot", "plot_spectra", "reflectance and transmittance over wavelength, each with the band of "
+    figures=(FigureFlag("--plot", "spectra", "reflectance and transmittance over wavelength, each with the band of "
                                               "its certified tolerance",
                     keywords={"quantities": ("reflectance", "transmittance")}),),
     one_reading=True, function="sweep", flags=MeasureFlags,
@@ -173,7 +173,7 @@ _SWEEP = Command(
      "--param specimen.thickness=1.2e-4:2e-4:4e-5 --param specimen.chlorophyll_a=2,4 --out lut.nc",
      "virtspec sweep soybean_abmb -D side=abaxial --theta-i 8",
      "virtspec sweep soybean_abmb --theta-i 8 --wavelengths 400:2500:5 --workers 2 --out leaf.nc"),
-    figures=(Figure("--plot", "plot", "the readings against theta_i (one curve per wavelength) or wavelength, with "
+    figures=(FigureFlag("--plot", "sweep", "the readings against theta_i (one curve per wavelength) or wavelength, with "
                                       "the band of their certified tolerance (one parameter point: draw a parameter "
                                       "sweep with virtspec plot FILE --sel NAME=VALUE)"),),
     flags=SweepFlags, function="sweep", respond=_respond_sweep)

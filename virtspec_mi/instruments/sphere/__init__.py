@@ -59,7 +59,7 @@ from virtspec_mi.engine.plan import Columns, Plan
 from virtspec_mi.engine.tally import Tally
 from virtspec_mi.instruments.sphere.geometry import Baffle, Port, Sphere, is_sphere_parameter, sphere_from_parameters
 from virtspec_mi.instruments.base import Instrument, reading_grid, reading_labels
-from virtspec_mi.instruments.command import Command, Figure, Session
+from virtspec_mi.instruments.command import Command, FigureFlag, Session
 from virtspec_mi.instruments.sphere.walk import FATES, HEMISPHERES, SPECIMEN, Holder, SphereFate, holder_frame
 from virtspec_mi.instruments.sphere.result import CONFIGURATIONS, SphereResult
 from virtspec_mi.checks import number, shown_value
@@ -338,7 +338,7 @@ SPHERE_COMMAND = Command(
     ("virtspec sphere sphere_150mm_8d --specular SCE --rays 20000",
      "virtspec sphere sphere_150mm_8d --method comparison --wavelengths 400:700:100 --rays 20000 "
      "--correct --out r.json"),
-    figures=(Figure("--plot", "plot", "the reading and the hemispherical value of the same rays over wavelength, "
+    figures=(FigureFlag("--plot", "spectra", "the reading and the hemispherical value of the same rays over wavelength, "
                                       "with their certified bands; several theta_i: one figure per angle, "
                                       "FIG_<deg>deg.png", dim="theta_i"),),
     flags=SphereCorrection, function="sphere_measure", respond=_respond_sphere,

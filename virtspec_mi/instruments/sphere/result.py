@@ -37,7 +37,6 @@ Baranoski et al. (2001), eqs. (2), (19), (23); Clopper & Pearson (1934); Goebel 
 from __future__ import annotations
 
 import json
-import os
 from dataclasses import asdict
 from functools import cached_property
 from types import SimpleNamespace
@@ -52,6 +51,7 @@ from virtspec_mi.instruments.sphere.geometry import Sphere, sphere_from_paramete
 from virtspec_mi.instruments.sphere.model import correct_readings, theory_inputs
 from virtspec_mi.results.base import ResultBase, per_count, plain_data, round_up, span
 from virtspec_mi.results.integrity import CountRules, field_value, finite_labels, whole_counts
+from virtspec_mi.results.figures import Figure, spectra
 from virtspec_mi.results.variables import READINGS, Variable, bounds
 from virtspec_mi.instruments.sphere.walk import FATES
 from virtspec_mi.settings import Settings
@@ -169,6 +169,8 @@ class SphereResult(ResultBase):
     }
     """Every variable derived from the counts, over the readings' dims: the fractions, the reading and its interval,
     the hemispherical value of the same rays, the instrument error and the certificate."""
+    FIGURES: ClassVar[dict[str, Figure]] = {"spectra": spectra(("reading", "hemispherical"))}
+    """The reading and the hemispherical value of the same rays (or one quantity) over wavelength, with their bands."""
     LEGACY: ClassVar[tuple[str, ...]] = ("virtspec-mi sphere 0",)
     KIND: ClassVar[str] = "integrating-sphere reading"
     KIND_DIMS: ClassVar[tuple[str, ...]] = ("configuration",)
@@ -498,18 +500,6 @@ class SphereResult(ResultBase):
         reading = self.squeeze()
         return np.stack([reading.reading, reading.hemispherical, reading.detector_fraction,
                          reading.standard_fraction], axis=1).astype(np.float32)
-
-    def plot(self, path: str | os.PathLike | None = None, quantity: str | None = None, **options: Any) -> Any:
-        """
-        The reading and the hemispherical value of the same rays over wavelength, each with
-        its certified band (or one ``quantity``: reading, corrected, hemispherical;
-        :func:`virtspec_mi.results.plot.plot_spectra`; ``theta_i=``, ``name=``, ``title=``).
-        """
-
-        from virtspec_mi.results.plot import plot_spectra
-
-        quantities = ("reading", "hemispherical") if quantity is None else (self.check_quantity(quantity),)
-        return plot_spectra(self, path, quantities=quantities, **options)
 
     # -- text -------------------------------------------------------------------------
 

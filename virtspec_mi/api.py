@@ -30,6 +30,13 @@ registry (:data:`virtspec_mi.instruments.INSTRUMENTS`). :func:`take` reads with 
 instrument of the registry by name (a fourth instrument is one module and one row
 there): the same keyed engine run, checkpoints and Dask included.
 
+The command line (:mod:`virtspec_mi.cli`) reaches the layers below through this module
+only (``tests/test_architecture.py``): it reads its flags with the parsers the API reads
+its keywords with (:func:`parse_theta_i`, :func:`parse_wavelengths`, :func:`parse_values`,
+from :mod:`virtspec_mi.checks`), names a reading's quantities (:data:`QUANTITIES`) and
+the checkpoint a call with ``out`` keeps (:func:`checkpoint_for`: ``OUT.partial.json``,
+named when an interrupt comes before the run names it).
+
 References
 ----------
 Baranoski et al. (2001), eqs. (2), (23), (24); Figs. 5 and 6.
@@ -44,15 +51,16 @@ from typing import Any, Iterator
 
 import numpy as np
 
-from virtspec_mi.checks import parse_theta_i
+from virtspec_mi.checks import parse_theta_i, parse_values, parse_wavelengths
 from virtspec_mi.engine.bench import Bench
-from virtspec_mi.engine import interrupts
+import virtspec_mi.interrupts as interrupts
 from virtspec_mi.engine.checkpoint import checkpoint_for, claim, kept_in, remove
 from virtspec_mi.engine.parameters import parameter_space
 from virtspec_mi.files import WriteError
 from virtspec_mi.engine.plan import Plan
 from virtspec_mi.engine.readings import in_process_runner
-from virtspec_mi.instruments import INSTRUMENTS, commanding, exported, exports
+from virtspec_mi.instruments import INSTRUMENTS, commanding
+from virtspec_mi.kernel.counts import QUANTITIES
 from virtspec_mi.results.readings import Result, fluctuation
 from virtspec_mi.results.io import check_output
 from virtspec_mi.results.zarr import SUFFIX as ZARR_SUFFIX
@@ -61,7 +69,9 @@ from virtspec_mi.scene import LoadedScene, loaded
 from virtspec_mi.settings import Settings, keywords, resolve, true_or_false
 
 __all__ = ["measure", "sweep", "gonio", "read_result", "read_gonio", "fluctuation", "sphere_measure", "take", "alias",
-           "aliases", "exported", "exports"]
+           "aliases",
+           # what the command line takes from the layers below (see the module docstring)
+           "parse_theta_i", "parse_wavelengths", "parse_values", "QUANTITIES", "checkpoint_for"]
 
 
 def measure(scene: Any, *, parameters: dict[str, Any] | None = None, defines: dict[str, Any] | None = None,
@@ -289,7 +299,7 @@ def _instrument(name: str, scene: LoadedScene) -> Any:
 
 @contextmanager
 def _naming(checkpoint: Path | None) -> Iterator[None]:
-    """An interrupt (``KeyboardInterrupt``: :mod:`virtspec_mi.engine.interrupts`) raised inside names ``checkpoint``."""
+    """An interrupt (``KeyboardInterrupt``: :mod:`virtspec_mi.interrupts`) raised inside names ``checkpoint``."""
 
     try:
         yield

@@ -21,7 +21,7 @@ import numpy as np
 import pytest
 
 import virtspec_mi as vm
-from virtspec_mi.engine import interrupts
+import virtspec_mi.interrupts as interrupts
 from virtspec_mi.engine.checkpoint import CheckpointError, locked
 from virtspec_mi.files import atomic_write
 from virtspec_mi.files import WriteError

@@ -89,7 +89,7 @@ import numpy as np
 
 from virtspec_mi import __version__
 from virtspec_mi.checks import check_delta, number, shown_value
-from virtspec_mi.engine import interrupts
+import virtspec_mi.interrupts as interrupts
 from virtspec_mi.engine.checkpoint import ResultStore, locked
 from virtspec_mi.settings import true_or_false, whole_number
 from virtspec_mi.exchange.common import derived_seed

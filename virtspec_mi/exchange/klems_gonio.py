@@ -48,7 +48,7 @@ from virtspec_mi import __version__
 from virtspec_mi.exchange.common import derived_seed
 from virtspec_mi.files import atomic_write
 from virtspec_mi.checks import check_delta, check_rays, number, shown_value
-from virtspec_mi.engine import interrupts
+import virtspec_mi.interrupts as interrupts
 from virtspec_mi.engine.checkpoint import locked
 from virtspec_mi.settings import true_or_false, whole_number
 from virtspec_mi.engine.readings import check_specimen

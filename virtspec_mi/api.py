@@ -83,7 +83,10 @@ def measure(scene: Any, *, parameters: dict[str, Any] | None = None, defines: di
     Parameters
     ----------
     scene
-        XML path, scene dict or loaded ``mi.Scene`` with ``emitter`` and ``specimen`` disks.
+        XML path, scene dict or loaded ``mi.Scene`` with ``emitter`` and ``specimen`` disks;
+        or a :class:`~virtspec_mi.scene.LoadedScene` (:func:`virtspec_mi.scene.loaded`: its
+        bench, fingerprint and source resolved once), which every function here takes as
+        it is — an application reading one scene many times loads it once.
     parameters
         Specimen parameters to set for this reading, name → one number (names as for
         :func:`sweep`); the scene gets its own values back afterwards.
@@ -243,9 +246,9 @@ def sweep(
         angles = _angles(resolved, theta_i, "a sweep")
         return DerivedSweep(tuple(float(t) for t in angles), tuple(
             _measure_target(scene, None, target, {**settings, "theta_i": float(t)}) for t in angles))
-    return _reading(commanding("sweep").name, "sweep", "a sweep", scene, settings, theta_i=theta_i,
-                    parameters=parameters, points=points, defines=defines, checkpoint=checkpoint, out=out,
-                    progress=progress, workers=workers, task_readings=task_readings)
+    return _reading(commanding("sweep").name, "sweep", "a sweep", loaded(scene, defines), settings, theta_i=theta_i,
+                    parameters=parameters, points=points, checkpoint=checkpoint, out=out, progress=progress,
+                    workers=workers, task_readings=task_readings)
 
 
 def _keyed(name: str, what: str, scene: LoadedScene, settings: Settings, options: Any, *, theta_i: Any,
@@ -427,8 +430,8 @@ def gonio(scene: Any, *, theta_i: Any = None, parameters: dict[str, Any] | None 
     Baranoski et al. (2001), eq. (23), Sect. 6; :mod:`virtspec_mi.budgets.bins`.
     """
 
-    return _reading(commanding("gonio").name, "gonio", "a goniophotometer reading", scene, options, theta_i=theta_i,
-                    parameters=parameters, points=points, defines=defines, checkpoint=checkpoint, out=out,
+    return _reading(commanding("gonio").name, "gonio", "a goniophotometer reading", loaded(scene, defines), options,
+                    theta_i=theta_i, parameters=parameters, points=points, checkpoint=checkpoint, out=out,
                     progress=progress, workers=workers, task_readings=task_readings)
 
 
@@ -487,9 +490,8 @@ def sphere_measure(scene: Any, *, theta_i: Any = None, parameters: dict[str, Any
     Baranoski et al. (2001), eqs. (2), (23); Goebel (1967).
     """
 
-    return _reading(commanding("sphere_measure").name, "sphere_measure", "a sphere reading", scene, settings,
-                    theta_i=theta_i,
-                    parameters=parameters, points=points, defines=defines, checkpoint=checkpoint, out=out,
+    return _reading(commanding("sphere_measure").name, "sphere_measure", "a sphere reading", loaded(scene, defines),
+                    settings, theta_i=theta_i, parameters=parameters, points=points, checkpoint=checkpoint, out=out,
                     progress=progress, workers=workers, task_readings=task_readings)
 
 
@@ -528,19 +530,18 @@ def take(instrument: str, scene: Any, *, theta_i: Any = None, parameters: dict[s
 
     if not isinstance(instrument, str) or instrument not in INSTRUMENTS:
         raise ValueError(f"instrument must be one of {', '.join(INSTRUMENTS)} (got {instrument!r})")
-    return _reading(instrument, "take", f"a {instrument} reading", scene, options, theta_i=theta_i,
-                    parameters=parameters, points=points, defines=defines, checkpoint=checkpoint, out=out,
-                    progress=progress, workers=workers, task_readings=task_readings)
+    return _reading(instrument, "take", f"a {instrument} reading", loaded(scene, defines), options, theta_i=theta_i,
+                    parameters=parameters, points=points, checkpoint=checkpoint, out=out, progress=progress,
+                    workers=workers, task_readings=task_readings)
 
 
-def _reading(name: str, caller: str, what: str, scene: Any, given: dict[str, Any], *, defines: dict[str, Any] | None,
-             **run: Any) -> Any:
+def _reading(name: str, caller: str, what: str, scene: LoadedScene, given: dict[str, Any], **run: Any) -> Any:
     """
-    The keyed reading (:func:`_keyed`) of the instrument ``name`` with the keywords
-    ``given`` of ``caller`` over the scene's settings and the instrument's options.
+    The keyed reading (:func:`_keyed`) of the instrument ``name`` of ``scene`` (loaded once,
+    where it entered the API) with the keywords ``given`` of ``caller`` over the scene's
+    settings and the instrument's options.
     """
 
-    scene = loaded(scene, defines)
     declared = INSTRUMENTS[name].options
     settings, *options = resolve(caller, given, _scene_options(scene.bench, Settings),
                                  *(() if declared is None else (_scene_options(scene.bench, declared),)))

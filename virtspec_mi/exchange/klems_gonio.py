@@ -83,7 +83,9 @@ def klems_measure(
     ----------
     scene
         XML path, scene dict or ``mi.Scene`` with ``emitter`` and ``specimen`` disks (as
-        for :func:`virtspec_mi.measure`); its geometry does not matter (collimated beam).
+        for :func:`virtspec_mi.measure`, a :class:`~virtspec_mi.scene.LoadedScene` too); its
+        geometry does not matter (collimated beam). Loaded once (:func:`virtspec_mi.scene.loaded`):
+        every reading of its side takes that loaded scene.
     basis
         ``full`` (145 patches), ``half`` (77, as Radiance reads it) or ``quarter`` (41).
     back
@@ -122,7 +124,7 @@ def klems_measure(
     from virtspec_mi.checks import parse_wavelengths
     from virtspec_mi.engine.progress import Progress
     from virtspec_mi.runtime import mitsuba
-    from virtspec_mi.scene import find_bench, instrument_scene
+    from virtspec_mi.scene import instrument_scene, loaded
 
     klems = klems_basis(basis)
     epsilon, delta = number("epsilon", epsilon), check_delta(delta)  # any real number type (numpy's too)
@@ -137,15 +139,13 @@ def klems_measure(
 
         check_klems_output(out, overwrite=overwrite, inputs=[_resolved(scene, shipped), _resolved(back, shipped)])
     mi = mitsuba()
-    scenes = [scene]
-    for each in scenes + ([back] if back not in (None, False) else []):
-        check_specimen(find_bench(each).bsdf, lams.tolist())  # wavelengths outside its data: before any reading
+    scenes = [loaded(each) for each in [scene] + ([back] if back not in (None, False) else [])]  # each loaded once
+    for each in scenes:
+        check_specimen(each.bench.bsdf, lams.tolist())  # wavelengths outside its data: before any reading
     if back is None:
         from virtspec_mi.exchange.flip import flipped
 
-        scenes.append(instrument_scene(flipped(find_bench(scene).bsdf)))
-    elif back is not False:
-        scenes.append(back)
+        scenes.append(loaded(instrument_scene(flipped(scenes[0].bench.bsdf))))
     n_sides = len(scenes)
     statements = n_sides * len(lams) * klems.size * (2 * klems.size + 2)
     n_rays = union_hoeffding_rays(epsilon, delta, statements) if rays is None else int(rays)
@@ -180,13 +180,12 @@ def klems_measure(
         bar = Progress(progress, n_sides * sum(len(v) for v in groups.values()), desc="klems")
         try:
             for s, side_scene in enumerate(scenes):
-                loaded = find_bench(side_scene).scene  # loaded once per side
                 for phi_i, patches in sorted(groups.items()):
                     label = f"{SIDES[s]}:{phi_i:.9g}"
                     part = None if parts is None else parts.path(label)
                     reading = None if part is None else parts.load(part)
                     if reading is None:
-                        reading = gonio(loaded, theta_i=[float(klems.theta[p]) for p in patches], phi_i=phi_i,
+                        reading = gonio(side_scene, theta_i=[float(klems.theta[p]) for p in patches], phi_i=phi_i,
                                         beam="collimated", wavelengths=lams.tolist(), rays=n_rays,
                                         seed=derived_seed(seed, label), theta_o_bins=edges.tolist(),
                                         phi_o_bins=phi_bins, out=part, progress=False if progress is False else None)

@@ -316,7 +316,7 @@ def albedo_table(
     from virtspec_mi.api import read_result, sweep
     from virtspec_mi.engine.progress import Progress
     from virtspec_mi.runtime import mitsuba
-    from virtspec_mi.scene import load_scene
+    from virtspec_mi.scene import loaded
 
     from virtspec_mi.exchange.engine_models import bsdf_model
 
@@ -367,8 +367,8 @@ def albedo_table(
 
         warm_writer()
     with (nullcontext() if checkpoint is None else locked(Path(checkpoint))), interrupts.deferred():
-            store = ResultStore(None if checkpoint is None else Path(checkpoint), identity)
-            scene = load_scene(_scene(grid, bsdf_parameters))
+            store = ResultStore(None if checkpoint is None else Path(checkpoint), identity, "table")
+            scene = loaded(_scene(grid, bsdf_parameters))  # once: every group's sweep takes it
             started = time.perf_counter()
             traced_seconds = 0.0
             groups = 0

@@ -31,10 +31,7 @@ Klems, J.H. (1994). ASHRAE Transactions 100(1), 1065–1072. Hoeffding, W. (1963
 
 from __future__ import annotations
 
-import hashlib
-import json
 import os
-import re
 import time
 from contextlib import nullcontext
 from dataclasses import dataclass
@@ -46,10 +43,9 @@ import numpy as np
 
 from virtspec_mi import __version__
 from virtspec_mi.exchange.common import derived_seed
-from virtspec_mi.files import atomic_write
 from virtspec_mi.checks import check_delta, check_rays, number, shown_value
 import virtspec_mi.interrupts as interrupts
-from virtspec_mi.engine.checkpoint import locked
+from virtspec_mi.engine.checkpoint import ResultStore, locked
 from virtspec_mi.settings import true_or_false, whole_number
 from virtspec_mi.engine.readings import check_specimen
 from virtspec_mi.exchange.klems import SIDES, KlemsMeasurement, aggregate, check_escaped, check_klems_output
@@ -120,7 +116,7 @@ def klems_measure(
     Klems (1994); Hoeffding (1963), eq. (2.3); Baranoski et al. (2001), eq. (23).
     """
 
-    from virtspec_mi.api import gonio
+    from virtspec_mi.api import gonio, read_gonio
     from virtspec_mi.checks import parse_wavelengths
     from virtspec_mi.engine.progress import Progress
     from virtspec_mi.runtime import mitsuba
@@ -167,23 +163,22 @@ def klems_measure(
                 "scene": str(scene) if isinstance(scene, (str, os.PathLike)) else None,
                 "back": str(back) if isinstance(back, (str, os.PathLike)) else repr(type(back).__name__),
                 "version": __version__}
-    parts = None if out is None else _Parts(Path(out).with_name(Path(out).name + ".parts"), identity)
-    if parts is not None:  # the parts' writer, imported here (a second or more), not between two safe points
+    folder = None if out is None else Path(out).with_name(Path(out).name + ".parts")
+    if folder is not None:  # the parts' writer, imported here (a second or more), not between two safe points
         from virtspec_mi.results.io import warm_writer
 
         warm_writer()
     # signals act at the readings' safe points only (never inside the files' writes); one run at a time on the
-    # parts folder, where each finished group of readings is kept (a re-run reuses them)
-    with (nullcontext() if parts is None else locked(parts.folder)), interrupts.deferred():
-        if parts is not None:
-            parts.open()
+    # parts folder (the engine's ResultStore), where each finished group of readings is kept (a re-run reuses them)
+    with (nullcontext() if folder is None else locked(folder)), interrupts.deferred():
+        parts = ResultStore(folder, identity, "Klems measurement")
         bar = Progress(progress, n_sides * sum(len(v) for v in groups.values()), desc="klems")
         try:
             for s, side_scene in enumerate(scenes):
                 for phi_i, patches in sorted(groups.items()):
                     label = f"{SIDES[s]}:{phi_i:.9g}"
-                    part = None if parts is None else parts.path(label)
-                    reading = None if part is None else parts.load(part)
+                    part = parts.path(label)  # the reading's out: written whole, with its own checkpoint meanwhile
+                    reading = parts.load(label, read_gonio)
                     if reading is None:
                         reading = gonio(side_scene, theta_i=[float(klems.theta[p]) for p in patches], phi_i=phi_i,
                                         beam="collimated", wavelengths=lams.tolist(), rays=n_rays,
@@ -207,13 +202,13 @@ def klems_measure(
                             refl[s, :, q], trans[s, :, q] = r[:, column], t[:, column]
                     bar.reach(bar.done + len(patches))
         except interrupts.Interrupted as stop:  # the parts folder is this run's checkpoint (a group's file is not)
-            stop.checkpoint = parts.folder if parts is not None and parts.kept() else None
+            stop.checkpoint = folder if parts.kept() else None
             stop.written = None  # type: ignore[attr-defined]
             raise
         finally:
             bar.close()
-        if parts is not None and parts.reused:
-            bar.note(f"resumed from {parts.folder}: {parts.reused} finished group(s) of readings reused")
+        if parts.reused:
+            bar.note(f"resumed from {folder}: {parts.reused} finished group(s) of readings reused")
         import mitsuba as _mitsuba_module
 
         provenance = {"seed": int(seed), "mitsuba": _mitsuba_module.__version__, "variant": mi.variant(),
@@ -229,59 +224,6 @@ def klems_measure(
             measurement.write(out, name=name, overwrite=overwrite)
             parts.remove()  # the file is written: its groups are safe
     return measurement
-
-
-class _Parts:
-    """
-    A Klems run's finished groups of readings (one goniophotometer reading per incidence
-    azimuth and side), each a result file ``<16 hex>.nc`` in the folder ``OUT.parts`` with
-    ``identity.json`` (the run's settings): a re-run reads them instead of measuring; an
-    interrupted group resumes from its own checkpoint beside it.
-    """
-
-    _OURS = re.compile(r"identity\.json|[0-9a-f]{16}\.nc(\.partial\.json)?")
-    _TEMPORARY = re.compile(r"\.(identity\.json|[0-9a-f]{16}\.nc(\.partial\.json)?)\.[0-9a-z]+\.tmp")
-
-    def __init__(self, folder: Path, identity: dict[str, Any]) -> None:
-        self.folder, self.identity, self.reused = folder, identity, 0
-
-    def open(self) -> None:
-        if self.folder.exists() and not self.folder.is_dir():
-            raise ValueError(f"{self.folder} (the Klems file's parts) is a file; move it")
-        self.folder.mkdir(exist_ok=True)
-        stamp = self.folder / "identity.json"
-        text = json.dumps(self.identity, sort_keys=True)
-        if stamp.exists():
-            if stamp.read_text() != text:
-                raise ValueError(f"{self.folder} holds the parts of another Klems measurement (other settings or "
-                                 "scene); re-run with the same settings, or delete it")
-        else:
-            atomic_write(stamp, lambda tmp: Path(tmp).write_text(text))
-
-    def path(self, label: str) -> Path:
-        return self.folder / (hashlib.blake2b(label.encode(), digest_size=8).hexdigest() + ".nc")
-
-    def load(self, part: Path) -> Any:
-        if not part.exists():
-            return None
-        from virtspec_mi.api import read_gonio
-
-        self.reused += 1
-        return read_gonio(part)
-
-    def kept(self) -> bool:
-        return any(re.fullmatch(r"[0-9a-f]{16}\.nc(\.partial\.json)?", p.name) for p in self.folder.iterdir())
-
-    def remove(self) -> None:
-        """Remove the folder: what this run writes there (and its temporaries), not more."""
-
-        for path in self.folder.iterdir():
-            if self._OURS.fullmatch(path.name) or self._TEMPORARY.fullmatch(path.name):
-                path.unlink()
-        try:
-            self.folder.rmdir()
-        except OSError:
-            pass
 
 
 def _resolved(scene: Any, shipped: Any) -> Any:

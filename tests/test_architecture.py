@@ -80,8 +80,10 @@ LAYERS: list[tuple[str, tuple[str, ...]]] = [
     ("plugins", ("=virtspec_mi.plugins", "virtspec_mi.plugins.bsdfs", "virtspec_mi.leaf_data")),
     ("kernel", ("virtspec_mi.kernel",)),
     # the root package imports llvm and scenes (its public names load lazily: not counted);
-    # virtspec_mi.scenes (the shipped scene files by name) imports nothing of the package
-    ("base", ("virtspec_mi.checks", "virtspec_mi.files", "virtspec_mi.llvm", "virtspec_mi.scenes", "=virtspec_mi",
+    # virtspec_mi.scenes (the shipped scene files by name) and virtspec_mi.interrupts (SIGINT and
+    # SIGTERM at safe points: the engine's runs, the command line's whole command) import nothing of it
+    ("base", ("virtspec_mi.checks", "virtspec_mi.files", "virtspec_mi.llvm", "virtspec_mi.scenes",
+              "virtspec_mi.interrupts", "=virtspec_mi",
               "=virtspec_mi.applications", "=virtspec_mi.applications.derived")),
 ]
 """
@@ -410,6 +412,21 @@ def test_imports_flow_down_the_layers(project_graph):
     graph, sites = project_graph
     problems = layering_violations(graph, sites)
     assert not problems, "imports against the layering (see LAYERS in this file):\n" + "\n".join(problems)
+
+
+PAST_THE_API: tuple[str, ...] = ("virtspec_mi.engine", "virtspec_mi.kernel", "virtspec_mi.checks")
+"""
+What the command line reaches only through the API (issue 29): the engine and the kernel
+below it, and the boundary's checks and parsers (:mod:`virtspec_mi.api` offers what the
+command line needs of them: the parsers, the checkpoint of an ``out=`` path).
+"""
+
+
+def test_the_command_line_reaches_the_engine_only_through_the_api(project_graph):
+    graph, sites = project_graph
+    past = sorted(f"{a} -> {b}  ({', '.join(f'{p}:{line}' for p, line in sites.get((a, b), []))})"
+                  for a in graph if _in(a, ("virtspec_mi.cli",)) for b in graph[a] if _in(b, PAST_THE_API))
+    assert not past, "the command line imports past the API (take it from virtspec_mi.api):\n" + "\n".join(past)
 
 
 def test_every_module_belongs_to_a_layer(project_graph):

@@ -35,6 +35,19 @@ def test_compare_and_every_result_kind_are_at_the_top():
         assert getattr(vm, kind.__name__) is kind, kind.__name__
 
 
+def test_the_instruments_own_names_come_from_the_registry_not_the_api():
+    """``vm.GonioResult``, ``vm.Sphere`` …: the registry's ``exports``, reached by the root itself (issue 29)."""
+
+    from virtspec_mi import api
+    from virtspec_mi.instruments import exported, exports
+
+    assert not {"exported", "exports"} & set(api.__all__)
+    names = exports()
+    assert {"GonioResult", "Sphere", "Port", "Baffle", "SphereResult", "GlossResult"} <= set(names) <= set(dir(vm))
+    for name in names:
+        assert getattr(vm, name) is exported(name)
+
+
 def test_an_unknown_name_is_an_attribute_error_naming_it():
     import pytest
 

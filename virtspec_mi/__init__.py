@@ -136,8 +136,8 @@ from virtspec_mi import scenes  # noqa: E402  (the shipped scenes by name: paths
 def __dir__() -> list[str]:
     """The public names (lazy ones included, and the API functions generated from the registry)."""
 
-    api = importlib.import_module(_LAZY["take"])
-    return sorted({*__all__, *api.aliases(), *api.exports()})
+    api, instruments = importlib.import_module(_LAZY["take"]), importlib.import_module(_LAZY["INSTRUMENTS"])
+    return sorted({*__all__, *api.aliases(), *instruments.exports()})
 
 
 def __getattr__(name: str) -> Any:
@@ -147,6 +147,7 @@ def __getattr__(name: str) -> Any:
         api = importlib.import_module(_LAZY["take"])  # the API, resolved on access as every lazy name
         if name in api.aliases():
             return api.alias(name)
-        if name in api.exports():  # an instrument's own public names (vm.GonioResult, vm.Sphere …)
-            return api.exported(name)
+        instruments = importlib.import_module(_LAZY["INSTRUMENTS"])  # the registry, as the lazy INSTRUMENTS
+        if name in instruments.exports():  # an instrument's own public names (vm.GonioResult, vm.Sphere …)
+            return instruments.exported(name)
     raise AttributeError(f"module 'virtspec_mi' has no attribute {name!r}")

@@ -30,6 +30,13 @@ registry (:data:`virtspec_mi.instruments.INSTRUMENTS`). :func:`take` reads with 
 instrument of the registry by name (a fourth instrument is one module and one row
 there): the same keyed engine run, checkpoints and Dask included.
 
+The command line (:mod:`virtspec_mi.cli`) reaches the layers below through this module
+only (``tests/test_architecture.py``): it reads its flags with the parsers the API reads
+its keywords with (:func:`parse_theta_i`, :func:`parse_wavelengths`, :func:`parse_values`,
+from :mod:`virtspec_mi.checks`), names a reading's quantities (:data:`QUANTITIES`) and
+the checkpoint a call with ``out`` keeps (:func:`checkpoint_for`: ``OUT.partial.json``,
+named when an interrupt comes before the run names it).
+
 References
 ----------
 Baranoski et al. (2001), eqs. (2), (23), (24); Figs. 5 and 6.
@@ -44,15 +51,16 @@ from typing import Any, Iterator
 
 import numpy as np
 
-from virtspec_mi.checks import parse_theta_i
+from virtspec_mi.checks import parse_theta_i, parse_values, parse_wavelengths
 from virtspec_mi.engine.bench import Bench
-from virtspec_mi.engine import interrupts
+import virtspec_mi.interrupts as interrupts
 from virtspec_mi.engine.checkpoint import checkpoint_for, claim, kept_in, remove
 from virtspec_mi.engine.parameters import parameter_space
 from virtspec_mi.files import WriteError
 from virtspec_mi.engine.plan import Plan
 from virtspec_mi.engine.readings import in_process_runner
-from virtspec_mi.instruments import INSTRUMENTS, commanding, exported, exports
+from virtspec_mi.instruments import INSTRUMENTS, commanding
+from virtspec_mi.kernel.counts import QUANTITIES
 from virtspec_mi.results.readings import Result, fluctuation
 from virtspec_mi.results.io import check_output
 from virtspec_mi.results.zarr import SUFFIX as ZARR_SUFFIX
@@ -61,7 +69,9 @@ from virtspec_mi.scene import LoadedScene, loaded
 from virtspec_mi.settings import Settings, keywords, resolve, true_or_false
 
 __all__ = ["measure", "sweep", "gonio", "read_result", "read_gonio", "fluctuation", "sphere_measure", "take", "alias",
-           "aliases", "exported", "exports"]
+           "aliases",
+           # what the command line takes from the layers below (see the module docstring)
+           "parse_theta_i", "parse_wavelengths", "parse_values", "QUANTITIES", "checkpoint_for"]
 
 
 def measure(scene: Any, *, parameters: dict[str, Any] | None = None, defines: dict[str, Any] | None = None,
@@ -73,7 +83,10 @@ def measure(scene: Any, *, parameters: dict[str, Any] | None = None, defines: di
     Parameters
     ----------
     scene
-        XML path, scene dict or loaded ``mi.Scene`` with ``emitter`` and ``specimen`` disks.
+        XML path, scene dict or loaded ``mi.Scene`` with ``emitter`` and ``specimen`` disks;
+        or a :class:`~virtspec_mi.scene.LoadedScene` (:func:`virtspec_mi.scene.loaded`: its
+        bench, fingerprint and source resolved once), which every function here takes as
+        it is — an application reading one scene many times loads it once.
     parameters
         Specimen parameters to set for this reading, name → one number (names as for
         :func:`sweep`); the scene gets its own values back afterwards.
@@ -233,9 +246,9 @@ def sweep(
         angles = _angles(resolved, theta_i, "a sweep")
         return DerivedSweep(tuple(float(t) for t in angles), tuple(
             _measure_target(scene, None, target, {**settings, "theta_i": float(t)}) for t in angles))
-    return _reading(commanding("sweep").name, "sweep", "a sweep", scene, settings, theta_i=theta_i,
-                    parameters=parameters, points=points, defines=defines, checkpoint=checkpoint, out=out,
-                    progress=progress, workers=workers, task_readings=task_readings)
+    return _reading(commanding("sweep").name, "sweep", "a sweep", loaded(scene, defines), settings, theta_i=theta_i,
+                    parameters=parameters, points=points, checkpoint=checkpoint, out=out, progress=progress,
+                    workers=workers, task_readings=task_readings)
 
 
 def _keyed(name: str, what: str, scene: LoadedScene, settings: Settings, options: Any, *, theta_i: Any,
@@ -289,7 +302,7 @@ def _instrument(name: str, scene: LoadedScene) -> Any:
 
 @contextmanager
 def _naming(checkpoint: Path | None) -> Iterator[None]:
-    """An interrupt (``KeyboardInterrupt``: :mod:`virtspec_mi.engine.interrupts`) raised inside names ``checkpoint``."""
+    """An interrupt (``KeyboardInterrupt``: :mod:`virtspec_mi.interrupts`) raised inside names ``checkpoint``."""
 
     try:
         yield
@@ -417,8 +430,8 @@ def gonio(scene: Any, *, theta_i: Any = None, parameters: dict[str, Any] | None 
     Baranoski et al. (2001), eq. (23), Sect. 6; :mod:`virtspec_mi.budgets.bins`.
     """
 
-    return _reading(commanding("gonio").name, "gonio", "a goniophotometer reading", scene, options, theta_i=theta_i,
-                    parameters=parameters, points=points, defines=defines, checkpoint=checkpoint, out=out,
+    return _reading(commanding("gonio").name, "gonio", "a goniophotometer reading", loaded(scene, defines), options,
+                    theta_i=theta_i, parameters=parameters, points=points, checkpoint=checkpoint, out=out,
                     progress=progress, workers=workers, task_readings=task_readings)
 
 
@@ -477,9 +490,8 @@ def sphere_measure(scene: Any, *, theta_i: Any = None, parameters: dict[str, Any
     Baranoski et al. (2001), eqs. (2), (23); Goebel (1967).
     """
 
-    return _reading(commanding("sphere_measure").name, "sphere_measure", "a sphere reading", scene, settings,
-                    theta_i=theta_i,
-                    parameters=parameters, points=points, defines=defines, checkpoint=checkpoint, out=out,
+    return _reading(commanding("sphere_measure").name, "sphere_measure", "a sphere reading", loaded(scene, defines),
+                    settings, theta_i=theta_i, parameters=parameters, points=points, checkpoint=checkpoint, out=out,
                     progress=progress, workers=workers, task_readings=task_readings)
 
 
@@ -518,19 +530,18 @@ def take(instrument: str, scene: Any, *, theta_i: Any = None, parameters: dict[s
 
     if not isinstance(instrument, str) or instrument not in INSTRUMENTS:
         raise ValueError(f"instrument must be one of {', '.join(INSTRUMENTS)} (got {instrument!r})")
-    return _reading(instrument, "take", f"a {instrument} reading", scene, options, theta_i=theta_i,
-                    parameters=parameters, points=points, defines=defines, checkpoint=checkpoint, out=out,
-                    progress=progress, workers=workers, task_readings=task_readings)
+    return _reading(instrument, "take", f"a {instrument} reading", loaded(scene, defines), options, theta_i=theta_i,
+                    parameters=parameters, points=points, checkpoint=checkpoint, out=out, progress=progress,
+                    workers=workers, task_readings=task_readings)
 
 
-def _reading(name: str, caller: str, what: str, scene: Any, given: dict[str, Any], *, defines: dict[str, Any] | None,
-             **run: Any) -> Any:
+def _reading(name: str, caller: str, what: str, scene: LoadedScene, given: dict[str, Any], **run: Any) -> Any:
     """
-    The keyed reading (:func:`_keyed`) of the instrument ``name`` with the keywords
-    ``given`` of ``caller`` over the scene's settings and the instrument's options.
+    The keyed reading (:func:`_keyed`) of the instrument ``name`` of ``scene`` (loaded once,
+    where it entered the API) with the keywords ``given`` of ``caller`` over the scene's
+    settings and the instrument's options.
     """
 
-    scene = loaded(scene, defines)
     declared = INSTRUMENTS[name].options
     settings, *options = resolve(caller, given, _scene_options(scene.bench, Settings),
                                  *(() if declared is None else (_scene_options(scene.bench, declared),)))

@@ -75,7 +75,7 @@ def mitsuba() -> ModuleType:
 
         if mi.variant() == name:
             return mi
-    from virtspec_mi.engine import interrupts
+    import virtspec_mi.interrupts as interrupts
 
     # Importing Dr.Jit and Mitsuba's variant (C extensions, about half a second) must not be cut by a
     # KeyboardInterrupt: it would come out as a SystemError or NameError and leave the modules half made; a

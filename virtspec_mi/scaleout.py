@@ -16,7 +16,7 @@ in-process run.
     ``None``: in this process (no Dask). An int N: a ``LocalCluster`` of N worker
     processes (``processes=True``, one thread each, the ``spawn`` start method), closed
     when the sweep ends; at most :data:`WORKERS_PER_CORE` per core of this machine, and
-    they ignore SIGINT (the driver stops the run: :mod:`virtspec_mi.engine.interrupts`).
+    they ignore SIGINT (the driver stops the run: :mod:`virtspec_mi.interrupts`).
     A scheduler address (``"tcp://host:8786"``) or an existing ``distributed.Client``:
     that cluster (left running, not limited).
 
@@ -75,7 +75,7 @@ import numpy as np
 from distributed import WorkerPlugin
 
 from virtspec_mi.checks import shown_value
-from virtspec_mi.engine import interrupts
+import virtspec_mi.interrupts as interrupts
 from virtspec_mi.engine.plan import Plan
 from virtspec_mi.engine.readings import BatchRunner, take_keyed_readings
 from virtspec_mi.engine.tally import Tally

@@ -41,7 +41,7 @@ from virtspec_mi.geometry.disks import (
     InstrumentGeometry,
 )
 from virtspec_mi.engine.bench import EMITTER_ID, SPECIMEN_ID, Bench, SceneError, read_bench
-from virtspec_mi.engine import interrupts
+import virtspec_mi.interrupts as interrupts
 from virtspec_mi import scenes
 from virtspec_mi.runtime import mitsuba
 from virtspec_mi.settings import SETTING_NAMES
@@ -266,11 +266,27 @@ def scene_fingerprint(scene: Any, bench: Bench, defines: dict[str, Any] | None =
         if defines:
             digest.update(repr(sorted(check_defines(defines).items())).encode())
     elif isinstance(scene, dict):
-        digest.update(repr(sorted(scene.items(), key=lambda item: str(item[0]))).encode())
+        try:
+            text = repr(sorted(scene.items(), key=lambda item: str(item[0])))
+        except RuntimeError:  # a loaded Python plugin inside (Mitsuba's trampoline raises for its missing to_string)
+            text = _dict_text(scene)
+        digest.update(text.encode())
     digest.update(_described(bench.bsdf).encode())
     digest.update(np.asarray(bench.to_world, dtype=np.float64).round(9).tobytes())
     digest.update(repr(asdict(bench.geometry)).encode())
     return f"sha256:{digest.hexdigest()[:16]}"
+
+
+def _dict_text(value: Any) -> str:
+    """A scene dict as text, each loaded Mitsuba object in it :func:`_described` (for a dict ``repr`` cannot write)."""
+
+    if isinstance(value, dict):
+        return "{" + ", ".join(f"{key!r}: {_dict_text(item)}" for key, item in sorted(value.items(),
+                                                                                    key=lambda i: str(i[0]))) + "}"
+    try:
+        return repr(value)
+    except RuntimeError:
+        return _described(value)
 
 
 def _described(bsdf: Any) -> str:

@@ -152,6 +152,19 @@ def test_fit_files_and_figure(tmp_path):
         result.write(tmp_path / "fit.csv")
 
 
+def test_the_specimen_is_loaded_once_for_every_forward_reading(monkeypatch):
+    """The scene is loaded where it enters the fit (vm.scene.loaded); each forward reading (a sweep) takes it."""
+
+    from virtspec_mi import scene
+
+    real, loads = scene.find_bench, []
+    monkeypatch.setattr(scene, "find_bench", lambda given, defines=None: loads.append(given) or real(given, defines))
+    result = vm.fit(synthetic({"Cab": 45.0}, 0.02, seed=7), "prospect_d", {"Cab": (10, 90)}, delta=0.1,
+                    **dict(FAST, evaluations=(4, 2, 1), profile_points=0, confirm=False))
+    sweeps = 1 + sum(stage != "table" for stage in result.candidate_stage)  # the table is one sweep
+    assert sweeps > 3 and len(loads) == 1 and loads[0]["specimen"]["bsdf"] == {"type": "prospect_d"}
+
+
 def test_cli_fit(tmp_path, capsys):
     from virtspec_mi.cli import main
 

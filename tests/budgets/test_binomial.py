@@ -90,3 +90,19 @@ def test_bad_input_names_the_parameter():
         union_hoeffding_rays(0.01, 0.01, 0)
     with pytest.raises(ValueError, match="rays"):
         union_hoeffding_rays(1e-6, 1e-9, 10)
+
+
+def test_stage_two_classes_round_up_within_a_step_and_never_past_hoeffding():
+    """A table's second batches in few classes: never fewer rays than a cell needs, at most CLASS_STEP more, capped."""
+
+    from virtspec_mi.budgets.binomial import (CLASS_STEP, stage_two_classes, table_pilot_rays,
+                                              union_hoeffding_rays_array)
+
+    need = np.array([1, 100, 1000, 1001, 1090, 5000, 10**7])
+    delta = np.full(len(need), 1e-4)
+    cap = union_hoeffding_rays_array(0.01, delta)
+    classes = stage_two_classes(need, 0.01, delta)
+    assert classes.dtype == np.int64 and np.all((classes >= np.minimum(need, cap)) & (classes <= cap))
+    assert np.all(classes[need < cap] <= np.ceil(need[need < cap] * CLASS_STEP)) and classes[-1] == cap[-1]
+    assert classes[2] == classes[3]  # 1000 and 1001 rays: one class (one sweep)
+    assert table_pilot_rays(0.01) == 4000 and table_pilot_rays(0.003) == 13334

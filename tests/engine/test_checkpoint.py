@@ -402,3 +402,32 @@ def test_killing_a_real_sphere_spectrum_process_and_rerunning_gives_the_uninterr
     for configuration in ("sample", "standard"):
         for name, values in whole.counts[configuration].items():
             np.testing.assert_array_equal(resumed.counts[configuration][name], values, err_msg=name)
+
+
+def test_a_result_store_keeps_each_calls_result_and_its_own_checkpoint(tmp_path):
+    """
+    ResultStore, the checkpoint of a run of several API calls (an albedo table's groups, a
+    Klems file's): a call given ``path(label)`` as its ``out`` keeps its own checkpoint
+    beside it meanwhile — something to resume from, removed with the folder (never a file
+    of another program); a folder of another run is refused, naming the run and what differs.
+    """
+
+    from virtspec_mi.engine.checkpoint import ResultStore
+
+    folder = tmp_path / "k.xml.parts"
+    store = ResultStore(folder, {"seed": 1}, "Klems measurement")
+    assert not store.kept() and store.load("front:0", str) is None
+    part = store.path("front:0")
+    assert part.parent == folder and part.name.endswith(".nc") and part == ResultStore(folder, {"seed": 1}).path(
+        "front:0")
+    checkpoint_for(part).write_text("{}")  # the call under way
+    assert store.kept()
+    part.write_text("done")
+    again = ResultStore(folder, {"seed": 1}, "Klems measurement")
+    assert again.load("front:0", lambda path: path.read_text()) == "done" and again.reused == 1 and again.saved == 1
+    (folder / "notes.txt").write_text("someone else's")
+    with pytest.raises(ValueError, match=r"belongs to a different Klems measurement \(differs in: seed\)"):
+        ResultStore(folder, {"seed": 2}, "Klems measurement")
+    again.remove()
+    assert sorted(p.name for p in folder.iterdir()) == ["notes.txt"]
+    assert not ResultStore(None, {"seed": 1}).kept()

@@ -167,6 +167,18 @@ def test_cli_gonio_klems(mi, tmp_path, capsys, scenes_dir):
     assert np.allclose(np.diag(r), r.sum(1))
 
 
+def test_a_scene_given_by_name_is_loaded_once(mi, monkeypatch):
+    """Each side's scene is loaded once (vm.scene.loaded), every goniophotometer reading of that side takes it."""
+
+    from virtspec_mi import scene
+
+    real, loads = scene.find_bench, []
+    monkeypatch.setattr(scene, "find_bench", lambda given, defines=None: loads.append(given) or real(given, defines))
+    measured = klems_measure("diamond_collimated", basis="quarter", isotropic=True, rays=2000, seed=4)
+    assert measured.sides == ("front", "back") and len(loads) == 2  # the front, then its specimen turned over
+    assert loads[0] == "diamond_collimated" and loads[1]["specimen"]["bsdf"]["type"] == "virtspec_flipped"
+
+
 @pytest.mark.slow
 def test_full_basis_file_passes_radiance(mi, tmp_path):
     _radiance()

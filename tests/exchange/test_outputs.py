@@ -21,7 +21,7 @@ import numpy as np
 import pytest
 
 import virtspec_mi as vm
-from virtspec_mi.engine import interrupts
+import virtspec_mi.interrupts as interrupts
 from virtspec_mi.engine.checkpoint import CheckpointError, locked
 from virtspec_mi.files import atomic_write
 from virtspec_mi.files import WriteError
@@ -256,5 +256,5 @@ def test_an_interrupted_klems_run_names_its_parts_and_resumes_to_the_same_counts
     (tmp_path / "k.xml").unlink()
     parts.mkdir()
     (parts / "identity.json").write_text("{}")  # another measurement's parts: refused, not mixed in
-    with pytest.raises(ValueError, match="holds the parts of another Klems measurement"):
+    with pytest.raises(ValueError, match="belongs to a different Klems measurement"):
         klems_measure("diamond_conical", **run, out=out, overwrite=True)

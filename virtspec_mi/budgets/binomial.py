@@ -12,8 +12,9 @@ Fixed rule (``hoeffding``): every cell gets N = ⌈ln(2C|Q|/δ)/(2ε²)⌉ rays
 
 Two-stage rule (``two-stage``), per cell:
 
-1. a pilot of n₁ rays gives, per quantity, the Clopper–Pearson interval [lo, hi] at
-   δ₁ = δ_c/10 (split over the quantities), δ_c = δ/C;
+1. a pilot of n₁ rays (by default ⌈40/ε⌉, :func:`table_pilot_rays`) gives, per quantity,
+   the Clopper–Pearson interval [lo, hi] at δ₁ = δ_c/10 (split over the quantities),
+   δ_c = δ/C;
 2. a *fresh* second batch of N₂ rays, the smallest N for which every p in [lo, hi]
    has P(|p̂ − p| ≥ ε) ≤ δ₂ (δ₂ = δ_c − δ₁, split over the quantities; the largest N₂
    over the quantities is traced), by the binomial tail bounds of Zubkov & Serov
@@ -30,6 +31,11 @@ Two-stage rule (``two-stage``), per cell:
    exp(−N·KL), :func:`chernoff_rays`) needs 2 ln(2/δ₂)p(1 − p)/ε² — 25 % more at
    δ₂ ≈ 10⁻⁵ — and never more than Hoeffding's N at the same δ₂ (which is the cap);
 3. the estimate is the second batch alone: P(miss) ≤ δ₁ + δ₂ = δ_c.
+
+The cells' N₂ are traced in few classes (:func:`stage_two_classes`): each rounded *up* to
+the next power of :data:`CLASS_STEP` (more rays than a cell needs certify it all the
+same), never past Hoeffding's N at the cell's δ₂ (which certifies alone), so cells of one
+class are one sweep.
 
 KL(q‖p) = q ln(q/p) + (1 − q) ln((1 − q)/(1 − p)) is the Bernoulli relative entropy.
 The minimum over an interval is exact and cheap: u(p) = KL(p + ε ‖ p) is strictly
@@ -68,7 +74,10 @@ from virtspec_mi.budgets.intervals import clopper_pearson
 
 __all__ = ["bernoulli_kl", "upper_exponent", "chernoff_rays", "binomial_rays", "union_hoeffding_rays",
            "union_hoeffding_rays_array", "pilot_intervals", "stage_two_shares",
-           "stage_two_rays"]
+           "stage_two_rays", "table_pilot_rays", "CLASS_STEP", "stage_two_classes"]
+
+CLASS_STEP: float = 2.0 ** 0.125
+"""The rays of two cells traced together (one class of :func:`stage_two_classes`) differ by at most this factor."""
 
 
 def bernoulli_kl(q: ArrayLike, p: ArrayLike) -> NDArray[np.float64]:
@@ -201,6 +210,23 @@ def union_hoeffding_rays_array(epsilon: float, delta: ArrayLike) -> NDArray[np.i
 
     delta = np.asarray(delta, dtype=np.float64)
     return np.ceil(np.log(2.0 / delta) / (2.0 * epsilon * epsilon) * (1 - 1e-12)).astype(np.int64)
+
+
+def table_pilot_rays(epsilon: float) -> int:
+    """The pilot size n₁ of a table's two-stage rule at tolerance ``epsilon``: ⌈40/ε⌉."""
+
+    return math.ceil(40.0 / epsilon - 1e-9)
+
+
+def stage_two_classes(need: ArrayLike, epsilon: float, delta: ArrayLike) -> NDArray[np.int64]:
+    """
+    The second-batch rays traced for cells that need ``need`` rays (:func:`binomial_rays` at
+    tolerance ``epsilon`` and each cell's ``delta``): each rounded up to the next power of
+    :data:`CLASS_STEP`, capped by Hoeffding's N at that δ (:func:`union_hoeffding_rays_array`).
+    """
+
+    classes = np.ceil(CLASS_STEP ** np.ceil(np.log(need) / np.log(CLASS_STEP) - 1e-9))
+    return np.minimum(classes, union_hoeffding_rays_array(epsilon, delta)).astype(np.int64)
 
 
 def stage_two_shares(intervals: dict[str, list[tuple[np.ndarray, np.ndarray]]], total: float) -> dict[str, np.ndarray]:

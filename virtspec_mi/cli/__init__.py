@@ -160,7 +160,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of ``virtspec``; returns the exit status."""
 
     signal.signal(signal.SIGPIPE, signal.SIG_DFL)  # a closed pipe (virtspec bounds | head) ends us quietly
-    from virtspec_mi.engine.interrupts import catching, exit_status
+    from virtspec_mi.interrupts import catching, exit_status
 
     # SIGINT and SIGTERM stop a run at its next safe point, its checkpoint saved; taken from the start, so a
     # Ctrl-C while the modules load (the parser imports numpy) is an interrupt too, never a traceback
@@ -204,10 +204,10 @@ def _command(args: argparse.Namespace, exit_status: Any) -> int:
         if args.command in handlers:
             return handlers[args.command](args)
         return respond(args, measuring_commands()[args.command])
-    except KeyboardInterrupt as stop:  # Ctrl-C (SIGINT) or SIGTERM: virtspec_mi.engine.interrupts.Interrupted
+    except KeyboardInterrupt as stop:  # Ctrl-C (SIGINT) or SIGTERM: virtspec_mi.interrupts.Interrupted
         return _interrupted(stop, args, exit_status)
     except Exception as error:
-        from virtspec_mi.engine.interrupts import received
+        from virtspec_mi.interrupts import received
 
         if received() is not None:  # an interrupt raised inside an import or a C extension comes out as another error
             return _interrupted(KeyboardInterrupt(received()), args, exit_status, received())

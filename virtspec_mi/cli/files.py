@@ -38,7 +38,7 @@ EXAMPLES = {
 def add_file_commands(command: Callable[..., argparse.ArgumentParser]) -> None:
     """Add ``colour``, ``compare`` and ``plot`` through ``command(name, summary, description, examples)``."""
 
-    from virtspec_mi.kernel.counts import QUANTITIES
+    from virtspec_mi.api import QUANTITIES
 
     colour_parser = command("colour", "CIE XYZ, L*a*b*, sRGB of a saved spectrum",
                      "Colorimetry (colour-science, ASTM E308) of one quantity of a result file at one theta_i, "
@@ -162,7 +162,7 @@ def colour(args: argparse.Namespace) -> int:
 def comparison_options(parser: argparse.ArgumentParser) -> None:
     """The flags of ``virtspec compare``: quantity, theta_i, uncertainty, illuminant, observer."""
 
-    from virtspec_mi.kernel.counts import QUANTITIES
+    from virtspec_mi.api import QUANTITIES
 
     parser.add_argument("--quantity",
                         help=f"quantity compared: {', '.join(QUANTITIES)} of a reading or goniophotometer file "
@@ -208,7 +208,7 @@ def plot(args: argparse.Namespace) -> int:
     from pathlib import Path
 
 
-    from virtspec_mi.checks import parse_theta_i, parse_wavelengths
+    from virtspec_mi.api import parse_theta_i, parse_wavelengths
     from virtspec_mi.comparison import compare
     from virtspec_mi.results.plot import check_figure_path, select
 

@@ -68,7 +68,7 @@ COMMON_FLAGS: tuple[Flag, ...] = (
 
 
 SEVERAL = {"theta_i": "parse_theta_i"}
-"""Settings a grid subcommand takes as several values, and the parser of :mod:`virtspec_mi.checks` that reads them."""
+"""Settings a grid subcommand takes as several values, and the parser of :mod:`virtspec_mi.api` that reads them."""
 
 
 def pairs(items: Sequence[str], flag: str) -> dict[str, str]:
@@ -142,7 +142,7 @@ def given(args: argparse.Namespace, kind: Any, several: tuple[str, ...] = (), hi
 
     from dataclasses import fields
 
-    from virtspec_mi import checks
+    from virtspec_mi import api
 
     given = {}
     for item in fields(kind):
@@ -150,7 +150,7 @@ def given(args: argparse.Namespace, kind: Any, several: tuple[str, ...] = (), hi
         if value is None:
             continue
         value = " ".join(value) if isinstance(value, list) else value
-        check = getattr(checks, SEVERAL[item.name]) if item.name in several else item.metadata["check"]
+        check = getattr(api, SEVERAL[item.name]) if item.name in several else item.metadata["check"]
         try:
             check(value)
         except ValueError as error:

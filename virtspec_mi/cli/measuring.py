@@ -146,7 +146,7 @@ def one_angle(name: str) -> str:
 def unrecognized_hint(args: argparse.Namespace, extra: list[str]) -> str:
     """What to do instead of the ``extra`` words: ``sweep`` for several angles after ``measure --theta-i``."""
 
-    from virtspec_mi.checks import parse_theta_i
+    from virtspec_mi.api import parse_theta_i
 
     if getattr(args, "theta_i", None) is None or not one_angle(getattr(args, "command", "")):
         return ""
@@ -197,12 +197,12 @@ def keywords_of(args: argparse.Namespace, command: Measuring) -> dict[str, Any]:
 
 def parsed_parameters(parameters: dict[str, str]) -> dict[str, tuple[float, ...]]:
     """
-    The values of each ``--param NAME=VALUES`` (:func:`virtspec_mi.checks.parse_values`:
+    The values of each ``--param NAME=VALUES`` (:func:`virtspec_mi.api.parse_values`:
     numbers and ``start:stop:step`` ranges), parsed once here and handed to the API as
     numbers; a bad one is refused naming its flag.
     """
 
-    from virtspec_mi.checks import parse_values
+    from virtspec_mi.api import parse_values
 
     return {name: flagged(f"--param {name}", lambda text, name=name: parse_values(name, text), values)
             for name, values in parameters.items()}
@@ -229,7 +229,7 @@ def run(args: argparse.Namespace, function: Callable[..., Any], keywords: dict[s
     ``pilot_delta must satisfy 0 < pilot_delta < delta``) names that keyword's flag.
     """
 
-    from virtspec_mi.engine.checkpoint import checkpoint_for
+    from virtspec_mi.api import checkpoint_for
 
     out = keywords["out"]
     args.checkpoint = checkpoint_for(out) if out is not None else None

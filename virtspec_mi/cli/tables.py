@@ -77,7 +77,7 @@ def albedo_options(parser: argparse.ArgumentParser) -> None:
 
 
 def albedo_table(args: argparse.Namespace) -> int:
-    from virtspec_mi.checks import parse_values
+    from virtspec_mi.api import parse_values
     from virtspec_mi.exchange.albedo import albedo_table
     from virtspec_mi.exchange.tables import read_albedo_table
 

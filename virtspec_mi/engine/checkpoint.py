@@ -497,18 +497,21 @@ def _weights(values: list, what: str) -> np.ndarray:
 
 class ResultStore:
     """
-    The checkpoint of a run made of several API calls (an albedo table's groups of cells):
-    each finished call's result kept as a file in a directory — ``identity.json`` (what
-    the run is: a rerun of another run is refused, naming what differs) and one
-    ``<16 hex>.nc`` per label, each written whole under its name (a temporary
-    ``.<name>.<random>.tmp`` beside it, renamed) — so that a rerun reuses them. Held by
-    one run at a time with :func:`locked`.
+    The checkpoint of a run made of several API calls (an albedo table's groups of cells,
+    a Klems file's groups of readings): each finished call's result kept as a file in a
+    directory — ``identity.json`` (what the run is: a rerun of another run is refused,
+    naming what differs) and one ``<16 hex>.nc`` per label, each written whole under its
+    name (a temporary ``.<name>.<random>.tmp`` beside it, renamed; by :meth:`save`, or by
+    the call itself given :meth:`path` as its ``out``, its own checkpoint
+    ``<16 hex>.nc.partial.json`` beside it meanwhile) — so that a rerun reuses them. Held
+    by one run at a time with :func:`locked`. ``what`` names the run in messages.
     """
 
-    _OURS = re.compile(r"identity\.json|[0-9a-f]{16}\.nc")
-    _TEMPORARY = re.compile(r"\.(identity\.json|[0-9a-f]{16}\.nc)\.[0-9a-z]+\.tmp")
+    _OURS = re.compile(r"identity\.json|[0-9a-f]{16}\.nc(\.partial\.json)?")
+    _TEMPORARY = re.compile(r"\.(identity\.json|[0-9a-f]{16}\.nc(\.partial\.json)?)\.[0-9a-z]+\.tmp")
+    _KEPT = re.compile(r"[0-9a-f]{16}\.nc(\.partial\.json)?")
 
-    def __init__(self, directory: Path | None, identity: dict[str, Any]) -> None:
+    def __init__(self, directory: Path | None, identity: dict[str, Any], what: str = "run") -> None:
         self.directory = directory
         self.reused = 0
         self.saved = 0
@@ -523,9 +526,10 @@ class ResultStore:
             if stamp.read_text() != text:
                 old = json.loads(stamp.read_text())
                 differ = sorted(k for k in set(old) | set(identity) if old.get(k) != identity.get(k))
-                raise ValueError(f"checkpoint {directory} belongs to a different table (differs in: "
+                raise ValueError(f"checkpoint {directory} belongs to a different {what} (differs in: "
                                  f"{', '.join(differ)}); re-run with the same settings, or delete it")
-            self.saved = sum(1 for path in directory.iterdir() if self._OURS.fullmatch(path.name)) - 1
+            self.saved = sum(1 for path in directory.iterdir() if self._KEPT.fullmatch(path.name)
+                             and not path.name.endswith(".partial.json"))
         else:
             atomic_write(stamp, lambda tmp: Path(tmp).write_text(text))
 
@@ -549,8 +553,17 @@ class ResultStore:
             result.write(path)
             self.saved += 1
 
+    def kept(self) -> bool:
+        """Whether the folder keeps anything to resume from: a finished call's result, or a call's own checkpoint."""
+
+        return self.directory is not None and self.directory.is_dir() and any(
+            self._KEPT.fullmatch(path.name) for path in self.directory.iterdir())
+
     def remove(self) -> None:
-        """Remove the folder: what this store writes (identity.json, <16 hex>.nc, their temporaries), not more."""
+        """
+        Remove the folder: what this store writes (identity.json, <16 hex>.nc, a call's
+        checkpoint, their temporaries), not more.
+        """
 
         if self.directory is None:
             return

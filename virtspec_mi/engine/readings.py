@@ -52,7 +52,7 @@ import numpy as np
 
 from virtspec_mi.budgets import twostage
 from virtspec_mi.checks import check_readings, check_rays_needed, check_wavelength_range, shown_value
-from virtspec_mi.engine import interrupts
+import virtspec_mi.interrupts as interrupts
 from virtspec_mi.engine.checkpoint import Checkpoint
 from virtspec_mi.engine.parameters import apply_point, current_values
 from virtspec_mi.engine.plan import Plan, kernel_options
@@ -94,8 +94,8 @@ def run(bench: Any, plan: Plan, *, checkpoint: Any = None, progress: bool | None
     SIGINT and SIGTERM stop the run at its next safe point — after a kernel chunk (each
     lasts about :data:`~virtspec_mi.kernel.tracer.CHUNK_SECONDS` at most) or a batch,
     or while it waits for Dask workers — with the checkpoint saved:
-    :class:`~virtspec_mi.engine.interrupts.Interrupted` names the signal and the
-    checkpoint (:mod:`virtspec_mi.engine.interrupts`).
+    :class:`~virtspec_mi.interrupts.Interrupted` names the signal and the
+    checkpoint (:mod:`virtspec_mi.interrupts`).
     """
 
     shared = _shares(bench, plan)

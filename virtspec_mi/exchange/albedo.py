@@ -75,7 +75,6 @@ Baranoski, G.V.G., Rokne, J.G., Xu, G. (2001). The Visual Computer 17, 506–518
 
 from __future__ import annotations
 
-import math
 import os
 import time
 import warnings
@@ -89,18 +88,16 @@ import numpy as np
 
 from virtspec_mi import __version__
 from virtspec_mi.checks import check_delta, number, shown_value
-from virtspec_mi.engine import interrupts
+import virtspec_mi.interrupts as interrupts
 from virtspec_mi.engine.checkpoint import ResultStore, locked
 from virtspec_mi.settings import true_or_false, whole_number
 from virtspec_mi.exchange.common import derived_seed
 from virtspec_mi.exchange.conventions import Convention, convention
-from virtspec_mi.budgets.binomial import (binomial_rays, pilot_intervals, stage_two_shares,
-                                         union_hoeffding_rays, union_hoeffding_rays_array)
+from virtspec_mi.budgets.binomial import (binomial_rays, pilot_intervals, stage_two_classes, stage_two_shares,
+                                         table_pilot_rays, union_hoeffding_rays)
 from virtspec_mi.exchange.tables import BOUNDS, DISTRIBUTIONS, MODELS, AlbedoTable, _FORMAT, _check_output
 
 __all__ = ["albedo_table"]
-
-_CLASS_STEP = 2.0 ** 0.125  # cells are traced in groups whose rays differ by at most this factor
 
 
 def _check_epsilon(epsilon: Any) -> float:
@@ -316,7 +313,7 @@ def albedo_table(
     from virtspec_mi.api import read_result, sweep
     from virtspec_mi.engine.progress import Progress
     from virtspec_mi.runtime import mitsuba
-    from virtspec_mi.scene import load_scene
+    from virtspec_mi.scene import loaded
 
     from virtspec_mi.exchange.engine_models import bsdf_model
 
@@ -335,7 +332,7 @@ def albedo_table(
                          "fresnel='split'")
     epsilon, delta = float(epsilon), float(delta)
     sized = epsilon / count_scale  # the counts estimate E/c: held to ε/c, the values c × count/N to ε
-    n1 = math.ceil(40.0 / epsilon - 1e-9) if pilot_rays is None else _whole("pilot_rays", pilot_rays, 1, 2**32 - 1)
+    n1 = table_pilot_rays(epsilon) if pilot_rays is None else _whole("pilot_rays", pilot_rays, 1, 2**32 - 1)
     outs = [] if out is None else [Path(out)] if isinstance(out, (str, os.PathLike)) else [Path(p) for p in out]
     for path in outs:
         if path.suffix.lower() not in (".nc", ".npy", ".h", ".hpp"):
@@ -367,8 +364,8 @@ def albedo_table(
 
         warm_writer()
     with (nullcontext() if checkpoint is None else locked(Path(checkpoint))), interrupts.deferred():
-            store = ResultStore(None if checkpoint is None else Path(checkpoint), identity)
-            scene = load_scene(_scene(grid, bsdf_parameters))
+            store = ResultStore(None if checkpoint is None else Path(checkpoint), identity, "table")
+            scene = loaded(_scene(grid, bsdf_parameters))  # once: every group's sweep takes it
             started = time.perf_counter()
             traced_seconds = 0.0
             groups = 0
@@ -427,8 +424,7 @@ def albedo_table(
                         share = shares[beam]  # δ of each quantity's second batch, per cell
                         totals["interval_delta"] = share
                         need = np.max([binomial_rays(lo, hi, sized, share) for lo, hi in pilots[beam]], axis=0)
-                        classes = np.minimum(np.ceil(_CLASS_STEP ** np.ceil(np.log(need) / np.log(_CLASS_STEP) - 1e-9)),
-                                             union_hoeffding_rays_array(sized, share)).astype(np.int64)
+                        classes = stage_two_classes(need, sized, share)  # few classes: one sweep each
                         for rays in np.unique(classes):
                             rows_in, cols_in = np.nonzero(classes == rays)
                             if len(np.unique(rows_in)) <= len(np.unique(cols_in)):  # fewer sweeps: one per θ row …

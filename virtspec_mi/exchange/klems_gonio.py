@@ -31,10 +31,7 @@ Klems, J.H. (1994). ASHRAE Transactions 100(1), 1065–1072. Hoeffding, W. (1963
 
 from __future__ import annotations
 
-import hashlib
-import json
 import os
-import re
 import time
 from contextlib import nullcontext
 from dataclasses import dataclass
@@ -46,10 +43,9 @@ import numpy as np
 
 from virtspec_mi import __version__
 from virtspec_mi.exchange.common import derived_seed
-from virtspec_mi.files import atomic_write
 from virtspec_mi.checks import check_delta, check_rays, number, shown_value
-from virtspec_mi.engine import interrupts
-from virtspec_mi.engine.checkpoint import locked
+import virtspec_mi.interrupts as interrupts
+from virtspec_mi.engine.checkpoint import ResultStore, locked
 from virtspec_mi.settings import true_or_false, whole_number
 from virtspec_mi.engine.readings import check_specimen
 from virtspec_mi.exchange.klems import SIDES, KlemsMeasurement, aggregate, check_escaped, check_klems_output
@@ -83,7 +79,9 @@ def klems_measure(
     ----------
     scene
         XML path, scene dict or ``mi.Scene`` with ``emitter`` and ``specimen`` disks (as
-        for :func:`virtspec_mi.measure`); its geometry does not matter (collimated beam).
+        for :func:`virtspec_mi.measure`, a :class:`~virtspec_mi.scene.LoadedScene` too); its
+        geometry does not matter (collimated beam). Loaded once (:func:`virtspec_mi.scene.loaded`):
+        every reading of its side takes that loaded scene.
     basis
         ``full`` (145 patches), ``half`` (77, as Radiance reads it) or ``quarter`` (41).
     back
@@ -118,11 +116,11 @@ def klems_measure(
     Klems (1994); Hoeffding (1963), eq. (2.3); Baranoski et al. (2001), eq. (23).
     """
 
-    from virtspec_mi.api import gonio
+    from virtspec_mi.api import gonio, read_gonio
     from virtspec_mi.checks import parse_wavelengths
     from virtspec_mi.engine.progress import Progress
     from virtspec_mi.runtime import mitsuba
-    from virtspec_mi.scene import find_bench, instrument_scene
+    from virtspec_mi.scene import instrument_scene, loaded
 
     klems = klems_basis(basis)
     epsilon, delta = number("epsilon", epsilon), check_delta(delta)  # any real number type (numpy's too)
@@ -137,15 +135,13 @@ def klems_measure(
 
         check_klems_output(out, overwrite=overwrite, inputs=[_resolved(scene, shipped), _resolved(back, shipped)])
     mi = mitsuba()
-    scenes = [scene]
-    for each in scenes + ([back] if back not in (None, False) else []):
-        check_specimen(find_bench(each).bsdf, lams.tolist())  # wavelengths outside its data: before any reading
+    scenes = [loaded(each) for each in [scene] + ([back] if back not in (None, False) else [])]  # each loaded once
+    for each in scenes:
+        check_specimen(each.bench.bsdf, lams.tolist())  # wavelengths outside its data: before any reading
     if back is None:
         from virtspec_mi.exchange.flip import flipped
 
-        scenes.append(instrument_scene(flipped(find_bench(scene).bsdf)))
-    elif back is not False:
-        scenes.append(back)
+        scenes.append(loaded(instrument_scene(flipped(scenes[0].bench.bsdf))))
     n_sides = len(scenes)
     statements = n_sides * len(lams) * klems.size * (2 * klems.size + 2)
     n_rays = union_hoeffding_rays(epsilon, delta, statements) if rays is None else int(rays)
@@ -167,26 +163,24 @@ def klems_measure(
                 "scene": str(scene) if isinstance(scene, (str, os.PathLike)) else None,
                 "back": str(back) if isinstance(back, (str, os.PathLike)) else repr(type(back).__name__),
                 "version": __version__}
-    parts = None if out is None else _Parts(Path(out).with_name(Path(out).name + ".parts"), identity)
-    if parts is not None:  # the parts' writer, imported here (a second or more), not between two safe points
+    folder = None if out is None else Path(out).with_name(Path(out).name + ".parts")
+    if folder is not None:  # the parts' writer, imported here (a second or more), not between two safe points
         from virtspec_mi.results.io import warm_writer
 
         warm_writer()
     # signals act at the readings' safe points only (never inside the files' writes); one run at a time on the
-    # parts folder, where each finished group of readings is kept (a re-run reuses them)
-    with (nullcontext() if parts is None else locked(parts.folder)), interrupts.deferred():
-        if parts is not None:
-            parts.open()
+    # parts folder (the engine's ResultStore), where each finished group of readings is kept (a re-run reuses them)
+    with (nullcontext() if folder is None else locked(folder)), interrupts.deferred():
+        parts = ResultStore(folder, identity, "Klems measurement")
         bar = Progress(progress, n_sides * sum(len(v) for v in groups.values()), desc="klems")
         try:
             for s, side_scene in enumerate(scenes):
-                loaded = find_bench(side_scene).scene  # loaded once per side
                 for phi_i, patches in sorted(groups.items()):
                     label = f"{SIDES[s]}:{phi_i:.9g}"
-                    part = None if parts is None else parts.path(label)
-                    reading = None if part is None else parts.load(part)
+                    part = parts.path(label)  # the reading's out: written whole, with its own checkpoint meanwhile
+                    reading = parts.load(label, read_gonio)
                     if reading is None:
-                        reading = gonio(loaded, theta_i=[float(klems.theta[p]) for p in patches], phi_i=phi_i,
+                        reading = gonio(side_scene, theta_i=[float(klems.theta[p]) for p in patches], phi_i=phi_i,
                                         beam="collimated", wavelengths=lams.tolist(), rays=n_rays,
                                         seed=derived_seed(seed, label), theta_o_bins=edges.tolist(),
                                         phi_o_bins=phi_bins, out=part, progress=False if progress is False else None)
@@ -208,13 +202,13 @@ def klems_measure(
                             refl[s, :, q], trans[s, :, q] = r[:, column], t[:, column]
                     bar.reach(bar.done + len(patches))
         except interrupts.Interrupted as stop:  # the parts folder is this run's checkpoint (a group's file is not)
-            stop.checkpoint = parts.folder if parts is not None and parts.kept() else None
+            stop.checkpoint = folder if parts.kept() else None
             stop.written = None  # type: ignore[attr-defined]
             raise
         finally:
             bar.close()
-        if parts is not None and parts.reused:
-            bar.note(f"resumed from {parts.folder}: {parts.reused} finished group(s) of readings reused")
+        if parts.reused:
+            bar.note(f"resumed from {folder}: {parts.reused} finished group(s) of readings reused")
         import mitsuba as _mitsuba_module
 
         provenance = {"seed": int(seed), "mitsuba": _mitsuba_module.__version__, "variant": mi.variant(),
@@ -230,59 +224,6 @@ def klems_measure(
             measurement.write(out, name=name, overwrite=overwrite)
             parts.remove()  # the file is written: its groups are safe
     return measurement
-
-
-class _Parts:
-    """
-    A Klems run's finished groups of readings (one goniophotometer reading per incidence
-    azimuth and side), each a result file ``<16 hex>.nc`` in the folder ``OUT.parts`` with
-    ``identity.json`` (the run's settings): a re-run reads them instead of measuring; an
-    interrupted group resumes from its own checkpoint beside it.
-    """
-
-    _OURS = re.compile(r"identity\.json|[0-9a-f]{16}\.nc(\.partial\.json)?")
-    _TEMPORARY = re.compile(r"\.(identity\.json|[0-9a-f]{16}\.nc(\.partial\.json)?)\.[0-9a-z]+\.tmp")
-
-    def __init__(self, folder: Path, identity: dict[str, Any]) -> None:
-        self.folder, self.identity, self.reused = folder, identity, 0
-
-    def open(self) -> None:
-        if self.folder.exists() and not self.folder.is_dir():
-            raise ValueError(f"{self.folder} (the Klems file's parts) is a file; move it")
-        self.folder.mkdir(exist_ok=True)
-        stamp = self.folder / "identity.json"
-        text = json.dumps(self.identity, sort_keys=True)
-        if stamp.exists():
-            if stamp.read_text() != text:
-                raise ValueError(f"{self.folder} holds the parts of another Klems measurement (other settings or "
-                                 "scene); re-run with the same settings, or delete it")
-        else:
-            atomic_write(stamp, lambda tmp: Path(tmp).write_text(text))
-
-    def path(self, label: str) -> Path:
-        return self.folder / (hashlib.blake2b(label.encode(), digest_size=8).hexdigest() + ".nc")
-
-    def load(self, part: Path) -> Any:
-        if not part.exists():
-            return None
-        from virtspec_mi.api import read_gonio
-
-        self.reused += 1
-        return read_gonio(part)
-
-    def kept(self) -> bool:
-        return any(re.fullmatch(r"[0-9a-f]{16}\.nc(\.partial\.json)?", p.name) for p in self.folder.iterdir())
-
-    def remove(self) -> None:
-        """Remove the folder: what this run writes there (and its temporaries), not more."""
-
-        for path in self.folder.iterdir():
-            if self._OURS.fullmatch(path.name) or self._TEMPORARY.fullmatch(path.name):
-                path.unlink()
-        try:
-            self.folder.rmdir()
-        except OSError:
-            pass
 
 
 def _resolved(scene: Any, shipped: Any) -> Any:

@@ -114,11 +114,10 @@ class Forward:
         return hashlib.sha256(text.encode()).hexdigest()[:20]
 
     def _sweep(self, parameters: dict[str, Any], mu: float, out: Path | None, workers: Any = None) -> Any:
-        scene = self.problem.scene if workers is None else self.problem.given_scene
-        return api.sweep(scene, parameters=parameters, wavelengths=list(map(float, self.problem.wavelengths)), mu=mu,
+        wavelengths = list(map(float, self.problem.wavelengths))
+        return api.sweep(self.problem.loaded, parameters=parameters, wavelengths=wavelengths, mu=mu,
                          delta=self.reading_delta, joint=self.joint, seed=self.seed, out=out, progress=False,
-                         workers=workers, defines=self.problem.defines if workers is not None else None,
-                         **self.settings)
+                         workers=workers, **self.settings)
 
     def reading(self, values: Sequence[float], mu: float, stage: str) -> Reading:
         """The certified spectrum at ``values`` (to ``mu``), traced, read from the work directory or remembered."""

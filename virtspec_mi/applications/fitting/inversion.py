@@ -222,7 +222,8 @@ def fit(measured: Any, specimen: Any, parameters: Mapping[str, Any], *, quantiti
         quantity → source (``{"reflectance": ..., "transmittance": ...}``).
     specimen
         A BSDF plugin's name (``"abm_b"``, ``"prospect_d"``: the paper's instrument around
-        it), a shipped scene's name, an XML path, a scene dict or an ``mi.Scene``.
+        it), a shipped scene's name, an XML path, a scene dict, an ``mi.Scene`` or a
+        :class:`~virtspec_mi.scene.LoadedScene`: loaded once, every forward reading takes it.
     parameters
         Free parameter → (lowest, highest) (or ``"lo:hi"``), named as the specimen shows
         them (``"Cab"`` or ``"specimen.Cab"``); both bounds are checked by the specimen.
@@ -347,14 +348,9 @@ def fit(measured: Any, specimen: Any, parameters: Mapping[str, Any], *, quantiti
             note(progress, f"fit: {confirmed} candidates at the confidence set's ends read again at mu = {target:g}")
     finally:
         keys = known_parameters(problem.scene)
-        apply_point(_Holder(problem.scene), [keys.get(k, k) for k in problem.keys], problem.start)
+        apply_point(problem.bench, [keys.get(k, k) for k in problem.keys], problem.start)
     return _result(problem, forward, estimate, loss_name, measure_loss, delta, target, mu_fraction, seed, started,
                    None if search is forward else search)
-
-
-class _Holder:
-    def __init__(self, scene: Any) -> None:
-        self.scene = scene
 
 
 def _refine_windows(forward: Forward, problem: FitProblem, chosen: FitWindows, readings: list[Reading],

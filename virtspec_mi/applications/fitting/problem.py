@@ -7,7 +7,9 @@ into a :class:`FitProblem`, refusing bad input with a ``ValueError`` that names 
 
 - the **specimen**: a project BSDF plugin's name (``abm_b``, ``prospect_d`` …: the
   paper's instrument around it, :func:`virtspec_mi.scene.instrument_scene`), a shipped
-  scene's name, an XML path, a scene dict or a loaded ``mi.Scene``;
+  scene's name, an XML path, a scene dict, a loaded ``mi.Scene`` or a
+  :class:`~virtspec_mi.scene.LoadedScene` — loaded once (:func:`virtspec_mi.scene.loaded`),
+  and every forward reading of the fit takes that one loaded scene;
 - the **free parameters**: name → (lowest, highest), each a number the specimen shows
   to ``mi.traverse`` (``Cab`` or ``specimen.Cab``; :mod:`virtspec_mi.engine.parameters`),
   both ends checked by the specimen itself (a bound outside the model's validity is
@@ -34,7 +36,7 @@ from virtspec_mi.comparison import MeasuredSpectrum, read_measured
 from virtspec_mi.engine.bench import Bench
 from virtspec_mi.engine.parameters import PREFIX, apply_point, current_values, known_parameters, parameter_space
 from virtspec_mi.runtime import PLUGINS
-from virtspec_mi.scene import find_bench, instrument_scene, scene_fingerprint, scene_source
+from virtspec_mi.scene import LoadedScene, instrument_scene, loaded, scene_fingerprint
 
 __all__ = ["FitProblem", "fit_problem", "describe", "FIT_QUANTITIES"]
 
@@ -48,11 +50,8 @@ _MATCH_NM = 1e-6
 class FitProblem:
     """A checked fit: the scene, the free parameters and their bounds, the measured spectra on the fit's wavelengths."""
 
-    scene: Any
-    """The loaded ``mi.Scene`` (the forward readings set its parameters)."""
-    given_scene: Any
-    """The specimen as given (a path or dict travels to Dask workers)."""
-    bench: Bench
+    loaded: LoadedScene
+    """The scene, loaded once: its bench, fingerprint and source (a path or dict given travels to Dask workers)."""
     names: tuple[str, ...]
     """The free parameters as the user named them."""
     keys: tuple[str, ...]
@@ -66,13 +65,32 @@ class FitProblem:
     """quantity → the measurement's uncertainty (a half-width) on :attr:`wavelengths`."""
     specimen: str
     """The specimen in words (its plugin or scene name)."""
-    fingerprint: str
-    """The scene's fingerprint as its readings record it (:func:`virtspec_mi.scene.scene_fingerprint`)."""
     fingerprints: frozenset[str]
-    """Every fingerprint a reading of this scene may carry (of the loaded scene, of the scene as given)."""
-    defines: dict[str, Any] | None
+    """
+    Every fingerprint a reading of this scene may carry: the loaded scene's, and the
+    ``mi.Scene``'s (what a fit's in-process readings recorded before the scene was loaded
+    once: their tables still read).
+    """
     start: tuple[float, ...]
     """The scene's own values of the free parameters (restored after the fit)."""
+
+    @property
+    def bench(self) -> Bench:
+        """The emitter and specimen disks (the forward readings set the specimen's parameters)."""
+
+        return self.loaded.bench
+
+    @property
+    def scene(self) -> Any:
+        """The loaded ``mi.Scene``."""
+
+        return self.loaded.bench.scene
+
+    @property
+    def fingerprint(self) -> str:
+        """The scene's fingerprint as its readings record it (:func:`virtspec_mi.scene.scene_fingerprint`)."""
+
+        return self.loaded.fingerprint
 
     @property
     def quantities(self) -> tuple[str, ...]:
@@ -88,6 +106,8 @@ class FitProblem:
 
 
 def _specimen_scene(specimen: Any) -> tuple[Any, str]:
+    if isinstance(specimen, LoadedScene):
+        return specimen, str(specimen.source["scene"])
     if isinstance(specimen, str) and specimen in PLUGINS and PLUGINS[specimen][0] == "bsdf":
         return instrument_scene({"type": specimen}), specimen
     if isinstance(specimen, str):
@@ -153,9 +173,9 @@ def fit_problem(measured: Any, specimen: Any, parameters: Mapping[str, Any], *,
     if not isinstance(parameters, Mapping) or not parameters:
         raise ValueError("a fit needs free parameters: name -> (lowest, highest), e.g. {'Cab': (10, 80)}")
     given_scene, label = _specimen_scene(specimen)
-    bench = find_bench(given_scene, defines)
-    scene = bench.scene
-    known = known_parameters(scene)
+    scene = loaded(given_scene, defines)  # once: every forward reading takes this one
+    bench = scene.bench
+    known = known_parameters(bench.scene)
     names = tuple(parameters)
     keys = tuple(name if name.startswith("specimen.") or name.startswith(PREFIX) else f"specimen.{name}"
                  for name in names)
@@ -177,15 +197,13 @@ def fit_problem(measured: Any, specimen: Any, parameters: Mapping[str, Any], *,
     values, errors = {}, {}
     for quantity, spectrum in spectra.items():
         values[quantity], errors[quantity] = _on_wavelengths(spectrum, grid, measurement_uncertainty)
-    return FitProblem(scene=scene, given_scene=given_scene, bench=bench, names=names, keys=keys, bounds=bounds,
-                      wavelengths=grid, measured=values, uncertainty=errors, specimen=label,
-                      fingerprint=scene_fingerprint(scene, bench),
-                      fingerprints=frozenset({scene_fingerprint(scene, bench),
-                                              scene_fingerprint(given_scene, bench, defines)}),
-                      defines=defines, start=tuple(start))
+    return FitProblem(loaded=scene, names=names, keys=keys, bounds=bounds, wavelengths=grid, measured=values,
+                      uncertainty=errors, specimen=label,
+                      fingerprints=frozenset({scene.fingerprint, scene_fingerprint(bench.scene, bench)}),
+                      start=tuple(start))
 
 
 def describe(problem: FitProblem) -> str:
     """The specimen as results name it (its scene's source)."""
 
-    return str(scene_source(problem.given_scene, problem.bench, problem.defines)["scene"])
+    return str(problem.loaded.source["scene"])

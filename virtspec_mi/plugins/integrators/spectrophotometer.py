@@ -175,7 +175,7 @@ def clear_render_errors(render: Callable) -> Callable:
     """
     ``mi.render`` that re-raises this integrator's ``ValueError`` (bad ``spp``, settings,
     wavelengths …) and an interrupt (``KeyboardInterrupt``: Ctrl-C, or SIGTERM under
-    :mod:`virtspec_mi.engine.interrupts`) as themselves, not as the ``RuntimeError``
+    :mod:`virtspec_mi.interrupts`) as themselves, not as the ``RuntimeError``
     Dr.Jit's custom operation makes of them; everything else as ``render`` does.
     """
 

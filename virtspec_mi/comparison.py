@@ -26,7 +26,7 @@ goniophotometer reading's reflectance, transmittance or absorptance; a sphere re
 ``reading`` (default), ``corrected`` or ``hemispherical`` value, against a measured
 spectrum of what it measures (its reflectance or transmittance column). A result with
 parameter dims is compared at one parameter point (select it first:
-:meth:`~virtspec_mi.results.base.ResultBase.sel`).
+:meth:`~virtspec_mi.results.labels.Labelled.sel`).
 
 The measured spectrum is linearly interpolated onto the result's wavelengths inside
 the measured range only; result wavelengths outside it are left out (and listed),

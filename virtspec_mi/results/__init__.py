@@ -2,8 +2,10 @@
 Results
 =======
 
-What the instruments return, and what is derived from it: one family of result kinds
-(:mod:`.base`: labels, ``sel`` / ``isel``, files, spectra) and the readings result every
+What the instruments return, and what is derived from it: one family of result kinds,
+each one ``xarray.Dataset`` of exact counts (:mod:`.base`: files, spectra; :mod:`.labels`:
+labels, ``sel`` / ``isel``; a kind's tables of what it derives, :mod:`.variables`, and of
+its figures, :mod:`.figures`) and the readings result every
 counting instrument returns or extends (:mod:`.readings`: reflectance and transmittance
 per reading), read back by their format tags (:mod:`.kinds`, :mod:`.formats`); files
 (:mod:`.io`, :mod:`.zarr`), colour-science spectra (:mod:`.colorimetry`) and plots

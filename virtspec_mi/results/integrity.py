@@ -444,7 +444,7 @@ def check_settings(result: Any) -> None:
     """
     The settings a result states agree with its labels and counts: its wavelengths are the
     wavelength labels, its θi the θi label of readings at one incidence (a selection of readings restates both:
-    :meth:`~virtspec_mi.results.base.ResultBase.isel`), and a μ the rays it sized can
+    :meth:`~virtspec_mi.results.labels.Labelled.isel`), and a μ the rays it sized can
     certify — no rule of :mod:`virtspec_mi.budgets` holds a fraction within μ with N ≤ 1/μ
     rays (the binomial bound's ε − 1/N > 0; Hoeffding's N = ln(2/δ)/(2μ²) is larger).
     """

@@ -55,13 +55,13 @@ class Labelled:
     def dims(self) -> tuple[str, ...]:
         """The dims of the result, in order: those of its :attr:`SHAPED_BY` variable."""
 
-        return tuple(str(d) for d in self.data[self.SHAPED_BY].dims)
+        return tuple(str(d) for d in self.data.variables[self.SHAPED_BY].dims)
 
     @cached_property
     def coords(self) -> dict[str, np.ndarray]:
         """Every label by name: 1-d along its dim (or along ``point``), 0-d for a scalar label."""
 
-        return {str(name): np.asarray(value.values) for name, value in self.data.coords.items()}
+        return {str(name): np.asarray(self.data.variables[name].values) for name in self.data.coords}
 
     # -- labels -----------------------------------------------------------------------
 
@@ -313,7 +313,8 @@ def _restated(data: Any) -> Any:
     settings = data.attrs.get("settings")
     if not hasattr(settings, "updated") or "wavelength" not in data.coords:
         return data
-    theta = data.coords["theta_i"].values if "theta_i" in data.coords else None
-    return data.assign_attrs(settings=settings.updated(
-        wavelengths=tuple(float(w) for w in np.atleast_1d(data.coords["wavelength"].values)),
-        theta_i=None if theta is None else float(np.atleast_1d(theta)[0])))
+    theta = data.variables["theta_i"].values if "theta_i" in data.coords else None
+    data.attrs = {**data.attrs, "settings": settings.updated(  # a dict of its own: the selection's, not the source's
+        wavelengths=tuple(float(w) for w in np.atleast_1d(data.variables["wavelength"].values)),
+        theta_i=None if theta is None else float(np.atleast_1d(theta)[0]))}
+    return data

@@ -166,7 +166,7 @@ class Result(ResultBase):
     def counts(self) -> Counts:
         """Exact counts by name behind the estimates."""
 
-        return Counts(**{name: self.data[name].values for name in Counts.names()})
+        return Counts(**{name: self.data.variables[name].values for name in Counts.names()})
 
     @cached_property
     def pilot(self) -> Counts | None:
@@ -174,7 +174,7 @@ class Result(ResultBase):
 
         if "pilot_rays" not in self.data:
             return None
-        return Counts(**{name: self.data[f"pilot_{name}"].values for name in Counts.names()})
+        return Counts(**{name: self.data.variables[f"pilot_{name}"].values for name in Counts.names()})
 
     @property
     def geometry(self) -> InstrumentGeometry:

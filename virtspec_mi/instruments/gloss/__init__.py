@@ -141,7 +141,7 @@ class GlossResult(Result):
     def glossy(self) -> np.ndarray:
         """Rays reflected into the receptor cone, per reading (``int64``, over ``dims``)."""
 
-        return self.data["glossy"].values
+        return self.data.variables["glossy"].values
 
     @property
     def cone(self) -> float:

@@ -179,7 +179,7 @@ class GonioResult(ResultBase):
     def bin_counts(self) -> np.ndarray:
         """Exact per-bin counts, ``int64``, shape (wavelengths, θi, θo bins, φo bins)."""
 
-        return self.data["bin_counts"].values
+        return self.data.variables["bin_counts"].values
 
     @property
     def bins(self) -> GonioBins:

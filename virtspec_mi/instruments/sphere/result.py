@@ -221,16 +221,17 @@ class SphereResult(ResultBase):
         return self._groups("pilot_") if "pilot_rays" in self.data else None
 
     def _groups(self, prefix: str) -> dict[str, dict[str, np.ndarray]]:
-        names = [str(n) for n in self.data.data_vars if "configuration" in self.data[n].dims]
+        names = [str(n) for n in self.data.data_vars if "configuration" in self.data.variables[n].dims]
         names = [n[len(prefix):] for n in names if n.startswith(prefix) and (prefix or not n.startswith("pilot_"))]
-        return {c: {name: self.data[prefix + name].isel(configuration=k).values for name in names}
+        axis = self.dims.index("configuration")
+        return {c: {name: np.take(self.data.variables[prefix + name].values, k, axis=axis) for name in names}
                 for k, c in enumerate(CONFIGURATIONS)}
 
     @property
     def wall_reflectance(self) -> np.ndarray:
         """ρw per reading (over the readings' dims)."""
 
-        return self.data["wall_reflectance"].values
+        return self.data.variables["wall_reflectance"].values
 
     @property
     def sphere(self) -> str:

@@ -9,22 +9,7 @@ import numpy as np
 import pytest
 
 import virtspec_mi as vm
-from result_kinds import ANGLES, WAVELENGTHS, gonio_reading, hemispherical_grid, sphere_grid
-
-
-@pytest.fixture(scope="module")
-def hemispherical():
-    return hemispherical_grid()
-
-
-@pytest.fixture(scope="module")
-def sphere():
-    return sphere_grid()
-
-
-@pytest.fixture(scope="module")
-def gonio(mi):
-    return gonio_reading()
+from result_kinds import ANGLES, WAVELENGTHS
 
 
 # --- spectra, colour and what a kind cannot do ---------------------------------------------

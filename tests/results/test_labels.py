@@ -9,22 +9,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from result_kinds import THICKNESS, gonio_reading, hemispherical_grid, sphere_grid
-
-
-@pytest.fixture(scope="module")
-def hemispherical():
-    return hemispherical_grid()
-
-
-@pytest.fixture(scope="module")
-def sphere():
-    return sphere_grid()
-
-
-@pytest.fixture(scope="module")
-def gonio(mi):
-    return gonio_reading()
+from result_kinds import THICKNESS
 
 
 def kinds(hemispherical, gonio, sphere):

@@ -209,13 +209,6 @@ def test_cli_plots_a_sweep_file_and_a_measure_json(angular, scenes_dir, tmp_path
 # --- goniophotometer figures; no figure clips its titles ---------------------------------------
 
 
-@pytest.fixture(scope="module")
-def gonio(mi):
-    from result_kinds import gonio_reading
-
-    return gonio_reading()
-
-
 def test_the_polar_radial_labels_lie_on_the_horizon_clear_of_every_curve(gonio):
     from virtspec_mi.instruments.goniophotometer.plot import HORIZON, plot_polar
 

@@ -68,6 +68,8 @@ __all__ = [
     "round_up",
     "span",
     "per_count",
+    "stored",
+    "attribute",
     "KINDS",
 ]
 
@@ -103,6 +105,18 @@ def span(counts: Any) -> str:
 
     low, high = int(np.min(counts)), int(np.max(counts))
     return f"{low:,}" if low == high else f"{low:,} to {high:,}"
+
+
+def stored(name: str, doc: str) -> property:
+    """A read-only property of a result: its stored variable ``name`` (the values of :attr:`ResultBase.data`'s)."""
+
+    return property(lambda self: self.data.variables[name].values, doc=doc)
+
+
+def attribute(name: str, doc: str, kind: Any = None) -> property:
+    """A read-only property of a result: the attribute ``name`` of its Dataset (as ``kind(value)`` if given)."""
+
+    return property(lambda self: self.data.attrs[name] if kind is None else kind(self.data.attrs[name]), doc=doc)
 
 
 # -- spectra --------------------------------------------------------------------------
@@ -235,11 +249,8 @@ class ResultBase(Labelled):
     def __delattr__(self, name: str) -> None:
         raise AttributeError(f"a {self.KIND} is read-only (its {name!r} cannot be deleted)")
 
-    @property
-    def settings(self) -> Any:
-        """The settings used (:class:`~virtspec_mi.settings.Settings`; its ``theta_i`` is the first angle)."""
-
-        return self.data.attrs["settings"]
+    settings = attribute("settings", "The settings used (:class:`~virtspec_mi.settings.Settings`; its ``theta_i`` "
+                                     "is the first angle).")
 
     @property
     def parameters(self) -> dict | None:
@@ -254,23 +265,10 @@ class ResultBase(Labelled):
 
         return self.data.attrs.get("source")
 
-    @property
-    def seconds(self) -> float:
-        """Time spent tracing, summed over the batches (and over interrupted and resumed runs)."""
-
-        return float(self.data.attrs["seconds"])
-
-    @property
-    def scene(self) -> str:
-        """Fingerprint of the scene (``sha256:…``), or ``""``."""
-
-        return str(self.data.attrs["scene"])
-
-    @property
-    def version(self) -> str:
-        """The virtspec-mi version that made the result."""
-
-        return str(self.data.attrs["version"])
+    seconds = attribute("seconds", "Time spent tracing, summed over the batches (and over interrupted and resumed "
+                                   "runs).", float)
+    scene = attribute("scene", "Fingerprint of the scene (``sha256:…``), or ``\"\"``.", str)
+    version = attribute("version", "The virtspec-mi version that made the result.", str)
 
     def _labelled(self) -> dict[str, tuple[tuple[str, ...], np.ndarray]]:
         """Every stored array by name: ``(its dims, values)``."""

@@ -38,7 +38,7 @@ from virtspec_mi import __version__
 from virtspec_mi.kernel.counts import DIRECTION_TOLERANCE, QUANTITIES, WEIGHT_ROUNDING, Counts
 from virtspec_mi.geometry.disks import InstrumentGeometry, backlit_fraction
 from virtspec_mi.budgets.intervals import clopper_pearson
-from virtspec_mi.results.base import ResultBase, per_count, plain_data, round_up, span
+from virtspec_mi.results.base import ResultBase, attribute, per_count, plain_data, round_up, span
 from virtspec_mi.results.figures import Figure, spectra, sweep
 from virtspec_mi.results.variables import Variable, bounds
 from virtspec_mi.results.integrity import (CountRules, check_counts, check_shapes, field_value, optional_numbers,
@@ -176,17 +176,11 @@ class Result(ResultBase):
             return None
         return Counts(**{name: self.data.variables[f"pilot_{name}"].values for name in Counts.names()})
 
-    @property
-    def geometry(self) -> InstrumentGeometry:
-        """r₁, r₂ and D of the scene."""
-
-        return self.data.attrs["geometry"]
-
-    @property
-    def wavelength_independent(self) -> bool:
-        """The specimen declared itself wavelength-independent: readings that differ only in wavelength share counts."""
-
-        return bool(self.data.attrs["wavelength_independent"])
+    geometry = attribute("geometry", "r₁, r₂ and D of the scene "
+                                     "(:class:`~virtspec_mi.geometry.disks.InstrumentGeometry`).")
+    wavelength_independent = attribute(
+        "wavelength_independent", "The specimen declared itself wavelength-independent: readings that differ only in "
+                                  "wavelength share counts.", bool)
 
     # -- counts by name ----------------------------------------------------------------
 

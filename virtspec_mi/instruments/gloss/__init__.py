@@ -48,7 +48,7 @@ from virtspec_mi.instruments.base import Instrument, reading_grid, readings_resu
 from virtspec_mi.instruments.command import Command, FigureFlag
 from virtspec_mi.kernel.counts import Fate
 from virtspec_mi.kernel.hooks import ExitHook
-from virtspec_mi.results.base import plain_data
+from virtspec_mi.results.base import attribute, plain_data, stored
 from virtspec_mi.results.readings import Result
 from virtspec_mi.results.integrity import CountRules, whole_counts
 from virtspec_mi.results.variables import Variable, bounds
@@ -137,17 +137,8 @@ class GlossResult(Result):
     def __init__(self, reading: Result, glossy: Any, cone: float = 2.0) -> None:
         self._extend(reading, {"glossy": (reading.dims, glossy)}, {}, {"cone": _check_cone(cone)})
 
-    @property
-    def glossy(self) -> np.ndarray:
-        """Rays reflected into the receptor cone, per reading (``int64``, over ``dims``)."""
-
-        return self.data.variables["glossy"].values
-
-    @property
-    def cone(self) -> float:
-        """Half-angle of the receptor cone, degrees."""
-
-        return float(self.data.attrs["cone"])
+    glossy = stored("glossy", "Rays reflected into the receptor cone, per reading (``int64``, over ``dims``).")
+    cone = attribute("cone", "Half-angle of the receptor cone, degrees.", float)
 
     @property
     def gloss(self) -> np.ndarray:

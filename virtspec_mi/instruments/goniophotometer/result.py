@@ -49,7 +49,7 @@ from virtspec_mi.budgets import bins as histogram_bounds
 from virtspec_mi.budgets.rules import guarantee_of
 from virtspec_mi.instruments.goniophotometer.bins import GonioBins
 from virtspec_mi.kernel.counts import QUANTITIES
-from virtspec_mi.results.base import ResultBase, plain_data, round_up, span
+from virtspec_mi.results.base import ResultBase, attribute, plain_data, round_up, span, stored
 from virtspec_mi.results.figures import Figure, sweep
 from virtspec_mi.results.variables import READINGS, Coordinate, Variable, of_reading
 from virtspec_mi.results.integrity import CountRules, field_value, whole_counts
@@ -175,35 +175,15 @@ class GonioResult(ResultBase):
 
         return Result._of(self.data.drop_dims(list(_BINS)))
 
-    @property
-    def bin_counts(self) -> np.ndarray:
-        """Exact per-bin counts, ``int64``, shape (wavelengths, θi, θo bins, φo bins)."""
-
-        return self.data.variables["bin_counts"].values
-
-    @property
-    def bins(self) -> GonioBins:
-        """The bins (edges in degrees, folding)."""
-
-        return self.data.attrs["bins"]
-
-    @property
-    def guarantee(self) -> str:
-        """How N was sized (:data:`~virtspec_mi.budgets.rules.GUARANTEES`), or ``"rays"`` when given."""
-
-        return str(self.data.attrs["guarantee"])
-
-    @property
-    def relative_tolerance(self) -> float | None:
-        """The relative certificate asked for (``guarantee="relative"``), else ``None``."""
-
-        return self.data.attrs["relative_tolerance"]
-
-    @property
-    def brdf_floor(self) -> float | None:
-        """The BRDF floor of the relative certificate (``guarantee="relative"``), else ``None``."""
-
-        return self.data.attrs["brdf_floor"]
+    bin_counts = stored("bin_counts", "Exact per-bin counts, ``int64``, shape (wavelengths, θi, θo bins, φo bins).")
+    bins = attribute("bins", "The bins (:class:`~virtspec_mi.instruments.goniophotometer.bins.GonioBins`: edges in "
+                             "degrees, folding).")
+    guarantee = attribute("guarantee", "How N was sized (:data:`~virtspec_mi.budgets.rules.GUARANTEES`), or "
+                                       "``\"rays\"`` when given.", str)
+    relative_tolerance = attribute("relative_tolerance", "The relative certificate asked for "
+                                                         "(``guarantee=\"relative\"``), else ``None``.")
+    brdf_floor = attribute("brdf_floor", "The BRDF floor of the relative certificate (``guarantee=\"relative\"``), "
+                                         "else ``None``.")
 
     @property
     def interval_delta(self) -> float:

@@ -49,7 +49,7 @@ from virtspec_mi.budgets.bounds import hoeffding_mu
 from virtspec_mi.budgets.intervals import clopper_pearson
 from virtspec_mi.instruments.sphere.geometry import Sphere, sphere_from_parameters
 from virtspec_mi.instruments.sphere.model import correct_readings, theory_inputs
-from virtspec_mi.results.base import ResultBase, per_count, plain_data, round_up, span
+from virtspec_mi.results.base import ResultBase, attribute, per_count, plain_data, round_up, span, stored
 from virtspec_mi.results.integrity import CountRules, field_value, finite_labels, whole_counts
 from virtspec_mi.results.figures import Figure, spectra
 from virtspec_mi.results.variables import READINGS, Variable, bounds
@@ -190,7 +190,8 @@ class SphereResult(ResultBase):
         arrays = {"wall_reflectance": (readings, wall_reflectance)}
         for prefix, groups in (("counts", counts), ("pilot", pilot or {})):
             for configuration, named in groups.items():
-                checked.update({f"{prefix}.{configuration}.{name}": (readings, values) for name, values in named.items()})
+                checked.update({f"{prefix}.{configuration}.{name}": (readings, values)
+                                for name, values in named.items()})
             if groups and set(groups) != set(CONFIGURATIONS):
                 raise ValueError(f"'{prefix}' must hold the counts of the configurations {', '.join(CONFIGURATIONS)} "
                                  f"(got {sorted(groups)})")
@@ -227,41 +228,14 @@ class SphereResult(ResultBase):
         return {c: {name: np.take(self.data.variables[prefix + name].values, k, axis=axis) for name in names}
                 for k, c in enumerate(CONFIGURATIONS)}
 
-    @property
-    def wall_reflectance(self) -> np.ndarray:
-        """ρw per reading (over the readings' dims)."""
-
-        return self.data.variables["wall_reflectance"].values
-
-    @property
-    def sphere(self) -> str:
-        """The sphere in words."""
-
-        return str(self.data.attrs["sphere"])
-
-    @property
-    def cap_fractions(self) -> dict[str, float]:
-        """Each port's cap area over the sphere's."""
-
-        return self.data.attrs["cap_fractions"]
-
-    @property
-    def options(self) -> dict[str, Any]:
-        """How it was read (``measurement``, ``specular``, ``method``, ``standard``, ``max_bounces``)."""
-
-        return self.data.attrs["options"]
-
-    @property
-    def sphere_parameters(self) -> dict[str, Any]:
-        """The sphere's description (:meth:`~virtspec_mi.instruments.sphere.geometry.Sphere.parameters`)."""
-
-        return self.data.attrs["sphere_parameters"]
-
-    @property
-    def specimen_radius(self) -> float | None:
-        """Radius of the specimen disk (mm), or ``None``."""
-
-        return self.data.attrs["specimen_radius"]
+    wall_reflectance = stored("wall_reflectance", "ρw per reading (over the readings' dims).")
+    sphere = attribute("sphere", "The sphere in words.", str)
+    cap_fractions = attribute("cap_fractions", "Each port's cap area over the sphere's.")
+    options = attribute("options", "How it was read (``measurement``, ``specular``, ``method``, ``standard``, "
+                                   "``max_bounces``).")
+    sphere_parameters = attribute(
+        "sphere_parameters", "The sphere's description (:meth:`~virtspec_mi.instruments.sphere.geometry.Sphere.parameters`).")
+    specimen_radius = attribute("specimen_radius", "Radius of the specimen disk (mm), or ``None``.")
 
     @property
     def rays(self) -> np.ndarray:

@@ -80,8 +80,8 @@ def main() -> None:
     import mitsuba
 
     import virtspec_mi as vm
-    from virtspec_mi.exchange.albedo import albedo_table
-    from virtspec_mi.exchange.klems_gonio import klems_measure
+    from virtspec_mi.applications.tables.albedo import albedo_table
+    from virtspec_mi.applications.klems.measure import klems_measure
     from virtspec_mi.budgets.binomial import union_hoeffding_rays
 
     vm.mitsuba()

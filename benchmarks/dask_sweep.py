@@ -11,7 +11,7 @@ Prints, in one run, side by side:
     (Hoeffding N = 26,492 rays per reading), seed 0: 10,525 readings (``--quick``:
     1,684). One in-process ``sweep(..., parameters=...)`` and the same sweep with
     ``workers=client`` on a ``LocalCluster`` of 2 worker processes (one thread and one
-    Dr.Jit thread each, tasks sized by the rule of :mod:`virtspec_mi.scaleout`). Both
+    Dr.Jit thread each, tasks sized by the rule of :mod:`virtspec_mi.runtime.scaleout`). Both
     warm (one small parameter sweep first compiles the kernel, on every worker too).
     Wall time, rays/s, the ratio, tasks, and that the counts are identical.
 (b) **Per-task overhead** — 400 empty tasks (``client.submit`` of a no-op, then gather):
@@ -49,7 +49,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from revisions import load_average, machine, machine_lines  # noqa: E402
 
 import virtspec_mi as vm  # noqa: E402
-from virtspec_mi import scaleout  # noqa: E402
+from virtspec_mi.runtime import scaleout  # noqa: E402
 from virtspec_mi.kernel.counts import Counts  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]

@@ -6,7 +6,7 @@ The soybean leaf (shipped scene ``soybean_abmb``: ABM-B, collimated at θi = 8°
 side by side in one run:
 
 - **ours** — ``vm.measure(scene, target=...)``: the rays of each wavelength ∝ its weight
-  (Nₖ ∝ |wₖ|, :mod:`virtspec_mi.applications.derived`), traced (wall time of the whole
+  (Nₖ ∝ |wₖ|, :mod:`virtspec_mi.applications.targets`), traced (wall time of the whole
   call: pilot, sizing, tracing, certificate), or for ΔE₀₀ ≤ 0.1 planned only (its rays
   from the same pilot and sizing; tracing them would take minutes);
 - **present route** — certify every wavelength to μ (Hoeffding, δ/n each: the union
@@ -37,12 +37,12 @@ import time
 import numpy as np
 
 import virtspec_mi as vm
-from virtspec_mi.applications.derived.delta_e import lab_box, radius
-from virtspec_mi.applications.derived.measure import plan_target
-from virtspec_mi.applications.derived.targets import _white, colour_of
+from virtspec_mi.colorimetry.delta_e import lab_box, radius
+from virtspec_mi.applications.targets.measure import plan_target
+from virtspec_mi.applications.targets.targets import _white, colour_of
 from virtspec_mi.budgets.bounds import hoeffding_rays
 from virtspec_mi.engine.readings import trace_allocated
-from virtspec_mi.scene import find_bench
+from virtspec_mi.runtime.scene import find_bench
 from virtspec_mi.settings import Settings
 
 DELTA = 0.01

@@ -53,10 +53,10 @@ def main() -> None:
     import mitsuba
 
     import virtspec_mi as vm
-    from virtspec_mi.exchange.albedo import albedo_table
-    from virtspec_mi.exchange.audit import audit
+    from virtspec_mi.applications.tables.albedo import albedo_table
+    from virtspec_mi.applications.tables.audit import audit
     from virtspec_mi.exchange.conventions import convention, cycles_roughness
-    from virtspec_mi.exchange.engine_tables import engine_tables
+    from virtspec_mi.applications.tables.engine_tables import engine_tables
 
     vm.mitsuba()
     print(f"# engine tables — {datetime.datetime.now(datetime.timezone.utc):%Y-%m-%d %H:%M} UTC")

@@ -211,14 +211,14 @@ def foreign_modules(root: Path, package: str = "virtspec_mi") -> list[str]:
 def find_bench(scene: Any) -> Any:
     """
     The bench (specimen BSDF, geometry, frame) of a loaded ``scene``, by the running tree's
-    name for it: ``virtspec_mi.scene.find_bench`` (``find_instrument`` before the subpackage
+    name for it: ``virtspec_mi.runtime.scene.find_bench`` (``find_instrument`` before the subpackage
     layout of cff7fea), so a worker runs older trees too.
     """
 
     try:
-        from virtspec_mi.scene import find_bench as find
+        from virtspec_mi.runtime.scene import find_bench as find
     except ImportError:
-        from virtspec_mi.scene import find_instrument as find
+        from virtspec_mi.runtime.scene import find_instrument as find
     return find(scene)
 
 

@@ -3,7 +3,7 @@ Speed versus error of the four ray budgets (issue 5).
 
 For each bound (hoeffding, chebyshev, exact, two-stage) and each specimen of exactly
 known reflectance rho, take K independent readings in one batched trace_readings call
-(virtspec_mi.validation.coverage) at mu = 0.005, delta = 0.01 and report: rays per
+(virtspec_mi.applications.coverage.coverage) at mu = 0.005, delta = 0.01 and report: rays per
 reading (behind the estimate, and spent, pilot included), seconds, |error| against
 rho, the observed miss rate |m/N - rho| >= mu with its 95 % Clopper-Pearson interval,
 the exact miss probability q and the two-sided binomial test of the miss count.
@@ -27,7 +27,7 @@ from pathlib import Path
 import numpy as np
 
 import virtspec_mi
-from virtspec_mi import validation
+from virtspec_mi.applications import coverage as validation
 from virtspec_mi.budgets import bounds
 from virtspec_mi.references.quadrature import fresnel_reflectance
 from virtspec_mi.budgets.twostage import two_stage_law

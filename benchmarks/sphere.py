@@ -49,7 +49,7 @@ def main() -> None:
     from virtspec_mi.engine.plan import kernel_options
     from virtspec_mi.instruments.sphere import configurations
     from virtspec_mi.kernel.tracer import ReadingPlan, tally_readings
-    from virtspec_mi.scene import find_bench
+    from virtspec_mi.runtime.scene import find_bench
 
     mi = vm.mitsuba()
     scene = mi.load_file(SCENE)

@@ -243,7 +243,7 @@ if (Path(virtspec_mi.__file__).parent / "kernel").is_dir():
     from virtspec_mi.kernel.rng import chunk_root, dimension_keys, hash32, to_unit
 else:  # a revision before virtspec_mi.kernel (the editable install would supply the new one)
     from virtspec_mi.geometry import jittered_cell, polar_warp
-    from virtspec_mi.rng import chunk_root, dimension_keys, hash32, to_unit
+    from virtspec_mi.kernel.rng import chunk_root, dimension_keys, hash32, to_unit
 
 
 def drjit_chunk(first: int, size: int, strata: int) -> tuple[int, int]:

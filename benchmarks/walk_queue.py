@@ -180,7 +180,7 @@ def occupancy(scale: int) -> list[list[str]]:
     from virtspec_mi.engine.plan import kernel_options
     from virtspec_mi.kernel.tracer import ReadingPlan, WalkQueue, tally_readings
     from virtspec_mi.kernel.walk import walk_steps
-    from virtspec_mi.scene import find_bench
+    from virtspec_mi.runtime.scene import find_bench
     from virtspec_mi.settings import Settings
 
     workloads = {
@@ -235,7 +235,7 @@ def gonio(scale: int) -> list[list[str]]:
     from virtspec_mi.engine.plan import kernel_options
     from virtspec_mi.instruments.goniophotometer.bins import make_bins
     from virtspec_mi.kernel.tracer import ReadingPlan, WalkQueue, tally_readings
-    from virtspec_mi.scene import find_bench
+    from virtspec_mi.runtime.scene import find_bench
     from virtspec_mi.settings import Settings
 
     bins = make_bins(36, 36)

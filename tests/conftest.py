@@ -7,7 +7,7 @@ from pathlib import Path
 import pytest
 
 import virtspec_mi
-from virtspec_mi.leaf_data import leaf_data_dir
+from virtspec_mi.plugins.leaf_data import leaf_data_dir
 
 ROOT = Path(__file__).resolve().parents[1]
 SCENES = ROOT / "scenes"

@@ -1,6 +1,6 @@
 """
 An independent quadrature of microfacet albedos for the tests (not the package's
-``virtspec_mi.exchange.microfacet_reference``): every model the ``microfacet`` plugin
+``virtspec_mi.references.microfacet``): every model the ``microfacet`` plugin
 offers, written from the published formulas alone.
 
 E(μ) = ∫ f cos θ_o dω_o with f = D G₂ F/(4 cos θ_i cos θ_o) and dω_o = 4 (ω_o·m) dω_m

@@ -85,7 +85,7 @@ def test_bad_parameter_lists_name_the_parameter(dielectric, values):
 
 
 def test_an_empty_item_between_commas_is_refused_everywhere_lists_are_written():
-    from virtspec_mi.checks import parse_theta_i, parse_values, parse_wavelengths
+    from virtspec_mi.base.checks import parse_theta_i, parse_values, parse_wavelengths
 
     for parse in (parse_wavelengths, parse_theta_i, lambda text: parse_values("eta", text)):
         with pytest.raises(ValueError, match="no empty item between commas"):
@@ -94,7 +94,7 @@ def test_an_empty_item_between_commas_is_refused_everywhere_lists_are_written():
 
 
 def test_workers_are_limited_to_four_per_core_of_a_local_cluster_with_the_reason(dielectric):
-    from virtspec_mi.scaleout import WORKERS_PER_CORE, check_workers, local_worker_limit
+    from virtspec_mi.runtime.scaleout import WORKERS_PER_CORE, check_workers, local_worker_limit
 
     limit = WORKERS_PER_CORE * (os.cpu_count() or 1)
     assert local_worker_limit() == limit
@@ -193,8 +193,8 @@ def test_wavelengths_in_micrometres_are_refused_with_compares_hint(dielectric, w
 
 
 def test_the_micrometre_rule_is_the_one_compare_uses(tmp_path):
-    from virtspec_mi.checks import NANOMETRE_FLOOR
-    from virtspec_mi.comparison import read_measured
+    from virtspec_mi.base.checks import NANOMETRE_FLOOR
+    from virtspec_mi.applications.comparison import read_measured
 
     path = tmp_path / "um.csv"
     path.write_text("0.4,0.2\n0.5,0.3\n")
@@ -258,7 +258,7 @@ def test_a_turbid_slab_spectrum_and_a_measured_table_hold_their_data_range(mi):
     ({"illuminant": 5}, ("illuminant",)),
 ])
 def test_compare_options_are_one_line_errors_naming_the_option(dielectric, options, words):
-    from virtspec_mi.comparison import compare
+    from virtspec_mi.applications.comparison import compare
 
     reading = vm.sweep(dielectric, theta_i=8, wavelengths="400, 500, 600", rays=1000, progress=False)
     measured = ([400.0, 500.0, 600.0], [0.04, 0.04, 0.04])

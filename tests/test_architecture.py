@@ -22,6 +22,8 @@ What counts as an import edge ``A -> B`` (A, B project modules):
 * the plugin registry: ``virtspec_mi.runtime.register()`` imports every module of its
   ``PLUGINS`` table (read from the file as a literal), so ``virtspec_mi.runtime`` has an
   edge to each of them;
+* a string constant that names a project module, alone or as ``"module:function"`` (a hook
+  imported by string), anywhere in A except the root package;
 * NOT counted: the root package's lazy ``_LAZY`` table (``importlib.import_module(_LAZY[name])``
   in ``__getattr__``: resolved on attribute access, not on import). Real import statements
   in ``__init__.py`` files do count.
@@ -35,6 +37,7 @@ from __future__ import annotations
 
 import ast
 import importlib.util
+import re
 import tomllib
 from collections import defaultdict
 from pathlib import Path
@@ -49,42 +52,25 @@ ROOT = Path(__file__).resolve().parents[1]
 # Layers, top to bottom. Data flows downward: a module may import modules of its own layer
 # or of a layer below it, never of a layer above it. Each entry is a dotted-name prefix: it
 # matches that module and everything under it ("virtspec_mi.kernel" matches
-# "virtspec_mi.kernel.tracer"; "virtspec_mi.scene" does not match "virtspec_mi.scenes"), the
+# "virtspec_mi.kernel.tracer"; "virtspec_mi.base" does not match "virtspec_mi.baseline"), the
 # most specific entry winning; "=name" matches that module alone. Every module of the
 # package must be in a layer. The first layer (the CLI) is special: nothing outside it may
 # import it at all.
 # ---------------------------------------------------------------------------------------
 LAYERS: list[tuple[str, tuple[str, ...]]] = [
-    ("cli", ("virtspec_mi.cli", "virtspec_mi.__main__")),
-    ("api", ("virtspec_mi.api", "virtspec_mi.comparison", "virtspec_mi.scaleout", "virtspec_mi.validation",
-             "virtspec_mi.scene", "virtspec_mi.runtime",
-             # the exchange formats that take their readings through the API
-             "virtspec_mi.exchange.albedo", "virtspec_mi.exchange.tables", "virtspec_mi.exchange.klems_gonio",
-             "virtspec_mi.exchange.flip",
-             "virtspec_mi.exchange.engine_tables", "virtspec_mi.exchange.audit",
-             # applications: clients of the API and the engine that answer a user's question (fits,
-             # derived quantities; the maths that results read is below)
-             "virtspec_mi.applications")),
-    # the integrators: Mitsuba's entry (mi.render), thin adapters over the instruments
-    ("adapter", ("virtspec_mi.plugins.integrators",)),
+    ("cli", ("virtspec_mi.cli", "=virtspec_mi.__main__")),
+    ("api", ("virtspec_mi.api",)),
+    ("applications", ("virtspec_mi.applications",)),
+    ("runtime", ("virtspec_mi.runtime",)),
     ("instruments", ("virtspec_mi.instruments",)),
-    ("results", ("virtspec_mi.results",
-                 # the derived quantities' maths that Result.colour() reads (issue 30)
-                 "virtspec_mi.applications.derived.functionals", "virtspec_mi.applications.derived.delta_e",
-                 "virtspec_mi.applications.derived.colour")),
+    ("results", ("virtspec_mi.results",)),
+    ("colorimetry", ("virtspec_mi.colorimetry",)),
     ("engine", ("virtspec_mi.engine",)),
     ("settings", ("virtspec_mi.settings",)),
-    # exchange: the file formats and their sizing (the modules that measure are in the api layer)
-    ("budgets/geometry/references", ("virtspec_mi.budgets", "virtspec_mi.geometry", "virtspec_mi.references",
-                                     "virtspec_mi.exchange")),
-    ("plugins", ("=virtspec_mi.plugins", "virtspec_mi.plugins.bsdfs", "virtspec_mi.leaf_data")),
+    ("budgets", ("virtspec_mi.budgets", "virtspec_mi.geometry", "virtspec_mi.references", "virtspec_mi.exchange")),
+    ("plugins", ("virtspec_mi.plugins",)),
     ("kernel", ("virtspec_mi.kernel",)),
-    # the root package imports llvm and scenes (its public names load lazily: not counted);
-    # virtspec_mi.scenes (the shipped scene files by name) and virtspec_mi.interrupts (SIGINT and
-    # SIGTERM at safe points: the engine's runs, the command line's whole command) import nothing of it
-    ("base", ("virtspec_mi.checks", "virtspec_mi.files", "virtspec_mi.llvm", "virtspec_mi.scenes",
-              "virtspec_mi.interrupts", "=virtspec_mi",
-              "=virtspec_mi.applications", "=virtspec_mi.applications.derived")),
+    ("base", ("virtspec_mi.base", "virtspec_mi.scenes", "=virtspec_mi")),
 ]
 """
 The layers of the package, top to bottom (issue 21). An entry names a module and everything
@@ -162,7 +148,17 @@ def _literal_import(node: ast.Call, module: str, package: str) -> str | None:
         return None
 
 
-def imports_of(source: str, module: str, is_package: bool, known: set[str]) -> list[tuple[str, int]]:
+ROOT_PACKAGE = "virtspec_mi"
+HOOK = re.compile(r"virtspec_mi(\.[A-Za-z_]\w*)+(:[A-Za-z_]\w*)?")
+"""
+A string that names a module of the package, alone or as ``"module:function"``: an import
+by string (a hook loaded with ``importlib``), counted as an edge like a statement. Not
+counted in the root package, whose lazy table of public names is the package's front door.
+"""
+
+
+def imports_of(source: str, module: str, is_package: bool, known: set[str],
+               strings: bool = True) -> list[tuple[str, int]]:
     """(imported project module, line) for every import in ``source`` (see module docstring)."""
 
     package = module if is_package else module.rpartition(".")[0]
@@ -184,6 +180,9 @@ def imports_of(source: str, module: str, is_package: bool, known: set[str]) -> l
             name = _literal_import(node, module, package)
             if name:
                 requested.append((name, node.lineno))
+        elif (strings and isinstance(node, ast.Constant) and isinstance(node.value, str) and module != ROOT_PACKAGE
+              and HOOK.fullmatch(node.value)):
+            requested.append((node.value.partition(":")[0], node.lineno))  # a hook by string: "module:function"
 
     found: list[tuple[str, int]] = []
     for name, line in requested:
@@ -198,22 +197,26 @@ def imports_of(source: str, module: str, is_package: bool, known: set[str]) -> l
     return [(name, line) for name, line in found if name != module]
 
 
-def import_graph() -> tuple[Graph, dict[tuple[str, str], list[Site]]]:
-    """The project's import graph and, for each edge, where it is made."""
+def import_graph(strings: bool = True) -> tuple[Graph, dict[tuple[str, str], list[Site]]]:
+    """
+    The project's import graph and, for each edge, where it is made; ``strings``: with the
+    imports by string (hooks named ``"module:function"``, which run up the layers as any
+    import does, but close no cycle: they are imported when called).
+    """
 
     files = project_files()
     known = set(files)
     graph: Graph = {name: set() for name in files}
     sites: dict[tuple[str, str], list[Site]] = defaultdict(list)
     for name, (path, is_package) in files.items():
-        for target, line in imports_of(path.read_text(encoding="utf-8"), name, is_package, known):
+        for target, line in imports_of(path.read_text(encoding="utf-8"), name, is_package, known, strings):
             graph[name].add(target)
             site = (str(path.relative_to(ROOT)), line)
             if site not in sites[name, target]:
                 sites[name, target].append(site)
     for target, line in registered_plugins(files):
         graph["virtspec_mi.runtime"].add(target)
-        sites["virtspec_mi.runtime", target].append(("virtspec_mi/runtime.py", line))
+        sites["virtspec_mi.runtime", target].append(("virtspec_mi/runtime/__init__.py", line))
     return graph, sites
 
 
@@ -226,7 +229,7 @@ def registered_plugins(files: dict[str, tuple[Path, bool]]) -> list[tuple[str, i
         if any(isinstance(t, ast.Name) and t.id == "PLUGINS" for t in targets) and node.value is not None:
             table = ast.literal_eval(node.value)
             return [(module, node.lineno) for _, module, _ in table.values()]
-    raise AssertionError("virtspec_mi/runtime.py has no literal PLUGINS table")
+    raise AssertionError("virtspec_mi/runtime/__init__.py has no literal PLUGINS table")
 
 
 # ------------------------------------------------------------------------ cycle finder
@@ -335,30 +338,17 @@ def _in(module: str, prefixes: tuple[str, ...]) -> bool:
                for p in prefixes)
 
 
-INSTRUMENT_PARTS: dict[str, str] = {
-    "walk": "kernel", "hook": "kernel",
-    "geometry": "budgets/geometry/references", "bins": "budgets/geometry/references",
-    "model": "budgets/geometry/references", "theory": "budgets/geometry/references",
-    "result": "results", "plot": "results",
-    "integrator": "adapter",
-}
+KERNEL_SIDE: tuple[str, ...] = ("hook", "walk")
 """
-The layer of each part of an instrument's folder (``virtspec_mi.instruments.<name>.<part>``),
-by the part's module name: its kernel-side exit hook (``walk``/``hook``: the kernel layer,
-importing only ``virtspec_mi.kernel``), its geometry, bins and physics references, its result
-and plots, its integrator; the folder's ``__init__`` (the instrument) is in the instruments layer.
+The parts of an instrument's folder that run inside the kernel's fused loop (its exit hook:
+``virtspec_mi.instruments.<name>.hook`` or ``.walk``): they sit in the instruments folder, whose
+layer they share, and import nothing of the package outside ``virtspec_mi.kernel``
+(:func:`test_the_kernel_imports_nothing_above_it`).
 """
 
 
 def layer_of(module: str) -> int | None:
-    """
-    Index into :data:`LAYERS` (0 = top) of the most specific matching prefix, or None; a
-    part of an instrument's folder by :data:`INSTRUMENT_PARTS`.
-    """
-
-    parts = module.split(".")
-    if len(parts) == 4 and parts[:2] == ["virtspec_mi", "instruments"] and parts[3] in INSTRUMENT_PARTS:
-        return [name for name, _ in LAYERS].index(INSTRUMENT_PARTS[parts[3]])
+    """Index into :data:`LAYERS` (0 = top) of the most specific matching prefix, or None."""
 
     best: tuple[int, int] | None = None  # (prefix length, layer)
     for i, (_, prefixes) in enumerate(LAYERS):
@@ -396,13 +386,13 @@ def test_the_import_graph_sees_the_project(project_graph):
 
     graph, _ = project_graph
     assert "virtspec_mi" in graph and "virtspec_mi.plugins" in graph
-    assert "virtspec_mi.plugins.integrators.spectrophotometer" in graph["virtspec_mi.runtime"]
+    assert "virtspec_mi.instruments.integrator" in graph["virtspec_mi.runtime"]
     assert any(name.startswith("virtspec_mi.plugins.") for name in graph)
     assert sum(map(len, graph.values())) > len(graph) // 2
 
 
-def test_no_import_cycles(project_graph):
-    graph, sites = project_graph
+def test_no_import_cycles():
+    graph, sites = import_graph(strings=False)
     report = describe_cycles(graph, sites)
     groups = cyclic_components(graph)
     assert not report, f"{len(groups)} group(s) of modules import one another in a cycle:\n\n{report}"
@@ -414,7 +404,7 @@ def test_imports_flow_down_the_layers(project_graph):
     assert not problems, "imports against the layering (see LAYERS in this file):\n" + "\n".join(problems)
 
 
-PAST_THE_API: tuple[str, ...] = ("virtspec_mi.engine", "virtspec_mi.kernel", "virtspec_mi.checks")
+PAST_THE_API: tuple[str, ...] = ("virtspec_mi.engine", "virtspec_mi.kernel", "virtspec_mi.base.checks")
 """
 What the command line reaches only through the API (issue 29): the engine and the kernel
 below it, and the boundary's checks and parsers (:mod:`virtspec_mi.api` offers what the
@@ -434,7 +424,7 @@ def test_every_module_belongs_to_a_layer(project_graph):
     unplaced = sorted(name for name in graph if layer_of(name) is None)
     assert not unplaced, f"modules in no layer of LAYERS (place each in one): {', '.join(unplaced)}"
     assert layer_of("virtspec_mi") == len(LAYERS) - 1 and layer_of("virtspec_mi.plugins") == layer_of(
-        "virtspec_mi.plugins.bsdfs.abm_b") != layer_of("virtspec_mi.plugins.integrators.spectrophotometer")
+        "virtspec_mi.plugins.bsdfs.abm_b") != layer_of("virtspec_mi.instruments.integrator")
 
 
 def test_cycle_finder_finds_a_cycle_and_passes_a_dag():
@@ -513,10 +503,38 @@ def test_the_kernel_imports_nothing_above_it(project_graph):
 
     graph, sites = project_graph
     bottom = [name for name, _ in LAYERS].index("kernel")
-    kernel = [name for name in graph if layer_of(name) == bottom]
+    kernel = [name for name in graph if layer_of(name) == bottom or (
+        name.startswith("virtspec_mi.instruments.") and name.rpartition(".")[2] in KERNEL_SIDE)]
     assert {"virtspec_mi.kernel.tracer", "virtspec_mi.instruments.sphere.walk",
             "virtspec_mi.instruments.goniophotometer.hook"} <= set(kernel)
     outside = sorted(f"{a} -> {b}  ({', '.join(f'{p}:{line}' for p, line in sites.get((a, b), []))})"
                      for a in kernel for b in graph[a]
                      if not (b == "virtspec_mi.kernel" or b.startswith("virtspec_mi.kernel.")))
     assert not outside, "the kernel imports modules above it:\n" + "\n".join(outside)
+
+
+def test_a_planted_upward_import_and_a_planted_string_hook_are_refused(project_graph):
+    """The layering test fails on an import statement and on a ``"module:function"`` string that go up."""
+
+    graph, _ = project_graph
+    known = set(graph)
+    for source in ("from virtspec_mi.api import measure\n",
+                   "def hook():\n    return 'virtspec_mi.applications.targets.parse:respond'\n",
+                   "TABLE = {'x': 'virtspec_mi.cli.measuring'}\n"):
+        planted = {name: set(targets) for name, targets in graph.items()}
+        planted["virtspec_mi.results.base"] |= {name for name, _ in imports_of(source, "virtspec_mi.results.base",
+                                                                               False, known)}
+        problems = layering_violations(planted)
+        assert any(p.startswith("virtspec_mi.results.base -> ") for p in problems), source
+
+
+def test_every_folder_is_one_layer():
+    """Each top-level folder of the package is named by exactly one prefix of :data:`LAYERS`: no per-module entry."""
+
+    prefixes = [p for _, entries in LAYERS for p in entries]
+    folders = sorted(path.name for path in (ROOT / "virtspec_mi").iterdir()
+                     if path.is_dir() and (path / "__init__.py").exists())
+    assert sorted(p.split(".")[1] for p in prefixes if p.count(".") == 1 and not p.startswith("=")) == folders
+    assert all(p.count(".") == 1 or p in ("=virtspec_mi", "=virtspec_mi.__main__") for p in prefixes), prefixes
+    loose = sorted(path.name for path in (ROOT / "virtspec_mi").glob("*.py"))
+    assert loose == ["__init__.py", "__main__.py"], f"loose modules at the package root: {loose}"

@@ -1,4 +1,4 @@
-"""The validate-once boundary (virtspec_mi/checks.py): limits checked before anything is built,
+"""The validate-once boundary (virtspec_mi/base/checks.py): limits checked before anything is built,
 numbers that are not numbers, messages that show the value given. Issue 12."""
 
 from __future__ import annotations
@@ -9,8 +9,8 @@ import resource
 import numpy as np
 import pytest
 
-from virtspec_mi import checks
-from virtspec_mi.checks import (
+from virtspec_mi.base import checks
+from virtspec_mi.base.checks import (
     MAX_RAYS,
     MAX_VALUES,
     check_float32,
@@ -132,7 +132,7 @@ def test_check_float32(value, ok):
 def test_validated_checks_each_named_argument_once_and_keeps_the_trusting_body():
     import inspect
 
-    from virtspec_mi.checks import check_delta, check_mu, validated
+    from virtspec_mi.base.checks import check_delta, check_mu, validated
 
     seen = []
 

@@ -26,9 +26,9 @@ def test_no_citation_of_files_outside_the_checkout():
 def test_the_leaf_data_message_names_the_published_source_not_a_local_path(monkeypatch, tmp_path):
     import pytest
 
-    from virtspec_mi.leaf_data import ENV_VAR, leaf_data_dir
+    from virtspec_mi.plugins.leaf_data import ENV_VAR, leaf_data_dir
 
-    from virtspec_mi import leaf_data
+    from virtspec_mi.plugins import leaf_data
 
     monkeypatch.delenv(ENV_VAR, raising=False)
     monkeypatch.setattr(leaf_data, "SHIPPED", tmp_path / "absent")  # an installation that lost its data

@@ -1,5 +1,5 @@
 """
-Tests of virtspec_mi.comparison: a simulated spectrum against a measured one.
+Tests of virtspec_mi.applications.comparison: a simulated spectrum against a measured one.
 
 Measured data that ship with an installed package: colour-science's ColorChecker N
 Ohta patches (written to CSV files here), measured through a Mitsuba ``diffuse``
@@ -26,7 +26,7 @@ import pytest
 
 import virtspec_mi as vm
 from abm_reference import SOYBEAN, SOYBEAN_RAYS, SOYBEAN_WAVELENGTHS, ROUNDING
-from virtspec_mi.comparison import Comparison, MeasuredSpectrum, compare, read_measured
+from virtspec_mi.applications.comparison import Comparison, MeasuredSpectrum, compare, read_measured
 
 CHART = colour.SDS_COLOURCHECKERS["ColorChecker N Ohta"]
 WAVELENGTHS = "362:798:4"  # 110 wavelengths; 382-778 nm compared (100, 80 of them between the 5 nm data)

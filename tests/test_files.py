@@ -1,5 +1,5 @@
 """
-Tests of virtspec_mi.files, and of every writer through it (issue 22, item 4): a failed
+Tests of virtspec_mi.base.files, and of every writer through it (issue 22, item 4): a failed
 write — a full disk, a file size limit — names the path and the cause, keeps what was
 being written (the result attached to the error; the command line saves it elsewhere),
 leaves the old file whole and no temporary, and never removes a file the project did not
@@ -20,10 +20,10 @@ import numpy as np
 import pytest
 
 import virtspec_mi as vm
-import virtspec_mi.files as files
+import virtspec_mi.base.files as files
 from result_kinds import hemispherical_grid, sphere_grid
 from result_kinds import gonio_from_counts
-from virtspec_mi.files import IN_MEMORY, WriteError, atomic_file, cause_of
+from virtspec_mi.base.files import IN_MEMORY, WriteError, atomic_file, cause_of
 
 SUFFIXES = (".nc", ".csv", ".json", ".zarr")
 ROOT = Path(__file__).resolve().parents[1]
@@ -212,7 +212,7 @@ CHILD = textwrap.dedent("""
     sys.path.insert(0, {tests!r})
     from pathlib import Path
     from result_kinds import hemispherical_grid, sphere_grid
-    from virtspec_mi.files import WriteError
+    from virtspec_mi.base.files import WriteError
     folder = Path({folder!r})
     small = hemispherical_grid().isel(wavelength=0, theta_i=0)
     large = {{"sweep": hemispherical_grid(), "sphere": sphere_grid()}}

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 import virtspec_mi as vm
-from virtspec_mi.scaleout import check_workers
+from virtspec_mi.runtime.scaleout import check_workers
 
 SMALL = dict(model="conductor", engine=None, mu=[0.5, 1.0], alpha=[0.3], epsilon=0.05, progress=False)
 
@@ -193,7 +193,7 @@ def test_a_selection_restates_its_settings_and_its_file_reads_back(dielectric, t
                                              ({"isotropic": "maybe"}, "isotropic must be true or false"),
                                              ({"epsilon": "abc"}, "epsilon must be a number")])
 def test_a_klems_measurements_settings_are_named_not_raw_conversion_errors(keywords, words):
-    from virtspec_mi.exchange.klems_gonio import klems_measure
+    from virtspec_mi.applications.klems.measure import klems_measure
 
     with pytest.raises(ValueError, match=words):
         klems_measure("diamond_conical", basis="quarter", **keywords)

@@ -3,7 +3,7 @@ Interrupts (issue 22, item 3): SIGINT and SIGTERM are honoured within about a se
 every long run — sweeps, goniophotometer and sphere readings, Dask runs — the checkpoint
 saved, the exit status 130 (SIGINT) or 143 (SIGTERM), the message naming the file to
 resume from; kernels are split into chunks bounded in time, which the counts do not
-depend on (virtspec_mi.interrupts, virtspec_mi.kernel.tracer).
+depend on (virtspec_mi.base.interrupts, virtspec_mi.kernel.tracer).
 
 The real-process tests are slow: each starts ``virtspec`` (or the API) in a child process
 and signals it once its checkpoint holds a finished reading.
@@ -23,9 +23,9 @@ import numpy as np
 import pytest
 
 import virtspec_mi as vm
-import virtspec_mi.interrupts as interrupts
+import virtspec_mi.base.interrupts as interrupts
 from virtspec_mi.engine.checkpoint import checkpoint_for
-from virtspec_mi.interrupts import Interrupted
+from virtspec_mi.base.interrupts import Interrupted
 from virtspec_mi.kernel import tracer
 
 from killed_runs import ROUGH_XML, signal_when_kept

@@ -185,7 +185,7 @@ def test_a_signal_during_the_result_files_write_waits_for_it_and_names_the_file(
     """A KeyboardInterrupt inside the NetCDF writer's file lock could hang; the file is finished first."""
 
     import virtspec_mi as vm
-    import virtspec_mi.interrupts as interrupts
+    import virtspec_mi.base.interrupts as interrupts
     from virtspec_mi.results import io
 
     scene = vm.instrument_scene({"type": "simple_dielectric"})

@@ -8,8 +8,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from virtspec_mi import leaf_data
-from virtspec_mi.leaf_data import (
+from virtspec_mi.plugins import leaf_data
+from virtspec_mi.plugins.leaf_data import (
     ENV_VAR,
     SHIPPED,
     GRID,

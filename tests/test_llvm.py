@@ -1,4 +1,4 @@
-"""Tests of virtspec_mi.llvm: a working libLLVM is chosen, a bad one refused with the fix."""
+"""Tests of virtspec_mi.base.llvm: a working libLLVM is chosen, a bad one refused with the fix."""
 
 from __future__ import annotations
 
@@ -8,7 +8,7 @@ import sys
 
 import pytest
 
-from virtspec_mi import llvm
+from virtspec_mi.base import llvm
 
 
 def test_major_version_from_file_names():

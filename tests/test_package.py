@@ -25,9 +25,9 @@ def test_every_lazy_name_is_the_object_of_the_module_that_defines_it():
 
 
 def test_compare_and_every_result_kind_are_at_the_top():
-    from virtspec_mi.comparison import compare
-    from virtspec_mi.exchange.tables import AlbedoTable
-    from virtspec_mi.exchange.klems import KlemsMeasurement
+    from virtspec_mi.applications.comparison import compare
+    from virtspec_mi.applications.tables.table import AlbedoTable
+    from virtspec_mi.applications.klems.matrices import KlemsMeasurement
     from virtspec_mi.instruments.gloss import GlossResult
 
     assert vm.compare is compare

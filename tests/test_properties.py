@@ -324,7 +324,7 @@ def test_specimen_parameter_lists_give_readings_or_name_the_parameter(scenes, va
 def test_workers_are_a_cluster_size_within_the_machine_an_address_or_named(workers):
     import os
 
-    from virtspec_mi.scaleout import check_workers
+    from virtspec_mi.runtime.scaleout import check_workers
 
     try:
         checked = check_workers(workers)

@@ -1,4 +1,4 @@
-"""Tests of virtspec_mi.scaleout: sweeps on a 2-worker Dask LocalCluster (spawned processes).
+"""Tests of virtspec_mi.runtime.scaleout: sweeps on a 2-worker Dask LocalCluster (spawned processes).
 
 One cluster serves the module (started with the project's own ``scaleout.connect(2)``):
 the counts of a distributed sweep are bit-identical to the in-process sweep's, an
@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 
 import virtspec_mi as vm
-from virtspec_mi import scaleout
+from virtspec_mi.runtime import scaleout
 from virtspec_mi.engine.checkpoint import Checkpoint
 from virtspec_mi.cli import main
 from virtspec_mi.kernel.counts import Counts
@@ -176,7 +176,7 @@ def test_killing_a_worker_mid_sweep_gives_the_identical_result(client, dielectri
         import os
         import signal
 
-        from virtspec_mi import scaleout as worker_side
+        from virtspec_mi.runtime import scaleout as worker_side
 
         original = worker_side.take_keyed_readings
 
@@ -193,7 +193,7 @@ def test_killing_a_worker_mid_sweep_gives_the_identical_result(client, dielectri
         worker_side.take_keyed_readings = dying
 
     def disarm() -> None:
-        from virtspec_mi import scaleout as worker_side
+        from virtspec_mi.runtime import scaleout as worker_side
 
         if hasattr(worker_side, "armed_original"):
             worker_side.take_keyed_readings = worker_side.armed_original

@@ -1,11 +1,11 @@
-"""Scenes loaded once where they enter the API (virtspec_mi.scene): LoadedScene, fingerprints."""
+"""Scenes loaded once where they enter the API (virtspec_mi.runtime.scene): LoadedScene, fingerprints."""
 
 from __future__ import annotations
 
 import pytest
 
 import virtspec_mi as vm
-from virtspec_mi.scene import LoadedScene, loaded, scene_fingerprint
+from virtspec_mi.runtime.scene import LoadedScene, loaded, scene_fingerprint
 
 from mirror_specimen import register_mirror
 

@@ -84,7 +84,7 @@ def test_the_help_examples_give_shipped_scenes_by_name():
 
 
 def test_a_name_is_sent_to_workers_as_the_shipped_file_whatever_the_directory(tmp_path, monkeypatch):
-    from virtspec_mi.scaleout import portable_scene
+    from virtspec_mi.runtime.scaleout import portable_scene
 
     monkeypatch.chdir(tmp_path)  # the workers' directory holds no file of that name
     assert portable_scene("diamond_conical") == str(scenes.path("diamond_conical"))

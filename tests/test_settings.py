@@ -5,7 +5,7 @@ from __future__ import annotations
 import pytest
 
 import virtspec_mi as vm
-from virtspec_mi.checks import parse_wavelengths
+from virtspec_mi.base.checks import parse_wavelengths
 from virtspec_mi.settings import Settings
 
 
@@ -69,7 +69,7 @@ def test_updated_ignores_none_and_revalidates():
 
 
 def test_check_wavelength_range():
-    from virtspec_mi.checks import check_wavelength_range
+    from virtspec_mi.base.checks import check_wavelength_range
 
     check_wavelength_range([400.0, 2500.0], (400, 2500), "abm_b")  # both ends included
     check_wavelength_range([1.0, 1e6], None, "any")  # no declared range: anything goes
@@ -100,7 +100,7 @@ def test_every_setting_is_an_api_keyword_an_xml_parameter_and_a_cli_flag(mi):
     import subprocess
     import sys
 
-    from virtspec_mi.plugins.integrators import spectrophotometer
+    from virtspec_mi.instruments import integrator as spectrophotometer
     from virtspec_mi.settings import SETTING_NAMES
 
     for function in (vm.measure, vm.sweep):
@@ -179,7 +179,7 @@ def test_probabilities_derived_from_delta_are_normal_floats(kwargs, message):
 
 
 def test_chunk_size_is_capped_by_memory():
-    from virtspec_mi.checks import MAX_CHUNK_SIZE
+    from virtspec_mi.base.checks import MAX_CHUNK_SIZE
 
     assert MAX_CHUNK_SIZE == 2**25 and Settings(chunk_size=2**25).chunk_size == 2**25
     with pytest.raises(ValueError, match=r"chunk_size must be a whole number with 1024 <= chunk_size <= 2\*\*25 "

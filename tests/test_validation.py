@@ -1,5 +1,5 @@
 """
-Tests of virtspec_mi.validation: the coverage harness on specimens of known reflectance.
+Tests of virtspec_mi.applications.coverage: the coverage harness on specimens of known reflectance.
 
 Cheap setting mu = 0.05, delta = 0.2, K = 1000 readings per (specimen, bound) in one
 take_readings call. Each check is a two-sided exact binomial test of the miss count
@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import pytest
 
-from virtspec_mi import validation
+from virtspec_mi.applications import coverage as validation
 from virtspec_mi.budgets import twostage
 from virtspec_mi.settings import Settings
 

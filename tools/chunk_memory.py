@@ -2,7 +2,7 @@
 Peak memory of one kernel launch against ``chunk_size``
 =======================================================
 
-The evidence behind :data:`virtspec_mi.checks.MAX_CHUNK_SIZE`. For each specimen and
+The evidence behind :data:`virtspec_mi.base.checks.MAX_CHUNK_SIZE`. For each specimen and
 each chunk size 2^k, a fresh Python process warms up (imports, kernel compilation with
 a tiny reading), then measures two wavelengths at θi (default 30°) with
 ``rays = chunk_size = 2^k`` and reports the growth of its peak resident memory

@@ -52,7 +52,7 @@ def ideal_table() -> str:
     from virtspec_mi.engine.plan import kernel_options
     from virtspec_mi.instruments.sphere.walk import SPECIMEN, Holder, holder_frame
     from virtspec_mi.kernel.tracer import ReadingPlan, tally_readings
-    from virtspec_mi.scene import find_bench
+    from virtspec_mi.runtime.scene import find_bench
 
     mu = hoeffding_mu(RAYS, DELTA)
     lines = ["| ρw | f | simulated | flat model (exact caps) | cap model, caps (Goebel, iadpython) "

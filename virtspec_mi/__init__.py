@@ -13,7 +13,7 @@ from __future__ import annotations
 import importlib
 from typing import Any
 
-__version__ = "0.1.0"
+from virtspec_mi.base.version import __version__  # noqa: E402  (one place: base.version)
 
 __all__ = [
     "__version__",
@@ -53,6 +53,7 @@ __all__ = [
     "AlbedoTable",
     "TableComparison",
     "KlemsMeasurement",
+    "write_klems",
     "compare",
     "read_measured",
     "Comparison",
@@ -83,10 +84,10 @@ _LAZY = {
     "Settings": "virtspec_mi.settings",
     "INSTRUMENTS": "virtspec_mi.instruments",
     "InstrumentGeometry": "virtspec_mi.geometry.disks",
-    "instrument_scene": "virtspec_mi.scene",
-    "load_scene": "virtspec_mi.scene",
-    "find_bench": "virtspec_mi.scene",
-    "tabulated_bsdf": "virtspec_mi.scene",
+    "instrument_scene": "virtspec_mi.runtime.scene",
+    "load_scene": "virtspec_mi.runtime.scene",
+    "find_bench": "virtspec_mi.runtime.scene",
+    "tabulated_bsdf": "virtspec_mi.runtime.scene",
     "read_table": "virtspec_mi.plugins.bsdfs.bsdf_table",
     "hoeffding_rays": "virtspec_mi.budgets.bounds",
     "chebyshev_rays": "virtspec_mi.budgets.bounds",
@@ -94,22 +95,23 @@ _LAZY = {
     "chebyshev_mu": "virtspec_mi.budgets.bounds",
     "BUDGETS": "virtspec_mi.budgets.rules",
     "mitsuba": "virtspec_mi.runtime",
-    "albedo_table": "virtspec_mi.exchange.albedo",
-    "read_albedo_table": "virtspec_mi.exchange.tables",
-    "AlbedoTable": "virtspec_mi.exchange.tables",
-    "TableComparison": "virtspec_mi.exchange.tables",
-    "KlemsMeasurement": "virtspec_mi.exchange.klems",
-    "compare": "virtspec_mi.comparison",
-    "read_measured": "virtspec_mi.comparison",
-    "Comparison": "virtspec_mi.comparison",
-    "MeasuredSpectrum": "virtspec_mi.comparison",
-    "colour": "virtspec_mi.applications.derived.targets",
-    "band": "virtspec_mi.applications.derived.targets",
-    "fapar": "virtspec_mi.applications.derived.targets",
-    "index": "virtspec_mi.applications.derived.targets",
-    "colour_difference": "virtspec_mi.applications.derived.difference",
-    "albedo": "virtspec_mi.applications.derived.targets",
-    "DerivedResult": "virtspec_mi.applications.derived.result",
+    "albedo_table": "virtspec_mi.applications.tables.albedo",
+    "read_albedo_table": "virtspec_mi.applications.tables.table",
+    "AlbedoTable": "virtspec_mi.applications.tables.table",
+    "TableComparison": "virtspec_mi.applications.tables.table",
+    "KlemsMeasurement": "virtspec_mi.applications.klems.matrices",
+    "write_klems": "virtspec_mi.applications.klems.matrices",
+    "compare": "virtspec_mi.applications.comparison",
+    "read_measured": "virtspec_mi.applications.comparison",
+    "Comparison": "virtspec_mi.applications.comparison",
+    "MeasuredSpectrum": "virtspec_mi.applications.comparison",
+    "colour": "virtspec_mi.applications.targets.targets",
+    "band": "virtspec_mi.applications.targets.targets",
+    "fapar": "virtspec_mi.applications.targets.targets",
+    "index": "virtspec_mi.applications.targets.targets",
+    "colour_difference": "virtspec_mi.applications.targets.difference",
+    "albedo": "virtspec_mi.applications.targets.targets",
+    "DerivedResult": "virtspec_mi.applications.targets.result",
     "fit": "virtspec_mi.applications.fitting",
     "read_fit": "virtspec_mi.applications.fitting",
     "FitResult": "virtspec_mi.applications.fitting",
@@ -119,7 +121,7 @@ _LAZY = {
 def _prefer_working_libllvm() -> None:
     """Point Dr.Jit at a working libLLVM as early as possible (never raises at import)."""
 
-    from virtspec_mi.llvm import LLVMError, select_libllvm
+    from virtspec_mi.base.llvm import LLVMError, select_libllvm
 
     try:
         select_libllvm()

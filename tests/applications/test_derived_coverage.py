@@ -27,8 +27,8 @@ import pytest
 from scipy.stats import binom
 
 import virtspec_mi as vm
-from virtspec_mi.applications.derived import functionals as functionals_module
-from virtspec_mi.applications.derived import measure as measure_module
+from virtspec_mi.budgets import functionals as functionals_module
+from virtspec_mi.applications.targets import measure as measure_module
 
 DELTA = 0.2
 TRIALS = 40
@@ -73,7 +73,7 @@ def _covers(result) -> bool:
         if inside:  # then the propagated statements must hold too (they are images of the box)
             import colour
 
-            from virtspec_mi.applications.derived.targets import colour_of
+            from virtspec_mi.applications.targets.targets import colour_of
 
             exact = colour_of(XYZ, target.functionals(), target)
             lab = result.colour.Lab_interval

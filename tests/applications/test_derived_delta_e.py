@@ -6,7 +6,7 @@ import colour
 import numpy as np
 import pytest
 
-from virtspec_mi.applications.derived.delta_e import LabBox, delta_e_00_bounds, delta_e_ab_bounds, lab_box
+from virtspec_mi.colorimetry.delta_e import LabBox, delta_e_00_bounds, delta_e_ab_bounds, lab_box
 
 WHITE = colour.CCS_ILLUMINANTS["CIE 1931 2 Degree Standard Observer"]["D65"]
 

@@ -7,8 +7,8 @@ import math
 import numpy as np
 import pytest
 
-from virtspec_mi.applications.derived.bands import SENTINEL_2, band, quadrature_weights
-from virtspec_mi.applications.derived.functionals import (Functional, allocate, certified_tolerance,
+from virtspec_mi.applications.targets.bands import SENTINEL_2, band, quadrature_weights
+from virtspec_mi.budgets.functionals import (Functional, allocate, certified_tolerance,
                                                           hoeffding_tolerance, union_delta)
 from virtspec_mi.budgets.bounds import hoeffding_rays
 
@@ -69,8 +69,8 @@ def test_bands_are_normalised_trapezoid_weights(tmp_path):
 
 
 def test_the_joint_allocation_meets_every_tolerance_with_fewer_rays_than_the_largest_of_each():
-    from virtspec_mi.applications.derived.colour import tristimulus_weights
-    from virtspec_mi.applications.derived.functionals import allocate_jointly
+    from virtspec_mi.colorimetry.certified import tristimulus_weights
+    from virtspec_mi.budgets.functionals import allocate_jointly
 
     weights = tristimulus_weights(np.arange(400, 781, 10.0))
     tolerances, delta = np.array([0.014, 0.015, 0.025]), 0.01 / 3

@@ -13,10 +13,10 @@ import numpy as np
 import pytest
 
 import virtspec_mi as vm
-from virtspec_mi.applications.derived.colour import CertifiedColour, tristimulus_weights
-from virtspec_mi.applications.derived.functionals import hoeffding_tolerance
-from virtspec_mi.applications.derived.parse import parse_target
-from virtspec_mi.results.colorimetry import colorimetry
+from virtspec_mi.colorimetry.certified import CertifiedColour, tristimulus_weights
+from virtspec_mi.budgets.functionals import hoeffding_tolerance
+from virtspec_mi.applications.targets.parse import parse_target
+from virtspec_mi.colorimetry.cie import colorimetry
 
 VALUES = "0.1, 0.3, 0.7, 0.4, 0.2, 0.6, 0.8, 0.5"
 
@@ -139,8 +139,8 @@ def test_a_sweep_certifies_a_target_at_every_angle(lambertian):
 def test_a_costly_colour_gets_a_second_pilot_and_still_holds_the_exact_colour(mi):
     """A dark reflector (albedo 2-8 %): its colour moves fast with XYZ, so the plan is costly and refined."""
 
-    from virtspec_mi.applications.derived.measure import PILOT_DELTA, PILOT_TOLERANCE
-    from virtspec_mi.applications.derived.functionals import allocate
+    from virtspec_mi.applications.targets.measure import PILOT_DELTA, PILOT_TOLERANCE
+    from virtspec_mi.budgets.functionals import allocate
 
     values = [0.02, 0.05, 0.08, 0.04]
     dark = vm.instrument_scene({"type": "diffuse", "reflectance": {

@@ -155,7 +155,7 @@ def test_fit_files_and_figure(tmp_path):
 def test_the_specimen_is_loaded_once_for_every_forward_reading(monkeypatch):
     """The scene is loaded where it enters the fit (vm.scene.loaded); each forward reading (a sweep) takes it."""
 
-    from virtspec_mi import scene
+    from virtspec_mi.runtime import scene
 
     real, loads = scene.find_bench, []
     monkeypatch.setattr(scene, "find_bench", lambda given, defines=None: loads.append(given) or real(given, defines))

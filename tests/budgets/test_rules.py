@@ -226,7 +226,7 @@ def test_checked_options_come_back_as_numbers():
 def test_below_the_boundary_nothing_is_checked_again(monkeypatch):
     """Settings validate once; the rules, the bins' formulas and the two-stage sizing trust their values."""
 
-    from virtspec_mi import checks
+    from virtspec_mi.base import checks
 
     settings = {name: Settings(bound=name, mu=0.05, delta=0.2) for name in BUDGETS}
     calls = []

@@ -384,7 +384,7 @@ def test_spectra_colours_and_plots_need_one_parameter_point(leaf_grid, tmp_path)
 
 
 def test_range_values_are_the_decimal_grid_and_include_the_stop():
-    from virtspec_mi.checks import parse_values
+    from virtspec_mi.base.checks import parse_values
 
     assert parse_values("p", "0.1:0.3:0.1") == (0.1, 0.2, 0.3)
     assert parse_values("p", "1e-4:2e-4:5e-5") == (1e-4, 1.5e-4, 2e-4)

@@ -21,7 +21,7 @@ from virtspec_mi.engine.readings import run, take_keyed_readings
 from virtspec_mi.engine.tally import Tally
 from virtspec_mi.instruments.goniophotometer.bins import make_bins
 from virtspec_mi.instruments.sphere.walk import SphereFate
-from virtspec_mi.scene import find_bench
+from virtspec_mi.runtime.scene import find_bench
 from virtspec_mi.settings import Settings
 
 ROUGH = {"type": "roughdielectric", "alpha": 0.3, "int_ior": 1.5}

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 import virtspec_mi as vm
-from virtspec_mi.scene import find_bench
+from virtspec_mi.runtime.scene import find_bench
 from virtspec_mi.settings import Settings
 from plans import take_readings
 from virtspec_mi.engine.readings import shares_wavelengths

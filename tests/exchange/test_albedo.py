@@ -1,5 +1,5 @@
 """
-Certified albedo tables (virtspec_mi.exchange.albedo): cells against the independent
+Certified albedo tables (virtspec_mi.applications.tables.albedo): cells against the independent
 quadrature, the certificate, files, the comparison mode, resume and the CLI.
 
 Cells are held to their own certificate: |Ê − E| < certified_epsilon (every cell of a
@@ -15,10 +15,10 @@ import numpy as np
 import pytest
 
 import virtspec_mi as vm
-from virtspec_mi.exchange.albedo import albedo_table
-from virtspec_mi.exchange.tables import read_albedo_table
+from virtspec_mi.applications.tables.albedo import albedo_table
+from virtspec_mi.applications.tables.table import read_albedo_table
 from virtspec_mi.exchange.conventions import convention, cycles_ior
-from virtspec_mi.exchange.microfacet_reference import average_albedo, directional_albedo
+from virtspec_mi.references.microfacet import average_albedo, directional_albedo
 
 
 def _reference(mu: float, alpha: float, distribution: str, eta: float | None = None, part: str = "total") -> tuple:
@@ -149,12 +149,12 @@ def test_a_published_table_of_another_model_is_flagged(ggx):
 
 
 def test_resume_reuses_finished_groups(mi, tmp_path, monkeypatch):
-    import virtspec_mi.api as api
+    import virtspec_mi.runtime.reading as reading
 
     kwargs = dict(engine=None, mu=[1.0, 0.4], alpha=[0.2, 0.8], epsilon=0.01, seed=5, progress=False)
     whole = albedo_table(**kwargs)
     calls = {"n": 0}
-    real = api.sweep
+    real = reading.take
 
     def failing(*args, **options):
         calls["n"] += 1
@@ -162,10 +162,10 @@ def test_resume_reuses_finished_groups(mi, tmp_path, monkeypatch):
             raise KeyboardInterrupt
         return real(*args, **options)
 
-    monkeypatch.setattr(api, "sweep", failing)
+    monkeypatch.setattr(reading, "take", failing)
     with pytest.raises(KeyboardInterrupt):
         albedo_table(checkpoint=tmp_path / "parts", **kwargs)
-    monkeypatch.setattr(api, "sweep", real)
+    monkeypatch.setattr(reading, "take", real)
     assert len(list((tmp_path / "parts").glob("*.nc"))) == 3
     resumed = albedo_table(checkpoint=tmp_path / "parts", **kwargs)
     for key in whole.counts:

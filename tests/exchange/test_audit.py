@@ -1,6 +1,6 @@
 """
-Audits of published engine tables (virtspec_mi.exchange.audit) and the engines' drop-in
-files (virtspec_mi.exchange.engine_tables).
+Audits of published engine tables (virtspec_mi.applications.tables.audit) and the engines' drop-in
+files (virtspec_mi.applications.tables.engine_tables).
 
 The "published" Cycles table is generated here: the independent quadrature of the tests
 (tests/microfacet_quadrature.py) on Cycles' grid, printed with six decimals in Cycles'
@@ -21,9 +21,9 @@ import pytest
 
 from microfacet_quadrature import albedo
 from published_tables import CYCLES_GGX_EAVG
-from virtspec_mi.exchange.audit import audit
+from virtspec_mi.applications.tables.audit import audit
 from virtspec_mi.exchange.conventions import convention
-from virtspec_mi.exchange.engine_tables import (engine_tables, read_engine_file, read_filament_inc, read_unreal,
+from virtspec_mi.applications.tables.engine_tables import (engine_tables, read_engine_file, read_filament_inc, read_unreal,
                                                 write_filament_inc, write_unreal)
 
 EPSILON = 0.05
@@ -205,8 +205,8 @@ def test_the_command_line_audit(published, tmp_path):
 
 
 def test_an_engine_table_read_back(certified, tmp_path):
-    from virtspec_mi.exchange.tables import read_albedo_table
-    from virtspec_mi.exchange.engine_tables import EngineTables
+    from virtspec_mi.applications.tables.table import read_albedo_table
+    from virtspec_mi.applications.tables.engine_tables import EngineTables
 
     certified.write(tmp_path / "t.nc")
     back = EngineTables.from_table(read_albedo_table(tmp_path / "t.nc"))

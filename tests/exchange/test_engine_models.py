@@ -17,8 +17,8 @@ import pytest
 from published_tables import CYCLES_GGX_E_MU1, CYCLES_GGX_EAVG
 
 from microfacet_quadrature import albedo, albedo_with_error
-from virtspec_mi.exchange.albedo import albedo_table
-from virtspec_mi.exchange.tables import read_albedo_table
+from virtspec_mi.applications.tables.albedo import albedo_table
+from virtspec_mi.applications.tables.table import read_albedo_table
 from virtspec_mi.exchange.conventions import cycles_roughness
 from virtspec_mi.exchange.engine_models import bsdf_model
 

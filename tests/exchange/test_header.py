@@ -8,7 +8,7 @@ import subprocess
 import numpy as np
 import pytest
 
-from virtspec_mi.exchange.albedo import albedo_table
+from virtspec_mi.applications.tables.albedo import albedo_table
 from virtspec_mi.exchange.header import read_table_values, write_header
 
 PROGRAM = """

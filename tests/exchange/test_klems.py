@@ -1,5 +1,5 @@
 """
-Klems BSDF files (virtspec_mi.exchange.klems*): the bases, exact aggregation, the turned-over
+Klems BSDF files (virtspec_mi.applications.klems.matrices*): the bases, exact aggregation, the turned-over
 specimen, the XML read back by an independent reader (Radiance's BSDF library through
 pyradiance, and the standard library's XML parser), and detection of swapped or corrupted files.
 """
@@ -10,10 +10,9 @@ import numpy as np
 import pytest
 
 import virtspec_mi as vm
-from virtspec_mi.exchange.flip import flipped
-from virtspec_mi.exchange.klems import check_klems, read_klems, read_klems_sidecar, sidecar_path
+from virtspec_mi.applications.klems.matrices import check_klems, read_klems, read_klems_sidecar, sidecar_path
 from virtspec_mi.exchange.klems_basis import klems_basis
-from virtspec_mi.exchange.klems_gonio import klems_measure
+from virtspec_mi.applications.klems.measure import flipped, klems_measure
 
 GLASS = {"type": "roughdielectric", "distribution": "ggx", "alpha": 0.2, "int_ior": 1.5, "ext_ior": 1.0}
 
@@ -132,7 +131,7 @@ def test_swapped_and_corrupted_files_are_detected(glass_file, tmp_path):
             check_klems(garbage, reader=reader)
 
 
-def test_isotropic_shortcut_and_gonio_result_to_klems(mi, tmp_path):
+def test_isotropic_shortcut_and_write_klems_of_a_gonio_reading(mi, tmp_path):
     """A rotation-invariant specimen: per-ring readings rotated agree with per-patch readings within the certificate."""
 
     scene = vm.instrument_scene(GLASS)
@@ -143,14 +142,14 @@ def test_isotropic_shortcut_and_gonio_result_to_klems(mi, tmp_path):
     b = klems_basis("quarter")
     reading = vm.gonio(scene, theta_i=b.theta_centres.tolist(), beam="collimated", rays=3000, seed=3, phi_i=180,
                        theta_o_bins=b.theta_edges().tolist(), phi_o_bins=b.phi_bins())
-    out = reading.to_klems(tmp_path / "g.xml", basis="quarter", isotropic=True)
+    out = vm.write_klems(reading, tmp_path / "g.xml", basis="quarter", isotropic=True)
     assert check_klems(out, reader="xml")["passed"]
     assert "Mitsuba None" not in out.read_text() and f"Mitsuba {mi.__version__}" in out.read_text()
     from_reading = read_klems_sidecar(sidecar_path(out))
     assert np.all(np.abs(from_reading.fraction - rotated.fraction)
                   < (from_reading.certified_epsilon + rotated.certified_epsilon)[..., None, None])
     with pytest.raises(ValueError, match="isotropic"):
-        reading.to_klems(tmp_path / "h.xml", basis="quarter")
+        vm.write_klems(reading, tmp_path / "h.xml", basis="quarter")
 
 
 def test_cli_gonio_klems(mi, tmp_path, capsys, scenes_dir):
@@ -170,7 +169,7 @@ def test_cli_gonio_klems(mi, tmp_path, capsys, scenes_dir):
 def test_a_scene_given_by_name_is_loaded_once(mi, monkeypatch):
     """Each side's scene is loaded once (vm.scene.loaded), every goniophotometer reading of that side takes it."""
 
-    from virtspec_mi import scene
+    from virtspec_mi.runtime import scene
 
     real, loads = scene.find_bench, []
     monkeypatch.setattr(scene, "find_bench", lambda given, defines=None: loads.append(given) or real(given, defines))

@@ -1,11 +1,11 @@
-"""The independent microfacet quadrature (virtspec_mi.exchange.microfacet_reference) against known limits."""
+"""The independent microfacet quadrature (virtspec_mi.references.microfacet) against known limits."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from virtspec_mi.exchange.microfacet_reference import average_albedo, directional_albedo, smith_g1, smith_lambda
+from virtspec_mi.references.microfacet import average_albedo, directional_albedo, smith_g1, smith_lambda
 from virtspec_mi.references.quadrature import fresnel_reflectance_cos
 
 

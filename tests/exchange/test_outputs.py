@@ -21,10 +21,10 @@ import numpy as np
 import pytest
 
 import virtspec_mi as vm
-import virtspec_mi.interrupts as interrupts
+import virtspec_mi.base.interrupts as interrupts
 from virtspec_mi.engine.checkpoint import CheckpointError, locked
-from virtspec_mi.files import atomic_write
-from virtspec_mi.files import WriteError
+from virtspec_mi.base.files import atomic_write
+from virtspec_mi.base.files import WriteError
 
 ROOT = Path(__file__).resolve().parents[2]
 SMALL = dict(model="conductor", engine=None, mu=[0.5, 1.0], alpha=[0.3], epsilon=0.05, progress=False)
@@ -52,13 +52,13 @@ def test_an_albedo_tables_npy_companions_never_replace_a_users_files(mi, tmp_pat
 
 
 def test_a_klems_export_never_replaces_the_users_nc_or_the_scene(mi, tmp_path):
-    from virtspec_mi.exchange.klems_gonio import klems_measure
+    from virtspec_mi.applications.klems.measure import klems_measure
 
     reading = vm.gonio(vm.instrument_scene({"type": "simple_dielectric"}), theta_i=[0, 30], rays=2000,
                        theta_o_bins=[0, 45, 90], phi_o_bins=4, progress=False)
     (tmp_path / "sample.nc").write_text("the user's data")
     with pytest.raises(ValueError, match="sample.nc already exists"):
-        reading.to_klems(tmp_path / "sample.xml")
+        vm.write_klems(reading, tmp_path / "sample.xml")
     assert (tmp_path / "sample.nc").read_text() == "the user's data" and not (tmp_path / "sample.xml").exists()
     scene = tmp_path / "spec.xml"
     scene.write_text((ROOT / "virtspec_mi" / "scenes" / "diamond_conical.xml").read_text())
@@ -231,7 +231,7 @@ def test_a_glass_table_compared_with_its_own_nc_on_either_side_flags_nothing(mi,
 
 
 def test_an_interrupted_klems_run_names_its_parts_and_resumes_to_the_same_counts(mi, tmp_path, monkeypatch):
-    from virtspec_mi.exchange.klems_gonio import klems_measure
+    from virtspec_mi.applications.klems.measure import klems_measure
 
     run = dict(basis="quarter", rays=2000, isotropic=True, progress=False)
     whole = klems_measure("diamond_conical", **run)

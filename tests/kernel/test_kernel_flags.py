@@ -15,7 +15,7 @@ import pytest
 import virtspec_mi as vm
 from virtspec_mi.kernel.counts import Counts, Fate
 from virtspec_mi.kernel.tracer import ReadingPlan, trace_rays
-from virtspec_mi.scene import find_bench
+from virtspec_mi.runtime.scene import find_bench
 from virtspec_mi.settings import Settings
 
 from mirror_specimen import register_mirror

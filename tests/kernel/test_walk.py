@@ -163,7 +163,7 @@ def test_queued_walks_count_as_one_loop_per_ray(mi, case):
     """Bit-identical counts: sample() per ray (one loop) vs queued lanes of any count, queue and chunk size."""
 
     from virtspec_mi.kernel.queue import WalkQueue
-    from virtspec_mi.scene import find_bench
+    from virtspec_mi.runtime.scene import find_bench
     from virtspec_mi.settings import Settings
 
     specimen, options, readings = _QUEUE_CASES[case]
@@ -200,7 +200,7 @@ def test_queued_walks_bin_as_one_loop_per_ray(mi, case):
     from virtspec_mi.engine.plan import kernel_options
     from virtspec_mi.instruments.goniophotometer.bins import make_bins
     from virtspec_mi.kernel.tracer import ReadingPlan, WalkQueue, tally_readings
-    from virtspec_mi.scene import find_bench
+    from virtspec_mi.runtime.scene import find_bench
     from virtspec_mi.settings import Settings
 
     specimen, options, readings, spec = _GONIO_CASES[case]
@@ -225,7 +225,7 @@ def test_queued_walks_bin_as_one_loop_per_ray(mi, case):
 
 def test_walk_specimens_declare_their_steps(mi, diamond):
     from virtspec_mi.kernel.walk import is_random_walk
-    from virtspec_mi.scene import find_bench
+    from virtspec_mi.runtime.scene import find_bench
 
     for specimen in ({"type": "abm_b"}, {"type": "abm_u"}, {"type": "turbid_slab"}):
         assert is_random_walk(find_bench(vm.instrument_scene(specimen)).bsdf)
@@ -279,7 +279,7 @@ def test_any_specimen_declaring_the_steps_runs_queued(mi, coin_walk):
     """The protocol is generic: a new walk specimen gets the queued lanes, with the one-loop counts."""
 
     from virtspec_mi.kernel.walk import is_random_walk
-    from virtspec_mi.scene import find_bench
+    from virtspec_mi.runtime.scene import find_bench
     from virtspec_mi.settings import Settings
 
     instrument = find_bench(vm.instrument_scene({"type": coin_walk}))
@@ -307,7 +307,7 @@ def test_queued_walks_do_not_depend_on_the_thread_count(mi):
 
     import drjit as dr
 
-    from virtspec_mi.scene import find_bench
+    from virtspec_mi.runtime.scene import find_bench
     from virtspec_mi.settings import Settings
 
     specimen, options, readings = _QUEUE_CASES["abm_b_conical"]

@@ -31,7 +31,7 @@ def test_walk_specimens_declare_their_length(mi):
 
     from virtspec_mi.kernel.queue import LONG_WALK_STEPS
     from virtspec_mi.kernel.walk import walk_steps
-    from virtspec_mi.scene import find_bench
+    from virtspec_mi.runtime.scene import find_bench
 
     for leaf in ("abm_b", "abm_u"):
         assert walk_steps(find_bench(vm.instrument_scene({"type": leaf})).bsdf) >= LONG_WALK_STEPS
@@ -60,7 +60,7 @@ def test_prestart_counts_as_one_loop_per_ray(mi, case):
     from virtspec_mi.engine.plan import kernel_options
     from virtspec_mi.instruments.goniophotometer.bins import make_bins
     from virtspec_mi.kernel.tracer import ReadingPlan, WalkQueue, tally_readings
-    from virtspec_mi.scene import find_bench
+    from virtspec_mi.runtime.scene import find_bench
     from virtspec_mi.settings import Settings
 
     specimen, options, readings = _CASES[case]

@@ -10,7 +10,7 @@ import pytest
 
 import virtspec_mi as vm
 from virtspec_mi.engine.bench import SceneError
-from virtspec_mi.leaf_data import LEAF_DATA_FILES
+from virtspec_mi.plugins.leaf_data import LEAF_DATA_FILES
 
 PLUGINS = ("abm_b", "abm_u")
 

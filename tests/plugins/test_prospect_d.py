@@ -28,7 +28,7 @@ from virtspec_mi.plugins.bsdfs.prospect_model import (
     tav,
 )
 from virtspec_mi.references.quadrature import fresnel_reflectance
-from virtspec_mi.scene import instrument_scene
+from virtspec_mi.runtime.scene import instrument_scene
 
 
 @pytest.fixture

@@ -157,7 +157,7 @@ def test_diffuse_beam_gives_the_hemispherical_fresnel_reflectance(mi):
 
 
 def test_diffuse_beam_directions_are_cosine_distributed(mi):
-    from virtspec_mi.scene import find_bench
+    from virtspec_mi.runtime.scene import find_bench
     from virtspec_mi.kernel.tracer import ReadingPlan, trace_rays
 
     instrument = find_bench(vm.instrument_scene({"type": "simple_dielectric"}))

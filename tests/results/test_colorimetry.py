@@ -1,5 +1,5 @@
 """
-Tests of virtspec_mi.results.colorimetry, with the end-to-end ColorChecker check: a Mitsuba
+Tests of virtspec_mi.colorimetry.cie, with the end-to-end ColorChecker check: a Mitsuba
 ``diffuse`` specimen whose reflectance is a ColorChecker patch spectrum, measured
 380–780 nm, reproduces the patch's L*a*b* within ΔE2000 < 0.5.
 """
@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 import virtspec_mi as vm
-from virtspec_mi.results.colorimetry import colorimetry
+from virtspec_mi.colorimetry.cie import colorimetry
 
 CHART = "ColorChecker N Ohta"
 
@@ -108,7 +108,7 @@ def test_colorchecker_patches_are_reproduced_within_delta_e_2000_of_0_5(mi):
 
 
 def test_a_sparse_spectrum_states_its_coverage_and_too_little_is_refused():
-    from virtspec_mi.results.colorimetry import MIN_COVERAGE, colorimetry
+    from virtspec_mi.colorimetry.cie import MIN_COVERAGE, colorimetry
 
     wide = colorimetry(_sweep_of([0.5] * 31, np.arange(400, 701, 10)).to_sd())
     assert wide.coverage > 0.99 and "covering 99.8% of the colour-matching weight" in wide.summary()

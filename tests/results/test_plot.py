@@ -162,7 +162,7 @@ def test_readings_are_selected_by_wavelength_and_angle(angular):
 
 
 def test_the_comparison_figure_overlays_and_shows_the_residuals(tmp_path):
-    from virtspec_mi.comparison import compare
+    from virtspec_mi.applications.comparison import compare
 
     result = grid_result([0.1, 0.2, 0.3, 0.4, 0.5], [380, 400, 500, 600, 700], [8])
     comparison = compare(result, ([400, 500, 600], [0.21, 0.3, 0.41], [0.01, 0.02, 0.01]))
@@ -281,7 +281,7 @@ def test_no_figure_clips_a_title(angular, gonio):
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from result_kinds import sphere_grid
 
-    from virtspec_mi.comparison import compare
+    from virtspec_mi.applications.comparison import compare
     from virtspec_mi.instruments.goniophotometer.plot import plot_hemisphere, plot_polar, plot_series
 
     wavelengths = np.arange(400, 701, 10)

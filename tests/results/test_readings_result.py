@@ -116,7 +116,7 @@ def test_a_reading_is_a_result_with_one_dimension(grey_reading):
 
 
 def test_a_reading_becomes_spectra_colour_plots_and_files(grey_reading, tmp_path):
-    from virtspec_mi.results.colorimetry import colorimetry
+    from virtspec_mi.colorimetry.cie import colorimetry
     from virtspec_mi.results.plot import plot_sweep
 
     sd = grey_reading.to_sd()

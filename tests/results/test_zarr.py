@@ -219,7 +219,7 @@ def test_a_store_of_ours_and_an_empty_directory_are_replaced_whole(tmp_path):
 def test_a_zarr_table_that_cannot_be_written_leaves_the_sweep_its_readings(dielectric, tmp_path, monkeypatch):
     import errno
 
-    from virtspec_mi.files import WriteError
+    from virtspec_mi.base.files import WriteError
     from virtspec_mi.results.zarr import ZarrTable
 
     whole = vm.sweep(dielectric, **SMALL)

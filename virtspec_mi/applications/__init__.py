@@ -1,8 +1,70 @@
 """
-Applications
-============
+Applications: what a user asks, answered with the instruments' readings
+=======================================================================
 
-Clients of the measuring API and the engine that answer a user's question in the user's
-own units (derived quantities, fitted parameters, renderer tables): each one subpackage,
-with no sizing, checkpoint or file-writing code of its own.
+Each application is one folder and one row of :data:`APPLICATIONS` (an
+:class:`~virtspec_mi.applications.base.Application`), or an entry point of the group
+:data:`ENTRY_POINTS` (``virtspec_mi.applications``) in another package. An application
+takes its readings through the instrument seam (:mod:`virtspec_mi.runtime.reading`:
+an instrument's init, process and postprocess), never through the API above it.
+
+- :mod:`.targets` — certified derived quantities (colour, bands, indices, fAPAR, albedo):
+  ``virtspec measure --target``;
+- :mod:`.fitting` — specimen parameters fitted to a measured spectrum (``virtspec fit``);
+- :mod:`.tables` — certified albedo tables of renderers, each engine's own tables and
+  their audit (``virtspec albedo-table``);
+- :mod:`.klems` — certified Klems BSDF files (``virtspec gonio --klems``);
+- :mod:`.comparison` — simulated against measured spectra (``virtspec compare``);
+- :mod:`.coverage` — the coverage harness of the certificates.
 """
+
+from __future__ import annotations
+
+import warnings
+from importlib.metadata import entry_points
+
+from virtspec_mi.applications.base import Application, Extension
+from virtspec_mi.applications.klems import KlemsApplication
+from virtspec_mi.applications.targets import TargetsApplication
+
+__all__ = ["APPLICATIONS", "ENTRY_POINTS", "Application", "Extension", "discovered", "extensions"]
+
+ENTRY_POINTS = "virtspec_mi.applications"
+"""The entry-point group of outside applications."""
+
+
+def discovered(builtin: tuple[type[Application], ...]) -> dict[str, type[Application]]:
+    """
+    The applications ``builtin`` and those of every installed package's entry point of
+    :data:`ENTRY_POINTS`, by name; an entry point that cannot be loaded, is not an
+    :class:`~virtspec_mi.applications.base.Application` class or takes a name already taken
+    is left out with a ``RuntimeWarning`` naming it.
+    """
+
+    found = {application.name: application for application in builtin}
+    for point in entry_points(group=ENTRY_POINTS):
+        try:
+            application = point.load()
+        except Exception as error:  # an outside package's import error: reported, not fatal
+            warnings.warn(f"application entry point {point.name!r} ({point.value}) could not be loaded: {error}",
+                          RuntimeWarning, stacklevel=2)
+            continue
+        if not (isinstance(application, type) and issubclass(application, Application)):
+            warnings.warn(f"application entry point {point.name!r} ({point.value}) is not a virtspec_mi Application "
+                          "class: left out", RuntimeWarning, stacklevel=2)
+        elif application.name in found:
+            warnings.warn(f"application entry point {point.name!r} ({point.value}) takes the name "
+                          f"{application.name!r}, already taken: left out", RuntimeWarning, stacklevel=2)
+        else:
+            found[application.name] = application
+    return found
+
+
+APPLICATIONS: dict[str, type[Application]] = discovered((TargetsApplication, KlemsApplication))
+"""Every application by name: the built-in ones, then the outside ones (:data:`ENTRY_POINTS`)."""
+
+
+def extensions(command: str) -> tuple[Extension, ...]:
+    """The extensions of the instrument subcommand ``command`` that the applications declare."""
+
+    return tuple(e for application in APPLICATIONS.values() for e in application.extensions if e.command == command)

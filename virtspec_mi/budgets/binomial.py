@@ -69,7 +69,7 @@ import math
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from virtspec_mi.checks import MAX_RAYS, check_delta, check_mu
+from virtspec_mi.base.checks import MAX_RAYS, check_delta, check_mu
 from virtspec_mi.budgets.intervals import clopper_pearson
 
 __all__ = ["bernoulli_kl", "upper_exponent", "chernoff_rays", "binomial_rays", "union_hoeffding_rays",

@@ -87,7 +87,7 @@ import numpy as np
 
 from virtspec_mi.budgets.bounds import exact_certified, exact_mu, exact_rays, hoeffding_mu, hoeffding_rays
 from virtspec_mi.budgets.intervals import clopper_pearson
-from virtspec_mi.checks import check_rays_needed, shown_value
+from virtspec_mi.base.checks import check_rays_needed, shown_value
 
 __all__ = [
     "dkw_rays",

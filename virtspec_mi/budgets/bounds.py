@@ -24,7 +24,7 @@ the same rigorous guarantee as eq. (23) with about 0.63× the rays at μ = 0.005
 
 Validation: the public functions here are entries users call (``vm.hoeffding_rays``,
 ``virtspec bounds``, the notebooks): each checks its arguments once
-(:func:`virtspec_mi.checks.validated`). The rule objects of
+(:func:`virtspec_mi.base.checks.validated`). The rule objects of
 :mod:`virtspec_mi.budgets.rules` and the other budget modules hold validated values
 (the settings and options dataclasses check them) and call the trusting bodies,
 ``hoeffding_rays.unchecked`` and so on.
@@ -53,7 +53,7 @@ from typing import Any, Callable, Sequence
 
 import numpy as np
 
-from virtspec_mi.checks import MAX_RAYS, check_delta, check_mu, check_rays, validated
+from virtspec_mi.base.checks import MAX_RAYS, check_delta, check_mu, check_rays, validated
 
 __all__ = [
     "chebyshev_rays",

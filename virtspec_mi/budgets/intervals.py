@@ -22,7 +22,7 @@ from typing import Any
 
 import numpy as np
 
-from virtspec_mi.checks import check_delta, validated
+from virtspec_mi.base.checks import check_delta, validated
 
 __all__ = ["clopper_pearson", "clopper_pearson_each"]
 

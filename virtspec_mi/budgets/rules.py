@@ -78,7 +78,7 @@ from virtspec_mi.budgets.bounds import (
     hoeffding_rays,
     stated_mu,
 )
-from virtspec_mi.checks import (
+from virtspec_mi.base.checks import (
     check_bins,
     check_brdf_floor,
     check_delta,

@@ -50,7 +50,7 @@ import numpy as np
 
 from virtspec_mi.budgets.bounds import exact_rays, hoeffding_rays, miss_probability
 from virtspec_mi.budgets.intervals import clopper_pearson
-from virtspec_mi.checks import check_delta, check_mu, check_rays, validated
+from virtspec_mi.base.checks import check_delta, check_mu, check_rays, validated
 
 __all__ = [
     "STAGE_TWO_SEED_MASK",

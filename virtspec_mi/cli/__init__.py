@@ -18,7 +18,7 @@ instrument through the API (:data:`MEASURING` lists them), e.g.:
   :func:`virtspec_mi.sweep`; ``--densities`` (the paper's Fig. 6);
 - ``virtspec gonio SCENE``: the goniophotometer, :func:`virtspec_mi.gonio` (R and T with
   their certificate and the per-θo table; ``--plot`` draws each wavelength;
-  ``--plot-series``; ``--klems``: :mod:`virtspec_mi.exchange.klems_gonio`);
+  ``--plot-series``; ``--klems``: :mod:`virtspec_mi.applications.klems.measure`);
 - ``virtspec sphere SCENE``: the integrating sphere, :func:`virtspec_mi.sphere_measure`
   (``--correct``: the reading corrected by the sphere theory, beside it);
 - ``virtspec gloss SCENE``: the gloss meter, ``vm.take("gloss", …)``; an outside
@@ -35,7 +35,7 @@ choices and default; a flag left out takes the scene's value) and the same commo
 resumable: finished readings are kept in ``FILE.partial.json``,
 :mod:`virtspec_mi.engine.checkpoint`), ``--plot FIG``, ``--json``, ``--quiet`` (else a
 progress bar on a terminal), ``--workers N`` / ``--scheduler ADDRESS`` /
-``--task-readings K`` (Dask: :mod:`virtspec_mi.scaleout`; the same counts).
+``--task-readings K`` (Dask: :mod:`virtspec_mi.runtime.scaleout`; the same counts).
 
 **Files** (:mod:`virtspec_mi.cli.files`) — ``virtspec plot|colour|compare FILE``: every kind of result file (a
 hemispherical reading or sweep, a goniophotometer reading: its R and T, or its lobes; a
@@ -107,7 +107,7 @@ class _Listing(argparse.HelpFormatter):
 def build_parser() -> argparse.ArgumentParser:
     """The ``virtspec`` argument parser (the measurement flags come from the options' fields)."""
 
-    from virtspec_mi import __version__
+    from virtspec_mi.base.version import __version__
     from virtspec_mi.applications.fitting.command import add_fit_command
 
     parser = argparse.ArgumentParser(
@@ -160,7 +160,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of ``virtspec``; returns the exit status."""
 
     signal.signal(signal.SIGPIPE, signal.SIG_DFL)  # a closed pipe (virtspec bounds | head) ends us quietly
-    from virtspec_mi.interrupts import catching, exit_status
+    from virtspec_mi.base.interrupts import catching, exit_status
 
     # SIGINT and SIGTERM stop a run at its next safe point, its checkpoint saved; taken from the start, so a
     # Ctrl-C while the modules load (the parser imports numpy) is an interrupt too, never a traceback
@@ -193,7 +193,7 @@ def _command(args: argparse.Namespace, exit_status: Any) -> int:
             print(answer(args.path, args.copy, args.destination))
             return 0
         if args.command == "llvm":
-            from virtspec_mi.llvm import main as llvm_main
+            from virtspec_mi.base.llvm import main as llvm_main
 
             return llvm_main([args.action])
         if args.command == "fit":
@@ -204,10 +204,10 @@ def _command(args: argparse.Namespace, exit_status: Any) -> int:
         if args.command in handlers:
             return handlers[args.command](args)
         return respond(args, measuring_commands()[args.command])
-    except KeyboardInterrupt as stop:  # Ctrl-C (SIGINT) or SIGTERM: virtspec_mi.interrupts.Interrupted
+    except KeyboardInterrupt as stop:  # Ctrl-C (SIGINT) or SIGTERM: virtspec_mi.base.interrupts.Interrupted
         return _interrupted(stop, args, exit_status)
     except Exception as error:
-        from virtspec_mi.interrupts import received
+        from virtspec_mi.base.interrupts import received
 
         if received() is not None:  # an interrupt raised inside an import or a C extension comes out as another error
             return _interrupted(KeyboardInterrupt(received()), args, exit_status, received())
@@ -236,7 +236,7 @@ def _interrupted(stop: BaseException, args: argparse.Namespace, exit_status: Any
 def _rescued(error: BaseException) -> Any:
     """The error; for a result kept only in memory (its file could not be written), where it was written instead."""
 
-    from virtspec_mi.files import IN_MEMORY
+    from virtspec_mi.base.files import IN_MEMORY
 
     if getattr(error, "result", None) is None or not error.kept.endswith(IN_MEMORY):  # type: ignore[attr-defined]
         return error

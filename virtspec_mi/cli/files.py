@@ -128,7 +128,7 @@ def selected(path: Any, selections: Sequence[str]) -> Any:
 def colour(args: argparse.Namespace) -> int:
     from pathlib import Path
 
-    from virtspec_mi.results.colorimetry import colorimetry
+    from virtspec_mi.colorimetry.cie import colorimetry
     from virtspec_mi.results.io import is_result_csv, read_spectra_csv
 
     path = Path(args.file)
@@ -183,7 +183,7 @@ def compare(args: argparse.Namespace) -> int:
     from dataclasses import replace
     from pathlib import Path
 
-    from virtspec_mi.comparison import compare
+    from virtspec_mi.applications.comparison import compare
     from virtspec_mi.results.plot import check_figure_path
 
     check_figure_path(args.plot)  # a bad suffix fails before any work
@@ -209,7 +209,7 @@ def plot(args: argparse.Namespace) -> int:
 
 
     from virtspec_mi.api import parse_theta_i, parse_wavelengths
-    from virtspec_mi.comparison import compare
+    from virtspec_mi.applications.comparison import compare
     from virtspec_mi.results.plot import check_figure_path, select
 
     path = Path(args.file)

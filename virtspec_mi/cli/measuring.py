@@ -15,7 +15,6 @@ from __future__ import annotations
 
 import argparse
 import functools
-import importlib
 import json
 import sys
 from contextlib import contextmanager
@@ -107,10 +106,22 @@ def measuring_flags(parser: argparse.ArgumentParser, row: Measuring) -> None:
 
     parser.add_argument("scene", help=row.command.scene)
     option_flags(parser, settings_options(), words=several(row))
-    for kind in (instrument_options(row), row.command.flags):
+    for kind in (instrument_options(row), row.command.flags, *(e.flags for e in extensions_of(row))):
         if kind is not None:
             option_flags(parser, kind)
     common_flags(parser, row)
+
+
+def extensions_of(row: Measuring) -> tuple[Any, ...]:
+    """
+    The applications' extensions of the subcommand ``row``
+    (:func:`virtspec_mi.applications.extensions`): their flags are the subcommand's, and one
+    given hands the command to its application.
+    """
+
+    from virtspec_mi.applications import extensions
+
+    return extensions(row.name)
 
 
 def several(command: Measuring) -> tuple[str, ...]:
@@ -342,20 +353,23 @@ class Session:
         if workers is None:
             yield None
             return
-        from virtspec_mi.scaleout import connect
+        from virtspec_mi.runtime.scaleout import connect
 
         with connect(workers) as client:
             yield client
 
 
 def respond(args: argparse.Namespace, row: Measuring) -> int:
-    """A measuring subcommand: its hook (:attr:`~virtspec_mi.instruments.command.Command.respond`) or the default."""
+    """
+    A measuring subcommand: an application's, when one of its extension's flags is given
+    (:func:`extensions_of`), else its hook (:attr:`~virtspec_mi.instruments.command.Command.respond`)
+    or the default.
+    """
 
     session = Session(args, row)
+    for extension in extensions_of(row):  # an application's flag given: the command is the application's
+        flags = extension.flags(**given(args, extension.flags))
+        if extension.given(flags):
+            return extension.respond(session, flags)
     respond = row.command.respond
-    if respond is None:
-        return session.default()
-    if isinstance(respond, str):  # "module:function": a hook of a layer above the instruments
-        module, _, name = respond.partition(":")
-        respond = getattr(importlib.import_module(module), name)
-    return respond(session)
+    return session.default() if respond is None else respond(session)

@@ -2,8 +2,8 @@
 ``virtspec albedo-table``: certified directional-albedo tables and engines' drop-in files
 =========================================================================================
 
-The flags of :func:`virtspec_mi.exchange.albedo.albedo_table` and of an engine's
-channels (:func:`virtspec_mi.exchange.engine_tables.engine_tables`, ``--audit``).
+The flags of :func:`virtspec_mi.applications.tables.albedo.albedo_table` and of an engine's
+channels (:func:`virtspec_mi.applications.tables.engine_tables.engine_tables`, ``--audit``).
 """
 
 from __future__ import annotations
@@ -34,7 +34,7 @@ def add_table_command(command: Callable[..., argparse.ArgumentParser]) -> None:
 
 
 def albedo_options(parser: argparse.ArgumentParser) -> None:
-    """The flags of ``virtspec albedo-table`` (:func:`virtspec_mi.exchange.albedo.albedo_table`)."""
+    """The flags of ``virtspec albedo-table`` (:func:`virtspec_mi.applications.tables.albedo.albedo_table`)."""
 
     parser.add_argument("--model", choices=("conductor", "glass"), default="conductor",
                         help="roughconductor with Fresnel = 1, or roughdielectric (default conductor)")
@@ -78,8 +78,8 @@ def albedo_options(parser: argparse.ArgumentParser) -> None:
 
 def albedo_table(args: argparse.Namespace) -> int:
     from virtspec_mi.api import parse_values
-    from virtspec_mi.exchange.albedo import albedo_table
-    from virtspec_mi.exchange.tables import read_albedo_table
+    from virtspec_mi.applications.tables.albedo import albedo_table
+    from virtspec_mi.applications.tables.table import read_albedo_table
 
     native = (".inc", ".raw", ".png")
     if args.audit or (args.engine in ("filament", "unreal") and any(p.lower().endswith(native) for p in args.out)):
@@ -117,8 +117,8 @@ def albedo_table(args: argparse.Namespace) -> int:
 def engine_tables(args: argparse.Namespace) -> int:
     """``--audit`` (and an engine's drop-in files): every channel of the engine's model certified at once."""
 
-    from virtspec_mi.exchange.audit import audit
-    from virtspec_mi.exchange.engine_tables import engine_tables
+    from virtspec_mi.applications.tables.audit import audit
+    from virtspec_mi.applications.tables.engine_tables import engine_tables
 
     if args.engine not in ("cycles", "filament", "unreal"):
         raise ValueError("--audit needs --engine cycles, filament or unreal (the published table's layout)")
@@ -127,8 +127,8 @@ def engine_tables(args: argparse.Namespace) -> int:
         if not path.lower().endswith(native):
             raise ValueError(f"--out {path}: an engine table is written as the engine's file or .nc")
     if args.source:  # a certified engine table written before (--out TABLE.nc)
-        from virtspec_mi.exchange.tables import read_albedo_table
-        from virtspec_mi.exchange.engine_tables import EngineTables
+        from virtspec_mi.applications.tables.table import read_albedo_table
+        from virtspec_mi.applications.tables.engine_tables import EngineTables
 
         tables = EngineTables.from_table(read_albedo_table(args.source))
     else:

@@ -10,7 +10,7 @@ and r₂ are their radii, D the distance between their centres; the specimen's
 ``to_world`` defines the measurement frame (normal = upper hemisphere, its local x
 axis = φi = 0). The emitter's own position only sets D: each reading rotates it to
 (θi, φi) about the specimen centre. Loading scenes from XML or dicts is
-:mod:`virtspec_mi.scene`'s job.
+:mod:`virtspec_mi.runtime.scene`'s job.
 
 References
 ----------

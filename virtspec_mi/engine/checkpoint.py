@@ -4,7 +4,7 @@ Checkpoints: finished readings of a long run, kept on disk
 
 A run keyed on reading indices (:func:`virtspec_mi.engine.readings.run`: a sweep, a
 goniophotometer or a sphere reading) records every finished batch in a JSON file,
-atomically (:func:`virtspec_mi.files.atomic_file`: an interruption leaves the old or the
+atomically (:func:`virtspec_mi.base.files.atomic_file`: an interruption leaves the old or the
 new file, and only a temporary of its own is ever removed; saves are spaced out when they
 would take more than about a tenth of the run, and what is left is saved at the end and
 on an interruption). A save that fails (a full disk) does not stop the run: it is warned
@@ -52,8 +52,8 @@ from typing import Any, Iterator
 
 import numpy as np
 
-from virtspec_mi import __version__
-from virtspec_mi.files import IN_MEMORY, WriteError, atomic_file, atomic_write
+from virtspec_mi.base.version import __version__
+from virtspec_mi.base.files import IN_MEMORY, WriteError, atomic_file, atomic_write
 from virtspec_mi.engine.tally import Tally
 from virtspec_mi.kernel.counts import Counts
 

@@ -48,7 +48,7 @@ from typing import Any, Mapping, Sequence
 
 import numpy as np
 
-from virtspec_mi.checks import parse_values
+from virtspec_mi.base.checks import parse_values
 
 __all__ = ["PREFIX", "ParameterSpace", "known_parameters", "short_name", "parameter_space", "apply_point",
            "current_values"]

@@ -34,7 +34,7 @@ from typing import Any
 import numpy as np
 
 from virtspec_mi.budgets import rules, twostage
-from virtspec_mi.checks import check_rays_needed, shown_value
+from virtspec_mi.base.checks import check_rays_needed, shown_value
 from virtspec_mi.engine.parameters import ParameterSpace
 from virtspec_mi.kernel.counts import Counts
 from virtspec_mi.kernel.hooks import ExitHook

@@ -15,7 +15,7 @@ Reading k traces the global ray indices [key·stride, key·stride + N_k) (key = 
 n_p·n_θ·n_λ: groups share rays; stride = :attr:`Plan.stride`), so its counts depend on
 (seed, key) only. Readings run in batches of about ``chunk_size`` rays (several readings
 per kernel chunk), each traced by :func:`take_keyed_readings` — the one batch function,
-here (:func:`in_process_runner`) or on a Dask worker (:mod:`virtspec_mi.scaleout`) —
+here (:func:`in_process_runner`) or on a Dask worker (:mod:`virtspec_mi.runtime.scaleout`) —
 recorded in a checkpoint (bins and sums too: :mod:`virtspec_mi.engine.checkpoint`) and
 shown by a progress bar (:mod:`virtspec_mi.engine.progress`).
 
@@ -51,8 +51,8 @@ from typing import Any, Callable, Iterable, Iterator, Sequence
 import numpy as np
 
 from virtspec_mi.budgets import twostage
-from virtspec_mi.checks import check_readings, check_rays_needed, check_wavelength_range, shown_value
-import virtspec_mi.interrupts as interrupts
+from virtspec_mi.base.checks import check_readings, check_rays_needed, check_wavelength_range, shown_value
+import virtspec_mi.base.interrupts as interrupts
 from virtspec_mi.engine.checkpoint import Checkpoint
 from virtspec_mi.engine.parameters import apply_point, current_values
 from virtspec_mi.engine.plan import Plan, kernel_options
@@ -68,7 +68,7 @@ BatchRunner = Callable[[list[np.ndarray]], Iterable[tuple[np.ndarray, Tally]]]
 What runs the batches of a keyed :func:`run`: given the batches left to do (arrays of
 reading indices), yield ``(batch, tally)`` for each as it finishes, in any order, every
 tally from :func:`take_keyed_readings` (its ``seconds`` the batch's). The default runs
-them here, one after the other (:func:`in_process_runner`); :mod:`virtspec_mi.scaleout`
+them here, one after the other (:func:`in_process_runner`); :mod:`virtspec_mi.runtime.scaleout`
 runs them on Dask workers.
 """
 
@@ -94,8 +94,8 @@ def run(bench: Any, plan: Plan, *, checkpoint: Any = None, progress: bool | None
     SIGINT and SIGTERM stop the run at its next safe point — after a kernel chunk (each
     lasts about :data:`~virtspec_mi.kernel.tracer.CHUNK_SECONDS` at most) or a batch,
     or while it waits for Dask workers — with the checkpoint saved:
-    :class:`~virtspec_mi.interrupts.Interrupted` names the signal and the
-    checkpoint (:mod:`virtspec_mi.interrupts`).
+    :class:`~virtspec_mi.base.interrupts.Interrupted` names the signal and the
+    checkpoint (:mod:`virtspec_mi.base.interrupts`).
     """
 
     shared = _shares(bench, plan)
@@ -115,7 +115,7 @@ def take_keyed_readings(bench: Any, plan: Plan, batch: Any) -> Tally:
     :func:`trace_readings` call after the point's values are set on the scene
     (:func:`virtspec_mi.engine.parameters.apply_point`); the scene's own values are
     restored before it returns (or raises). The one function that traces a batch of a
-    keyed run, here or on a Dask worker (:mod:`virtspec_mi.scaleout`).
+    keyed run, here or on a Dask worker (:mod:`virtspec_mi.runtime.scaleout`).
     """
 
     batch = np.asarray(batch, dtype=np.int64)
@@ -160,9 +160,9 @@ def trace_readings(bench: Any, plan: Plan, group: int, readings: Sequence[tuple[
     ``wavelength_range`` attribute refuses wavelengths outside it, and one with a
     ``check_wavelengths`` method parameters out of range at them (``ValueError``).
     Before anything is traced, the call is held to
-    :data:`~virtspec_mi.checks.MAX_READINGS` readings and
-    :data:`~virtspec_mi.checks.MAX_TOTAL_RAYS` rays, and every reading's N (the two-stage
-    N₂ included) to :data:`~virtspec_mi.checks.MAX_RAYS`. ``progress`` shows the
+    :data:`~virtspec_mi.base.checks.MAX_READINGS` readings and
+    :data:`~virtspec_mi.base.checks.MAX_TOTAL_RAYS` rays, and every reading's N (the two-stage
+    N₂ included) to :data:`~virtspec_mi.base.checks.MAX_RAYS`. ``progress`` shows the
     readings traced (per chunk; both stages of two-stage) by the rule of
     :mod:`virtspec_mi.engine.progress`.
     """
@@ -194,7 +194,7 @@ def trace_allocated(bench: Any, settings: Settings, readings: Sequence[tuple[flo
     """
     Trace every (wavelength nm, θi, φi) of ``readings`` with its own number of rays
     ``rays[i]`` (an allocation among wavelengths, e.g. Nₖ ∝ |wₖ| of a derived quantity:
-    :mod:`virtspec_mi.applications.derived`) in one batched kernel call with ``settings``'
+    :mod:`virtspec_mi.applications.targets`) in one batched kernel call with ``settings``'
     seed, beam, sampling and chunk size, and return their
     :class:`~virtspec_mi.engine.tally.Tally`. Every reading has rays of its own — never
     shared across wavelengths, even for a wavelength-independent specimen — from global

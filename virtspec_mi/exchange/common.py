@@ -3,7 +3,7 @@ Small pieces the exchange modules share: companion files and derived seeds
 ===========================================================================
 
 Their files are written as every file of the project is
-(:func:`virtspec_mi.files.atomic_write`).
+(:func:`virtspec_mi.base.files.atomic_write`).
 
 - :func:`check_companions`: a companion file an output brings with it (a sidecar of
   another suffix, an average beside a table) never replaces a file of that name that

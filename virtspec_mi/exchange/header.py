@@ -2,7 +2,7 @@
 Albedo tables as C/C++ headers, and published tables read back
 ==============================================================
 
-:func:`write_header` prints a certified :class:`~virtspec_mi.exchange.tables.AlbedoTable`
+:func:`write_header` prints a certified :class:`~virtspec_mi.applications.tables.table.AlbedoTable`
 as a C/C++ header in the layout of Blender Cycles' generated tables
 (``intern/cycles/app/cycles_precompute.cpp``): one ``static const float
 table_<name>[<size>] = { … };`` per table, flat, in the engine's memory order
@@ -21,7 +21,7 @@ bias). The header compiles as C99 and C++ (``tests/exchange/test_header.py`` com
 it with the system compiler).
 
 :func:`read_table_values` reads a published table for
-:meth:`~virtspec_mi.exchange.tables.AlbedoTable.compare`: ``.npy``, ``.nc``, ``.csv`` /
+:meth:`~virtspec_mi.applications.tables.table.AlbedoTable.compare`: ``.npy``, ``.nc``, ``.csv`` /
 ``.txt`` or a C/C++ header (the numbers between the braces of the named array,
 ``f`` suffixes and comments allowed).
 
@@ -182,7 +182,7 @@ def read_table_values(published: Any, array: str | None = None, expected: int | 
             except (OSError, ValueError, TypeError, EOFError) as error:  # random bytes, a pickle, strings
                 raise ValueError(f"published table {path} is not a .npy array of numbers ({error})") from None
         elif suffix == ".nc":
-            from virtspec_mi.files import read_netcdf
+            from virtspec_mi.base.files import read_netcdf
 
             dataset = read_netcdf(path, "published table")
             name = array or "E"

@@ -31,7 +31,7 @@ import math
 from dataclasses import dataclass
 import numpy as np
 
-from virtspec_mi.checks import check_positive
+from virtspec_mi.base.checks import check_positive
 from virtspec_mi.kernel.incidence import incidence_frame
 
 __all__ = [

@@ -83,7 +83,7 @@ class Instrument(ABC):
         self.scene = scene
         """Fingerprint of the scene, recorded in the plan (a checkpoint's identity) and the result."""
         self.source = source
-        """The scene's name and ``-D`` defines (:func:`virtspec_mi.scene.scene_source`), recorded in the result."""
+        """The scene's name and ``-D`` defines (:func:`virtspec_mi.runtime.scene.scene_source`), recorded in the result."""
         self.bench: Any = None
         self.plan: Plan | None = None
 

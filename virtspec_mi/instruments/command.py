@@ -73,11 +73,11 @@ class Command:
     """An :class:`~virtspec_mi.settings.Options` class of the command's own flags beyond the instrument's options."""
     function: str | None = None
     """The API function that takes its readings (``sweep``, ``gonio`` …), or ``None``: ``take(instrument, …)``."""
-    respond: Callable[["Session"], int] | str | None = None
+    respond: Callable[["Session"], int] | None = None
     """
     What the command does with the session (:class:`Session`), or ``None``: take, print
-    the summary, draw. A string ``"module:function"`` names a hook of a layer above the
-    instruments (an application, e.g. the Klems matrices), imported when it runs.
+    the summary, draw. An application extends a command from above with flags of its own
+    (:class:`virtspec_mi.applications.base.Extension`), never by a hook named here.
     """
     scene: str = ("Mitsuba XML scene with 'emitter' and 'specimen' disks, or a shipped scene's name "
                   "(virtspec scenes)")

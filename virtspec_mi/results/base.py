@@ -34,7 +34,7 @@ everything else derived from them. This module holds what they share, written on
   checked against and :meth:`ResultBase.plot` are built from them here, for every kind;
 - **spectra**: :meth:`ResultBase.spectrum` — one quantity over wavelength at one θi with
   its certified tolerance (:class:`Spectrum`) — is what ``to_sd``, ``colour``,
-  :func:`virtspec_mi.comparison.compare` and the spectrum plots read, for every kind.
+  :func:`virtspec_mi.applications.comparison.compare` and the spectrum plots read, for every kind.
 
 References
 ----------
@@ -260,7 +260,7 @@ class ResultBase(Labelled):
 
     @property
     def source(self) -> dict | None:
-        """The scene measured, for people (:func:`virtspec_mi.scene.scene_source`): its ``scene`` name and
+        """The scene measured, for people (:func:`virtspec_mi.runtime.scene.scene_source`): its ``scene`` name and
         ``defines``; ``None`` when not recorded (a result made outside the API, a file written before)."""
 
         return self.data.attrs.get("source")
@@ -366,9 +366,9 @@ class ResultBase(Labelled):
     _QUANTITY_NOTE: ClassVar[str] = ""
 
     def to_sd(self, quantity: str | None = None, theta_i: float | None = None) -> Any:
-        """One quantity at one θi as a ``colour.SpectralDistribution`` (:mod:`virtspec_mi.results.colorimetry`)."""
+        """One quantity at one θi as a ``colour.SpectralDistribution`` (:mod:`virtspec_mi.colorimetry.cie`)."""
 
-        from virtspec_mi.results.colorimetry import spectral_distribution
+        from virtspec_mi.colorimetry.cie import spectral_distribution
 
         return spectral_distribution(self, quantity, theta_i)
 
@@ -376,10 +376,10 @@ class ResultBase(Labelled):
         """
         CIE XYZ, L*a*b* and sRGB of one quantity at one θi (``illuminant=``, ``observer=``):
         with certified intervals from the rays spent where the readings allow it
-        (:func:`virtspec_mi.applications.derived.colour.result_colour`).
+        (:func:`virtspec_mi.colorimetry.certified.result_colour`).
         """
 
-        from virtspec_mi.applications.derived.colour import result_colour
+        from virtspec_mi.colorimetry.certified import result_colour
 
         return result_colour(self, quantity, theta_i, **options)
 

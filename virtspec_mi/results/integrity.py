@@ -12,7 +12,7 @@ wavelength=551, theta_i=30)``. The rules:
 1. **Counts are whole numbers** ≥ 0 (:func:`whole_counts`): not fractions, text,
    booleans, NaN or infinities, and within ``int64``.
 2. **Labels are finite numbers** (:func:`finite_labels`); a dim's labels are one per
-   position; wavelengths lie in :data:`~virtspec_mi.checks.WAVELENGTH_RANGE` and θi in
+   position; wavelengths lie in :data:`~virtspec_mi.base.checks.WAVELENGTH_RANGE` and θi in
    [0°, 90°]; the labels of θi and of a parameter grid are distinct, a list of points
    is numbered 0 … n − 1 (:func:`check_labels`). Labels are kept in the order they
    were asked for (a reading's wavelengths need not be sorted, nor distinct: a
@@ -57,7 +57,7 @@ from typing import Any, Callable, Mapping
 
 import numpy as np
 
-from virtspec_mi.checks import WAVELENGTH_RANGE
+from virtspec_mi.base.checks import WAVELENGTH_RANGE
 
 __all__ = [
     "CountRules",

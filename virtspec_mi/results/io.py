@@ -27,12 +27,12 @@ Each round-trips exactly (the counts are the data; everything else is derived):
 :func:`write_spectra_csv` / :func:`read_spectra_csv` write and read R, T and A at one θi
 in colour-science's CSV spectral format.
 
-Every file (not a Zarr store) is written atomically (:func:`virtspec_mi.files.atomic_file`):
+Every file (not a Zarr store) is written atomically (:func:`virtspec_mi.base.files.atomic_file`):
 into a temporary file beside it (``.NAME.*.tmp``, created here), flushed to disk, then
 renamed onto the name. A failed or interrupted write (a full disk, a directory of that
 name, Ctrl-C) leaves the old file — or none — and no temporary; readers and concurrent
 writers never see a partial file. A failed write raises
-:class:`~virtspec_mi.files.WriteError` naming the path and the cause, with the result
+:class:`~virtspec_mi.base.files.WriteError` naming the path and the cause, with the result
 attached (``error.result``); :func:`rescue` writes it elsewhere (the command line does).
 A Zarr store is written beside and swapped in, never over a directory holding anything
 this project did not write (:func:`virtspec_mi.results.zarr.replace_store`).
@@ -55,7 +55,7 @@ from typing import Any
 
 import numpy as np
 
-from virtspec_mi.files import IN_MEMORY, WriteError, atomic_file
+from virtspec_mi.base.files import IN_MEMORY, WriteError, atomic_file
 from virtspec_mi.results.integrity import unsealed
 
 __all__ = [
@@ -107,7 +107,7 @@ def write(result: Any, path: str | os.PathLike, *, plain: bool = False) -> Path:
     for ``.nc`` and ``.zarr``, ``result.csv_dataset()`` for ``.csv``, ``result.sealed_json()``
     for ``.json``. ``plain=True`` (a ``.csv`` only) leaves out the attribute line: a
     header row and the rows, for a spreadsheet. A failed write (a full disk …) raises
-    :class:`~virtspec_mi.files.WriteError` naming the path and the cause, with the result
+    :class:`~virtspec_mi.base.files.WriteError` naming the path and the cause, with the result
     attached (``error.result``): nothing traced is lost with the file.
     """
 

@@ -12,7 +12,7 @@ Plots of results with matplotlib (PNG and SVG)
 - :func:`plot_densities`: sweeps at successive ray densities N = 10^d side by side
   (Fig. 5), their fluctuation Δ of eq. (24) (Fig. 6a) and their seconds (Fig. 6b).
 - :func:`plot_comparison`: a result over a measured spectrum (a
-  :class:`virtspec_mi.comparison.Comparison`) with a panel of the residuals and their
+  :class:`virtspec_mi.applications.comparison.Comparison`) with a panel of the residuals and their
   combined tolerance.
 
 Every figure names what was measured in its title (a name when given, the quantity,
@@ -337,7 +337,7 @@ def plot_densities(results: Sequence[Any], densities: Sequence[float], deltas: S
 def plot_comparison(comparison: Any, path: str | os.PathLike | None = None, *, title: str | None = None,
                     name: str | None = None) -> Any:
     """
-    A result over a measured spectrum (``comparison``: a :class:`virtspec_mi.comparison.Comparison`):
+    A result over a measured spectrum (``comparison``: a :class:`virtspec_mi.applications.comparison.Comparison`):
     above, the simulated spectrum with its certified band and the measured one (with
     its uncertainty when known; wavelengths outside the measured range shaded: not
     compared); below, the residuals simulated − measured with the combined tolerance

@@ -16,7 +16,7 @@ The same methods serve one reading or many, and every result kind
 :meth:`Result.summary`, :meth:`Result.as_dict` (JSON, format ``"virtspec-mi result 1"``),
 :meth:`Result.to_dataset` (``xarray.Dataset``), ``write`` / ``read`` (NetCDF, CSV, JSON,
 Zarr; :mod:`virtspec_mi.results.io`), ``to_sd`` / :meth:`Result.to_msds` / ``colour``
-(colour-science; :mod:`virtspec_mi.results.colorimetry`) and :meth:`Result.plot`
+(colour-science; :mod:`virtspec_mi.colorimetry.cie`) and :meth:`Result.plot`
 (:mod:`virtspec_mi.results.plot`).
 
 References
@@ -34,7 +34,7 @@ from typing import Any, ClassVar, Mapping
 
 import numpy as np
 
-from virtspec_mi import __version__
+from virtspec_mi.base.version import __version__
 from virtspec_mi.kernel.counts import DIRECTION_TOLERANCE, QUANTITIES, WEIGHT_ROUNDING, Counts
 from virtspec_mi.geometry.disks import InstrumentGeometry, backlit_fraction
 from virtspec_mi.budgets.intervals import clopper_pearson
@@ -116,7 +116,7 @@ class Result(ResultBase):
         ``point`` with each parameter as a coordinate along it. A parameter selected with
         :meth:`sel` stays as a scalar coordinate.
     source : dict or None
-        The scene's name and ``-D`` defines (:func:`virtspec_mi.scene.scene_source`), or ``None``.
+        The scene's name and ``-D`` defines (:func:`virtspec_mi.runtime.scene.scene_source`), or ``None``.
     """
 
     FORMAT: ClassVar[str] = "virtspec-mi result 1"
@@ -571,7 +571,7 @@ class Result(ResultBase):
     def to_msds(self, theta_i: float | None = None) -> Any:
         """R, T and A at one θi as a ``colour.MultiSpectralDistributions``."""
 
-        from virtspec_mi.results.colorimetry import multi_spectral_distributions
+        from virtspec_mi.colorimetry.cie import multi_spectral_distributions
 
         return multi_spectral_distributions(self, theta_i)
 

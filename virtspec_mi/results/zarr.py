@@ -49,7 +49,7 @@ from typing import Any, Callable, Iterator, Sequence
 
 import numpy as np
 
-from virtspec_mi.files import WriteError, cause_of, flush_directory, temporary_name
+from virtspec_mi.base.files import WriteError, cause_of, flush_directory, temporary_name
 from virtspec_mi.kernel.counts import Counts
 from virtspec_mi.results.formats import TABLE_ATTRIBUTE, annotate, format_parts
 from virtspec_mi.results.integrity import CHECKSUM, checksum
@@ -451,7 +451,7 @@ def replace_store(path: str | os.PathLike, write: Callable[[Path], Any]) -> None
     ``write(directory)`` a store into a new directory beside ``path`` (made here, under a
     fresh name), then put it in place of whatever :func:`check_store` allows there: the old
     store (this project's) is moved aside and removed, and nothing else ever is. A failed
-    write removes the new directory (its own) and raises :class:`~virtspec_mi.files.WriteError`
+    write removes the new directory (its own) and raises :class:`~virtspec_mi.base.files.WriteError`
     naming ``path`` and the cause; ``path`` keeps its old store.
     """
 

@@ -39,7 +39,7 @@ def test_bins_add_up_to_reflected_plus_transmitted_exactly_and_counts_are_unchan
 def test_tallies_do_not_depend_on_chunking_or_on_the_other_readings(mi, rough):
     from virtspec_mi.engine.plan import kernel_options
     from virtspec_mi.kernel.tracer import ReadingPlan, tally_readings
-    from virtspec_mi.scene import find_bench
+    from virtspec_mi.runtime.scene import find_bench
 
     instrument = find_bench(rough)
     bins = make_bins([0, 10, 30, 90, 120, 180], [0, 45, 200, 360])  # searched edges
@@ -72,7 +72,7 @@ def test_each_ray_lands_in_the_bin_of_its_direction(mi, rough, spec):
     """The kernel's bin of every ray against a float64 NumPy binning of its outgoing direction."""
 
     from virtspec_mi.kernel.tracer import ReadingPlan, trace_rays
-    from virtspec_mi.scene import find_bench
+    from virtspec_mi.runtime.scene import find_bench
 
     bins = make_bins(**spec)
     phi_i = 30.0
@@ -227,7 +227,7 @@ def test_every_gonio_parameter_is_a_keyword_a_flag_and_an_integrator_parameter(c
     from virtspec_mi.instruments.goniophotometer import GonioOptions
 
     vm.mitsuba()  # the integrator's module needs the variant
-    from virtspec_mi.plugins.integrators import spectrophotometer
+    from virtspec_mi.instruments import integrator as spectrophotometer
     from virtspec_mi.settings import SETTING_NAMES
 
     GONIO_PARAMETERS = GonioOptions.names()

@@ -13,7 +13,7 @@ import pytest
 
 import virtspec_mi as vm
 from virtspec_mi.budgets.bounds import hoeffding_mu
-from virtspec_mi.scene import find_bench
+from virtspec_mi.runtime.scene import find_bench
 from virtspec_mi.settings import Settings
 from virtspec_mi.instruments.sphere import theory as st
 from virtspec_mi.instruments.sphere.geometry import Baffle, Port, Sphere

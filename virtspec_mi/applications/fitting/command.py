@@ -107,7 +107,7 @@ def run_fit(args: argparse.Namespace) -> int:
 
     from virtspec_mi.applications.fitting.inversion import fit
     from virtspec_mi.applications.fitting.result import FIT_SUFFIXES
-    from virtspec_mi.checks import parse_wavelengths
+    from virtspec_mi.base.checks import parse_wavelengths
 
     if args.out and Path(args.out).suffix.lower() not in FIT_SUFFIXES:
         raise ValueError(f"--out: a fit file is {' or '.join(FIT_SUFFIXES)} (got {args.out})")

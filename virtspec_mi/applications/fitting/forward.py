@@ -46,7 +46,7 @@ from typing import Any, Sequence
 
 import numpy as np
 
-from virtspec_mi import api
+from virtspec_mi.runtime.reading import read_result, take
 from virtspec_mi.applications.fitting.problem import FitProblem
 from virtspec_mi.engine.checkpoint import checkpoint_for
 from virtspec_mi.settings import Settings, resolve
@@ -115,7 +115,7 @@ class Forward:
 
     def _sweep(self, parameters: dict[str, Any], mu: float, out: Path | None, workers: Any = None) -> Any:
         wavelengths = list(map(float, self.problem.wavelengths))
-        return api.sweep(self.problem.loaded, parameters=parameters, wavelengths=wavelengths, mu=mu,
+        return take("sweep", self.problem.loaded, parameters=parameters, wavelengths=wavelengths, mu=mu,
                          delta=self.reading_delta, joint=self.joint, seed=self.seed, out=out, progress=False,
                          workers=workers, **self.settings)
 
@@ -129,7 +129,7 @@ class Forward:
         started = time.perf_counter()
         path = None if self.directory is None else self.directory / f"reading-{self._key(values, mu)}.nc"
         if path is not None and path.exists() and not checkpoint_for(path).exists():
-            result = api.read_result(path)
+            result = read_result(path)
         else:
             result = self._sweep({key: [float(v)] for key, v in zip(self.problem.keys, values)}, mu, path)
             self.traced_rays += int(np.sum(result.rays_spent))
@@ -161,7 +161,7 @@ class Forward:
         keys = self.problem.keys
         started = time.perf_counter()
         if path is not None and path.exists() and not checkpoint_for(path).exists():
-            result = self._check_table(api.read_result(path), path)
+            result = self._check_table(read_result(path), path)
         else:
             note(self.progress, f"fit: table of {int(np.prod([len(g) for g in grid]))} points at mu = {mu:g}")
             result = self._sweep({key: list(map(float, values)) for key, values in zip(keys, grid)}, mu, path,

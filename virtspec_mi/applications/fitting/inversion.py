@@ -37,7 +37,7 @@ s(θ) = max |F̂(θ) − m| / (μ'(θ) + u) ≤ 1, with μ'(θ) its certified to
 measurement's uncertainty. For the true parameters θ₀ the test fails with probability
 ≤ δ (the forward readings' joint risk, :mod:`.forward`) plus the measurement's own risk
 (that |m − truth| > u somewhere), so the consistent candidates are a confidence set of
-level ≥ 1 − δ less that risk — the test is the one :func:`virtspec_mi.comparison.compare`
+level ≥ 1 − δ less that risk — the test is the one :func:`virtspec_mi.applications.comparison.compare`
 counts, made simultaneous. The set is exact for the candidates tested (each passed or failed
 its own test); each parameter's **interval** summarises it, running from the parameter's
 smallest to its largest value among consistent candidates, each end carried out to the next
@@ -80,7 +80,7 @@ from virtspec_mi.applications.fitting.problem import FitProblem, describe, fit_p
 from virtspec_mi.applications.fitting.result import FitResult
 from virtspec_mi.applications.fitting.search import search_problem, table_start
 from virtspec_mi.applications.fitting.windows import FitWindows, fit_windows, window_loss
-from virtspec_mi.checks import number
+from virtspec_mi.base.checks import number
 from virtspec_mi.engine.parameters import apply_point, known_parameters
 
 __all__ = ["fit", "LOSSES", "LOSS_NAMES", "SEARCH_WAVELENGTHS", "UNCONSTRAINED_SHARE", "PROFILE_BISECTIONS",
@@ -216,14 +216,14 @@ def fit(measured: Any, specimen: Any, parameters: Mapping[str, Any], *, quantiti
     Parameters
     ----------
     measured
-        A measured spectrum (any :func:`~virtspec_mi.comparison.read_measured` source: a
+        A measured spectrum (any :func:`~virtspec_mi.applications.comparison.read_measured` source: a
         ``wavelength,value,uncertainty`` CSV, a NetCDF file, a ``(wavelengths, values,
         uncertainty)`` tuple, a result), read as each of ``quantities``; or a dict
         quantity → source (``{"reflectance": ..., "transmittance": ...}``).
     specimen
         A BSDF plugin's name (``"abm_b"``, ``"prospect_d"``: the paper's instrument around
         it), a shipped scene's name, an XML path, a scene dict, an ``mi.Scene`` or a
-        :class:`~virtspec_mi.scene.LoadedScene`: loaded once, every forward reading takes it.
+        :class:`~virtspec_mi.runtime.scene.LoadedScene`: loaded once, every forward reading takes it.
     parameters
         Free parameter → (lowest, highest) (or ``"lo:hi"``), named as the specimen shows
         them (``"Cab"`` or ``"specimen.Cab"``); both bounds are checked by the specimen.

@@ -6,15 +6,15 @@ A fit's inputs, checked: the specimen, its free parameters and the measured spec
 into a :class:`FitProblem`, refusing bad input with a ``ValueError`` that names it:
 
 - the **specimen**: a project BSDF plugin's name (``abm_b``, ``prospect_d`` …: the
-  paper's instrument around it, :func:`virtspec_mi.scene.instrument_scene`), a shipped
+  paper's instrument around it, :func:`virtspec_mi.runtime.scene.instrument_scene`), a shipped
   scene's name, an XML path, a scene dict, a loaded ``mi.Scene`` or a
-  :class:`~virtspec_mi.scene.LoadedScene` — loaded once (:func:`virtspec_mi.scene.loaded`),
+  :class:`~virtspec_mi.runtime.scene.LoadedScene` — loaded once (:func:`virtspec_mi.runtime.scene.loaded`),
   and every forward reading of the fit takes that one loaded scene;
 - the **free parameters**: name → (lowest, highest), each a number the specimen shows
   to ``mi.traverse`` (``Cab`` or ``specimen.Cab``; :mod:`virtspec_mi.engine.parameters`),
   both ends checked by the specimen itself (a bound outside the model's validity is
   refused with the plugin's own message);
-- the **measured spectra**: reflectance and/or transmittance (:func:`~virtspec_mi.comparison.read_measured`
+- the **measured spectra**: reflectance and/or transmittance (:func:`~virtspec_mi.applications.comparison.read_measured`
   formats), each with its measurement uncertainty (a fit without one has no honest
   confidence set: refused), on one set of wavelengths inside the specimen's data range.
 
@@ -31,12 +31,12 @@ from typing import Any, Mapping, Sequence
 
 import numpy as np
 
-from virtspec_mi.checks import number
-from virtspec_mi.comparison import MeasuredSpectrum, read_measured
+from virtspec_mi.base.checks import number
+from virtspec_mi.applications.comparison import MeasuredSpectrum, read_measured
 from virtspec_mi.engine.bench import Bench
 from virtspec_mi.engine.parameters import PREFIX, apply_point, current_values, known_parameters, parameter_space
 from virtspec_mi.runtime import PLUGINS
-from virtspec_mi.scene import LoadedScene, instrument_scene, loaded, scene_fingerprint
+from virtspec_mi.runtime.scene import LoadedScene, instrument_scene, loaded, scene_fingerprint
 
 __all__ = ["FitProblem", "fit_problem", "describe", "FIT_QUANTITIES"]
 
@@ -88,7 +88,7 @@ class FitProblem:
 
     @property
     def fingerprint(self) -> str:
-        """The scene's fingerprint as its readings record it (:func:`virtspec_mi.scene.scene_fingerprint`)."""
+        """The scene's fingerprint as its readings record it (:func:`virtspec_mi.runtime.scene.scene_fingerprint`)."""
 
         return self.loaded.fingerprint
 

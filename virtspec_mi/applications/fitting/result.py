@@ -8,7 +8,7 @@ data leave unconstrained), whether the fit is consistent at all, the measured an
 spectra with both uncertainty bands and the residuals, every candidate read (values,
 tolerance, test statistic, loss, stage: the table, the refinement, the profiles) and the
 rays spent. It is written to JSON (``.json``) or NetCDF (``.nc``, through xarray),
-atomically (:func:`virtspec_mi.files.atomic_file`), read back by :func:`read_fit`, and
+atomically (:func:`virtspec_mi.base.files.atomic_file`), read back by :func:`read_fit`, and
 plotted by :meth:`FitResult.plot` (measured against fitted with both bands, the
 residuals, and each parameter's profile of the test statistic).
 
@@ -28,8 +28,8 @@ from typing import Any
 
 import numpy as np
 
-from virtspec_mi import __version__
-from virtspec_mi.files import atomic_file
+from virtspec_mi.base.version import __version__
+from virtspec_mi.base.files import atomic_file
 
 __all__ = ["FitResult", "read_fit", "FIT_FORMAT", "FIT_SUFFIXES"]
 

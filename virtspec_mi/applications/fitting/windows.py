@@ -55,7 +55,7 @@ import numpy as np
 
 from virtspec_mi.applications.fitting.forward import Reading
 from virtspec_mi.applications.fitting.problem import FitProblem
-from virtspec_mi.checks import number
+from virtspec_mi.base.checks import number
 
 __all__ = ["OPTIMAL_WINDOWS", "FitWindows", "fit_windows", "window_loss"]
 

@@ -40,7 +40,7 @@ from typing import Any, ClassVar, Mapping
 import numpy as np
 
 from virtspec_mi.budgets.intervals import clopper_pearson
-from virtspec_mi.checks import number, shown_value
+from virtspec_mi.base.checks import number, shown_value
 from virtspec_mi.engine.parameters import ParameterSpace
 from virtspec_mi.engine.plan import Columns, Plan
 from virtspec_mi.engine.tally import Tally

@@ -25,7 +25,7 @@ import numpy as np
 
 from virtspec_mi.budgets import rules
 from virtspec_mi.budgets.rules import GUARANTEES, check_gonio_options
-from virtspec_mi.checks import check_brdf_floor, check_relative_tolerance
+from virtspec_mi.base.checks import check_brdf_floor, check_relative_tolerance
 from virtspec_mi.engine.parameters import ParameterSpace
 from virtspec_mi.engine.plan import Columns, Plan
 from virtspec_mi.engine.tally import Tally
@@ -35,7 +35,7 @@ from virtspec_mi.instruments.command import Command, FigureFlag
 from virtspec_mi.instruments.goniophotometer.result import GonioResult
 from virtspec_mi.settings import Options, Settings, one_of, option, true_or_false
 
-__all__ = ["GonioOptions", "Goniophotometer", "KlemsFlags", "GonioResult"]
+__all__ = ["GonioOptions", "Goniophotometer", "GonioResult"]
 
 
 def _bin_spec(name: str) -> Any:
@@ -99,34 +99,6 @@ class GonioOptions(Options):
 
 
 
-def _klems_file(value: Any) -> str:
-    if not isinstance(value, str) or not value.strip():
-        raise ValueError(f"klems must be a file path (got {value!r})")
-    return value
-
-
-_BASES = {"full": "145 patches", "half": "77 patches", "quarter": "41 patches"}
-
-
-@dataclass(frozen=True)
-class KlemsFlags(Options):
-    """
-    ``virtspec gonio``'s own flags: the Klems matrices instead of one reading
-    (:func:`virtspec_mi.exchange.klems_gonio.klems_measure`).
-    """
-
-    title: ClassVar[str] = "Klems matrices"
-
-    klems: str | None = option(
-        None, _klems_file, "measure the Klems matrices instead (incidence at every patch centre, front and back; "
-                           "--mu is the certified tolerance of every patch fraction) and write WINDOW 6 XML FILE "
-                           "with its NetCDF sidecar FILE.nc")
-    klems_basis: str = option("full", one_of("klems_basis", _BASES), "Klems basis of --klems", _BASES)
-    isotropic: bool = option(False, true_or_false("isotropic"),
-                             "--klems: one reading per ring, rotated onto its other patches (rotation-invariant "
-                             "specimens)")
-
-
 GONIO_COMMAND = Command(
     "gonio", "goniophotometer: certified BRDF/BTDF by outgoing direction",
     "Measure the specimen of a scene as the spectrophotometer does, and bin every escaping ray by its outgoing "
@@ -146,7 +118,7 @@ GONIO_COMMAND = Command(
              FigureFlag("--plot-series", "series", "the distribution over theta_i as a series (f in the plane of "
                                                     "incidence and the CDF of theta_o, certified bands); several "
                                                     "wavelengths: one figure per wavelength", dim="wavelength")),
-    flags=KlemsFlags, function="gonio", respond="virtspec_mi.exchange.klems_gonio:respond")
+    function="gonio")
 """``virtspec gonio``: its reading, or with ``--klems`` the Klems matrices (the application's hook, by import path)."""
 
 

@@ -56,7 +56,7 @@ from typing import Any
 
 import numpy as np
 
-from virtspec_mi.checks import shown_value, value_tokens
+from virtspec_mi.base.checks import shown_value, value_tokens
 from virtspec_mi.instruments.goniophotometer.hook import BinLayout
 
 __all__ = ["BINNINGS", "HEMISPHERES", "MAX_BINS", "GonioBins", "make_bins", "parse_edges"]

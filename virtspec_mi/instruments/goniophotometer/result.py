@@ -38,8 +38,6 @@ Nicodemus et al. (1977), NBS Monograph 160; Baranoski et al. (2001), Sect. 6.
 
 from __future__ import annotations
 
-import os
-from pathlib import Path
 from functools import cached_property
 from typing import Any, ClassVar, Mapping
 
@@ -489,18 +487,6 @@ class GonioResult(ResultBase):
 
     def _quantity(self, quantity: str) -> tuple[np.ndarray, np.ndarray, float]:
         return self.result._quantity(quantity)
-
-    def to_klems(self, path: str | os.PathLike, back: "GonioResult | None" = None, basis: str = "full",
-                 isotropic: bool = False, overwrite: bool = False) -> Path:
-        """
-        Write a WINDOW 6 Klems XML (and its NetCDF sidecar): :func:`virtspec_mi.exchange.klems.klems_from_gonio`;
-        the sidecar replaces no other file of its name unless ``overwrite=True``.
-        """
-
-        from virtspec_mi.exchange.klems import check_klems_output, klems_from_gonio
-
-        check_klems_output(path, overwrite=overwrite)
-        return klems_from_gonio(self, back, basis, isotropic).write(path, overwrite=overwrite)
 
     def to_sd(self, quantity: str | None = None, theta_i: float | None = None, *, theta_o: float | None = None,
               phi_o: float | None = None) -> Any:

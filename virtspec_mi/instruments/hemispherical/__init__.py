@@ -31,7 +31,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from virtspec_mi.checks import MAX_RAYS
+from virtspec_mi.base.checks import MAX_RAYS
 
 from virtspec_mi.engine.parameters import ParameterSpace
 from virtspec_mi.engine.plan import Columns, Plan
@@ -41,7 +41,7 @@ from virtspec_mi.instruments.command import Command, FigureFlag, Session
 from virtspec_mi.results.readings import Result, fluctuation
 from virtspec_mi.settings import Options, Settings, option
 
-__all__ = ["Hemispherical", "SweepFlags", "MeasureFlags"]
+__all__ = ["Hemispherical", "SweepFlags"]
 
 
 def _check_densities(value: Any) -> tuple[float, ...]:
@@ -70,24 +70,6 @@ class SweepFlags(Options):
     densities: tuple[float, ...] | None = option(
         None, _check_densities, "sweep at N = 10^d rays for each log10 N = d; print seconds and the fluctuation of "
                                 "eq. (24)", words=True)
-
-
-def _check_target(value: Any) -> str:
-    if not isinstance(value, str) or not value.strip():
-        raise ValueError(f"target must be a text such as colour,dE00=0.5 (got {value!r})")
-    return value
-
-
-@dataclass(frozen=True)
-class MeasureFlags(Options):
-    """``virtspec measure``'s own flag: a derived quantity certified instead of the spectrum."""
-
-    title: ClassVar[str] = "derived quantity"
-
-    target: str | None = option(
-        None, _check_target, "certify a derived quantity instead of a spectrum, e.g. colour,dE00=0.5 | "
-        "band:B04:B08,tolerance=0.002 | index:NDVI,tolerance=0.002 | fapar,tolerance=0.002 (the instrument picks "
-        "the wavelengths and the rays of each)")
 
 
 def _respond_sweep(session: Session) -> int:
@@ -159,8 +141,7 @@ _MEASURE = Command(
     figures=(FigureFlag("--plot", "spectra", "reflectance and transmittance over wavelength, each with the band of "
                                               "its certified tolerance",
                     keywords={"quantities": ("reflectance", "transmittance")}),),
-    one_reading=True, function="sweep", flags=MeasureFlags,
-    respond="virtspec_mi.applications.derived.parse:respond")
+    one_reading=True, function="sweep")
 
 _SWEEP = Command(
     "sweep", "certified readings over theta_i x wavelength (x parameters)",

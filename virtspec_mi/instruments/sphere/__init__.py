@@ -62,7 +62,7 @@ from virtspec_mi.instruments.base import Instrument, reading_grid, reading_label
 from virtspec_mi.instruments.command import Command, FigureFlag, Session
 from virtspec_mi.instruments.sphere.walk import FATES, HEMISPHERES, SPECIMEN, Holder, SphereFate, holder_frame
 from virtspec_mi.instruments.sphere.result import CONFIGURATIONS, SphereResult
-from virtspec_mi.checks import number, shown_value
+from virtspec_mi.base.checks import number, shown_value
 from virtspec_mi.results.base import plain_data
 from virtspec_mi.settings import Options, Settings, one_of, option, share, true_or_false, whole_number
 

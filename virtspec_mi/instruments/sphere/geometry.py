@@ -50,7 +50,7 @@ from typing import Any, Sequence
 
 import numpy as np
 
-from virtspec_mi.checks import number, value_tokens
+from virtspec_mi.base.checks import number, value_tokens
 
 __all__ = ["ROLES", "HOLDER_ROLES", "Port", "Baffle", "Sphere", "SPHERE_PARAMETERS", "is_sphere_parameter",
            "sphere_from_parameters", "parse_port", "parse_baffle", "parse_wall_reflectance"]
@@ -78,7 +78,7 @@ def _three(name: str, value: Any) -> tuple:
 
 
 def _finite(name: str, value: Any) -> float:
-    """A finite number (:func:`virtspec_mi.checks.number`, which refuses booleans, non-numbers and NaN)."""
+    """A finite number (:func:`virtspec_mi.base.checks.number`, which refuses booleans, non-numbers and NaN)."""
 
     result = number(name, value)
     if not math.isfinite(result):

@@ -51,7 +51,7 @@ import mitsuba as mi
 
 from virtspec_mi.instruments.sphere import IntegratingSphere
 
-from virtspec_mi.plugins.integrators.spectrophotometer import Spectrophotometer
+from virtspec_mi.instruments.integrator import Spectrophotometer
 
 __all__ = ["IntegratingSphereIntegrator"]
 

@@ -27,7 +27,7 @@ It is a result like the others (:class:`~virtspec_mi.results.base.ResultBase`): 
 (the counts over the reading's dims and ``configuration``), ``write`` / ``read``
 (NetCDF, CSV, JSON, Zarr; files of the former ``"kind": "sphere_result"`` layout read
 too), spectra of ``reading``, ``corrected`` or ``hemispherical`` (``spectrum``, ``to_sd``,
-``colour``, :func:`virtspec_mi.comparison.compare`) and :meth:`SphereResult.plot`.
+``colour``, :func:`virtspec_mi.applications.comparison.compare`) and :meth:`SphereResult.plot`.
 
 References
 ----------
@@ -44,7 +44,7 @@ from typing import Any, ClassVar, Mapping
 
 import numpy as np
 
-from virtspec_mi import __version__
+from virtspec_mi.base.version import __version__
 from virtspec_mi.budgets.bounds import hoeffding_mu
 from virtspec_mi.budgets.intervals import clopper_pearson
 from virtspec_mi.instruments.sphere.geometry import Sphere, sphere_from_parameters
@@ -126,7 +126,7 @@ class SphereResult(ResultBase):
         Two-stage pilot counts per configuration (spent, not in the estimates); ``None``
         for budgets sized in advance.
     source : dict or None
-        The scene's name and ``-D`` defines (:func:`virtspec_mi.scene.scene_source`), or ``None``.
+        The scene's name and ``-D`` defines (:func:`virtspec_mi.runtime.scene.scene_source`), or ``None``.
     """
 
     FORMAT: ClassVar[str] = "virtspec-mi sphere 1"

@@ -133,7 +133,7 @@ from typing import Any
 
 import numpy as np
 
-from virtspec_mi.checks import shown_value
+from virtspec_mi.base.checks import shown_value
 
 __all__ = [
     "PORT_SURFACES",

@@ -70,7 +70,7 @@ import mitsuba as mi
 import numpy as np
 
 
-from virtspec_mi.leaf_data import (
+from virtspec_mi.plugins.leaf_data import (
     GRID,
     GRID_STEP,
     LOOKUPS,
@@ -78,7 +78,7 @@ from virtspec_mi.leaf_data import (
     load_leaf_data,
     mesophyll_absorption,
 )
-from virtspec_mi.checks import FLOAT32_MAX, FLOAT32_MIN_NORMAL, check_float32
+from virtspec_mi.base.checks import FLOAT32_MAX, FLOAT32_MIN_NORMAL, check_float32
 from virtspec_mi.plugins.bsdfs.sampled_only import SampledOnlyBSDF
 from virtspec_mi.kernel.walk import CAPPED_COMPONENT, walk_rng, walk_to_end
 
@@ -135,7 +135,7 @@ PARAMETER_DOCS: tuple[tuple[str, str, Any, str], ...] = (
                                     "interpolation (NPSG MATLAB)."),
     ("data_dir", "string", '""', "Directory of the NPSG data files; empty = the environment variable "
                                   "``VIRTSPEC_LEAF_DATA`` if set, else the data shipped with the package "
-                                  "(see :mod:`virtspec_mi.leaf_data`)."),
+                                  "(see :mod:`virtspec_mi.plugins.leaf_data`)."),
     ("max_steps", "integer", "100000", "Cap on interface events per walk; a walk reaching it is counted in "
                                         "``Result.capped`` (never in R, T or A). The longest soybean walks "
                                         "are ≈ 200 events."),

@@ -16,7 +16,7 @@ exact counts ``bin_counts`` (wavelength, theta_i, theta_o, phi_o), rays ``rays``
   BSDF f_k = p_k/Ω_k, the per-row (λ, θi) cumulative sums of p_k (sampling) and the
   reflected and transmitted totals R = Σ_{θo<90} p_k, T = Σ_{θo>90} p_k;
 - gives the plugin its properties as plain arrays (:meth:`BSDFTable.properties`; the
-  dict-scene entry is :func:`virtspec_mi.scene.tabulated_bsdf`);
+  dict-scene entry is :func:`virtspec_mi.runtime.scene.tabulated_bsdf`);
 - writes a table back as a contract dataset (:func:`table_dataset`).
 
 Folded azimuths (``phi_folded = 1``): the specimen was taken as isotropic and φo folded
@@ -253,7 +253,7 @@ def read_table(source: Any) -> BSDFTable:
         path = Path(source)
         if not path.is_file():
             raise ValueError(f"BSDF table: filename {str(path)!r} is not a file")
-        from virtspec_mi.files import read_netcdf
+        from virtspec_mi.base.files import read_netcdf
 
         dataset = read_netcdf(path, "BSDF table: filename (a goniophotometer table)")
     elif hasattr(source, "to_dataset") and not isinstance(source, xr.Dataset):

@@ -84,7 +84,7 @@ from typing import Any
 import drjit as dr
 import mitsuba as mi
 
-from virtspec_mi.checks import check_float32
+from virtspec_mi.base.checks import check_float32
 from virtspec_mi.plugins.bsdfs.microfacet_model import ALPHA_RANGE, WALTER_SCALE, check_model
 
 __all__ = ["Microfacet"]

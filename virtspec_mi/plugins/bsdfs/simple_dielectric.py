@@ -54,7 +54,7 @@ from typing import Any
 import drjit as dr
 import mitsuba as mi
 
-from virtspec_mi.checks import check_float32
+from virtspec_mi.base.checks import check_float32
 from virtspec_mi.kernel.walk_optics import NEAR_ONE, fresnel_near_one
 from virtspec_mi.plugins.bsdfs.sampled_only import SampledOnlyBSDF
 

@@ -58,7 +58,7 @@ filename : string, default none
     ``phi_i`` and ``phi_folded``); validated by :func:`virtspec_mi.plugins.bsdfs.bsdf_table.read_table`.
 wavelength, theta_i, theta_o_lower, theta_o_upper, phi_o_lower, phi_o_upper : Float64, default none
     Instead of ``filename`` (dict scenes): the table's coordinates (nm, degrees), as
-    :func:`virtspec_mi.scene.tabulated_bsdf` builds them from a dataset.
+    :func:`virtspec_mi.runtime.scene.tabulated_bsdf` builds them from a dataset.
 fraction : Float64 or TensorXf64, default none
     With the arrays above: p_k = m_k/N over (wavelength, theta_i, theta_o, phi_o), C
     order (a flat ``Float64``: Mitsuba's dict parser takes a tensor whose first axis
@@ -108,7 +108,7 @@ def _table_from_props(props: mi.Properties) -> BSDFTable:
     if has_file == has_arrays:
         raise ValueError("tabulated: give exactly one of 'filename' (a NetCDF goniophotometer table) "
                          "and the table arrays ('fraction', 'wavelength', 'theta_i', bin edges; "
-                         "virtspec_mi.scene.tabulated_bsdf builds them)")
+                         "virtspec_mi.runtime.scene.tabulated_bsdf builds them)")
     if has_file:
         return read_table(str(props.get("filename")))
     values = {}

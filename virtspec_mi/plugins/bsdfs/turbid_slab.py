@@ -105,7 +105,7 @@ import drjit as dr
 import mitsuba as mi
 import numpy as np
 
-from virtspec_mi.checks import check_float32
+from virtspec_mi.base.checks import check_float32
 from virtspec_mi.plugins.bsdfs.sampled_only import SampledOnlyBSDF
 
 from virtspec_mi.kernel.spectra import check_covered

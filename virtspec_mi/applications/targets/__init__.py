@@ -1,0 +1,38 @@
+"""
+Certified derived quantities: colour, sensor bands, indices, fAPAR
+==================================================================
+
+A question in the user's own units — a colour and its ΔE₀₀, a band's reflectance, an
+index, the absorbed share of PAR — is a *target* the instrument sizes its rays for: a
+linear functional of the spectrum costs the rays of one reading at its tolerance
+(Hoeffding 1963 with Nₖ ∝ |wₖ|), nonlinear maps get intervals by propagating the
+certified box. Modules, one job each:
+
+- :mod:`.functionals` — linear functionals, their Hoeffding tolerance and allocation;
+- :mod:`.delta_e` — L*a*b* boxes, exact ΔE*ab and a rigorous ΔE₀₀ enclosure;
+- :mod:`.colour` — certified XYZ, L*a*b*, sRGB (``Result.colour()``);
+- :mod:`.bands`, :mod:`.indices` — response functions, Sentinel-2 bands, indices;
+- :mod:`.targets` — ``vm.colour``, ``vm.band``, ``vm.fapar``, ``vm.index``;
+- :mod:`.measure` — a target's rays traced through the engine; :mod:`.result` — its result;
+- :mod:`.difference` — ``vm.colour_difference``; :mod:`.parse` — ``--target`` strings.
+
+The application's row (:class:`TargetsApplication`) extends ``virtspec measure`` with
+``--target`` (:class:`~.parse.TargetFlags`).
+"""
+
+from __future__ import annotations
+
+from typing import ClassVar
+
+from virtspec_mi.applications.base import Application, Extension
+from virtspec_mi.applications.targets.parse import TargetFlags, respond
+
+__all__ = ["TargetsApplication"]
+
+
+class TargetsApplication(Application):
+    """Certified derived quantities: ``vm.measure(scene, target=...)``, ``virtspec measure --target``."""
+
+    name: ClassVar[str] = "targets"
+    summary: ClassVar[str] = "certified derived quantities: colour, bands, indices, fAPAR, albedo"
+    extensions: ClassVar[tuple[Extension, ...]] = (Extension("measure", TargetFlags, respond, "target"),)

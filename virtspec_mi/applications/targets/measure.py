@@ -1,0 +1,249 @@
+"""
+Measuring a target: the rays a derived quantity needs, where it needs them
+==========================================================================
+
+:func:`take_target` certifies a :class:`~.targets.Target` on a bench (``vm.measure(scene,
+target=...)`` calls it):
+
+1. the target's functionals (:mod:`.functionals`) on one wavelength grid, checked against
+   the specimen's data (a band outside it, a colour of too little of the visible: refused
+   with the reason);
+2. for a nonlinear target, a pilot of about 80,000 rays per functional (Nₖ ∝ |wₖ|, its own
+   seed) gives the point at which the target picks each functional's tolerance; when
+   that asks for more than :data:`REFINE_ABOVE` times the pilot's rays, a second pilot
+   of :data:`REFINE_SHARE` of them (its own seed) refines the point, and the tolerances
+   are picked again with less in reserve (:data:`REFINED_MARGIN`);
+3. each functional j at δ/m (m functionals, union bound) holds to its tolerance with the
+   fewest rays in all: Nₖ = ⌈cⱼ|wⱼₖ|⌉ for one functional (:func:`~.functionals.allocate`),
+   the joint optimum for several sharing wavelengths
+   (:func:`~.functionals.allocate_jointly`); wavelengths of zero weight are not traced;
+4. one batched kernel call (:func:`virtspec_mi.engine.readings.trace_allocated`, seed
+   :func:`~virtspec_mi.budgets.twostage.stage_two_seed` of the settings' seed: rays fresh
+   of the pilot's) traces them, each reading with rays of its own;
+5. the certificate comes from the rays spent: each functional's Hoeffding tolerance
+   (eq. 1 of :mod:`.functionals`) plus its rounding bias, then the target's map (exact
+   intervals, or the ΔE₀₀ bound of :mod:`.delta_e`): a :class:`~.result.DerivedResult`.
+
+The per-wavelength readings are returned too (``result.readings``, a hemispherical
+:class:`~virtspec_mi.results.readings.Result`): they are the rays spent, and carry
+no joint per-wavelength certificate — each alone has the Hoeffding tolerance of its own
+N, which for most of them is wide.
+
+References
+----------
+Hoeffding (1963), Theorem 2; Baranoski et al. (2001), eq. (2).
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, replace
+from typing import Any
+
+import numpy as np
+
+from virtspec_mi.budgets.functionals import (Functional, allocate, allocate_jointly, certified_tolerance,
+                                                          union_delta)
+from virtspec_mi.applications.targets.result import DerivedResult
+from virtspec_mi.applications.targets.targets import ColourTarget, Target, Value, colour_of
+from virtspec_mi.budgets.twostage import stage_two_seed
+from virtspec_mi.engine.plan import Plan
+from virtspec_mi.engine.readings import trace_allocated
+from virtspec_mi.instruments.base import readings_result
+from virtspec_mi.runtime.reading import scene_options
+from virtspec_mi.runtime.scene import LoadedScene
+from virtspec_mi.settings import Settings, resolve
+
+__all__ = ["measure_target", "take_target", "plan_target", "TargetPlan", "PILOT_TOLERANCE", "PILOT_DELTA", "REFUSED_SETTINGS"]
+
+PILOT_TOLERANCE: float = 0.003
+"""A pilot's tolerance on each functional, as a share of its Σ|w| (about 80,000 rays per functional at PILOT_DELTA)."""
+
+PILOT_DELTA: float = 0.5
+"""δ a pilot is sized at (it decides rays only; nothing it measures is claimed)."""
+
+REFINE_ABOVE: float = 50.0
+"""A nonlinear target whose rays exceed this many times the pilot's gets a second pilot (see :func:`plan_target`)."""
+
+REFINE_SHARE: float = 0.02
+"""The second pilot's rays, as a share of the rays first planned (laid out as they are)."""
+
+REFINED_MARGIN: float = 0.95
+"""The share of the tolerance sized for after the second pilot (:data:`~.targets.MARGIN` after the first)."""
+
+REFINE_SEED_MASK: int = 0x2C1B3C6D
+"""The second pilot's seed is the settings' seed XOR this (distinct from the first pilot's and the estimates')."""
+
+REFUSED_SETTINGS: tuple[str, ...] = ("wavelengths", "mu", "rays", "bound", "pilot_rays", "pilot_delta", "joint")
+"""Settings a target decides itself: giving one with a target is an error."""
+
+
+def _fates(tally_counts: Any, quantity: str) -> np.ndarray:
+    return np.asarray(getattr(tally_counts, {"reflectance": "reflected", "transmittance": "transmitted",
+                                             "absorptance": "absorbed"}[quantity]), dtype=np.float64)
+
+
+def _specimen_fit(target: Target, bench: Any) -> Target:
+    """The target within the specimen's data (a colour's grid clipped to it), or ``ValueError`` saying why not."""
+
+    from virtspec_mi.kernel.spectra import data_ranges  # Mitsuba is set up: the bench is loaded
+
+    spans = [(float(r.low), float(r.high)) for r in data_ranges(bench.bsdf)]
+    own = getattr(bench.bsdf, "wavelength_range", None)
+    spans += [] if own is None else [(float(own[0]), float(own[1]))]
+    if not spans:
+        return target
+    low, high = max(s[0] for s in spans), min(s[1] for s in spans)
+    if isinstance(target, ColourTarget):
+        return replace(target, low=max(low, target.low or low), high=min(high, target.high or high))
+    for f in target.functionals():
+        used = f.wavelengths[f.weights != 0]
+        if used.min() < low or used.max() > high:
+            raise ValueError(f"target {target.describe()}: {f.name} needs {used.min():g}-{used.max():g} nm, outside "
+                             f"the specimen's data ({low:g}-{high:g} nm): the instrument cannot certify it")
+    return target
+
+
+def _grid(functionals: list[Functional]) -> tuple[np.ndarray, np.ndarray]:
+    """The union of the functionals' wavelengths and their weights on it, shape (m, n)."""
+
+    grid = np.unique(np.concatenate([f.wavelengths for f in functionals]))
+    return grid, np.stack([f.at(grid) for f in functionals])
+
+
+def _trace(bench: Any, settings: Settings, grid: np.ndarray, rays: np.ndarray, seed: int) -> tuple[np.ndarray, Any]:
+    """The traced wavelengths (rays > 0) and their tally, each reading from its own key k·stride."""
+
+    used = np.flatnonzero(rays > 0)
+    stride = int(rays.max())
+    readings = [(float(grid[k]), float(settings.theta_i), float(settings.phi_i)) for k in used]
+    tally = trace_allocated(bench, settings.updated(seed=seed), readings, rays[used], offsets=used * stride)
+    return used, tally
+
+
+@dataclass(frozen=True, eq=False)
+class TargetPlan:
+    """
+    What :func:`plan_target` decided: the target (fitted to the specimen's data), its
+    functionals, their wavelength ``grid`` and ``weights`` (m × n), the tolerance each is
+    sized for, δ of each (``each``), the rays per wavelength and the pilot's rays.
+    """
+
+    target: Target
+    functionals: list[Functional]
+    grid: np.ndarray
+    weights: np.ndarray
+    tolerances: np.ndarray
+    each: float
+    rays: np.ndarray
+    pilot_rays: int
+
+
+def plan_target(bench: Any, settings: Settings, target: Target) -> TargetPlan:
+    """Steps 1–3 of the module docstring (the pilot traced when the target needs one): the rays, not yet traced."""
+
+    if not isinstance(target, Target):
+        raise ValueError(f"target must be made by vm.colour, vm.band, vm.fapar or vm.index (got {target!r})")
+    target = _specimen_fit(target, bench)
+    functionals = target.functionals()
+    quantity = functionals[0].quantity
+    grid, weights = _grid(functionals)
+    each = union_delta(float(settings.delta), len(functionals))
+    pilot_rays = 0
+    estimates = None
+    counts = np.zeros(len(grid))
+    if target.needs_pilot:
+        first = np.max([allocate(w, PILOT_TOLERANCE * np.abs(w).sum(), PILOT_DELTA) for w in weights], axis=0)
+        used, tally = _trace(bench, settings, grid, first, settings.seed)
+        counts[used] = _fates(tally.counts, quantity)
+        estimates = weights @ (counts / np.maximum(first, 1))
+        pilot_rays = int(first.sum())
+    tolerances = np.asarray(target.tolerances(estimates, float(settings.delta)), dtype=np.float64)
+    rays = allocate_jointly(weights, tolerances, each)
+    if target.needs_pilot and rays.sum() > REFINE_ABOVE * pilot_rays:
+        # a costly target: a second pilot of REFINE_SHARE of those rays pins the point down, so the sizing can
+        # keep less in reserve (REFINED_MARGIN): its rays (counted) are few beside those it saves
+        second = np.where(rays > 0, np.maximum(1, np.ceil(REFINE_SHARE * rays)), 0).astype(np.int64)
+        used, tally = _trace(bench, settings, grid, second, settings.seed ^ REFINE_SEED_MASK)
+        counts[used] += _fates(tally.counts, quantity)
+        pooled = counts / np.maximum(first + second, 1)  # both pilots' rays (sizing only)
+        pilot_rays += int(second.sum())
+        tolerances = np.asarray(target.tolerances(weights @ pooled, float(settings.delta), REFINED_MARGIN),
+                                dtype=np.float64)
+        rays = allocate_jointly(weights, tolerances, each)
+    return TargetPlan(target, functionals, grid, weights, tolerances, each, rays, pilot_rays)
+
+
+def measure_target(scene: LoadedScene, parameters: Any, target: Target, settings: dict[str, Any]) -> DerivedResult:
+    """
+    ``vm.measure(scene, target=...)``: the keywords of the call checked — a target picks its
+    own wavelengths and rays (:data:`REFUSED_SETTINGS` given: ``ValueError``), and reads the
+    scene's own specimen parameters — the settings resolved over the scene's integrator, then
+    :func:`take_target`.
+    """
+
+    given = sorted(name for name in REFUSED_SETTINGS if settings.get(name) is not None)
+    if given:
+        raise ValueError(f"{', '.join(given)}: a target picks its own wavelengths and rays (give its tolerance to the "
+                         "target, e.g. vm.band('B04', tolerance=0.002)); leave them out")
+    if parameters:
+        raise ValueError("parameters: a target is measured at the scene's own specimen parameters (set them in the "
+                         "scene or with defines)")
+    resolved, = resolve("measure", settings, scene_options(scene.bench, Settings))
+    return take_target(scene.bench, resolved, target, scene=scene.fingerprint, source=scene.source)
+
+
+def take_target(bench: Any, settings: Settings, target: Target, *, scene: str = "", source: dict | None = None
+                ) -> DerivedResult:
+    """Certify ``target`` on ``bench`` with ``settings`` (δ, θi, φi, beam, sampling, seed: the module docstring)."""
+
+    start = time.perf_counter()
+    planned = plan_target(bench, settings, target)
+    target, functionals, grid, weights = planned.target, planned.functionals, planned.grid, planned.weights
+    rays, each, pilot_rays, delta = planned.rays, planned.each, planned.pilot_rays, float(settings.delta)
+    quantity = functionals[0].quantity
+    used, tally = _trace(bench, settings, grid, rays, stage_two_seed(settings.seed))
+    plan = Plan(settings.updated(wavelengths=[float(w) for w in grid[used]]), (float(settings.theta_i),), scene=scene)
+    readings = readings_result(bench, plan, tally, scene, source).squeeze("theta_i")
+    spent = rays[used]
+    values = _fates(tally.counts, quantity) / spent
+    if not np.all(readings.certified):
+        raise ValueError(f"target {target.describe()}: some readings escaped their certificate (weight violations, "
+                         "capped walks or invalid directions): no certified value")
+    rounding = np.asarray(readings.rounding_bias, dtype=np.float64)
+    estimates = weights[:, used] @ values
+    certified = np.array([certified_tolerance(Functional(f.name, grid[used], w[used], f.quantity), spent, each,
+                                              rounding) for f, w in zip(functionals, weights)])
+    colour = None
+    if isinstance(target, ColourTarget):
+        colour = _certified_colour(target, functionals, estimates, certified, delta, int(spent.sum()))
+        reported = _colour_values(colour)
+    else:
+        reported = target.values(estimates, certified)
+    return DerivedResult(target=target, values=tuple(reported), readings=readings, rays=int(spent.sum()),
+                         pilot_rays=pilot_rays, delta=delta, statements=len(functionals),
+                         functional_tolerances=tuple(float(t) for t in certified), colour=colour,
+                         met=target.met(reported), seconds=time.perf_counter() - start)
+
+
+def _certified_colour(target: ColourTarget, functionals: list[Functional], estimates: np.ndarray,
+                      tolerances: np.ndarray, delta: float, rays: int) -> Any:
+    from virtspec_mi.colorimetry.certified import certify_colour
+
+    return certify_colour(colour_of(estimates, functionals, target), functionals, tolerances, delta, rays)
+
+
+def _colour_values(colour: Any) -> list[Value]:
+    out = []
+    for space, names, units, interval, values in (
+            ("CIE XYZ", "XYZ", "1", colour.XYZ_interval, colour.XYZ),
+            ("CIE L*a*b*", ("L", "a", "b"), "1", colour.Lab_interval, colour.Lab),
+            ("sRGB (encoded, before clipping)", ("sRGB_R", "sRGB_G", "sRGB_B"), "1", colour.sRGB_interval,
+             colour.sRGB)):
+        for name, (low, high), value in zip(names, interval, values):
+            out.append(Value(name, float(value), float(low), float(high), units, f"{space} {name}"))
+    out.append(Value("dE00_radius", colour.dE00_radius, 0.0, colour.dE00_radius, "1",
+                     "largest CIEDE2000 difference between the estimate and a colour of the certified box"))
+    out.append(Value("dEab_radius", colour.dEab_radius, 0.0, colour.dEab_radius, "1",
+                     "largest CIE 1976 difference between the estimate and a colour of the certified box"))
+    return out

@@ -1,0 +1,118 @@
+"""
+Runtime: libLLVM, Mitsuba variant and plugin registration in one place
+======================================================================
+
+Everything that touches Dr.Jit or Mitsuba goes through :func:`mitsuba`, which on its
+first call
+
+1. points Dr.Jit at a working libLLVM (:mod:`virtspec_mi.base.llvm`) and refuses a bad one,
+2. selects the Mitsuba variant (``llvm_ad_spectral``; ``VIRTSPEC_VARIANT`` overrides it,
+   e.g. ``cuda_ad_spectral`` on a GPU machine),
+3. registers the project's plugins (:data:`PLUGINS`: :mod:`virtspec_mi.plugins`) under
+   that variant (:func:`register`), and lets ``mi.render`` raise the
+   ``spectrophotometer`` integrator's ``ValueError`` (e.g. a bad ``spp``) as itself
+   rather than wrapped in Dr.Jit's ``RuntimeError``
+   (:func:`virtspec_mi.instruments.integrator.clear_render_errors`).
+
+The plugins, one per file (``bsdfs/``: specimens; ``integrators/``: the instruments'
+Mitsuba entry):
+
+======================  ===========  ===============================================
+name                    kind         module (under :mod:`virtspec_mi.plugins`)
+======================  ===========  ===============================================
+``simple_dielectric``   BSDF         :mod:`.bsdfs.simple_dielectric`
+``turbid_slab``         BSDF         :mod:`.bsdfs.turbid_slab`
+``abm_b``               BSDF         :mod:`.bsdfs.abm_b` (walk: :mod:`.bsdfs.abm_walk`)
+``abm_u``               BSDF         :mod:`.bsdfs.abm_u` (walk: :mod:`.bsdfs.abm_walk`)
+``tabulated``           BSDF         :mod:`.bsdfs.tabulated` (a goniophotometer table)
+``microfacet``          BSDF         :mod:`.bsdfs.microfacet` (the engines' albedo models)
+``prospect_d``          BSDF         :mod:`.bsdfs.prospect_d` (model: :mod:`.bsdfs.prospect_model`)
+``spectrophotometer``   integrator   :mod:`.integrators.spectrophotometer`
+======================  ===========  ===============================================
+
+and the integrators the instruments declare (:attr:`~virtspec_mi.instruments.base.Instrument.integrators`,
+e.g. the integrating sphere's ``integrating_sphere``), registered with them.
+"""
+
+from __future__ import annotations
+
+import os
+from types import ModuleType
+
+from virtspec_mi.base.llvm import check_loaded_llvm, select_libllvm
+
+__all__ = ["DEFAULT_VARIANT", "PLUGINS", "mitsuba", "register", "variant"]
+
+DEFAULT_VARIANT: str = "llvm_ad_spectral"
+
+PLUGINS: dict[str, tuple[str, str, str]] = {
+    "simple_dielectric": ("bsdf", "virtspec_mi.plugins.bsdfs.simple_dielectric", "SimpleDielectric"),
+    "turbid_slab": ("bsdf", "virtspec_mi.plugins.bsdfs.turbid_slab", "TurbidSlab"),
+    "abm_b": ("bsdf", "virtspec_mi.plugins.bsdfs.abm_b", "ABMB"),
+    "abm_u": ("bsdf", "virtspec_mi.plugins.bsdfs.abm_u", "ABMU"),
+    "tabulated": ("bsdf", "virtspec_mi.plugins.bsdfs.tabulated", "Tabulated"),
+    "microfacet": ("bsdf", "virtspec_mi.plugins.bsdfs.microfacet", "Microfacet"),
+    "prospect_d": ("bsdf", "virtspec_mi.plugins.bsdfs.prospect_d", "ProspectD"),
+    "virtspec_flipped": ("bsdf", "virtspec_mi.plugins.bsdfs.flipped", "FlippedBSDF"),
+    "spectrophotometer": ("integrator", "virtspec_mi.instruments.integrator", "Spectrophotometer"),
+}
+"""The project's plugins beside the instruments: Mitsuba name → (kind, module, class)."""
+
+_registered: set[str] = set()
+
+
+def variant() -> str:
+    """The Mitsuba variant virtspec-mi runs on (``VIRTSPEC_VARIANT`` or ``llvm_ad_spectral``)."""
+
+    return os.environ.get("VIRTSPEC_VARIANT", DEFAULT_VARIANT)
+
+
+def mitsuba() -> ModuleType:
+    """Return the ``mitsuba`` module, set up for virtspec-mi (idempotent)."""
+
+    name = variant()
+    if name in _registered:
+        import mitsuba as mi
+
+        if mi.variant() == name:
+            return mi
+    import virtspec_mi.base.interrupts as interrupts
+
+    # Importing Dr.Jit and Mitsuba's variant (C extensions, about half a second) must not be cut by a
+    # KeyboardInterrupt: it would come out as a SystemError or NameError and leave the modules half made; a
+    # Ctrl-C waits for its end instead (the plugins' Python modules after it take a KeyboardInterrupt as any)
+    with interrupts.deferred():
+        if name.startswith("llvm"):
+            select_libllvm()
+            check_loaded_llvm()
+        import mitsuba as mi
+
+        if mi.variant() != name:
+            mi.set_variant(name)
+    if name not in _registered:
+        from virtspec_mi.instruments.integrator import clear_render_errors
+
+        register()
+        mi.render = clear_render_errors(mi.render)
+        _registered.add(name)
+    return mi
+
+
+def register() -> None:
+    """
+    Register every plugin of :data:`PLUGINS`, and every integrator an instrument of the
+    registry declares (``"module:Class"``), under the current Mitsuba variant.
+    """
+
+    import importlib
+
+    import mitsuba as mi
+
+    from virtspec_mi.instruments import INSTRUMENTS
+
+    declared = {name: ("integrator", *target.split(":")) for instrument in INSTRUMENTS.values()
+                for name, target in instrument.integrators.items()}
+    registrars = {"bsdf": mi.register_bsdf, "integrator": mi.register_integrator}
+    for name, (kind, module, cls) in {**PLUGINS, **declared}.items():
+        plugin = getattr(importlib.import_module(module), cls)
+        registrars[kind](name, lambda props, plugin=plugin: plugin(props))

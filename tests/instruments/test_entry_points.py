@@ -98,7 +98,9 @@ def test_a_broken_entry_point_is_left_out_with_a_warning(monkeypatch):
     points = [EntryPoint("broken", "no_such_module:Nothing", instruments.ENTRY_POINTS),
               EntryPoint("sphere", "virtspec_mi.instruments.sphere:IntegratingSphere", instruments.ENTRY_POINTS),
               EntryPoint("plain", "virtspec_mi.settings:Settings", instruments.ENTRY_POINTS)]
-    monkeypatch.setattr(instruments, "entry_points", lambda group: points)
+    import virtspec_mi.base.entry_points as rows
+
+    monkeypatch.setattr(rows, "entry_points", lambda group: points)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         found = instruments.discovered(tuple(instruments.INSTRUMENTS.values()))

@@ -20,9 +20,7 @@ an instrument's init, process and postprocess), never through the API above it.
 
 from __future__ import annotations
 
-import warnings
-from importlib.metadata import entry_points
-
+from virtspec_mi.base.entry_points import discovered as entry_point_rows
 from virtspec_mi.applications.base import Application, Extension
 from virtspec_mi.applications.klems import KlemsApplication
 from virtspec_mi.applications.targets import TargetsApplication
@@ -36,28 +34,10 @@ ENTRY_POINTS = "virtspec_mi.applications"
 def discovered(builtin: tuple[type[Application], ...]) -> dict[str, type[Application]]:
     """
     The applications ``builtin`` and those of every installed package's entry point of
-    :data:`ENTRY_POINTS`, by name; an entry point that cannot be loaded, is not an
-    :class:`~virtspec_mi.applications.base.Application` class or takes a name already taken
-    is left out with a ``RuntimeWarning`` naming it.
+    :data:`ENTRY_POINTS`, by name (:func:`virtspec_mi.base.entry_points.discovered`).
     """
 
-    found = {application.name: application for application in builtin}
-    for point in entry_points(group=ENTRY_POINTS):
-        try:
-            application = point.load()
-        except Exception as error:  # an outside package's import error: reported, not fatal
-            warnings.warn(f"application entry point {point.name!r} ({point.value}) could not be loaded: {error}",
-                          RuntimeWarning, stacklevel=2)
-            continue
-        if not (isinstance(application, type) and issubclass(application, Application)):
-            warnings.warn(f"application entry point {point.name!r} ({point.value}) is not a virtspec_mi Application "
-                          "class: left out", RuntimeWarning, stacklevel=2)
-        elif application.name in found:
-            warnings.warn(f"application entry point {point.name!r} ({point.value}) takes the name "
-                          f"{application.name!r}, already taken: left out", RuntimeWarning, stacklevel=2)
-        else:
-            found[application.name] = application
-    return found
+    return entry_point_rows(ENTRY_POINTS, builtin, Application)
 
 
 APPLICATIONS: dict[str, type[Application]] = discovered((TargetsApplication, KlemsApplication))

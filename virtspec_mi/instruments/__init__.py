@@ -34,10 +34,9 @@ backend" (the ``xarray.backends`` entry-point group).
 from __future__ import annotations
 
 import sys
-import warnings
-from importlib.metadata import entry_points
 from typing import Any
 
+from virtspec_mi.base.entry_points import discovered as entry_point_rows
 from virtspec_mi.instruments.base import Instrument
 from virtspec_mi.instruments.gloss import GlossMeter
 from virtspec_mi.instruments.goniophotometer import Goniophotometer
@@ -53,28 +52,12 @@ ENTRY_POINTS = "virtspec_mi.instruments"
 def discovered(builtin: tuple[type[Instrument], ...]) -> dict[str, type[Instrument]]:
     """
     The instruments ``builtin`` and those of every installed package's entry point of
-    :data:`ENTRY_POINTS`, by name. An entry point that cannot be loaded, is not an
-    :class:`~virtspec_mi.instruments.base.Instrument` class or takes a name already taken
-    is left out with a ``RuntimeWarning`` naming it (one broken package does not stop the tool).
+    :data:`ENTRY_POINTS`, by name (:func:`virtspec_mi.base.entry_points.discovered`: an entry
+    point that cannot be loaded, is not an :class:`~virtspec_mi.instruments.base.Instrument`
+    class or takes a name already taken is left out with a ``RuntimeWarning`` naming it).
     """
 
-    found = {instrument.name: instrument for instrument in builtin}
-    for point in entry_points(group=ENTRY_POINTS):
-        try:
-            instrument = point.load()
-        except Exception as error:  # an outside package's import error: reported, not fatal
-            warnings.warn(f"instrument entry point {point.name!r} ({point.value}) could not be loaded: {error}",
-                          RuntimeWarning, stacklevel=2)
-            continue
-        if not (isinstance(instrument, type) and issubclass(instrument, Instrument)):
-            warnings.warn(f"instrument entry point {point.name!r} ({point.value}) is not a virtspec_mi Instrument "
-                          "class: left out", RuntimeWarning, stacklevel=2)
-        elif instrument.name in found:
-            warnings.warn(f"instrument entry point {point.name!r} ({point.value}) takes the name "
-                          f"{instrument.name!r}, already taken: left out", RuntimeWarning, stacklevel=2)
-        else:
-            found[instrument.name] = instrument
-    return found
+    return entry_point_rows(ENTRY_POINTS, builtin, Instrument)
 
 
 INSTRUMENTS: dict[str, type[Instrument]] = discovered((Hemispherical, Goniophotometer, IntegratingSphere, GlossMeter))

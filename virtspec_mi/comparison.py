@@ -227,8 +227,9 @@ def read_measured(source: Any, quantity: str = "reflectance", theta_i: float | N
 
 def _read_file(path: Path, quantity: str, theta_i: float | None) -> MeasuredSpectrum:
     suffix = path.suffix.lower()
-    if suffix not in MEASURED_SUFFIXES:
-        raise ValueError(f"measured must end in one of {', '.join(MEASURED_SUFFIXES)} (got {path.name!r})")
+    if suffix not in MEASURED_SUFFIXES and format_for(path) is None:  # an outside format's suffix reads too
+        known = dict.fromkeys((*MEASURED_SUFFIXES, *suffixes()))
+        raise ValueError(f"measured must end in one of {', '.join(known)} (got {path.name!r})")
     if not path.is_file():
         raise ValueError(f"measured file not found: {path}")
     if format_for(path) is not None:  # an instrument's or a library's file (exchange.measured)

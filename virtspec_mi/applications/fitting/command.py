@@ -16,6 +16,8 @@ import argparse
 import json
 from typing import Any
 
+from virtspec_mi.exchange.measured.flags import add_measured_flags, measured_from
+
 __all__ = ["add_fit_command", "run_fit", "EXAMPLES"]
 
 EXAMPLES: str = (
@@ -56,7 +58,9 @@ def add_fit_command(commands: Any) -> argparse.ArgumentParser:
                     "consistent at all. Resumable with --directory.",
         epilog=EXAMPLES, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("measured", help="measured spectrum: a wavelength,value,uncertainty CSV (or a colour-science "
-                                         "CSV with uncertainty columns), a NetCDF file or a result file")
+                                         "CSV with uncertainty columns), a NetCDF file, a result file, or an "
+                                         "instrument's or library's file (.asd, .sig, .sed, .jdx/.dx, .sli, a CSV "
+                                         "table of many samples: --sample; give --uncertainty)")
     parser.add_argument("--specimen", required=True,
                         help="a BSDF plugin (abm_b, abm_u, prospect_d, turbid_slab ...), a shipped scene or an "
                              "XML scene")
@@ -97,6 +101,7 @@ def add_fit_command(commands: Any) -> argparse.ArgumentParser:
     parser.add_argument("--plot", help="figure (.png, .svg): measured vs fitted, residuals, profiles")
     parser.add_argument("--json", action="store_true", help="print the fit as one JSON object")
     parser.add_argument("--progress", action="store_true", help="a line per stage on stderr")
+    add_measured_flags(parser)
     return parser
 
 
@@ -114,10 +119,11 @@ def run_fit(args: argparse.Namespace) -> int:
     if args.plot and Path(args.plot).suffix.lower() not in (".png", ".svg", ".pdf"):
         raise ValueError(f"--plot: a figure is .png, .svg or .pdf (got {args.plot})")
     if args.transmittance:
-        measured: Any = {"reflectance": args.measured, "transmittance": args.transmittance}
+        measured: Any = {"reflectance": measured_from(args, args.measured),
+                         "transmittance": measured_from(args, args.transmittance)}
         quantities = None
     else:
-        measured = args.measured
+        measured = measured_from(args, args.measured)
         quantities = ("reflectance", "transmittance") if args.quantity == "both" else (args.quantity,)
     defines = {}
     for item in args.defines:

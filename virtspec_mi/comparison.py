@@ -76,8 +76,7 @@ from virtspec_mi.kernel.counts import QUANTITIES
 from virtspec_mi.results.base import ResultBase, plain_data, round_up
 from virtspec_mi.results.colorimetry import DEFAULT_ILLUMINANT, DEFAULT_OBSERVER, Colour, colorimetry
 
-__all__ = ["MeasuredSpectrum", "Comparison", "read_measured", "compare", "MEASURED_SUFFIXES", "MeasuredFile",
-           "read_samples"]
+__all__ = ["MeasuredSpectrum", "Comparison", "read_measured", "compare", "MEASURED_SUFFIXES"]
 
 MEASURED_SUFFIXES: tuple[str, ...] = tuple(dict.fromkeys((".csv", ".txt", ".nc", ".json", *suffixes())))
 """Files :func:`read_measured` reads (``.json``: a virtspec-mi result file; the instruments' and libraries' files of

@@ -1,6 +1,6 @@
 """
 ASD FieldSpec binary files (``.asd``): a reader of the published format
-======================================================================
+=======================================================================
 
 An ASD file (FieldSpec, LabSpec, HandHeld; file versions 1–8, the first three bytes
 ``ASD`` or ``as2`` … ``as8``) holds a 484-byte header, the spectrum (``channels`` values,

@@ -1,6 +1,6 @@
 """
 What a reader of a measured-spectra file returns, and the one set of rules that settles it
-=========================================================================================
+==========================================================================================
 
 A format's reader (:class:`MeasuredFormat`) turns a file into :class:`RawSpectra`: the
 numbers it holds and what its header *tells* — the quantity (reflectance or

@@ -1,6 +1,6 @@
 """
 ENVI spectral libraries (``.sli`` + ``.hdr``), the header read with the ``spectral`` package
-===========================================================================================
+============================================================================================
 
 An ENVI spectral library is a raw binary file (``.sli``) of ``lines`` spectra of
 ``samples`` values each (``bands = 1``), described by a text header (``.hdr``, the same

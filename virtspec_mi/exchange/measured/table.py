@@ -1,6 +1,6 @@
 """
 CSV tables of many spectra (EcoSIS style): one column or one row per sample
-==========================================================================
+===========================================================================
 
 Two layouts, told apart by the header row (comma-, semicolon- or tab-separated; quoted
 fields; an empty field is a missing value, left out of that sample):

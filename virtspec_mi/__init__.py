@@ -70,6 +70,8 @@ __all__ = [
     "fit",
     "read_fit",
     "FitResult",
+    "fit_samples",
+    "FitTable",
 ]
 
 _LAZY = {
@@ -117,6 +119,8 @@ _LAZY = {
     "fit": "virtspec_mi.applications.fitting",
     "read_fit": "virtspec_mi.applications.fitting",
     "FitResult": "virtspec_mi.applications.fitting",
+    "fit_samples": "virtspec_mi.applications.fitting",
+    "FitTable": "virtspec_mi.applications.fitting",
 }
 
 

@@ -339,7 +339,7 @@ INSTRUMENT_PARTS: dict[str, str] = {
     "walk": "kernel", "hook": "kernel",
     "geometry": "budgets/geometry/references", "bins": "budgets/geometry/references",
     "model": "budgets/geometry/references", "theory": "budgets/geometry/references",
-    "result": "results", "plot": "results",
+    "result": "results", "plot": "results", "rgl": "results",
     "integrator": "adapter",
 }
 """

@@ -269,6 +269,15 @@ def respond(session: Any) -> int:
     from virtspec_mi.exchange.klems import sidecar_path
 
     flags, args = session.flags, session.args
+    if flags.klems is not None and getattr(flags, "rgl", None) is not None:
+        raise ValueError("--rgl writes one reading's reflection, --klems measures matrices of its own: give one")
+    if getattr(flags, "rgl", None) is not None:  # the reading, and its .bsdf
+        result = session.take()
+        status = session.report(result, result.summary(), session.draw(result))
+        result.to_rgl(flags.rgl)
+        if not args.json:
+            print(f"rgl: {flags.rgl} (Mitsuba's measured plugin; reflection only)")
+        return status
     if flags.klems is None:
         return session.default()
     common = {"--out": args.out, "--plot": args.plot, "--plot-series": getattr(args, "plot_series", None),

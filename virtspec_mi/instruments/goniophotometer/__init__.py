@@ -125,6 +125,10 @@ class KlemsFlags(Options):
     isotropic: bool = option(False, true_or_false("isotropic"),
                              "--klems: one reading per ring, rotated onto its other patches (rotation-invariant "
                              "specimens)")
+    rgl: str | None = option(
+        None, _klems_file, "also write the reading's reflection as an RGL .bsdf FILE for Mitsuba's measured plugin "
+                           "(each node: its bin's f times cos theta_o, with the bin's certified interval; see "
+                           "GonioResult.to_rgl)")
 
 
 GONIO_COMMAND = Command(

@@ -502,6 +502,16 @@ class GonioResult(ResultBase):
         check_klems_output(path, overwrite=overwrite)
         return klems_from_gonio(self, back, basis, isotropic).write(path, overwrite=overwrite)
 
+    def to_rgl(self, path: str | os.PathLike, resolution: int = 32) -> Any:
+        """
+        Write the reflection as an RGL ``.bsdf`` for Mitsuba's ``measured`` plugin; returns the
+        :class:`~virtspec_mi.instruments.goniophotometer.rgl.RGLExport` (nodes, values, certified intervals).
+        """
+
+        from virtspec_mi.instruments.goniophotometer.rgl import rgl_export
+
+        return rgl_export(self, path, resolution)
+
     def to_sd(self, quantity: str | None = None, theta_i: float | None = None, *, theta_o: float | None = None,
               phi_o: float | None = None) -> Any:
         """

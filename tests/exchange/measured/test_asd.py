@@ -104,3 +104,14 @@ def test_splice_correct_continues_the_line_through_the_last_two_channels():
     values, note = splice_correct(w, np.array([1.0, 2.0, 3.0, 10.0, 11.0]), (1000.0,))
     np.testing.assert_allclose(values, [1, 2, 3, 4, 5])
     assert note == "splice-corrected: -6 above 1000 nm"
+
+
+def test_integer_data_and_the_default_splices_of_an_older_header(tmp_path):
+    target, reference = np.full(CHANNELS, 300), np.full(CHANNELS, 1200)
+    jumped = target + 60 * (WAVELENGTHS > 1000)
+    path = write_asd(tmp_path / "i.asd", 350.0, 1.0, jumped, reference, data_format=1, splices=(0.0, 0.0),
+                     version=b"as6")
+    np.testing.assert_allclose(read_samples(path).values[0], jumped / 1200)
+    corrected = read_samples(MeasuredFile(path, splice=True))  # no splice in the header: 1000 and 1800 nm
+    np.testing.assert_allclose(corrected.values[0], 0.25)
+    assert corrected.note.startswith("splice-corrected: -0.05 above 1000 nm, +0 above 1800 nm")

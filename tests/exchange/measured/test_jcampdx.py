@@ -61,3 +61,32 @@ def test_truncated_files_are_refused(tmp_path):
     (tmp_path / "none.jdx").write_text("hello\n")
     with pytest.raises(ValueError, match=r"none.jdx: not a JCAMP-DX file"):
         read_samples(tmp_path / "none.jdx")
+
+
+DIF = """##TITLE= dif leaf
+##JCAMP-DX= 4.24
+##XUNITS= NANOMETERS
+##YUNITS= %T
+##YFACTOR= 0.1
+##FIRSTX= 400
+##LASTX= 409
+##NPOINTS= 10
+##XYDATA= (X++(Y..Y))
+400A00KL%k
+404A03JJJJ
+408A07J
+##END=
+"""
+
+
+def test_the_compressed_difference_form_and_its_y_checks(tmp_path):
+    """ASDF (SQZ + DIF, McDonald & Wilks 1988): each line's first value repeats the last of the line before."""
+
+    (tmp_path / "dif.jdx").write_text(DIF)
+    samples = read_samples(tmp_path / "dif.jdx")
+    assert samples.quantity == "transmittance"  # %T: transmittance in percent
+    np.testing.assert_allclose(samples.values[0], [0.1, 0.102, 0.105, 0.105, 0.103, 0.104, 0.105, 0.106, 0.107,
+                                                   0.108])
+    (tmp_path / "bad.jdx").write_text(DIF.replace("404A03", "404A09"))
+    with pytest.raises(ValueError, match=r"bad.jdx: damaged data \(Y-Check failed"):
+        read_samples(tmp_path / "bad.jdx")

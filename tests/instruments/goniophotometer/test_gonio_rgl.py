@@ -98,3 +98,15 @@ def test_cli_gonio_rgl(tmp_path, capsys, mi):
                  "--theta-o-bins", "6", "--phi-o-bins", "8", "--rgl", str(path), "--quiet"]) == 0
     assert f"rgl: {path}" in capsys.readouterr().out
     assert mi.load_dict({"type": "measured", "filename": str(path)}) is not None
+
+
+def test_a_reading_that_is_not_certified_gets_no_interval(lambertian, tmp_path, monkeypatch):
+    from virtspec_mi.instruments.goniophotometer.result import GonioResult
+
+    bins_mu = np.array(lambertian.bins_mu, dtype=float)
+    bins_mu[1, 2] = np.nan  # 600 nm at 60 degrees: as a reading with weight violations reports itself
+    monkeypatch.setattr(GonioResult, "bins_mu", property(lambda self: bins_mu))
+    export = lambertian.to_rgl(tmp_path / "w.bsdf", resolution=8)
+    assert np.all(np.isnan(export.lower[1, 2])) and np.all(np.isnan(export.upper[1, 2]))
+    assert not np.any(np.isnan(export.lower[0, 2][export.valid[2]]))
+    assert np.any(export.values[1, 2] > 0)  # the estimate is written; its interval is not

@@ -93,7 +93,8 @@ class RGLExport:
         (θi, n_phi, n_theta) the node's wo is a reflected direction inside the bins.
     values, lower, upper : ndarray
         (wavelength, θi, n_phi, n_theta): the stored f_k·cos θo and its certified interval
-        (0 and NaN where not ``valid``; NaN bounds where the reading is not certified).
+        (0 and NaN where not ``valid``; NaN bounds where the reading is not certified: its
+        ``bins_mu`` is NaN, e.g. weight violations or capped walks).
     """
 
     path: Path
@@ -194,6 +195,8 @@ def rgl_export(result: "GonioResult", path: str | os.PathLike, resolution: int =
     brdf = np.asarray(grid.brdf, dtype=np.float64).reshape(len(wavelengths), len(theta_i), *grid.bins.shape)
     lower = np.asarray(grid.brdf_lower, dtype=np.float64).reshape(brdf.shape)
     upper = np.asarray(grid.brdf_upper, dtype=np.float64).reshape(brdf.shape)
+    uncertified = np.isnan(np.asarray(grid.bins_mu, dtype=np.float64).reshape(len(wavelengths), len(theta_i)))
+    lower[uncertified], upper[uncertified] = np.nan, np.nan  # a reading that is not certified: no interval
     if np.any(np.diff(theta_i) <= 0):
         raise ValueError(f"an RGL .bsdf needs increasing theta_i (got {theta_i})")
     if np.any(np.diff(wavelengths) <= 0):

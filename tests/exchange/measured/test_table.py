@@ -44,7 +44,8 @@ def test_percentages_are_refused_unless_stated(tmp_path):
 
 def test_single_spectrum_csvs_are_not_claimed(tmp_path):
     for text in ("wavelength,reflectance\n400,0.1\n", "wavelength,reflectance,transmittance\n400,0.1,0.2\n",
-                 "400,0.1,0.01\n500,0.2,0.01\n", "wavelength,leaf\n400,0.1\n"):
+                 "400,0.1,0.01\n500,0.2,0.01\n", "wavelength,leaf\n400,0.1\n",
+                 '# virtspec-mi result {"kind": "gonio"}\nwavelength,theta_o,phi_o,brdf\n400,5,10,0.1\n'):
         (tmp_path / "s.csv").write_text(text)
         assert format_for(tmp_path / "s.csv") is None, text
 

@@ -44,6 +44,7 @@ __all__ = ["read_table", "claims_table", "layout"]
 _SINGLE = ("reflectance", "transmittance", "absorptance", "uncertainty")
 _WAVELENGTH = ("wavelength", "wavelengths", "wl", "nm", "lambda", "wavelength_nm", "wavelength_um")
 _LABELS = ("sample_name", "sample", "name", "id", "spectra", "label")
+_RESULT_FILE = "# virtspec-mi result"  # the first line of a result CSV (virtspec_mi.results.io)
 
 
 def _number(text: str) -> float | None:
@@ -62,6 +63,8 @@ def _header(path: Path) -> tuple[list[str], str] | None:
     try:
         with path.open(encoding="utf-8-sig", errors="replace") as handle:
             for line in handle:
+                if line.startswith(_RESULT_FILE):
+                    return None  # a virtspec-mi result CSV: the comparison reads it as a result
                 if line.strip() and not line.lstrip().startswith("#"):
                     delimiter = _delimiter(line)
                     return [f.strip() for f in next(csv.reader([line], delimiter=delimiter))], delimiter

@@ -209,7 +209,7 @@ def test_measured_files_in_every_format(tmp_path):
     ("0.4,0.2\n0.5,0.3\n", r"must be in nm \(got 0.4-0.5.*micrometres"),
     ("400,0.2\n400,0.3\n", r"wavelengths must be distinct"),
     ("400,0.2,0.1,0.3\n", r"plain rows must be wavelength,value\[,uncertainty\]"),
-    ("wavelength,a,b\n400,0.1,0.2\n", r"quantity must name a column of bad.csv \(a, b; got 'reflectance'\)"),
+    ("wavelength,a,b\n400,0.1,0.2\n", r"bad.csv: it does not tell whether it holds reflectance or transmittance"),
     ("400,0.2\n500,x\n", r"line 2: expected numbers"),
     ("400,0.2,-0.1\n", r"measurement_uncertainty must be finite and >= 0"),
 ])

@@ -58,6 +58,8 @@ __all__ = [
     "read_measured",
     "Comparison",
     "MeasuredSpectrum",
+    "MeasuredFile",
+    "read_samples",
     "GlossResult",
     "colour",
     "band",
@@ -69,6 +71,8 @@ __all__ = [
     "fit",
     "read_fit",
     "FitResult",
+    "fit_samples",
+    "FitTable",
 ]
 
 _LAZY = {
@@ -105,6 +109,8 @@ _LAZY = {
     "read_measured": "virtspec_mi.applications.comparison",
     "Comparison": "virtspec_mi.applications.comparison",
     "MeasuredSpectrum": "virtspec_mi.applications.comparison",
+    "MeasuredFile": "virtspec_mi.exchange.measured",
+    "read_samples": "virtspec_mi.exchange.measured",
     "colour": "virtspec_mi.applications.targets.targets",
     "band": "virtspec_mi.applications.targets.targets",
     "fapar": "virtspec_mi.applications.targets.targets",
@@ -115,6 +121,8 @@ _LAZY = {
     "fit": "virtspec_mi.applications.fitting",
     "read_fit": "virtspec_mi.applications.fitting",
     "FitResult": "virtspec_mi.applications.fitting",
+    "fit_samples": "virtspec_mi.applications.fitting",
+    "FitTable": "virtspec_mi.applications.fitting",
 }
 
 

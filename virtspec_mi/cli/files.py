@@ -16,6 +16,7 @@ import sys
 from typing import Any, Callable, Sequence
 
 from virtspec_mi.cli.flags import pairs
+from virtspec_mi.exchange.measured.flags import add_measured_flags, measured_from
 
 __all__ = ["add_file_commands", "colour", "compare", "plot", "selected"]
 
@@ -62,10 +63,13 @@ def add_file_commands(command: Callable[..., argparse.ArgumentParser]) -> None:
                       "common wavelengths (the measured one interpolated onto the result's, never extrapolated): "
                       "residuals, RMSE, the share of points within the certified tolerance (+ the measurement "
                       "uncertainty) and Delta E 2000. MEASURED: a colour-science CSV spectral file, a plain "
-                      "wavelength,value[,uncertainty] CSV, a NetCDF file or another result file.", EXAMPLES["compare"])
+                      "wavelength,value[,uncertainty] CSV, a NetCDF file, another result file, or an instrument's or "
+                      "library's file (ASD, SVC .sig, PSR .sed, JCAMP-DX, ENVI .sli, a CSV table of many samples).",
+                      EXAMPLES["compare"])
     compare_parser.add_argument("result", help="result file of any kind (.nc, .csv, .json, .zarr; also `measure --json` "
                                         "output)")
-    compare_parser.add_argument("measured", help="measured spectrum (.csv, .txt, .nc, or a result file)")
+    compare_parser.add_argument("measured", help="measured spectrum (.csv, .txt, .nc, a result file, .asd, .sig, .sed, "
+                                                 ".jdx/.dx, .sli)")
     comparison_options(compare_parser)
     selection_option(compare_parser)
     compare_parser.add_argument("--plot", help="figure .png or .svg: both spectra and the residuals")
@@ -89,6 +93,7 @@ def add_file_commands(command: Callable[..., argparse.ArgumentParser]) -> None:
     plot_parser.add_argument("--against", metavar="MEASURED", help="measured spectrum to overlay (as for compare)")
     plot_parser.add_argument("--uncertainty", type=float,
                       help="measurement uncertainty of MEASURED (overrides its uncertainty column)")
+    add_measured_flags(plot_parser)
     plot_parser.add_argument("--out", help="figure .png or .svg (default: FILE with the suffix .png)")
     selection_option(plot_parser)
 
@@ -177,6 +182,7 @@ def comparison_options(parser: argparse.ArgumentParser) -> None:
                                                             "(default D65)")
     parser.add_argument("--observer", default="CIE 1931 2 Degree Standard Observer",
                         help="colour.MSDS_CMFS name (default CIE 1931 2 degree)")
+    add_measured_flags(parser)
 
 
 def compare(args: argparse.Namespace) -> int:
@@ -188,7 +194,7 @@ def compare(args: argparse.Namespace) -> int:
 
     check_figure_path(args.plot)  # a bad suffix fails before any work
     result = selected(args.result, args.selections)
-    comparison = compare(result, args.measured, quantity=args.quantity, theta_i=args.theta_i,
+    comparison = compare(result, measured_from(args, args.measured), quantity=args.quantity, theta_i=args.theta_i,
                          measurement_uncertainty=args.uncertainty, illuminant=args.illuminant,
                          observer=args.observer)
     comparison = replace(comparison, result_name=Path(args.result).name)
@@ -232,7 +238,8 @@ def plot(args: argparse.Namespace) -> int:
         raise ValueError(f"--theta-i must be one angle with --against (got {len(theta_i)})")
     if wavelengths is not None:
         result = select(result, wavelengths=wavelengths)
-    comparison = compare(result, against, quantity=args.quantity, theta_i=theta_i[0] if theta_i else None,
+    comparison = compare(result, measured_from(args, against), quantity=args.quantity,
+                         theta_i=theta_i[0] if theta_i else None,
                          measurement_uncertainty=args.uncertainty)
     comparison = replace(comparison, result_name=path.name)
     comparison.plot(out)

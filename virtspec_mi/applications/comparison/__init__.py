@@ -40,7 +40,12 @@ never extrapolated. :func:`read_measured` reads it from
 - a NetCDF (xarray) file with a variable named after the quantity (or its only
   variable) over one wavelength dimension, and optionally ``<quantity>_uncertainty``;
 - a virtspec-mi result file of any kind (another simulation: its certified tolerance
-  is the uncertainty).
+  is the uncertainty);
+- an instrument's or a library's file of one or many spectra — ASD ``.asd``, SVC ``.sig``,
+  PSR ``.sed``, JCAMP-DX, ENVI ``.sli``, CSV tables of many samples, and the formats of
+  outside packages (:data:`virtspec_mi.exchange.measured.FORMATS`): read by
+  :func:`~virtspec_mi.exchange.measured.read_samples`, one sample chosen with a
+  :class:`~virtspec_mi.exchange.measured.base.MeasuredFile`.
 
 Wavelengths are in nm (values below 100 are refused with the hint "micrometres? multiply by
 1000") and values fractions in [0, 1] (percentages are refused with a hint). A measured
@@ -66,14 +71,16 @@ from typing import Any
 import numpy as np
 
 from virtspec_mi.base.checks import NANOMETRE_FLOOR, check_nanometres, number
+from virtspec_mi.exchange.measured import MeasuredFile, Samples, format_for, read_samples, suffixes
 from virtspec_mi.kernel.counts import QUANTITIES
 from virtspec_mi.results.base import ResultBase, plain_data, round_up
 from virtspec_mi.colorimetry.cie import DEFAULT_ILLUMINANT, DEFAULT_OBSERVER, Colour, colorimetry
 
 __all__ = ["MeasuredSpectrum", "Comparison", "read_measured", "compare", "MEASURED_SUFFIXES"]
 
-MEASURED_SUFFIXES: tuple[str, ...] = (".csv", ".txt", ".nc", ".json")
-"""Files :func:`read_measured` reads (``.json``: a virtspec-mi result file)."""
+MEASURED_SUFFIXES: tuple[str, ...] = tuple(dict.fromkeys((".csv", ".txt", ".nc", ".json", *suffixes())))
+"""Files :func:`read_measured` reads (``.json``: a virtspec-mi result file; the instruments' and libraries' files of
+:data:`virtspec_mi.exchange.measured.FORMATS`)."""
 
 _PERCENT = 1.5  # measured values above this are taken for percentages
 _MATCH_NM = 1e-6  # wavelengths closer than this are the same
@@ -192,9 +199,11 @@ def _check_uncertainty(uncertainty: Any, size: int, source: str) -> np.ndarray:
 def read_measured(source: Any, quantity: str = "reflectance", theta_i: float | None = None) -> MeasuredSpectrum:
     """
     A measured spectrum of ``quantity`` from a file (see the module docstring for the
-    formats), a ``colour.SpectralDistribution``, a ``(wavelengths, values[, uncertainty])``
-    tuple, a :class:`MeasuredSpectrum` or a result of any kind (at ``theta_i``; its
-    certified tolerance becomes the uncertainty).
+    formats), a :class:`~virtspec_mi.exchange.measured.base.MeasuredFile` (a file and how
+    to read it: its ``sample``, its ``quantity`` or ``scale`` when it does not tell them,
+    ASD's ``splice`` correction), a ``colour.SpectralDistribution``, a ``(wavelengths,
+    values[, uncertainty])`` tuple, a :class:`MeasuredSpectrum` or a result of any kind (at
+    ``theta_i``; its certified tolerance becomes the uncertainty).
     """
 
     check_quantity(quantity)
@@ -202,6 +211,8 @@ def read_measured(source: Any, quantity: str = "reflectance", theta_i: float | N
         return source
     if isinstance(source, ResultBase):
         return _from_result(source, quantity, theta_i, "result")
+    if isinstance(source, MeasuredFile):
+        return _from_samples(read_samples(source), quantity, source.sample)
     if isinstance(source, (str, os.PathLike)):
         return _read_file(Path(source), quantity, theta_i)
     if hasattr(source, "wavelengths") and hasattr(source, "values"):  # colour.SpectralDistribution
@@ -215,10 +226,13 @@ def read_measured(source: Any, quantity: str = "reflectance", theta_i: float | N
 
 def _read_file(path: Path, quantity: str, theta_i: float | None) -> MeasuredSpectrum:
     suffix = path.suffix.lower()
-    if suffix not in MEASURED_SUFFIXES:
-        raise ValueError(f"measured must end in one of {', '.join(MEASURED_SUFFIXES)} (got {path.name!r})")
+    if suffix not in MEASURED_SUFFIXES and format_for(path) is None:  # an outside format's suffix reads too
+        known = dict.fromkeys((*MEASURED_SUFFIXES, *suffixes()))
+        raise ValueError(f"measured must end in one of {', '.join(known)} (got {path.name!r})")
     if not path.is_file():
         raise ValueError(f"measured file not found: {path}")
+    if format_for(path) is not None:  # an instrument's or a library's file (exchange.measured)
+        return _from_samples(read_samples(path), quantity, None)
     if suffix == ".json" or (suffix == ".csv" and _is_result_csv(path)):
         from virtspec_mi.runtime.reading import read_result
 
@@ -226,6 +240,17 @@ def _read_file(path: Path, quantity: str, theta_i: float | None) -> MeasuredSpec
     if suffix == ".nc":
         return _read_netcdf(path, quantity, theta_i)
     return _read_table(path, quantity)
+
+
+def _from_samples(samples: Samples, quantity: str, sample: str | int | None) -> MeasuredSpectrum:
+    """One sample of a measured file (``sample``: its label or index; ``None``: the only one) as a spectrum."""
+
+    if samples.quantity != quantity:
+        raise ValueError(f"measured file {samples.source} holds {samples.quantity}, not the {quantity} compared or "
+                         f"fitted (measured_quantity= states what a file that does not tell holds)")
+    wavelengths, values, label = samples.spectrum(sample)
+    source = samples.source if len(samples) == 1 else f"{samples.source} [{label}]"
+    return MeasuredSpectrum.of(wavelengths, values, quantity=quantity, source=source, note=samples.note)
 
 
 def _is_result_csv(path: Path) -> bool:

@@ -9,7 +9,8 @@ with a confidence set and the parameters the data leave unconstrained
 (:mod:`.inversion`); each parameter estimated on its optimal spectral window
 (:mod:`.windows`, ``loss="windows"``); the forward readings on common random numbers, kept
 for resuming (:mod:`.forward`); the inputs checked (:mod:`.problem`); the result, its files
-and figures (:mod:`.result`); the ``virtspec fit`` command (:mod:`.command`).
+and figures (:mod:`.result`); every spectrum of a file of many fitted, a table of fits
+(:mod:`.samples`, on Dask workers); the ``virtspec fit`` command (:mod:`.command`).
 
 References
 ----------
@@ -21,9 +22,10 @@ from __future__ import annotations
 import importlib
 from typing import Any
 
-__all__ = ["fit", "FitResult", "read_fit", "LOSSES"]
+__all__ = ["fit", "FitResult", "read_fit", "LOSSES", "fit_samples", "FitTable"]
 
-_LAZY = {"fit": "inversion", "LOSSES": "inversion", "FitResult": "result", "read_fit": "result"}
+_LAZY = {"fit": "inversion", "LOSSES": "inversion", "FitResult": "result", "read_fit": "result",
+         "fit_samples": "samples", "FitTable": "samples"}
 """Where each name lives: imported on first use, so that ``virtspec``'s parser (which adds ``virtspec fit``
 from :mod:`.command`) does not import SciPy's optimisers."""
 

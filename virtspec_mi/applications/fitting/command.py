@@ -16,6 +16,8 @@ import argparse
 import json
 from typing import Any
 
+from virtspec_mi.exchange.measured.flags import add_measured_flags, measured_from
+
 __all__ = ["add_fit_command", "run_fit", "EXAMPLES"]
 
 EXAMPLES: str = (
@@ -25,7 +27,9 @@ EXAMPLES: str = (
     "      --free mesophyll_fraction=0.3:0.9 --theta-i 8 --beam collimated --directory fit-work \\\n"
     "      --out fit.nc --plot fit.png\n"
     "  virtspec fit leaf.csv --specimen prospect_d --free Cab=10:80 --free Cm=0.002:0.02 --quantity both \\\n"
-    "      --loss windows --window Cab=700:720   (Cm on its published window, 1700-2400 nm)"
+    "      --loss windows --window Cab=700:720   (Cm on its published window, 1700-2400 nm)\n"
+    "  virtspec fit library.sli --measured-quantity reflectance --specimen prospect_d --free Cab=10:90 \\\n"
+    "      --uncertainty 0.01 --workers 4 --out fits.csv   (every spectrum of the library: a table of fits)"
 )
 
 
@@ -56,7 +60,9 @@ def add_fit_command(commands: Any) -> argparse.ArgumentParser:
                     "consistent at all. Resumable with --directory.",
         epilog=EXAMPLES, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("measured", help="measured spectrum: a wavelength,value,uncertainty CSV (or a colour-science "
-                                         "CSV with uncertainty columns), a NetCDF file or a result file")
+                                         "CSV with uncertainty columns), a NetCDF file, a result file, or an "
+                                         "instrument's or library's file (.asd, .sig, .sed, .jdx/.dx, .sli, a CSV "
+                                         "table of many samples: --sample; give --uncertainty)")
     parser.add_argument("--specimen", required=True,
                         help="a BSDF plugin (abm_b, abm_u, prospect_d, turbid_slab ...), a shipped scene or an "
                              "XML scene")
@@ -97,6 +103,7 @@ def add_fit_command(commands: Any) -> argparse.ArgumentParser:
     parser.add_argument("--plot", help="figure (.png, .svg): measured vs fitted, residuals, profiles")
     parser.add_argument("--json", action="store_true", help="print the fit as one JSON object")
     parser.add_argument("--progress", action="store_true", help="a line per stage on stderr")
+    add_measured_flags(parser)
     return parser
 
 
@@ -109,15 +116,17 @@ def run_fit(args: argparse.Namespace) -> int:
     from virtspec_mi.applications.fitting.result import FIT_SUFFIXES
     from virtspec_mi.base.checks import parse_wavelengths
 
-    if args.out and Path(args.out).suffix.lower() not in FIT_SUFFIXES:
+    many = not args.transmittance and _many_samples(args)  # every spectrum fitted: a table (its own suffixes)
+    if args.out and not many and Path(args.out).suffix.lower() not in FIT_SUFFIXES:
         raise ValueError(f"--out: a fit file is {' or '.join(FIT_SUFFIXES)} (got {args.out})")
     if args.plot and Path(args.plot).suffix.lower() not in (".png", ".svg", ".pdf"):
         raise ValueError(f"--plot: a figure is .png, .svg or .pdf (got {args.plot})")
     if args.transmittance:
-        measured: Any = {"reflectance": args.measured, "transmittance": args.transmittance}
+        measured: Any = {"reflectance": measured_from(args, args.measured),
+                         "transmittance": measured_from(args, args.transmittance)}
         quantities = None
     else:
-        measured = args.measured
+        measured = measured_from(args, args.measured)
         quantities = ("reflectance", "transmittance") if args.quantity == "both" else (args.quantity,)
     defines = {}
     for item in args.defines:
@@ -129,14 +138,16 @@ def run_fit(args: argparse.Namespace) -> int:
                                                 ("bound", args.bound)) if value is not None}
     search = {} if args.search_wavelengths is None else {"search_wavelengths": args.search_wavelengths or None}
     args.checkpoint = args.directory  # an interrupt's message names where the readings are kept
-    result = fit(measured, args.specimen, dict(args.free), quantities=quantities,
-                 measurement_uncertainty=args.uncertainty,
-                 wavelengths=None if args.wavelengths is None else parse_wavelengths(args.wavelengths),
-                 loss=args.loss, windows=dict(args.window) or None, delta=args.delta,
-                 mu_fraction=args.mu_fraction, forward_mu=args.forward_mu,
-                 table=args.table, table_points=args.table_points, profile_points=args.profile_points,
-                 seed=args.seed, directory=args.directory, defines=defines or None, workers=args.workers,
-                 progress=True if args.progress else None, **search, **settings)
+    options = dict(quantities=quantities, measurement_uncertainty=args.uncertainty,
+                   wavelengths=None if args.wavelengths is None else parse_wavelengths(args.wavelengths),
+                   loss=args.loss, windows=dict(args.window) or None, delta=args.delta,
+                   mu_fraction=args.mu_fraction, forward_mu=args.forward_mu, table_points=args.table_points,
+                   profile_points=args.profile_points, seed=args.seed, defines=defines or None,
+                   progress=True if args.progress else None, **search, **settings)
+    if many:
+        return _run_table(args, options)
+    result = fit(measured, args.specimen, dict(args.free), table=args.table, directory=args.directory,
+                 workers=args.workers, **options)
     if args.out:
         result.write(args.out)
     if args.plot:
@@ -148,4 +159,44 @@ def run_fit(args: argparse.Namespace) -> int:
     for label, path in (("fit", args.out), ("plot", args.plot)):
         if path:
             print(f"{label}: {path}")
+    return 0
+
+
+def _many_samples(args: argparse.Namespace) -> bool:
+    """Whether MEASURED is a file of many spectra and no --sample chose one (then every one is fitted)."""
+
+    from virtspec_mi.exchange.measured import format_for, read_samples
+
+    if args.sample is not None or format_for(args.measured, args.measured_format) is None:
+        return False
+    return len(read_samples(measured_from(args, args.measured))) > 1
+
+
+def _run_table(args: argparse.Namespace, options: dict[str, Any]) -> int:
+    """``virtspec fit`` of every spectrum of a file of many: a table of fits (on Dask with --workers)."""
+
+    from pathlib import Path
+
+    from virtspec_mi.applications.fitting.samples import TABLE_SUFFIXES, fit_samples
+
+    if args.out and Path(args.out).suffix.lower() not in TABLE_SUFFIXES:
+        raise ValueError(f"--out: the fits of a file of many spectra are a table, {' or '.join(TABLE_SUFFIXES)} "
+                         f"(got {args.out}); or choose one spectrum with --sample")
+    if args.table or args.plot:
+        raise ValueError("--table and --plot take one spectrum: choose it with --sample (the fits of every "
+                         "spectrum share one table in --directory)")
+    table = fit_samples(measured_from(args, args.measured), args.specimen, dict(args.free), workers=args.workers,
+                        directory=args.directory, **options)
+    if args.out:
+        table.write(args.out)
+    if args.json:
+        data = table.to_dataset()
+        print(json.dumps({"source": table.source, "samples": list(table.labels), "parameters": list(table.names),
+                          "estimate": data["estimate"].values.tolist(),
+                          "intervals": table.intervals.tolist(), "consistent": table.consistent.tolist(),
+                          "statistic": table.statistic.tolist()}))
+        return 0
+    print(table.summary())
+    if args.out:
+        print(f"table: {args.out}")
     return 0

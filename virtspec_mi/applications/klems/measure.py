@@ -304,6 +304,8 @@ def respond(session: Any, flags: KlemsFlags) -> int:
     from virtspec_mi.applications.klems.matrices import sidecar_path
 
     args = session.args
+    if getattr(session.flags, "rgl", None) is not None:
+        raise ValueError("--rgl writes one reading's reflection, --klems measures matrices of its own: give one")
     common = {"--out": args.out, "--plot": args.plot, "--plot-series": getattr(args, "plot_series", None),
               "--json": args.json, "--param": args.params, "--points": args.points, "-D": args.defines,
               "--workers": args.workers, "--scheduler": args.scheduler, "--task-readings": args.task_readings}

@@ -31,11 +31,11 @@ from virtspec_mi.engine.plan import Columns, Plan
 from virtspec_mi.engine.tally import Tally
 from virtspec_mi.instruments.goniophotometer.bins import BINNINGS, HEMISPHERES, GonioBins, make_bins, parse_edges
 from virtspec_mi.instruments.base import Instrument, reading_grid, readings_result
-from virtspec_mi.instruments.command import Command, FigureFlag
+from virtspec_mi.instruments.command import Command, FigureFlag, Session
 from virtspec_mi.instruments.goniophotometer.result import GonioResult
 from virtspec_mi.settings import Options, Settings, one_of, option, true_or_false
 
-__all__ = ["GonioOptions", "Goniophotometer", "GonioResult"]
+__all__ = ["GonioOptions", "Goniophotometer", "GonioResult", "RglFlags"]
 
 
 def _bin_spec(name: str) -> Any:
@@ -99,6 +99,37 @@ class GonioOptions(Options):
 
 
 
+def _bsdf_file(value: Any) -> str:
+    if not isinstance(value, str) or not value.strip():
+        raise ValueError(f"rgl must be a file path (got {value!r})")
+    return value
+
+
+@dataclass(frozen=True)
+class RglFlags(Options):
+    """``virtspec gonio``'s own flag: the reading's reflection also written as Mitsuba's measured ``.bsdf``."""
+
+    title: ClassVar[str] = "Mitsuba measured BSDF"
+
+    rgl: str | None = option(
+        None, _bsdf_file, "also write the reading's reflection as an RGL .bsdf FILE for Mitsuba's measured plugin "
+                          "(each node: its bin's f times cos theta_o, with the bin's certified interval; see "
+                          "GonioResult.to_rgl)")
+
+
+def _respond_gonio(session: Session) -> int:
+    """``virtspec gonio``: the reading printed and drawn; with ``--rgl FILE`` its ``.bsdf`` written too."""
+
+    if session.flags.rgl is None:
+        return session.default()
+    result = session.take()
+    status = session.report(result, result.summary(), session.draw(result))
+    result.to_rgl(session.flags.rgl)
+    if not session.args.json:
+        print(f"rgl: {session.flags.rgl} (Mitsuba's measured plugin; reflection only)")
+    return status
+
+
 GONIO_COMMAND = Command(
     "gonio", "goniophotometer: certified BRDF/BTDF by outgoing direction",
     "Measure the specimen of a scene as the spectrophotometer does, and bin every escaping ray by its outgoing "
@@ -118,7 +149,7 @@ GONIO_COMMAND = Command(
              FigureFlag("--plot-series", "series", "the distribution over theta_i as a series (f in the plane of "
                                                     "incidence and the CDF of theta_o, certified bands); several "
                                                     "wavelengths: one figure per wavelength", dim="wavelength")),
-    function="gonio")
+    flags=RglFlags, function="gonio", respond=_respond_gonio)
 """``virtspec gonio``: its reading, or with ``--klems`` the Klems matrices (the application's hook, by import path)."""
 
 

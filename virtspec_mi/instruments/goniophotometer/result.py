@@ -38,6 +38,8 @@ Nicodemus et al. (1977), NBS Monograph 160; Baranoski et al. (2001), Sect. 6.
 
 from __future__ import annotations
 
+import os
+
 from functools import cached_property
 from typing import Any, ClassVar, Mapping
 
@@ -487,6 +489,16 @@ class GonioResult(ResultBase):
 
     def _quantity(self, quantity: str) -> tuple[np.ndarray, np.ndarray, float]:
         return self.result._quantity(quantity)
+
+    def to_rgl(self, path: str | os.PathLike, resolution: int = 32) -> Any:
+        """
+        Write the reflection as an RGL ``.bsdf`` for Mitsuba's ``measured`` plugin; returns the
+        :class:`~virtspec_mi.instruments.goniophotometer.rgl.RGLExport` (nodes, values, certified intervals).
+        """
+
+        from virtspec_mi.instruments.goniophotometer.rgl import rgl_export
+
+        return rgl_export(self, path, resolution)
 
     def to_sd(self, quantity: str | None = None, theta_i: float | None = None, *, theta_o: float | None = None,
               phi_o: float | None = None) -> Any:

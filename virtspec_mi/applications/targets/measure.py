@@ -50,6 +50,7 @@ from virtspec_mi.budgets.twostage import stage_two_seed
 from virtspec_mi.engine.plan import Plan
 from virtspec_mi.engine.readings import trace_allocated
 from virtspec_mi.instruments.base import readings_result
+from virtspec_mi.plugins.specimen import specimen_of
 from virtspec_mi.runtime.reading import scene_options
 from virtspec_mi.runtime.scene import LoadedScene
 from virtspec_mi.settings import Settings, resolve
@@ -89,7 +90,7 @@ def _specimen_fit(target: Target, bench: Any) -> Target:
     from virtspec_mi.kernel.spectra import data_ranges  # Mitsuba is set up: the bench is loaded
 
     spans = [(float(r.low), float(r.high)) for r in data_ranges(bench.bsdf)]
-    own = getattr(bench.bsdf, "wavelength_range", None)
+    own = specimen_of(bench.bsdf).wavelength_range
     spans += [] if own is None else [(float(own[0]), float(own[1]))]
     if not spans:
         return target

@@ -57,9 +57,12 @@ def add_fit_command(commands: Any) -> argparse.ArgumentParser:
         epilog=EXAMPLES, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("measured", help="measured spectrum: a wavelength,value,uncertainty CSV (or a colour-science "
                                          "CSV with uncertainty columns), a NetCDF file or a result file")
+    from virtspec_mi.plugins import specimen_rows
+
     parser.add_argument("--specimen", required=True,
-                        help="a BSDF plugin (abm_b, abm_u, prospect_d, turbid_slab ...), a shipped scene or an "
-                             "XML scene")
+                        help=f"a specimen plugin ({', '.join(specimen_rows())}: the project's and the installed "
+                             "packages' of the entry-point group virtspec_mi.specimens), a shipped scene or an XML "
+                             "scene")
     parser.add_argument("--free", type=_pair, action="append", required=True, metavar="NAME=LOWEST:HIGHEST",
                         help="a free parameter and its bounds (repeat for several)")
     parser.add_argument("--quantity", choices=("reflectance", "transmittance", "both"), default="reflectance",

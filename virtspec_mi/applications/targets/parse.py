@@ -64,16 +64,17 @@ def parse_target(text: str) -> Target:
         raise ValueError(f"--target: the kind must be one of {', '.join(TARGETS)} (got {text!r}), e.g. "
                          "colour,dE00=0.5 or band:B04:B08,tolerance=0.002") from None
     allowed = row.options()
+    accepted = {**allowed, **{long: allowed[short] for short, long in row.short if short in allowed}}
     options: dict[str, Any] = {}
     for pair in pairs:
         name, sep, value = pair.partition("=")
         name = name.strip()
-        if not sep or name not in allowed:
+        if not sep or name not in accepted:
             raise ValueError(f"--target {kind}: options are NAME=VALUE with NAME one of "
                              f"{', '.join(allowed) or '(none)'} (got {pair!r})")
         if row.keyword(name) in options:
             raise ValueError(f"--target {kind}: {name} given twice (got {text!r})")
-        options[row.keyword(name)] = _value(kind, name, value, allowed[name])
+        options[row.keyword(name)] = _value(kind, name, value, accepted[name])
     fewest, most = row.arguments()
     if most == 0 and arguments:
         raise ValueError(f"--target {kind} takes no ':' arguments (got {arguments})")

@@ -59,7 +59,8 @@ def test_a_mitsuba_bsdf_reads_as_the_general_case(mi):
 def test_the_project_specimens_declare_what_they_know(mi):
     leaf, slab = specimen_of(mi.load_dict({"type": "abm_b"})), specimen_of(mi.load_dict({"type": "turbid_slab"}))
     assert (leaf.name, leaf.wavelength_range, leaf.wavelength_independent) == ("abm_b", (400.0, 2500.0), False)
-    assert leaf.parameter("thickness") == Parameter("thickness", 0.0, math.inf, "m", "Whole-leaf thickness h in m (> 0)")
+    assert leaf.parameter("thickness") == Parameter("thickness", 0.0, math.inf, "m",
+                                                    "Whole-leaf thickness h in m (> 0)")
     assert leaf.parameter("mesophyll_fraction").highest == 1.0 and leaf.parameter("palisade_aspect_ratio")
     assert specimen_of(mi.load_dict({"type": "abm_u"})).parameter("palisade_aspect_ratio") is None  # no palisade
     assert slab.wavelength_independent and slab.parameter("mu_a").units == "1/length"

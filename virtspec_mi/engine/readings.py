@@ -233,7 +233,7 @@ def in_process_runner(bench: Any, plan: Plan) -> BatchRunner:
 
 
 def shares_wavelengths(bench: Any) -> bool:
-    """True when the specimen declares itself wavelength-independent (:func:`~virtspec_mi.plugins.specimen.specimen_of`)."""
+    """True when the specimen declares itself wavelength-independent (the specimen protocol: ``specimen_of``)."""
 
     return specimen_of(bench.bsdf).wavelength_independent
 

@@ -3,10 +3,11 @@ Targets: the quantity a user wants, its tolerance, and how to size its rays
 ===========================================================================
 
 A target names a derived quantity and the tolerance it must be certified to; the
-instrument (:mod:`~virtspec_mi.applications.targets.measure`) picks the wavelengths, the rays per wavelength (Nₖ ∝ |wₖ|,
-:func:`~.functionals.allocate`) and the rays in all. Each target is a small set of linear
-functionals (:class:`~.functionals.Functional`) stated together at δ (δ/m each, a union
-bound), and a map from their certified box to what is reported:
+instrument (:mod:`~virtspec_mi.applications.targets.measure`) picks the wavelengths, the
+rays per wavelength (Nₖ ∝ |wₖ|, :func:`~.functionals.allocate`) and the rays in all. Each
+target is a small set of linear functionals (:class:`~.functionals.Functional`) stated
+together at δ (δ/m each, a union bound), and a map from their certified box to what is
+reported:
 
 - :class:`BandTarget` (``vm.band``): band values, each to ±tolerance (linear: no pilot).
 - :class:`FaparTarget` (``vm.fapar``): the absorbed share of the PAR photons (400–700 nm
@@ -15,6 +16,11 @@ bound), and a map from their certified box to what is reported:
   exact interval over the bands' box, :mod:`.indices`), and its bands.
 - :class:`ColourTarget` (``vm.colour``): CIE XYZ, L*a*b*, sRGB with ΔE₀₀ of the certified
   box around the estimate ≤ ``tolerance_dE00`` (:mod:`.colour`, :mod:`.delta_e`).
+
+The targets are chosen from one table, :data:`TARGETS` (name → :class:`TargetKind`: a
+constructor, whose signature gives a text's ``:`` arguments and options): the parser, the
+API's messages, the command line's ``--target`` help and the package's top-level names
+read it, so a new target is one constructor and one row.
 
 The nonlinear ones need to know how steep their map is at this specimen: a small pilot
 (rays spent, not in the estimates) gives the point where the tolerances of the

@@ -102,7 +102,16 @@ def test_a_class_without_the_protocol_is_refused_naming_what_it_lacks(mi, tmp_pa
         load_specimen("nota", "bare_bsdf:NotABSDF")
 
 
-def test_an_entry_point_taking_a_project_name_or_broken_is_left_out_with_a_warning(mi, monkeypatch):
+@pytest.fixture
+def reread():
+    """The installed packages' specimens read again in the test, and after it (the cache of the real ones)."""
+
+    plugins.discovered_specimens.cache_clear()
+    yield
+    plugins.discovered_specimens.cache_clear()
+
+
+def test_an_entry_point_taking_a_project_name_or_broken_is_left_out_with_a_warning(mi, monkeypatch, reread):
     points = [EntryPoint("abm_b", "somewhere:Leaf", ENTRY_POINTS),
               EntryPoint("broken_leaf", "no_such_module_38:Leaf", ENTRY_POINTS)]
     monkeypatch.setattr(plugins, "entry_points", lambda group: points if group == ENTRY_POINTS else [])

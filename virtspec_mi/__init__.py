@@ -15,65 +15,8 @@ from typing import Any
 
 from virtspec_mi.base.version import __version__  # noqa: E402  (one place: base.version)
 
-__all__ = [
-    "__version__",
-    "measure",
-    "sweep",
-    "gonio",
-    "read_result",
-    "read_gonio",
-    "GonioResult",
-    "fluctuation",
-    "sphere_measure",
-    "take",
-    "Sphere",
-    "Port",
-    "Baffle",
-    "SphereResult",
-    "Result",
-    "Settings",
-    "GonioOptions",
-    "SphereOptions",
-    "INSTRUMENTS",
-    "InstrumentGeometry",
-    "instrument_scene",
-    "load_scene",
-    "find_bench",
-    "tabulated_bsdf",
-    "read_table",
-    "hoeffding_rays",
-    "chebyshev_rays",
-    "hoeffding_mu",
-    "chebyshev_mu",
-    "BUDGETS",
-    "mitsuba",
-    "scenes",
-    "albedo_table",
-    "read_albedo_table",
-    "AlbedoTable",
-    "TableComparison",
-    "KlemsMeasurement",
-    "write_klems",
-    "compare",
-    "read_measured",
-    "Comparison",
-    "MeasuredSpectrum",
-    "MeasuredFile",
-    "read_samples",
-    "GlossResult",
-    "colour",
-    "band",
-    "fapar",
-    "index",
-    "colour_difference",
-    "albedo",
-    "DerivedResult",
-    "fit",
-    "read_fit",
-    "FitResult",
-    "fit_samples",
-    "FitTable",
-]
+_OWN: tuple[str, ...] = ("__version__", "scenes")
+"""The root's own names beside the lazy ones (the version, the shipped scenes' module)."""
 
 _LAZY = {
     "measure": "virtspec_mi.api",
@@ -99,6 +42,7 @@ _LAZY = {
     "chebyshev_mu": "virtspec_mi.budgets.bounds",
     "BUDGETS": "virtspec_mi.budgets.rules",
     "mitsuba": "virtspec_mi.runtime",
+    "specimens": "virtspec_mi.runtime",
     "albedo_table": "virtspec_mi.applications.tables.albedo",
     "read_albedo_table": "virtspec_mi.applications.tables.table",
     "AlbedoTable": "virtspec_mi.applications.tables.table",
@@ -111,12 +55,7 @@ _LAZY = {
     "MeasuredSpectrum": "virtspec_mi.applications.comparison",
     "MeasuredFile": "virtspec_mi.exchange.measured",
     "read_samples": "virtspec_mi.exchange.measured",
-    "colour": "virtspec_mi.applications.targets.targets",
-    "band": "virtspec_mi.applications.targets.targets",
-    "fapar": "virtspec_mi.applications.targets.targets",
-    "index": "virtspec_mi.applications.targets.targets",
     "colour_difference": "virtspec_mi.applications.targets.difference",
-    "albedo": "virtspec_mi.applications.targets.targets",
     "DerivedResult": "virtspec_mi.applications.targets.result",
     "fit": "virtspec_mi.applications.fitting",
     "read_fit": "virtspec_mi.applications.fitting",
@@ -143,21 +82,46 @@ _prefer_working_libllvm()
 from virtspec_mi import scenes  # noqa: E402  (the shipped scenes by name: paths only, no Mitsuba)
 
 
+_ROWS = {"take": "virtspec_mi.api", "INSTRUMENTS": "virtspec_mi.instruments",
+         "TARGETS": "virtspec_mi.applications.targets.targets"}
+"""Where the tables whose rows export names are: the API's generated functions, the instruments, the targets."""
+
+
+def _table(name: str) -> Any:
+    return importlib.import_module(_ROWS[name])
+
+
+def _rows() -> list[str]:
+    """The names the tables' rows export: each instrument's ``exports``, each target's constructor (``vm.colour``)."""
+
+    return [*_table("INSTRUMENTS").exports(), *_table("TARGETS").TARGETS]
+
+
 def __dir__() -> list[str]:
     """The public names (lazy ones included, and the API functions generated from the registry)."""
 
-    api, instruments = importlib.import_module(_LAZY["take"]), importlib.import_module(_LAZY["INSTRUMENTS"])
-    return sorted({*__all__, *api.aliases(), *instruments.exports()})
+    return sorted({*_public(), *_table("take").aliases()})
+
+
+def _public() -> list[str]:
+    """``__all__``: the root's own names, the lazy ones, and those the rows export (not a hand-kept list)."""
+
+    return list(dict.fromkeys([*_OWN, *_LAZY, *_rows()]))
 
 
 def __getattr__(name: str) -> Any:
+    if name == "__all__":  # built from the tables on each access (a row added at run time is listed)
+        return _public()
     if name in _LAZY:
         return getattr(importlib.import_module(_LAZY[name]), name)
     if not name.startswith("_"):  # an instrument's subcommand without a function of its own: generated (vm.gloss)
-        api = importlib.import_module(_LAZY["take"])  # the API, resolved on access as every lazy name
+        api = _table("take")  # the API, resolved on access as every lazy name
         if name in api.aliases():
             return api.alias(name)
-        instruments = importlib.import_module(_LAZY["INSTRUMENTS"])  # the registry, as the lazy INSTRUMENTS
+        instruments = _table("INSTRUMENTS")  # the registry, as the lazy INSTRUMENTS
         if name in instruments.exports():  # an instrument's own public names (vm.GonioResult, vm.Sphere …)
             return instruments.exported(name)
+        targets = _table("TARGETS").TARGETS  # a target's constructor (vm.colour, vm.band …): its row of TARGETS
+        if name in targets:
+            return targets[name].make
     raise AttributeError(f"module 'virtspec_mi' has no attribute {name!r}")

@@ -21,7 +21,8 @@ resumable from a checkpoint and its readings independent of how they are batched
 :func:`gonio` (the goniophotometer) and :func:`sphere_measure` (the integrating sphere)
 take their readings the same keyed way, with the same keywords (``theta_i``,
 ``parameters``, ``points``, ``defines``, ``checkpoint``, ``out``, ``progress``,
-``workers``, ``task_readings``). Every function here is thin: it parses its keywords at
+``workers``, ``task_readings``: declared once, :class:`~virtspec_mi.runtime.reading.RunOptions`,
+and each function's signature built from them). Every function here is thin: it parses its keywords at
 the boundary — every setting of :class:`~virtspec_mi.settings.Settings` and every option
 of its instrument (its signature is built from their fields,
 :func:`virtspec_mi.settings.keywords`; a bad value raises ``ValueError`` naming it and
@@ -44,6 +45,7 @@ Baranoski et al. (2001), eqs. (2), (23), (24); Figs. 5 and 6.
 
 from __future__ import annotations
 
+import inspect
 import os
 from typing import Any
 
@@ -53,9 +55,10 @@ from virtspec_mi.engine.parameters import parameter_space
 from virtspec_mi.instruments import INSTRUMENTS, commanding
 from virtspec_mi.kernel.counts import QUANTITIES
 from virtspec_mi.results.readings import fluctuation
-from virtspec_mi.runtime.reading import incidence_angles, instrument_for, keyed_reading, scene_options
+from virtspec_mi.runtime.reading import RunOptions, incidence_angles, instrument_for, keyed_reading, scene_options
 from virtspec_mi.runtime.scene import LoadedScene, loaded
-from virtspec_mi.settings import Settings, keywords, resolve
+from virtspec_mi.settings import Settings, resolve
+from virtspec_mi.settings import keywords as signature
 
 __all__ = ["measure", "sweep", "gonio", "read_result", "read_gonio", "fluctuation", "sphere_measure", "take", "alias",
            "aliases",
@@ -63,8 +66,11 @@ __all__ = ["measure", "sweep", "gonio", "read_result", "read_gonio", "fluctuatio
            "parse_theta_i", "parse_wavelengths", "parse_values", "QUANTITIES", "checkpoint_for"]
 
 
-def measure(scene: Any, *, parameters: dict[str, Any] | None = None, defines: dict[str, Any] | None = None,
-            progress: bool | None = None, target: Any = None, **settings: Any) -> Any:
+_MEASURE_RUN: tuple[str, ...] = ("parameters", "defines", "progress")
+"""The run keywords :func:`measure` takes (one reading: θi is a setting; no checkpoint, file or workers)."""
+
+
+def measure(scene: Any, *, target: Any = None, **keywords: Any) -> Any:
     """
     Measure the specimen of ``scene`` and return a certified :class:`~virtspec_mi.results.readings.Result`
     over wavelength (θi a scalar label).
@@ -105,7 +111,9 @@ def measure(scene: Any, *, parameters: dict[str, Any] | None = None, defines: di
     Baranoski et al. (2001), eqs. (2), (23).
     """
 
-    scene = loaded(scene, defines)
+    run, settings = RunOptions.split(keywords, only=_MEASURE_RUN)
+    parameters, progress = run["parameters"], run["progress"]
+    scene = loaded(scene, run["defines"])
     bench = scene.bench
     if target is not None:
         return _measure_target(scene, parameters, target, settings)
@@ -128,21 +136,7 @@ def _measure_target(scene: LoadedScene, parameters: Any, target: Any, settings: 
     return measure_target(scene, parameters, target, settings)
 
 
-def sweep(
-    scene: Any,
-    *,
-    theta_i: Any = None,
-    parameters: dict[str, Any] | None = None,
-    points: bool = False,
-    defines: dict[str, Any] | None = None,
-    checkpoint: str | os.PathLike | None = None,
-    out: str | os.PathLike | None = None,
-    progress: bool | None = None,
-    workers: Any = None,
-    task_readings: int | None = None,
-    target: Any = None,
-    **settings: Any,
-) -> Any:
+def sweep(scene: Any, *, target: Any = None, **keywords: Any) -> Any:
     """
     Certified readings of ``scene`` over every (wavelength, θi) pair.
 
@@ -212,9 +206,10 @@ def sweep(
     Baranoski et al. (2001), eq. (23), Fig. 5.
     """
 
+    run, settings = RunOptions.split(keywords)
+    defines = run.pop("defines")
     if target is not None:
-        given = [name for name, value in (("parameters", parameters), ("checkpoint", checkpoint), ("out", out),
-                                          ("workers", workers)) if value]
+        given = [name for name in ("parameters", "checkpoint", "out", "workers") if run[name]]
         if given:
             raise ValueError(f"{', '.join(given)}: not taken with a target (each angle is one vm.measure(target=...))")
         from virtspec_mi.applications.targets.result import DerivedSweep
@@ -224,22 +219,19 @@ def sweep(
                                                                                     "bound", "pilot_rays",
                                                                                     "pilot_delta", "joint")},
                             scene_options(scene.bench, Settings))
-        angles = incidence_angles(resolved, theta_i, "a sweep")
+        angles = incidence_angles(resolved, run["theta_i"], "a sweep")
         return DerivedSweep(tuple(float(t) for t in angles), tuple(
             _measure_target(scene, None, target, {**settings, "theta_i": float(t)}) for t in angles))
-    return keyed_reading(commanding("sweep").name, "sweep", "a sweep", loaded(scene, defines), settings, theta_i=theta_i,
-                    parameters=parameters, points=points, checkpoint=checkpoint, out=out, progress=progress,
-                    workers=workers, task_readings=task_readings)
+    return keyed_reading(commanding("sweep").name, "sweep", "a sweep", loaded(scene, defines), settings, **run)
 
 
-measure.__signature__ = keywords(measure, Settings)  # type: ignore[attr-defined]
-sweep.__signature__ = keywords(sweep, Settings)  # type: ignore[attr-defined]
+# the signatures: the run keywords (RunOptions, declared once), the settings and the instrument's options
+measure.__signature__ = signature(measure, Settings, RunOptions,  # type: ignore[attr-defined]
+                                  exclude=tuple(set(RunOptions.names()) - {*_MEASURE_RUN, "theta_i"}))
+sweep.__signature__ = signature(sweep, RunOptions, Settings)  # type: ignore[attr-defined]
 
 
-def gonio(scene: Any, *, theta_i: Any = None, parameters: dict[str, Any] | None = None, points: bool = False,
-          defines: dict[str, Any] | None = None, checkpoint: str | os.PathLike | None = None,
-          out: str | os.PathLike | None = None, progress: bool | None = None, workers: Any = None,
-          task_readings: int | None = None, **options: Any) -> Any:
+def gonio(scene: Any, **keywords: Any) -> Any:
     """
     A certified goniophotometer reading of ``scene``: the spectrophotometer's readings
     over every (wavelength, θi, specimen parameter point), with every escaping ray also
@@ -274,12 +266,10 @@ def gonio(scene: Any, *, theta_i: Any = None, parameters: dict[str, Any] | None 
     Baranoski et al. (2001), eq. (23), Sect. 6; :mod:`virtspec_mi.budgets.bins`.
     """
 
-    return keyed_reading(commanding("gonio").name, "gonio", "a goniophotometer reading", loaded(scene, defines), options,
-                    theta_i=theta_i, parameters=parameters, points=points, checkpoint=checkpoint, out=out,
-                    progress=progress, workers=workers, task_readings=task_readings)
+    return _keyed("gonio", "a goniophotometer reading", scene, keywords)
 
 
-gonio.__signature__ = keywords(gonio, commanding("gonio").options, Settings)  # type: ignore[attr-defined]
+gonio.__signature__ = signature(gonio, RunOptions, commanding("gonio").options, Settings)  # type: ignore[attr-defined]
 
 
 def read_gonio(path: str | os.PathLike) -> Any:
@@ -301,10 +291,7 @@ def read_result(path: str | os.PathLike) -> Any:
     return read_any(path)
 
 
-def sphere_measure(scene: Any, *, theta_i: Any = None, parameters: dict[str, Any] | None = None, points: bool = False,
-                   defines: dict[str, Any] | None = None, checkpoint: str | os.PathLike | None = None,
-                   out: str | os.PathLike | None = None, progress: bool | None = None, workers: Any = None,
-                   task_readings: int | None = None, **settings: Any) -> Any:
+def sphere_measure(scene: Any, **keywords: Any) -> Any:
     """
     Read the specimen of ``scene`` as a physical integrating sphere would: a
     :class:`~virtspec_mi.instruments.sphere.result.SphereResult` over wavelength (and θi and specimen
@@ -334,19 +321,14 @@ def sphere_measure(scene: Any, *, theta_i: Any = None, parameters: dict[str, Any
     Baranoski et al. (2001), eqs. (2), (23); Goebel (1967).
     """
 
-    return keyed_reading(commanding("sphere_measure").name, "sphere_measure", "a sphere reading", loaded(scene, defines),
-                    settings, theta_i=theta_i, parameters=parameters, points=points, checkpoint=checkpoint, out=out,
-                    progress=progress, workers=workers, task_readings=task_readings)
+    return _keyed("sphere_measure", "a sphere reading", scene, keywords)
 
 
-sphere_measure.__signature__ = keywords(  # type: ignore[attr-defined]
-    sphere_measure, Settings, commanding("sphere_measure").options)
+sphere_measure.__signature__ = signature(  # type: ignore[attr-defined]
+    sphere_measure, RunOptions, Settings, commanding("sphere_measure").options)
 
 
-def take(instrument: str, scene: Any, *, theta_i: Any = None, parameters: dict[str, Any] | None = None,
-         points: bool = False, defines: dict[str, Any] | None = None, checkpoint: str | os.PathLike | None = None,
-         out: str | os.PathLike | None = None, progress: bool | None = None, workers: Any = None,
-         task_readings: int | None = None, **options: Any) -> Any:
+def take(instrument: str, scene: Any, **keywords: Any) -> Any:
     """
     A reading of ``scene`` with any instrument of the registry, by its name
     (:data:`virtspec_mi.instruments.INSTRUMENTS`: ``hemispherical``, ``goniophotometer``,
@@ -374,9 +356,22 @@ def take(instrument: str, scene: Any, *, theta_i: Any = None, parameters: dict[s
 
     if not isinstance(instrument, str) or instrument not in INSTRUMENTS:
         raise ValueError(f"instrument must be one of {', '.join(INSTRUMENTS)} (got {instrument!r})")
-    return keyed_reading(instrument, "take", f"a {instrument} reading", loaded(scene, defines), options, theta_i=theta_i,
-                    parameters=parameters, points=points, checkpoint=checkpoint, out=out, progress=progress,
-                    workers=workers, task_readings=task_readings)
+    return _keyed("take", f"a {instrument} reading", scene, keywords, instrument)
+
+
+take.__signature__ = signature(take, RunOptions).replace(parameters=[  # type: ignore[attr-defined]
+    *signature(take, RunOptions).parameters.values(), inspect.Parameter("options", inspect.Parameter.VAR_KEYWORD)])
+
+
+def _keyed(word: str, what: str, scene: Any, given: dict[str, Any], instrument: str | None = None) -> Any:
+    """
+    The keyed reading of the API function ``word`` (its instrument: ``instrument``, or the one
+    with that command): the run keywords of ``given`` taken apart from its settings and options.
+    """
+
+    run, options = RunOptions.split(given)
+    defines = run.pop("defines")
+    return keyed_reading(instrument or commanding(word).name, word, what, loaded(scene, defines), options, **run)
 
 
 def aliases() -> dict[str, str]:
@@ -400,18 +395,13 @@ def alias(name: str) -> Any:
     instrument = INSTRUMENTS[aliases()[name]]
     command = next(c for c in instrument.commands if c.name == name)
 
-    def reading(scene: Any, *, theta_i: Any = None, parameters: dict[str, Any] | None = None, points: bool = False,
-                defines: dict[str, Any] | None = None, checkpoint: str | os.PathLike | None = None,
-                out: str | os.PathLike | None = None, progress: bool | None = None, workers: Any = None,
-                task_readings: int | None = None, **options: Any) -> Any:
-        return take(instrument.name, scene, theta_i=theta_i, parameters=parameters, points=points, defines=defines,
-                    checkpoint=checkpoint, out=out, progress=progress, workers=workers, task_readings=task_readings,
-                    **options)
+    def reading(scene: Any, **keywords: Any) -> Any:
+        return take(instrument.name, scene, **keywords)
 
     reading.__name__ = reading.__qualname__ = name
     reading.__doc__ = (f"{command.description}\n\nGenerated from the registry: ``take({instrument.name!r}, scene, "
                        "...)`` (:func:`virtspec_mi.take`; keywords as for :func:`virtspec_mi.sweep`, and the "
                        "instrument's options).")
     kinds = (Settings,) if instrument.options is None else (Settings, instrument.options)
-    reading.__signature__ = keywords(reading, *kinds)  # type: ignore[attr-defined]
+    reading.__signature__ = signature(reading, RunOptions, *kinds)  # type: ignore[attr-defined]
     return reading

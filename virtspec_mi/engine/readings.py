@@ -52,6 +52,7 @@ import numpy as np
 
 from virtspec_mi.budgets import twostage
 from virtspec_mi.base.checks import check_readings, check_rays_needed, check_wavelength_range, shown_value
+from virtspec_mi.plugins.specimen import specimen_of
 import virtspec_mi.base.interrupts as interrupts
 from virtspec_mi.engine.checkpoint import Checkpoint
 from virtspec_mi.engine.parameters import apply_point, current_values
@@ -232,9 +233,9 @@ def in_process_runner(bench: Any, plan: Plan) -> BatchRunner:
 
 
 def shares_wavelengths(bench: Any) -> bool:
-    """True when the specimen's BSDF declares ``wavelength_independent = True``."""
+    """True when the specimen declares itself wavelength-independent (the specimen protocol: ``specimen_of``)."""
 
-    return bool(getattr(bench.bsdf, "wavelength_independent", False))
+    return specimen_of(bench.bsdf).wavelength_independent
 
 
 def _shares(bench: Any, plan: Plan) -> bool:
@@ -272,21 +273,20 @@ def _traced_readings(bench: Any, readings: Sequence[tuple[float, float, float]],
 
 def check_specimen(bsdf: Any, wavelengths: list[float]) -> None:
     """
-    Refuse, before tracing, wavelengths the specimen does not take: outside its
-    ``wavelength_range`` (the ABM leaves' data, a measured table's), outside the data of
-    any Mitsuba spectrum it holds (:func:`virtspec_mi.kernel.spectra.check_covered`: a
+    Refuse, before tracing, wavelengths the specimen does not take (read through the
+    specimen protocol, :func:`~virtspec_mi.plugins.specimen.specimen_of`): outside its
+    wavelength range (the ABM leaves' data, a measured table's), outside the data of any
+    Mitsuba spectrum it holds (:func:`virtspec_mi.kernel.spectra.check_covered`: a
     ``regular``/``irregular`` spectrum's range, an RGB colour's CIE range), or where its
     ``check_wavelengths`` finds a spectral parameter out of range (``turbid_slab``'s spectra).
     """
 
     from virtspec_mi.kernel.spectra import check_covered  # Mitsuba is set up by now (a bench is loaded)
 
-    name = getattr(bsdf, "PLUGIN", "") or (bsdf.class_name() if hasattr(bsdf, "class_name") else type(bsdf).__name__)
-    check_wavelength_range(wavelengths, getattr(bsdf, "wavelength_range", None), name)
-    check_covered(bsdf, wavelengths, f"the specimen {name}")
-    check = getattr(bsdf, "check_wavelengths", None)
-    if check is not None:
-        check(wavelengths)
+    specimen = specimen_of(bsdf)
+    check_wavelength_range(wavelengths, specimen.wavelength_range, specimen.name)
+    check_covered(bsdf, wavelengths, f"the specimen {specimen.name}")
+    specimen.check_wavelengths(wavelengths)
 
 
 def _fixed(bench: Any, readings: Sequence[tuple[float, float, float]], settings: Settings, rays: np.ndarray,

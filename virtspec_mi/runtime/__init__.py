@@ -8,14 +8,17 @@ first call
 1. points Dr.Jit at a working libLLVM (:mod:`virtspec_mi.base.llvm`) and refuses a bad one,
 2. selects the Mitsuba variant (``llvm_ad_spectral``; ``VIRTSPEC_VARIANT`` overrides it,
    e.g. ``cuda_ad_spectral`` on a GPU machine),
-3. registers the project's plugins (:data:`PLUGINS`: :mod:`virtspec_mi.plugins`) under
-   that variant (:func:`register`), and lets ``mi.render`` raise the
+3. registers the specimens (:data:`virtspec_mi.plugins.SPECIMENS` and the outside
+   packages' entry points of the group ``virtspec_mi.specimens``:
+   :func:`virtspec_mi.plugins.specimen_rows`) and the project's other plugins
+   (:data:`PLUGINS`) under that variant (:func:`register`), and lets ``mi.render`` raise the
    ``spectrophotometer`` integrator's ``ValueError`` (e.g. a bad ``spp``) as itself
    rather than wrapped in Dr.Jit's ``RuntimeError``
    (:func:`virtspec_mi.instruments.integrator.clear_render_errors`).
 
-The plugins, one per file (``bsdfs/``: specimens; ``integrators/``: the instruments'
-Mitsuba entry):
+The plugins, one per file (``bsdfs/``: the specimens of :data:`virtspec_mi.plugins.SPECIMENS`,
+:func:`specimens` lists them with the outside ones; the ``spectrophotometer`` integrator
+and the ``virtspec_flipped`` BSDF of :data:`PLUGINS`):
 
 ======================  ===========  ===============================================
 name                    kind         module (under :mod:`virtspec_mi.plugins`)
@@ -27,7 +30,8 @@ name                    kind         module (under :mod:`virtspec_mi.plugins`)
 ``tabulated``           BSDF         :mod:`.bsdfs.tabulated` (a goniophotometer table)
 ``microfacet``          BSDF         :mod:`.bsdfs.microfacet` (the engines' albedo models)
 ``prospect_d``          BSDF         :mod:`.bsdfs.prospect_d` (model: :mod:`.bsdfs.prospect_model`)
-``spectrophotometer``   integrator   :mod:`.integrators.spectrophotometer`
+``virtspec_flipped``    BSDF         :mod:`.bsdfs.flipped` (a BSDF turned over)
+``spectrophotometer``   integrator   :mod:`virtspec_mi.instruments.integrator`
 ======================  ===========  ===============================================
 
 and the integrators the instruments declare (:attr:`~virtspec_mi.instruments.base.Instrument.integrators`,
@@ -41,22 +45,15 @@ from types import ModuleType
 
 from virtspec_mi.base.llvm import check_loaded_llvm, select_libllvm
 
-__all__ = ["DEFAULT_VARIANT", "PLUGINS", "mitsuba", "register", "variant"]
+__all__ = ["DEFAULT_VARIANT", "PLUGINS", "mitsuba", "register", "variant", "specimens"]
 
 DEFAULT_VARIANT: str = "llvm_ad_spectral"
 
 PLUGINS: dict[str, tuple[str, str, str]] = {
-    "simple_dielectric": ("bsdf", "virtspec_mi.plugins.bsdfs.simple_dielectric", "SimpleDielectric"),
-    "turbid_slab": ("bsdf", "virtspec_mi.plugins.bsdfs.turbid_slab", "TurbidSlab"),
-    "abm_b": ("bsdf", "virtspec_mi.plugins.bsdfs.abm_b", "ABMB"),
-    "abm_u": ("bsdf", "virtspec_mi.plugins.bsdfs.abm_u", "ABMU"),
-    "tabulated": ("bsdf", "virtspec_mi.plugins.bsdfs.tabulated", "Tabulated"),
-    "microfacet": ("bsdf", "virtspec_mi.plugins.bsdfs.microfacet", "Microfacet"),
-    "prospect_d": ("bsdf", "virtspec_mi.plugins.bsdfs.prospect_d", "ProspectD"),
     "virtspec_flipped": ("bsdf", "virtspec_mi.plugins.bsdfs.flipped", "FlippedBSDF"),
     "spectrophotometer": ("integrator", "virtspec_mi.instruments.integrator", "Spectrophotometer"),
 }
-"""The project's plugins beside the instruments: Mitsuba name → (kind, module, class)."""
+"""The project's plugins beside the specimens and the instruments: Mitsuba name → (kind, module, class)."""
 
 _registered: set[str] = set()
 
@@ -100,19 +97,55 @@ def mitsuba() -> ModuleType:
 
 def register() -> None:
     """
-    Register every plugin of :data:`PLUGINS`, and every integrator an instrument of the
-    registry declares (``"module:Class"``), under the current Mitsuba variant.
+    Register every specimen (:func:`virtspec_mi.plugins.specimen_rows`: the project's and
+    the outside packages' entry points), every plugin of :data:`PLUGINS`, and every
+    integrator an instrument of the registry declares (``"module:Class"``), under the
+    current Mitsuba variant. An outside specimen that cannot be loaded, or is no BSDF
+    implementing the specimen protocol, is left out with a ``RuntimeWarning`` naming it.
     """
 
     import importlib
+    import warnings
 
     import mitsuba as mi
 
     from virtspec_mi.instruments import INSTRUMENTS
+    from virtspec_mi.plugins import SPECIMENS, load_specimen, specimen_rows
 
+    registrars = {"bsdf": mi.register_bsdf, "integrator": mi.register_integrator}
+    for name, row in specimen_rows().items():
+        try:
+            plugin = load_specimen(name, row)
+        except Exception as error:
+            if name in SPECIMENS:
+                raise
+            warnings.warn(f"specimen entry point {name!r} ({row}) could not be registered: {error}", RuntimeWarning,
+                          stacklevel=2)
+            continue
+        mi.register_bsdf(name, lambda props, plugin=plugin: plugin(props))
     declared = {name: ("integrator", *target.split(":")) for instrument in INSTRUMENTS.values()
                 for name, target in instrument.integrators.items()}
-    registrars = {"bsdf": mi.register_bsdf, "integrator": mi.register_integrator}
     for name, (kind, module, cls) in {**PLUGINS, **declared}.items():
         plugin = getattr(importlib.import_module(module), cls)
         registrars[kind](name, lambda props, plugin=plugin: plugin(props))
+
+
+def specimens() -> dict[str, str]:
+    """
+    The specimens a scene can name (``{"type": NAME}``), the project's and those of the
+    installed packages' entry points (``virtspec_mi.specimens``), each with the first line
+    of its class's docstring: ``vm.specimens()``. Mitsuba is set up (the classes loaded).
+    """
+
+    from virtspec_mi.plugins import load_specimen, specimen_rows
+
+    mitsuba()
+    listed = {}
+    for name, row in specimen_rows().items():
+        try:
+            plugin = load_specimen(name, row)
+        except Exception:  # warned of when registered (mitsuba() above): not a specimen
+            continue
+        first = ((plugin.__doc__ or "").strip().splitlines() or [""])[0].strip()
+        listed[name] = first.replace(" (see the module docstring)", "")
+    return listed

@@ -22,10 +22,12 @@ https://eradiate.readthedocs.io.
 
 from __future__ import annotations
 
+import inspect
 import os
 from contextlib import ExitStack, contextmanager
+from dataclasses import dataclass, fields
 from pathlib import Path
-from typing import Any, Iterator
+from typing import Any, ClassVar, Iterator
 
 import numpy as np
 
@@ -44,9 +46,59 @@ from virtspec_mi.results.readings import Result
 from virtspec_mi.results.zarr import SUFFIX as ZARR_SUFFIX
 from virtspec_mi.results.zarr import ZarrTable
 from virtspec_mi.runtime.scene import LoadedScene
-from virtspec_mi.settings import Settings, resolve, true_or_false
+from virtspec_mi.settings import Options, Settings, option, resolve, true_or_false
 
-__all__ = ["take", "keyed_reading", "read_result", "instrument_for", "scene_options", "incidence_angles"]
+__all__ = ["take", "keyed_reading", "read_result", "instrument_for", "scene_options", "incidence_angles", "RunOptions"]
+
+
+def _as_given(value: Any) -> Any:
+    """A run keyword is taken as given here; :func:`keyed_reading` checks it where it is used."""
+
+    return value
+
+
+@dataclass(frozen=True)
+class RunOptions(Options):
+    """
+    The keywords of a run, beside the settings and the instrument's options, declared
+    once: the API's run functions (``measure``, ``sweep``, ``gonio``, ``sphere_measure``,
+    ``take`` and the generated ones, ``vm.gloss``) have their signatures built from them
+    (:func:`virtspec_mi.settings.keywords`, with their defaults) and take them apart with
+    :meth:`split`; :func:`keyed_reading` uses them.
+    """
+
+    title: ClassVar[str] = "run keywords"
+
+    theta_i: Any = option(None, _as_given, "incidence angles in degrees: a number, a sequence or 'start:stop:step' "
+                          "(default: the scene's)")
+    parameters: dict[str, Any] | None = option(None, _as_given, "specimen parameters, name -> values")
+    points: bool = option(False, _as_given, "parameters holds explicit points (one dim 'point')")
+    defines: dict[str, Any] | None = option(None, _as_given, "values of an XML scene's $name parameters")
+    checkpoint: str | os.PathLike | None = option(None, _as_given, "the checkpoint (JSON) a run resumes from")
+    out: str | os.PathLike | None = option(None, _as_given, "the result file written when the run completes")
+    progress: bool | None = option(None, _as_given, "a progress bar: True, False or None (when worth it)")
+    workers: Any = option(None, _as_given, "Dask workers: a number, a scheduler address or a Client")
+    task_readings: int | None = option(None, _as_given, "readings per Dask task (default: from the ray rate)")
+
+    @classmethod
+    def keyword_parameters(cls) -> list[inspect.Parameter]:
+        """The run keywords as keyword-only parameters with their defaults and types (not ``None`` for all)."""
+
+        return [inspect.Parameter(item.name, inspect.Parameter.KEYWORD_ONLY, default=item.default,
+                                  annotation=item.type) for item in fields(cls)]
+
+    @classmethod
+    def split(cls, given: dict[str, Any], only: tuple[str, ...] | None = None) -> tuple[dict[str, Any], dict[str, Any]]:
+        """
+        ``given`` (a run function's keywords) as the run keywords — each of ``only`` (default:
+        every one), its default where not given — and the others (the settings and the
+        instrument's options, which :func:`virtspec_mi.settings.resolve` checks).
+        """
+
+        names = cls.names() if only is None else only
+        defaults = {item.name: item.default for item in fields(cls)}
+        return {name: given.get(name, defaults[name]) for name in names}, {
+            name: value for name, value in given.items() if name not in names}
 
 
 def keyed_reading(name: str, caller: str, what: str, scene: LoadedScene, given: dict[str, Any], **run: Any) -> Any:

@@ -169,9 +169,11 @@ def _check_specimen_dict(scene: dict) -> None:
     a ``ref``, or a loaded ``mi.BSDF``): Mitsuba gives such a shape a default diffuse BSDF.
     """
 
+    from virtspec_mi.plugins import specimen_rows
     from virtspec_mi.runtime import PLUGINS
 
     mi = mitsuba()
+    project = {**{name: "bsdf" for name in specimen_rows()}, **{name: row[0] for name, row in PLUGINS.items()}}
     specimen = scene.get(SPECIMEN_ID)
     if not isinstance(specimen, dict):
         return  # not an instrument scene: read_bench names what is missing
@@ -182,9 +184,8 @@ def _check_specimen_dict(scene: dict) -> None:
         if not isinstance(value, dict) or not isinstance(value.get("type"), str):
             return False
         kind = value["type"]
-        project = PLUGINS.get(kind)
-        if project is not None:
-            return project[0] == "bsdf"
+        if kind in project:
+            return project[kind] == "bsdf"
         return kind == "ref" or mi.PluginManager.instance().plugin_type(kind) in (mi.ObjectType.BSDF,
                                                                                 mi.ObjectType.Unknown)
 

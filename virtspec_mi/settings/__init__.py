@@ -212,6 +212,16 @@ class Options:
         return "\n".join(f"{item.name} = {shown(item.default)}: {help_text(item)}" for item in fields(cls))
 
     @classmethod
+    def keyword_parameters(cls) -> list[inspect.Parameter]:
+        """
+        These options as keyword-only parameters of a signature (:func:`keywords`): each
+        ``name=None`` (a value left ``None`` comes from the scene's integrator, else from
+        the default).
+        """
+
+        return [inspect.Parameter(name, inspect.Parameter.KEYWORD_ONLY, default=None) for name in cls.names()]
+
+    @classmethod
     def keywords(cls, function: Callable, exclude: tuple[str, ...] = ()) -> inspect.Signature:
         """``function``'s signature with these options as keywords (:func:`keywords`)."""
 
@@ -268,9 +278,10 @@ class Options:
 def keywords(function: Callable, *kinds: type[Options], exclude: tuple[str, ...] = ()) -> inspect.Signature:
     """
     The one signature builder: ``function``'s signature with every option of ``kinds``
-    (in order) appended as a keyword-only ``name=None`` — a value left ``None`` comes
-    from the scene's integrator, else from the default — except those ``function``
-    declares itself and those in ``exclude``.
+    (in order) appended as a keyword-only parameter (:meth:`Options.keyword_parameters`:
+    ``name=None`` — a value left ``None`` comes from the scene's integrator, else from the
+    default — or a kind's own, e.g. the API's run options with their defaults), except
+    those ``function`` declares itself, those an earlier kind gave, and those in ``exclude``.
     """
 
     signature = inspect.signature(function)
@@ -278,10 +289,10 @@ def keywords(function: Callable, *kinds: type[Options], exclude: tuple[str, ...]
     taken = {p.name for p in own} | set(exclude)
     extra = []
     for kind in kinds:
-        for name in kind.names():
-            if name not in taken:
-                extra.append(inspect.Parameter(name, inspect.Parameter.KEYWORD_ONLY, default=None))
-                taken.add(name)
+        for parameter in kind.keyword_parameters():
+            if parameter.name not in taken:
+                extra.append(parameter)
+                taken.add(parameter.name)
     return signature.replace(parameters=[*own, *extra])
 
 

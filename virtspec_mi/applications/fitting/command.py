@@ -63,9 +63,12 @@ def add_fit_command(commands: Any) -> argparse.ArgumentParser:
                                          "CSV with uncertainty columns), a NetCDF file, a result file, or an "
                                          "instrument's or library's file (.asd, .sig, .sed, .jdx/.dx, .sli, a CSV "
                                          "table of many samples: --sample; give --uncertainty)")
+    from virtspec_mi.plugins import specimen_rows
+
     parser.add_argument("--specimen", required=True,
-                        help="a BSDF plugin (abm_b, abm_u, prospect_d, turbid_slab ...), a shipped scene or an "
-                             "XML scene")
+                        help=f"a specimen plugin ({', '.join(specimen_rows())}: the project's and the installed "
+                             "packages' of the entry-point group virtspec_mi.specimens), a shipped scene or an XML "
+                             "scene")
     parser.add_argument("--free", type=_pair, action="append", required=True, metavar="NAME=LOWEST:HIGHEST",
                         help="a free parameter and its bounds (repeat for several)")
     parser.add_argument("--quantity", choices=("reflectance", "transmittance", "both"), default="reflectance",

@@ -13,7 +13,9 @@ into a :class:`FitProblem`, refusing bad input with a ``ValueError`` that names 
 - the **free parameters**: name → (lowest, highest), each a number the specimen shows
   to ``mi.traverse`` (``Cab`` or ``specimen.Cab``; :mod:`virtspec_mi.engine.parameters`),
   both ends checked by the specimen itself (a bound outside the model's validity is
-  refused with the plugin's own message);
+  refused with the plugin's own message) and against the parameter's bounds the
+  specimen declares (the specimen protocol, :class:`~virtspec_mi.plugins.specimen.Specimen`:
+  an unknown name is answered with each parameter's units and bounds);
 - the **measured spectra**: reflectance and/or transmittance (:func:`~virtspec_mi.applications.comparison.read_measured`
   formats), each with its measurement uncertainty (a fit without one has no honest
   confidence set: refused), on one set of wavelengths inside the specimen's data range.
@@ -35,7 +37,8 @@ from virtspec_mi.base.checks import number
 from virtspec_mi.applications.comparison import MeasuredSpectrum, read_measured
 from virtspec_mi.engine.bench import Bench
 from virtspec_mi.engine.parameters import PREFIX, apply_point, current_values, known_parameters, parameter_space
-from virtspec_mi.runtime import PLUGINS
+from virtspec_mi.plugins import specimen_rows
+from virtspec_mi.plugins.specimen import specimen_of
 from virtspec_mi.runtime.scene import LoadedScene, instrument_scene, loaded, scene_fingerprint
 
 __all__ = ["FitProblem", "fit_problem", "describe", "FIT_QUANTITIES"]
@@ -108,11 +111,18 @@ class FitProblem:
 def _specimen_scene(specimen: Any) -> tuple[Any, str]:
     if isinstance(specimen, LoadedScene):
         return specimen, str(specimen.source["scene"])
-    if isinstance(specimen, str) and specimen in PLUGINS and PLUGINS[specimen][0] == "bsdf":
+    if isinstance(specimen, str) and specimen in specimen_rows():  # a specimen plugin, an outside one too
         return instrument_scene({"type": specimen}), specimen
     if isinstance(specimen, str):
         return specimen, specimen
     return specimen, type(specimen).__name__
+
+
+def _declared(own: Any, short: str) -> str:
+    """A parameter as an error lists it: with its units and bounds when the specimen declares them."""
+
+    declared = own.parameter(short.rpartition(".")[2])
+    return short if declared is None else f"{short} {declared.describe().partition(' ')[2]}"
 
 
 def _bounds(name: str, value: Any) -> tuple[float, float]:
@@ -179,18 +189,26 @@ def fit_problem(measured: Any, specimen: Any, parameters: Mapping[str, Any], *,
     names = tuple(parameters)
     keys = tuple(name if name.startswith("specimen.") or name.startswith(PREFIX) else f"specimen.{name}"
                  for name in names)
+    own = specimen_of(bench.bsdf)  # the specimen protocol: its parameters' bounds and units, its wavelength range
     for name, key in zip(names, keys):
         if key not in known and key not in known.values():
-            listed = ", ".join(sorted(k[len("specimen."):] for k in known)) or "none"
+            shorts = sorted(k[len("specimen."):] for k in known)
+            listed = ", ".join(_declared(own, short) for short in shorts) or "none"
             raise ValueError(f"the specimen {label} has no parameter {name!r} (its parameters: {listed})")
     bounds = np.array([_bounds(name, parameters[name]) for name in names])
     start = current_values(bench, [known.get(key, key) for key in keys])
     parameter_space(bench, {key: list(row) for key, row in zip(keys, bounds)})  # the specimen checks both ends
     apply_point(bench, [known.get(key, key) for key in keys], start)
+    for name, key, (low, high) in zip(names, keys, bounds):
+        declared = own.parameter(key.rpartition(".")[2])
+        if declared is not None and not (declared.within(low) and declared.within(high)):
+            raise ValueError(f"the bounds of free parameter {name!r} ({low:g}, {high:g}) must lie within the "
+                             f"specimen {label}'s {declared.lowest:g} <= {declared.name} <= {declared.highest:g} "
+                             f"({declared.units})")
     spectra = _spectra(measured, quantities)
     first = next(iter(spectra.values()))
     grid = first.wavelengths if wavelengths is None else np.unique(np.asarray(wavelengths, dtype=np.float64).ravel())
-    data_range = getattr(bench.bsdf, "wavelength_range", None)
+    data_range = own.wavelength_range
     if data_range is not None and (grid.min() < data_range[0] or grid.max() > data_range[1]):
         raise ValueError(f"the measured spectrum reaches {grid.min():g}-{grid.max():g} nm, outside the data range of "
                          f"the specimen {label} ({data_range[0]:g}-{data_range[1]:g} nm): give wavelengths= inside it")

@@ -88,7 +88,7 @@ def band(response: Any, name: str | None = None, step: float = 1.0) -> Band:
     """
     A :class:`Band` from ``response``: a name of :data:`SENTINEL_2` (``"B04"``, or
     ``"S2A_B04"``), a pair of edges ``(low, high)`` in nm (rectangular, sampled every
-    ``step`` nm, edges included), a dict ``{wavelength nm: response}`` or the path of a
+    ``step`` nm, edges included; or written ``"650-680"``), a dict ``{wavelength nm: response}`` or the path of a
     two-column text file (wavelength nm, response).
     """
 
@@ -106,6 +106,8 @@ def band(response: Any, name: str | None = None, step: float = 1.0) -> Band:
     if isinstance(response, Mapping):
         pairs = sorted((float(k), float(v)) for k, v in response.items())
         return _checked(name or "band", np.array([p[0] for p in pairs]), np.array([p[1] for p in pairs]), "given")
+    if isinstance(response, str) and not Path(response).is_file() and _edges(response) is not None:
+        return band(_edges(response), name, step)  # "650-680": edges in nm, as a text writes them
     if isinstance(response, (str, os.PathLike)):
         path = Path(response)
         if not path.is_file():
@@ -121,6 +123,16 @@ def band(response: Any, name: str | None = None, step: float = 1.0) -> Band:
         return _checked(name or path.stem, table[order, 0], table[order, 1], f"file {path.name}")
     raise ValueError(f"response must be a Sentinel-2 band ({', '.join(SENTINEL_2)}), edges (low, high) in nm, a dict "
                      f"{{wavelength: response}} or a two-column file (got {response!r})")
+
+
+def _edges(text: str) -> tuple[float, float] | None:
+    """``(650.0, 680.0)`` of ``"650-680"``; ``None`` for a text that is not two numbers joined by ``-``."""
+
+    low, sep, high = text.partition("-")
+    try:
+        return (float(low), float(high)) if sep else None
+    except ValueError:
+        return None
 
 
 def _rectangle(low: float, high: float, step: float) -> tuple[np.ndarray, np.ndarray]:

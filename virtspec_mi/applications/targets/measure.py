@@ -45,11 +45,12 @@ import numpy as np
 from virtspec_mi.budgets.functionals import (Functional, allocate, allocate_jointly, certified_tolerance,
                                                           union_delta)
 from virtspec_mi.applications.targets.result import DerivedResult
-from virtspec_mi.applications.targets.targets import ColourTarget, Target, Value, colour_of
+from virtspec_mi.applications.targets.targets import TARGETS, ColourTarget, Target, Value, colour_of
 from virtspec_mi.budgets.twostage import stage_two_seed
 from virtspec_mi.engine.plan import Plan
 from virtspec_mi.engine.readings import trace_allocated
 from virtspec_mi.instruments.base import readings_result
+from virtspec_mi.plugins.specimen import specimen_of
 from virtspec_mi.runtime.reading import scene_options
 from virtspec_mi.runtime.scene import LoadedScene
 from virtspec_mi.settings import Settings, resolve
@@ -89,7 +90,7 @@ def _specimen_fit(target: Target, bench: Any) -> Target:
     from virtspec_mi.kernel.spectra import data_ranges  # Mitsuba is set up: the bench is loaded
 
     spans = [(float(r.low), float(r.high)) for r in data_ranges(bench.bsdf)]
-    own = getattr(bench.bsdf, "wavelength_range", None)
+    own = specimen_of(bench.bsdf).wavelength_range
     spans += [] if own is None else [(float(own[0]), float(own[1]))]
     if not spans:
         return target
@@ -143,7 +144,9 @@ def plan_target(bench: Any, settings: Settings, target: Target) -> TargetPlan:
     """Steps 1–3 of the module docstring (the pilot traced when the target needs one): the rays, not yet traced."""
 
     if not isinstance(target, Target):
-        raise ValueError(f"target must be made by vm.colour, vm.band, vm.fapar or vm.index (got {target!r})")
+        made = [f"vm.{name}" for name in TARGETS]
+        raise ValueError(f"target must be made by {', '.join(made[:-1])} or {made[-1]} (the rows of TARGETS; a "
+                         f"text such as 'colour,dE00=0.5' is read by parse_target) (got {target!r})")
     target = _specimen_fit(target, bench)
     functionals = target.functionals()
     quantity = functionals[0].quantity

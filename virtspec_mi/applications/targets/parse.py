@@ -2,7 +2,13 @@
 Targets written as text: ``virtspec measure --target ...``
 ==========================================================
 
-:func:`parse_target` reads a target from one string, ``KIND[:ARG]...[,NAME=VALUE]...``:
+:func:`parse_target` reads a target from one string, ``KIND[:ARG]...[,NAME=VALUE]...``,
+by the table :data:`~.targets.TARGETS`: ``KIND`` names a row (or one of its spellings,
+``color``), the ``:`` arguments go to its constructor's positional-only parameters
+(``band:B04:B08``, ``index:NDVI``), and each ``NAME=VALUE`` is one of the constructor's
+options, converted by its annotation (a number, a word, true/false). An unknown kind or
+option is refused naming the allowed ones, an option given twice is refused. The rows
+today:
 
 - ``colour`` (or ``color``) with ``dE00=0.5``, ``illuminant=D65``, ``observer=...``,
   ``quantity=``, ``step=10``;
@@ -14,7 +20,7 @@ Targets written as text: ``virtspec measure --target ...``
   ``quantity``, ``step``.
 
 e.g. ``colour,dE00=0.5``, ``band:B04:B08,tolerance=0.002``, ``index:NDVI,tolerance=0.002``,
-``fapar,tolerance=0.002``. An unknown kind or name is refused with the allowed ones.
+``fapar,tolerance=0.002``.
 """
 
 from __future__ import annotations
@@ -22,71 +28,77 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any, Callable, ClassVar
 
-import virtspec_mi.applications.targets.targets as targets
-from virtspec_mi.applications.targets.targets import Target
+from virtspec_mi.applications.targets.targets import TARGETS, Target, target_kind
 from virtspec_mi.settings import Options, option
 
-__all__ = ["parse_target", "KINDS", "TargetFlags", "measure_target_command", "respond"]
-
-KINDS: dict[str, tuple[str, ...]] = {
-    "colour": ("dE00", "illuminant", "observer", "quantity", "step"),
-    "band": ("tolerance", "quantity", "step"),
-    "index": ("tolerance", "step"),
-    "fapar": ("tolerance", "illuminant", "low", "high", "step"),
-    "albedo": ("tolerance", "illuminant", "low", "high", "quantity", "step"),
-}
-"""Each kind of target and the names it takes."""
-
-_NUMBERS = {"dE00", "tolerance", "step", "low", "high"}
+__all__ = ["parse_target", "kinds", "TargetFlags", "measure_target_command", "respond", "target_help"]
 
 
-def _band_argument(text: str) -> Any:
-    low, sep, high = text.partition("-")
-    if sep:
-        try:
-            return float(low), float(high)
-        except ValueError:
-            pass
-    return text
+def kinds() -> dict[str, tuple[str, ...]]:
+    """Each kind of target of :data:`~.targets.TARGETS` and the options it takes, as a text writes them."""
+
+    return {name: tuple(kind.options()) for name, kind in TARGETS.items()}
+
+
+def _value(kind: str, name: str, text: str, to: type) -> Any:
+    text = text.strip()
+    if to is bool:
+        if text.lower() not in ("true", "false"):
+            raise ValueError(f"--target {kind}: {name} must be true or false (got {text!r})")
+        return text.lower() == "true"
+    try:
+        return to(text)
+    except ValueError:
+        raise ValueError(f"--target {kind}: {name} must be {'a number' if to is float else 'a whole number'} "
+                         f"(got {text!r})") from None
 
 
 def parse_target(text: str) -> Target:
     """The :class:`~.targets.Target` written ``text`` (see the module docstring)."""
 
     head, *pairs = [part.strip() for part in str(text).split(",")]
-    kind, *arguments = [part.strip() for part in head.split(":")]
-    kind = "colour" if kind.lower() == "color" else kind.lower()
-    if kind not in KINDS:
-        raise ValueError(f"--target: the kind must be one of {', '.join(KINDS)} (got {text!r}), e.g. "
-                         "colour,dE00=0.5 or band:B04:B08,tolerance=0.002")
+    word, *arguments = [part.strip() for part in head.split(":")]
+    try:
+        kind, row = target_kind(word)
+    except ValueError:
+        raise ValueError(f"--target: the kind must be one of {', '.join(TARGETS)} (got {text!r}), e.g. "
+                         "colour,dE00=0.5 or band:B04:B08,tolerance=0.002") from None
+    allowed = row.options()
+    accepted = {**allowed, **{long: allowed[short] for short, long in row.short if short in allowed}}
     options: dict[str, Any] = {}
     for pair in pairs:
         name, sep, value = pair.partition("=")
-        if not sep or name.strip() not in KINDS[kind]:
-            raise ValueError(f"--target {kind}: options are NAME=VALUE with NAME one of {', '.join(KINDS[kind])} "
-                             f"(got {pair!r})")
         name = name.strip()
-        try:
-            options[name] = float(value) if name in _NUMBERS else value.strip()
-        except ValueError:
-            raise ValueError(f"--target {kind}: {name} must be a number (got {value!r})") from None
-    if kind == "colour":
-        if arguments:
-            raise ValueError(f"--target colour takes no ':' arguments (got {arguments})")
-        if "dE00" in options:
-            options["tolerance_dE00"] = options.pop("dE00")
-        return targets.colour(**options)
-    if kind == "band":
-        if not arguments:
-            raise ValueError("--target band needs at least one band, e.g. band:B04 or band:650-680")
-        return targets.band(*[_band_argument(a) for a in arguments], **options)
-    if kind == "index":
-        if len(arguments) != 1:
-            raise ValueError("--target index needs one index name, e.g. index:NDVI")
-        return targets.index(arguments[0], **options)
-    if arguments:
+        if not sep or name not in accepted:
+            raise ValueError(f"--target {kind}: options are NAME=VALUE with NAME one of "
+                             f"{', '.join(allowed) or '(none)'} (got {pair!r})")
+        if row.keyword(name) in options:
+            raise ValueError(f"--target {kind}: {name} given twice (got {text!r})")
+        options[row.keyword(name)] = _value(kind, name, value, accepted[name])
+    fewest, most = row.arguments()
+    if most == 0 and arguments:
         raise ValueError(f"--target {kind} takes no ':' arguments (got {arguments})")
-    return targets.albedo(**options) if kind == "albedo" else targets.fapar(**options)
+    if len(arguments) < fewest or (most is not None and len(arguments) > most):
+        count = f"{fewest}" if most == fewest else f"at least {fewest}"
+        raise ValueError(f"--target {kind} needs {count} ':' argument{'s' if most != 1 else ''}, "
+                         f"e.g. {_example(kind)} (got {len(arguments)})")
+    return row.make(*arguments, **options)
+
+
+_EXAMPLES = {"band": "band:B04:B08 or band:650-680", "index": "index:NDVI"}
+
+
+def _example(kind: str) -> str:
+    return _EXAMPLES.get(kind, f"{kind}:ARG")
+
+
+def target_help() -> str:
+    """The ``--target`` help: an example, then each row of :data:`~.targets.TARGETS` with its options."""
+
+    rows = "; ".join(kind.describe(name) for name, kind in TARGETS.items())
+    return ("certify a derived quantity instead of a spectrum, KIND[:ARG...][,NAME=VALUE...], e.g. colour,dE00=0.5 | "
+            f"band:B04:B08,tolerance=0.002 | index:NDVI,tolerance=0.002 | fapar,tolerance=0.002; the kinds: {rows} "
+            "(the instrument picks the wavelengths and the rays of each)")
 
 
 def _check_target(value: Any) -> str:
@@ -101,10 +113,7 @@ class TargetFlags(Options):
 
     title: ClassVar[str] = "derived quantity"
 
-    target: str | None = option(
-        None, _check_target, "certify a derived quantity instead of a spectrum, e.g. colour,dE00=0.5 | "
-        "band:B04:B08,tolerance=0.002 | index:NDVI,tolerance=0.002 | fapar,tolerance=0.002 (the instrument picks "
-        "the wavelengths and the rays of each)")
+    target: str | None = option(None, _check_target, target_help())
 
 
 _NOT_WITH_TARGET = {"out": "--out", "workers": "--workers/--scheduler", "parameters": "--param"}

@@ -3,10 +3,11 @@ Targets: the quantity a user wants, its tolerance, and how to size its rays
 ===========================================================================
 
 A target names a derived quantity and the tolerance it must be certified to; the
-instrument (:mod:`~virtspec_mi.applications.targets.measure`) picks the wavelengths, the rays per wavelength (Nₖ ∝ |wₖ|,
-:func:`~.functionals.allocate`) and the rays in all. Each target is a small set of linear
-functionals (:class:`~.functionals.Functional`) stated together at δ (δ/m each, a union
-bound), and a map from their certified box to what is reported:
+instrument (:mod:`~virtspec_mi.applications.targets.measure`) picks the wavelengths, the
+rays per wavelength (Nₖ ∝ |wₖ|, :func:`~.functionals.allocate`) and the rays in all. Each
+target is a small set of linear functionals (:class:`~.functionals.Functional`) stated
+together at δ (δ/m each, a union bound), and a map from their certified box to what is
+reported:
 
 - :class:`BandTarget` (``vm.band``): band values, each to ±tolerance (linear: no pilot).
 - :class:`FaparTarget` (``vm.fapar``): the absorbed share of the PAR photons (400–700 nm
@@ -15,6 +16,11 @@ bound), and a map from their certified box to what is reported:
   exact interval over the bands' box, :mod:`.indices`), and its bands.
 - :class:`ColourTarget` (``vm.colour``): CIE XYZ, L*a*b*, sRGB with ΔE₀₀ of the certified
   box around the estimate ≤ ``tolerance_dE00`` (:mod:`.colour`, :mod:`.delta_e`).
+
+The targets are chosen from one table, :data:`TARGETS` (name → :class:`TargetKind`: a
+constructor, whose signature gives a text's ``:`` arguments and options): the parser, the
+API's messages, the command line's ``--target`` help and the package's top-level names
+read it, so a new target is one constructor and one row.
 
 The nonlinear ones need to know how steep their map is at this specimen: a small pilot
 (rays spent, not in the estimates) gives the point where the tolerances of the
@@ -29,7 +35,9 @@ Hoeffding (1963), Theorem 2; CIE 015:2018; ASTM E308.
 
 from __future__ import annotations
 
+import inspect
 import math
+import typing
 from dataclasses import dataclass, field
 from typing import Any, Callable
 
@@ -41,7 +49,7 @@ from virtspec_mi.applications.targets.indices import Index, index_definition
 from virtspec_mi.colorimetry.cie import DEFAULT_ILLUMINANT, DEFAULT_OBSERVER
 
 __all__ = ["Value", "Target", "BandTarget", "FaparTarget", "IndexTarget", "ColourTarget", "band", "fapar", "index",
-           "colour", "albedo", "MARGIN", "colour_of"]
+           "colour", "albedo", "MARGIN", "colour_of", "TargetKind", "TARGETS", "target_kind"]
 
 MARGIN: float = 0.8
 """Share of a nonlinear target's tolerance the second batch is sized for from the pilot's point (the rest
@@ -369,10 +377,10 @@ def colour_of(XYZ: np.ndarray, functionals: list[Functional], target: ColourTarg
     return Colour(np.asarray(XYZ), Lab, sRGB, target.illuminant, target.observer, functionals[0].wavelengths)
 
 
-# -- the constructors of the top level (vm.band, vm.fapar, vm.index, vm.colour) -------------------
+# -- the constructors (a row each of TARGETS: vm.colour, vm.band, vm.index, vm.fapar, vm.albedo) ----
 
 
-def band(response: Any = "B04", *more: Any, tolerance: float = 0.002, quantity: str = "reflectance",
+def band(response: Any = "B04", /, *more: Any, tolerance: float = 0.002, quantity: str = "reflectance",
          step: float = 1.0) -> BandTarget:
     """
     A band target: ``response`` (and ``more`` bands) each a Sentinel-2 band name, edges
@@ -403,7 +411,7 @@ def fapar(tolerance: float = 0.002, illuminant: str = "D65", low: float = 400.0,
     return target
 
 
-def index(name: str = "NDVI", bands: dict[str, Any] | None = None, tolerance: float = 0.005,
+def index(name: str = "NDVI", /, bands: dict[str, Any] | None = None, tolerance: float = 0.005,
           step: float = 1.0) -> IndexTarget:
     """A normalised-difference index (NDVI, GNDVI, NDRE, PRI; ``bands`` replaces its bands) to ±``tolerance``."""
 
@@ -451,3 +459,85 @@ def albedo(tolerance: float = 0.002, illuminant: str = "D65", low: float | None 
     weighted = make_band(response, name=f"albedo_{illuminant}")
     weighted = Band(weighted.name, weighted.wavelengths, weighted.response, f"weighted by illuminant {illuminant}")
     return band(weighted, tolerance=tolerance, quantity=quantity, step=step)
+
+
+# -- the table of targets ---------------------------------------------------------------------------
+
+_TEXT_TYPES: dict[Any, type] = {float: float, int: int, str: str, bool: bool}
+
+
+@dataclass(frozen=True)
+class TargetKind:
+    """
+    One row of :data:`TARGETS`: a target's constructor, and how a text names it. Its
+    positional-only parameters and ``*args`` take the ``:`` arguments of a text
+    (``band:B04:B08``); its other parameters of a plain type (``float``, ``int``, ``str``,
+    ``bool``, or one of them or ``None``) are its options (``NAME=VALUE``, converted by
+    their annotation); ``spellings`` are other names of the kind (``color``) and
+    ``short`` the options' short names (``dE00`` for ``tolerance_dE00``).
+    """
+
+    make: Callable[..., Target]
+    spellings: tuple[str, ...] = ()
+    short: tuple[tuple[str, str], ...] = ()
+
+    def _parameters(self) -> list[inspect.Parameter]:
+        return list(inspect.signature(self.make).parameters.values())
+
+    def arguments(self) -> tuple[int, int | None]:
+        """How many ``:`` arguments it takes: (fewest, most; ``None``: any)."""
+
+        positional = [p for p in self._parameters() if p.kind is p.POSITIONAL_ONLY]
+        many = any(p.kind is p.VAR_POSITIONAL for p in self._parameters())
+        return (1 if positional or many else 0), (None if many else len(positional))
+
+    def options(self) -> dict[str, type]:
+        """Each option as a text writes it (short names first) → the type its value is converted to."""
+
+        hints = typing.get_type_hints(self.make)
+        kinds = {}
+        for parameter in self._parameters():
+            if parameter.kind in (parameter.POSITIONAL_ONLY, parameter.VAR_POSITIONAL, parameter.VAR_KEYWORD):
+                continue
+            hint = hints.get(parameter.name, Any)
+            plain = [t for t in typing.get_args(hint) if t is not type(None)] if typing.get_args(hint) else [hint]
+            if len(plain) == 1 and plain[0] in _TEXT_TYPES:
+                kinds[dict((long, short) for short, long in self.short).get(parameter.name, parameter.name)] = plain[0]
+        return kinds
+
+    def keyword(self, option: str) -> str:
+        """The constructor's keyword of ``option`` as a text writes it."""
+
+        return dict(self.short).get(option, option)
+
+    def describe(self, name: str) -> str:
+        """The row in words: ``band[:ARG...][,NAME=VALUE ...] (NAME: tolerance, quantity, step)``."""
+
+        low, high = self.arguments()
+        arguments = "" if high == 0 else ":ARG" if high == 1 else ":ARG..."
+        return f"{name}{arguments} ({', '.join(self.options()) or 'no options'})"
+
+
+TARGETS: dict[str, TargetKind] = {
+    "colour": TargetKind(colour, spellings=("color",), short=(("dE00", "tolerance_dE00"),)),
+    "band": TargetKind(band),
+    "index": TargetKind(index),
+    "fapar": TargetKind(fapar),
+    "albedo": TargetKind(albedo),
+}
+"""
+The targets by name → their row (:class:`TargetKind`: a constructor and how a text names
+it). The parser (:func:`~.parse.parse_target`), ``vm.measure(target=...)``'s message, the
+command line's ``--target`` help and the package's top-level names (``vm.colour`` …) read
+it: a new target is one constructor and one row.
+"""
+
+
+def target_kind(word: str) -> tuple[str, TargetKind]:
+    """The row of :data:`TARGETS` that ``word`` names (a name or a spelling, any case), or ``ValueError``."""
+
+    folded = word.strip().lower()
+    for name, kind in TARGETS.items():
+        if folded == name.lower() or folded in (s.lower() for s in kind.spellings):
+            return name, kind
+    raise ValueError(f"the kind must be one of {', '.join(TARGETS)} (got {word!r})")

@@ -41,7 +41,8 @@ European Commission, Joint Research Centre.
 
 from __future__ import annotations
 
-from virtspec_mi.plugins.bsdfs.abm_walk import AIR, ANTIDERMAL, CUTICLE, MESOPHYLL, ABMLeaf, Interface, leaf_defaults, parameter_docs
+from virtspec_mi.plugins.bsdfs.abm_walk import (AIR, ANTIDERMAL, CUTICLE, MESOPHYLL, ABMLeaf, Interface, leaf_defaults,
+                                                leaf_parameters, parameter_docs)
 
 __all__ = ["ABMB", "SOYBEAN"]
 
@@ -58,6 +59,7 @@ class ABMB(ABMLeaf):
 
     PLUGIN = "abm_b"
     DEFAULTS = SOYBEAN
+    PARAMETERS = leaf_parameters(SOYBEAN)
     INTERFACES = (
         Interface(AIR, CUTICLE, _CU, _EP, _EP, None),
         Interface(CUTICLE, MESOPHYLL, _EP, _PA, _PA, _EP, slab_below=(1.0, 0.0)),

@@ -44,7 +44,8 @@ European Commission, Joint Research Centre.
 
 from __future__ import annotations
 
-from virtspec_mi.plugins.bsdfs.abm_walk import AIR, CUTICLE, MESOPHYLL, ABMLeaf, Interface, leaf_defaults, parameter_docs
+from virtspec_mi.plugins.bsdfs.abm_walk import (AIR, CUTICLE, MESOPHYLL, ABMLeaf, Interface, leaf_defaults,
+                                                leaf_parameters, parameter_docs)
 
 __all__ = ["ABMU", "CORN"]
 
@@ -61,6 +62,7 @@ class ABMU(ABMLeaf):
 
     PLUGIN = "abm_u"
     DEFAULTS = CORN
+    PARAMETERS = leaf_parameters(CORN)
     INTERFACES = (
         Interface(AIR, CUTICLE, _CU, _EP, _EP, None),
         Interface(CUTICLE, MESOPHYLL, _EP, _SP, _SP, _EP, slab_below=(0.0, 1.0)),

@@ -62,6 +62,7 @@ follow the NPSG reference C++ implementation (BSD-3), https://github.com/turtles
 
 from __future__ import annotations
 
+import math
 import textwrap
 from typing import Any, NamedTuple
 
@@ -80,6 +81,7 @@ from virtspec_mi.plugins.leaf_data import (
 )
 from virtspec_mi.base.checks import FLOAT32_MAX, FLOAT32_MIN_NORMAL, check_float32
 from virtspec_mi.plugins.bsdfs.sampled_only import SampledOnlyBSDF
+from virtspec_mi.plugins.specimen import Parameter
 from virtspec_mi.kernel.walk import CAPPED_COMPONENT, walk_rng, walk_to_end
 
 __all__ = [
@@ -89,6 +91,7 @@ __all__ = [
     "ANTIDERMAL",
     "Interface",
     "ABMLeaf",
+    "leaf_parameters",
     "WALKING",
     "EXIT_TOP",
     "EXIT_BOTTOM",
@@ -179,6 +182,23 @@ def leaf_defaults(column: int) -> dict[str, float]:
     """The defaults of one leaf of :data:`LEAF_DEFAULTS` (0: soybean, 1: corn), in table order."""
 
     return {name: values[column] for name, *values in LEAF_DEFAULTS if values[column] is not None}
+
+
+_UNITS: dict[str, str] = {"thickness": "m", "mesophyll_fraction": "1", "chlorophyll_a": "kg/m3",
+                          "chlorophyll_b": "kg/m3", "carotenoids": "kg/m3", "protein": "kg/m3", "cellulose": "kg/m3",
+                          "lignin": "kg/m3"}
+
+
+def leaf_parameters(defaults: dict[str, float]) -> tuple[Parameter, ...]:
+    """
+    The specimen parameters of a leaf with ``defaults`` (its numeric parameters): bounds
+    as the plugin checks them (> 0 or >= 0: lowest 0, none above; the mesophyll fraction
+    at most 1), units as :data:`PARAMETER_DOCS` states them (aspect ratios: pure numbers).
+    """
+
+    meanings = {name: meaning for name, _, _, meaning in PARAMETER_DOCS}
+    return tuple(Parameter(name, 0.0, 1.0 if name == "mesophyll_fraction" else math.inf, _UNITS.get(name, "1"),
+                           meanings[name].partition(",")[0].rstrip(".")) for name in defaults)
 
 
 class Interface(NamedTuple):

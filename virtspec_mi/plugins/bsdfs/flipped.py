@@ -32,6 +32,8 @@ from typing import Any
 
 import mitsuba as mi
 
+from virtspec_mi.plugins.specimen import Parameter, specimen_of
+
 __all__ = ["PLUGIN_NAME", "FlippedBSDF"]
 
 PLUGIN_NAME: str = "virtspec_flipped"
@@ -45,6 +47,11 @@ def _mirror(v: Any) -> Any:
 class FlippedBSDF(mi.BSDF):
     """The nested BSDF with its frame mirrored through the surface (see the module docstring)."""
 
+    # the specimen protocol: the nested specimen's range, flag and check (its parameters are under 'nested')
+    PARAMETERS: tuple[Parameter, ...] = ()
+    wavelength_range: tuple[float, float] | None = None
+    wavelength_independent: bool = False
+
     def __init__(self, props: Any) -> None:
         super().__init__(props)
         nested = None
@@ -57,7 +64,15 @@ class FlippedBSDF(mi.BSDF):
         self.nested = nested
         self.m_components = [nested.flags(i) for i in range(nested.component_count())]
         self.m_flags = nested.flags()
-        self.wavelength_independent = bool(getattr(nested, "wavelength_independent", False))
+        own = specimen_of(nested)  # the nested specimen's protocol, as it declares it (a Mitsuba BSDF: the defaults)
+        self.wavelength_independent = own.wavelength_independent
+        self.wavelength_range = own.wavelength_range
+        self._nested_specimen = own
+
+    def check_wavelengths(self, wavelengths: Any) -> None:
+        """The nested specimen's check."""
+
+        self._nested_specimen.check_wavelengths(wavelengths)
 
     def _turned(self, si: Any) -> Any:
         turned = mi.SurfaceInteraction3f(si)

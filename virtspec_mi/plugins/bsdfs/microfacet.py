@@ -86,6 +86,7 @@ import mitsuba as mi
 
 from virtspec_mi.base.checks import check_float32
 from virtspec_mi.plugins.bsdfs.microfacet_model import ALPHA_RANGE, WALTER_SCALE, check_model
+from virtspec_mi.plugins.specimen import Parameter
 
 __all__ = ["Microfacet"]
 
@@ -96,6 +97,12 @@ class Microfacet(mi.BSDF):
     """A rough conductor sampled consistently with its evaluation (see the module docstring)."""
 
     wavelength_independent: bool = True
+    PARAMETERS = (Parameter("alpha", *ALPHA_RANGE, "1", "roughness (lowest excluded; 1 at most with the 'unreal' "
+                            "shadowing)"),)
+    wavelength_range: tuple[float, float] | None = None  # the specimen protocol: any wavelength
+
+    def check_wavelengths(self, wavelengths: Any) -> None:
+        """The specimen protocol: no spectral parameter to check."""
 
     def __init__(self, props: mi.Properties) -> None:
         super().__init__(props)

@@ -64,6 +64,7 @@ from virtspec_mi.plugins.bsdfs.prospect_model import (
     prospect_d,
 )
 from virtspec_mi.plugins.bsdfs.sampled_only import SampledOnlyBSDF
+from virtspec_mi.plugins.specimen import Parameter
 
 __all__ = ["ProspectD"]
 
@@ -72,6 +73,8 @@ class ProspectD(SampledOnlyBSDF):
     """PROSPECT-D's R(λ) and T(λ) as a Lambertian reflector/transmitter (see the module docstring)."""
 
     PLUGIN = "prospect_d"
+    PARAMETERS = tuple(Parameter(name, low, high, unit or "1", meaning)
+                       for name, (_, low, high, unit, meaning) in PROSPECT_PARAMETERS.items())
 
     def __init__(self, props: mi.Properties) -> None:
         super().__init__(props)

@@ -30,11 +30,29 @@ from typing import Any
 import drjit as dr
 import mitsuba as mi
 
+from virtspec_mi.plugins.specimen import Parameter
+
 __all__ = ["SampledOnlyBSDF"]
 
 
 class SampledOnlyBSDF(mi.BSDF):
-    """A ``mi.BSDF`` whose subclasses implement ``sample()`` only (see the module docstring)."""
+    """
+    A ``mi.BSDF`` whose subclasses implement ``sample()`` only (see the module docstring),
+    and the specimen protocol (:class:`~virtspec_mi.plugins.specimen.Specimen`) in its
+    general case, which a subclass overrides where it knows more.
+    """
+
+    PLUGIN: str = ""
+    """The plugin's name in scenes (messages name it; ``""``: its class name)."""
+    PARAMETERS: tuple[Parameter, ...] = ()
+    """Its numeric parameters with their bounds and units (:meth:`exposed_parameters` shows their values)."""
+    wavelength_range: tuple[float, float] | None = None
+    """The wavelengths (nm) its data cover; ``None``: any."""
+    wavelength_independent: bool = False
+    """``True``: readings that differ only in wavelength are one reading."""
+
+    def check_wavelengths(self, wavelengths: Any) -> None:
+        """Refuse wavelengths at which a spectral parameter is out of range (none here)."""
 
     def eval(self, ctx, si, wo, active=True):
         return mi.Spectrum(0.0)

@@ -57,6 +57,7 @@ import mitsuba as mi
 from virtspec_mi.base.checks import check_float32
 from virtspec_mi.kernel.walk_optics import NEAR_ONE, fresnel_near_one
 from virtspec_mi.plugins.bsdfs.sampled_only import SampledOnlyBSDF
+from virtspec_mi.plugins.specimen import Parameter
 
 __all__ = ["SimpleDielectric", "ETA_RANGE"]
 
@@ -72,6 +73,7 @@ class SimpleDielectric(SampledOnlyBSDF):
     """Coin-flip Fresnel dielectric with unit weights (see the module docstring)."""
 
     wavelength_independent: bool = True
+    PARAMETERS = (Parameter("eta", *ETA_RANGE, "1", "relative refractive index (specimen / outside)"),)
 
     def __init__(self, props: mi.Properties) -> None:
         super().__init__(props)

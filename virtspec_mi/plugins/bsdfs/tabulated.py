@@ -81,12 +81,14 @@ piecewise-constant 1-D distributions); Mitsuba 3 ``mi.BSDF`` (Python BSDF plugin
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import drjit as dr
 import mitsuba as mi
 import numpy as np
 
 from virtspec_mi.plugins.bsdfs.bsdf_table import TABLE_PROPERTIES, BSDFTable, read_table
+from virtspec_mi.plugins.specimen import Parameter
 
 __all__ = ["Tabulated"]
 
@@ -126,6 +128,14 @@ def _table_from_props(props: mi.Properties) -> BSDFTable:
 
 class Tabulated(mi.BSDF):
     """Piecewise-constant BSDF of a goniophotometer table (see the module docstring)."""
+
+    # the specimen protocol: no parameter; the range and the flag are the table's (set in __init__)
+    PARAMETERS: tuple[Parameter, ...] = ()
+    wavelength_range: tuple[float, float] | None = None
+    wavelength_independent: bool = False
+
+    def check_wavelengths(self, wavelengths: Any) -> None:
+        """The specimen protocol: the table's range is :attr:`wavelength_range`; nothing more to check."""
 
     def __init__(self, props: mi.Properties) -> None:
         super().__init__(props)

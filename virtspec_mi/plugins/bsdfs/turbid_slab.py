@@ -107,6 +107,7 @@ import numpy as np
 
 from virtspec_mi.base.checks import check_float32
 from virtspec_mi.plugins.bsdfs.sampled_only import SampledOnlyBSDF
+from virtspec_mi.plugins.specimen import Parameter
 
 from virtspec_mi.kernel.spectra import check_covered
 from virtspec_mi.kernel.walk import CAPPED_COMPONENT, walk_rng, walk_to_end
@@ -172,6 +173,13 @@ def _check_thickness(thickness: Any) -> float:
 
 class TurbidSlab(SampledOnlyBSDF):
     """MCML-style analog random walk in a Fresnel-bounded HG slab (see the module docstring)."""
+
+    PLUGIN = "turbid_slab"
+    PARAMETERS = (*(Parameter(name, lower, upper, "1/length" if name.startswith("mu_") else "1", meaning)
+                    for name, (_, lower, upper, _, _, meaning) in _SPECTRAL.items()),
+                  Parameter("thickness", COEFFICIENT_RANGE[0], math.inf, "length (the unit of 1/mu_a)",
+                            "slab thickness (inf: a semi-infinite medium)"))
+    """Its parameters given as numbers (a spectrum given is not a parameter: :meth:`exposed_parameters`)."""
 
     def __init__(self, props: mi.Properties) -> None:
         super().__init__(props)

@@ -62,6 +62,8 @@ from virtspec_mi.instruments.base import Instrument, reading_grid, reading_label
 from virtspec_mi.instruments.command import Command, FigureFlag, Session
 from virtspec_mi.instruments.sphere.walk import FATES, HEMISPHERES, SPECIMEN, Holder, SphereFate, holder_frame
 from virtspec_mi.instruments.sphere.result import CONFIGURATIONS, SphereResult
+from virtspec_mi.instruments.sphere.beam import BeamProfile
+from virtspec_mi.instruments.sphere.real import check_traced_beam
 from virtspec_mi.checks import number, shown_value
 from virtspec_mi.results.base import plain_data
 from virtspec_mi.settings import Options, Settings, one_of, option, share, true_or_false, whole_number
@@ -206,6 +208,10 @@ def _check_beam(sphere: Sphere, options: SphereOptions, settings: Settings, fram
 
     if settings.beam == "diffuse":
         raise ValueError("beam must be 'collimated' or 'conical' for a sphere reading (got 'diffuse')")
+    if sphere.beam_profile is not None:
+        theta, phi = math.radians(settings.theta_i), math.radians(settings.phi_i)
+        check_traced_beam(sphere, options.measurement, settings.beam, np.array(
+            [math.sin(theta) * math.cos(phi), math.sin(theta) * math.sin(phi), math.cos(theta)]), frame)
     if options.measurement == "transmittance":
         return
     entrance = sphere.port("entrance")

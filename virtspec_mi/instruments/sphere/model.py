@@ -157,6 +157,11 @@ def theory_inputs(sphere: Sphere, options: ReadingMode, wavelengths: Sequence[fl
         if transmittance and (port.role == "specular" and options.specular == "SCI"
                               or port.role == "reference" and sphere.port("sample") is None):
             continue  # plugged with wall material: wall (as simulated)
+        plugged = not transmittance and (port.role == "specular" and options.specular == "SCI"
+                                         or port.role == "reference" and not comparison)
+        if port.depth > 0.0 and not plugged:  # a port wall (virtspec_mi.instruments.sphere.ports): black walls only
+            cap = _deep_port(port, cap, out, holder=port is beam_port or port.role == "reference" and comparison
+                             or port.role == "sample" and transmittance)
         disk = None
         if port is beam_port:
             disk = radius
@@ -175,6 +180,29 @@ def theory_inputs(sphere: Sphere, options: ReadingMode, wavelengths: Sequence[fl
         out["method"] = options.method
         out["mode"] = options.specular
     return out
+
+
+def _deep_port(port: Any, cap: float, out: dict[str, Any], holder: bool) -> float:
+    """
+    A port of depth d > 0 in the theory: with black walls (``edge_reflectance=0``) and
+    nothing held in it, Lambertian light uniform over its rim disk (a uniformly bright
+    wall) reaches its outer end with the disk-to-disk view factor F(d, r) and is absorbed
+    otherwise, so the port counts as ``cap · F`` of its role and ``cap · (1 − F)`` open
+    (returned: the fraction of its role).
+    Anything else (a reflecting port wall, a recessed specimen or standard) the theory
+    does not model: ``ValueError``.
+    """
+
+    from virtspec_mi.instruments.sphere.ports import disk_view_factor
+
+    if holder or port.edge_reflectance != 0.0:
+        raise ValueError(f"the sphere theory does not model port {port.name!r}'s wall (depth {port.depth:g} mm"
+                         + (", a specimen or standard recessed in it" if holder else
+                            f", edge_reflectance {port.edge_reflectance if port.edge_reflectance is not None else 'rho_w'}")
+                         + "): only a black port wall (edge_reflectance=0) of a port holding nothing is modelled")
+    share = disk_view_factor(port.depth, port.radius)
+    out["open_fraction"] += cap * (1.0 - share)
+    return cap * share
 
 
 def _transmittance(inputs: dict[str, Any]) -> bool:

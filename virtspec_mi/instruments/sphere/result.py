@@ -141,6 +141,7 @@ class SphereResult(ResultBase):
         "hemispherical_transmitted": ("1", "rays the specimen transmitted at its first interaction"),
         "detected_from_upper": ("1", "detected rays the specimen had first reflected"),
         "wall_reflections": ("1", "wall (and baffle) reflections, summed over the rays"),
+        "beam_spill": ("1", "rays of a traced beam whose first surface was not the specimen (a beam profile)"),
         "wall_reflectance": ("1", "reflectance of the sphere wall"),
     }
     """

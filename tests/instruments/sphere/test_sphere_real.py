@@ -1,0 +1,124 @@
+"""
+Tests of virtspec_mi.instruments.sphere.real: the walk of real ports (a port wall of given
+depth and reflectance, elliptical and rectangular openings) against today's walk in its
+limits (bit for bit) and against the sphere theory where it has a closed form.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import virtspec_mi as vm
+from virtspec_mi.budgets.intervals import clopper_pearson
+from virtspec_mi.instruments.sphere import SphereOptions
+from virtspec_mi.instruments.sphere import theory as st
+from virtspec_mi.instruments.sphere.geometry import Port, Sphere
+from virtspec_mi.instruments.sphere.model import theory_inputs
+from virtspec_mi.instruments.sphere.real import RealSphereLayout
+from virtspec_mi.instruments.sphere.walk import SphereLayout
+from virtspec_mi.scene import find_bench
+from virtspec_mi.settings import Settings
+
+LAMBERTIAN = {"type": "diffuse", "reflectance": 0.5}
+
+
+def walk(sphere, rays, *, bsdf=LAMBERTIAN, radius=12.7, settings=None, layout=None):
+    """One reading at 551 nm of ``sphere`` (sample, entrance, detector ports; the sample port's rays lost, the
+    entrance's lost, the detector's detected): per fate code its count, and the walk's sums."""
+
+    from virtspec_mi.engine.plan import kernel_options
+    from virtspec_mi.instruments.sphere.walk import SPECIMEN, Holder, holder_frame
+    from virtspec_mi.kernel.tracer import ReadingPlan, tally_readings
+
+    vm.mitsuba()
+    bench = find_bench(vm.instrument_scene(bsdf, specimen_radius=radius))
+    settings = settings or Settings(theta_i=0, beam="collimated")
+    holder = Holder(0, SPECIMEN, radius, holder_frame(sphere.ports[0].axis, False))
+    layout = layout or sphere.layout([holder], [6, 7, 0], 100_000, [551.0])
+    tally = tally_readings(bench, [ReadingPlan(551.0, settings.theta_i, settings.phi_i, rays)], hook=layout,
+                           **kernel_options(settings))
+    return tally.bins[0].reshape(4, layout.codes).sum(axis=0), {k: int(v[0]) for k, v in tally.sums.items()}, layout
+
+
+def sphere(sample=None, detector=None, **extra):
+    return Sphere(150, 0.98, (sample or Port("sample", "sample", 180, 0, 12.7), Port("entrance", "entrance", 0, 0, 6.0),
+                              detector or Port("detector", "detector", 90, 90, 6.35)), **extra)
+
+
+def test_knife_edges_take_the_plain_walk():
+    """depth 0, a circle and no beam profile: the plain layout (today's kernel), not the real one."""
+
+    plain = sphere(Port("sample", "sample", 180, 0, 12.7, depth=0.0), beam_profile="shape=point divergence=0")
+    assert plain == sphere() and plain.beam_profile is None
+    counts, sums, layout = walk(plain, 4000)
+    assert type(layout) is SphereLayout
+    reference, reference_sums, _ = walk(sphere(), 4000)
+    assert np.array_equal(counts, reference) and sums == reference_sums
+
+
+@pytest.mark.parametrize("case", ["shallow_sample_port", "shallow_detector", "round_ellipse"])
+def test_real_walk_reproduces_todays_counts_in_its_limits(case):
+    """The real walk itself (cylinders, non-circular caps) in the limits where it must be today's walk: a port wall
+    1 nm deep (the ray enters its cylinder at the rim plane and leaves it at once), an ellipse of equal axes; the
+    same random numbers, so the very same counts, fate by fate."""
+
+    real = {"shallow_sample_port": sphere(Port("sample", "sample", 180, 0, 12.7, depth=1e-6, edge_reflectance=0.0)),
+            "shallow_detector": sphere(detector=Port("detector", "detector", 90, 90, 6.35, depth=1e-6,
+                                                     edge_reflectance=0.0)),
+            "round_ellipse": sphere(detector=Port("detector", "detector", 90, 90, shape="ellipse", width=12.7,
+                                                  height=12.7))}[case]
+    counts, sums, layout = walk(real, 20000)
+    assert type(layout) is RealSphereLayout
+    reference, reference_sums, _ = walk(sphere(), 20000)
+    assert np.array_equal(counts, reference) and sums == reference_sums
+
+
+def _theory_detected(sphere_, rho_s=0.5):
+    kw = theory_inputs(sphere_, SphereOptions(), [551.0])
+    fractions = {k: kw[k] for k in ("sample_fraction", "detector_fraction", "open_fraction")}
+    return rho_s * st.detected_fraction(0.98, rho_s, port_surface="flat", **fractions)
+
+
+@pytest.mark.parametrize("detector", [
+    Port("detector", "detector", 90, 90, 12.0, depth=8.0, edge_reflectance=0.0),
+    Port("detector", "detector", 90, 90, shape="ellipse", width=30.0, height=14.0),
+    Port("detector", "detector", 90, 90, shape="rectangle", width=24.0, height=10.0)], ids=["deep", "ellipse", "rect"])
+def test_real_detector_port_matches_the_theory(detector):
+    """
+    The detector fraction against the sphere theory's flat model with the port's exact
+    share: a black-walled port of depth d passes F(d, r), the view factor between its rim
+    disk and its outer end (``disk_view_factor``); a non-circular port counts its exact
+    area share (``shaped_fraction``). A conical beam lights the specimen uniformly, as
+    the theory assumes (see test_sphere_walk). The theory's value must lie in the
+    detector count's exact Clopper–Pearson interval at δ = 1e-3.
+    """
+
+    real = sphere(detector=detector)
+    rays = 105_967
+    counts, _, _ = walk(real, rays, settings=Settings(theta_i=0, beam="conical"))
+    low, high = clopper_pearson(counts[0], rays, 1e-3)
+    assert low <= _theory_detected(real) <= high
+    if detector.depth:  # and the port wall matters: the knife edge's theory lies far outside that interval
+        knife = sphere(detector=Port("detector", "detector", 90, 90, 12.0))
+        assert _theory_detected(knife) > high + 3 * (high - low)
+
+
+def test_port_wall_reflectance_and_a_recessed_specimen():
+    """A reflecting port wall returns light the black one absorbs; a recessed specimen's light meets its port wall
+    (fewer detections with a black wall); every ray keeps exactly one fate; the theory refuses what it does not model."""
+
+    rays = 20000
+    black, _, _ = walk(sphere(detector=Port("detector", "detector", 90, 90, 6.35, depth=6.0, edge_reflectance=0.0)),
+                       rays)
+    white, sums, _ = walk(sphere(detector=Port("detector", "detector", 90, 90, 6.35, depth=6.0,
+                                               edge_reflectance=0.99)), rays)
+    knife, _, _ = walk(sphere(), rays)
+    assert black[0] < white[0] and black[0] < knife[0] and black.sum() == white.sum() == rays
+    recessed, _, _ = walk(sphere(Port("sample", "sample", 180, 0, 12.7, depth=5.0, edge_reflectance=0.0)), rays)
+    assert recessed[0] < 0.8 * knife[0] and recessed.sum() == rays
+    with pytest.raises(ValueError, match="does not model port 'detector'"):
+        theory_inputs(sphere(detector=Port("detector", "detector", 90, 90, 6.35, depth=6.0)), SphereOptions(), [551.0])
+    with pytest.raises(ValueError, match="recessed"):
+        theory_inputs(sphere(Port("sample", "sample", 180, 0, 12.7, depth=5.0, edge_reflectance=0.0)),
+                      SphereOptions(), [551.0])

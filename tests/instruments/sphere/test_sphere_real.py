@@ -122,3 +122,29 @@ def test_port_wall_reflectance_and_a_recessed_specimen():
     with pytest.raises(ValueError, match="recessed"):
         theory_inputs(sphere(Port("sample", "sample", 180, 0, 12.7, depth=5.0, edge_reflectance=0.0)),
                       SphereOptions(), [551.0])
+
+
+def test_holder_mask():
+    """
+    A clip in front of the specimen: with the mask's reflectance equal to a Lambertian
+    specimen's (0.5) the port holds one 0.5 Lambertian disk as before, so the detector
+    fractions' exact intervals (δ = 1e-3) meet; a black mask detects less, beyond them; an
+    aperture is validated; the theory refuses it.
+    """
+
+    rays = 60_000
+    plain, _, _ = walk(sphere(), rays)
+    grey, _, _ = walk(sphere(Port("sample", "sample", 180, 0, 12.7, aperture=6.0, mask_reflectance=0.5)), rays)
+    black, _, _ = walk(sphere(Port("sample", "sample", 180, 0, 12.7, aperture=6.0, mask_reflectance=0.0)), rays)
+    white, _, _ = walk(sphere(Port("sample", "sample", 180, 0, 12.7, aperture=6.0, mask_reflectance=1.0)), rays)
+    (a_plain, a_grey, a_black, a_white), (b_plain, b_grey, b_black, b_white) = clopper_pearson(
+        np.array([plain[0], grey[0], black[0], white[0]]), rays, 1e-3)
+    assert max(a_plain, a_grey) <= min(b_plain, b_grey)
+    assert b_black < a_white
+    assert grey.sum() == black.sum() == rays
+    with pytest.raises(ValueError, match="aperture must satisfy 0 < aperture < radius = 12.7 mm"):
+        Port("sample", "sample", 180, 0, 12.7, aperture=12.7)
+    with pytest.raises(ValueError, match="mask_reflectance must satisfy 0 <= mask_reflectance <= 1"):
+        Port("sample", "sample", 180, 0, 12.7, aperture=6, mask_reflectance=2)
+    with pytest.raises(ValueError, match="holder mask"):
+        theory_inputs(sphere(Port("sample", "sample", 180, 0, 12.7, aperture=6.0)), SphereOptions(), [551.0])

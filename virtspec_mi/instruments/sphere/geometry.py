@@ -114,6 +114,12 @@ class Port:
     width, height
         Full sizes of an elliptical or rectangular opening along the port's in-plane axes
         e₁, e₂ (mm, > 0; :func:`~virtspec_mi.instruments.sphere.ports.port_frame`).
+    aperture
+        A holder mask (a clip) in front of what the port holds: a flat annulus from this
+        radius to the port's, mm (0 < aperture < radius; default ``None``: no mask).
+    mask_reflectance
+        The mask's Lambertian reflectance towards the sphere, 0 … 1 (default ``None``:
+        the sphere's wall reflectance ρw(λ)).
     """
 
     name: str
@@ -126,6 +132,8 @@ class Port:
     shape: str = "circle"
     width: float | None = None
     height: float | None = None
+    aperture: float | None = None
+    mask_reflectance: float | None = None
 
     def __post_init__(self) -> None:
         from virtspec_mi.instruments.sphere.ports import check_port_extras
@@ -423,7 +431,8 @@ class Sphere:
             return (tuple(float(v) for v in port.axis), radius * port.cos_half_angle(radius),
                     tuple(float(v) for v in self.port_plane_centre(port)))
 
-        plain = all(p.depth == 0.0 and p.shape == "circle" for p in self.ports) and self.beam_profile is None
+        plain = all(p.depth == 0.0 and p.shape == "circle" and p.aperture is None for p in self.ports) \
+            and self.beam_profile is None
         if not plain:
             return real_layout(self, holders, caps, max_bounces, grid)
         return SphereLayout(
@@ -512,8 +521,8 @@ def parse_port(name: str, text: str) -> Port:
     if missing:
         raise ValueError(f"port {name!r}: missing {', '.join(missing)} (e.g. 'role=detector polar=90 radius=6.35')")
     try:
-        extras: dict[str, Any] = {k: float(items[k]) for k in ("depth", "edge_reflectance", "width", "height")
-                                  if k in items}
+        extras: dict[str, Any] = {k: float(items[k]) for k in ("depth", "edge_reflectance", "width", "height",
+                                                               "aperture", "mask_reflectance") if k in items}
         if "shape" in items:
             extras["shape"] = items["shape"]
         return Port(name, items["role"], float(items["polar"]), float(items.get("azimuth", 0.0)),

@@ -159,9 +159,12 @@ def theory_inputs(sphere: Sphere, options: ReadingMode, wavelengths: Sequence[fl
             continue  # plugged with wall material: wall (as simulated)
         plugged = not transmittance and (port.role == "specular" and options.specular == "SCI"
                                          or port.role == "reference" and not comparison)
+        holds = port is beam_port or port.role == "reference" and comparison or port.role == "sample" and transmittance
+        if port.aperture is not None and holds:
+            raise ValueError(f"the sphere theory does not model port {port.name!r}'s holder mask (aperture "
+                             f"{port.aperture:g} mm): read the mask's effect from the simulation (SphereResult.budget)")
         if port.depth > 0.0 and not plugged:  # a port wall (virtspec_mi.instruments.sphere.ports): black walls only
-            cap = _deep_port(port, cap, out, holder=port is beam_port or port.role == "reference" and comparison
-                             or port.role == "sample" and transmittance)
+            cap = _deep_port(port, cap, out, holder=holds)
         disk = None
         if port is beam_port:
             disk = radius

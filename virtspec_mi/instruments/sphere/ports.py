@@ -48,7 +48,8 @@ __all__ = ["SHAPES", "check_port_extras", "port_frame", "shaped_fraction", "shap
 SHAPES: tuple[str, ...] = ("circle", "ellipse", "rectangle")
 """The shapes of a port's opening."""
 
-EXTRA_KEYS: tuple[str, ...] = ("depth", "edge_reflectance", "shape", "width", "height")
+EXTRA_KEYS: tuple[str, ...] = ("depth", "edge_reflectance", "shape", "width", "height", "aperture",
+                               "mask_reflectance")
 """The keys of a port's text beyond role, polar, azimuth and radius."""
 
 
@@ -79,6 +80,7 @@ def check_port_extras(port: Any) -> None:
         object.__setattr__(port, "edge_reflectance", rho)
     if not isinstance(port.shape, str) or port.shape not in SHAPES:
         raise ValueError(f"port {name!r}: shape must be one of {', '.join(SHAPES)} (got {port.shape!r})")
+    _check_mask(port)
     if port.shape == "circle":
         if port.width is not None or port.height is not None:
             raise ValueError(f"port {name!r}: width and height are for shape ellipse or rectangle (a circular port "
@@ -103,6 +105,30 @@ def check_port_extras(port: Any) -> None:
         raise ValueError(f"port {name!r}: radius is not given for shape {port.shape} (its size is width x height; "
                          f"its circumscribed radius is {circumscribed:g} mm, got radius {port.radius!r})")
     object.__setattr__(port, "radius", circumscribed)
+
+
+def _check_mask(port: Any) -> None:
+    """A holder mask: 0 < aperture < radius (a circular port), 0 <= mask_reflectance <= 1."""
+
+    name = port.name
+    if port.aperture is None:
+        if port.mask_reflectance is not None:
+            raise ValueError(f"port {name!r}: mask_reflectance is for a holder mask: give its aperture too")
+        return
+    if port.shape != "circle" or port.radius is None:
+        raise ValueError(f"port {name!r}: aperture (a holder mask) needs a circular port with a radius")
+    aperture = _finite(f"port {name!r} aperture", port.aperture)
+    radius = _finite(f"port {name!r} radius", port.radius)
+    if not 0.0 < aperture < radius:
+        raise ValueError(f"port {name!r}: aperture must satisfy 0 < aperture < radius = {radius:g} mm (the mask's "
+                         f"clear opening; omit it for no mask; got {aperture:g})")
+    object.__setattr__(port, "aperture", aperture)
+    if port.mask_reflectance is not None:
+        rho = _finite(f"port {name!r} mask_reflectance", port.mask_reflectance)
+        if not 0.0 <= rho <= 1.0:
+            raise ValueError(f"port {name!r}: mask_reflectance must satisfy 0 <= mask_reflectance <= 1 (got {rho:g}; "
+                             "omit it for the sphere's wall reflectance)")
+        object.__setattr__(port, "mask_reflectance", rho)
 
 
 def port_frame(axis: Any) -> tuple[np.ndarray, np.ndarray]:
@@ -183,6 +209,10 @@ def extras_text(port: Any) -> str:
         out.append(f"edge_reflectance={port.edge_reflectance!r}")
     if port.shape != "circle":
         out.append(f"shape={port.shape} width={port.width!r} height={port.height!r}")
+    if port.aperture is not None:
+        out.append(f"aperture={port.aperture!r}")
+    if port.mask_reflectance is not None:
+        out.append(f"mask_reflectance={port.mask_reflectance!r}")
     return (" " + " ".join(out)) if out else ""
 
 

@@ -103,12 +103,16 @@ class RealSphereLayout(SphereLayout):
         rectangle, a, b, fate code).
     beam : tuple or None
         A traced beam: (kind 0 point / 1 ellipse / 2 rectangle, a, b, cos β), mm.
+    masks : tuple
+        Per holder: ``None``, or its mask (aperture, port radius, ρm at each of
+        :attr:`wall`'s wavelengths).
     """
 
     tubes: tuple = ()
     edges: tuple = ()
     shaped: tuple = ()
     beam: tuple | None = None
+    masks: tuple = ()
 
     @property
     def sums(self) -> tuple[str, ...]:  # type: ignore[override]
@@ -132,7 +136,8 @@ class RealSphereLayout(SphereLayout):
 
         grid = np.asarray(self.wall[0], dtype=np.float64)
         index = np.minimum(np.searchsorted(grid, wavelengths), len(grid) - 1)
-        return tuple(np.asarray(values, dtype=np.float64)[index] for values in self.edges)
+        masks = tuple(mask[2] for mask in self.masks if mask is not None)
+        return tuple(np.asarray(values, dtype=np.float64)[index] for values in (*self.edges, *masks))
 
     # -- the chunk: a traced beam starts every ray on its beam line -----------------------
 
@@ -305,13 +310,26 @@ class RealSphereLayout(SphereLayout):
         rare = state["rare"]
         next_last = surface
 
+        mask_column = len(self.tubes)
         for k, holder in enumerate(self.holders):
             _, _, centre = self.planes[k]
             on_holder = active & (surface == k + 1)
             q = x - _vec(centre)
             in_disk = dr.squared_norm(q) <= holder.radius * holder.radius
             lost = mi.UInt32(SphereFate.lost(holder.port))
-            fate = dr.select(on_holder & ~in_disk, lost, fate)
+            mask = self.masks[k] if self.masks else None
+            on_mask = mi.Bool(False)
+            if mask is not None:  # the clip's annulus: Lambertian, rho_m, facing the sphere
+                aperture, port_radius, _ = mask
+                on_mask = on_holder & (dr.squared_norm(q) >= aperture * aperture) & (
+                    dr.squared_norm(q) <= port_radius * port_radius)
+                in_disk = in_disk & ~on_mask
+                kept = u[0] < columns[mask_column]
+                mask_column += 1
+                fate = dr.select(on_mask & ~kept, mi.UInt32(int(SphereFate.WALL)), fate)
+                walls = walls + dr.select(on_mask & kept, mi.UInt32(1), mi.UInt32(0))
+                new_d = dr.select(on_mask, dr.normalize(mi.Frame3f(-_vec(self.planes[k][0])).to_world(local)), new_d)
+            fate = dr.select(on_holder & ~in_disk & ~on_mask, lost, fate)
             lit = on_holder & in_disk
             if k == 0 and self.beam is not None:
                 rare = rare | dr.select(active & (state["bounces"] == 0) & ~lit, mi.UInt32(SPILL), 0)
@@ -389,12 +407,21 @@ def real_layout(sphere: Any, holders: Sequence[Any], caps: Sequence[int | None],
     if profile is not None:
         a, b = profile.half_sizes()
         beam = (BEAM_SHAPES_CODE[profile.shape], a, b, math.cos(math.radians(profile.divergence)))
+    masks = []
+    for holder in holders:
+        port = sphere.ports[holder.port]
+        if port.aperture is None:
+            masks.append(None)
+            continue
+        values = rho_w if port.mask_reflectance is None else np.full(grid.shape, port.mask_reflectance)
+        masks.append((port.aperture, port.radius, tuple(float(v) for v in values)))
     return RealSphereLayout(
         radius=radius, ports=len(sphere.ports), caps=tuple(circles),
         planes=tuple(plane(k, h) for k, h in enumerate(holders)), holders=tuple(holders),
         baffle=None if sphere.baffle is None else (sphere.baffle.centre, sphere.baffle.normal, sphere.baffle.radius),
         max_bounces=int(max_bounces), wall=(tuple(float(w) for w in grid), tuple(float(r) for r in rho_w)),
-        tubes=tuple(tubes), edges=tuple(edges), shaped=tuple(shaped), beam=beam)
+        tubes=tuple(tubes), edges=tuple(edges), shaped=tuple(shaped), beam=beam,
+        masks=tuple(masks) if any(m is not None for m in masks) else ())
 
 
 BEAM_SHAPES_CODE: dict[str, int] = {"point": 0, "ellipse": 1, "rectangle": 2}

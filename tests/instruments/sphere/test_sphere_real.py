@@ -6,6 +6,8 @@ limits (bit for bit) and against the sphere theory where it has a closed form.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import pytest
 
@@ -148,3 +150,47 @@ def test_holder_mask():
         Port("sample", "sample", 180, 0, 12.7, aperture=6, mask_reflectance=2)
     with pytest.raises(ValueError, match="holder mask"):
         theory_inputs(sphere(Port("sample", "sample", 180, 0, 12.7, aperture=6.0)), SphereOptions(), [551.0])
+
+
+@pytest.mark.parametrize("gamma", [30.0, 60.0])
+def test_detector_field_of_view_matches_the_theory(gamma):
+    """A detector counting only rays within γ of its axis: Lambertian light from a uniformly bright wall arrives
+    within γ with probability sin²γ, so the theory's detector share is cap · sin²γ (the rest lost); its value lies in
+    the count's exact interval at δ = 1e-3. γ = 90 is today's detector (the plain walk, bit for bit)."""
+
+    real = sphere(detector=Port("detector", "detector", 90, 90, 12.0, field_of_view=gamma))
+    rays = 105_967
+    counts, _, _ = walk(real, rays, settings=Settings(theta_i=0, beam="conical"))
+    low, high = clopper_pearson(counts[0], rays, 1e-3)
+    assert low <= _theory_detected(real) <= high
+    whole = sphere(detector=Port("detector", "detector", 90, 90, 6.35, field_of_view=90))
+    assert whole == sphere() and type(walk(whole, 10, layout=None)[2]) is SphereLayout
+    with pytest.raises(ValueError, match="field_of_view must satisfy 0 < field_of_view <= 90"):
+        Port("detector", "detector", 90, 90, 6.35, field_of_view=0)
+    with pytest.raises(ValueError, match="field_of_view is for a port with role detector"):
+        Port("open", "open", 90, 90, 6.35, field_of_view=10)
+
+
+@pytest.mark.parametrize("share", [0.7, 1.0])
+def test_a_partly_specular_wall(share):
+    """
+    The wall as a Lambertian + mirror mix. A closed sphere (a white specimen filling the
+    only port behind a mask, wall and mask of reflectance 0.9): every wall or mask event
+    survives with probability 0.9 whatever the direction law, so each ray's number of
+    surviving wall reflections is exactly geometric, mean ρ/(1 − ρ) = 9, variance
+    ρ/(1 − ρ)² = 90, with or without mirrors, and every ray ends absorbed by the wall.
+    The mean of N rays lies within Chebyshev's bound √(90/(N δ)) at δ = 1e-3. 0 is the
+    Lambertian wall (the plain walk, bit for bit); the theory refuses a mirror share.
+    """
+
+    with pytest.raises(ValueError, match="wall_specular must satisfy 0 <= wall_specular <= 1"):
+        sphere(wall_specular=1.5)
+    assert sphere(wall_specular=0.0) == sphere()
+    rays = 200_000
+    closed = Sphere(150, 0.9, (Port("sample", "sample", 180, 0, 12.7, aperture=12.0, mask_reflectance=0.9),),
+                    wall_specular=share)
+    counts, sums, layout = walk(closed, rays, bsdf={"type": "diffuse", "reflectance": 1.0}, radius=12.7 * 1.001)
+    assert layout.wall_specular == share and counts[1] == rays
+    assert abs(sums["wall_reflections"] / rays - 9.0) < math.sqrt(90.0 / (rays * 1e-3))
+    with pytest.raises(ValueError, match="mirror share"):
+        theory_inputs(sphere(wall_specular=0.5), SphereOptions(), [551.0])

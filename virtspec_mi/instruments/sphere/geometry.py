@@ -120,6 +120,11 @@ class Port:
     mask_reflectance
         The mask's Lambertian reflectance towards the sphere, 0 … 1 (default ``None``:
         the sphere's wall reflectance ρw(λ)).
+    field_of_view
+        A detector's field of view: the half-angle (degrees, 0 < field_of_view <= 90) of
+        the cone about the port's axis within which a ray reaching the detector counts;
+        one outside it is lost (absorbed by the detector's housing). 90 (or ``None``,
+        the default): the whole hemisphere, today's detector.
     """
 
     name: str
@@ -134,6 +139,7 @@ class Port:
     height: float | None = None
     aperture: float | None = None
     mask_reflectance: float | None = None
+    field_of_view: float | None = None
 
     def __post_init__(self) -> None:
         from virtspec_mi.instruments.sphere.ports import check_port_extras
@@ -234,11 +240,12 @@ class Sphere:
     baffle: Baffle | None = None
     name: str = field(default="", compare=False)
     beam_profile: Any = None
+    wall_specular: float = 0.0
 
     def _identity(self) -> tuple:
         wall = self.wall_reflectance
         return (self.diameter, wall if isinstance(wall, float) else tuple(map(tuple, wall)), self.baffle,
-                tuple(sorted(self.ports, key=lambda port: port.name)), self.beam_profile)
+                tuple(sorted(self.ports, key=lambda port: port.name)), self.beam_profile, self.wall_specular)
 
     def __eq__(self, other: object) -> bool:
         return isinstance(other, Sphere) and self._identity() == other._identity()
@@ -267,6 +274,11 @@ class Sphere:
         from virtspec_mi.instruments.sphere.beam import beam_profile_of
 
         object.__setattr__(self, "beam_profile", beam_profile_of(self.beam_profile))
+        specular = _finite("wall_specular", self.wall_specular)
+        if not 0.0 <= specular <= 1.0:
+            raise ValueError(f"wall_specular must satisfy 0 <= wall_specular <= 1 (the mirror share of the wall's "
+                             f"reflection; 0: Lambertian; got {specular:g})")
+        object.__setattr__(self, "wall_specular", specular)
         radius = diameter / 2.0
         names = [p.name for p in ports]
         if len(set(names)) != len(names):
@@ -408,6 +420,8 @@ class Sphere:
                              f"radius={b.radius!r}")
         if self.beam_profile is not None:
             out["beam_profile"] = self.beam_profile.text()
+        if self.wall_specular:
+            out["wall_specular"] = self.wall_specular
         return out
 
     def layout(self, holders: Sequence[Any], caps: Sequence[int | None], max_bounces: int,
@@ -431,8 +445,8 @@ class Sphere:
             return (tuple(float(v) for v in port.axis), radius * port.cos_half_angle(radius),
                     tuple(float(v) for v in self.port_plane_centre(port)))
 
-        plain = all(p.depth == 0.0 and p.shape == "circle" and p.aperture is None for p in self.ports) \
-            and self.beam_profile is None
+        plain = all(p.depth == 0.0 and p.shape == "circle" and p.aperture is None and p.field_of_view is None
+                    for p in self.ports) and self.beam_profile is None and self.wall_specular == 0.0
         if not plain:
             return real_layout(self, holders, caps, max_bounces, grid)
         return SphereLayout(
@@ -456,6 +470,7 @@ class Sphere:
 
         extras = "".join(f"; port {p.name}:{extras_text(p)}" for p in self.ports if extras_text(p))
         beam = "" if self.beam_profile is None else f"; beam {self.beam_profile.text()}"
+        beam += f"; wall specular share {self.wall_specular:g}" if self.wall_specular else ""
         return (f"sphere {self.diameter:g} mm, wall reflectance {rho_text}; ports: {ports or 'none'}{baffle}"
                 f"{extras}{beam}")
 
@@ -522,7 +537,8 @@ def parse_port(name: str, text: str) -> Port:
         raise ValueError(f"port {name!r}: missing {', '.join(missing)} (e.g. 'role=detector polar=90 radius=6.35')")
     try:
         extras: dict[str, Any] = {k: float(items[k]) for k in ("depth", "edge_reflectance", "width", "height",
-                                                               "aperture", "mask_reflectance") if k in items}
+                                                               "aperture", "mask_reflectance", "field_of_view")
+                                  if k in items}
         if "shape" in items:
             extras["shape"] = items["shape"]
         return Port(name, items["role"], float(items["polar"]), float(items.get("azimuth", 0.0)),
@@ -547,7 +563,7 @@ def parse_baffle(text: str) -> Baffle:
         raise ValueError(f"baffle: {error}") from None
 
 
-SPHERE_PARAMETERS: tuple[str, ...] = ("diameter", "wall_reflectance", "baffle", "beam_profile")
+SPHERE_PARAMETERS: tuple[str, ...] = ("diameter", "wall_reflectance", "baffle", "beam_profile", "wall_specular")
 """Parameters of a sphere description besides its ``port_<name>`` entries."""
 
 
@@ -574,4 +590,6 @@ def sphere_from_parameters(values: Any) -> Sphere:
     wall = {"wall_reflectance": values.get("wall_reflectance")} if "wall_reflectance" in values else {}
     if "beam_profile" in values and values.get("beam_profile"):
         wall["beam_profile"] = str(values.get("beam_profile"))
+    if "wall_specular" in values:
+        wall["wall_specular"] = values.get("wall_specular")
     return Sphere(values.get("diameter"), ports=ports, baffle=baffle, **wall)

@@ -50,6 +50,7 @@ Goebel (1967), eq. 2 (port fractions); :mod:`virtspec_mi.instruments.sphere.theo
 
 from __future__ import annotations
 
+import math
 from typing import Any, Protocol, Sequence
 
 import numpy as np
@@ -141,6 +142,9 @@ def theory_inputs(sphere: Sphere, options: ReadingMode, wavelengths: Sequence[fl
     """
 
     transmittance = options.measurement == "transmittance"
+    if sphere.wall_specular:
+        raise ValueError(f"the sphere theory does not model a wall with a mirror share (wall_specular "
+                         f"{sphere.wall_specular:g}): its light does not land uniformly")
     beam_role = "entrance" if transmittance else "sample"
     beam_port = sphere.port(beam_role)
     if beam_port is None:
@@ -164,7 +168,14 @@ def theory_inputs(sphere: Sphere, options: ReadingMode, wavelengths: Sequence[fl
             raise ValueError(f"the sphere theory does not model port {port.name!r}'s holder mask (aperture "
                              f"{port.aperture:g} mm): read the mask's effect from the simulation (SphereResult.budget)")
         if port.depth > 0.0 and not plugged:  # a port wall (virtspec_mi.instruments.sphere.ports): black walls only
+            if port.field_of_view is not None:
+                raise ValueError(f"the sphere theory does not model port {port.name!r}'s field of view behind a port "
+                                 "wall (depth > 0)")
             cap = _deep_port(port, cap, out, holder=holds)
+        elif port.field_of_view is not None:  # Lambertian light within gamma of the axis: sin^2 gamma of it
+            share = math.sin(math.radians(port.field_of_view)) ** 2
+            out["open_fraction"] += cap * (1.0 - share)
+            cap *= share
         disk = None
         if port is beam_port:
             disk = radius

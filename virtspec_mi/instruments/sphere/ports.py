@@ -49,7 +49,7 @@ SHAPES: tuple[str, ...] = ("circle", "ellipse", "rectangle")
 """The shapes of a port's opening."""
 
 EXTRA_KEYS: tuple[str, ...] = ("depth", "edge_reflectance", "shape", "width", "height", "aperture",
-                               "mask_reflectance")
+                               "mask_reflectance", "field_of_view")
 """The keys of a port's text beyond role, polar, azimuth and radius."""
 
 
@@ -81,6 +81,14 @@ def check_port_extras(port: Any) -> None:
     if not isinstance(port.shape, str) or port.shape not in SHAPES:
         raise ValueError(f"port {name!r}: shape must be one of {', '.join(SHAPES)} (got {port.shape!r})")
     _check_mask(port)
+    if port.field_of_view is not None:
+        gamma = _finite(f"port {name!r} field_of_view", port.field_of_view)
+        if not 0.0 < gamma <= 90.0:
+            raise ValueError(f"port {name!r}: field_of_view must satisfy 0 < field_of_view <= 90 degrees (the "
+                             f"half-angle of the detector's cone; 90: the whole hemisphere; got {gamma:g})")
+        if port.role != "detector":
+            raise ValueError(f"port {name!r}: field_of_view is for a port with role detector (got role {port.role})")
+        object.__setattr__(port, "field_of_view", None if gamma == 90.0 else gamma)
     if port.shape == "circle":
         if port.width is not None or port.height is not None:
             raise ValueError(f"port {name!r}: width and height are for shape ellipse or rectangle (a circular port "
@@ -213,6 +221,8 @@ def extras_text(port: Any) -> str:
         out.append(f"aperture={port.aperture!r}")
     if port.mask_reflectance is not None:
         out.append(f"mask_reflectance={port.mask_reflectance!r}")
+    if port.field_of_view is not None:
+        out.append(f"field_of_view={port.field_of_view!r}")
     return (" " + " ".join(out)) if out else ""
 
 

@@ -106,6 +106,12 @@ class RealSphereLayout(SphereLayout):
     masks : tuple
         Per holder: ``None``, or its mask (aperture, port radius, ρm at each of
         :attr:`wall`'s wavelengths).
+    fovs : tuple
+        Per entry of :attr:`caps` (or empty): ``None``, or a detector's field of view
+        (cos γ, the fate code of a ray outside it); a shaped port and a tube carry theirs
+        as their last element.
+    wall_specular : float
+        The mirror share s of the wall's (and the baffle's) reflection (0: Lambertian).
     """
 
     tubes: tuple = ()
@@ -113,6 +119,8 @@ class RealSphereLayout(SphereLayout):
     shaped: tuple = ()
     beam: tuple | None = None
     masks: tuple = ()
+    fovs: tuple = ()
+    wall_specular: float = 0.0
 
     @property
     def sums(self) -> tuple[str, ...]:  # type: ignore[override]
@@ -130,6 +138,17 @@ class RealSphereLayout(SphereLayout):
 
     def _holder_tube(self, k: int) -> int:
         return next((i for i, tube in enumerate(self.tubes) if tube[6] == k), -1)
+
+    @staticmethod
+    def _seen(code: Any, d: Any, axis: Any, fov: tuple | None) -> Any:
+        """A port's fate code, or its lost code for a ray outside the detector's field of view."""
+
+        import drjit as dr
+        import mitsuba as mi
+
+        if fov is None:
+            return code
+        return dr.select(dr.dot(d, axis) >= fov[0], code, mi.UInt32(fov[1]))
 
     def extra_columns(self, wavelengths: np.ndarray) -> tuple:
         """ρe of every tube at the readings' wavelengths."""
@@ -213,7 +232,7 @@ class RealSphereLayout(SphereLayout):
         resolved = mi.Bool(False)
         body_p = mi.Point3f(p)
         body_last = mi.UInt32(last)
-        for i, (_, axis, offset, depth, radius, _, holder) in enumerate(self.tubes):
+        for i, (_, axis, offset, depth, radius, _, holder, _) in enumerate(self.tubes):
             c = _vec(axis)
             inside = active & (last == TUBE + i)
             dc = dr.dot(d, c)
@@ -255,7 +274,7 @@ class RealSphereLayout(SphereLayout):
         body_x = body_p + t * d
 
         # 3. a wall hit in a deep port's cap: into its cylinder at the rim plane, on to its wall or outer end
-        for i, (_, axis, offset, depth, radius, _, holder) in enumerate(self.tubes):
+        for i, (_, axis, offset, depth, radius, _, holder, _) in enumerate(self.tubes):
             c = _vec(axis)
             enters = ~resolved & (body_surface == 0) & (dr.dot(body_x, c) >= offset)
             dc = dr.dot(d, c)
@@ -275,20 +294,22 @@ class RealSphereLayout(SphereLayout):
 
         fate = state["fate"]
         on_wall = active & (surface == 0)
-        for axis, threshold, action in self.caps:
+        for n, (axis, threshold, action) in enumerate(self.caps):
             inside = dr.dot(x, _vec(axis)) >= threshold
-            fate = dr.select(on_wall & inside & (fate == _ACTIVE), mi.UInt32(action), fate)
-        for axis, e1, e2, kind, a, b_, action in self.shaped:
+            code = self._seen(mi.UInt32(action), d, _vec(axis), self.fovs[n] if self.fovs else None)
+            fate = dr.select(on_wall & inside & (fate == _ACTIVE), code, fate)
+        for axis, e1, e2, kind, a, b_, action, fov in self.shaped:
             px, py = dr.dot(x, _vec(e1)) / a, dr.dot(x, _vec(e2)) / b_
             inside = (dr.dot(x, _vec(axis)) > 0.0) & (
                 (px * px + py * py <= 1.0) if kind == 0 else ((dr.abs(px) <= 1.0) & (dr.abs(py) <= 1.0)))
-            fate = dr.select(on_wall & inside & (fate == _ACTIVE), mi.UInt32(action), fate)
+            code = self._seen(mi.UInt32(action), d, _vec(axis), fov)
+            fate = dr.select(on_wall & inside & (fate == _ACTIVE), code, fate)
         on_tube = active & (surface >= TUBE) & (surface < TUBE + len(self.tubes))
         diffuse = (on_wall & (fate == _ACTIVE)) | (active & (surface == 3)) | on_tube
         inward = -dr.normalize(x)
         rho = mi.Float(rho_w)
         on_cylinder = mi.Point3f(x)
-        for i, (_, axis, offset, depth, radius, action, holder) in enumerate(self.tubes):
+        for i, (_, axis, offset, depth, radius, action, holder, fov) in enumerate(self.tubes):
             c = _vec(axis)
             here = surface == TUBE + i
             q = x - dr.dot(x, c) * c
@@ -296,7 +317,7 @@ class RealSphereLayout(SphereLayout):
             rho = dr.select(here, columns[i], rho)
             on_cylinder = dr.select(here, dr.dot(x, c) * c + q * (radius / dr.norm(q)), on_cylinder)
             if holder < 0:  # the outer end: the port's fate
-                fate = dr.select(active & (surface == END + i), mi.UInt32(action), fate)
+                fate = dr.select(active & (surface == END + i), self._seen(mi.UInt32(action), d, c, fov), fate)
         if baffle is not None:
             facing = dr.select(dr.dot(d, _vec(baffle[1])) > 0.0, -_vec(baffle[1]), _vec(baffle[1]))
             inward = dr.select(surface == 3, facing, inward)
@@ -304,6 +325,9 @@ class RealSphereLayout(SphereLayout):
         fate = dr.select(diffuse & ~survives, mi.UInt32(int(SphereFate.WALL)), fate)
         local = mi.warp.square_to_cosine_hemisphere(mi.Point2f(u[1], u[2]))
         new_d = dr.normalize(mi.Frame3f(inward).to_world(local))
+        if self.wall_specular > 0.0:  # the wall's (and baffle's) mirror share: u[3] is free at a wall event
+            mirror = diffuse & ~on_tube & (u[3] < self.wall_specular)
+            new_d = dr.select(mirror, dr.normalize(d - 2.0 * dr.dot(d, inward) * inward), new_d)
         on_sphere = x * (self.radius / dr.norm(x))
         new_p = dr.select(surface == 0, on_sphere, dr.select(on_tube, on_cylinder, x))
         walls = state["walls"] + dr.select(diffuse & survives, mi.UInt32(1), mi.UInt32(0))
@@ -375,10 +399,12 @@ def real_layout(sphere: Any, holders: Sequence[Any], caps: Sequence[int | None],
     radius = sphere.radius
     rho_w = sphere.wall_reflectance_at(grid)
     holder_of = {h.port: k for k, h in enumerate(holders)}
-    circles, shaped, tubes, edges = [], [], [], []
+    circles, shaped, tubes, edges, fovs = [], [], [], [], []
     for j, (port, action) in enumerate(zip(sphere.ports, caps)):
         axis = tuple(float(v) for v in port.axis)
         offset = radius * port.cos_half_angle(radius)
+        fov = None if port.field_of_view is None or action is None else (
+            math.cos(math.radians(port.field_of_view)), SphereFate.lost(j))
         if port.shape != "circle":
             if j in holder_of:
                 raise ValueError(f"port {port.name!r}: shape {port.shape} cannot hold a specimen or a standard (its "
@@ -386,15 +412,17 @@ def real_layout(sphere: Any, holders: Sequence[Any], caps: Sequence[int | None],
             if action is not None:
                 e1, e2 = port_frame(port.axis)
                 shaped.append((axis, tuple(float(v) for v in e1), tuple(float(v) for v in e2),
-                               0 if port.shape == "ellipse" else 1, port.width / 2.0, port.height / 2.0, int(action)))
+                               0 if port.shape == "ellipse" else 1, port.width / 2.0, port.height / 2.0, int(action),
+                               fov))
             continue
         if port.depth > 0.0 and (action is not None or j in holder_of):
             holder = holder_of.get(j, -1)
-            tubes.append((j, axis, offset, port.depth, port.radius, -1 if holder >= 0 else int(action), holder))
+            tubes.append((j, axis, offset, port.depth, port.radius, -1 if holder >= 0 else int(action), holder, fov))
             edge = rho_w if port.edge_reflectance is None else np.full(grid.shape, port.edge_reflectance)
             edges.append(tuple(float(v) for v in edge))
         elif action is not None:
             circles.append((axis, offset, int(action)))
+            fovs.append(fov)
     deep = {tube[6]: tube for tube in tubes if tube[6] >= 0}
 
     def plane(k: int, holder: Any) -> tuple:
@@ -421,7 +449,8 @@ def real_layout(sphere: Any, holders: Sequence[Any], caps: Sequence[int | None],
         baffle=None if sphere.baffle is None else (sphere.baffle.centre, sphere.baffle.normal, sphere.baffle.radius),
         max_bounces=int(max_bounces), wall=(tuple(float(w) for w in grid), tuple(float(r) for r in rho_w)),
         tubes=tuple(tubes), edges=tuple(edges), shaped=tuple(shaped), beam=beam,
-        masks=tuple(masks) if any(m is not None for m in masks) else ())
+        masks=tuple(masks) if any(m is not None for m in masks) else (),
+        fovs=tuple(fovs) if any(f is not None for f in fovs) else (), wall_specular=float(sphere.wall_specular))
 
 
 BEAM_SHAPES_CODE: dict[str, int] = {"point": 0, "ellipse": 1, "rectangle": 2}

@@ -338,6 +338,10 @@ def _in(module: str, prefixes: tuple[str, ...]) -> bool:
 INSTRUMENT_PARTS: dict[str, str] = {
     "walk": "kernel", "hook": "kernel",
     "geometry": "budgets/geometry/references", "bins": "budgets/geometry/references",
+    # a sphere's real ports, its beam, and the walk of a real sphere (it extends the plain walk, so it
+    # cannot be a kernel-side hook: the kernel receives it as plain values)
+    "ports": "budgets/geometry/references", "beam": "budgets/geometry/references",
+    "real": "budgets/geometry/references",
     "model": "budgets/geometry/references", "theory": "budgets/geometry/references",
     "result": "results", "plot": "results",
     "integrator": "adapter",

@@ -41,6 +41,7 @@ from typing import Any
 import numpy as np
 
 from virtspec_mi.checks import number
+from virtspec_mi.instruments.sphere.real import port_frame
 
 __all__ = ["SHAPES", "check_port_extras", "port_frame", "shaped_fraction", "shaped_area", "contains",
            "extras_text", "EXTRA_KEYS"]
@@ -137,16 +138,6 @@ def _check_mask(port: Any) -> None:
             raise ValueError(f"port {name!r}: mask_reflectance must satisfy 0 <= mask_reflectance <= 1 (got {rho:g}; "
                              "omit it for the sphere's wall reflectance)")
         object.__setattr__(port, "mask_reflectance", rho)
-
-
-def port_frame(axis: Any) -> tuple[np.ndarray, np.ndarray]:
-    """(e₁, e₂) of a port's tangent plane (see the module docstring)."""
-
-    c = np.asarray(axis, dtype=np.float64)
-    e = np.array([1.0, 0.0, 0.0]) if abs(c[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
-    e1 = e - (e @ c) * c
-    e1 /= np.linalg.norm(e1)
-    return e1, np.cross(c, e1)
 
 
 def _boundary(shape: str, a: float, b: float, phi: float) -> float:

@@ -55,7 +55,7 @@ from virtspec_mi.kernel.walk import CAPPED_COMPONENT
 from virtspec_mi.instruments.sphere.walk import (_ACTIVE, _LENGTH2, _ROUNDED, _VIOLATION, WALK_BASE, SphereFate,
                                                  SphereLayout, _vec)
 
-__all__ = ["BEAM_BASE", "SPILL", "TUBE", "END", "RealSphereLayout", "real_layout", "check_traced_beam"]
+__all__ = ["BEAM_BASE", "SPILL", "TUBE", "END", "RealSphereLayout", "real_layout", "check_traced_beam", "port_frame"]
 
 BEAM_BASE: int = WALK_BASE - 16
 """First random-number dimension of a traced beam ray (4 of them), below the walk's."""
@@ -68,6 +68,19 @@ TUBE: int = 16
 
 END: int = 48
 """Surface code of the outer end of cylinder i of a port without a holder: ``END + i``."""
+
+
+def port_frame(axis: Any) -> tuple[np.ndarray, np.ndarray]:
+    """
+    (e₁, e₂) of a port's tangent plane: e₁ is the sphere's +x projected onto it (+y when
+    the axis is within 25° of ±x), e₂ = c × e₁ (:mod:`virtspec_mi.instruments.sphere.ports`).
+    """
+
+    c = np.asarray(axis, dtype=np.float64)
+    e = np.array([1.0, 0.0, 0.0]) if abs(c[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
+    e1 = e - (e @ c) * c
+    e1 /= np.linalg.norm(e1)
+    return e1, np.cross(c, e1)
 
 
 def _cylinder_exit(p: Any, d: Any, axis: Any, radius: float) -> Any:
@@ -393,8 +406,6 @@ class RealSphereLayout(SphereLayout):
 def real_layout(sphere: Any, holders: Sequence[Any], caps: Sequence[int | None], max_bounces: int,
                 grid: np.ndarray) -> RealSphereLayout:
     """The :class:`RealSphereLayout` of a sphere with deep or non-circular ports or a beam profile (plain values)."""
-
-    from virtspec_mi.instruments.sphere.ports import port_frame
 
     radius = sphere.radius
     rho_w = sphere.wall_reflectance_at(grid)

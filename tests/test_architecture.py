@@ -341,7 +341,7 @@ INSTRUMENT_PARTS: dict[str, str] = {
     # a sphere's real ports, its beam, and the walk of a real sphere (it extends the plain walk, so it
     # cannot be a kernel-side hook: the kernel receives it as plain values)
     "ports": "budgets/geometry/references", "beam": "budgets/geometry/references",
-    "real": "budgets/geometry/references",
+    "real": "budgets/geometry/references", "budget": "results",
     "model": "budgets/geometry/references", "theory": "budgets/geometry/references",
     "result": "results", "plot": "results",
     "integrator": "adapter",

@@ -265,12 +265,16 @@ class SphereCorrection(Options):
     collimated_transmittance: float | None = option(
         None, _fraction("collimated_transmittance"), "the unscattered part of a transmittance reading, 0 ... 1 "
         "(default 0); implies --correct")
+    budget: bool = option(False, true_or_false("budget"),
+                          "also print the error budget: reading - hemispherical split into its sources (port walls, "
+                          "holder, beam, wall, field of view, substitution, the ideal sphere's ports, interactions), "
+                          "each a certified difference of two readings of the same rays (--json: budget)")
 
     def assumptions(self) -> dict[str, float] | None:
         """What the correction assumes (the values given), or ``None`` when no correction is asked for."""
 
         given = {name: getattr(self, name) for name in self.names()
-                 if name != "correct" and getattr(self, name) is not None}
+                 if name not in ("correct", "budget") and getattr(self, name) is not None}
         return given if (self.correct or given) else None
 
 
@@ -285,6 +289,10 @@ def _respond_sphere(session: Session) -> int:
         text += "\n" + _correction_table(result, corrected, interval, assumptions)
         data = {**result.as_dict(), "corrected": plain_data(corrected), "corrected_interval": plain_data(interval),
                 "correction": assumptions}
+    if session.flags.budget:
+        budget = result.budget(lambda sphere, **options: session.take(sphere=sphere, **options))
+        text += "\n" + budget.summary()
+        data = {**(data or result.as_dict()), "budget": budget.as_dict()}
     return session.report(result, text, session.draw(result), data)
 
 

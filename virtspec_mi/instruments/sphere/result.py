@@ -441,6 +441,17 @@ class SphereResult(ResultBase):
                                   collimated_transmittance=collimated_transmittance)
         return values.reshape(interval.shape)
 
+    def budget(self, take: Any) -> Any:
+        """
+        The error budget: reading − hemispherical split into its sources, each certified
+        (:func:`virtspec_mi.instruments.sphere.budget.sphere_budget`); ``take(sphere,
+        **options)`` reads another sphere with this reading's scene, settings, seed and N.
+        """
+
+        from virtspec_mi.instruments.sphere.budget import sphere_budget
+
+        return sphere_budget(self, take)
+
     def _check_spectrum(self, what: str) -> None:
         other = [d for d in self.reading_dims if d != "wavelength"]
         if other:

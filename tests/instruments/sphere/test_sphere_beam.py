@@ -134,6 +134,7 @@ def test_a_sphere_reading_reports_its_beam_spill(tmp_path):
     result = vm.sphere_measure(SCENE, rays=4000, wavelengths="550", sphere=traced)
     spill = result.counts["sample"]["beam_spill"]
     assert 0 < spill[0] < 4000 and "beam shape=rectangle" in result.summary()
+    assert f"beam spill (rays whose first surface was not the specimen): {spill[0] / 4000:.4f}" in result.summary()
     assert result.counts["standard"]["beam_spill"][0] == spill[0]  # the standard is the specimen's size: same beam
     result.write(tmp_path / "spill.json")
     again = type(result).read(tmp_path / "spill.json")

@@ -231,7 +231,15 @@ class Sphere:
         The ports (:class:`Port`), names unique, caps not overlapping.
     baffle
         Optional :class:`Baffle` (or its text ``"centre=x,y,z normal=x,y,z radius=r"``),
-        wholly inside the sphere and clear of the holder ports' planes.
+        wholly inside the sphere and clear of the holder ports' planes (and of the rim plane
+        of every port with a wall).
+    beam_profile
+        Optional :class:`~virtspec_mi.instruments.sphere.beam.BeamProfile` (or its text
+        ``"shape=rectangle width=7 height=4 divergence=0.5"``): a traced beam; ``None`` (and
+        a point without divergence) is the bench's pencil beam.
+    wall_specular
+        The mirror share of the wall's and the baffle's reflection, 0 … 1 (default 0:
+        Lambertian).
     """
 
     diameter: float

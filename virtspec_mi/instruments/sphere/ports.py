@@ -25,6 +25,12 @@ module holds what a real port adds, each validated where it enters:
   (+y when the axis is within 25° of ±x), e₂ = c × e₁. A non-circular port cannot hold a
   specimen or a standard (its rim is not planar): only the ``detector``, ``specular``,
   ``open`` roles and the ``entrance`` of a reflectance reading may be non-circular.
+- **aperture**, **mask_reflectance**: a holder mask (a clip) in front of what the port
+  holds, a flat annulus from the aperture (0 < aperture < r) to the port's radius in the
+  holder's plane, Lambertian of reflectance ρm (default ρw(λ)), facing the sphere.
+- **field_of_view** γ (a detector, 0 < γ ≤ 90 degrees): a ray reaching the detector
+  counts when its direction is within γ of the port's axis, else it is lost (the
+  detector's housing); 90 is the whole hemisphere (stored as ``None``).
 
 References
 ----------

@@ -508,6 +508,11 @@ class SphereResult(ResultBase):
         fixed = [f"{name} = {float(value):g}" for name, value in self.coords.items() if not self.coord_dims(name)]
         if fixed:
             lines.append("at " + ", ".join(fixed))
+        if "beam_spill" in self.counts["sample"]:  # a traced beam (a beam profile): the rays that missed the specimen
+            spill = self.counts["sample"]["beam_spill"] / self.counts["sample"]["rays"]
+            low, high = float(np.min(spill)), float(np.max(spill))
+            lines.append("beam spill (rays whose first surface was not the specimen): "
+                         + (f"{low:.4f}" if low == high else f"{low:.4f} to {high:.4f}") + " of the sample's rays")
         labels = list(self.reading_dims)
         heads = ["lambda/nm" if d == "wavelength" else d for d in labels]
         lines.append(" ".join(f"{h:>10}" for h in heads) + "  rho_w   p_sample  p_standard   reading  [interval]"

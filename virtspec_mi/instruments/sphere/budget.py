@@ -12,8 +12,8 @@ same seed and N (common random numbers: the two readings share their first inter
 and their random numbers, so most of their noise cancels in the point difference).
 
 - ``port_walls``: ports of depth > 0 that hold nothing (their depth set to 0: knife edges);
-- ``holder``: a recessed specimen or standard (the depth of a port that holds one) and
-  holder masks (removed);
+- ``holder``: a recessed or proud specimen or standard (the depth or ``proud`` of a port
+  that holds one) and holder masks (removed);
 - ``beam``: the beam's size, divergence and spill (the beam profile removed: the
   bench's pencil at the specimen's centre);
 - ``wall``: the wall's mirror share (set to 0: Lambertian);
@@ -59,7 +59,7 @@ __all__ = ["SOURCES", "SphereBudget", "without", "ideal_sphere", "features_of", 
 
 SOURCES: dict[str, str] = {
     "port_walls": "port walls (edges) of ports that hold nothing",
-    "holder": "holders: a recessed specimen or standard, holder masks",
+    "holder": "holders: a recessed or proud specimen or standard, holder masks",
     "beam": "the beam's size, divergence and spill",
     "wall": "the wall's mirror share (non-Lambertian)",
     "field_of_view": "the detector's field of view",
@@ -80,8 +80,8 @@ def _port_without(port: Port, feature: str, holders: tuple[str, ...]) -> Port:
     holds = port.role in holders
     if feature == "port_walls" and not holds and port.depth > 0.0:
         return replace(port, depth=0.0, edge_reflectance=None)
-    if feature == "holder" and holds and (port.depth > 0.0 or port.aperture is not None):
-        return replace(port, depth=0.0, edge_reflectance=None, aperture=None, mask_reflectance=None)
+    if feature == "holder" and holds and (port.depth > 0.0 or port.aperture is not None or port.proud):
+        return replace(port, depth=0.0, edge_reflectance=None, aperture=None, mask_reflectance=None, proud=0.0)
     if feature == "field_of_view" and port.field_of_view is not None:
         return replace(port, field_of_view=None)
     return port

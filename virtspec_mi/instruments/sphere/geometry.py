@@ -125,6 +125,10 @@ class Port:
         the cone about the port's axis within which a ray reaching the detector counts;
         one outside it is lost (absorbed by the detector's housing). 90 (or ``None``,
         the default): the whole hemisphere, today's detector.
+    proud
+        How far what the port holds stands into the sphere, mm (≥ 0, less than R cos α;
+        default 0: in the rim plane): the specimen (or standard) on a post of its own
+        radius whose side reflects ``edge_reflectance`` (Lambertian).
     """
 
     name: str
@@ -140,6 +144,7 @@ class Port:
     aperture: float | None = None
     mask_reflectance: float | None = None
     field_of_view: float | None = None
+    proud: float = 0.0
 
     def __post_init__(self) -> None:
         from virtspec_mi.instruments.sphere.ports import check_port_extras
@@ -303,6 +308,10 @@ class Sphere:
                                      f"{math.degrees(gap):.3f} deg apart, their caps' half-angles add up to "
                                      f"{math.degrees(a.half_angle(radius) + b.half_angle(radius)):.3f} deg")
         for port in ports:
+            if port.proud and not port.proud < radius * port.cos_half_angle(radius):
+                raise ValueError(f"port {port.name!r}: proud must satisfy 0 <= proud < "
+                                 f"{radius * port.cos_half_angle(radius):g} mm (the rim plane's distance from the "
+                                 f"centre; got {port.proud:g})")
             if port.shape != "circle" and port.role in ("sample", "reference"):
                 raise ValueError(f"port {port.name!r}: role {port.role} needs shape circle (a specimen or a standard "
                                  f"sits in it; a non-circular rim is not planar), got shape {port.shape}")
@@ -313,7 +322,7 @@ class Sphere:
             raise ValueError(f"baffle must lie inside the sphere: its rim reaches "
                              f"{self.baffle.farthest_rim_distance():g} mm from the centre (radius {radius:g} mm)")
         for port in ports if self.baffle is not None else ():
-            plane = radius * port.cos_half_angle(radius)
+            plane = radius * port.cos_half_angle(radius) - port.proud
             reach = self.baffle.reach(port.axis)
             if (port.role in HOLDER_ROLES or port.depth > 0.0) and not reach < plane:
                 raise ValueError(f"baffle must not cross the plane of port {port.name!r} (role {port.role}: where the "
@@ -454,7 +463,7 @@ class Sphere:
                     tuple(float(v) for v in self.port_plane_centre(port)))
 
         plain = all(p.depth == 0.0 and p.shape == "circle" and p.aperture is None and p.field_of_view is None
-                    for p in self.ports) and self.beam_profile is None and self.wall_specular == 0.0
+                    and p.proud == 0.0 for p in self.ports) and self.beam_profile is None and self.wall_specular == 0.0
         if not plain:
             return real_layout(self, holders, caps, max_bounces, grid)
         return SphereLayout(
@@ -545,7 +554,8 @@ def parse_port(name: str, text: str) -> Port:
         raise ValueError(f"port {name!r}: missing {', '.join(missing)} (e.g. 'role=detector polar=90 radius=6.35')")
     try:
         extras: dict[str, Any] = {k: float(items[k]) for k in ("depth", "edge_reflectance", "width", "height",
-                                                               "aperture", "mask_reflectance", "field_of_view")
+                                                               "aperture", "mask_reflectance", "field_of_view",
+                                                               "proud")
                                   if k in items}
         if "shape" in items:
             extras["shape"] = items["shape"]

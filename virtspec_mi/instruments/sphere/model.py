@@ -167,6 +167,9 @@ def theory_inputs(sphere: Sphere, options: ReadingMode, wavelengths: Sequence[fl
         if port.aperture is not None and holds:
             raise ValueError(f"the sphere theory does not model port {port.name!r}'s holder mask (aperture "
                              f"{port.aperture:g} mm): read the mask's effect from the simulation (SphereResult.budget)")
+        if port.proud and holds:
+            raise ValueError(f"the sphere theory does not model a specimen standing proud of port {port.name!r} "
+                             f"(proud {port.proud:g} mm): read its effect from the simulation (SphereResult.budget)")
         if port.depth > 0.0 and not plugged:  # a port wall (virtspec_mi.instruments.sphere.ports): black walls only
             if port.field_of_view is not None:
                 raise ValueError(f"the sphere theory does not model port {port.name!r}'s field of view behind a port "

@@ -28,6 +28,9 @@ module holds what a real port adds, each validated where it enters:
 - **aperture**, **mask_reflectance**: a holder mask (a clip) in front of what the port
   holds, a flat annulus from the aperture (0 < aperture < r) to the port's radius in the
   holder's plane, Lambertian of reflectance ρm (default ρw(λ)), facing the sphere.
+- **proud** s (mm, ≥ 0): what the port holds stands s into the sphere, on a post of its
+  own radius from the rim plane to the plane x·c = R cos α − s; the post's side reflects
+  ``edge_reflectance`` (Lambertian); a crossing of that plane outside the disk flies on.
 - **field_of_view** γ (a detector, 0 < γ ≤ 90 degrees): a ray reaching the detector
   counts when its direction is within γ of the port's axis, else it is lost (the
   detector's housing); 90 is the whole hemisphere (stored as ``None``).
@@ -56,7 +59,7 @@ SHAPES: tuple[str, ...] = ("circle", "ellipse", "rectangle")
 """The shapes of a port's opening."""
 
 EXTRA_KEYS: tuple[str, ...] = ("depth", "edge_reflectance", "shape", "width", "height", "aperture",
-                               "mask_reflectance", "field_of_view")
+                               "mask_reflectance", "field_of_view", "proud")
 """The keys of a port's text beyond role, polar, azimuth and radius."""
 
 
@@ -88,6 +91,13 @@ def check_port_extras(port: Any) -> None:
     if not isinstance(port.shape, str) or port.shape not in SHAPES:
         raise ValueError(f"port {name!r}: shape must be one of {', '.join(SHAPES)} (got {port.shape!r})")
     _check_mask(port)
+    proud = _finite(f"port {name!r} proud", port.proud)
+    if not proud >= 0.0:
+        raise ValueError(f"port {name!r}: proud must satisfy proud >= 0 mm (0: in the rim plane; got {proud:g})")
+    object.__setattr__(port, "proud", proud)
+    if proud and (depth > 0.0 or port.aperture is not None):
+        raise ValueError(f"port {name!r}: proud (a specimen standing into the sphere) excludes depth and aperture "
+                         "(give depth for a recessed specimen, aperture for a mask in the rim plane)")
     if port.field_of_view is not None:
         gamma = _finite(f"port {name!r} field_of_view", port.field_of_view)
         if not 0.0 < gamma <= 90.0:
@@ -220,6 +230,8 @@ def extras_text(port: Any) -> str:
         out.append(f"mask_reflectance={port.mask_reflectance!r}")
     if port.field_of_view is not None:
         out.append(f"field_of_view={port.field_of_view!r}")
+    if port.proud:
+        out.append(f"proud={port.proud!r}")
     return (" " + " ".join(out)) if out else ""
 
 

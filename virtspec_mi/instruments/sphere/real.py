@@ -55,7 +55,7 @@ from virtspec_mi.kernel.walk import CAPPED_COMPONENT
 from virtspec_mi.instruments.sphere.walk import (_ACTIVE, _LENGTH2, _ROUNDED, _VIOLATION, WALK_BASE, SphereFate,
                                                  SphereLayout, _vec)
 
-__all__ = ["BEAM_BASE", "SPILL", "TUBE", "END", "RealSphereLayout", "real_layout", "check_traced_beam", "port_frame"]
+__all__ = ["BEAM_BASE", "SPILL", "TUBE", "END", "POST", "RealSphereLayout", "real_layout", "check_traced_beam", "port_frame"]
 
 BEAM_BASE: int = WALK_BASE - 16
 """First random-number dimension of a traced beam ray (4 of them), below the walk's."""
@@ -68,6 +68,9 @@ TUBE: int = 16
 
 END: int = 48
 """Surface code of the outer end of cylinder i of a port without a holder: ``END + i``."""
+
+POST: int = 80
+"""Surface code of the side of holder k's post (a disk standing proud of its port): ``POST + k``."""
 
 
 def port_frame(axis: Any) -> tuple[np.ndarray, np.ndarray]:
@@ -125,6 +128,10 @@ class RealSphereLayout(SphereLayout):
         as their last element.
     wall_specular : float
         The mirror share s of the wall's (and the baffle's) reflection (0: Lambertian).
+    posts : tuple
+        Per holder: ``None``, or the post of a disk standing proud of its port (rim
+        offset R cos α, proud s, the post's radius, its ρ at each of :attr:`wall`'s
+        wavelengths): the holder's plane is then R cos α − s and only its disk stops a ray.
     """
 
     tubes: tuple = ()
@@ -134,6 +141,7 @@ class RealSphereLayout(SphereLayout):
     masks: tuple = ()
     fovs: tuple = ()
     wall_specular: float = 0.0
+    posts: tuple = ()
 
     @property
     def sums(self) -> tuple[str, ...]:  # type: ignore[override]
@@ -169,7 +177,8 @@ class RealSphereLayout(SphereLayout):
         grid = np.asarray(self.wall[0], dtype=np.float64)
         index = np.minimum(np.searchsorted(grid, wavelengths), len(grid) - 1)
         masks = tuple(mask[2] for mask in self.masks if mask is not None)
-        return tuple(np.asarray(values, dtype=np.float64)[index] for values in (*self.edges, *masks))
+        posts = tuple(post[3] for post in self.posts if post is not None)
+        return tuple(np.asarray(values, dtype=np.float64)[index] for values in (*self.edges, *masks, *posts))
 
     # -- the chunk: a traced beam starts every ray on its beam line -----------------------
 
@@ -268,12 +277,28 @@ class RealSphereLayout(SphereLayout):
         c2 = dr.squared_norm(body_p) - self.radius * self.radius
         t = -b + dr.safe_sqrt(b * b - c2)
         body_surface = mi.UInt32(0)
-        for k, (axis, offset, _) in enumerate(self.planes):
+        for k, (axis, offset, centre) in enumerate(self.planes):
             if k in deep_holders:
                 continue
             cos_d = dr.dot(d, _vec(axis))
             t_k = (offset - dr.dot(body_p, _vec(axis))) / cos_d
             hit = (cos_d > 0.0) & (t_k > 0.0) & (t_k < t) & (body_last != k + 1)
+            post = self.posts[k] if self.posts else None
+            if post is not None:  # a disk standing proud: only the disk stops a ray, and the post's side
+                radius = self.holders[k].radius
+                hit = hit & (dr.squared_norm(body_p + t_k * d - _vec(centre)) <= radius * radius)
+                c = _vec(axis)
+                q = body_p - dr.dot(body_p, c) * c
+                w = d - dr.dot(d, c) * c
+                a_, b_ = dr.squared_norm(w), dr.dot(q, w)
+                disc = b_ * b_ - a_ * (dr.squared_norm(q) - radius * radius)
+                t_s = (-b_ - dr.safe_sqrt(disc)) / a_
+                along = dr.dot(body_p + t_s * d, c)
+                side = (a_ > 1e-12) & (b_ < 0.0) & (disc >= 0.0) & (t_s > 0.0) & (t_s < t) & (
+                    along >= post[0] - post[1]) & (along <= post[0]) & (body_last != POST + k)
+                t = dr.select(side, t_s, t)
+                body_surface = dr.select(side, mi.UInt32(POST + k), body_surface)
+                hit = hit & (t_k < t)
             t = dr.select(hit, t_k, t)
             body_surface = dr.select(hit, mi.UInt32(k + 1), body_surface)
         baffle = self.baffle
@@ -318,7 +343,8 @@ class RealSphereLayout(SphereLayout):
             code = self._seen(mi.UInt32(action), d, _vec(axis), fov)
             fate = dr.select(on_wall & inside & (fate == _ACTIVE), code, fate)
         on_tube = active & (surface >= TUBE) & (surface < TUBE + len(self.tubes))
-        diffuse = (on_wall & (fate == _ACTIVE)) | (active & (surface == 3)) | on_tube
+        on_post = active & (surface >= POST) & (surface < POST + len(self.holders))
+        diffuse = (on_wall & (fate == _ACTIVE)) | (active & (surface == 3)) | on_tube | on_post
         inward = -dr.normalize(x)
         rho = mi.Float(rho_w)
         on_cylinder = mi.Point3f(x)
@@ -331,6 +357,17 @@ class RealSphereLayout(SphereLayout):
             on_cylinder = dr.select(here, dr.dot(x, c) * c + q * (radius / dr.norm(q)), on_cylinder)
             if holder < 0:  # the outer end: the port's fate
                 fate = dr.select(active & (surface == END + i), self._seen(mi.UInt32(action), d, c, fov), fate)
+        column = len(self.tubes) + sum(mask is not None for mask in self.masks)
+        for k, post in enumerate(self.posts):
+            if post is None:
+                continue
+            c = _vec(self.planes[k][0])
+            here = surface == POST + k
+            q = x - dr.dot(x, c) * c
+            inward = dr.select(here, dr.normalize(q), inward)  # the post's side faces away from its axis
+            rho = dr.select(here, columns[column], rho)
+            on_cylinder = dr.select(here, dr.dot(x, c) * c + q * (self.holders[k].radius / dr.norm(q)), on_cylinder)
+            column += 1
         if baffle is not None:
             facing = dr.select(dr.dot(d, _vec(baffle[1])) > 0.0, -_vec(baffle[1]), _vec(baffle[1]))
             inward = dr.select(surface == 3, facing, inward)
@@ -339,10 +376,10 @@ class RealSphereLayout(SphereLayout):
         local = mi.warp.square_to_cosine_hemisphere(mi.Point2f(u[1], u[2]))
         new_d = dr.normalize(mi.Frame3f(inward).to_world(local))
         if self.wall_specular > 0.0:  # the wall's (and baffle's) mirror share: u[3] is free at a wall event
-            mirror = diffuse & ~on_tube & (u[3] < self.wall_specular)
+            mirror = diffuse & ~on_tube & ~on_post & (u[3] < self.wall_specular)
             new_d = dr.select(mirror, dr.normalize(d - 2.0 * dr.dot(d, inward) * inward), new_d)
         on_sphere = x * (self.radius / dr.norm(x))
-        new_p = dr.select(surface == 0, on_sphere, dr.select(on_tube, on_cylinder, x))
+        new_p = dr.select(surface == 0, on_sphere, dr.select(on_tube | on_post, on_cylinder, x))
         walls = state["walls"] + dr.select(diffuse & survives, mi.UInt32(1), mi.UInt32(0))
         rare = state["rare"]
         next_last = surface
@@ -438,7 +475,7 @@ def real_layout(sphere: Any, holders: Sequence[Any], caps: Sequence[int | None],
 
     def plane(k: int, holder: Any) -> tuple:
         port = sphere.ports[holder.port]
-        offset = radius * port.cos_half_angle(radius) + (port.depth if k in deep else 0.0)
+        offset = radius * port.cos_half_angle(radius) + (port.depth if k in deep else 0.0) - port.proud
         return (tuple(float(v) for v in port.axis), offset, tuple(float(v) * offset for v in port.axis))
 
     profile = sphere.beam_profile
@@ -446,6 +483,12 @@ def real_layout(sphere: Any, holders: Sequence[Any], caps: Sequence[int | None],
     if profile is not None:
         a, b = profile.half_sizes()
         beam = (BEAM_SHAPES_CODE[profile.shape], a, b, math.cos(math.radians(profile.divergence)))
+    posts = []
+    for holder in holders:
+        port = sphere.ports[holder.port]
+        values = rho_w if port.edge_reflectance is None else np.full(grid.shape, port.edge_reflectance)
+        posts.append(None if not port.proud else (radius * port.cos_half_angle(radius), port.proud,
+                                                  float(holder.radius), tuple(float(v) for v in values)))
     masks = []
     for holder in holders:
         port = sphere.ports[holder.port]
@@ -461,7 +504,8 @@ def real_layout(sphere: Any, holders: Sequence[Any], caps: Sequence[int | None],
         max_bounces=int(max_bounces), wall=(tuple(float(w) for w in grid), tuple(float(r) for r in rho_w)),
         tubes=tuple(tubes), edges=tuple(edges), shaped=tuple(shaped), beam=beam,
         masks=tuple(masks) if any(m is not None for m in masks) else (),
-        fovs=tuple(fovs) if any(f is not None for f in fovs) else (), wall_specular=float(sphere.wall_specular))
+        fovs=tuple(fovs) if any(f is not None for f in fovs) else (), wall_specular=float(sphere.wall_specular),
+        posts=tuple(posts) if any(p is not None for p in posts) else ())
 
 
 BEAM_SHAPES_CODE: dict[str, int] = {"point": 0, "ellipse": 1, "rectangle": 2}
@@ -485,7 +529,7 @@ def check_traced_beam(sphere: Any, measurement: str, beam: str, local: np.ndarra
         raise ValueError(f"beam_profile traces a collimated beam: give beam='collimated' (got {beam!r})")
     port = sphere.port("sample")
     axis = port.axis
-    offset = sphere.radius * port.cos_half_angle(sphere.radius) + port.depth
+    offset = sphere.radius * port.cos_half_angle(sphere.radius) + port.depth - port.proud
     centre = axis * offset
     travel = -(frame @ local)
     u = frame[:, 0] - (frame[:, 0] @ travel) * travel

@@ -24,7 +24,6 @@ import time
 from dataclasses import replace
 
 import virtspec_mi as vm
-from virtspec_mi.instruments.sphere.geometry import sphere_from_parameters
 
 SCENE = "scenes/sphere_150mm_8d.xml"
 
@@ -57,7 +56,7 @@ def main() -> None:
     parser.add_argument("--rays", type=int, default=105_967)
     args = parser.parse_args()
     settings = {"rays": args.rays, "wavelengths": "551", "seed": 0}
-    plain = sphere_from_parameters(vm.sphere_measure(SCENE, rays=100).sphere_parameters)
+    plain = vm.load_scene(SCENE).integrator().sphere_options.sphere
     spheres = variants(plain)
     results = {name: vm.sphere_measure(SCENE, sphere=sphere, **settings) for name, sphere in spheres.items()}  # warm
     times = {name: [] for name in spheres}

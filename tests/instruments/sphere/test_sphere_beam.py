@@ -64,9 +64,8 @@ def test_beam_profiles_are_validated_naming_the_parameter_and_its_range():
 
 
 def test_traced_beams_are_refused_where_they_do_not_apply():
-    from virtspec_mi.instruments.sphere.geometry import sphere_from_parameters as read
 
-    scene_sphere = read(vm.sphere_measure(SCENE, rays=200, wavelengths="550").sphere_parameters)
+    scene_sphere = vm.mitsuba().load_file(SCENE).integrator().sphere_options.sphere
     traced = replace(scene_sphere, beam_profile="shape=ellipse width=4 height=4")
     with pytest.raises(ValueError, match="beam_profile traces a collimated beam"):
         vm.sphere_measure(SCENE, rays=200, wavelengths="550", sphere=traced, beam="conical")
@@ -127,9 +126,8 @@ def test_a_beam_within_the_specimen_reads_a_lambertian_as_the_point_does():
 
 
 def test_a_sphere_reading_reports_its_beam_spill(tmp_path):
-    from virtspec_mi.instruments.sphere.geometry import sphere_from_parameters as read
 
-    scene_sphere = read(vm.sphere_measure(SCENE, rays=200, wavelengths="550").sphere_parameters)
+    scene_sphere = vm.mitsuba().load_file(SCENE).integrator().sphere_options.sphere
     traced = replace(scene_sphere, beam_profile="shape=rectangle width=30 height=6 divergence=1")
     result = vm.sphere_measure(SCENE, rays=4000, wavelengths="550", sphere=traced)
     spill = result.counts["sample"]["beam_spill"]

@@ -13,7 +13,6 @@ import pytest
 
 import virtspec_mi as vm
 from virtspec_mi.instruments.sphere.budget import features_of, ideal_sphere, without
-from virtspec_mi.instruments.sphere.geometry import sphere_from_parameters
 
 SCENE = "scenes/sphere_150mm_8d.xml"
 SETTINGS = {"rays": 4000, "wavelengths": "450, 650", "seed": 4}
@@ -25,7 +24,7 @@ def take(sphere, **options):
 
 @pytest.fixture(scope="module")
 def real():
-    base = sphere_from_parameters(vm.sphere_measure(SCENE, rays=100, wavelengths="550").sphere_parameters)
+    base = vm.mitsuba().load_file(SCENE).integrator().sphere_options.sphere
     ports = tuple(replace(p, depth=4.0, edge_reflectance=0.0, field_of_view=40.0) if p.role == "detector" else
                   replace(p, aperture=9.0, mask_reflectance=0.1) if p.role == "sample" else p for p in base.ports)
     return base, replace(base, ports=ports, beam_profile="shape=rectangle width=20 height=8 divergence=1",

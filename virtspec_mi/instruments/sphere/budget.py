@@ -16,7 +16,7 @@ and their random numbers, so most of their noise cancels in the point difference
   that holds one) and holder masks (removed);
 - ``beam``: the beam's size, divergence and spill (the beam profile removed: the
   bench's pencil at the specimen's centre);
-- ``wall``: the wall's mirror share (set to 0: Lambertian);
+- ``wall``: the wall's mirror share or its BSDF (removed: Lambertian of ρw);
 - ``field_of_view``: the detector's field of view (the whole hemisphere);
 - ``substitution`` (a substitution reflectance reading of a sphere with a reference
   port): the ideal sphere (every feature above removed) read by substitution minus the
@@ -61,7 +61,7 @@ SOURCES: dict[str, str] = {
     "port_walls": "port walls (edges) of ports that hold nothing",
     "holder": "holders: a recessed or proud specimen or standard, holder masks",
     "beam": "the beam's size, divergence and spill",
-    "wall": "the wall's mirror share (non-Lambertian)",
+    "wall": "the wall's mirror share or BSDF (non-Lambertian)",
     "field_of_view": "the detector's field of view",
     "substitution": "substitution error (ideal sphere: substitution - comparison)",
     "ports": "the ideal sphere's own error (port losses, first landing)",
@@ -95,7 +95,7 @@ def without(sphere: Sphere, feature: str, measurement: str = "reflectance") -> S
     if feature == "beam":
         return replace(sphere, beam_profile=None)
     if feature == "wall":
-        return replace(sphere, wall_specular=0.0)
+        return replace(sphere, wall_specular=0.0, wall_bsdf=None)
     holders = _holder_roles(measurement)
     return replace(sphere, ports=tuple(_port_without(p, feature, holders) for p in sphere.ports))
 

@@ -44,6 +44,7 @@ sphere theory, Applied Optics 6, 125–128.
 
 from __future__ import annotations
 
+import json
 import math
 from dataclasses import dataclass, field
 from typing import Any, Sequence
@@ -245,6 +246,10 @@ class Sphere:
     wall_specular
         The mirror share of the wall's and the baffle's reflection, 0 … 1 (default 0:
         Lambertian).
+    wall_bsdf
+        Optional Mitsuba BSDF plugin dict (or its JSON text) of the wall and the baffle,
+        e.g. ``{"type": "roughplastic", "alpha": 0.3, "diffuse_reflectance": 0.97}``:
+        sampled at each wall event in place of ρw and the Lambertian (its own spectrum).
     """
 
     diameter: float
@@ -254,11 +259,13 @@ class Sphere:
     name: str = field(default="", compare=False)
     beam_profile: Any = None
     wall_specular: float = 0.0
+    wall_bsdf: Any = None
 
     def _identity(self) -> tuple:
         wall = self.wall_reflectance
         return (self.diameter, wall if isinstance(wall, float) else tuple(map(tuple, wall)), self.baffle,
-                tuple(sorted(self.ports, key=lambda port: port.name)), self.beam_profile, self.wall_specular)
+                tuple(sorted(self.ports, key=lambda port: port.name)), self.beam_profile, self.wall_specular,
+                None if self.wall_bsdf is None else json.dumps(self.wall_bsdf, sort_keys=True))
 
     def __eq__(self, other: object) -> bool:
         return isinstance(other, Sphere) and self._identity() == other._identity()
@@ -292,6 +299,7 @@ class Sphere:
             raise ValueError(f"wall_specular must satisfy 0 <= wall_specular <= 1 (the mirror share of the wall's "
                              f"reflection; 0: Lambertian; got {specular:g})")
         object.__setattr__(self, "wall_specular", specular)
+        object.__setattr__(self, "wall_bsdf", _wall_bsdf(self.wall_bsdf, specular))
         radius = diameter / 2.0
         names = [p.name for p in ports]
         if len(set(names)) != len(names):
@@ -439,6 +447,8 @@ class Sphere:
             out["beam_profile"] = self.beam_profile.text()
         if self.wall_specular:
             out["wall_specular"] = self.wall_specular
+        if self.wall_bsdf is not None:
+            out["wall_bsdf"] = json.dumps(self.wall_bsdf, sort_keys=True)
         return out
 
     def layout(self, holders: Sequence[Any], caps: Sequence[int | None], max_bounces: int,
@@ -463,7 +473,8 @@ class Sphere:
                     tuple(float(v) for v in self.port_plane_centre(port)))
 
         plain = all(p.depth == 0.0 and p.shape == "circle" and p.aperture is None and p.field_of_view is None
-                    and p.proud == 0.0 for p in self.ports) and self.beam_profile is None and self.wall_specular == 0.0
+                    and p.proud == 0.0 for p in self.ports) and self.beam_profile is None and self.wall_specular == 0.0 \
+            and self.wall_bsdf is None
         if not plain:
             return real_layout(self, holders, caps, max_bounces, grid)
         return SphereLayout(
@@ -488,8 +499,32 @@ class Sphere:
         extras = "".join(f"; port {p.name}:{extras_text(p)}" for p in self.ports if extras_text(p))
         beam = "" if self.beam_profile is None else f"; beam {self.beam_profile.text()}"
         beam += f"; wall specular share {self.wall_specular:g}" if self.wall_specular else ""
+        beam += f"; wall BSDF {json.dumps(self.wall_bsdf, sort_keys=True)}" if self.wall_bsdf is not None else ""
         return (f"sphere {self.diameter:g} mm, wall reflectance {rho_text}; ports: {ports or 'none'}{baffle}"
                 f"{extras}{beam}")
+
+
+def _wall_bsdf(value: Any, specular: float) -> dict | None:
+    """The wall's BSDF: ``None``, or a Mitsuba plugin dict (or its JSON text) with a ``type``; not with a mirror share."""
+
+    if value is None:
+        return None
+    if isinstance(value, str):
+        try:
+            value = json.loads(value)
+        except ValueError as error:
+            raise ValueError(f"wall_bsdf must be a Mitsuba BSDF plugin dict or its JSON text, e.g. "
+                             f"'{{\"type\": \"roughplastic\", \"alpha\": 0.3}}' ({error})") from None
+    if not isinstance(value, dict) or not isinstance(value.get("type"), str):
+        raise ValueError(f"wall_bsdf must be a Mitsuba BSDF plugin dict with a 'type' (got {value!r})")
+    try:
+        json.dumps(value)
+    except TypeError:
+        raise ValueError("wall_bsdf must hold plain values (numbers, text, lists, dicts): it is recorded with the "
+                         "reading") from None
+    if specular:
+        raise ValueError("wall_bsdf replaces the wall's Lambertian + mirror model: give wall_specular = 0 with it")
+    return value
 
 
 def parse_wall_reflectance(value: Any) -> float | tuple[tuple[float, ...], tuple[float, ...]]:
@@ -581,7 +616,8 @@ def parse_baffle(text: str) -> Baffle:
         raise ValueError(f"baffle: {error}") from None
 
 
-SPHERE_PARAMETERS: tuple[str, ...] = ("diameter", "wall_reflectance", "baffle", "beam_profile", "wall_specular")
+SPHERE_PARAMETERS: tuple[str, ...] = ("diameter", "wall_reflectance", "baffle", "beam_profile", "wall_specular",
+                                      "wall_bsdf")
 """Parameters of a sphere description besides its ``port_<name>`` entries."""
 
 
@@ -610,4 +646,6 @@ def sphere_from_parameters(values: Any) -> Sphere:
         wall["beam_profile"] = str(values.get("beam_profile"))
     if "wall_specular" in values:
         wall["wall_specular"] = values.get("wall_specular")
+    if "wall_bsdf" in values and values.get("wall_bsdf"):
+        wall["wall_bsdf"] = str(values.get("wall_bsdf"))
     return Sphere(values.get("diameter"), ports=ports, baffle=baffle, **wall)

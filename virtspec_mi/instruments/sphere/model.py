@@ -142,9 +142,9 @@ def theory_inputs(sphere: Sphere, options: ReadingMode, wavelengths: Sequence[fl
     """
 
     transmittance = options.measurement == "transmittance"
-    if sphere.wall_specular:
-        raise ValueError(f"the sphere theory does not model a wall with a mirror share (wall_specular "
-                         f"{sphere.wall_specular:g}): its light does not land uniformly")
+    if sphere.wall_specular or sphere.wall_bsdf is not None:
+        raise ValueError("the sphere theory does not model a non-Lambertian wall (a mirror share, wall_specular "
+                         f"{sphere.wall_specular:g}, or a wall_bsdf): its light does not land uniformly")
     beam_role = "entrance" if transmittance else "sample"
     beam_port = sphere.port(beam_role)
     if beam_port is None:

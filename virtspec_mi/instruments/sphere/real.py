@@ -53,7 +53,7 @@ from virtspec_mi.kernel.hooks import ChunkRays
 from virtspec_mi.kernel.rng import GOLDEN, hash32, to_unit
 from virtspec_mi.kernel.walk import CAPPED_COMPONENT
 from virtspec_mi.instruments.sphere.walk import (_ACTIVE, _LENGTH2, _ROUNDED, _VIOLATION, WALK_BASE, SphereFate,
-                                                 SphereLayout, _vec)
+                                                 SphereLayout, _loaded, _vec)
 
 __all__ = ["BEAM_BASE", "SPILL", "TUBE", "END", "POST", "RealSphereLayout", "real_layout", "check_traced_beam", "port_frame"]
 
@@ -128,6 +128,9 @@ class RealSphereLayout(SphereLayout):
         as their last element.
     wall_specular : float
         The mirror share s of the wall's (and the baffle's) reflection (0: Lambertian).
+    wall_bsdf : dict or None
+        A Mitsuba BSDF plugin dict sampled at each wall and baffle event (instead of ρw and
+        the Lambertian).
     posts : tuple
         Per holder: ``None``, or the post of a disk standing proud of its port (rim
         offset R cos α, proud s, the post's radius, its ρ at each of :attr:`wall`'s
@@ -142,6 +145,7 @@ class RealSphereLayout(SphereLayout):
     fovs: tuple = ()
     wall_specular: float = 0.0
     posts: tuple = ()
+    wall_bsdf: Any = None
 
     @property
     def sums(self) -> tuple[str, ...]:  # type: ignore[override]
@@ -183,6 +187,8 @@ class RealSphereLayout(SphereLayout):
     # -- the chunk: a traced beam starts every ray on its beam line -----------------------
 
     def exits(self, rays: ChunkRays) -> tuple[Any, dict[str, Any]]:
+        if self.wall_bsdf is not None:
+            _loaded(self.wall_bsdf, rays.specimen)  # loaded once, outside the walk's loop
         if self.beam is None:
             return super().exits(rays)
         import drjit as dr
@@ -372,16 +378,35 @@ class RealSphereLayout(SphereLayout):
             facing = dr.select(dr.dot(d, _vec(baffle[1])) > 0.0, -_vec(baffle[1]), _vec(baffle[1]))
             inward = dr.select(surface == 3, facing, inward)
         survives = u[0] < rho
-        fate = dr.select(diffuse & ~survives, mi.UInt32(int(SphereFate.WALL)), fate)
         local = mi.warp.square_to_cosine_hemisphere(mi.Point2f(u[1], u[2]))
         new_d = dr.normalize(mi.Frame3f(inward).to_world(local))
+        rare = state["rare"]
+        if self.wall_bsdf is not None:  # the wall's (and baffle's) own BSDF, sampled about the inward normal
+            coated = diffuse & ~on_tube & ~on_post
+            wo, w, component = dr.if_stmt(
+                (x, d, inward, coated, *u, wavelength), coated,
+                lambda x_, d_, n_, c_, u0, u1, u2, u3, lam, bsdf=_loaded(self.wall_bsdf, None): self._sample(
+                    bsdf, mi.Frame3f(n_), x_, -d_, lam, [u0, u1, u2, u3], c_),
+                lambda *_: (mi.Vector3f(0.0, 0.0, 1.0), mi.Float(0.0), mi.UInt32(0)),
+                label="sphere_wall")
+            length2 = dr.squared_norm(wo)
+            invalid = coated & ~((length2 >= _LENGTH2[0]) & (length2 <= _LENGTH2[1])) & (w > 0.0)
+            survives = dr.select(coated, (u[3] < w) & (wo.z > 0.0), survives)
+            new_d = dr.select(coated, dr.normalize(mi.Frame3f(inward).to_world(wo)), new_d)
+            exact = (w >= 0.0) & (w <= 1.0)
+            rounded = ~exact & (w >= -WEIGHT_ROUNDING) & (w <= 1.0 + WEIGHT_ROUNDING)
+            rare = rare | dr.select(coated & ~exact & ~rounded, mi.UInt32(_VIOLATION), 0) \
+                | dr.select(coated & rounded, mi.UInt32(_ROUNDED), 0)
+            fate = dr.select(invalid, mi.UInt32(int(SphereFate.INVALID)), fate)
+            fate = dr.select(coated & (component == CAPPED_COMPONENT), mi.UInt32(int(SphereFate.CAPPED)), fate)
+            survives = survives & ~invalid
+        fate = dr.select(diffuse & ~survives & (fate == _ACTIVE), mi.UInt32(int(SphereFate.WALL)), fate)
         if self.wall_specular > 0.0:  # the wall's (and baffle's) mirror share: u[3] is free at a wall event
             mirror = diffuse & ~on_tube & ~on_post & (u[3] < self.wall_specular)
             new_d = dr.select(mirror, dr.normalize(d - 2.0 * dr.dot(d, inward) * inward), new_d)
         on_sphere = x * (self.radius / dr.norm(x))
         new_p = dr.select(surface == 0, on_sphere, dr.select(on_tube | on_post, on_cylinder, x))
         walls = state["walls"] + dr.select(diffuse & survives, mi.UInt32(1), mi.UInt32(0))
-        rare = state["rare"]
         next_last = surface
 
         mask_column = len(self.tubes)
@@ -505,6 +530,7 @@ def real_layout(sphere: Any, holders: Sequence[Any], caps: Sequence[int | None],
         tubes=tuple(tubes), edges=tuple(edges), shaped=tuple(shaped), beam=beam,
         masks=tuple(masks) if any(m is not None for m in masks) else (),
         fovs=tuple(fovs) if any(f is not None for f in fovs) else (), wall_specular=float(sphere.wall_specular),
+        wall_bsdf=sphere.wall_bsdf,
         posts=tuple(posts) if any(p is not None for p in posts) else ())
 
 

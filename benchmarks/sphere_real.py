@@ -7,7 +7,8 @@ The 150 mm 8°/d sphere of ``scenes/sphere_150mm_8d.xml`` (SCI, grey Lambertian 
 standard configurations) of the plain sphere, then of the same sphere with one feature
 each — a 3 mm black detector tube, a holder mask, a 40° detector field of view, an
 elliptical detector port, a 10 % mirror share of the wall, a traced 20 × 8 mm beam with 1°
-divergence — and with all of them; then the error budget of the all-features sphere (its
+divergence, a wall BSDF (a rough specular lobe blended with a Lambertian base) — and with
+all of them (but the wall BSDF); then the error budget of the all-features sphere (its
 nine readings). Warm (one untimed run each first), best of K, the configurations
 interleaved so the busy machine's drift falls on all alike; ratio: time over the plain
 sphere's in the same round.
@@ -41,6 +42,9 @@ def variants(plain):
         "elliptical detector 14 x 10 mm": replace(plain, ports=ports("detector", radius=None, shape="ellipse",
                                                                      width=14.0, height=10.0)),
         "wall mirror share 0.1": replace(plain, wall_specular=0.1),
+        "wall BSDF (PTFE-like blend)": replace(plain, wall_bsdf={
+            "type": "blendbsdf", "weight": 0.2, "lambert": {"type": "diffuse", "reflectance": 0.98},
+            "lobe": {"type": "roughconductor", "alpha": 0.3, "material": "none", "specular_reflectance": 0.98}}),
         "traced beam 20 x 8 mm, 1 deg": replace(plain, beam_profile="shape=rectangle width=20 height=8 divergence=1"),
     }
     every = tuple(replace(p, depth=3.0, edge_reflectance=0.0, field_of_view=40.0) if p.role == "detector" else

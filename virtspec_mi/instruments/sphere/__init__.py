@@ -69,7 +69,7 @@ from virtspec_mi.results.base import plain_data
 from virtspec_mi.settings import Options, Settings, one_of, option, share, true_or_false, whole_number
 
 __all__ = ["MEASUREMENTS", "SPECULAR", "METHODS", "SphereOptions", "IntegratingSphere", "configurations",
-           "SphereCorrection", "Sphere", "Port", "Baffle", "SphereResult"]
+           "SphereCorrection", "Sphere", "Port", "Baffle", "BeamProfile", "SphereResult"]
 
 MEASUREMENTS: dict[str, str] = {
     "reflectance": "8/d-type reflectance: the specimen in the sample port, lit through the entrance port",

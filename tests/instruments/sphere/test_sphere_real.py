@@ -59,17 +59,22 @@ def test_knife_edges_take_the_plain_walk():
     assert np.array_equal(counts, reference) and sums == reference_sums
 
 
-@pytest.mark.parametrize("case", ["shallow_sample_port", "shallow_detector", "round_ellipse"])
+@pytest.mark.parametrize("case", ["shallow_sample_port", "shallow_detector", "round_ellipse", "hemisphere_view",
+                                  "no_mirror"])
 def test_real_walk_reproduces_todays_counts_in_its_limits(case):
-    """The real walk itself (cylinders, non-circular caps) in the limits where it must be today's walk: a port wall
-    1 nm deep (the ray enters its cylinder at the rim plane and leaves it at once), an ellipse of equal axes; the
-    same random numbers, so the very same counts, fate by fate."""
+    """The real walk itself (cylinders, non-circular caps, a field of view, the mirror share) in the limits where it
+    must be today's walk: a port wall 1 nm deep (the ray enters its cylinder at the rim plane and leaves it at once),
+    an ellipse of equal axes, a field of view a hair under the hemisphere (every ray reaching the cap moves outwards
+    across its rim plane), a mirror share of 1e-12 (below the smallest uniform number but 0); the same random numbers,
+    so the very same counts, fate by fate."""
 
     real = {"shallow_sample_port": sphere(Port("sample", "sample", 180, 0, 12.7, depth=1e-6, edge_reflectance=0.0)),
             "shallow_detector": sphere(detector=Port("detector", "detector", 90, 90, 6.35, depth=1e-6,
                                                      edge_reflectance=0.0)),
             "round_ellipse": sphere(detector=Port("detector", "detector", 90, 90, shape="ellipse", width=12.7,
-                                                  height=12.7))}[case]
+                                                  height=12.7)),
+            "hemisphere_view": sphere(detector=Port("detector", "detector", 90, 90, 6.35, field_of_view=89.999999)),
+            "no_mirror": sphere(wall_specular=1e-12)}[case]
     counts, sums, layout = walk(real, 20000)
     assert type(layout) is RealSphereLayout
     reference, reference_sums, _ = walk(sphere(), 20000)

@@ -62,12 +62,14 @@ from virtspec_mi.instruments.base import Instrument, reading_grid, reading_label
 from virtspec_mi.instruments.command import Command, FigureFlag, Session
 from virtspec_mi.instruments.sphere.walk import FATES, HEMISPHERES, SPECIMEN, Holder, SphereFate, holder_frame
 from virtspec_mi.instruments.sphere.result import CONFIGURATIONS, SphereResult
+from virtspec_mi.instruments.sphere.beam import BeamProfile
+from virtspec_mi.instruments.sphere.real import check_traced_beam
 from virtspec_mi.base.checks import number, shown_value
 from virtspec_mi.results.base import plain_data
 from virtspec_mi.settings import Options, Settings, one_of, option, share, true_or_false, whole_number
 
 __all__ = ["MEASUREMENTS", "SPECULAR", "METHODS", "SphereOptions", "IntegratingSphere", "configurations",
-           "SphereCorrection", "Sphere", "Port", "Baffle", "SphereResult"]
+           "SphereCorrection", "Sphere", "Port", "Baffle", "BeamProfile", "SphereResult"]
 
 MEASUREMENTS: dict[str, str] = {
     "reflectance": "8/d-type reflectance: the specimen in the sample port, lit through the entrance port",
@@ -206,6 +208,10 @@ def _check_beam(sphere: Sphere, options: SphereOptions, settings: Settings, fram
 
     if settings.beam == "diffuse":
         raise ValueError("beam must be 'collimated' or 'conical' for a sphere reading (got 'diffuse')")
+    if sphere.beam_profile is not None:
+        theta, phi = math.radians(settings.theta_i), math.radians(settings.phi_i)
+        check_traced_beam(sphere, options.measurement, settings.beam, np.array(
+            [math.sin(theta) * math.cos(phi), math.sin(theta) * math.sin(phi), math.cos(theta)]), frame)
     if options.measurement == "transmittance":
         return
     entrance = sphere.port("entrance")
@@ -259,12 +265,16 @@ class SphereCorrection(Options):
     collimated_transmittance: float | None = option(
         None, _fraction("collimated_transmittance"), "the unscattered part of a transmittance reading, 0 ... 1 "
         "(default 0); implies --correct")
+    budget: bool = option(False, true_or_false("budget"),
+                          "also print the error budget: reading - hemispherical split into its sources (port walls, "
+                          "holder, beam, wall, field of view, substitution, the ideal sphere's ports, interactions), "
+                          "each a certified difference of two readings of the same rays (--json: budget)")
 
     def assumptions(self) -> dict[str, float] | None:
         """What the correction assumes (the values given), or ``None`` when no correction is asked for."""
 
         given = {name: getattr(self, name) for name in self.names()
-                 if name != "correct" and getattr(self, name) is not None}
+                 if name not in ("correct", "budget") and getattr(self, name) is not None}
         return given if (self.correct or given) else None
 
 
@@ -279,6 +289,10 @@ def _respond_sphere(session: Session) -> int:
         text += "\n" + _correction_table(result, corrected, interval, assumptions)
         data = {**result.as_dict(), "corrected": plain_data(corrected), "corrected_interval": plain_data(interval),
                 "correction": assumptions}
+    if session.flags.budget:
+        budget = result.budget(lambda sphere, **options: session.take(sphere=sphere, **options))
+        text += "\n" + budget.summary()
+        data = {**(data or result.as_dict()), "budget": budget.as_dict()}
     return session.report(result, text, session.draw(result), data)
 
 

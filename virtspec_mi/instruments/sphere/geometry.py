@@ -44,6 +44,7 @@ sphere theory, Applied Optics 6, 125–128.
 
 from __future__ import annotations
 
+import json
 import math
 from dataclasses import dataclass, field
 from typing import Any, Sequence
@@ -100,16 +101,56 @@ class Port:
     polar, azimuth
         Direction of the port centre from the sphere centre, degrees (polar in [0, 180]).
     radius
-        Radius of the opening, mm (> 0, less than the sphere radius).
+        Radius of the opening, mm (> 0, less than the sphere radius); for an ellipse or a
+        rectangle it is not given (it becomes the circumscribed radius).
+    depth
+        Thickness of the port wall, mm (≥ 0, default 0: a knife edge): a cylinder of
+        radius r from the rim plane outwards; what sits in the port sits at its outer end
+        (:mod:`virtspec_mi.instruments.sphere.ports`).
+    edge_reflectance
+        Reflectance of that cylinder wall, 0 … 1 (Lambertian; default ``None``: the
+        sphere's wall reflectance ρw(λ)).
+    shape
+        ``"circle"`` (default), ``"ellipse"`` or ``"rectangle"`` (knife edges only).
+    width, height
+        Full sizes of an elliptical or rectangular opening along the port's in-plane axes
+        e₁, e₂ (mm, > 0; :func:`~virtspec_mi.instruments.sphere.ports.port_frame`).
+    aperture
+        A holder mask (a clip) in front of what the port holds: a flat annulus from this
+        radius to the port's, mm (0 < aperture < radius; default ``None``: no mask).
+    mask_reflectance
+        The mask's Lambertian reflectance towards the sphere, 0 … 1 (default ``None``:
+        the sphere's wall reflectance ρw(λ)).
+    field_of_view
+        A detector's field of view: the half-angle (degrees, 0 < field_of_view <= 90) of
+        the cone about the port's axis within which a ray reaching the detector counts;
+        one outside it is lost (absorbed by the detector's housing). 90 (or ``None``,
+        the default): the whole hemisphere, today's detector.
+    proud
+        How far what the port holds stands into the sphere, mm (≥ 0, less than R cos α;
+        default 0: in the rim plane): the specimen (or standard) on a post of its own
+        radius whose side reflects ``edge_reflectance`` (Lambertian).
     """
 
     name: str
     role: str
     polar: float
     azimuth: float
-    radius: float
+    radius: float | None = None
+    depth: float = 0.0
+    edge_reflectance: float | None = None
+    shape: str = "circle"
+    width: float | None = None
+    height: float | None = None
+    aperture: float | None = None
+    mask_reflectance: float | None = None
+    field_of_view: float | None = None
+    proud: float = 0.0
 
     def __post_init__(self) -> None:
+        from virtspec_mi.instruments.sphere.ports import check_port_extras
+
+        check_port_extras(self)
         if not isinstance(self.name, str) or not self.name or any(c.isspace() for c in self.name):
             raise ValueError(f"port name must be a non-empty string without spaces (got {self.name!r})")
         if not isinstance(self.role, str) or self.role not in ROLES:
@@ -119,6 +160,8 @@ class Port:
             raise ValueError(f"port {self.name!r}: polar must satisfy 0 <= polar <= 180 degrees (got {polar:g})")
         object.__setattr__(self, "polar", polar)
         object.__setattr__(self, "azimuth", _finite(f"port {self.name!r} azimuth", self.azimuth))
+        if self.radius is None:
+            raise ValueError(f"port {self.name!r}: radius (mm, > 0) is required for a circular port")
         radius = _finite(f"port {self.name!r} radius", self.radius)
         if not radius > 0.0:
             raise ValueError(f"port {self.name!r}: radius must be > 0 mm (got {radius:g})")
@@ -194,7 +237,19 @@ class Sphere:
         The ports (:class:`Port`), names unique, caps not overlapping.
     baffle
         Optional :class:`Baffle` (or its text ``"centre=x,y,z normal=x,y,z radius=r"``),
-        wholly inside the sphere and clear of the holder ports' planes.
+        wholly inside the sphere and clear of the holder ports' planes (and of the rim plane
+        of every port with a wall).
+    beam_profile
+        Optional :class:`~virtspec_mi.instruments.sphere.beam.BeamProfile` (or its text
+        ``"shape=rectangle width=7 height=4 divergence=0.5"``): a traced beam; ``None`` (and
+        a point without divergence) is the bench's pencil beam.
+    wall_specular
+        The mirror share of the wall's and the baffle's reflection, 0 … 1 (default 0:
+        Lambertian).
+    wall_bsdf
+        Optional Mitsuba BSDF plugin dict (or its JSON text) of the wall and the baffle,
+        e.g. ``{"type": "roughplastic", "alpha": 0.3, "diffuse_reflectance": 0.97}``:
+        sampled at each wall event in place of ρw and the Lambertian (its own spectrum).
     """
 
     diameter: float
@@ -202,11 +257,15 @@ class Sphere:
     ports: tuple[Port, ...] = ()
     baffle: Baffle | None = None
     name: str = field(default="", compare=False)
+    beam_profile: Any = None
+    wall_specular: float = 0.0
+    wall_bsdf: Any = None
 
     def _identity(self) -> tuple:
         wall = self.wall_reflectance
         return (self.diameter, wall if isinstance(wall, float) else tuple(map(tuple, wall)), self.baffle,
-                tuple(sorted(self.ports, key=lambda port: port.name)))
+                tuple(sorted(self.ports, key=lambda port: port.name)), self.beam_profile, self.wall_specular,
+                None if self.wall_bsdf is None else json.dumps(self.wall_bsdf, sort_keys=True))
 
     def __eq__(self, other: object) -> bool:
         return isinstance(other, Sphere) and self._identity() == other._identity()
@@ -232,6 +291,15 @@ class Sphere:
         elif self.baffle is not None and not isinstance(self.baffle, Baffle):
             raise ValueError("baffle must be a virtspec_mi.Baffle, its text 'centre=x,y,z normal=x,y,z radius=r' "
                              f"(mm) or None (got {type(self.baffle).__name__} {self.baffle!r})")
+        from virtspec_mi.instruments.sphere.beam import beam_profile_of
+
+        object.__setattr__(self, "beam_profile", beam_profile_of(self.beam_profile))
+        specular = _finite("wall_specular", self.wall_specular)
+        if not 0.0 <= specular <= 1.0:
+            raise ValueError(f"wall_specular must satisfy 0 <= wall_specular <= 1 (the mirror share of the wall's "
+                             f"reflection; 0: Lambertian; got {specular:g})")
+        object.__setattr__(self, "wall_specular", specular)
+        object.__setattr__(self, "wall_bsdf", _wall_bsdf(self.wall_bsdf, specular))
         radius = diameter / 2.0
         names = [p.name for p in ports]
         if len(set(names)) != len(names):
@@ -247,6 +315,14 @@ class Sphere:
                     raise ValueError(f"ports {a.name!r} and {b.name!r} overlap: their centres are "
                                      f"{math.degrees(gap):.3f} deg apart, their caps' half-angles add up to "
                                      f"{math.degrees(a.half_angle(radius) + b.half_angle(radius)):.3f} deg")
+        for port in ports:
+            if port.proud and not port.proud < radius * port.cos_half_angle(radius):
+                raise ValueError(f"port {port.name!r}: proud must satisfy 0 <= proud < "
+                                 f"{radius * port.cos_half_angle(radius):g} mm (the rim plane's distance from the "
+                                 f"centre; got {port.proud:g})")
+            if port.shape != "circle" and port.role in ("sample", "reference"):
+                raise ValueError(f"port {port.name!r}: role {port.role} needs shape circle (a specimen or a standard "
+                                 f"sits in it; a non-circular rim is not planar), got shape {port.shape}")
         for role in ("sample", "entrance", "reference", "specular"):
             if sum(p.role == role for p in ports) > 1:
                 raise ValueError(f"ports: at most one port may have role {role!r}")
@@ -254,9 +330,9 @@ class Sphere:
             raise ValueError(f"baffle must lie inside the sphere: its rim reaches "
                              f"{self.baffle.farthest_rim_distance():g} mm from the centre (radius {radius:g} mm)")
         for port in ports if self.baffle is not None else ():
-            plane = radius * port.cos_half_angle(radius)
+            plane = radius * port.cos_half_angle(radius) - port.proud
             reach = self.baffle.reach(port.axis)
-            if port.role in HOLDER_ROLES and not reach < plane:
+            if (port.role in HOLDER_ROLES or port.depth > 0.0) and not reach < plane:
                 raise ValueError(f"baffle must not cross the plane of port {port.name!r} (role {port.role}: where the "
                                  f"specimen or a standard sits): its rim reaches {reach:g} mm along the port's axis, "
                                  f"the plane lies at {plane:g} mm from the centre; move or shrink the baffle")
@@ -276,6 +352,10 @@ class Sphere:
         """Exact share of the sphere surface of a port's cap: h/(2R) = (1 − cos α)/2."""
 
         port = self._named(port)
+        if port.shape != "circle":
+            from virtspec_mi.instruments.sphere.ports import shaped_fraction
+
+            return shaped_fraction(port, self.radius)
         ratio = port.radius / self.radius
         return ratio * ratio / (2.0 * (1.0 + port.cos_half_angle(self.radius)))  # (1 − cos α)/2, no cancellation
 
@@ -283,6 +363,10 @@ class Sphere:
         """iadpython's convention: the projected disk, r²/(4R²)."""
 
         port = self._named(port)
+        if port.shape != "circle":
+            from virtspec_mi.instruments.sphere.ports import shaped_area
+
+            return shaped_area(port) / (4.0 * math.pi * self.radius ** 2)
         return port.radius ** 2 / (4.0 * self.radius ** 2)
 
     @property
@@ -328,7 +412,12 @@ class Sphere:
 
         point = np.asarray(point, float)
         for port in self.ports:
-            if point @ port.axis >= self.radius * port.cos_half_angle(self.radius):
+            if port.shape != "circle":
+                from virtspec_mi.instruments.sphere.ports import contains
+
+                if contains(port, point, self.radius):
+                    return port
+            elif point @ port.axis >= self.radius * port.cos_half_angle(self.radius):
                 return port
         return None
 
@@ -345,13 +434,21 @@ class Sphere:
             "wall_reflectance": rho if isinstance(rho, float) else ", ".join(
                 f"{w!r}:{v!r}" for w, v in zip(*rho)),
         }
+        from virtspec_mi.instruments.sphere.ports import extras_text
+
         for port in self.ports:
             out[f"port_{port.name}"] = (f"role={port.role} polar={port.polar!r} azimuth={port.azimuth!r} "
-                                        f"radius={port.radius!r}")
+                                        f"radius={port.radius!r}" + extras_text(port))
         if self.baffle is not None:
             b = self.baffle
             out["baffle"] = (f"centre={','.join(repr(v) for v in b.centre)} normal={','.join(repr(v) for v in b.normal)} "
                              f"radius={b.radius!r}")
+        if self.beam_profile is not None:
+            out["beam_profile"] = self.beam_profile.text()
+        if self.wall_specular:
+            out["wall_specular"] = self.wall_specular
+        if self.wall_bsdf is not None:
+            out["wall_bsdf"] = json.dumps(self.wall_bsdf, sort_keys=True)
         return out
 
     def layout(self, holders: Sequence[Any], caps: Sequence[int | None], max_bounces: int,
@@ -366,6 +463,7 @@ class Sphere:
         """
 
         from virtspec_mi.instruments.sphere.walk import SphereLayout
+        from virtspec_mi.instruments.sphere.real import real_layout
 
         radius = self.radius
         grid = np.unique(np.asarray(wavelengths, dtype=np.float64))
@@ -374,6 +472,11 @@ class Sphere:
             return (tuple(float(v) for v in port.axis), radius * port.cos_half_angle(radius),
                     tuple(float(v) for v in self.port_plane_centre(port)))
 
+        plain = all(p.depth == 0.0 and p.shape == "circle" and p.aperture is None and p.field_of_view is None
+                    and p.proud == 0.0 for p in self.ports) and self.beam_profile is None and self.wall_specular == 0.0 \
+            and self.wall_bsdf is None
+        if not plain:
+            return real_layout(self, holders, caps, max_bounces, grid)
         return SphereLayout(
             radius=radius, ports=len(self.ports),
             caps=tuple((tuple(float(v) for v in p.axis), radius * p.cos_half_angle(radius), int(action))
@@ -391,7 +494,37 @@ class Sphere:
         ports = "; ".join(f"{p.name} ({p.role}, r = {p.radius:g} mm at {p.polar:g}/{p.azimuth:g} deg, "
                           f"f = {self.cap_fraction(p):.5f})" for p in self.ports)
         baffle = "" if self.baffle is None else f"; baffle r = {self.baffle.radius:g} mm"
-        return f"sphere {self.diameter:g} mm, wall reflectance {rho_text}; ports: {ports or 'none'}{baffle}"
+        from virtspec_mi.instruments.sphere.ports import extras_text
+
+        extras = "".join(f"; port {p.name}:{extras_text(p)}" for p in self.ports if extras_text(p))
+        beam = "" if self.beam_profile is None else f"; beam {self.beam_profile.text()}"
+        beam += f"; wall specular share {self.wall_specular:g}" if self.wall_specular else ""
+        beam += f"; wall BSDF {json.dumps(self.wall_bsdf, sort_keys=True)}" if self.wall_bsdf is not None else ""
+        return (f"sphere {self.diameter:g} mm, wall reflectance {rho_text}; ports: {ports or 'none'}{baffle}"
+                f"{extras}{beam}")
+
+
+def _wall_bsdf(value: Any, specular: float) -> dict | None:
+    """The wall's BSDF: ``None``, or a Mitsuba plugin dict (or its JSON text) with a ``type``; not with a mirror share."""
+
+    if value is None:
+        return None
+    if isinstance(value, str):
+        try:
+            value = json.loads(value)
+        except ValueError as error:
+            raise ValueError(f"wall_bsdf must be a Mitsuba BSDF plugin dict or its JSON text, e.g. "
+                             f"'{{\"type\": \"roughplastic\", \"alpha\": 0.3}}' ({error})") from None
+    if not isinstance(value, dict) or not isinstance(value.get("type"), str):
+        raise ValueError(f"wall_bsdf must be a Mitsuba BSDF plugin dict with a 'type' (got {value!r})")
+    try:
+        json.dumps(value)
+    except TypeError:
+        raise ValueError("wall_bsdf must hold plain values (numbers, text, lists, dicts): it is recorded with the "
+                         "reading") from None
+    if specular:
+        raise ValueError("wall_bsdf replaces the wall's Lambertian + mirror model: give wall_specular = 0 with it")
+    return value
 
 
 def parse_wall_reflectance(value: Any) -> float | tuple[tuple[float, ...], tuple[float, ...]]:
@@ -447,13 +580,22 @@ def _fields(text: str, name: str, allowed: tuple[str, ...]) -> dict[str, str]:
 def parse_port(name: str, text: str) -> Port:
     """A port from its XML string, e.g. ``"role=detector polar=90 azimuth=90 radius=6.35"``."""
 
-    items = _fields(text, f"port {name!r}", ("role", "polar", "azimuth", "radius"))
-    missing = [k for k in ("role", "polar", "radius") if k not in items]
+    from virtspec_mi.instruments.sphere.ports import EXTRA_KEYS
+
+    items = _fields(text, f"port {name!r}", ("role", "polar", "azimuth", "radius", *EXTRA_KEYS))
+    shaped = items.get("shape", "circle") != "circle"
+    missing = [k for k in ("role", "polar", *(() if shaped else ("radius",))) if k not in items]
     if missing:
         raise ValueError(f"port {name!r}: missing {', '.join(missing)} (e.g. 'role=detector polar=90 radius=6.35')")
     try:
+        extras: dict[str, Any] = {k: float(items[k]) for k in ("depth", "edge_reflectance", "width", "height",
+                                                               "aperture", "mask_reflectance", "field_of_view",
+                                                               "proud")
+                                  if k in items}
+        if "shape" in items:
+            extras["shape"] = items["shape"]
         return Port(name, items["role"], float(items["polar"]), float(items.get("azimuth", 0.0)),
-                    float(items["radius"]))
+                    float(items["radius"]) if "radius" in items else None, **extras)
     except ValueError as error:
         if str(error).startswith("port"):
             raise
@@ -474,7 +616,8 @@ def parse_baffle(text: str) -> Baffle:
         raise ValueError(f"baffle: {error}") from None
 
 
-SPHERE_PARAMETERS: tuple[str, ...] = ("diameter", "wall_reflectance", "baffle")
+SPHERE_PARAMETERS: tuple[str, ...] = ("diameter", "wall_reflectance", "baffle", "beam_profile", "wall_specular",
+                                      "wall_bsdf")
 """Parameters of a sphere description besides its ``port_<name>`` entries."""
 
 
@@ -499,4 +642,10 @@ def sphere_from_parameters(values: Any) -> Sphere:
                   if key.startswith("port_"))
     baffle = parse_baffle(str(values.get("baffle"))) if "baffle" in values and values.get("baffle") else None
     wall = {"wall_reflectance": values.get("wall_reflectance")} if "wall_reflectance" in values else {}
+    if "beam_profile" in values and values.get("beam_profile"):
+        wall["beam_profile"] = str(values.get("beam_profile"))
+    if "wall_specular" in values:
+        wall["wall_specular"] = values.get("wall_specular")
+    if "wall_bsdf" in values and values.get("wall_bsdf"):
+        wall["wall_bsdf"] = str(values.get("wall_bsdf"))
     return Sphere(values.get("diameter"), ports=ports, baffle=baffle, **wall)

@@ -22,8 +22,17 @@ port_<name> : string
     One per port: ``"role=ROLE polar=DEG azimuth=DEG radius=MM"``; ROLE one of sample,
     entrance, reference, detector, specular, open; polar/azimuth of the port centre in
     sphere coordinates (centre at the origin, +z up).
+    A port string may add (:mod:`virtspec_mi.instruments.sphere.ports`): ``depth=MM``
+    (a port wall), ``edge_reflectance=R``, ``shape=ellipse|rectangle width=MM
+    height=MM`` (instead of radius), ``aperture=MM mask_reflectance=R`` (a holder mask),
+    ``field_of_view=DEG`` (a detector's cone half-angle).
 baffle : string, optional
     ``"centre=x,y,z normal=x,y,z radius=r"`` (mm, sphere coordinates).
+beam_profile : string, optional
+    ``"shape=point|ellipse|rectangle width=MM height=MM divergence=DEG"``: a traced beam
+    (:mod:`virtspec_mi.instruments.sphere.beam`).
+wall_specular : float, default 0
+    The mirror share of the wall's reflection, 0 … 1.
 measurement : string, default "reflectance"
     ``reflectance`` (specimen in the sample port) or ``transmittance`` (at the entrance port).
 specular : string, default "SCI"

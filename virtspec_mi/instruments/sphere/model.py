@@ -50,6 +50,7 @@ Goebel (1967), eq. 2 (port fractions); :mod:`virtspec_mi.instruments.sphere.theo
 
 from __future__ import annotations
 
+import math
 from typing import Any, Protocol, Sequence
 
 import numpy as np
@@ -141,6 +142,9 @@ def theory_inputs(sphere: Sphere, options: ReadingMode, wavelengths: Sequence[fl
     """
 
     transmittance = options.measurement == "transmittance"
+    if sphere.wall_specular or sphere.wall_bsdf is not None:
+        raise ValueError("the sphere theory does not model a non-Lambertian wall (a mirror share, wall_specular "
+                         f"{sphere.wall_specular:g}, or a wall_bsdf): its light does not land uniformly")
     beam_role = "entrance" if transmittance else "sample"
     beam_port = sphere.port(beam_role)
     if beam_port is None:
@@ -157,6 +161,24 @@ def theory_inputs(sphere: Sphere, options: ReadingMode, wavelengths: Sequence[fl
         if transmittance and (port.role == "specular" and options.specular == "SCI"
                               or port.role == "reference" and sphere.port("sample") is None):
             continue  # plugged with wall material: wall (as simulated)
+        plugged = not transmittance and (port.role == "specular" and options.specular == "SCI"
+                                         or port.role == "reference" and not comparison)
+        holds = port is beam_port or port.role == "reference" and comparison or port.role == "sample" and transmittance
+        if port.aperture is not None and holds:
+            raise ValueError(f"the sphere theory does not model port {port.name!r}'s holder mask (aperture "
+                             f"{port.aperture:g} mm): read the mask's effect from the simulation (SphereResult.budget)")
+        if port.proud and holds:
+            raise ValueError(f"the sphere theory does not model a specimen standing proud of port {port.name!r} "
+                             f"(proud {port.proud:g} mm): read its effect from the simulation (SphereResult.budget)")
+        if port.depth > 0.0 and not plugged:  # a port wall (virtspec_mi.instruments.sphere.ports): black walls only
+            if port.field_of_view is not None:
+                raise ValueError(f"the sphere theory does not model port {port.name!r}'s field of view behind a port "
+                                 "wall (depth > 0)")
+            cap = _deep_port(port, cap, out, holder=holds)
+        elif port.field_of_view is not None:  # Lambertian light within gamma of the axis: sin^2 gamma of it
+            share = math.sin(math.radians(port.field_of_view)) ** 2
+            out["open_fraction"] += cap * (1.0 - share)
+            cap *= share
         disk = None
         if port is beam_port:
             disk = radius
@@ -175,6 +197,29 @@ def theory_inputs(sphere: Sphere, options: ReadingMode, wavelengths: Sequence[fl
         out["method"] = options.method
         out["mode"] = options.specular
     return out
+
+
+def _deep_port(port: Any, cap: float, out: dict[str, Any], holder: bool) -> float:
+    """
+    A port of depth d > 0 in the theory: with black walls (``edge_reflectance=0``) and
+    nothing held in it, Lambertian light uniform over its rim disk (a uniformly bright
+    wall) reaches its outer end with the disk-to-disk view factor F(d, r) and is absorbed
+    otherwise, so the port counts as ``cap · F`` of its role and ``cap · (1 − F)`` open
+    (returned: the fraction of its role).
+    Anything else (a reflecting port wall, a recessed specimen or standard) the theory
+    does not model: ``ValueError``.
+    """
+
+    from virtspec_mi.instruments.sphere.ports import disk_view_factor
+
+    if holder or port.edge_reflectance != 0.0:
+        raise ValueError(f"the sphere theory does not model port {port.name!r}'s wall (depth {port.depth:g} mm"
+                         + (", a specimen or standard recessed in it" if holder else
+                            f", edge_reflectance {port.edge_reflectance if port.edge_reflectance is not None else 'rho_w'}")
+                         + "): only a black port wall (edge_reflectance=0) of a port holding nothing is modelled")
+    share = disk_view_factor(port.depth, port.radius)
+    out["open_fraction"] += cap * (1.0 - share)
+    return cap * share
 
 
 def _transmittance(inputs: dict[str, Any]) -> bool:

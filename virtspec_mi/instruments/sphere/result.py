@@ -141,6 +141,7 @@ class SphereResult(ResultBase):
         "hemispherical_transmitted": ("1", "rays the specimen transmitted at its first interaction"),
         "detected_from_upper": ("1", "detected rays the specimen had first reflected"),
         "wall_reflections": ("1", "wall (and baffle) reflections, summed over the rays"),
+        "beam_spill": ("1", "rays of a traced beam whose first surface was not the specimen (a beam profile)"),
         "wall_reflectance": ("1", "reflectance of the sphere wall"),
     }
     """
@@ -440,6 +441,17 @@ class SphereResult(ResultBase):
                                   collimated_transmittance=collimated_transmittance)
         return values.reshape(interval.shape)
 
+    def budget(self, take: Any) -> Any:
+        """
+        The error budget: reading − hemispherical split into its sources, each certified
+        (:func:`virtspec_mi.instruments.sphere.budget.sphere_budget`); ``take(sphere,
+        **options)`` reads another sphere with this reading's scene, settings, seed and N.
+        """
+
+        from virtspec_mi.instruments.sphere.budget import sphere_budget
+
+        return sphere_budget(self, take)
+
     def _check_spectrum(self, what: str) -> None:
         other = [d for d in self.reading_dims if d != "wavelength"]
         if other:
@@ -496,6 +508,11 @@ class SphereResult(ResultBase):
         fixed = [f"{name} = {float(value):g}" for name, value in self.coords.items() if not self.coord_dims(name)]
         if fixed:
             lines.append("at " + ", ".join(fixed))
+        if "beam_spill" in self.counts["sample"]:  # a traced beam (a beam profile): the rays that missed the specimen
+            spill = self.counts["sample"]["beam_spill"] / self.counts["sample"]["rays"]
+            low, high = float(np.min(spill)), float(np.max(spill))
+            lines.append("beam spill (rays whose first surface was not the specimen): "
+                         + (f"{low:.4f}" if low == high else f"{low:.4f} to {high:.4f}") + " of the sample's rays")
         labels = list(self.reading_dims)
         heads = ["lambda/nm" if d == "wavelength" else d for d in labels]
         lines.append(" ".join(f"{h:>10}" for h in heads) + "  rho_w   p_sample  p_standard   reading  [interval]"

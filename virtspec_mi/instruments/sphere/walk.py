@@ -206,6 +206,13 @@ class SphereLayout(ExitHook):
     needs_rays = True
     spectral = True
     sums = ("wall_reflections", "weight_violations", "rounded_weights")
+    start_last = 1
+    """The ``last`` surface of a walk's start (1: holder 0's plane)."""
+
+    def extra_columns(self, wavelengths: np.ndarray) -> tuple:
+        """Further per-reading values :meth:`step` takes as columns (none here; a subclass's)."""
+
+        return ()
 
     @property
     def codes(self) -> int:
@@ -304,6 +311,7 @@ class SphereLayout(ExitHook):
         rho_w = self.wall_reflectance(rays.wavelengths).astype(np.float32)
         wavelengths = rays.wavelengths.astype(np.float32)
         bsdfs = [_loaded(holder.bsdf, rays.specimen) for holder in self.holders]
+        extras = [values.astype(np.float32) for values in self.extra_columns(rays.wavelengths)]
 
         def reading_of(ray: Any) -> Any:
             return dr.zeros(mi.UInt32, width) if single else dr.gather(mi.UInt32, rays.slot, ray)
@@ -311,14 +319,16 @@ class SphereLayout(ExitHook):
         slot = dr.arange(mi.UInt32, width)
         ray = dr.gather(mi.UInt32, walking, slot)
         state = (slot, ray, reading_of(ray), dr.gather(mi.Point3f, start, ray), dr.gather(mi.Vector3f, direction, ray),
-                 dr.full(mi.UInt32, 1, width), dr.full(mi.UInt32, _ACTIVE, width), dr.zeros(mi.UInt32, width),
+                 dr.full(mi.UInt32, self.start_last, width), dr.full(mi.UInt32, _ACTIVE, width),
+                 dr.zeros(mi.UInt32, width),
                  dr.zeros(mi.UInt32, width), dr.gather(mi.UInt32, rare, ray))
 
         def body(slot, ray, reading, p, d, last, state_fate, bounces, walls, state_rare):
             at = None if single else reading
             out = self.step({"p": p, "d": d, "last": last, "fate": state_fate, "bounces": bounces, "walls": walls,
                              "rare": state_rare}, rays.ray_index(ray, at), root, rays.column(rho_w, mi.Float, at),
-                            rays.column(wavelengths, mi.Float, at), bsdfs)
+                            rays.column(wavelengths, mi.Float, at), bsdfs,
+                            *[rays.column(values, mi.Float, at) for values in extras])
             done = out["fate"] != _ACTIVE
             dr.scatter(fate_out, out["fate"], ray, done)
             dr.scatter(rare_out, out["rare"], ray, done)
@@ -331,7 +341,7 @@ class SphereLayout(ExitHook):
             return (slot, ray, reading,
                     dr.select(more, dr.gather(mi.Point3f, start, ray, more), out["p"]),
                     dr.select(more, dr.gather(mi.Vector3f, direction, ray, more), out["d"]),
-                    dr.select(more, mi.UInt32(1), out["last"]),
+                    dr.select(more, mi.UInt32(self.start_last), out["last"]),
                     dr.select(more, mi.UInt32(_ACTIVE), out["fate"]),
                     dr.select(more, mi.UInt32(0), out["bounces"]),
                     dr.select(more, mi.UInt32(0), out["walls"]),
@@ -343,8 +353,10 @@ class SphereLayout(ExitHook):
 
     # -- one step: state in → one flight and one surface event → state out --------------
 
-    def step(self, state: dict, ray_index: Any, root: Any, rho_w: Any, wavelength: Any, bsdfs: list) -> dict:
-        """One bounce of every lane still walking (``state['fate'] == ACTIVE``); ``bsdfs``: the holders'."""
+    def step(self, state: dict, ray_index: Any, root: Any, rho_w: Any, wavelength: Any, bsdfs: list,
+             *columns: Any) -> dict:
+        """One bounce of every lane still walking (``state['fate'] == ACTIVE``); ``bsdfs``: the holders'
+        (``columns``: :meth:`extra_columns` of the lanes' readings, none here)."""
 
         import drjit as dr
         import mitsuba as mi

@@ -105,11 +105,14 @@ def measure(scene: Any, *, parameters: dict[str, Any] | None = None, defines: di
     target
         A derived quantity to certify instead of a spectrum (``vm.colour(...)``,
         ``vm.band(...)``, ``vm.index(...)``, ``vm.fapar(...)``): the instrument picks the
-        wavelengths and the rays of each (Nₖ ∝ |wₖ|) for the target's tolerance at δ and
+        wavelengths and the rays of each for the target's tolerance at δ and
         returns a :class:`~virtspec_mi.applications.derived.result.DerivedResult`
         (:mod:`virtspec_mi.applications.derived`). ``wavelengths``, ``mu``, ``rays``,
-        ``bound``, ``pilot_rays``, ``pilot_delta`` and ``joint`` are then the target's to
-        decide (giving one is an error); ``parameters`` are not taken.
+        ``pilot_rays``, ``pilot_delta`` and ``joint`` are then the target's to
+        decide (giving one is an error); ``parameters`` are not taken. ``bound`` is then the
+        target's certificate: ``"betting"`` (default: sequential batches, a betting
+        confidence sequence, :mod:`virtspec_mi.applications.derived.sequential`) or
+        ``"hoeffding"`` (one batch sized by Hoeffding's bound).
 
     References
     ----------
@@ -136,6 +139,8 @@ def _measure_target(scene: LoadedScene, parameters: Any, target: Any, settings: 
 
     from virtspec_mi.applications.derived.measure import REFUSED_SETTINGS, take_target
 
+    settings = dict(settings)
+    bound = settings.pop("bound", None) or "betting"  # a target's certificate: "betting" or "hoeffding"
     given = sorted(name for name in REFUSED_SETTINGS if settings.get(name) is not None)
     if given:
         raise ValueError(f"{', '.join(given)}: a target picks its own wavelengths and rays (give its tolerance to the "
@@ -144,7 +149,7 @@ def _measure_target(scene: LoadedScene, parameters: Any, target: Any, settings: 
         raise ValueError("parameters: a target is measured at the scene's own specimen parameters (set them in the "
                          "scene or with defines)")
     resolved, = resolve("measure", settings, _scene_options(scene.bench, Settings))
-    return take_target(scene.bench, resolved, target, scene=scene.fingerprint, source=scene.source)
+    return take_target(scene.bench, resolved, target, scene=scene.fingerprint, source=scene.source, bound=bound)
 
 
 def sweep(

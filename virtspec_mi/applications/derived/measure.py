@@ -52,7 +52,7 @@ from virtspec_mi.engine.readings import trace_allocated
 from virtspec_mi.instruments.base import readings_result
 from virtspec_mi.settings import Settings
 
-__all__ = ["take_target", "plan_target", "TargetPlan", "PILOT_TOLERANCE", "PILOT_DELTA", "REFUSED_SETTINGS"]
+__all__ = ["take_target", "plan_target", "TargetPlan", "PILOT_TOLERANCE", "PILOT_DELTA", "REFUSED_SETTINGS", "BOUNDS"]
 
 PILOT_TOLERANCE: float = 0.003
 """A pilot's tolerance on each functional, as a share of its Σ|w| (about 80,000 rays per functional at PILOT_DELTA)."""
@@ -72,8 +72,11 @@ REFINED_MARGIN: float = 0.95
 REFINE_SEED_MASK: int = 0x2C1B3C6D
 """The second pilot's seed is the settings' seed XOR this (distinct from the first pilot's and the estimates')."""
 
-REFUSED_SETTINGS: tuple[str, ...] = ("wavelengths", "mu", "rays", "bound", "pilot_rays", "pilot_delta", "joint")
-"""Settings a target decides itself: giving one with a target is an error."""
+REFUSED_SETTINGS: tuple[str, ...] = ("wavelengths", "mu", "rays", "pilot_rays", "pilot_delta", "joint")
+"""Settings a target decides itself: giving one with a target is an error (``bound`` is one of :data:`BOUNDS`)."""
+
+BOUNDS: tuple[str, ...] = ("betting", "hoeffding")
+"""A target's certificate: a betting confidence sequence (:mod:`.sequential`, the default) or Hoeffding's."""
 
 
 def _fates(tally_counts: Any, quantity: str) -> np.ndarray:
@@ -135,10 +138,14 @@ class TargetPlan:
     each: float
     rays: np.ndarray
     pilot_rays: int
+    pilot_counts: tuple[np.ndarray, np.ndarray] | None = None  # (rays, counts) per grid wavelength: sizing only
 
 
-def plan_target(bench: Any, settings: Settings, target: Target) -> TargetPlan:
-    """Steps 1–3 of the module docstring (the pilot traced when the target needs one): the rays, not yet traced."""
+def plan_target(bench: Any, settings: Settings, target: Target, refine: bool = True) -> TargetPlan:
+    """
+    Steps 1–3 of the module docstring (the pilot traced when the target needs one): the rays, not yet traced
+    (``refine``: a second pilot for a costly nonlinear target).
+    """
 
     if not isinstance(target, Target):
         raise ValueError(f"target must be made by vm.colour, vm.band, vm.fapar or vm.index (got {target!r})")
@@ -158,7 +165,8 @@ def plan_target(bench: Any, settings: Settings, target: Target) -> TargetPlan:
         pilot_rays = int(first.sum())
     tolerances = np.asarray(target.tolerances(estimates, float(settings.delta)), dtype=np.float64)
     rays = allocate_jointly(weights, tolerances, each)
-    if target.needs_pilot and rays.sum() > REFINE_ABOVE * pilot_rays:
+    pilot_counts = None if estimates is None else (np.asarray(first, dtype=np.float64), counts.copy())
+    if refine and target.needs_pilot and rays.sum() > REFINE_ABOVE * pilot_rays:
         # a costly target: a second pilot of REFINE_SHARE of those rays pins the point down, so the sizing can
         # keep less in reserve (REFINED_MARGIN): its rays (counted) are few beside those it saves
         second = np.where(rays > 0, np.maximum(1, np.ceil(REFINE_SHARE * rays)), 0).astype(np.int64)
@@ -169,13 +177,25 @@ def plan_target(bench: Any, settings: Settings, target: Target) -> TargetPlan:
         tolerances = np.asarray(target.tolerances(weights @ pooled, float(settings.delta), REFINED_MARGIN),
                                 dtype=np.float64)
         rays = allocate_jointly(weights, tolerances, each)
-    return TargetPlan(target, functionals, grid, weights, tolerances, each, rays, pilot_rays)
+        pilot_counts = (np.asarray(first + second, dtype=np.float64), counts.copy())
+    return TargetPlan(target, functionals, grid, weights, tolerances, each, rays, pilot_rays, pilot_counts)
 
 
-def take_target(bench: Any, settings: Settings, target: Target, *, scene: str = "", source: dict | None = None
-                ) -> DerivedResult:
-    """Certify ``target`` on ``bench`` with ``settings`` (δ, θi, φi, beam, sampling, seed: the module docstring)."""
+def take_target(bench: Any, settings: Settings, target: Target, *, scene: str = "", source: dict | None = None,
+                bound: str = "betting") -> DerivedResult:
+    """
+    Certify ``target`` on ``bench`` with ``settings`` (δ, θi, φi, beam, sampling, seed):
+    ``bound="betting"`` (default) by sequential batches and a betting confidence sequence
+    (:mod:`.sequential`), ``bound="hoeffding"`` by the one-batch Hoeffding route of the
+    module docstring.
+    """
 
+    if bound not in BOUNDS:
+        raise ValueError(f"bound must be one of {', '.join(BOUNDS)} for a target (got {bound!r})")
+    if bound == "betting":
+        from virtspec_mi.applications.derived.sequential import take_sequential
+
+        return take_sequential(bench, settings, target, scene=scene, source=source)
     start = time.perf_counter()
     planned = plan_target(bench, settings, target)
     target, functionals, grid, weights = planned.target, planned.functionals, planned.grid, planned.weights

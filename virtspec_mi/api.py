@@ -135,9 +135,10 @@ def measure(scene: Any, *, parameters: dict[str, Any] | None = None, defines: di
 
 
 def _measure_target(scene: LoadedScene, parameters: Any, target: Any, settings: dict[str, Any]) -> Any:
-    """:func:`measure` of a derived quantity (:func:`virtspec_mi.applications.derived.measure.take_target`)."""
+    """:func:`measure` of a derived quantity (:func:`virtspec_mi.applications.derived.sequential.certify_target`)."""
 
-    from virtspec_mi.applications.derived.measure import REFUSED_SETTINGS, take_target
+    from virtspec_mi.applications.derived.measure import REFUSED_SETTINGS
+    from virtspec_mi.applications.derived.sequential import certify_target
 
     settings = dict(settings)
     bound = settings.pop("bound", None) or "betting"  # a target's certificate: "betting" or "hoeffding"
@@ -149,7 +150,7 @@ def _measure_target(scene: LoadedScene, parameters: Any, target: Any, settings: 
         raise ValueError("parameters: a target is measured at the scene's own specimen parameters (set them in the "
                          "scene or with defines)")
     resolved, = resolve("measure", settings, _scene_options(scene.bench, Settings))
-    return take_target(scene.bench, resolved, target, scene=scene.fingerprint, source=scene.source, bound=bound)
+    return certify_target(scene.bench, resolved, target, scene=scene.fingerprint, source=scene.source, bound=bound)
 
 
 def sweep(

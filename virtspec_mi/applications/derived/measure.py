@@ -52,7 +52,7 @@ from virtspec_mi.engine.readings import trace_allocated
 from virtspec_mi.instruments.base import readings_result
 from virtspec_mi.settings import Settings
 
-__all__ = ["take_target", "plan_target", "TargetPlan", "PILOT_TOLERANCE", "PILOT_DELTA", "REFUSED_SETTINGS", "BOUNDS"]
+__all__ = ["take_target", "plan_target", "TargetPlan", "PILOT_TOLERANCE", "PILOT_DELTA", "REFUSED_SETTINGS"]
 
 PILOT_TOLERANCE: float = 0.003
 """A pilot's tolerance on each functional, as a share of its Σ|w| (about 80,000 rays per functional at PILOT_DELTA)."""
@@ -73,10 +73,7 @@ REFINE_SEED_MASK: int = 0x2C1B3C6D
 """The second pilot's seed is the settings' seed XOR this (distinct from the first pilot's and the estimates')."""
 
 REFUSED_SETTINGS: tuple[str, ...] = ("wavelengths", "mu", "rays", "pilot_rays", "pilot_delta", "joint")
-"""Settings a target decides itself: giving one with a target is an error (``bound`` is one of :data:`BOUNDS`)."""
-
-BOUNDS: tuple[str, ...] = ("betting", "hoeffding")
-"""A target's certificate: a betting confidence sequence (:mod:`.sequential`, the default) or Hoeffding's."""
+"""Settings a target decides itself: giving one with a target is an error (``bound``: :data:`.sequential.BOUNDS`)."""
 
 
 def _fates(tally_counts: Any, quantity: str) -> np.ndarray:
@@ -181,21 +178,14 @@ def plan_target(bench: Any, settings: Settings, target: Target, refine: bool = T
     return TargetPlan(target, functionals, grid, weights, tolerances, each, rays, pilot_rays, pilot_counts)
 
 
-def take_target(bench: Any, settings: Settings, target: Target, *, scene: str = "", source: dict | None = None,
-                bound: str = "betting") -> DerivedResult:
+def take_target(bench: Any, settings: Settings, target: Target, *, scene: str = "", source: dict | None = None
+                ) -> DerivedResult:
     """
-    Certify ``target`` on ``bench`` with ``settings`` (δ, θi, φi, beam, sampling, seed):
-    ``bound="betting"`` (default) by sequential batches and a betting confidence sequence
-    (:mod:`.sequential`), ``bound="hoeffding"`` by the one-batch Hoeffding route of the
-    module docstring.
+    Certify ``target`` on ``bench`` with ``settings`` (δ, θi, φi, beam, sampling, seed) by
+    the one-batch Hoeffding route of the module docstring (``bound="hoeffding"``; the
+    default, a betting confidence sequence over batches, is :mod:`.sequential`).
     """
 
-    if bound not in BOUNDS:
-        raise ValueError(f"bound must be one of {', '.join(BOUNDS)} for a target (got {bound!r})")
-    if bound == "betting":
-        from virtspec_mi.applications.derived.sequential import take_sequential
-
-        return take_sequential(bench, settings, target, scene=scene, source=source)
     start = time.perf_counter()
     planned = plan_target(bench, settings, target)
     target, functionals, grid, weights = planned.target, planned.functionals, planned.grid, planned.weights

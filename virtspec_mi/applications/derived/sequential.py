@@ -51,7 +51,7 @@ from typing import Any
 import numpy as np
 
 from virtspec_mi.applications.derived.functionals import allocate_jointly
-from virtspec_mi.applications.derived.measure import _certified_colour, _colour_values, _fates, plan_target
+from virtspec_mi.applications.derived.measure import _certified_colour, _colour_values, _fates, plan_target, take_target
 from virtspec_mi.applications.derived.result import DerivedResult
 from virtspec_mi.applications.derived.targets import ColourTarget, Target
 from virtspec_mi.budgets.betting import BettingSequence, neyman_rays, prior_variances
@@ -63,9 +63,9 @@ from virtspec_mi.instruments.base import readings_result
 from virtspec_mi.kernel.counts import WEIGHT_ROUNDING, Counts
 from virtspec_mi.settings import Settings
 
-__all__ = ["take_sequential", "PLANNED_MARGIN", "FIRST_SHARE", "LEAST_GROWTH", "MOST_BATCHES", "MOST_RAYS_FACTOR", "STREAM"]
+__all__ = ["certify_target", "take_sequential", "BOUNDS", "PLANNED_MARGIN", "FIRST_SHARE", "LEAST_GROWTH", "MOST_BATCHES", "MOST_RAYS_FACTOR", "STREAM"]
 
-FIRST_SHARE: float = 0.9
+FIRST_SHARE: float = 0.75
 """The first batch asks for this share of the information a functional needs (pilot's variances)."""
 
 LEAST_GROWTH: float = 0.1
@@ -79,6 +79,9 @@ MOST_RAYS_FACTOR: float = 4.0
 
 PLANNED_MARGIN: float = 0.95
 """The share of a nonlinear target's tolerance its functionals' stakes are planned for (from the pilot's point)."""
+
+BOUNDS: tuple[str, ...] = ("betting", "hoeffding")
+"""A target's certificates: a betting confidence sequence (this module, the default) or Hoeffding's (one batch)."""
 
 STREAM: int = 1 << 32
 """Reading k's rays are global indices k·STREAM + (its rays so far): one stream per wavelength."""
@@ -96,15 +99,29 @@ def _add(total: Counts, part: Counts, index: np.ndarray) -> None:
             getattr(total, name)[index] += getattr(part, name)
 
 
-def _ladder_information(need: np.ndarray, have: np.ndarray, widths: np.ndarray, tolerances: np.ndarray) -> np.ndarray:
+def _next_information(have: np.ndarray, widths: np.ndarray, tolerances: np.ndarray) -> np.ndarray:
     """
-    The information each functional should have after the next batch: what the width
-    so far asks for (a half-width ≈ t/2 + c/(t·I) reaches t at I·(2w/t − 1)), at least the
-    Gaussian need, within [1 + LEAST_GROWTH, 2] times what it has; 0 when it is met.
+    The information each functional should have after the next batch: what its width so
+    far asks for (a half-width w ≈ t/2 + c/(t·I) reaches t at I·(2w/t − 1)), within
+    [1 + LEAST_GROWTH, 2] times what it has; 0 when it holds its tolerance already.
     """
 
-    wanted = np.maximum(need, have * (2 * widths / tolerances - 1)) * 1.05
+    wanted = have * (2 * widths / tolerances - 1)
     return np.where(widths <= tolerances, 0.0, np.clip(wanted, (1 + LEAST_GROWTH) * have, 2 * have))
+
+
+def certify_target(bench: Any, settings: Settings, target: Target, *, scene: str = "", source: dict | None = None,
+                   bound: str = "betting") -> DerivedResult:
+    """
+    Certify ``target``: ``bound="betting"`` (default) by :func:`take_sequential`,
+    ``bound="hoeffding"`` by the one-batch route :func:`~.measure.take_target`.
+    """
+
+    if bound not in BOUNDS:
+        raise ValueError(f"bound must be one of {', '.join(BOUNDS)} for a target (got {bound!r})")
+    if bound == "hoeffding":
+        return take_target(bench, settings, target, scene=scene, source=source)
+    return take_sequential(bench, settings, target, scene=scene, source=source)
 
 
 def take_sequential(bench: Any, settings: Settings, target: Target, *, scene: str = "", source: dict | None = None
@@ -165,7 +182,7 @@ def take_sequential(bench: Any, settings: Settings, target: Target, *, scene: st
         if np.all(widths <= tolerances):  # each functional holds its plan but the map is not met: grow all
             wanted = (1 + 2 * LEAST_GROWTH) * have
         else:
-            wanted = _ladder_information(need, have, widths, tolerances)
+            wanted = _next_information(have, widths, tolerances)
         batch = neyman_rays(w, np.maximum(wanted - have, 0.0), variances)
         batch = np.minimum(batch, np.maximum(MOST_RAYS_FACTOR * hoeffding - spent.sum(), 1)).astype(np.int64)
     estimates, certified, reported, colour, met = _certificate(target, functionals, sequences, total, spent, delta,

@@ -151,24 +151,33 @@ def _edges(floors: np.ndarray, caps: np.ndarray, high: float) -> np.ndarray:
     return np.unique(np.concatenate([[0.0, high], inner[(inner > 0) & (inner < high)]]))
 
 
-def _pieces(rays: np.ndarray, hits: np.ndarray, bets: np.ndarray, floors: np.ndarray, caps: np.ndarray
-            ) -> tuple[np.ndarray, np.ndarray]:
+def _candidates(rays: np.ndarray, hits: np.ndarray, bets: np.ndarray, floors: np.ndarray, caps: np.ndarray
+                ) -> tuple[np.ndarray, np.ndarray]:
     """
-    One stratum's candidate points and log-capitals: for every piece [eᵢ, eᵢ₊₁) of [0, 1]
-    between the ends of the stakes' ranges, its two ends (the right one as the limit from
-    the left) with the stakes active on it, and the point m = 1. The minimum over
-    m ∈ [0, 1] of log K(m) + c·m for any c ≥ 0 is the least of the candidates' (log K is
-    concave on each piece).
+    Every stratum's candidate points and log-capitals, shape (strata, C): for every piece
+    [eᵢ, eᵢ₊₁) of [0, 1] between the ends of the stakes' ranges, its two ends (the right
+    one as the limit from the left) with the stakes active on it, and the point m = 1,
+    where log K = 0 (arrays (stakes, strata) in; unused ends are padded with 1). The
+    minimum over m ∈ [0, 1] of log K(m) + c·m for any c ≥ 0 is the least of a stratum's
+    candidates (log K is concave on each piece).
     """
 
     floors, caps = _staking(rays, bets, floors, caps)
-    edges = _edges(floors, caps, 1.0)
-    points, values = [np.array([1.0])], [_at(rays, hits, bets, floors, caps, 1.0, np.array([1.0]))]
-    for lo, hi in zip(edges[:-1], edges[1:]):
-        ends = np.array([lo, hi])
-        points.append(ends)
-        values.append(_at(rays, hits, bets, floors, caps, lo, ends))
-    return np.concatenate(points), np.concatenate(values)
+    inner = np.concatenate([floors, caps]).T  # (strata, 2·stakes)
+    inner = np.where((inner > 0) & (inner < 1), inner, 1.0)
+    edges = np.sort(np.concatenate([np.zeros((len(inner), 1)), inner, np.ones((len(inner), 1))], axis=1), axis=1)
+    lo, hi = edges[:, :-1], edges[:, 1:]  # (strata, P) pieces (empty ones where lo == hi: harmless)
+    active = (floors.T[:, :, None] <= lo[:, None, :]) & (caps.T[:, :, None] > lo[:, None, :])  # (strata, stakes, P)
+
+    def log_capital(m: np.ndarray) -> np.ndarray:
+        b, n, k = bets.T[:, :, None], rays.T[:, :, None], hits.T[:, :, None]
+        up = np.where(active, k * np.log1p(b * (1.0 - m[:, None, :])), 0.0)
+        down = np.where(active, (n - k) * np.log1p(-b * m[:, None, :]), 0.0)
+        return (up + down).sum(axis=1) - _ROUNDING * (np.abs(up) + np.abs(down)).sum(axis=1) - 1e-300
+
+    points = np.concatenate([lo, hi, np.ones((len(lo), 1))], axis=1)
+    values = np.concatenate([log_capital(lo), log_capital(hi), np.zeros((len(lo), 1))], axis=1)
+    return points, values
 
 
 def _one_stratum(a: float, rays: np.ndarray, hits: np.ndarray, bets: np.ndarray, floors: np.ndarray,
@@ -201,7 +210,7 @@ def _one_stratum(a: float, rays: np.ndarray, hits: np.ndarray, bets: np.ndarray,
 
 
 def lower_bound(weights: np.ndarray, rays: np.ndarray, hits: np.ndarray, bets: np.ndarray, floors: np.ndarray,
-                caps: np.ndarray, alpha: float, search: int = 400) -> float:
+                caps: np.ndarray, alpha: float, search: int = 240) -> float:
     """
     A lower confidence bound s_B of S = Σₖ aₖ μₖ (``weights`` aₖ ≥ 0) at level ``alpha``:
     eq. (2) by the exact Lagrangian bound of the module docstring (one stratum: directly).
@@ -222,20 +231,21 @@ def lower_bound(weights: np.ndarray, rays: np.ndarray, hits: np.ndarray, bets: n
         return 0.0
     if len(a) == 1:
         return _one_stratum(float(a[0]), rays[:, 0], hits[:, 0], bets[:, 0], floors[:, 0], caps[:, 0], level)
-    pieces = [_pieces(rays[:, k], hits[:, k], bets[:, k], floors[:, k], caps[:, k]) for k in range(len(a))]
+    points, values = _candidates(rays, hits, bets, floors, caps)
     total = float(a.sum())
+    slopes = a[:, None] * points
 
     def bound(nu: np.ndarray) -> np.ndarray:  # s(ν) = (Σₖ hₖ(ν) − level)/ν for every ν given
         h = np.zeros(len(nu))
-        for (points, values), ak in zip(pieces, a):
-            h += np.min(values[None, :] + nu[:, None] * ak * points[None, :], axis=1)
+        for part in np.array_split(np.arange(len(nu)), max(1, len(nu) * values.size // 2_000_000)):
+            h[part] = np.min(values[None] + nu[part, None, None] * slopes[None], axis=2).sum(axis=1)
         return (h - level) / nu
 
     nu = level / total * np.logspace(-3, 12, search)
     s = bound(nu)
     best, found = int(np.argmax(s)), [s]
     for _ in range(3):  # refine around the best ν (any ν is valid: this only tightens)
-        nu = np.geomspace(nu[max(best - 1, 0)], nu[min(best + 1, len(nu) - 1)], 64)
+        nu = np.geomspace(nu[max(best - 1, 0)], nu[min(best + 1, len(nu) - 1)], 48)
         s = bound(nu)
         best = int(np.argmax(s))
         found.append(s)

@@ -20,9 +20,10 @@ default, ``bound="betting"``:
    *before* the batch is traced, from the rays before it (predictable);
 4. the batch is traced (:func:`~virtspec_mi.engine.readings.trace_allocated`, seed
    :func:`~virtspec_mi.budgets.twostage.stage_two_seed` of the settings' seed). Reading k
-   continues its own stream of rays: global indices k·2³² + (rays it traced before), so
-   no ray is traced twice and batch b's rays are independent of every earlier batch's;
-   the result is a function of the seed alone;
+   continues its own stream of rays: global indices k·S + (rays it traced before), S
+   more than any reading can trace (:data:`MOST_RAYS_FACTOR` times Hoeffding's rays in
+   all, plus the first batch), so no ray is traced twice and batch b's rays are
+   independent of every earlier batch's; the result is a function of the seed alone;
 5. after each batch the certificate of the rays so far — each functional's interval
    (the symmetric half-width enclosing it, plus its rounding bias), then the target's map
    — decides: sampling **stops at the first batch at which the target is met**; no batch
@@ -63,7 +64,7 @@ from virtspec_mi.instruments.base import readings_result
 from virtspec_mi.kernel.counts import WEIGHT_ROUNDING, Counts
 from virtspec_mi.settings import Settings
 
-__all__ = ["certify_target", "take_sequential", "BOUNDS", "PLANNED_MARGIN", "FIRST_SHARE", "LEAST_GROWTH", "MOST_BATCHES", "MOST_RAYS_FACTOR", "STREAM"]
+__all__ = ["certify_target", "take_sequential", "BOUNDS", "PLANNED_MARGIN", "FIRST_SHARE", "LEAST_GROWTH", "MOST_BATCHES", "MOST_RAYS_FACTOR"]
 
 FIRST_SHARE: float = 0.75
 """The first batch asks for this share of the information a functional needs (pilot's variances)."""
@@ -82,9 +83,6 @@ PLANNED_MARGIN: float = 0.95
 
 BOUNDS: tuple[str, ...] = ("betting", "hoeffding")
 """A target's certificates: a betting confidence sequence (this module, the default) or Hoeffding's (one batch)."""
-
-STREAM: int = 1 << 32
-"""Reading k's rays are global indices k·STREAM + (its rays so far): one stream per wavelength."""
 
 
 def _add(total: Counts, part: Counts, index: np.ndarray) -> None:
@@ -156,15 +154,16 @@ def take_sequential(bench: Any, settings: Settings, target: Target, *, scene: st
     else:
         batch = neyman_rays(w, FIRST_SHARE * need, prior_variances(prior_rays, prior_hits)[1])
     seconds_traced = 0.0
+    stride = int(MOST_RAYS_FACTOR * hoeffding) + int(batch.sum()) + 1  # more than any reading can trace
     while True:
         batch = np.where(batch > 0, batch, 0).astype(np.int64)
-        if np.any(spent + batch >= STREAM):
+        if np.any(spent + batch > stride):
             break  # a reading's stream is full: stop with what the rays so far certify
         for sequence in sequences:
             sequence.stake(batch)  # before the batch is traced: the stakes are predictable
         traced = np.flatnonzero(batch > 0)
         tally = trace_allocated(bench, settings.updated(seed=seed), [readings[i] for i in traced], batch[traced],
-                                offsets=used[traced] * STREAM + spent[traced])
+                                offsets=np.arange(len(used))[traced] * stride + spent[traced])
         seconds_traced += tally.seconds
         part = np.zeros(len(used))
         part[traced] = _fates(tally.counts, quantity)

@@ -40,7 +40,9 @@ def test_every_batch_traces_fresh_rays_and_a_seed_gives_one_result(dark, monkeyp
     monkeypatch.setattr(sequential, "trace_allocated", recording)
     target = vm.band((500, 520), tolerance=0.004)
     first = vm.measure(dark, target=target, delta=0.05, seed=3)
+    pilot, calls = calls[0], calls[1:]  # a linear target's pilot (sizing only) has a seed of its own
     assert len(first.batches) >= 2 and len(calls) == len(first.batches)
+    assert pilot[0] != calls[0][0] and int(pilot[2].sum()) == first.pilot_rays
     ranges: dict[float, list[tuple[int, int]]] = {}
     for seed, wavelengths, rays, offsets in calls:
         assert seed == calls[0][0]
@@ -79,7 +81,7 @@ def test_fewer_rays_than_hoeffding_where_the_reflectance_is_small(dark):
     betting = vm.measure(dark, target=target, delta=0.05, seed=1)
     hoeffding = vm.measure(dark, target=target, delta=0.05, seed=1, bound="hoeffding")
     assert betting.met and hoeffding.met and hoeffding.bound == "hoeffding" and not hoeffding.batches
-    assert betting.rays < hoeffding.rays / 2, (betting.rays, hoeffding.rays)
+    assert betting.total_rays < hoeffding.total_rays / 2, (betting.total_rays, hoeffding.total_rays)  # pilot included
     exact = _exact_band(450, 600)
     assert betting["band_450-600"].lower <= exact <= betting["band_450-600"].upper
 

@@ -67,8 +67,10 @@ t·Iᵦ·(Ŝᵦ − s) − t²Iᵦ/2 to (2) for every m with Σ aₖmₖ = s: a 
 with information Iᵦ, and the certified half-width after batches of total information I
 is about t/2 + log(1/α)/(t·I), which reaches t at I = 2 log(1/α)/t² — the Gaussian
 optimum (Hoeffding needs (Σₖ aₖ)²/(4 (Σₖ aₖ √vₖ)²) times as many rays). The threshold
-uₖᵦ = p̃ₖ + 5 σ̃ₖ (σ̃ the standard error of p̃) keeps the relaxation close: the stake is
-nothing above it, so a null mean far above the data buys the adversary nothing.
+uₖᵦ = p̃ₖ + 5 σ̃ₖ keeps the relaxation close: the stake is nothing above it, so a null
+mean far above the data buys the adversary nothing. σ̃ₖ is the standard error of the
+batch's mean about p̃ₖ, at the largest variance p(1 − p) within 3 standard errors of
+p̃ₖ (a small count understates the variance).
 Validity never depends on these choices; only the width does.
 
 References
@@ -350,7 +352,11 @@ def stakes(weights: np.ndarray, batch: np.ndarray, tolerance: float, prior_rays:
     bet = np.zeros(len(w))
     bet[used] = np.minimum(tolerance * information * a[used] / batch[used], MAX_BET)
     seen = np.asarray(prior_rays, dtype=np.float64)
-    error = np.sqrt(v / np.maximum(seen, 1.0) + v / np.maximum(batch, 1.0) + 1.0 / np.maximum(seen, 1.0) ** 2)
+    n = np.maximum(seen, 1.0)
+    reach = 3.0 * np.sqrt(v / n) + 1.0 / n  # p̃ may be this far off: the error uses the largest variance within it
+    nearest = np.clip(0.5, p - reach, p + reach)
+    v_high = nearest * (1.0 - nearest)
+    error = np.sqrt(v_high / n + v_high / np.maximum(batch, 1.0)) + 1.0 / n
     lower_mean = np.where(w > 0, p, 1 - p)  # each side's oriented prior mean
     return _side(lower_mean, error, seen, bet), _side(1 - lower_mean, error, seen, bet)
 

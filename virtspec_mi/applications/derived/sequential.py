@@ -10,13 +10,14 @@ default, ``bound="betting"``:
    for a nonlinear target the pilot and the tolerance tⱼ each functional is planned for
    (:func:`~.measure.plan_target`, without its second pilot; tⱼ for
    :data:`PLANNED_MARGIN` of the target's tolerance at the pilot's point); a linear
-   target's tⱼ is its tolerance. The pilot's counts (its own seed) only size rays and stakes;
+   target's tⱼ is its tolerance, and its pilot :data:`BLIND_SHARE` of Hoeffding's rays
+   (Nₖ ∝ |wₖ|, the settings' seed). The pilot's counts (its own seed) only size rays and stakes;
 2. each functional j gets a :class:`~virtspec_mi.budgets.betting.BettingSequence` at
    δ/m (m functionals, union bound), its stakes planned for tⱼ;
 3. batch after batch: the rays of the batch go to the wavelengths by Neyman allocation
    (Nₖ ∝ |wⱼₖ|·σ̂ₖ for each j, σ̂ from the rays before the batch; the most any functional
-   asks for), sized for the information each functional still lacks (the first batch of a
-   target without a pilot: a quarter of Hoeffding's rays, Nₖ ∝ |wₖ|); the stakes are fixed
+   asks for), sized for the information each functional still lacks (the first batch:
+   :data:`FIRST_SHARE` of what it needs at the pilot's variances); the stakes are fixed
    *before* the batch is traced, from the rays before it (predictable);
 4. the batch is traced (:func:`~virtspec_mi.engine.readings.trace_allocated`, seed
    :func:`~virtspec_mi.budgets.twostage.stage_two_seed` of the settings' seed). Reading k
@@ -64,10 +65,13 @@ from virtspec_mi.instruments.base import readings_result
 from virtspec_mi.kernel.counts import WEIGHT_ROUNDING, Counts
 from virtspec_mi.settings import Settings
 
-__all__ = ["certify_target", "take_sequential", "BOUNDS", "PLANNED_MARGIN", "FIRST_SHARE", "LEAST_GROWTH", "MOST_BATCHES", "MOST_RAYS_FACTOR"]
+__all__ = ["certify_target", "take_sequential", "BOUNDS", "PLANNED_MARGIN", "FIRST_SHARE", "BLIND_SHARE", "LEAST_GROWTH", "MOST_BATCHES", "MOST_RAYS_FACTOR"]
 
 FIRST_SHARE: float = 0.75
 """The first batch asks for this share of the information a functional needs (pilot's variances)."""
+
+BLIND_SHARE: float = 1 / 16
+"""A linear target's pilot: this share of Hoeffding's rays (Nₖ ∝ |wₖ|, sizing and stakes only)."""
 
 LEAST_GROWTH: float = 0.1
 """A later batch adds at least this share of the information so far (and at most as much again)."""
@@ -133,8 +137,18 @@ def take_sequential(bench: Any, settings: Settings, target: Target, *, scene: st
     used = np.flatnonzero(np.any(weights != 0, axis=0))
     w = weights[:, used]
     prior = planned.pilot_counts
-    if prior is None:
+    hoeffding = int(allocate_jointly(weights, np.asarray(planned.tolerances, dtype=np.float64), planned.each).sum())
+    readings = [(float(grid[k]), float(settings.theta_i), float(settings.phi_i)) for k in used]
+    pilot_rays = planned.pilot_rays
+    if prior is None:  # a linear target: a small pilot of its own (seed: the settings'), Nₖ ∝ |wₖ|
         tolerances = np.asarray(planned.tolerances, dtype=np.float64)
+        first = neyman_rays(weights[:, used], 2 * math.log(2 / planned.each) / tolerances ** 2 * BLIND_SHARE,
+                            np.full(len(used), 0.25))
+        tally = trace_allocated(bench, settings, readings, np.maximum(first, 1),
+                                offsets=np.arange(len(used)) * int(max(first.max(), 1)))
+        prior = (np.zeros(len(grid)), np.zeros(len(grid)))
+        prior[0][used], prior[1][used] = np.maximum(first, 1), _fates(tally.counts, quantity)
+        pilot_rays += int(np.maximum(first, 1).sum())
     else:  # stopping on the certificate itself, a nonlinear target keeps less in reserve than one batch must
         point = weights @ (prior[1] / np.maximum(prior[0], 1))
         tolerances = np.asarray(target.tolerances(point, delta, PLANNED_MARGIN), dtype=np.float64)
@@ -143,16 +157,11 @@ def take_sequential(bench: Any, settings: Settings, target: Target, *, scene: st
     sequences = [BettingSequence(row, float(t), each, prior_rays.copy(), prior_hits.copy())
                  for row, t in zip(w, tolerances)]
     need = 2 * math.log(2 / each) / tolerances ** 2  # information at which a planned stake certifies t
-    hoeffding = int(allocate_jointly(weights, tolerances, each).sum())
     seed = stage_two_seed(settings.seed)
-    readings = [(float(grid[k]), float(settings.theta_i), float(settings.phi_i)) for k in used]
     total = Counts.zeros(len(used))
     spent = np.zeros(len(used), dtype=np.int64)
     batches: list[int] = []
-    if prior is None:  # no pilot: a quarter of Hoeffding's information, rays in proportion to |w|
-        batch = neyman_rays(w, need / 4, np.full(len(used), 0.25))
-    else:
-        batch = neyman_rays(w, FIRST_SHARE * need, prior_variances(prior_rays, prior_hits)[1])
+    batch = neyman_rays(w, FIRST_SHARE * need, prior_variances(prior_rays, prior_hits)[1])
     seconds_traced = 0.0
     stride = int(MOST_RAYS_FACTOR * hoeffding) + int(batch.sum()) + 1  # more than any reading can trace
     while True:
@@ -189,7 +198,7 @@ def take_sequential(bench: Any, settings: Settings, target: Target, *, scene: st
     plan = Plan(settings.updated(wavelengths=[float(x) for x in grid[used]]), (float(settings.theta_i),), scene=scene)
     result = readings_result(bench, plan, Tally(total).with_seconds(seconds_traced), scene, source)
     return DerivedResult(target=target, values=tuple(reported), readings=result.squeeze("theta_i"),
-                         rays=int(spent.sum()), pilot_rays=planned.pilot_rays, delta=delta,
+                         rays=int(spent.sum()), pilot_rays=pilot_rays, delta=delta,
                          statements=len(functionals), functional_tolerances=tuple(float(t) for t in certified),
                          colour=colour, met=met, seconds=time.perf_counter() - start, bound="betting",
                          batches=tuple(batches))

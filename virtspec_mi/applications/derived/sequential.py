@@ -67,7 +67,7 @@ from virtspec_mi.settings import Settings
 
 __all__ = ["certify_target", "take_sequential", "BOUNDS", "PLANNED_MARGIN", "FIRST_SHARE", "BLIND_SHARE", "LEAST_GROWTH", "MOST_BATCHES", "MOST_RAYS_FACTOR"]
 
-FIRST_SHARE: float = 0.75
+FIRST_SHARE: float = 0.9
 """The first batch asks for this share of the information a functional needs (pilot's variances)."""
 
 BLIND_SHARE: float = 1 / 16

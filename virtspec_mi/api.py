@@ -110,9 +110,10 @@ def measure(scene: Any, *, parameters: dict[str, Any] | None = None, defines: di
         (:mod:`virtspec_mi.applications.derived`). ``wavelengths``, ``mu``, ``rays``,
         ``pilot_rays``, ``pilot_delta`` and ``joint`` are then the target's to
         decide (giving one is an error); ``parameters`` are not taken. ``bound`` is then the
-        target's certificate: ``"betting"`` (default: sequential batches, a betting
-        confidence sequence, :mod:`virtspec_mi.applications.derived.sequential`) or
-        ``"hoeffding"`` (one batch sized by Hoeffding's bound).
+        target's certificate: ``"betting"`` (sequential batches, a betting confidence
+        sequence, :mod:`virtspec_mi.applications.derived.sequential`), ``"hoeffding"``
+        (one batch sized by Hoeffding's bound) or ``"auto"`` (default: betting unless a
+        linear target's pilot shows it would not pay).
 
     References
     ----------
@@ -141,7 +142,7 @@ def _measure_target(scene: LoadedScene, parameters: Any, target: Any, settings: 
     from virtspec_mi.applications.derived.sequential import certify_target
 
     settings = dict(settings)
-    bound = settings.pop("bound", None) or "betting"  # a target's certificate: "betting" or "hoeffding"
+    bound = settings.pop("bound", None) or "auto"  # a target's certificate: "auto", "betting" or "hoeffding"
     given = sorted(name for name in REFUSED_SETTINGS if settings.get(name) is not None)
     if given:
         raise ValueError(f"{', '.join(given)}: a target picks its own wavelengths and rays (give its tolerance to the "

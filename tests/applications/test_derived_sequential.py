@@ -93,5 +93,21 @@ def test_a_colour_stops_on_its_own_certificate(dark):
 
 
 def test_a_bound_a_target_does_not_take_is_refused(dark):
-    with pytest.raises(ValueError, match="bound must be one of betting, hoeffding for a target"):
+    with pytest.raises(ValueError, match="bound must be one of auto, betting, hoeffding for a target"):
         vm.measure(dark, target=vm.band("B04"), bound="chebyshev")
+
+
+def test_auto_takes_hoeffdings_route_when_the_pilot_shows_betting_would_not_pay(mi):
+    """The soybean leaf's B04 to +-0.01: few rays per wavelength, a handful in the rarer fate each."""
+
+    leaf = vm.scenes.path("soybean_abmb")
+    target = vm.band("B04", tolerance=0.01)
+    auto = vm.measure(leaf, target=target, seed=2)
+    hoeffding = vm.measure(leaf, target=target, seed=2, bound="hoeffding")
+    assert auto.bound == "hoeffding" and not auto.batches and auto.met
+    assert auto.rays == hoeffding.rays and auto["band_B04"] == hoeffding["band_B04"]  # the same route, same rays
+    assert 0 < auto.pilot_rays < auto.rays / 8  # its pilot (1/16 of Hoeffding's rays) is counted
+    dark = vm.measure(vm.instrument_scene({"type": "diffuse", "reflectance": {
+        "type": "regular", "wavelength_min": 300, "wavelength_max": 1000, "values": ", ".join(map(str, DARK))}}),
+        target=vm.band((500, 520), tolerance=0.004), delta=0.05, seed=3)
+    assert dark.bound == "betting"

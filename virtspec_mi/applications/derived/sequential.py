@@ -33,6 +33,11 @@ default, ``bound="betting"``:
    Hoeffding's rays or :data:`MOST_BATCHES` batches stops and says "NOT MET", with the
    interval its rays certify.
 
+:func:`certify_target` picks the route: ``bound="betting"`` this one,
+``bound="hoeffding"`` the one-batch route of :mod:`.measure`, ``bound="auto"`` (the
+default) this one unless a linear target's pilot shows it would not pay (:func:`pays`),
+then Hoeffding's, the pilot's rays counted.
+
 The batch granularity: a batch asks for at most as much again as all the batches before
 it (and at least :data:`LEAST_GROWTH` of it), so the rays spent exceed the fewest that
 would have met the target by at most that step.
@@ -47,7 +52,7 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import fields
+from dataclasses import fields, replace
 from typing import Any
 
 import numpy as np
@@ -65,7 +70,7 @@ from virtspec_mi.instruments.base import readings_result
 from virtspec_mi.kernel.counts import WEIGHT_ROUNDING, Counts
 from virtspec_mi.settings import Settings
 
-__all__ = ["certify_target", "take_sequential", "BOUNDS", "PLANNED_MARGIN", "FIRST_SHARE", "BLIND_SHARE", "LEAST_GROWTH", "MOST_BATCHES", "MOST_RAYS_FACTOR"]
+__all__ = ["certify_target", "take_sequential", "pays", "BOUNDS", "PAYS_FACTOR", "LEAST_COUNTS", "PLANNED_MARGIN", "FIRST_SHARE", "BLIND_SHARE", "LEAST_GROWTH", "MOST_BATCHES", "MOST_RAYS_FACTOR"]
 
 FIRST_SHARE: float = 0.9
 """The first batch asks for this share of the information a functional needs (pilot's variances)."""
@@ -85,8 +90,15 @@ MOST_RAYS_FACTOR: float = 4.0
 PLANNED_MARGIN: float = 0.95
 """The share of a nonlinear target's tolerance its functionals' stakes are planned for (from the pilot's point)."""
 
-BOUNDS: tuple[str, ...] = ("betting", "hoeffding")
-"""A target's certificates: a betting confidence sequence (this module, the default) or Hoeffding's (one batch)."""
+BOUNDS: tuple[str, ...] = ("auto", "betting", "hoeffding")
+"""A target's certificates: a betting confidence sequence (this module), Hoeffding's (one batch), or ``auto``
+(the default: betting unless a linear target's pilot shows it would not pay, :func:`pays`)."""
+
+PAYS_FACTOR: float = 1.25
+"""``auto`` takes the betting route when its predicted rays are at most 1/PAYS_FACTOR of Hoeffding's …"""
+
+LEAST_COUNTS: float = 20.0
+"""… and its strata expect at least this many rays in the rarer fate each (|w|-weighted mean)."""
 
 
 def _add(total: Counts, part: Counts, index: np.ndarray) -> None:
@@ -113,22 +125,46 @@ def _next_information(have: np.ndarray, widths: np.ndarray, tolerances: np.ndarr
 
 
 def certify_target(bench: Any, settings: Settings, target: Target, *, scene: str = "", source: dict | None = None,
-                   bound: str = "betting") -> DerivedResult:
+                   bound: str = "auto") -> DerivedResult:
     """
-    Certify ``target``: ``bound="betting"`` (default) by :func:`take_sequential`,
-    ``bound="hoeffding"`` by the one-batch route :func:`~.measure.take_target`.
+    Certify ``target``: ``bound="betting"`` by :func:`take_sequential`, ``bound="hoeffding"``
+    by the one-batch route :func:`~.measure.take_target`, ``bound="auto"`` (default) by the
+    betting route unless a linear target's pilot shows it would not pay (:func:`pays`), then
+    by Hoeffding's (the result's ``bound`` says which).
     """
 
     if bound not in BOUNDS:
         raise ValueError(f"bound must be one of {', '.join(BOUNDS)} for a target (got {bound!r})")
     if bound == "hoeffding":
         return take_target(bench, settings, target, scene=scene, source=source)
-    return take_sequential(bench, settings, target, scene=scene, source=source)
+    return take_sequential(bench, settings, target, scene=scene, source=source, fallback=bound == "auto")
 
 
-def take_sequential(bench: Any, settings: Settings, target: Target, *, scene: str = "", source: dict | None = None
-                    ) -> DerivedResult:
-    """Certify ``target`` on ``bench`` with ``settings`` by batches until it is met (the module docstring)."""
+def pays(weights: np.ndarray, need: np.ndarray, variances: np.ndarray, means: np.ndarray, hoeffding: int) -> bool:
+    """
+    Whether the betting route is expected to beat Hoeffding's, from a pilot only: the
+    Neyman rays for the information ``need`` (Gaussian) cost at most 1/:data:`PAYS_FACTOR`
+    of ``hoeffding``'s rays, and the strata expect at least :data:`LEAST_COUNTS` rays in the
+    rarer fate each (weighted by |w|: with fewer, each stratum's test is in its small-count
+    regime, where the sequence stays wide). A rule of thumb, measured on the shipped
+    specimens (``benchmarks/betting.py``); it decides the bound before any estimate is
+    traced, so either certificate stays valid.
+    """
+
+    rays = neyman_rays(weights, need, variances)
+    rarer = rays * np.minimum(means, 1 - means)
+    share = np.abs(np.atleast_2d(weights)).sum(axis=0)
+    typical = float(np.sum(share * rarer) / np.sum(share))
+    return bool(PAYS_FACTOR * rays.sum() <= hoeffding and typical >= LEAST_COUNTS)
+
+
+def take_sequential(bench: Any, settings: Settings, target: Target, *, scene: str = "", source: dict | None = None,
+                    fallback: bool = False) -> DerivedResult:
+    """
+    Certify ``target`` on ``bench`` with ``settings`` by batches until it is met (the module
+    docstring); ``fallback``: a linear target whose pilot shows the betting route would not
+    pay (:func:`pays`) is certified by Hoeffding's route instead, its pilot's rays counted.
+    """
 
     start = time.perf_counter()
     planned = plan_target(bench, settings, target, refine=False)
@@ -149,6 +185,12 @@ def take_sequential(bench: Any, settings: Settings, target: Target, *, scene: st
         prior = (np.zeros(len(grid)), np.zeros(len(grid)))
         prior[0][used], prior[1][used] = np.maximum(first, 1), _fates(tally.counts, quantity)
         pilot_rays += int(np.maximum(first, 1).sum())
+        v = prior_variances(prior[0][used], prior[1][used])
+        need = 2 * math.log(2 / planned.each) / tolerances ** 2
+        if fallback and not pays(weights[:, used], need, v[1], v[0], hoeffding):
+            result = take_target(bench, settings, target, scene=scene, source=source)
+            return replace(result, pilot_rays=result.pilot_rays + pilot_rays,
+                           seconds=time.perf_counter() - start)
     else:  # stopping on the certificate itself, a nonlinear target keeps less in reserve than one batch must
         point = weights @ (prior[1] / np.maximum(prior[0], 1))
         tolerances = np.asarray(target.tolerances(point, delta, PLANNED_MARGIN), dtype=np.float64)
@@ -238,8 +280,6 @@ def _certificate(target: Target, functionals: list, sequences: list[BettingSeque
 
 
 def _with_method(colour: Any) -> Any:
-    from dataclasses import replace
-
     return replace(colour, method="betting confidence sequence (Spertus, Sridhar & Stark 2024) on each tristimulus "
                                   "functional at delta/3, stopped at the first batch that met the target; the XYZ "
                                   "box mapped exactly to L*a*b* and sRGB; dE00 a rigorous upper bound")

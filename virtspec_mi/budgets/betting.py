@@ -23,10 +23,11 @@ fixed within the batch, the stratum's capital after B batches is a function of i
 
     Kₖ(m) = Πᵦ [ (1 + λₖᵦ(1 − m))^kₖᵦ · (1 − λₖᵦ m)^(nₖᵦ − kₖᵦ) ]^[m < uₖᵦ]           (1)
 
-**Theorem** (Spertus, Sridhar & Stark 2024, Section 3 — the intersection–union test of
-their Theorem 1 — with the per-stratum test supermartingales of Waudby-Smith & Ramdas
-2023, Proposition 1 / eq. (11); Ville's inequality). With μ* the true oriented means,
-P(∃B: Πₖ Kₖ(μ*ₖ) ≥ 1/α) ≤ α. Hence the set
+**Theorem** (Ville's maximal inequality for non-negative supermartingales, Ville 1939;
+used as here by Spertus, Sridhar & Stark 2024 — independent test supermartingales per
+stratum multiplied, a union of intersection nulls — and, for one stratum, by
+Waudby-Smith & Ramdas 2023 — the betting capital process). With μ* the true oriented
+means, P(∃B: Πₖ Kₖ(μ*ₖ) ≥ 1/α) ≤ α. Hence the set
 
     C_B = { s : min_{m ∈ [0,1]ᴷ, Σₖ aₖ mₖ ≤ s} Σₖ log Kₖ(mₖ) < log(1/α) }              (2)
 
@@ -76,13 +77,14 @@ Validity never depends on these choices; only the width does.
 References
 ----------
 Spertus, J. V., Sridhar, M. & Stark, P. B. (2024). Sequential stratified inference for
-the mean. arXiv:2409.06680, Section 3 (intersection–union test supermartingales,
-Theorem 1) and Section 4 (predictable, η-adaptive bets and allocation).
+the mean. arXiv:2409.06680 (intersection–union test supermartingales combined across
+strata by multiplication; bets and stratum selection that may depend on the null and
+on the sample so far).
 Waudby-Smith, I. & Ramdas, A. (2023). Estimating means of bounded random variables by
-betting. *J. R. Stat. Soc. B* 86(1), 1–27, Proposition 1 and eq. (11) (the capital
-process), Theorem 3 (its confidence sequence).
-Ville, J. (1939). *Étude critique de la notion de collectif*, p. 100 (the maximal
-inequality for non-negative supermartingales).
+betting. *J. R. Stat. Soc. B* 86(1), 1–27 (the capital process of a bounded mean and
+its confidence sequence).
+Ville, J. (1939). *Étude critique de la notion de collectif*. Gauthier-Villars (the
+maximal inequality for non-negative supermartingales).
 """
 
 from __future__ import annotations

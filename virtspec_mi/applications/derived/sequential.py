@@ -45,7 +45,7 @@ would have met the target by at most that step.
 References
 ----------
 Spertus, Sridhar & Stark (2024), arXiv:2409.06680; Waudby-Smith & Ramdas (2023), JRSS-B;
-Neyman (1934), *J. R. Stat. Soc.* 97(4), 558–625 (optimum allocation, §5).
+Neyman (1934), *J. R. Stat. Soc.* 97(4), 558–625 (optimum allocation).
 """
 
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""The colour-difference bounds of applications.derived.delta_e enclose colour-science's ΔE₀₀ and ΔE*ab."""
+"""The colour-difference bounds of colorimetry.delta_e enclose colour-science's ΔE₀₀ and ΔE*ab."""
 
 from __future__ import annotations
 

@@ -74,7 +74,7 @@ def test_a_colour_target_meets_its_tolerance_and_reports_its_variables(lambertia
 
 
 def test_a_band_target_spends_the_rays_of_one_reading(lambertian, tmp_path):
-    result = vm.measure(lambertian, target=vm.band((500, 530), tolerance=0.01), delta=0.05, seed=0)
+    result = vm.measure(lambertian, target=vm.band((500, 530), tolerance=0.01), delta=0.05, seed=0, bound="hoeffding")
     assert result.rays <= math.log(2 / 0.05) / (2 * 0.01 ** 2) + 31
     value = result["band_500-530"]
     figure = result.plot(tmp_path / "band.png")
@@ -145,7 +145,7 @@ def test_a_costly_colour_gets_a_second_pilot_and_still_holds_the_exact_colour(mi
     values = [0.02, 0.05, 0.08, 0.04]
     dark = vm.instrument_scene({"type": "diffuse", "reflectance": {
         "type": "regular", "wavelength_min": 300, "wavelength_max": 1000, "values": ", ".join(map(str, values))}})
-    result = vm.measure(dark, target=vm.colour(tolerance_dE00=2.0), delta=0.2, seed=4)
+    result = vm.measure(dark, target=vm.colour(tolerance_dE00=2.0), delta=0.2, seed=4, bound="hoeffding")
     weights = np.stack([f.weights for f in result.target.functionals()])
     first = np.max([allocate(w, PILOT_TOLERANCE * np.abs(w).sum(), PILOT_DELTA) for w in weights], axis=0).sum()
     assert result.pilot_rays > first  # the second pilot ran

@@ -100,11 +100,15 @@ def measure(scene: Any, *, target: Any = None, **keywords: Any) -> Any:
     target
         A derived quantity to certify instead of a spectrum (``vm.colour(...)``,
         ``vm.band(...)``, ``vm.index(...)``, ``vm.fapar(...)``): the instrument picks the
-        wavelengths and the rays of each (Nₖ ∝ |wₖ|) for the target's tolerance at δ and
+        wavelengths and the rays of each for the target's tolerance at δ and
         returns a :class:`~virtspec_mi.applications.targets.result.DerivedResult`
         (:mod:`virtspec_mi.applications.targets`). ``wavelengths``, ``mu``, ``rays``,
-        ``bound``, ``pilot_rays``, ``pilot_delta`` and ``joint`` are then the target's to
-        decide (giving one is an error); ``parameters`` are not taken.
+        ``pilot_rays``, ``pilot_delta`` and ``joint`` are then the target's to
+        decide (giving one is an error); ``parameters`` are not taken. ``bound`` is then the
+        target's certificate: ``"betting"`` (sequential batches, a betting confidence
+        sequence, :mod:`virtspec_mi.applications.targets.sequential`), ``"hoeffding"``
+        (one batch sized by Hoeffding's bound) or ``"auto"`` (default: betting unless a
+        linear target's pilot shows it would not pay).
 
     References
     ----------
@@ -129,9 +133,9 @@ def measure(scene: Any, *, target: Any = None, **keywords: Any) -> Any:
 
 
 def _measure_target(scene: LoadedScene, parameters: Any, target: Any, settings: dict[str, Any]) -> Any:
-    """:func:`measure` of a derived quantity (:func:`virtspec_mi.applications.targets.measure.measure_target`)."""
+    """:func:`measure` of a derived quantity (:func:`virtspec_mi.applications.targets.sequential.measure_target`)."""
 
-    from virtspec_mi.applications.targets.measure import measure_target
+    from virtspec_mi.applications.targets.sequential import measure_target
 
     return measure_target(scene, parameters, target, settings)
 

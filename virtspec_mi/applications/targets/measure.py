@@ -38,7 +38,7 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass, replace
-from typing import Any
+from typing import Any, Callable
 
 import numpy as np
 
@@ -75,8 +75,8 @@ REFINED_MARGIN: float = 0.95
 REFINE_SEED_MASK: int = 0x2C1B3C6D
 """The second pilot's seed is the settings' seed XOR this (distinct from the first pilot's and the estimates')."""
 
-REFUSED_SETTINGS: tuple[str, ...] = ("wavelengths", "mu", "rays", "bound", "pilot_rays", "pilot_delta", "joint")
-"""Settings a target decides itself: giving one with a target is an error."""
+REFUSED_SETTINGS: tuple[str, ...] = ("wavelengths", "mu", "rays", "pilot_rays", "pilot_delta", "joint")
+"""Settings a target decides itself: giving one with a target is an error (``bound``: :data:`.sequential.BOUNDS`)."""
 
 
 def _fates(tally_counts: Any, quantity: str) -> np.ndarray:
@@ -138,10 +138,14 @@ class TargetPlan:
     each: float
     rays: np.ndarray
     pilot_rays: int
+    pilot_counts: tuple[np.ndarray, np.ndarray] | None = None  # (rays, counts) per grid wavelength: sizing only
 
 
-def plan_target(bench: Any, settings: Settings, target: Target) -> TargetPlan:
-    """Steps 1–3 of the module docstring (the pilot traced when the target needs one): the rays, not yet traced."""
+def plan_target(bench: Any, settings: Settings, target: Target, refine: bool = True) -> TargetPlan:
+    """
+    Steps 1–3 of the module docstring (the pilot traced when the target needs one): the rays, not yet traced
+    (``refine``: a second pilot for a costly nonlinear target).
+    """
 
     if not isinstance(target, Target):
         made = [f"vm.{name}" for name in TARGETS]
@@ -163,7 +167,8 @@ def plan_target(bench: Any, settings: Settings, target: Target) -> TargetPlan:
         pilot_rays = int(first.sum())
     tolerances = np.asarray(target.tolerances(estimates, float(settings.delta)), dtype=np.float64)
     rays = allocate_jointly(weights, tolerances, each)
-    if target.needs_pilot and rays.sum() > REFINE_ABOVE * pilot_rays:
+    pilot_counts = None if estimates is None else (np.asarray(first, dtype=np.float64), counts.copy())
+    if refine and target.needs_pilot and rays.sum() > REFINE_ABOVE * pilot_rays:
         # a costly target: a second pilot of REFINE_SHARE of those rays pins the point down, so the sizing can
         # keep less in reserve (REFINED_MARGIN): its rays (counted) are few beside those it saves
         second = np.where(rays > 0, np.maximum(1, np.ceil(REFINE_SHARE * rays)), 0).astype(np.int64)
@@ -174,15 +179,18 @@ def plan_target(bench: Any, settings: Settings, target: Target) -> TargetPlan:
         tolerances = np.asarray(target.tolerances(weights @ pooled, float(settings.delta), REFINED_MARGIN),
                                 dtype=np.float64)
         rays = allocate_jointly(weights, tolerances, each)
-    return TargetPlan(target, functionals, grid, weights, tolerances, each, rays, pilot_rays)
+        pilot_counts = (np.asarray(first + second, dtype=np.float64), counts.copy())
+    return TargetPlan(target, functionals, grid, weights, tolerances, each, rays, pilot_rays, pilot_counts)
 
 
-def measure_target(scene: LoadedScene, parameters: Any, target: Target, settings: dict[str, Any]) -> DerivedResult:
+def measure_target(scene: LoadedScene, parameters: Any, target: Target, settings: dict[str, Any],
+                   take: Callable[..., DerivedResult] | None = None) -> DerivedResult:
     """
     ``vm.measure(scene, target=...)``: the keywords of the call checked — a target picks its
     own wavelengths and rays (:data:`REFUSED_SETTINGS` given: ``ValueError``), and reads the
     scene's own specimen parameters — the settings resolved over the scene's integrator, then
-    :func:`take_target`.
+    ``take`` (default :func:`take_target`, the one-batch route; the sequential route:
+    :func:`virtspec_mi.applications.targets.sequential.measure_target`).
     """
 
     given = sorted(name for name in REFUSED_SETTINGS if settings.get(name) is not None)
@@ -193,12 +201,16 @@ def measure_target(scene: LoadedScene, parameters: Any, target: Target, settings
         raise ValueError("parameters: a target is measured at the scene's own specimen parameters (set them in the "
                          "scene or with defines)")
     resolved, = resolve("measure", settings, scene_options(scene.bench, Settings))
-    return take_target(scene.bench, resolved, target, scene=scene.fingerprint, source=scene.source)
+    return (take or take_target)(scene.bench, resolved, target, scene=scene.fingerprint, source=scene.source)
 
 
 def take_target(bench: Any, settings: Settings, target: Target, *, scene: str = "", source: dict | None = None
                 ) -> DerivedResult:
-    """Certify ``target`` on ``bench`` with ``settings`` (δ, θi, φi, beam, sampling, seed: the module docstring)."""
+    """
+    Certify ``target`` on ``bench`` with ``settings`` (δ, θi, φi, beam, sampling, seed) by
+    the one-batch Hoeffding route of the module docstring (``bound="hoeffding"``; the
+    default, a betting confidence sequence over batches, is :mod:`.sequential`).
+    """
 
     start = time.perf_counter()
     planned = plan_target(bench, settings, target)

@@ -125,7 +125,7 @@ def measure_target_command(args: Any, keywords: dict[str, Any], report: Callable
     target=...)``) and printed by ``report`` (its summary, or with ``--json`` its ``as_dict()``).
     """
 
-    from virtspec_mi.applications.targets.measure import measure_target
+    from virtspec_mi.applications.targets.sequential import measure_target
     from virtspec_mi.runtime.scene import loaded
 
     try:

@@ -63,6 +63,11 @@ class DerivedResult:
         Whether the certified values meet the tolerance asked for.
     seconds : float
         Wall time of the whole measurement (pilot, sizing, tracing, certificate).
+    bound : str
+        The certificate: ``"betting"`` (a betting confidence sequence over batches,
+        :mod:`.sequential`) or ``"hoeffding"`` (one batch, Hoeffding 1963).
+    batches : tuple of int
+        The rays of each batch, in order (the last is the stopping time).
     """
 
     target: Target
@@ -76,6 +81,8 @@ class DerivedResult:
     colour: Any = None
     met: bool = True
     seconds: float = 0.0
+    bound: str = "hoeffding"
+    batches: tuple[int, ...] = ()
 
     def __getitem__(self, name: str) -> Value:
         for value in self.values:
@@ -94,10 +101,10 @@ class DerivedResult:
         wavelengths = np.atleast_1d(readings.coords["wavelength"])
         lines = [f"target: {self.target.describe()}",
                  f"certified together at delta = {self.delta:g} ({self.statements} linear functional"
-                 f"{'s' if self.statements > 1 else ''}, Hoeffding 1963, each at delta/{self.statements})"
+                 f"{'s' if self.statements > 1 else ''}, {self._bound_words}, each at delta/{self.statements})"
                  + ("" if self.met else "  -- NOT MET: the rays spent certify less than asked (see the intervals)"),
                  f"rays: {self.rays:,} on {len(wavelengths)} wavelengths {wavelengths.min():g}-{wavelengths.max():g} "
-                 f"nm (N_k proportional to |w_k|, {int(np.min(readings.rays)):,}-{int(np.max(readings.rays)):,} "
+                 f"nm ({self._allocation_words}, {int(np.min(readings.rays)):,}-{int(np.max(readings.rays)):,} "
                  f"each)" + (f" + {self.pilot_rays:,} pilot rays (sizing only)" if self.pilot_rays else "")
                  + f", {self.seconds:.3g} s"]
         for v in self.values:
@@ -105,6 +112,17 @@ class DerivedResult:
         lines.append("the per-wavelength readings (result.readings) are the rays spent: they carry no joint "
                      "per-wavelength certificate of their own")
         return "\n".join(lines)
+
+    @property
+    def _allocation_words(self) -> str:
+        return "N_k in proportion to |w_k| sigma_k" if self.bound == "betting" else "N_k proportional to |w_k|"
+
+    @property
+    def _bound_words(self) -> str:
+        if self.bound == "betting":
+            return (f"betting confidence sequence, stopped after batch {len(self.batches)} of rays "
+                    f"{', '.join(f'{b:,}' for b in self.batches)}")
+        return "Hoeffding 1963"
 
     def __repr__(self) -> str:
         head = ", ".join(f"{v.name} = {v.value:.5g} [{v.lower:.5g}, {v.upper:.5g}]" for v in self.values[:3])
@@ -116,6 +134,7 @@ class DerivedResult:
         return {"format": FORMAT, "target": self.target.as_dict(), "description": self.target.describe(),
                 "delta": self.delta, "statements": self.statements, "met": bool(self.met),
                 "rays": int(self.rays), "pilot_rays": int(self.pilot_rays), "seconds": float(self.seconds),
+                "bound": self.bound, "batches": [int(b) for b in self.batches],
                 "functional_tolerances": list(self.functional_tolerances),
                 "values": {v.name: {"value": v.value, "lower": v.lower, "upper": v.upper, "units": v.units,
                                     "long_name": v.long_name} for v in self.values},

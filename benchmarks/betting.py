@@ -1,0 +1,82 @@
+"""
+Betting confidence sequences against Hoeffding's route for certified targets (issue 39)
+========================================================================================
+
+The soybean leaf (shipped scene ``soybean_abmb``: ABM-B, collimated at θi = 8°,
+δ = 0.01, seed 0), each target measured twice in one run, side by side:
+
+- ``bound="hoeffding"`` — the one-batch route (Nₖ ∝ |wₖ|, Hoeffding 1963; the previous
+  main's route, bit-identical);
+- ``bound="betting"`` — batches until the certificate holds, Neyman allocation, a
+  stratified betting confidence sequence (:mod:`virtspec_mi.budgets.betting`).
+
+Rays are those of the estimates plus the pilot's; seconds are the wall time of the whole
+``vm.measure`` call (pilot, sizing, tracing, certificates). The kernel is compiled before
+anything is timed.
+
+Run::
+
+    PYTHONPATH=$PWD .venv/bin/python benchmarks/betting.py [--quick] [--markdown FILE]
+
+``--quick`` leaves out the colour to ΔE₀₀ ≤ 0.5 (Hoeffding's route traces about 1.2·10⁸ rays).
+"""
+
+from __future__ import annotations
+
+import argparse
+import datetime
+import os
+import platform
+
+import virtspec_mi as vm
+
+DELTA = 0.01
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser()
+    parser.add_argument("--quick", action="store_true", help="leave out the colour to dE00 <= 0.5")
+    parser.add_argument("--markdown", help="also write the table to this file")
+    args = parser.parse_args()
+    scene = vm.scenes.path("soybean_abmb")
+    options = dict(delta=DELTA, seed=0, theta_i=8.0, beam="collimated")
+    for bound in ("hoeffding", "betting"):  # compile the kernels (not timed)
+        vm.measure(scene, target=vm.band("B04", tolerance=0.05), bound=bound, **options)
+    targets = [("colour, dE00 <= 1.0", lambda: vm.colour(tolerance_dE00=1.0)),
+               ("S2 B04 & B08, +-0.002", lambda: vm.band("B04", "B08", tolerance=0.002)),
+               ("NDVI, +-0.002", lambda: vm.index("NDVI", tolerance=0.002)),
+               ("fAPAR, +-0.002", lambda: vm.fapar(tolerance=0.002))]
+    if not args.quick:
+        targets.insert(0, ("colour, dE00 <= 0.5", lambda: vm.colour(tolerance_dE00=0.5)))
+    lines = []
+    lanes = 16 if "avx512f" in open("/proc/cpuinfo").read() else 8
+    start = datetime.datetime.now(datetime.timezone.utc)
+    rows = []
+    for name, make in targets:
+        results = {bound: vm.measure(scene, target=make(), bound=bound, **options) for bound in ("hoeffding", "betting")}
+        rows.append((name, results))
+        h, b = results["hoeffding"], results["betting"]
+        print(f"{name}: hoeffding {h.total_rays:,} rays {h.seconds:.2f} s (met {h.met}); betting {b.total_rays:,} "
+              f"rays {b.seconds:.2f} s (met {b.met}, batches {list(b.batches)}); ratio {h.total_rays / b.total_rays:.2f}",
+              flush=True)
+    head = (f"`python benchmarks/betting.py{' --quick' if args.quick else ''}` on {start:%Y-%m-%d %H:%M} UTC, "
+            f"{platform.machine()}, {os.cpu_count()} cores (load at the end {os.getloadavg()[0]:.1f}), SIMD {lanes} "
+            f"lanes; soybean_abmb, collimated 8 deg, delta = {DELTA}, seed 0")
+    lines += [head, "", "| target | Hoeffding: rays | s | betting: rays | s | batches | rays saved | certified (Hoeffding; "
+                        "betting) |", "|---|---:|---:|---:|---:|---:|---:|---|"]
+    for name, results in rows:
+        h, b = results["hoeffding"], results["betting"]
+        shown = (lambda r: f"dE00 <= {r.colour.dE00_radius:.3f}" if r.colour is not None
+                 else f"+-{max(v.half_width for v in r.values):.5f}")
+        lines.append(f"| {name} | {h.total_rays:,} | {h.seconds:.2f} | {b.total_rays:,} | {b.seconds:.2f} | "
+                     f"{len(b.batches)} | {h.total_rays / b.total_rays:.2f}x | {shown(h)}; {shown(b)} |")
+    text = "\n".join(lines)
+    print()
+    print(text)
+    if args.markdown:
+        with open(args.markdown, "w") as handle:
+            handle.write(text + "\n")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,113 @@
+"""
+Targets measured sequentially (bound="betting", applications/targets/sequential.py): fresh
+rays in every batch, determinism, no batch after the certificate holds, what the result
+records, and fewer rays than Hoeffding's route where the variance is small.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import virtspec_mi as vm
+import virtspec_mi.applications.targets.sequential as sequential
+
+DARK = [0.03, 0.05, 0.08, 0.04]
+
+
+@pytest.fixture(scope="module")
+def dark(mi):
+    return vm.instrument_scene({"type": "diffuse", "reflectance": {
+        "type": "regular", "wavelength_min": 300, "wavelength_max": 1000, "values": ", ".join(map(str, DARK))}})
+
+
+def _exact_band(low: float, high: float) -> float:
+    grid = np.arange(low, high + 1)
+    values = np.interp(grid, np.linspace(300, 1000, len(DARK)), DARK)
+    weights = np.ones(len(grid))
+    weights[[0, -1]] = 0.5
+    return float(weights @ values / weights.sum())
+
+
+def test_every_batch_traces_fresh_rays_and_a_seed_gives_one_result(dark, monkeypatch):
+    calls = []
+    original = sequential.trace_allocated
+
+    def recording(bench, settings, readings, rays, offsets=None):
+        calls.append((settings.seed, [r[0] for r in readings], np.asarray(rays), np.asarray(offsets)))
+        return original(bench, settings, readings, rays, offsets=offsets)
+
+    monkeypatch.setattr(sequential, "trace_allocated", recording)
+    target = vm.band((500, 520), tolerance=0.004)
+    first = vm.measure(dark, target=target, delta=0.05, seed=3)
+    pilot, calls = calls[0], calls[1:]  # a linear target's pilot (sizing only) has a seed of its own
+    assert len(first.batches) >= 2 and len(calls) == len(first.batches)
+    assert pilot[0] != calls[0][0] and int(pilot[2].sum()) == first.pilot_rays
+    ranges: dict[float, list[tuple[int, int]]] = {}
+    for seed, wavelengths, rays, offsets in calls:
+        assert seed == calls[0][0]
+        for w, n, o in zip(wavelengths, rays, offsets):
+            ranges.setdefault(w, []).append((int(o), int(o + n)))
+    for w, spans in ranges.items():  # each wavelength continues one stream: no ray twice
+        spans.sort()
+        assert all(a[1] <= b[0] for a, b in zip(spans, spans[1:])), (w, spans)
+    spans = sorted(span for spans in ranges.values() for span in spans)
+    assert all(a[1] <= b[0] for a, b in zip(spans, spans[1:]))  # no ray twice, across wavelengths either
+    monkeypatch.setattr(sequential, "trace_allocated", original)
+    again = vm.measure(dark, target=target, delta=0.05, seed=3)
+    assert again.batches == first.batches and again["band_500-520"] == first["band_500-520"]
+    other = vm.measure(dark, target=target, delta=0.05, seed=4)
+    assert other["band_500-520"].value != first["band_500-520"].value
+
+
+def test_sampling_stops_at_the_first_batch_that_meets_the_target(dark, monkeypatch):
+    target = vm.band((500, 520), tolerance=0.004)
+    result = vm.measure(dark, target=target, delta=0.05, seed=5)
+    assert result.met and result.bound == "betting" and len(result.batches) >= 2
+    assert result.rays == sum(result.batches) == int(np.sum(result.readings.rays))
+    value = result["band_500-520"]
+    assert value.half_width <= 0.004 and value.lower <= _exact_band(500, 520) <= value.upper
+    monkeypatch.setattr(sequential, "MOST_BATCHES", len(result.batches) - 1)
+    shorter = vm.measure(dark, target=target, delta=0.05, seed=5)
+    assert shorter.batches == result.batches[:-1] and not shorter.met  # the last batch was needed
+    assert "NOT MET" in shorter.summary()
+    data = result.as_dict()
+    assert data["bound"] == "betting" and data["batches"] == list(result.batches)
+    assert "betting confidence sequence, stopped after batch" in result.summary()
+
+
+def test_fewer_rays_than_hoeffding_where_the_reflectance_is_small(dark):
+    target = vm.band((450, 600), tolerance=0.002)
+    betting = vm.measure(dark, target=target, delta=0.05, seed=1)
+    hoeffding = vm.measure(dark, target=target, delta=0.05, seed=1, bound="hoeffding")
+    assert betting.met and hoeffding.met and hoeffding.bound == "hoeffding" and not hoeffding.batches
+    assert betting.total_rays < hoeffding.total_rays / 2, (betting.total_rays, hoeffding.total_rays)  # pilot included
+    exact = _exact_band(450, 600)
+    assert betting["band_450-600"].lower <= exact <= betting["band_450-600"].upper
+
+
+def test_a_colour_stops_on_its_own_certificate(dark):
+    result = vm.measure(dark, target=vm.colour(tolerance_dE00=2.0), delta=0.2, seed=2)
+    assert result.met and result.colour.dE00_radius <= 2.0 and "betting confidence sequence" in result.colour.method
+    assert result.pilot_rays > 0 and result.rays == sum(result.batches)
+
+
+def test_a_bound_a_target_does_not_take_is_refused(dark):
+    with pytest.raises(ValueError, match="bound must be one of auto, betting, hoeffding for a target"):
+        vm.measure(dark, target=vm.band("B04"), bound="chebyshev")
+
+
+def test_auto_takes_hoeffdings_route_when_the_pilot_shows_betting_would_not_pay(mi):
+    """The soybean leaf's B04 to +-0.01: few rays per wavelength, a handful in the rarer fate each."""
+
+    leaf = vm.scenes.path("soybean_abmb")
+    target = vm.band("B04", tolerance=0.01)
+    auto = vm.measure(leaf, target=target, seed=2)
+    hoeffding = vm.measure(leaf, target=target, seed=2, bound="hoeffding")
+    assert auto.bound == "hoeffding" and not auto.batches and auto.met
+    assert auto.rays == hoeffding.rays and auto["band_B04"] == hoeffding["band_B04"]  # the same route, same rays
+    assert 0 < auto.pilot_rays < auto.rays / 8  # its pilot (1/16 of Hoeffding's rays) is counted
+    dark = vm.measure(vm.instrument_scene({"type": "diffuse", "reflectance": {
+        "type": "regular", "wavelength_min": 300, "wavelength_max": 1000, "values": ", ".join(map(str, DARK))}}),
+        target=vm.band((500, 520), tolerance=0.004), delta=0.05, seed=3)
+    assert dark.bound == "betting"

@@ -79,6 +79,7 @@ __all__ = [
     "unsealed",
     "check_checksum",
     "check_agreement",
+    "agree_values",
     "read_file",
     "MissingFile",
 ]
@@ -480,6 +481,10 @@ def check_agreement(content: tuple[str, Any], result: Any) -> None:
     """
 
     kind, value = content
+    own = getattr(result, "_agreement", None)  # a kind that shows more than counts checks all it shows
+    if own is not None:
+        own(kind, value)
+        return
     if kind not in ("dataset", "table", "rows"):
         return
     rebuilt = result
@@ -503,6 +508,12 @@ def check_agreement(content: tuple[str, Any], result: Any) -> None:
                 raise ValueError(f"coordinate {name!r} has shape {theirs.shape}; the result it holds gives "
                                  f"{np.shape(values)}")
             _agree_values(str(name), theirs.values, np.asarray(values), "variable")
+
+
+def agree_values(name: str, theirs: Any, ours: Any, what: str = "variable") -> None:
+    """``ValueError`` naming ``what`` ``name`` and the first entry where a file's values differ from the result's."""
+
+    _agree_values(name, np.asarray(theirs), np.asarray(ours), what)
 
 
 def _agree_values(name: str, theirs: np.ndarray, ours: np.ndarray, what: str) -> None:

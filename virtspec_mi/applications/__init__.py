@@ -24,7 +24,10 @@ import warnings
 from importlib.metadata import entry_points
 
 from virtspec_mi.applications.base import Application, Extension
+from virtspec_mi.applications.comparison import ComparisonApplication
+from virtspec_mi.applications.fitting import FittingApplication
 from virtspec_mi.applications.klems import KlemsApplication
+from virtspec_mi.applications.tables import TablesApplication
 from virtspec_mi.applications.targets import TargetsApplication
 
 __all__ = ["APPLICATIONS", "ENTRY_POINTS", "Application", "Extension", "discovered", "extensions"]
@@ -60,7 +63,8 @@ def discovered(builtin: tuple[type[Application], ...]) -> dict[str, type[Applica
     return found
 
 
-APPLICATIONS: dict[str, type[Application]] = discovered((TargetsApplication, KlemsApplication))
+APPLICATIONS: dict[str, type[Application]] = discovered((TargetsApplication, FittingApplication, TablesApplication,
+                                                         KlemsApplication, ComparisonApplication))
 """Every application by name: the built-in ones, then the outside ones (:data:`ENTRY_POINTS`)."""
 
 

@@ -118,7 +118,8 @@ def tagged(content: tuple[str, Any]) -> tuple[str, Any]:
     of every kind: a goniophotometer dataset's ``gonio_json``; a sphere result's
     ``"kind": "sphere_result"`` JSON object or its NetCDF dataset (``json`` attribute and
     the counts as variables) are tagged ``"virtspec-mi sphere 0"`` (the dataset itself is
-    the data); an application's NetCDF file written before the result family (a fit, an
+    the data); a comparison's JSON object without a tag (its figures: ``measured_source``,
+    ``residuals``, ``within``, ``rmse``) ``"virtspec-mi comparison 0"``; an application's NetCDF file written before the result family (a fit, an
     albedo table, a Klems sidecar: a ``format`` attribute, no ``result_json``) by its
     ``format`` (the dataset itself is the data, read by the kind's ``_from_plain``).
     ``ValueError`` if it is no result.
@@ -128,6 +129,8 @@ def tagged(content: tuple[str, Any]) -> tuple[str, Any]:
     if kind == "plain":
         if value.get("kind") == "sphere_result":
             return "virtspec-mi sphere 0", value
+        if "format" not in value and {"measured_source", "residuals", "within", "rmse"} <= set(value):
+            return "virtspec-mi comparison 0", value  # `virtspec compare --json` before the comparison had a tag
         return str(value.get("format")), value
     attrs = value.attrs
     names = (TABLE_ATTRIBUTE,) if kind == "table" else ("result_json", "gonio_json")

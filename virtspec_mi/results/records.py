@@ -67,6 +67,22 @@ def check_record(result: "Record") -> None:
         check_counts(group, counts, rules, where)
 
 
+def _plain(value: Any) -> Any:
+    """A NetCDF attribute as Python's value (numpy's scalars and arrays as numbers and lists)."""
+
+    return value.tolist() if isinstance(value, (np.ndarray, np.generic)) else value
+
+
+def _same(theirs: Any, ours: Any) -> bool:
+    """Whether a file's attribute is the result's: numbers by value (NaN is NaN), anything else as text."""
+
+    theirs, ours = _plain(theirs), _plain(ours)
+    numbers = (int, float)
+    if isinstance(theirs, numbers) and isinstance(ours, numbers) and not isinstance(theirs, bool):
+        return theirs == ours or (theirs != theirs and ours != ours)
+    return str(theirs) == str(ours)
+
+
 class RecordedData:
     """
     Plain data a record read from a file keeps as it was written (a target, a certified
@@ -161,9 +177,10 @@ class Record(ResultBase):
                                      f"{variable.shape}")
                 agree_values(str(name), theirs.values, variable.values)
         for name, value in shown.attrs.items():
-            if name in content.attrs and str(content.attrs[name]) != str(value):
-                raise ValueError(f"the attribute {name!r} holds {str(content.attrs[name])[:60]!r} where the result the "
-                                 f"file holds gives {str(value)[:60]!r} (the file was changed after it was written)")
+            if name in content.attrs and not _same(content.attrs[name], value):
+                theirs = _plain(content.attrs[name])
+                raise ValueError(f"the attribute {name!r} holds {str(theirs)[:60]!r} where the result the file holds "
+                                 f"gives {str(_plain(value))[:60]!r} (the file was changed after it was written)")
 
     def _dataset_attrs(self) -> dict[str, Any]:
         return {"format": self.FORMAT, "result_json": self.sealed_json()}

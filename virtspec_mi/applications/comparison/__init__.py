@@ -61,16 +61,19 @@ import re
 import os
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
 
 from virtspec_mi.base.checks import NANOMETRE_FLOOR, check_nanometres, number
 from virtspec_mi.kernel.counts import QUANTITIES
-from virtspec_mi.results.base import ResultBase, plain_data, round_up
+from virtspec_mi.results.base import ResultBase
 from virtspec_mi.colorimetry.cie import DEFAULT_ILLUMINANT, DEFAULT_OBSERVER, Colour, colorimetry
+from virtspec_mi.applications.base import Application
+from virtspec_mi.applications.comparison.result import Comparison, _range
 
-__all__ = ["MeasuredSpectrum", "Comparison", "read_measured", "compare", "MEASURED_SUFFIXES"]
+__all__ = ["MeasuredSpectrum", "Comparison", "read_measured", "compare", "MEASURED_SUFFIXES",
+           "ComparisonApplication"]
 
 MEASURED_SUFFIXES: tuple[str, ...] = (".csv", ".txt", ".nc", ".json")
 """Files :func:`read_measured` reads (``.json``: a virtspec-mi result file)."""
@@ -200,7 +203,7 @@ def read_measured(source: Any, quantity: str = "reflectance", theta_i: float | N
     check_quantity(quantity)
     if isinstance(source, MeasuredSpectrum):
         return source
-    if isinstance(source, ResultBase):
+    if isinstance(source, ResultBase) and source.QUANTITIES:
         return _from_result(source, quantity, theta_i, "result")
     if isinstance(source, (str, os.PathLike)):
         return _read_file(Path(source), quantity, theta_i)
@@ -385,236 +388,6 @@ def _read_netcdf(path: Path, quantity: str, theta_i: float | None) -> MeasuredSp
 # -- the comparison ------------------------------------------------------------------
 
 
-@dataclass(frozen=True, eq=False)
-class Comparison:
-    """
-    A result against a measured spectrum over their common wavelengths (sorted).
-
-    Attributes
-    ----------
-    quantity : str
-        The result's quantity compared (``reflectance``, a sphere's ``reading`` …).
-    theta_i : float
-        The result's incidence angle used (degrees).
-    wavelengths : ndarray
-        The compared wavelengths: the result's, inside the measured range.
-    simulated, measured : ndarray
-        The result's values and the measured spectrum interpolated onto ``wavelengths``.
-    certified_mu : ndarray
-        The result's certified tolerance per point (NaN: not certified; :attr:`Spectrum.tolerance
-        <virtspec_mi.results.base.Spectrum>`).
-    measurement_uncertainty : ndarray
-        The measurement's uncertainty per point (zeros when not given).
-    left_out : ndarray
-        Result wavelengths outside the measured range (not compared).
-    interpolated : int
-        Compared points that fall between measured wavelengths (linearly interpolated).
-    delta_E : float
-        ΔE2000 between the colours of both spectra (NaN: not computed, see ``delta_E_note``).
-    delta_E_note : str
-        Why ΔE2000 was not computed (empty when it was).
-    simulated_colour, measured_colour : Colour or None
-        The colours behind ``delta_E``.
-    illuminant, observer : str
-        The colorimetry's illuminant and observer.
-    result : ResultBase
-        The result compared (any kind).
-    spectrum : MeasuredSpectrum
-        The measured spectrum as read.
-    result_name : str
-        A name for the result (its file name, or ``"result"``).
-    """
-
-    quantity: str
-    theta_i: float
-    wavelengths: np.ndarray
-    simulated: np.ndarray
-    measured: np.ndarray
-    certified_mu: np.ndarray
-    measurement_uncertainty: np.ndarray
-    left_out: np.ndarray
-    interpolated: int
-    delta_E: float
-    delta_E_note: str
-    simulated_colour: Colour | None
-    measured_colour: Colour | None
-    illuminant: str
-    observer: str
-    result: ResultBase
-    spectrum: MeasuredSpectrum
-    result_name: str = "result"
-
-    # -- statistics ----------------------------------------------------------------
-
-    @property
-    def residuals(self) -> np.ndarray:
-        """Simulated − measured at each compared wavelength."""
-
-        return self.simulated - self.measured
-
-    @property
-    def tolerance(self) -> np.ndarray:
-        """The combined tolerance per point: certified μ' + measurement uncertainty (NaN: not certified)."""
-
-        return self.certified_mu + self.measurement_uncertainty
-
-    @property
-    def certified(self) -> np.ndarray:
-        """True at the compared points the result certifies."""
-
-        return ~np.isnan(self.certified_mu)
-
-    @property
-    def within(self) -> np.ndarray:
-        """True where |residual| ≤ the combined tolerance (False where not certified)."""
-
-        tolerance = np.where(self.certified, self.tolerance, -np.inf)
-        return np.abs(self.residuals) <= tolerance
-
-    @property
-    def points_within(self) -> int:
-        return int(self.within.sum())
-
-    @property
-    def share_within(self) -> float:
-        """Share of the certified compared points within their tolerance (NaN when none is certified)."""
-
-        certified = int(self.certified.sum())
-        return self.points_within / certified if certified else math.nan
-
-    @property
-    def rmse(self) -> float:
-        return float(np.sqrt(np.mean(self.residuals ** 2)))
-
-    @property
-    def mean_absolute_difference(self) -> float:
-        return float(np.mean(np.abs(self.residuals)))
-
-    @property
-    def largest_difference(self) -> tuple[float, float]:
-        """(|residual|, wavelength) of the largest absolute residual."""
-
-        k = int(np.argmax(np.abs(self.residuals)))
-        return float(abs(self.residuals[k])), float(self.wavelengths[k])
-
-    @property
-    def interpolation_distance(self) -> float:
-        """Largest distance (nm) from a compared wavelength to the nearest measured one (0: none interpolated)."""
-
-        gaps = np.abs(self.wavelengths[:, None] - self.spectrum.wavelengths[None, :]).min(axis=1)
-        return float(gaps.max())
-
-    @property
-    def interval_delta(self) -> float:
-        """δ of each certified point."""
-
-        return self.result.spectrum(self.quantity, self.theta_i).delta
-
-    def simulated_spectrum(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """The result's whole spectrum at θi, sorted: (wavelengths, values, certified_mu), left-out points included."""
-
-        spectrum = self.result.spectrum(self.quantity, self.theta_i)
-        return spectrum.wavelengths, spectrum.values, spectrum.tolerance
-
-    # -- reports -------------------------------------------------------------------
-
-    def summary(self) -> str:
-        """Human-readable report: what was compared, the residuals, the tolerance and ΔE2000."""
-
-        n, measured = len(self.wavelengths), self.spectrum
-        total = n + len(self.left_out)
-        lines = [
-            f"{self.quantity} at theta_i = {self.theta_i:g} deg: {self.result_name} against {measured.source}",
-            f"compared {n} of {total} wavelengths ({_range(self.wavelengths)} nm; measured "
-            f"{_range(measured.wavelengths)} nm, {len(measured.wavelengths)} points; {self.interpolated} "
-            "interpolated linearly)",
-        ]
-        if len(self.left_out):
-            lines.append(f"left out (outside the measured range, never extrapolated): {_listed(self.left_out)} nm")
-        largest, at = self.largest_difference
-        lines.append(f"RMSE = {self.rmse:.5f}, mean |difference| = {self.mean_absolute_difference:.5f}, "
-                     f"largest |difference| = {largest:.5f} at {at:g} nm")
-        lines.append(self._tolerance_line())
-        if self.delta_E_note:
-            lines.append(f"Delta E 2000: {self.delta_E_note}")
-        else:
-            lines.append(f"Delta E 2000 = {self.delta_E:.3f} under {self.illuminant} ({self.observer}; "
-                         f"Lab simulated {_triple(self.simulated_colour.Lab)}, measured "
-                         f"{_triple(self.measured_colour.Lab)}; {self.simulated_colour.coverage:.1%} of the "
-                         "colour-matching weight covered)")
-        if self.interpolated:
-            lines.append(f"note: {self.interpolated} compared points lie between measured wavelengths (up to "
-                         f"{self.interpolation_distance:g} nm from one): the error of interpolating the measured "
-                         "spectrum there is in the residuals, not in the tolerance")
-        if measured.note:
-            lines.append(f"note: {measured.note}")
-        return "\n".join(lines)
-
-    def _tolerance_line(self) -> str:
-        certified = int(self.certified.sum())
-        if not certified:
-            return ("tolerance: the result is NOT CERTIFIED (weight violations or capped walks): no tolerance to "
-                    "test the residuals against")
-        largest_mu = round_up(float(np.nanmax(self.certified_mu)))
-        largest_u = round_up(float(np.max(self.measurement_uncertainty)))
-        uncertainty = (f" + measurement uncertainty (<= {largest_u:g})" if largest_u > 0
-                       else " (no measurement uncertainty given)")
-        text = (f"within the combined tolerance, certified mu' (<= {largest_mu:g}, "
-                f"each point with probability >= {1 - self.interval_delta:g}){uncertainty}: "
-                f"{self.points_within} of {certified} points ({self.share_within:.1%})")
-        if certified < len(self.wavelengths):
-            text += f"; {len(self.wavelengths) - certified} points NOT CERTIFIED, left out of the share"
-        return text
-
-    def as_dict(self) -> dict[str, Any]:
-        """Every figure by name as plain data (JSON-ready; NaN as ``None``)."""
-
-        plain = plain_data
-
-        return {
-            "quantity": self.quantity,
-            "theta_i": self.theta_i,
-            "result": self.result_name,
-            "scene": self.result.scene,
-            "measured_source": self.spectrum.source,
-            "measured_range": [float(self.spectrum.wavelengths[0]), float(self.spectrum.wavelengths[-1])],
-            "measured_points": len(self.spectrum.wavelengths),
-            "wavelengths": plain(self.wavelengths),
-            "simulated": plain(self.simulated),
-            "measured": plain(self.measured),
-            "residuals": plain(self.residuals),
-            "certified_mu": plain(self.certified_mu),
-            "measurement_uncertainty": plain(self.measurement_uncertainty),
-            "tolerance": plain(self.tolerance),
-            "within": plain(self.within),
-            "compared": len(self.wavelengths),
-            "interpolated": self.interpolated,
-            "interpolation_distance": self.interpolation_distance,
-            "left_out": plain(self.left_out),
-            "interval_delta": self.interval_delta,
-            "certified": bool(np.all(self.certified)),
-            "points_within": self.points_within,
-            "share_within": None if math.isnan(self.share_within) else self.share_within,
-            "rmse": self.rmse,
-            "mean_absolute_difference": self.mean_absolute_difference,
-            "largest_difference": self.largest_difference[0],
-            "delta_E_2000": None if math.isnan(self.delta_E) else self.delta_E,
-            "delta_E_note": self.delta_E_note,
-            "illuminant": self.illuminant,
-            "observer": self.observer,
-            "Lab_simulated": None if self.simulated_colour is None else plain(self.simulated_colour.Lab),
-            "Lab_measured": None if self.measured_colour is None else plain(self.measured_colour.Lab),
-            "note": self.spectrum.note,
-        }
-
-    def plot(self, path: str | os.PathLike | None = None, **options: Any) -> Any:
-        """The overlay with a residual panel (:func:`virtspec_mi.results.plot.plot_comparison`)."""
-
-        from virtspec_mi.results.plot import plot_comparison
-
-        return plot_comparison(self, path, **options)
-
-
 def compare(
     result: ResultBase | str | os.PathLike,
     measured: Any,
@@ -726,24 +499,22 @@ def _check_colour_names(illuminant: str, observer: str) -> None:
 
 
 def _result_of(result: Any) -> tuple[ResultBase, str]:
-    if isinstance(result, ResultBase):
+    if isinstance(result, ResultBase) and result.QUANTITIES:
         return result, "result"
+    if isinstance(result, ResultBase):
+        raise ValueError(f"result must be a reading with a spectrum (a Result, GonioResult or SphereResult; got a "
+                         f"{result.KIND})")
     if isinstance(result, (str, os.PathLike)):
         from virtspec_mi.runtime.reading import read_result
 
-        return read_result(result), Path(result).name
+        return _result_of(read_result(result))[0], Path(result).name
     raise ValueError("result must be a virtspec-mi result (a Result, GonioResult or SphereResult) or a result file "
                      f"(got {type(result).__name__})")
 
 
-def _range(wavelengths: np.ndarray) -> str:
-    return f"{wavelengths.min():g}-{wavelengths.max():g}"
+class ComparisonApplication(Application):
+    """Simulated against measured spectra: ``vm.compare``, ``virtspec compare``."""
 
-
-def _listed(values: np.ndarray, shown: int = 8) -> str:
-    text = ", ".join(f"{v:g}" for v in values[:shown])
-    return text + (f", ... ({len(values)} in all)" if len(values) > shown else "")
-
-
-def _triple(values: np.ndarray) -> str:
-    return "(" + ", ".join(f"{v:.2f}" for v in values) + ")"
+    name: ClassVar[str] = "comparison"
+    summary: ClassVar[str] = "a simulated spectrum against a measured one: residuals, combined tolerance, Delta E 2000"
+    results: ClassVar[tuple[type, ...]] = (Comparison,)

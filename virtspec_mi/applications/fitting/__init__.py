@@ -19,13 +19,24 @@ Féret et al. (2017), RSE 193:204–215; Jacquemoud & Baret (1990), RSE 34:75–
 from __future__ import annotations
 
 import importlib
-from typing import Any
+from typing import Any, ClassVar
 
-__all__ = ["fit", "FitResult", "read_fit", "LOSSES"]
+from virtspec_mi.applications.base import Application
+from virtspec_mi.applications.fitting.result import FitResult
 
-_LAZY = {"fit": "inversion", "LOSSES": "inversion", "FitResult": "result", "read_fit": "result"}
+__all__ = ["fit", "FitResult", "read_fit", "LOSSES", "FittingApplication"]
+
+_LAZY = {"fit": "inversion", "LOSSES": "inversion", "read_fit": "result"}
 """Where each name lives: imported on first use, so that ``virtspec``'s parser (which adds ``virtspec fit``
 from :mod:`.command`) does not import SciPy's optimisers."""
+
+
+class FittingApplication(Application):
+    """Specimen parameters fitted to a measured spectrum: ``vm.fit``, ``virtspec fit``."""
+
+    name: ClassVar[str] = "fitting"
+    summary: ClassVar[str] = "specimen parameters fitted to a measured spectrum, with a confidence set"
+    results: ClassVar[tuple[type, ...]] = (FitResult,)
 
 
 def __getattr__(name: str) -> Any:

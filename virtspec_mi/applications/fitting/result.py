@@ -21,7 +21,6 @@ Baranoski et al. (2001), eq. (23) (the certified tolerance of each fitted value)
 
 from __future__ import annotations
 
-import json
 import math
 import os
 from dataclasses import dataclass, field

@@ -687,41 +687,9 @@ class AlbedoTable(Record):
             label = {d: float(coords[d][i]) for d, i in zip(dims, index)}
             flagged.append({"index": tuple(int(i) for i in index), **label, "published": float(values[index]),
                             "certified": float(mine[index]), "tolerance": float(tol[index])})
+        from virtspec_mi.applications.tables.comparison import TableComparison
+
         return TableComparison(self, values, tuple(dims), flagged, int(mine.size), average, side, rounding)
-
-
-@dataclass(frozen=True, eq=False)
-class TableComparison:
-    """A published table against a certified one (:meth:`AlbedoTable.compare`)."""
-
-    table: AlbedoTable
-    published: np.ndarray
-    dims: tuple[str, ...]
-    outside: list[dict[str, Any]]
-    cells: int
-    average: bool
-    side: str
-    rounding: float
-
-    @property
-    def share_outside(self) -> float:
-        return len(self.outside) / self.cells
-
-    def summary(self, limit: int = 20) -> str:
-        what = "E_avg" if self.average else "E"
-        side = f" ({self.side})" if self.table.model == "glass" else ""
-        head = (f"{what}{side}: {len(self.outside):,} of {self.cells:,} published cells outside the certified interval "
-                f"(|published - certified| >= epsilon' + rounding {self.rounding:g}; the certificate: "
-                f"{self.table.statement()})")
-        if not self.outside:
-            return head
-        lines = [head, "  " + "  ".join(f"{d:>9}" for d in self.dims) + "  published  certified  epsilon'"]
-        for cell in self.outside[:limit]:
-            lines.append("  " + "  ".join(f"{cell[d]:9.5g}" for d in self.dims)
-                         + f"  {cell['published']:9.6f}  {cell['certified']:9.6f}  {cell['tolerance']:.3g}")
-        if len(self.outside) > limit:
-            lines.append(f"  ... and {len(self.outside) - limit:,} more")
-        return "\n".join(lines)
 
 
 def read_albedo_table(path: str | os.PathLike) -> AlbedoTable:
@@ -825,6 +793,4 @@ def _sidecar(path: Path) -> Path:
 AlbedoTable.EXPORTS = {".npy": _write_npy, ".h": _write_header, ".hpp": _write_header}
 AlbedoTable.COMPANIONS = {".npy": _sidecar}
 
-
-
-# ----------------------------------------------------------------------------- measuring
+from virtspec_mi.applications.tables.comparison import TableComparison  # noqa: E402  (it holds an AlbedoTable)

@@ -25,13 +25,17 @@ from typing import Any, ClassVar, Mapping
 
 import numpy as np
 
-from virtspec_mi.colorimetry.cie import Colour
+from pathlib import Path
+
+from virtspec_mi.applications.comparison.measured import _MATCH_NM, MeasuredSpectrum, read_measured
+from virtspec_mi.base.checks import number
+from virtspec_mi.colorimetry.cie import DEFAULT_ILLUMINANT, DEFAULT_OBSERVER, Colour, colorimetry
 from virtspec_mi.results.base import ResultBase, plain_data, round_up
 from virtspec_mi.results.figures import Figure
 from virtspec_mi.results.integrity import field_value, finite_labels, optional_numbers
 from virtspec_mi.results.records import Record, RecordedData
 
-__all__ = ["Comparison"]
+__all__ = ["Comparison", "compare"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -320,7 +324,6 @@ class Comparison(Record):
 
     @classmethod
     def _from_dict(cls, data: Mapping[str, Any]) -> "Comparison":
-        from virtspec_mi.applications.comparison import MeasuredSpectrum, compare
         from virtspec_mi.results.kinds import kind_of
 
         compared = field_value(data, "compared_result", "object")
@@ -392,3 +395,122 @@ def _listed(values: np.ndarray, shown: int = 8) -> str:
 
 def _triple(values: np.ndarray) -> str:
     return "(" + ", ".join(f"{v:.2f}" for v in values) + ")"
+
+
+def compare(
+    result: ResultBase | str | os.PathLike,
+    measured: Any,
+    *,
+    quantity: str | None = None,
+    theta_i: float | None = None,
+    measurement_uncertainty: Any = None,
+    illuminant: str = DEFAULT_ILLUMINANT,
+    observer: str = DEFAULT_OBSERVER,
+) -> Comparison:
+    """
+    Compare a result with a measured spectrum over their common wavelengths.
+
+    Parameters
+    ----------
+    result
+        A result of any kind (a reading or a sweep, a goniophotometer reading, a sphere
+        reading) or a result file (``.nc``, ``.csv``, ``.json``, ``.zarr``; also
+        ``virtspec measure --json`` output). A parameter sweep: select one point first.
+    measured
+        A measured spectrum: a file (colour-science CSV, plain ``wavelength,value[,
+        uncertainty]`` CSV, NetCDF, a result file), a ``colour.SpectralDistribution``, a
+        ``(wavelengths, values[, uncertainty])`` tuple or a :class:`MeasuredSpectrum`.
+    quantity
+        The result's quantity (its ``QUANTITIES``; default the first): ``reflectance``,
+        ``transmittance`` or ``absorptance`` of a reading (the measured column of that
+        name), or a sphere reading's ``reading``, ``corrected`` or ``hemispherical`` (the
+        measured column of what the sphere measures).
+    theta_i
+        The result's angle to use (needed for a sweep over several angles).
+    measurement_uncertainty
+        A number or one value per measured point, added to the certified tolerance;
+        overrides an uncertainty column of the file. Default: the file's, else none.
+    illuminant, observer
+        For ΔE2000 (names of ``colour.SDS_ILLUMINANTS`` and ``colour.MSDS_CMFS``).
+
+    Raises
+    ------
+    ValueError
+        Bad input, or no result wavelength inside the measured range (nothing to compare).
+    """
+
+    result, result_name = _result_of(result)
+    quantity = result.check_quantity(quantity)
+    theta_i = None if theta_i is None else number("theta_i", theta_i)  # one of the result's angles: checked there
+    _check_colour_names(illuminant, observer)
+    simulation = result.spectrum(quantity, theta_i)
+    spectrum = read_measured(measured, simulation.measures, theta_i)
+    if measurement_uncertainty is not None:
+        spectrum = spectrum.with_uncertainty(measurement_uncertainty)
+    wavelengths = simulation.wavelengths
+    low, high = spectrum.wavelengths[0], spectrum.wavelengths[-1]
+    inside = (wavelengths >= low - _MATCH_NM) & (wavelengths <= high + _MATCH_NM)
+    if not inside.any():
+        raise ValueError(f"the result's wavelengths ({_range(wavelengths)} nm) lie outside the measured range "
+                         f"{_range(spectrum.wavelengths)} nm of {spectrum.source}: nothing to compare")
+    compared = wavelengths[inside]
+    at = np.clip(compared, low, high)
+    measured_values = np.interp(at, spectrum.wavelengths, spectrum.values)
+    uncertainty = (np.zeros(len(compared)) if spectrum.uncertainty is None
+                   else np.interp(at, spectrum.wavelengths, spectrum.uncertainty))
+    nearest = np.min(np.abs(compared[:, None] - spectrum.wavelengths[None, :]), axis=1)
+    simulated = simulation.values[inside]
+    delta_e, note, colours = _delta_e(compared, simulated, measured_values, simulation.measures, illuminant, observer)
+    return Comparison(
+        quantity=quantity, theta_i=simulation.theta_i, wavelengths=compared, simulated=simulated,
+        measured=measured_values, certified_mu=simulation.tolerance[inside],
+        measurement_uncertainty=uncertainty, left_out=wavelengths[~inside],
+        interpolated=int(np.sum(nearest > _MATCH_NM)), delta_E=delta_e, delta_E_note=note,
+        simulated_colour=colours[0], measured_colour=colours[1], illuminant=illuminant, observer=observer,
+        result=result, spectrum=spectrum, result_name=result_name)
+
+
+def _delta_e(wavelengths: np.ndarray, simulated: np.ndarray, measured: np.ndarray, quantity: str, illuminant: str,
+             observer: str) -> tuple[float, str, tuple[Colour | None, Colour | None]]:
+    """ΔE2000 of the two spectra on the same wavelengths, or NaN and the reason."""
+
+    import colour
+
+    if quantity == "absorptance":
+        return math.nan, "not computed: colour is for reflectance or transmittance spectra", (None, None)
+    if len(wavelengths) < 2:
+        return math.nan, "not computed: colorimetry needs at least two wavelengths (1 compared)", (None, None)
+    try:
+        with colour.utilities.suppress_warnings(colour_runtime_warnings=True):
+            colours = tuple(colorimetry(colour.SpectralDistribution(values, wavelengths), illuminant, observer)
+                            for values in (simulated, measured))
+    except ValueError as error:
+        return math.nan, f"not computed: {error}", (None, None)
+    delta_e = float(colour.delta_E(colours[0].Lab, colours[1].Lab, method="CIE 2000"))
+    return delta_e, "", colours  # type: ignore[return-value]
+
+
+# -- helpers -------------------------------------------------------------------------
+
+
+def _check_colour_names(illuminant: str, observer: str) -> None:
+    import colour
+
+    if illuminant not in colour.SDS_ILLUMINANTS:
+        raise ValueError(f"illuminant must be a name of colour.SDS_ILLUMINANTS, e.g. D65, A, D50 (got {illuminant!r})")
+    if observer not in colour.MSDS_CMFS:
+        raise ValueError(f"observer must be a name of colour.MSDS_CMFS, e.g. {DEFAULT_OBSERVER!r} (got {observer!r})")
+
+
+def _result_of(result: Any) -> tuple[ResultBase, str]:
+    if isinstance(result, ResultBase) and result.QUANTITIES:
+        return result, "result"
+    if isinstance(result, ResultBase):
+        raise ValueError(f"result must be a reading with a spectrum (a Result, GonioResult or SphereResult; got a "
+                         f"{result.KIND})")
+    if isinstance(result, (str, os.PathLike)):
+        from virtspec_mi.runtime.reading import read_result
+
+        return _result_of(read_result(result))[0], Path(result).name
+    raise ValueError("result must be a virtspec-mi result (a Result, GonioResult or SphereResult) or a result file "
+                     f"(got {type(result).__name__})")

@@ -63,9 +63,9 @@ class TableComparison(Record):
 
     @classmethod
     def _from_dict(cls, data: Mapping[str, Any]) -> "TableComparison":
-        from virtspec_mi.applications.tables.table import AlbedoTable
+        from virtspec_mi.results.kinds import kind_of
 
-        table = AlbedoTable.from_dict(field_value(data, "table", "object"))
+        table = kind_of("virtspec-mi albedo table 1").from_dict(field_value(data, "table", "object"))
         again = table.compare(np.asarray(optional_numbers(data["published"], "published")),
                               average=field_value(data, "average", "flag"), side=field_value(data, "side", "text"),
                               rounding=float(data["rounding"]))

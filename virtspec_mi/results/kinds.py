@@ -8,11 +8,12 @@ format tag registers itself there when defined — hemispherical
 goniophotometer (:class:`~virtspec_mi.instruments.goniophotometer.result.GonioResult`,
 ``"virtspec-mi gonio 1"``), integrating sphere
 (:class:`~virtspec_mi.instruments.sphere.result.SphereResult`, ``"virtspec-mi sphere 1"``) and any
-instrument's own, e.g. the gloss meter's) and :func:`read_result`, which reads a file of
+instrument's own, e.g. the gloss meter's; the applications' records, :mod:`virtspec_mi.results.records`:
+a certified target, a fit, an albedo table, Klems matrices, a comparison) and :func:`read_result`, which reads a file of
 any of them (NetCDF, CSV, JSON, Zarr; also ``virtspec measure --json`` output and files
 written before every kind had a tag) by the tag it carries
 (:func:`virtspec_mi.results.formats.tagged`). :func:`virtspec_mi.read_result` loads the
-instrument registry first, so that the kinds of every instrument are known.
+instruments' and the applications' registries first, so that every kind is known.
 
 References
 ----------

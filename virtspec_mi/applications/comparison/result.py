@@ -76,7 +76,7 @@ class Comparison(Record):
         The colorimetry's illuminant and observer.
     result : ResultBase
         The result compared (any kind).
-    spectrum : MeasuredSpectrum
+    spectrum : virtspec_mi.applications.comparison.measured.MeasuredSpectrum
         The measured spectrum as read.
     result_name : str
         A name for the result (its file name, or ``"result"``).
@@ -419,7 +419,8 @@ def compare(
     measured
         A measured spectrum: a file (colour-science CSV, plain ``wavelength,value[,
         uncertainty]`` CSV, NetCDF, a result file), a ``colour.SpectralDistribution``, a
-        ``(wavelengths, values[, uncertainty])`` tuple or a :class:`MeasuredSpectrum`.
+        ``(wavelengths, values[, uncertainty])`` tuple or a
+        :class:`~virtspec_mi.applications.comparison.measured.MeasuredSpectrum`.
     quantity
         The result's quantity (its ``QUANTITIES``; default the first): ``reflectance``,
         ``transmittance`` or ``absorptance`` of a reading (the measured column of that

@@ -170,11 +170,14 @@ def _canonical(data) -> dict:
     return json.loads(json.dumps(data, sort_keys=True, default=lambda v: np.asarray(v).tolist()))
 
 
-@pytest.mark.parametrize("file", sorted(name for name in _MANIFEST["files"]
-                                        if not name.endswith((".h", "_avg.npy"))))
+@pytest.mark.parametrize("file", sorted(name for name in _MANIFEST["files"] if not name.endswith("_avg.npy")))
 def test_every_application_file_of_04d2580_reads_to_what_it_held(file):
     entry = _MANIFEST["files"][file]
     held = json.loads(_MANIFEST["held"][entry["class"]])
+    if file == "albedo.h":  # a header: the values alone (held to the table below)
+        with pytest.raises(ValueError, match="a C header holds an albedo table's values, not its counts"):
+            vm.read_result(APPLICATIONS_04D2580 / file)
+        return
     if file in ("albedo.json", "albedo.npy"):  # the .npy's sidecar held the description, not the counts
         with pytest.raises(ValueError, match="description without its counts .* read the table's .nc"):
             vm.read_result(APPLICATIONS_04D2580 / file)

@@ -28,9 +28,7 @@ import numpy as np
 
 from virtspec_mi.budgets.intervals import clopper_pearson_each
 from virtspec_mi.exchange.common import check_companions
-from virtspec_mi.base.files import atomic_write
-from virtspec_mi.results.integrity import CountRules, checksum, field_value, finite_labels, optional_numbers, \
-    whole_counts
+from virtspec_mi.results.integrity import CountRules, field_value, finite_labels, optional_numbers, whole_counts
 from virtspec_mi.results.records import Record, plain_floats
 
 __all__ = ["MODELS", "DISTRIBUTIONS", "BOUNDS", "SIDES", "TableBudget", "AlbedoTable", "TableComparison",
@@ -758,39 +756,9 @@ def _ours(npy: Path) -> bool:
         return False
 
 
-def _save_npy(path: str, values: np.ndarray) -> None:
-    with open(path, "wb") as handle:
-        np.save(handle, values)
-
-
-def _write_npy(table: AlbedoTable, path: Path) -> Path:
-    """Ê as float32 in the engine's memory order; E_avg in ``NAME_avg.npy``; the whole table in ``NAME.json``."""
-
-    atomic_write(path, lambda tmp: _save_npy(tmp, table.layout().astype(np.float32)))
-    if table.E_avg is not None:
-        avg = path.with_name(path.stem + "_avg.npy")
-        atomic_write(avg, lambda tmp: _save_npy(tmp, table.E_avg.astype(np.float32)))
-    data = table.as_dict()
-    sealed = {**data, "checksum": checksum(data)}
-    atomic_write(path.with_suffix(".json"), lambda tmp: Path(tmp).write_text(json.dumps(sealed, indent=1)))
-    return path
-
-
-def _write_header(table: AlbedoTable, path: Path) -> Path:
-    from virtspec_mi.exchange.header import write_header
-
-    atomic_write(path, lambda tmp: Path(tmp).write_text(write_header(table)))
-    return path
-
-
-def _sidecar(path: Path) -> Path:
-    """The ``NAME.json`` of a table's ``NAME.npy`` (or of its ``NAME_avg.npy``)."""
-
-    stem = path.stem[:-4] if path.stem.endswith("_avg") else path.stem
-    return path.with_name(stem + ".json")
-
+from virtspec_mi.applications.tables.files import _sidecar, _values_only, _write_header, _write_npy  # noqa: E402
 
 AlbedoTable.EXPORTS = {".npy": _write_npy, ".h": _write_header, ".hpp": _write_header}
-AlbedoTable.COMPANIONS = {".npy": _sidecar}
+AlbedoTable.COMPANIONS = {".npy": _sidecar, ".h": _values_only, ".hpp": _values_only}
 
 from virtspec_mi.applications.tables.comparison import TableComparison  # noqa: E402  (it holds an AlbedoTable)

@@ -2,7 +2,8 @@
 The result family: :class:`ResultBase`
 ======================================
 
-Every result kind — the hemispherical reading (:class:`~virtspec_mi.results.readings.Result`),
+Every result kind (the applications' records too: :mod:`virtspec_mi.results.records`) —
+the hemispherical reading (:class:`~virtspec_mi.results.readings.Result`),
 the goniophotometer reading (:class:`~virtspec_mi.instruments.goniophotometer.result.GonioResult`) and the
 integrating-sphere reading (:class:`~virtspec_mi.instruments.sphere.result.SphereResult`) — is an
 immutable set of exact counts over labelled dimensions (xarray conventions) with
@@ -22,7 +23,8 @@ everything else derived from them. This module holds what they share, written on
   carried in the JSON object (``format``) and in every dataset (attributes ``format`` and
   ``result_json``, the whole result as JSON); :meth:`ResultBase.write` /
   :meth:`ResultBase.read` through :mod:`virtspec_mi.results.io` (NetCDF, CSV, JSON, Zarr;
-  atomic writes); every file read — and every dict given to :meth:`ResultBase.from_dict` —
+  atomic writes; a kind's own ``EXPORTS``, read through the result file they accompany,
+  ``COMPANIONS``: :func:`holder`); every file read — and every dict given to :meth:`ResultBase.from_dict` —
   is checked by the rules of :mod:`virtspec_mi.results.integrity` (whole counts that add
   up as the kind says, :meth:`ResultBase._count_groups`; finite labels; shapes; tags;
   the checksum of :meth:`ResultBase.sealed_json`); every variable and coordinate of

@@ -59,14 +59,14 @@ def _plot(result: Any, path: Any, quantity: Any, **options: Any) -> Any:
 def _readings(data: Mapping[str, Any]) -> Result:
     """
     A target's readings from their JSON object, checked by every rule of a reading's but
-    the settings' μ: their rays follow the target's weights (Nₖ ∝ |wₖ|), not the μ their
-    settings state.
+    the one of the settings' μ: their rays follow the target's weights (Nₖ ∝ |wₖ|), not the
+    μ their settings state (their wavelengths and θi are checked against the settings').
     """
 
     if data.get("format") != Result.FORMAT:
         raise ValueError(f"'readings' must be a hemispherical reading (format {Result.FORMAT!r})")
     readings = Result._from_dict(data)
-    check_result(readings, settings=False)
+    check_result(readings, sized=False)
     readings._check_stored(data)
     check_checksum(data)
     return readings

@@ -24,9 +24,9 @@ from typing import Any, ClassVar
 from virtspec_mi.applications.base import Application
 from virtspec_mi.applications.fitting.result import FitResult
 
-__all__ = ["fit", "FitResult", "read_fit", "LOSSES", "FittingApplication"]
+__all__ = ["fit", "FitResult", "read_fit", "LOSSES"]
 
-_LAZY = {"fit": "inversion", "LOSSES": "inversion", "read_fit": "result"}
+_LAZY = {"fit": "inversion", "LOSSES": "inversion", "FitResult": "result", "read_fit": "result"}
 """Where each name lives: imported on first use, so that ``virtspec``'s parser (which adds ``virtspec fit``
 from :mod:`.command`) does not import SciPy's optimisers."""
 

@@ -2,7 +2,7 @@
 The result of a target: certified derived quantities and the readings behind them
 =================================================================================
 
-A :class:`DerivedResult` holds what :func:`~.measure.take_target` certified — each
+A :class:`DerivedResult` holds what :func:`~virtspec_mi.applications.targets.measure.take_target` certified — each
 quantity (:class:`~.targets.Value`) with its interval, all of them together with
 probability ≥ 1 − δ — the rays spent (the pilot's apart), the tolerance each linear
 functional was certified to, and the per-wavelength readings
@@ -184,7 +184,10 @@ class DerivedResult(Record):
                 "readings": self.readings.as_dict()}
 
     def plot(self, path: Any = None) -> Any:
-        """A colour swatch with its certified ΔE₀₀ radius, or the values with error bars (:mod:`virtspec_mi.applications.targets.plot`)."""
+        """
+        A colour swatch with its certified ΔE₀₀ radius, or the values with error bars
+        (:mod:`~virtspec_mi.applications.targets.plot`).
+        """
 
         from virtspec_mi.applications.targets.plot import plot_derived
 

@@ -297,3 +297,20 @@ def test_the_other_readers_are_read_result_of_their_kind(application_results, tm
         vm.read_fit(table.write(tmp_path / "table.json"))
     with pytest.raises(ValueError, match="a fit is written as .nc, .json"):
         fit.write(tmp_path / "fit.csv")
+
+
+@pytest.mark.parametrize("file, edit, words", [
+    ("albedo.nc", lambda d: d["reflected"].values.__setitem__((0, 0), d["rays"].values[0, 0] + 5),
+     "'reflected' holds a count above 'rays'"),
+    ("klems.nc", lambda d: d["rays"].values.__setitem__((0, 0, 0), 0), "'rays' must be at least 1"),
+    ("fit.nc", lambda d: d.attrs.__setitem__("traced_rays", d.attrs["rays"] + 1), "'traced_rays' holds a count above"),
+])
+def test_an_edited_file_of_04d2580_is_refused(tmp_path, file, edit, words):
+    import xarray as xr
+
+    with xr.open_dataset(APPLICATIONS_04D2580 / file) as opened:
+        dataset = opened.load()
+    edit(dataset)
+    dataset.to_netcdf(tmp_path / file)
+    with pytest.raises(ValueError, match=f"result file {tmp_path / file}: .*{words}"):
+        vm.read_result(tmp_path / file)

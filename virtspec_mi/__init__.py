@@ -57,6 +57,7 @@ _LAZY = {
     "read_samples": "virtspec_mi.exchange.measured",
     "colour_difference": "virtspec_mi.applications.targets.difference",
     "DerivedResult": "virtspec_mi.applications.targets.result",
+    "DerivedSweep": "virtspec_mi.applications.targets.result",
     "fit": "virtspec_mi.applications.fitting",
     "read_fit": "virtspec_mi.applications.fitting",
     "FitResult": "virtspec_mi.applications.fitting",

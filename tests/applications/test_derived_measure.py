@@ -113,12 +113,16 @@ def test_target_strings():
         parse_target("index:NDVI,dE00=1")
 
 
-def test_the_cli_measures_a_target(mi, capsys):
+def test_the_cli_measures_a_target(mi, capsys, tmp_path):
     from virtspec_mi.cli import main
 
     assert main(["measure", "soybean_abmb", "--target", "band:B08,tolerance=0.01", "--json"]) == 0
-    data = json.loads(capsys.readouterr().out)
+    printed = capsys.readouterr().out
+    data = json.loads(printed)
     assert data["format"] == "virtspec-mi derived 1" and data["met"]
+    (tmp_path / "target.json").write_text(printed)  # what --json prints is the target's file
+    back = vm.read_result(tmp_path / "target.json")
+    assert isinstance(back, vm.DerivedResult) and back["band_B08"].value == data["values"]["band_B08"]["value"]
     value = data["values"]["band_B08"]
     assert value["lower"] < value["value"] < value["upper"] and value["upper"] - value["value"] <= 0.01
     assert main(["measure", "soybean_abmb", "--target", "band:B04", "--out", "x.nc"]) != 0

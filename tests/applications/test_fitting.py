@@ -148,7 +148,7 @@ def test_fit_files_and_figure(tmp_path):
     assert len(values) >= 3 and statistic.min() <= 1.0
     result.plot(tmp_path / "fit.png")
     assert (tmp_path / "fit.png").stat().st_size > 10_000
-    with pytest.raises(ValueError, match="a fit file is"):
+    with pytest.raises(ValueError, match="a fit is written as .nc, .json"):
         result.write(tmp_path / "fit.csv")
 
 

@@ -102,6 +102,13 @@ def test_plot_colour_and_compare_of_a_sphere_file_go_through_its_reading(files, 
     status, printed, _ = run(capsys, "compare", path, measured, "--quantity", "corrected", "--json")
     assert status == 0 and json.loads(printed)["quantity"] == "corrected"
     np.testing.assert_allclose(json.loads(printed)["simulated"], sphere.corrected())  # the theory's inverse
+    (files["folder"] / "comparison.json").write_text(printed)  # what --json prints is the comparison's file
+    import virtspec_mi as vm
+
+    back, data = vm.read_result(files["folder"] / "comparison.json"), json.loads(printed)
+    data.pop("checksum")
+    assert type(back) is vm.Comparison and back.quantity == "corrected"
+    assert json.dumps(back.as_dict(), sort_keys=True) == json.dumps(data, sort_keys=True)
     err = one_line_error(capsys, "colour", path, "--quantity", "absorptance")
     assert "quantity must be one of reading, corrected, hemispherical (got 'absorptance'): a sphere reading" in err
 

@@ -11,6 +11,7 @@ moved by 2ε in one cell is caught (|v − Ê| ≥ 2ε − ε > ε′ whenever t
 
 from __future__ import annotations
 
+import dataclasses
 import struct
 import subprocess
 import sys
@@ -212,4 +213,4 @@ def test_an_engine_table_read_back(certified, tmp_path):
     back = EngineTables.from_table(read_albedo_table(tmp_path / "t.nc"))
     assert back.engine == "cycles" and np.array_equal(back.values("E"), certified.values("E"))
     with pytest.raises(ValueError, match="not an engine table"):
-        EngineTables.from_table(certified.table.__class__(**{**certified.table.__dict__, "engine": "grid"}))
+        EngineTables.from_table(dataclasses.replace(certified.table, engine="grid"))

@@ -285,11 +285,15 @@ def read_gonio(path: str | os.PathLike) -> Any:
 def read_result(path: str | os.PathLike) -> Any:
     """
     The result in a file, whatever its kind — a hemispherical reading or sweep, a
-    goniophotometer reading, a sphere reading — by its format tag
-    (:func:`virtspec_mi.results.kinds.read_result`), an instrument's own kind too (the
-    registry is loaded: :data:`virtspec_mi.instruments.INSTRUMENTS`).
+    goniophotometer reading, a sphere reading, an instrument's own kind (the registry is
+    loaded: :data:`virtspec_mi.instruments.INSTRUMENTS`), and an application's: a certified
+    target, a fit, an albedo table, Klems matrices, a comparison (the kinds of every row of
+    :data:`virtspec_mi.applications.APPLICATIONS`) — by its format tag
+    (:func:`virtspec_mi.results.kinds.read_result`), in every format its kind writes (an
+    export such as a Klems XML file through the result file it accompanies).
     """
 
+    from virtspec_mi.applications import APPLICATIONS  # noqa: F401  (every application's result kinds register)
     from virtspec_mi.results.kinds import read_result as read_any
 
     return read_any(path)

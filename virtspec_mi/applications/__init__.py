@@ -22,7 +22,10 @@ from __future__ import annotations
 
 from virtspec_mi.base.entry_points import discovered as entry_point_rows
 from virtspec_mi.applications.base import Application, Extension
+from virtspec_mi.applications.comparison import ComparisonApplication
+from virtspec_mi.applications.fitting import FittingApplication
 from virtspec_mi.applications.klems import KlemsApplication
+from virtspec_mi.applications.tables import TablesApplication
 from virtspec_mi.applications.targets import TargetsApplication
 
 __all__ = ["APPLICATIONS", "ENTRY_POINTS", "Application", "Extension", "discovered", "extensions"]
@@ -40,7 +43,8 @@ def discovered(builtin: tuple[type[Application], ...]) -> dict[str, type[Applica
     return entry_point_rows(ENTRY_POINTS, builtin, Application)
 
 
-APPLICATIONS: dict[str, type[Application]] = discovered((TargetsApplication, KlemsApplication))
+APPLICATIONS: dict[str, type[Application]] = discovered((TargetsApplication, FittingApplication, TablesApplication,
+                                                         KlemsApplication, ComparisonApplication))
 """Every application by name: the built-in ones, then the outside ones (:data:`ENTRY_POINTS`)."""
 
 

@@ -14,7 +14,10 @@ A row declares what the rest of the package generates from it:
   command does when one of them is given (``virtspec measure --target``: a certified
   target; ``virtspec gonio --klems``: the Klems matrices). The command line adds the flags
   and hands the command to the application; nothing outside the application's folder
-  names it (no ``"module:function"`` hook, no list of its flags elsewhere).
+  names it (no ``"module:function"`` hook, no list of its flags elsewhere);
+- its ``results``: the result kinds it returns (:class:`~virtspec_mi.results.base.ResultBase`
+  kinds, registered by their format tags when their classes are defined), which
+  :func:`virtspec_mi.read_result` reads (it loads the registry).
 
 References
 ----------
@@ -61,3 +64,5 @@ class Application:
     """What it answers, in one line."""
     extensions: ClassVar[tuple[Extension, ...]] = ()
     """The instruments' subcommands it extends."""
+    results: ClassVar[tuple[type, ...]] = ()
+    """The result kinds it returns (:class:`~virtspec_mi.results.base.ResultBase` kinds)."""

@@ -201,7 +201,7 @@ def compare(args: argparse.Namespace) -> int:
     if args.plot:
         comparison.plot(args.plot)
     if args.json:
-        print(json.dumps(comparison.as_dict()))
+        print(comparison.sealed_json())  # a comparison's file: vm.read_result reads it
         return 0
     print(comparison.summary())
     if args.plot:

@@ -11,5 +11,7 @@ per reading), read back by their format tags (:mod:`.kinds`, :mod:`.formats`); f
 (:mod:`.io`, :mod:`.zarr`), colour-science spectra (:mod:`.colorimetry`) and plots
 (:mod:`.plot`). An instrument's own result kind lives in its folder
 (``virtspec_mi.instruments.<name>.result``) and registers itself in
-:data:`~virtspec_mi.results.base.KINDS`.
+:data:`~virtspec_mi.results.base.KINDS`; an application's kinds are records
+(:mod:`.records`: a result built from its fields, its Dataset on first use), declared in
+its row of :data:`virtspec_mi.applications.APPLICATIONS`.
 """

@@ -2,7 +2,8 @@
 The result family: :class:`ResultBase`
 ======================================
 
-Every result kind — the hemispherical reading (:class:`~virtspec_mi.results.readings.Result`),
+Every result kind (the applications' records too: :mod:`virtspec_mi.results.records`) —
+the hemispherical reading (:class:`~virtspec_mi.results.readings.Result`),
 the goniophotometer reading (:class:`~virtspec_mi.instruments.goniophotometer.result.GonioResult`) and the
 integrating-sphere reading (:class:`~virtspec_mi.instruments.sphere.result.SphereResult`) — is an
 immutable set of exact counts over labelled dimensions (xarray conventions) with
@@ -22,7 +23,8 @@ everything else derived from them. This module holds what they share, written on
   carried in the JSON object (``format``) and in every dataset (attributes ``format`` and
   ``result_json``, the whole result as JSON); :meth:`ResultBase.write` /
   :meth:`ResultBase.read` through :mod:`virtspec_mi.results.io` (NetCDF, CSV, JSON, Zarr;
-  atomic writes); every file read — and every dict given to :meth:`ResultBase.from_dict` —
+  atomic writes; a kind's own ``EXPORTS``, read through the result file they accompany,
+  ``COMPANIONS``: :func:`holder`); every file read — and every dict given to :meth:`ResultBase.from_dict` —
   is checked by the rules of :mod:`virtspec_mi.results.integrity` (whole counts that add
   up as the kind says, :meth:`ResultBase._count_groups`; finite labels; shapes; tags;
   the checksum of :meth:`ResultBase.sealed_json`); every variable and coordinate of
@@ -48,7 +50,7 @@ import json
 import os
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, ClassVar, Mapping
+from typing import Any, Callable, ClassVar, Mapping
 
 import numpy as np
 
@@ -71,6 +73,7 @@ __all__ = [
     "stored",
     "attribute",
     "KINDS",
+    "holder",
 ]
 
 
@@ -196,6 +199,18 @@ class ResultBase(Labelled):
     """Labels :meth:`to_dataset` adds beside the stored ones (:class:`~virtspec_mi.results.variables.Coordinate`)."""
     FIGURES: ClassVar[dict[str, Figure]] = {"spectra": spectra()}
     """What :meth:`plot` draws, by name (:class:`~virtspec_mi.results.figures.Figure`): the first is the default."""
+    SUFFIXES: ClassVar[tuple[str, ...]] = (".nc", ".csv", ".json", ".zarr")
+    """The result files of this kind :meth:`write` writes and :func:`virtspec_mi.read_result` reads back."""
+    EXPORTS: ClassVar[dict[str, Callable[..., Path]]] = {}
+    """
+    This kind's own files for other programs, by suffix: ``write(result, path, **options)`` → the path (an
+    albedo table's ``.npy`` and C header, a Klems XML file); :meth:`write` writes them too.
+    """
+    COMPANIONS: ClassVar[dict[str, Callable[[Path], Path]]] = {}
+    """
+    Exports that a result file accompanies, by suffix: the path of that file (a Klems XML's ``.nc`` sidecar,
+    an albedo table's ``.npy`` and its ``.json``); :func:`virtspec_mi.read_result` of the export reads it.
+    """
 
     data: Any
     """
@@ -391,15 +406,21 @@ class ResultBase(Labelled):
 
     # -- files ------------------------------------------------------------------------
 
-    def write(self, path: str | os.PathLike, *, plain: bool = False) -> Path:
+    def write(self, path: str | os.PathLike, *, plain: bool = False, **options: Any) -> Path:
         """
-        Write to ``.nc`` (NetCDF-4), ``.csv``, ``.json`` or ``.zarr`` by suffix
-        (:mod:`virtspec_mi.results.io`); ``plain=True``: a ``.csv`` of columns and rows
-        alone, for a spreadsheet (not read back as a result).
+        Write to ``.nc`` (NetCDF-4), ``.csv``, ``.json`` or ``.zarr`` by suffix — those of
+        the kind's :attr:`SUFFIXES` — (:mod:`virtspec_mi.results.io`), or to one of the
+        kind's :attr:`EXPORTS` (``options`` are the export's); ``plain=True``: a ``.csv``
+        of columns and rows alone, for a spreadsheet (not read back as a result).
         """
 
         from virtspec_mi.results import io as results_io
 
+        export = self.EXPORTS.get(Path(path).suffix.lower())
+        if export is not None:
+            return export(self, Path(path), **options)
+        if options:
+            raise TypeError(f"{', '.join(options)}: not an option of a {self.KIND}'s {Path(path).suffix} file")
         return results_io.write(self, path, plain=plain)
 
     @classmethod
@@ -412,7 +433,7 @@ class ResultBase(Labelled):
 
         from virtspec_mi.results import io as results_io
 
-        return read_file(path, results_io.read, lambda content: cls.from_tagged(*tagged(content)))
+        return read_file(holder(path), results_io.read, lambda content: cls.from_tagged(*tagged(content)))
 
     @classmethod
     def from_dataset(cls, dataset: Any) -> Any:
@@ -462,7 +483,7 @@ class ResultBase(Labelled):
             raise ValueError(f"lacks the field {error} of a {cls.KIND}") from None
         except (TypeError, AttributeError) as error:
             raise ValueError(f"a field of the {cls.KIND} has the wrong type ({' '.join(str(error).split())})") from None
-        check_result(result)
+        result._check()
         result._check_stored(data)
         check_checksum(data)
         return result
@@ -527,6 +548,11 @@ class ResultBase(Labelled):
         """The attributes of this kind's dataset (numbers and text, for NetCDF) beside its format and result."""
 
         return {}
+
+    def _check(self) -> None:
+        """Rules 2 to 4 of :mod:`virtspec_mi.results.integrity` for this result (a reading's labels, shapes, counts)."""
+
+        check_result(self)
 
     def _check_stored(self, data: Mapping[str, Any]) -> None:
         """Derived counts a JSON object of this kind also holds agree with the result built from it (none: nothing)."""
@@ -631,6 +657,20 @@ an instrument's own, e.g. ``"gloss"``): a class that declares its ``FORMAT`` reg
 itself here when it is defined (:meth:`ResultBase.__init_subclass__`), so a new kind is
 one class, wherever it lives (beside its instrument).
 """
+
+
+def holder(path: str | os.PathLike) -> Path:
+    """
+    The file that holds the result of ``path``: itself, or the result file an export
+    accompanies (a kind's :attr:`ResultBase.COMPANIONS`, e.g. a Klems XML file's ``.nc`` sidecar).
+    """
+
+    path = Path(path)
+    for kind in KINDS.values():
+        companion = kind.COMPANIONS.get(path.suffix.lower())
+        if companion is not None:
+            return companion(path)
+    return path
 
 
 def _kind_in_words(word: str) -> str:

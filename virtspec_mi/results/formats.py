@@ -29,7 +29,7 @@ from virtspec_mi.results.integrity import unsealed
 
 __all__ = ["VARIABLES", "TABLE_ATTRIBUTE", "describe_variable", "annotate", "format_parts", "tagged"]
 
-_TAG = re.compile(r"^virtspec-mi (?P<word>[a-z]+) (?P<version>\d+)$")
+_TAG = re.compile(r"^virtspec-mi (?P<word>[a-z]+(?: [a-z]+)*) (?P<version>\d+)$")
 
 _COUNT = "1"
 VARIABLES: dict[str, tuple[str, str]] = {
@@ -94,7 +94,10 @@ def annotate(dataset: Any, parameters: Mapping[str, str] | None = None,
 
 
 def format_parts(tag: Any) -> tuple[str, int]:
-    """``("gonio", 1)`` of ``"virtspec-mi gonio 1"``; ``ValueError`` for anything else."""
+    """
+    ``("gonio", 1)`` of ``"virtspec-mi gonio 1"`` (a word may be several, ``"virtspec-mi albedo table 1"``);
+    ``ValueError`` for anything else.
+    """
 
     match = _TAG.match(tag) if isinstance(tag, str) else None
     if match is None:
@@ -115,13 +118,19 @@ def tagged(content: tuple[str, Any]) -> tuple[str, Any]:
     of every kind: a goniophotometer dataset's ``gonio_json``; a sphere result's
     ``"kind": "sphere_result"`` JSON object or its NetCDF dataset (``json`` attribute and
     the counts as variables) are tagged ``"virtspec-mi sphere 0"`` (the dataset itself is
-    the data). ``ValueError`` if it is no result.
+    the data); a comparison's JSON object without a tag (its figures: ``measured_source``,
+    ``residuals``, ``within``, ``rmse``) ``"virtspec-mi comparison 0"``; an application's NetCDF file written before the result family (a fit, an
+    albedo table, a Klems sidecar: a ``format`` attribute, no ``result_json``) by its
+    ``format`` (the dataset itself is the data, read by the kind's ``_from_plain``).
+    ``ValueError`` if it is no result.
     """
 
     kind, value = content
     if kind == "plain":
         if value.get("kind") == "sphere_result":
             return "virtspec-mi sphere 0", value
+        if "format" not in value and {"measured_source", "residuals", "within", "rmse"} <= set(value):
+            return "virtspec-mi comparison 0", value  # `virtspec compare --json` before the comparison had a tag
         return str(value.get("format")), value
     attrs = value.attrs
     names = (TABLE_ATTRIBUTE,) if kind == "table" else ("result_json", "gonio_json")
@@ -136,4 +145,6 @@ def tagged(content: tuple[str, Any]) -> tuple[str, Any]:
             return str(data.get("format")), (value if kind == "table" else unsealed(attrs[name], data))
     if "json" in attrs and "rays" in attrs and "sphere" in attrs:
         return "virtspec-mi sphere 0", value
+    if kind == "dataset" and isinstance(attrs.get("format"), str) and _TAG.match(attrs["format"]):
+        return attrs["format"], value  # a kind's NetCDF file written before its result_json (a fit, a table, Klems)
     raise ValueError("not a virtspec-mi result (no result_json attribute)")

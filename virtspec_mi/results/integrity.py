@@ -2,7 +2,7 @@
 What a result file must hold: the rules checked when one is read
 ================================================================
 
-Every result file — any kind (hemispherical, goniophotometer, sphere), any format
+Every result file — any kind (hemispherical, goniophotometer, sphere, an application's), any format
 (NetCDF, CSV, JSON, Zarr, ``virtspec measure --json`` output) — is read as strictly as
 user input: one rule is written once, here, and every kind and format goes through it.
 A file that breaks one raises a one-line ``ValueError`` naming the file and the field,
@@ -29,7 +29,9 @@ wavelength=551, theta_i=30)``. The rules:
    count a file holds besides the data it is rebuilt from — a dataset's count variables
    and coordinates, a CSV file's rows, a JSON object's derived ``absorbed`` (each kind's
    ``_check_stored``) — equals the rebuilt result's, so an edited variable is refused
-   rather than silently ignored.
+   rather than silently ignored; a kind that shows more than counts (an application's
+   record, :mod:`virtspec_mi.results.records`) checks every value and attribute it shows
+   (its ``_agreement``).
 7. **The checksum** (:func:`checksum`): files written by this version carry the SHA-256
    of their content (``checksum``); content changed after writing (an edit, a damaged
    file) no longer matches and is refused — checked last, so a broken rule is named
@@ -79,6 +81,7 @@ __all__ = [
     "unsealed",
     "check_checksum",
     "check_agreement",
+    "agree_values",
     "read_file",
     "MissingFile",
 ]
@@ -425,11 +428,13 @@ def _label(value: Any) -> str:
     return f"{value:g}" if isinstance(value, float) else str(value)
 
 
-def check_result(result: Any) -> None:
+def check_result(result: Any, sized: bool = True) -> None:
     """
     Rules 2 to 4 for a result of any kind: its labels (:func:`check_labels`), the shapes of
-    its arrays (:func:`check_shapes`) and its counts (:func:`check_counts` of every group
-    the kind declares, ``result._count_groups()``).
+    its arrays (:func:`check_shapes`), its counts (:func:`check_counts` of every group the
+    kind declares, ``result._count_groups()``) and its settings (:func:`check_settings`;
+    ``sized=False``: readings whose rays were sized by something else than their settings'
+    μ, e.g. a certified target's, whose rays follow the target's weights).
     """
 
     check_labels(result.dims, result.coords, result.parameters, result.KIND_DIMS)
@@ -437,10 +442,10 @@ def check_result(result: Any) -> None:
     check_shapes(result._labelled(), sizes)
     for group, counts, rules, dims in result._count_groups():
         check_counts(group, counts, rules, reading_at(dims, result.coords))
-    check_settings(result)
+    check_settings(result, sized)
 
 
-def check_settings(result: Any) -> None:
+def check_settings(result: Any, sized: bool = True) -> None:
     """
     The settings a result states agree with its labels and counts: its wavelengths are the
     wavelength labels, its θi the θi label of readings at one incidence (a selection of readings restates both:
@@ -461,7 +466,7 @@ def check_settings(result: Any) -> None:
         raise ValueError(f"the settings' theta_i {settings.theta_i:g} is not the theta_i label {float(angles[0]):g} "
                          "of the readings")
     rays = np.asarray(getattr(result, "rays", np.array([])), dtype=np.float64)
-    if getattr(settings, "rays", 0) is None and rays.size and np.any(rays * float(settings.mu) <= 1.0):
+    if sized and getattr(settings, "rays", 0) is None and rays.size and np.any(rays * float(settings.mu) <= 1.0):
         raise ValueError(f"mu = {float(settings.mu):g} ({settings.bound}) cannot be certified with "
                          f"{int(rays.min()):,} rays a reading (no rule holds a fraction within mu with N <= 1/mu)")
 
@@ -480,6 +485,10 @@ def check_agreement(content: tuple[str, Any], result: Any) -> None:
     """
 
     kind, value = content
+    own = getattr(result, "_agreement", None)  # a kind that shows more than counts checks all it shows
+    if own is not None:
+        own(kind, value)
+        return
     if kind not in ("dataset", "table", "rows"):
         return
     rebuilt = result
@@ -503,6 +512,12 @@ def check_agreement(content: tuple[str, Any], result: Any) -> None:
                 raise ValueError(f"coordinate {name!r} has shape {theirs.shape}; the result it holds gives "
                                  f"{np.shape(values)}")
             _agree_values(str(name), theirs.values, np.asarray(values), "variable")
+
+
+def agree_values(name: str, theirs: Any, ours: Any, what: str = "variable") -> None:
+    """``ValueError`` naming ``what`` ``name`` and the first entry where a file's values differ from the result's."""
+
+    _agree_values(name, np.asarray(theirs), np.asarray(ours), what)
 
 
 def _agree_values(name: str, theirs: np.ndarray, ours: np.ndarray, what: str) -> None:

@@ -115,6 +115,10 @@ def write(result: Any, path: str | os.PathLike, *, plain: bool = False) -> Path:
     if not isinstance(plain, (bool, np.bool_)):
         raise ValueError(f"plain must be True or False (got {plain!r})")
     suffix = check_plain_csv(path) if plain else result_format(path)
+    own = getattr(result, "SUFFIXES", SUFFIXES)
+    if suffix not in own:
+        raise ValueError(f"a {result.KIND} is written as {', '.join(own + tuple(result.EXPORTS))} "
+                         f"(got {path.name!r})")
     try:
         if suffix == ".zarr":
             from virtspec_mi.results.zarr import write_result

@@ -8,11 +8,12 @@ format tag registers itself there when defined — hemispherical
 goniophotometer (:class:`~virtspec_mi.instruments.goniophotometer.result.GonioResult`,
 ``"virtspec-mi gonio 1"``), integrating sphere
 (:class:`~virtspec_mi.instruments.sphere.result.SphereResult`, ``"virtspec-mi sphere 1"``) and any
-instrument's own, e.g. the gloss meter's) and :func:`read_result`, which reads a file of
+instrument's own, e.g. the gloss meter's; the applications' records, :mod:`virtspec_mi.results.records`:
+a certified target, a fit, an albedo table, Klems matrices, a comparison) and :func:`read_result`, which reads a file of
 any of them (NetCDF, CSV, JSON, Zarr; also ``virtspec measure --json`` output and files
 written before every kind had a tag) by the tag it carries
 (:func:`virtspec_mi.results.formats.tagged`). :func:`virtspec_mi.read_result` loads the
-instrument registry first, so that the kinds of every instrument are known.
+instruments' and the applications' registries first, so that every kind is known.
 
 References
 ----------
@@ -26,7 +27,7 @@ from typing import Any
 
 from virtspec_mi.results import io as results_io
 from virtspec_mi.results import readings  # noqa: F401  (the shared kind registers; the instruments register theirs)
-from virtspec_mi.results.base import KINDS, ResultBase
+from virtspec_mi.results.base import KINDS, ResultBase, holder
 from virtspec_mi.results.formats import format_parts, tagged
 from virtspec_mi.results.integrity import read_file
 
@@ -55,9 +56,11 @@ def read_result(path: str | os.PathLike) -> Any:
     The result in ``path``, whatever its kind (a hemispherical reading or sweep, a
     goniophotometer reading, a sphere reading): ``.nc``, ``.csv``, ``.json`` or ``.zarr``
     as written by its ``write`` (or printed by ``virtspec measure --json``), checked by
-    every rule of :mod:`virtspec_mi.results.integrity`: ``FileNotFoundError`` if it is
+    every rule of :mod:`virtspec_mi.results.integrity`; an export that a result file
+    accompanies (a Klems XML file, an albedo table's ``.npy``) is read from that file
+    (:data:`~virtspec_mi.results.base.COMPANIONS`): ``FileNotFoundError`` if it is
     missing, a one-line ``ValueError`` naming the file and the field if it is not a result
     or breaks a rule.
     """
 
-    return read_file(path, results_io.read, result_from)
+    return read_file(holder(path), results_io.read, result_from)

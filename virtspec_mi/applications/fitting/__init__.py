@@ -20,7 +20,10 @@ Féret et al. (2017), RSE 193:204–215; Jacquemoud & Baret (1990), RSE 34:75–
 from __future__ import annotations
 
 import importlib
-from typing import Any
+from typing import Any, ClassVar
+
+from virtspec_mi.applications.base import Application
+from virtspec_mi.applications.fitting.result import FitResult
 
 __all__ = ["fit", "FitResult", "read_fit", "LOSSES", "fit_samples", "FitTable"]
 
@@ -28,6 +31,14 @@ _LAZY = {"fit": "inversion", "LOSSES": "inversion", "FitResult": "result", "read
          "fit_samples": "samples", "FitTable": "samples"}
 """Where each name lives: imported on first use, so that ``virtspec``'s parser (which adds ``virtspec fit``
 from :mod:`.command`) does not import SciPy's optimisers."""
+
+
+class FittingApplication(Application):
+    """Specimen parameters fitted to a measured spectrum: ``vm.fit``, ``virtspec fit``."""
+
+    name: ClassVar[str] = "fitting"
+    summary: ClassVar[str] = "specimen parameters fitted to a measured spectrum, with a confidence set"
+    results: ClassVar[tuple[type, ...]] = (FitResult,)
 
 
 def __getattr__(name: str) -> Any:

@@ -7,9 +7,11 @@ the estimate, each parameter's interval from the confidence set (and which param
 data leave unconstrained), whether the fit is consistent at all, the measured and fitted
 spectra with both uncertainty bands and the residuals, every candidate read (values,
 tolerance, test statistic, loss, stage: the table, the refinement, the profiles) and the
-rays spent. It is written to JSON (``.json``) or NetCDF (``.nc``, through xarray),
-atomically (:func:`virtspec_mi.base.files.atomic_file`), read back by :func:`read_fit`, and
-plotted by :meth:`FitResult.plot` (measured against fitted with both bands, the
+rays spent. It is a result kind of the one family (:class:`~virtspec_mi.results.records.Record`,
+format ``"virtspec-mi fit 1"``): written to JSON (``.json``) or NetCDF (``.nc``) by the
+one writer (:mod:`virtspec_mi.results.io`, atomically), read back by
+:func:`virtspec_mi.read_result` (:func:`read_fit`: the same, refusing another kind; a fit's
+``.nc`` of an earlier release, without ``result_json``, reads too), and plotted by :meth:`FitResult.plot` (measured against fitted with both bands, the
 residuals, and each parameter's profile of the test statistic).
 
 References
@@ -19,22 +21,23 @@ Baranoski et al. (2001), eq. (23) (the certified tolerance of each fitted value)
 
 from __future__ import annotations
 
-import json
 import math
 import os
-from dataclasses import dataclass
-from pathlib import Path
-from typing import Any
+from dataclasses import dataclass, field
+from typing import Any, ClassVar, Mapping
 
 import numpy as np
 
 from virtspec_mi.base.version import __version__
-from virtspec_mi.base.files import atomic_file
+from virtspec_mi.results.integrity import CountRules, optional_numbers, whole_counts
+from virtspec_mi.results.figures import Figure
+from virtspec_mi.results.records import Record
+from virtspec_mi.results.variables import Variable
 
 __all__ = ["FitResult", "read_fit", "FIT_FORMAT", "FIT_SUFFIXES"]
 
 FIT_FORMAT: str = "virtspec-mi fit 1"
-"""The ``format`` of a fit file."""
+"""The format tag of a fit's files."""
 FIT_SUFFIXES: tuple[str, ...] = (".json", ".nc")
 
 _ARRAYS = ("bounds", "estimate", "intervals", "wavelengths", "candidate_values", "candidate_mu",
@@ -42,9 +45,47 @@ _ARRAYS = ("bounds", "estimate", "intervals", "wavelengths", "candidate_values",
 _SPECTRA = ("measured", "uncertainty", "fitted", "fitted_tolerance")
 
 
+_RAYS = CountRules(None, parts={"traced_rays": "rays"})
+"""The rays traced now are some of the rays the readings hold (the others were read from the store)."""
+
+
 @dataclass(frozen=True, eq=False)
-class FitResult:
-    """What a fit found (see the module docstring); arrays in the order of :attr:`names`."""
+class FitResult(Record):
+    """
+    What a fit found (see the module docstring); arrays in the order of :attr:`names`. A
+    result kind (format ``"virtspec-mi fit 1"``): its Dataset has the spectra over
+    (quantity, wavelength), the parameters' bounds, estimate and intervals, every
+    candidate read, the scalars as attributes.
+    """
+
+    FORMAT: ClassVar[str] = FIT_FORMAT
+    KIND: ClassVar[str] = "fit"
+    VARIABLES: ClassVar[dict[str, tuple[str, str]]] = {
+        "quantity": ("1", "measured quantity"), "parameter": ("1", "free parameter"), "end": ("1", "interval end"),
+        "candidate": ("1", "forward reading"),
+        "measured": ("1", "measured value"), "uncertainty": ("1", "measurement uncertainty"),
+        "fitted": ("1", "fitted value (the forward reading at the estimate)"),
+        "fitted_tolerance": ("1", "certified tolerance of the fitted value"),
+        "bounds": ("as in the specimen plugin", "search bounds of the parameter"),
+        "estimate": ("as in the specimen plugin", "estimated parameter value"),
+        "intervals": ("as in the specimen plugin", "interval of the parameter from the confidence set (NaN: empty)"),
+        "unconstrained": ("1", "the data leave the parameter unconstrained (1) or not (0)"),
+        "candidate_values": ("as in the specimen plugin", "parameter values of the forward reading"),
+        "candidate_mu": ("1", "tolerance the forward reading was certified to"),
+        "candidate_statistic": ("1", "test statistic s = max |F - m| / (mu' + u)"),
+        "candidate_loss": ("1", "loss of the forward reading"),
+        "candidate_consistent": ("1", "the candidate is consistent with the measurement (1) or not (0)"),
+        "candidate_stage": ("1", "stage of the fit that read the candidate"),
+        "residuals": ("1", "fitted - measured"),
+    }
+    DERIVED: ClassVar[dict[str, Variable]] = {
+        "residuals": Variable("1", "fitted - measured", lambda r: np.array([r.residuals[q] for q in r.quantities]),
+                              ("quantity", "wavelength")),
+    }
+    FIGURES: ClassVar[dict[str, Figure]] = {
+        "fit": Figure(lambda result, path, quantity, **options: result.plot(path),
+                      "measured against fitted with both bands, the residuals and each parameter's profile"),
+    }
 
     names: tuple[str, ...]
     bounds: np.ndarray
@@ -58,11 +99,11 @@ class FitResult:
     """The estimate's s = max |F̂ − m| / (μ' + u) (≤ 1: consistent)."""
     loss_name: str
     loss: float
-    delta: float
+    delta: float = field()
     mu_fraction: float
     forward_mu: float
     """The forward tolerance asked for at the optimum."""
-    wavelengths: np.ndarray
+    wavelengths: np.ndarray = field()
     quantities: tuple[str, ...]
     measured: dict[str, np.ndarray]
     uncertainty: dict[str, np.ndarray]
@@ -77,7 +118,7 @@ class FitResult:
     """Each reading's verdict (that of the finest reading of the same values)."""
     rays: int
     traced_rays: int
-    seconds: float
+    seconds: float = field()
     specimen: str
     seed: int
     reading_delta: float
@@ -160,10 +201,10 @@ class FitResult:
                      f"({self.traced_rays:,} traced now), {self.seconds:.1f} s, seed {self.seed}")
         return "\n".join(lines)
 
-    # -- files ---------------------------------------------------------------------------
+    # -- the result family: its Dataset, its files ------------------------------------------
 
     def as_dict(self) -> dict[str, Any]:
-        """Plain JSON data (the ``.json`` file's content)."""
+        """Plain JSON data (the ``.json`` file's content; a ``.nc`` file's ``result_json``)."""
 
         data: dict[str, Any] = {"format": FIT_FORMAT, "version": self.version, "names": list(self.names),
                                 "quantities": list(self.quantities), "candidate_stage": list(self.candidate_stage),
@@ -179,22 +220,8 @@ class FitResult:
         data["forward_tolerance"] = self.forward_tolerance
         return data
 
-    def write(self, path: str | os.PathLike) -> Path:
-        """Write to ``.json`` or ``.nc`` (atomically); ``ValueError`` for another suffix."""
-
-        path = Path(path)
-        suffix = path.suffix.lower()
-        if suffix not in FIT_SUFFIXES:
-            raise ValueError(f"a fit file is {' or '.join(FIT_SUFFIXES)} (got {path.name})")
-        with atomic_file(path) as temporary:
-            if suffix == ".json":
-                temporary.write_text(json.dumps(self.as_dict(), indent=1, allow_nan=True))
-            else:
-                self.to_xarray().to_netcdf(temporary)
-        return path
-
-    def to_xarray(self) -> Any:
-        """An ``xarray.Dataset``: spectra over (quantity, wavelength), parameters, candidates."""
+    def _stored(self) -> Any:
+        """Spectra over (quantity, wavelength), parameters, candidates; the scalars as attributes."""
 
         import xarray as xr
 
@@ -203,7 +230,7 @@ class FitResult:
         scalars = {name: getattr(self, name) for name in ("statistic", "loss", "delta", "mu_fraction", "forward_mu",
                                                           "rays", "traced_rays", "seconds", "seed", "reading_delta",
                                                           "search_wavelengths")}
-        attrs = {"format": FIT_FORMAT, "version": self.version, "specimen": self.specimen, "loss_name": self.loss_name,
+        attrs = {"version": self.version, "specimen": self.specimen, "loss_name": self.loss_name,
                  "consistent": int(self.consistent), **{k: (float(v) if isinstance(v, float) else int(v))
                                                         for k, v in scalars.items()}}
         return xr.Dataset(
@@ -220,6 +247,57 @@ class FitResult:
             coords={"quantity": list(self.quantities), "wavelength": self.wavelengths, "parameter": list(self.names),
                     "end": ["low", "high"]},
             attrs=attrs)
+
+    def _file_attrs(self) -> dict[str, Any]:
+        return dict(self.data.attrs)
+
+    def _count_groups(self) -> list[tuple[str, Any, CountRules, tuple[str, ...]]]:
+        counts = {"rays": whole_counts(self.rays, "rays"), "traced_rays": whole_counts(self.traced_rays, "traced_rays")}
+        return [("", counts, _RAYS, ())]
+
+    @classmethod
+    def _from_dict(cls, data: Mapping[str, Any]) -> "FitResult":
+        def array(name: str) -> np.ndarray:
+            return np.array(optional_numbers(data[name], name), dtype=np.float64)
+
+        return cls(
+            names=tuple(data["names"]), bounds=array("bounds"), estimate=array("estimate"),
+            intervals=array("intervals"), unconstrained=tuple(data["unconstrained"]),
+            consistent=bool(data["consistent"]), quantities=tuple(data["quantities"]), wavelengths=array("wavelengths"),
+            **{name: {q: np.array(optional_numbers(v, name), dtype=np.float64) for q, v in data[name].items()}
+               for name in _SPECTRA},
+            candidate_values=array("candidate_values"), candidate_mu=array("candidate_mu"),
+            candidate_statistic=array("candidate_statistic"), candidate_loss=array("candidate_loss"),
+            candidate_consistent=array("candidate_consistent").astype(bool),
+            candidate_stage=tuple(data["candidate_stage"]), search_wavelengths=int(data.get("search_wavelengths", 0)),
+            **{k: data[k] for k in ("statistic", "loss_name", "loss", "delta", "mu_fraction", "forward_mu", "rays",
+                                    "traced_rays", "seconds", "specimen", "seed", "reading_delta", "version")})
+
+    @classmethod
+    def _from_legacy(cls, dataset: Any) -> "FitResult":
+        """A fit's NetCDF file written before the result family (its fields as variables and attributes)."""
+
+        data = dict(dataset.attrs)
+        quantities = [str(q) for q in dataset["quantity"].values]
+        fields = {name: {q: np.asarray(dataset[name].values[i]) for i, q in enumerate(quantities)}
+                  for name in _SPECTRA}
+        arrays = {name: np.asarray(dataset[name].values, dtype=np.float64) for name in
+                  ("bounds", "estimate", "intervals", "candidate_values", "candidate_mu", "candidate_statistic",
+                   "candidate_loss")}
+        arrays["candidate_consistent"] = np.asarray(dataset["candidate_consistent"].values, dtype=bool)
+        try:
+            return cls(
+                names=tuple(str(n) for n in dataset["parameter"].values), **arrays,
+                wavelengths=np.asarray(dataset["wavelength"].values, dtype=np.float64),
+                unconstrained=tuple(bool(v) for v in dataset["unconstrained"].values),
+                consistent=bool(data["consistent"]), quantities=tuple(quantities), **fields,
+                candidate_stage=tuple(str(s) for s in dataset["candidate_stage"].values),
+                search_wavelengths=int(data.get("search_wavelengths", 0)),
+                **{k: _attribute(data[k]) for k in ("statistic", "loss_name", "loss", "delta", "mu_fraction",
+                                                    "forward_mu", "rays", "traced_rays", "seconds", "specimen",
+                                                    "seed", "reading_delta", "version")})
+        except KeyError as error:
+            raise ValueError(f"lacks the field {error} of a fit") from None
 
     # -- figures -------------------------------------------------------------------------
 
@@ -272,51 +350,16 @@ def _plain(values: Any) -> Any:
         [_plain(row) for row in array]
 
 
+def _attribute(value: Any) -> Any:
+    """A NetCDF attribute as Python's (numpy's scalars as ``int``, ``float``, ``str``)."""
+
+    return value.item() if hasattr(value, "item") else value
+
+
 def read_fit(path: str | os.PathLike) -> FitResult:
-    """A :class:`FitResult` from its ``.json`` or ``.nc`` file (``ValueError`` for another file)."""
+    """
+    A :class:`FitResult` from its ``.json`` or ``.nc`` file: :func:`virtspec_mi.read_result`
+    that refuses a file of another kind (``ValueError`` naming the kind it holds).
+    """
 
-    path = Path(path)
-    if path.suffix.lower() == ".nc":
-        import xarray as xr
-
-        with xr.open_dataset(path) as dataset:
-            data = dict(dataset.attrs)
-            if data.get("format") != FIT_FORMAT:
-                raise ValueError(f"{path} is not a fit file (format {data.get('format')!r})")
-            quantities = [str(q) for q in dataset["quantity"].values]
-            fields = {name: {q: np.asarray(dataset[name].values[i]) for i, q in enumerate(quantities)}
-                      for name in _SPECTRA}
-            arrays = {name: np.asarray(dataset[name].values, dtype=np.float64) for name in
-                      ("bounds", "estimate", "intervals", "candidate_values", "candidate_mu", "candidate_statistic",
-                       "candidate_loss")}
-            arrays["candidate_consistent"] = np.asarray(dataset["candidate_consistent"].values, dtype=bool)
-            return FitResult(
-                names=tuple(str(n) for n in dataset["parameter"].values), **arrays,
-                wavelengths=np.asarray(dataset["wavelength"].values, dtype=np.float64),
-                unconstrained=tuple(bool(v) for v in dataset["unconstrained"].values),
-                consistent=bool(data["consistent"]), quantities=tuple(quantities), **fields,
-                candidate_stage=tuple(str(s) for s in dataset["candidate_stage"].values),
-                search_wavelengths=int(data.get("search_wavelengths", 0)),
-                **{k: data[k] for k in ("statistic", "loss_name", "loss", "delta", "mu_fraction", "forward_mu", "rays",
-                                        "traced_rays", "seconds", "specimen", "seed", "reading_delta", "version")})
-    try:
-        data = json.loads(path.read_text())
-    except (OSError, ValueError) as error:
-        raise ValueError(f"cannot read the fit file {path}: {error}") from None
-    if not isinstance(data, dict) or data.get("format") != FIT_FORMAT:
-        raise ValueError(f"{path} is not a fit file (format {FIT_FORMAT!r})")
-
-    def array(name: str) -> np.ndarray:
-        return np.array(data[name], dtype=np.float64)
-
-    return FitResult(
-        names=tuple(data["names"]), bounds=array("bounds"), estimate=array("estimate"), intervals=array("intervals"),
-        unconstrained=tuple(data["unconstrained"]), consistent=bool(data["consistent"]),
-        quantities=tuple(data["quantities"]), wavelengths=array("wavelengths"),
-        **{name: {q: np.array(v, dtype=np.float64) for q, v in data[name].items()} for name in _SPECTRA},
-        candidate_values=array("candidate_values"), candidate_mu=array("candidate_mu"),
-        candidate_statistic=array("candidate_statistic"), candidate_loss=array("candidate_loss"),
-        candidate_consistent=array("candidate_consistent").astype(bool), candidate_stage=tuple(data["candidate_stage"]),
-        search_wavelengths=int(data.get("search_wavelengths", 0)),
-        **{k: data[k] for k in ("statistic", "loss_name", "loss", "delta", "mu_fraction", "forward_mu", "rays",
-                                "traced_rays", "seconds", "specimen", "seed", "reading_delta", "version")})
+    return FitResult.read(path)

@@ -12,6 +12,7 @@ from __future__ import annotations
 from typing import ClassVar
 
 from virtspec_mi.applications.base import Application, Extension
+from virtspec_mi.applications.klems.matrices import KlemsMeasurement
 from virtspec_mi.applications.klems.measure import KlemsFlags, respond
 
 __all__ = ["KlemsApplication"]
@@ -23,3 +24,4 @@ class KlemsApplication(Application):
     name: ClassVar[str] = "klems"
     summary: ClassVar[str] = "certified Klems BSDF files (WINDOW 6 XML) from the goniophotometer"
     extensions: ClassVar[tuple[Extension, ...]] = (Extension("gonio", KlemsFlags, respond, "klems"),)
+    results: ClassVar[tuple[type, ...]] = (KlemsMeasurement,)

@@ -61,10 +61,10 @@ from __future__ import annotations
 
 import json
 import os
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from datetime import datetime, timezone
 from pathlib import Path
-from typing import Any, Sequence
+from typing import Any, ClassVar, Mapping, Sequence
 from xml.sax.saxutils import escape
 
 import numpy as np
@@ -74,6 +74,8 @@ from virtspec_mi.exchange.common import check_companions
 from virtspec_mi.base.files import atomic_write
 from virtspec_mi.exchange.klems_basis import KlemsBasis, klems_basis
 from virtspec_mi.budgets.intervals import clopper_pearson
+from virtspec_mi.results.integrity import CountRules, field_value, finite_labels, whole_counts
+from virtspec_mi.results.records import Record
 
 __all__ = ["SIDES", "KINDS", "KlemsMeasurement", "klems_from_gonio", "write_klems", "aggregate", "check_escaped", "read_klems",
            "read_klems_sidecar", "sidecar_path", "check_klems", "check_klems_output"]
@@ -86,13 +88,21 @@ KINDS: tuple[str, ...] = ("reflection", "transmission")
 
 _DIRECTIONS = {("front", "reflection"): "Reflection Front", ("front", "transmission"): "Transmission Front",
                ("back", "reflection"): "Reflection Back", ("back", "transmission"): "Transmission Back"}
-_FORMAT = "virtspec-mi klems 1"
+
+
+_INCIDENCE_RULES = CountRules("rays", parts={"reflected": "rays", "transmitted": "rays"},
+                              sums=((("reflected", "transmitted"), "rays", False),))
+"""Each incidence's R and T counts within its rays."""
 
 
 @dataclass(frozen=True, eq=False)
-class KlemsMeasurement:
+class KlemsMeasurement(Record):
     """
-    Klems matrices with their exact counts and certificate (see the module docstring).
+    Klems matrices with their exact counts and certificate (see the module docstring); a
+    result kind (format ``"virtspec-mi klems 1"``): its Dataset is the sidecar (counts,
+    fractions, f with its simultaneous bounds, R and T, the patches), its files the
+    ``.nc`` sidecar and ``.json``, its export the Klems XML (``.xml``, which
+    :func:`virtspec_mi.read_result` reads through its sidecar).
 
     Attributes
     ----------
@@ -118,15 +128,37 @@ class KlemsMeasurement:
         Scene, seed, versions, time, rays.
     """
 
+    FORMAT: ClassVar[str] = "virtspec-mi klems 1"
+    KIND: ClassVar[str] = "Klems measurement"
+    VARIABLES: ClassVar[dict[str, tuple[str, str]]] = {
+        "side": ("1", "side of incidence (front: the specimen's +z)"), "kind": ("1", "reflection or transmission"),
+        "incidence": ("1", "incident Klems patch"), "outgoing": ("1", "outgoing Klems patch"),
+        "patch": ("1", "Klems patch"), "counts": ("1", "rays of the incidence that left into the outgoing patch"),
+        "fraction": ("1", "patch fraction m/N"), "bsdf": ("1/sr", "patch BSDF f = (m/N)/Lambda"),
+        "bsdf_lower": ("1/sr", "simultaneous Clopper-Pearson lower bound of f (each at delta/S)"),
+        "bsdf_upper": ("1/sr", "simultaneous Clopper-Pearson upper bound of f (each at delta/S)"),
+        "reflectance": ("1", "hemispherical reflectance of the incidence"),
+        "transmittance": ("1", "hemispherical transmittance of the incidence"),
+        "reflectance_lower": ("1", "Clopper-Pearson lower bound of the reflectance (at delta/S)"),
+        "reflectance_upper": ("1", "Clopper-Pearson upper bound of the reflectance (at delta/S)"),
+        "transmittance_lower": ("1", "Clopper-Pearson lower bound of the transmittance (at delta/S)"),
+        "transmittance_upper": ("1", "Clopper-Pearson upper bound of the transmittance (at delta/S)"),
+        "certified_epsilon": ("1", "tolerance the incidence's rays give every statement at delta/S (Hoeffding)"),
+        "theta": ("degree", "polar angle of the patch centre"), "phi": ("degree", "azimuth of the patch centre"),
+        "theta_lower": ("degree", "lower polar bound of the patch's ring"),
+        "theta_upper": ("degree", "upper polar bound of the patch's ring"),
+        "projected_solid_angle": ("sr", "projected solid angle of the patch (Lambda)"),
+    }
+
     basis: KlemsBasis
     sides: tuple[str, ...]
-    wavelengths: np.ndarray
+    wavelengths: np.ndarray = field()
     counts: np.ndarray
     rays: np.ndarray
     reflected: np.ndarray
     transmitted: np.ndarray
     epsilon: float
-    delta: float
+    delta: float = field()
     isotropic: bool = False
     provenance: dict[str, Any] = field(default_factory=dict)
 
@@ -268,7 +300,7 @@ class KlemsMeasurement:
         out += ["</Layer>", "</Optical>", "</WindowElement>", ""]
         return "\n".join(out)
 
-    def to_dataset(self) -> Any:
+    def _stored(self) -> Any:
         """The sidecar: counts, fractions, f with its simultaneous bounds, R and T, certificate."""
 
         import xarray as xr
@@ -291,7 +323,7 @@ class KlemsMeasurement:
                 **patch}
         coords = {"side": list(self.sides), "wavelength": self.wavelengths, "kind": list(KINDS),
                   "incidence": np.arange(b.size), "outgoing": np.arange(b.size), "patch": np.arange(b.size)}
-        attrs = {"format": _FORMAT, "basis": b.key, "basis_name": b.name, "epsilon": self.epsilon,
+        attrs = {"basis": b.key, "basis_name": b.name, "epsilon": self.epsilon,
                  "delta": self.delta, "statements": self.statements, "isotropic": int(self.isotropic),
                  "certificate": self.statement(), "provenance": json.dumps(self.provenance, sort_keys=True),
                  "orientation": "front = specimen +z (WINDOW front); incident patch (theta, phi): source at azimuth "
@@ -299,37 +331,95 @@ class KlemsMeasurement:
         return xr.Dataset(data, coords=coords, attrs=attrs)
 
     @classmethod
-    def from_dataset(cls, dataset: Any) -> "KlemsMeasurement":
-        if dataset.attrs.get("format") != _FORMAT:
-            raise ValueError(f"not a virtspec-mi Klems sidecar (format {dataset.attrs.get('format')!r})")
-        return cls(klems_basis(str(dataset.attrs["basis"])), tuple(str(s) for s in dataset["side"].values),
-                   np.asarray(dataset["wavelength"].values, dtype=np.float64),
-                   np.asarray(dataset["counts"].values, dtype=np.int64), np.asarray(dataset["rays"].values, np.int64),
-                   np.asarray(dataset["reflected"].values, np.int64), np.asarray(dataset["transmitted"].values, np.int64),
-                   float(dataset.attrs["epsilon"]), float(dataset.attrs["delta"]), bool(dataset.attrs["isotropic"]),
-                   json.loads(str(dataset.attrs["provenance"])))
+    def _from_legacy(cls, dataset: Any) -> "KlemsMeasurement":
+        """A sidecar written before the result family (its counts as variables, its settings as attributes)."""
+
+        try:
+            return cls(klems_basis(str(dataset.attrs["basis"])), tuple(str(s) for s in dataset["side"].values),
+                       finite_labels(dataset["wavelength"].values, "wavelength"),
+                       whole_counts(dataset["counts"].values, "counts"), whole_counts(dataset["rays"].values, "rays"),
+                       whole_counts(dataset["reflected"].values, "reflected"),
+                       whole_counts(dataset["transmitted"].values, "transmitted"),
+                       float(dataset.attrs["epsilon"]), float(dataset.attrs["delta"]), bool(dataset.attrs["isotropic"]),
+                       json.loads(str(dataset.attrs["provenance"])))
+        except KeyError as error:
+            raise ValueError(f"lacks the field {error} of a Klems sidecar") from None
+
+    def as_dict(self) -> dict[str, Any]:
+        """The matrices as plain data: basis, sides, wavelengths, the exact counts, ε, δ, provenance, the certificate."""
+
+        return {"format": self.FORMAT, "basis": self.basis.key, "sides": list(self.sides),
+                "wavelengths": self.wavelengths.tolist(), "counts": self.counts.tolist(), "rays": self.rays.tolist(),
+                "reflected": self.reflected.tolist(), "transmitted": self.transmitted.tolist(),
+                "epsilon": self.epsilon, "delta": self.delta, "isotropic": bool(self.isotropic),
+                "provenance": self.provenance, "certificate": self.statement()}
+
+    @classmethod
+    def _from_dict(cls, data: Mapping[str, Any]) -> "KlemsMeasurement":
+        return cls(klems_basis(field_value(data, "basis", "text")), tuple(data["sides"]),
+                   finite_labels(data["wavelengths"], "wavelengths"), whole_counts(data["counts"], "counts"),
+                   whole_counts(data["rays"], "rays"), whole_counts(data["reflected"], "reflected"),
+                   whole_counts(data["transmitted"], "transmitted"), float(data["epsilon"]), float(data["delta"]),
+                   field_value(data, "isotropic", "flag"), field_value(data, "provenance", "object"))
+
+    def _check(self) -> None:
+        """Shapes by the basis, sides and wavelengths; each incidence's counts within its rays; the patches add up."""
+
+        size = self.basis.size
+        expected = (len(self.sides), len(self.wavelengths), size)
+        for name, values in (("rays", self.rays), ("reflected", self.reflected), ("transmitted", self.transmitted)):
+            if np.shape(values) != expected:
+                raise ValueError(f"'{name}' has shape {np.shape(values)}; the sides, wavelengths and the "
+                                 f"{self.basis.name} basis give {expected}")
+        if np.shape(self.counts) != expected + (2, size):
+            raise ValueError(f"'counts' has shape {np.shape(self.counts)}; expected {expected + (2, size)}")
+        super()._check()
+        if np.any(self.counts[..., 0, :].sum(-1) > self.reflected) or \
+                np.any(self.counts[..., 1, :].sum(-1) > self.transmitted):
+            raise ValueError("'counts' add up to more than the reflected or transmitted rays of an incidence")
+
+    def _count_groups(self) -> list[tuple[str, Any, CountRules, tuple[str, ...]]]:
+        counts = {"rays": self.rays, "reflected": self.reflected, "transmitted": self.transmitted}
+        return [("", counts, _INCIDENCE_RULES, ("side", "wavelength", "incidence"))]
+
+    def _check_stored(self, data: Mapping[str, Any]) -> None:
+        if "certificate" in data and data["certificate"] != self.statement():
+            raise ValueError("'certificate' disagrees with the counts it is made from (edited?)")
 
     def write(self, path: str | os.PathLike, name: str = "virtspec-mi specimen", overwrite: bool = False) -> Path:
         """
-        Write the Klems XML to ``path`` (``.xml``) and the certified sidecar to the same
-        name with ``.nc`` (:func:`sidecar_path`); both atomically. The sidecar replaces
-        a file of its name only when that is a Klems sidecar or with ``overwrite=True``
-        (:func:`check_klems_output`).
+        Write by the one writer (:meth:`ResultBase.write <virtspec_mi.results.base.ResultBase.write>`):
+        ``.nc`` (the sidecar alone) or ``.json``, or its export ``.xml``: the Klems XML to
+        ``path`` and the certified sidecar to the same name with ``.nc`` (:func:`sidecar_path`),
+        both atomically. The sidecar replaces a file of its name only when that is a Klems
+        sidecar or with ``overwrite=True`` (:func:`check_klems_output`).
         """
 
-        path = Path(path)
-        check_klems_output(path, overwrite=overwrite)
-        sidecar = sidecar_path(path)
-        measured = KlemsMeasurement(**{**self.__dict__, "provenance": {**self.provenance, "sidecar": sidecar.name}})
-        atomic_write(sidecar, lambda tmp: measured.to_dataset().to_netcdf(tmp))
-        atomic_write(path, lambda tmp: Path(tmp).write_text(measured.xml(name), encoding="utf-8"))
-        return path
+        if Path(path).suffix.lower() == ".xml":
+            return super().write(path, name=name, overwrite=overwrite)
+        return super().write(path)
+
+
+def _write_xml(measured: KlemsMeasurement, path: Path, name: str = "virtspec-mi specimen",
+               overwrite: bool = False) -> Path:
+    """The Klems XML file and its sidecar (:meth:`KlemsMeasurement.write`)."""
+
+    check_klems_output(path, overwrite=overwrite)
+    sidecar = sidecar_path(path)
+    measured = replace(measured, provenance={**measured.provenance, "sidecar": sidecar.name})
+    atomic_write(sidecar, lambda tmp: measured.to_dataset().to_netcdf(tmp))
+    atomic_write(path, lambda tmp: Path(tmp).write_text(measured.xml(name), encoding="utf-8"))
+    return path
 
 
 def sidecar_path(path: str | os.PathLike) -> Path:
     """The NetCDF sidecar of a Klems XML file: the same name with ``.nc``."""
 
     return Path(path).with_suffix(".nc")
+
+
+KlemsMeasurement.EXPORTS = {".xml": _write_xml}
+KlemsMeasurement.COMPANIONS = {".xml": sidecar_path}
 
 
 
@@ -360,17 +450,23 @@ def _is_sidecar(path: Path) -> bool:
         import xarray as xr
 
         with xr.open_dataset(path) as dataset:
-            return dataset.attrs.get("format") == _FORMAT
+            return dataset.attrs.get("format") == KlemsMeasurement.FORMAT
     except Exception:  # not NetCDF, unreadable: not ours
         return False
 
 
 def read_klems_sidecar(path: str | os.PathLike) -> KlemsMeasurement:
-    """The :class:`KlemsMeasurement` of a sidecar written by :meth:`KlemsMeasurement.write`."""
+    """
+    The :class:`KlemsMeasurement` of a sidecar written by :meth:`KlemsMeasurement.write` (or of
+    its Klems XML file): :func:`virtspec_mi.read_result` that refuses another kind.
+    """
 
     from virtspec_mi.base.files import read_netcdf
 
-    return KlemsMeasurement.from_dataset(read_netcdf(path, "Klems sidecar"))
+    path = Path(path)
+    if path.suffix.lower() == ".nc":
+        read_netcdf(path, "Klems sidecar")  # a file that is not NetCDF, named as a sidecar's
+    return KlemsMeasurement.read(path)
 
 
 # ------------------------------------------------------------------------------ aggregation
@@ -470,7 +566,7 @@ def klems_from_gonio(front: Any, back: Any = None, basis: str = "full", isotropi
                                "mitsuba": _installed_mitsuba(),
                                "created": datetime.now(timezone.utc).isoformat(timespec="seconds")})
     eps = float(np.max(result.certified_epsilon)) if epsilon is None else float(epsilon)
-    return KlemsMeasurement(**{**result.__dict__, "epsilon": eps})
+    return replace(result, epsilon=eps)
 
 
 def _installed_mitsuba() -> str:

@@ -8,4 +8,23 @@ Certified albedo tables of renderers, each engine's own tables and their audit
 - :mod:`~virtspec_mi.applications.tables.engine_tables` — each engine's channels in its own files;
 - :mod:`~virtspec_mi.applications.tables.audit` — an engine's published table held to a
   certified one.
+
+The application's row: :class:`TablesApplication`.
 """
+
+from __future__ import annotations
+
+from typing import ClassVar
+
+from virtspec_mi.applications.base import Application
+from virtspec_mi.applications.tables.table import AlbedoTable, TableComparison
+
+__all__ = ["TablesApplication"]
+
+
+class TablesApplication(Application):
+    """Certified albedo and engine tables and their audit: ``vm.albedo_table``, ``virtspec albedo-table``."""
+
+    name: ClassVar[str] = "tables"
+    summary: ClassVar[str] = "certified directional-albedo tables of renderers, each engine's own tables, their audit"
+    results: ClassVar[tuple[type, ...]] = (AlbedoTable, TableComparison)

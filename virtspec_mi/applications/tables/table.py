@@ -22,13 +22,14 @@ import json
 import os
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import Any, ClassVar, Mapping
 
 import numpy as np
 
 from virtspec_mi.budgets.intervals import clopper_pearson_each
 from virtspec_mi.exchange.common import check_companions
-from virtspec_mi.base.files import atomic_write
+from virtspec_mi.results.integrity import CountRules, field_value, finite_labels, optional_numbers, whole_counts
+from virtspec_mi.results.records import Record, plain_floats
 
 __all__ = ["MODELS", "DISTRIBUTIONS", "BOUNDS", "SIDES", "TableBudget", "AlbedoTable", "TableComparison",
            "read_albedo_table"]
@@ -70,14 +71,50 @@ SIDES: tuple[str, ...] = ("outside", "inside")
 """Glass: light arriving from outside (relative index η) or from inside (1/η)."""
 
 _FORMAT = "virtspec-mi albedo table 1"
+"""The format tag of an albedo table's files (:attr:`AlbedoTable.FORMAT`)."""
 
 
 # ----------------------------------------------------------------------------- the table
 
+_COUNTS = ("rays", "reflected", "transmitted", "rounded_weights", "weight_violations", "invalid_directions", "capped",
+           "pilot_rays", "pilot_violations")
+"""A cell's exact counts (its estimating batch's, and its pilot's rays and violations)."""
+_CELL_RULES = CountRules("rays", parts={"reflected": "rays", "transmitted": "rays", "rounded_weights": "rays",
+                                        "weight_violations": "rays", "invalid_directions": "rays", "capped": "rays",
+                                        "pilot_violations": "pilot_rays"},
+                         sums=((("reflected", "transmitted"), "rays", False),))
+"""How a cell's counts add up: every part within its rays, reflected + transmitted within the rays."""
+_WORDS = {"E": "directional albedo E", "E_R": "reflected part of E", "E_T": "transmitted part of E"}
+
+
+def _table_variables() -> dict[str, tuple[str, str]]:
+    """``(units, long_name)`` of every variable and coordinate an albedo table's Dataset may hold."""
+
+    table = {"mu": ("1", "cosine of the incidence angle"), "alpha": ("1", "Mitsuba microfacet roughness alpha"),
+             "roughness": ("1", "the engine's roughness (alpha = roughness^2)"), "side": ("1", "side of incidence"),
+             "eta": ("1", "relative index of refraction, light from outside"),
+             "relative_eta": ("1", "relative index of refraction of the side")}
+    for average, suffix in (("", ""), ("_avg", " (diffuse beam: E_avg)")):
+        for name, words in _WORDS.items():
+            table[f"{name}{average}"] = ("1", words + suffix)
+            for side in ("lower", "upper"):
+                table[f"{name}{average}_{side}"] = ("1", f"Clopper-Pearson {side} bound of {words}{suffix}")
+        table[f"certified_epsilon{average}"] = ("1", f"certified tolerance of the cell (NaN: not certified){suffix}")
+    for prefix, suffix in (("", ""), ("avg_", " (diffuse beam: E_avg)")):
+        for name in _COUNTS:
+            table[f"{prefix}{name}"] = ("1", f"{name.replace('_', ' ')} of the cell{suffix}")
+        table[f"{prefix}interval_delta"] = ("1", f"failure probability of the cell's interval{suffix}")
+    return table
+
+
 @dataclass(frozen=True, eq=False)
-class AlbedoTable:
+class AlbedoTable(Record):
     """
-    A certified table of E(μ, α[, η]) and E_avg(α[, η]) (see the module docstring).
+    A certified table of E(μ, α[, η]) and E_avg(α[, η]) (see the module docstring); a
+    result kind (format ``"virtspec-mi albedo table 1"``): its Dataset holds the counts of
+    every cell, E with its intervals and the certificate over the canonical dims, the
+    settings as attributes; files ``.nc``, ``.json`` and its exports ``.npy`` (with its
+    sidecar ``NAME.json``, which :func:`virtspec_mi.read_result` reads) and ``.h``/``.hpp``.
 
     Canonical dims: conductor E ``("mu", "alpha")``, E_avg ``("alpha",)``; glass E
     ``("side", "eta", "mu", "alpha")``, E_avg ``("side", "eta", "alpha")``. Files are
@@ -121,9 +158,13 @@ class AlbedoTable:
         are divided by c = 1.0032 to stay ≤ 1); intervals and tolerances scale with it.
     """
 
+    FORMAT: ClassVar[str] = "virtspec-mi albedo table 1"
+    KIND: ClassVar[str] = "albedo table"
+    VARIABLES: ClassVar[dict[str, tuple[str, str]]] = _table_variables()
+
     model: str
     distribution: str
-    mu: np.ndarray
+    mu: np.ndarray = field()
     alpha: np.ndarray
     eta: np.ndarray | None
     roughness: np.ndarray | None
@@ -132,7 +173,7 @@ class AlbedoTable:
     counts: dict[str, np.ndarray]
     average_counts: dict[str, np.ndarray] | None
     epsilon: float
-    delta: float
+    delta: float = field()
     bound: str
     quantities: tuple[str, ...] = ("E",)
     provenance: dict[str, Any] = field(default_factory=dict)
@@ -357,7 +398,7 @@ class AlbedoTable:
 
         return ("E", "E_R", "E_T") if self.model == "glass" or "E_R" in self.quantities else ("E",)
 
-    def to_dataset(self) -> Any:
+    def _stored(self) -> Any:
         """The table as an ``xarray.Dataset`` (canonical dims), counts and certificate included."""
 
         import xarray as xr
@@ -386,7 +427,7 @@ class AlbedoTable:
             data["certified_epsilon_avg"] = (adims, self.certified_epsilon(average=True))
             for key, value in self.average_counts.items():
                 data[f"avg_{key}"] = (adims, value)
-        attrs = {"format": _FORMAT, "model": self.model, "distribution": self.distribution, "engine": self.engine,
+        attrs = {"model": self.model, "distribution": self.distribution, "engine": self.engine,
                  "order": " ".join(self.order), "epsilon": self.epsilon, "delta": self.delta, "bound": self.bound,
                  "quantities": " ".join(self.quantities),
                  "certificate": self.statement(), "rays_total": self.rays,
@@ -395,10 +436,10 @@ class AlbedoTable:
         return xr.Dataset(data, coords=coords, attrs=attrs)
 
     @classmethod
-    def from_dataset(cls, dataset: Any) -> "AlbedoTable":
+    def _from_legacy(cls, dataset: Any) -> "AlbedoTable":
+        """A table's dataset (an ``.nc`` of an earlier release, or any of its ``.nc`` files), checked by :meth:`_check_read`."""
+
         attrs = dataset.attrs
-        if attrs.get("format") != _FORMAT:
-            raise ValueError(f"not a virtspec-mi albedo table (format {attrs.get('format')!r}, expected {_FORMAT!r})")
         model = str(attrs["model"])
         keys = ("rays", "reflected", "transmitted", "rounded_weights", "weight_violations", "invalid_directions",
                 "capped", "pilot_rays", "pilot_violations")
@@ -417,32 +458,13 @@ class AlbedoTable:
 
     def _check_read(self, dataset: Any) -> None:
         """
-        A table file read as strictly as a result file (:mod:`virtspec_mi.results.integrity`): counts that add up
-        (each part within its rays, rays >= 1), an ε the rays can hold (N > 1/ε: no N smaller holds a fraction within
-        ε), and every value it shows besides its counts — E, the intervals, ε' per cell, the certificate — equal to
-        what the counts and settings give (an edited value is refused, not stated as certified).
+        A table file read as strictly as a result file (:mod:`virtspec_mi.results.integrity`): its rules
+        (:meth:`_check`), and every value it shows besides its counts — E, the intervals, ε' per cell, the
+        certificate — equal to what the counts and settings give (an edited value is refused, not stated as certified).
         """
 
-        for prefix, counts in (("", self.counts), ("avg_", self.average_counts)):
-            if counts is None:
-                continue
-            rays = counts["rays"]
-            if np.any(rays < 1):
-                raise ValueError(f"albedo table: '{prefix}rays' holds {int(rays.min())}: every cell needs rays >= 1")
-            for part, whole in (("reflected", "rays"), ("transmitted", "rays"), ("rounded_weights", "rays"),
-                                ("weight_violations", "rays"), ("invalid_directions", "rays"), ("capped", "rays"),
-                                ("pilot_violations", "pilot_rays")):
-                if np.any(counts[part] > counts[whole]):
-                    raise ValueError(f"albedo table: '{prefix}{part}' holds a count above '{prefix}{whole}'")
-            if np.any(counts["reflected"] + counts["transmitted"] > rays):
-                raise ValueError(f"albedo table: '{prefix}reflected' + '{prefix}transmitted' exceed '{prefix}rays'")
-            if np.any(rays * self.epsilon <= 1.0):
-                raise ValueError(f"albedo table: epsilon = {self.epsilon:g} cannot be certified with "
-                                 f"{int(rays.min()):,} rays a cell (N > 1/epsilon is needed)")
-            delta = counts["interval_delta"]
-            if not np.all((delta > 0) & (delta <= self.delta)):
-                raise ValueError(f"albedo table: '{prefix}interval_delta' must lie in (0, delta = {self.delta:g}]")
-        shown = self.to_dataset()
+        self._check()
+        shown = self.data
         for name in shown.data_vars:
             if name in dataset and not np.array_equal(np.asarray(dataset[name].values), np.asarray(shown[name].values),
                                                       equal_nan=True):
@@ -452,6 +474,96 @@ class AlbedoTable:
             if str(dataset.attrs.get(name)) != str(shown.attrs[name]):
                 raise ValueError(f"albedo table: the attribute '{name}' disagrees with the counts and settings "
                                  "(edited?)")
+
+    def _check(self) -> None:
+        """
+        The table's rules: every cell's counts add up (each part within its rays, rays >= 1:
+        :meth:`_count_groups`), an ε the rays can hold (N > 1/ε: no N smaller holds a
+        fraction within ε), each cell's δ in (0, δ].
+        """
+
+        for group, counts, rules, dims in self._count_groups():
+            prefix = "avg_" if group else ""
+            rays = counts["rays"]
+            if np.any(rays < 1):
+                raise ValueError(f"albedo table: '{prefix}rays' holds {int(rays.min())}: every cell needs rays >= 1")
+            for part, whole in rules.parts.items():
+                if np.any(counts[part] > counts[whole]):
+                    raise ValueError(f"albedo table: '{prefix}{part}' holds a count above '{prefix}{whole}'")
+            if np.any(counts["reflected"] + counts["transmitted"] > rays):
+                raise ValueError(f"albedo table: '{prefix}reflected' + '{prefix}transmitted' exceed '{prefix}rays'")
+            if np.any(rays * self.epsilon <= 1.0):
+                raise ValueError(f"albedo table: epsilon = {self.epsilon:g} cannot be certified with "
+                                 f"{int(rays.min()):,} rays a cell (N > 1/epsilon is needed)")
+            delta = (self.average_counts if group else self.counts)["interval_delta"]
+            if not np.all((delta > 0) & (delta <= self.delta)):
+                raise ValueError(f"albedo table: '{prefix}interval_delta' must lie in (0, delta = {self.delta:g}]")
+
+    def _count_groups(self) -> list[tuple[str, Any, CountRules, tuple[str, ...]]]:
+        groups = [("", {k: self.counts[k] for k in _COUNTS}, _CELL_RULES, self.dims)]
+        if self.average_counts is not None:
+            groups.append(("average", {k: self.average_counts[k] for k in _COUNTS}, _CELL_RULES, self.average_dims))
+        return groups
+
+    def _agreement(self, kind: str, content: Any) -> None:
+        """Rule 6 for a table's ``.nc`` file: its counts, values and certificate are the ones its result_json gives."""
+
+        if kind == "dataset":
+            legacy = type(self)._from_legacy(content)  # the file's own counts by the rules, its values by its counts
+            for ours, theirs, prefix in ((self.counts, legacy.counts, ""),
+                                         (self.average_counts or {}, legacy.average_counts or {}, "avg_")):
+                for name in _COUNTS:
+                    if name in ours and not np.array_equal(ours[name], theirs.get(name)):
+                        raise ValueError(f"albedo table: '{prefix}{name}' disagrees with the table the file holds "
+                                         "(edited?)")
+            self._check_read(content)
+
+    def as_dict(self) -> dict[str, Any]:
+        """
+        The table as plain data: its :meth:`description` (provenance, layout, certificate) with
+        its exact counts (``counts``, ``average_counts``: each cell's, canonical dims).
+        """
+
+        def plain(counts: dict[str, np.ndarray] | None) -> dict[str, Any] | None:
+            if counts is None:
+                return None
+            return {**{k: np.asarray(counts[k]).tolist() for k in _COUNTS},
+                    "interval_delta": plain_floats(counts["interval_delta"])}
+
+        return {**self.description(), "counts": plain(self.counts), "average_counts": plain(self.average_counts)}
+
+    @classmethod
+    def _from_dict(cls, data: Mapping[str, Any]) -> "AlbedoTable":
+        if "counts" not in data:
+            raise ValueError("holds an albedo table's description without its counts (a .npy's sidecar of an earlier "
+                             "release): read the table's .nc file, which holds them")
+
+        def counts(values: Any, prefix: str) -> dict[str, np.ndarray] | None:
+            if values is None:
+                return None
+            out = {k: whole_counts(values[k], f"{prefix}{k}") for k in _COUNTS}
+            out["interval_delta"] = optional_numbers(values["interval_delta"], f"{prefix}interval_delta")
+            return out
+
+        model = field_value(data, "model", "text")
+        if model not in MODELS:
+            raise ValueError(f"'model' must be one of {', '.join(MODELS)} (got {model!r})")
+        order = [d for d in data["order"] if d != "side"]
+        return cls(model, field_value(data, "distribution", "text"), finite_labels(data["mu"], "mu"),
+                   finite_labels(data["alpha"], "alpha"),
+                   None if data["eta_outside"] is None else finite_labels(data["eta_outside"], "eta_outside"),
+                   None if data["roughness"] is None else finite_labels(data["roughness"], "roughness"),
+                   field_value(data, "engine", "text"), tuple(order), counts(data["counts"], ""),
+                   counts(data["average_counts"], "avg_"), float(data["epsilon"]), float(data["delta"]),
+                   field_value(data, "bound", "text"), tuple(data["quantities"]), field_value(data, "provenance", "object"),
+                   field_value(data, "bsdf", "object"), float(data["count_scale"]))
+
+    def _check_stored(self, data: Mapping[str, Any]) -> None:
+        """The certificate and the rays a table's JSON states are the ones its counts give."""
+
+        for name, ours in (("certificate", self.statement()), ("rays_total", self.rays)):
+            if data.get(name) != ours:
+                raise ValueError(f"albedo table: '{name}' disagrees with the counts and settings (edited?)")
 
     @classmethod
     def _built(cls, dataset: Any, attrs: Any, model: str, counts: dict, average: dict | None) -> "AlbedoTable":
@@ -471,38 +583,27 @@ class AlbedoTable:
 
     def write(self, path: str | os.PathLike, overwrite: bool = False) -> Path:
         """
-        Write the table: ``.nc`` (NetCDF of :meth:`to_dataset`), ``.npy`` (Ê as float32 in
-        the engine's memory order; E_avg in ``NAME_avg.npy``; provenance and certificate in
-        ``NAME.json``) or ``.h`` / ``.hpp`` (a C header in Cycles' layout,
-        :mod:`virtspec_mi.exchange.header`). A ``.npy``'s companions replace files of their
-        names only when those are an albedo table's (its ``NAME.json`` says so) or with
-        ``overwrite=True`` (else ``ValueError``, before anything is written).
+        Write the table by the one writer (:meth:`ResultBase.write <virtspec_mi.results.base.ResultBase.write>`):
+        ``.nc`` (NetCDF of :meth:`to_dataset`) or ``.json`` (:meth:`as_dict`), or one of its
+        exports (:attr:`EXPORTS`): ``.npy`` (Ê as float32 in the engine's memory order; E_avg
+        in ``NAME_avg.npy``; the whole table — provenance, certificate, counts — in
+        ``NAME.json``, which :func:`virtspec_mi.read_result` reads) or ``.h`` / ``.hpp`` (a C
+        header in Cycles' layout, :mod:`virtspec_mi.exchange.header`). A ``.npy``'s
+        companions replace files of their names only when those are an albedo table's (its
+        ``NAME.json`` says so) or with ``overwrite=True`` (else ``ValueError``, before
+        anything is written).
         """
 
-        from virtspec_mi.exchange.header import write_header
-
         path = Path(path)
-        suffix = path.suffix.lower()
+        if path.suffix.lower() not in (*self.SUFFIXES, *self.EXPORTS):
+            raise ValueError(f"path must end in .nc, .json, .npy, .h or .hpp (got {path.name!r})")
         self.check_output(path, overwrite)
-        if suffix == ".nc":
-            atomic_write(path, lambda tmp: self.to_dataset().to_netcdf(tmp))
-        elif suffix == ".npy":
-            atomic_write(path, lambda tmp: _save_npy(tmp, self.layout().astype(np.float32)))
-            if self.E_avg is not None:
-                avg = path.with_name(path.stem + "_avg.npy")
-                atomic_write(avg, lambda tmp: _save_npy(tmp, self.E_avg.astype(np.float32)))
-            sidecar = path.with_suffix(".json")
-            atomic_write(sidecar, lambda tmp: Path(tmp).write_text(json.dumps(self.description(), indent=1)))
-        elif suffix in (".h", ".hpp"):
-            atomic_write(path, lambda tmp: Path(tmp).write_text(write_header(self)))
-        else:
-            raise ValueError(f"path must end in .nc, .npy, .h or .hpp (got {path.name!r})")
-        return path
+        return super().write(path)
 
     def description(self) -> dict[str, Any]:
         """Provenance, layout and certificate as plain data (the ``.npy`` sidecar, the header's comment)."""
 
-        return {"format": _FORMAT, "model": self.model, "model_description": MODELS[self.model],
+        return {"format": self.FORMAT, "model": self.model, "model_description": MODELS[self.model],
                 "distribution": self.distribution, "engine": self.engine,
                 "order": list((["side"] if self.model == "glass" else []) + list(self.order)),
                 "average_order": list(self.average_dims), "shape": list(self.layout().shape),
@@ -584,56 +685,27 @@ class AlbedoTable:
             label = {d: float(coords[d][i]) for d, i in zip(dims, index)}
             flagged.append({"index": tuple(int(i) for i in index), **label, "published": float(values[index]),
                             "certified": float(mine[index]), "tolerance": float(tol[index])})
+        from virtspec_mi.applications.tables.comparison import TableComparison
+
         return TableComparison(self, values, tuple(dims), flagged, int(mine.size), average, side, rounding)
 
 
-@dataclass(frozen=True, eq=False)
-class TableComparison:
-    """A published table against a certified one (:meth:`AlbedoTable.compare`)."""
-
-    table: AlbedoTable
-    published: np.ndarray
-    dims: tuple[str, ...]
-    outside: list[dict[str, Any]]
-    cells: int
-    average: bool
-    side: str
-    rounding: float
-
-    @property
-    def share_outside(self) -> float:
-        return len(self.outside) / self.cells
-
-    def summary(self, limit: int = 20) -> str:
-        what = "E_avg" if self.average else "E"
-        side = f" ({self.side})" if self.table.model == "glass" else ""
-        head = (f"{what}{side}: {len(self.outside):,} of {self.cells:,} published cells outside the certified interval "
-                f"(|published - certified| >= epsilon' + rounding {self.rounding:g}; the certificate: "
-                f"{self.table.statement()})")
-        if not self.outside:
-            return head
-        lines = [head, "  " + "  ".join(f"{d:>9}" for d in self.dims) + "  published  certified  epsilon'"]
-        for cell in self.outside[:limit]:
-            lines.append("  " + "  ".join(f"{cell[d]:9.5g}" for d in self.dims)
-                         + f"  {cell['published']:9.6f}  {cell['certified']:9.6f}  {cell['tolerance']:.3g}")
-        if len(self.outside) > limit:
-            lines.append(f"  ... and {len(self.outside) - limit:,} more")
-        return "\n".join(lines)
-
-
 def read_albedo_table(path: str | os.PathLike) -> AlbedoTable:
-    """An :class:`AlbedoTable` from a NetCDF file written by :meth:`AlbedoTable.write`."""
+    """
+    An :class:`AlbedoTable` from a file written by :meth:`AlbedoTable.write` (``.nc``, ``.json``,
+    a ``.npy`` with its sidecar): :func:`virtspec_mi.read_result` that refuses another kind.
+    """
 
     path = Path(path)
-    if path.suffix.lower() != ".nc":
-        raise ValueError(f"path must be a .nc file written by AlbedoTable.write (got {path.name!r})")
-    from virtspec_mi.base.files import read_netcdf
+    if path.suffix.lower() == ".nc":
+        from virtspec_mi.base.files import read_netcdf
 
+        read_netcdf(path, "albedo table")  # a file that is not NetCDF, named as a table's
     try:
-        return AlbedoTable.from_dataset(read_netcdf(path, "albedo table"))
+        return AlbedoTable.read(path)
     except ValueError as error:
-        text = str(error)
-        raise ValueError(text.replace("albedo table:", f"albedo table {path}:", 1)) from None
+        text = str(error).replace("albedo table: ", "", 1)
+        raise ValueError(text.replace("result file", "albedo table", 1)) from None
 
 
 def _own_table(published: Any) -> "AlbedoTable | None":
@@ -647,7 +719,7 @@ def _own_table(published: Any) -> "AlbedoTable | None":
 
     try:
         with xr.open_dataset(published) as dataset:
-            if dataset.attrs.get("format") != _FORMAT:
+            if dataset.attrs.get("format") != AlbedoTable.FORMAT:
                 return None
     except Exception:  # not a NetCDF file: read_table_values says so
         return None
@@ -679,15 +751,14 @@ def _ours(npy: Path) -> bool:
     """Whether ``NAME.json`` beside a table's ``NAME.npy`` is an albedo table's sidecar (so are its companions)."""
 
     try:
-        return json.loads(npy.with_suffix(".json").read_text(encoding="utf-8")).get("format") == _FORMAT
+        return json.loads(npy.with_suffix(".json").read_text(encoding="utf-8")).get("format") == AlbedoTable.FORMAT
     except (OSError, ValueError, AttributeError):
         return False
 
 
-def _save_npy(path: str, values: np.ndarray) -> None:
-    with open(path, "wb") as handle:
-        np.save(handle, values)
+from virtspec_mi.applications.tables.files import _sidecar, _values_only, _write_header, _write_npy  # noqa: E402
 
+AlbedoTable.EXPORTS = {".npy": _write_npy, ".h": _write_header, ".hpp": _write_header}
+AlbedoTable.COMPANIONS = {".npy": _sidecar, ".h": _values_only, ".hpp": _values_only}
 
-
-# ----------------------------------------------------------------------------- measuring
+from virtspec_mi.applications.tables.comparison import TableComparison  # noqa: E402  (it holds an AlbedoTable)

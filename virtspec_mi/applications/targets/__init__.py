@@ -28,6 +28,7 @@ from typing import ClassVar
 
 from virtspec_mi.applications.base import Application, Extension
 from virtspec_mi.applications.targets.parse import TargetFlags, respond
+from virtspec_mi.applications.targets.result import DerivedResult, DerivedSweep
 
 __all__ = ["TargetsApplication"]
 
@@ -38,3 +39,4 @@ class TargetsApplication(Application):
     name: ClassVar[str] = "targets"
     summary: ClassVar[str] = "certified derived quantities: colour, bands, indices, fAPAR, albedo"
     extensions: ClassVar[tuple[Extension, ...]] = (Extension("measure", TargetFlags, respond, "target"),)
+    results: ClassVar[tuple[type, ...]] = (DerivedResult, DerivedSweep)

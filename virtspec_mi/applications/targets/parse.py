@@ -122,7 +122,7 @@ _NOT_WITH_TARGET = {"out": "--out", "workers": "--workers/--scheduler", "paramet
 def measure_target_command(args: Any, keywords: dict[str, Any], report: Callable[..., int]) -> int:
     """
     ``virtspec measure SCENE --target TARGET``: the target measured (``vm.measure(scene,
-    target=...)``) and printed by ``report`` (its summary, or with ``--json`` its ``as_dict()``).
+    target=...)``) and printed by ``report`` (its summary, or with ``--json`` its file: ``as_dict()`` sealed).
     """
 
     from virtspec_mi.applications.targets.sequential import measure_target
@@ -141,7 +141,7 @@ def measure_target_command(args: Any, keywords: dict[str, Any], report: Callable
     settings = {k: v for k, v in keywords.items()
                 if k not in ("out", "workers", "task_readings", "points", "parameters", "defines", "progress")}
     result = measure_target(loaded(args.scene, keywords.get("defines") or None), None, target, settings)
-    return report(args, result, result.summary(), data=result.as_dict())
+    return report(args, result, result.summary())  # --json: its file (sealed JSON, read by vm.read_result)
 
 
 def respond(session: Any, flags: TargetFlags) -> int:

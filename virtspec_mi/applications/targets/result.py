@@ -11,7 +11,11 @@ functional was certified to, and the per-wavelength readings
 certificate of their own. :meth:`DerivedResult.summary`, :meth:`DerivedResult.as_dict`
 (JSON) and :meth:`DerivedResult.to_dataset` (xarray: one variable per quantity with
 ``units``, ``long_name`` and its ``<name>_lower`` / ``<name>_upper`` bounds, and the
-readings over ``wavelength``) show it.
+readings over ``wavelength``) show it. Both kinds are results of the one family
+(:class:`~virtspec_mi.results.records.Record`: format ``"virtspec-mi derived 1"`` and
+``"virtspec-mi derived sweep 1"``), written by the one writer (``.json``, ``.nc``) and read
+back by :func:`virtspec_mi.read_result`; a target read from a file is its record
+(:class:`~virtspec_mi.results.records.RecordedData`: ``as_dict()``, ``describe()``).
 
 References
 ----------
@@ -21,23 +25,70 @@ Hoeffding (1963), Theorem 2.
 from __future__ import annotations
 
 import json
-from dataclasses import dataclass
-from typing import Any
+from dataclasses import dataclass, field
+from typing import Any, ClassVar, Mapping
 
 import numpy as np
 
 from virtspec_mi.applications.targets.targets import Target, Value
+from virtspec_mi.results.figures import Figure
+from virtspec_mi.results.integrity import (CountRules, check_checksum, check_result, field_value, optional_numbers,
+                                           whole_counts)
+from virtspec_mi.results.readings import Result
+from virtspec_mi.results.records import Record, RecordedData
 
-__all__ = ["DerivedResult", "DerivedSweep", "FORMAT"]
+__all__ = ["DerivedResult", "DerivedSweep", "FORMAT", "SWEEP_FORMAT"]
 
 FORMAT: str = "virtspec-mi derived 1"
-"""The ``format`` of :meth:`DerivedResult.as_dict`."""
+"""The format tag of a :class:`DerivedResult` (its :meth:`DerivedResult.as_dict`, its files)."""
+SWEEP_FORMAT: str = "virtspec-mi derived sweep 1"
+"""
+The format tag of a :class:`DerivedSweep`. Earlier releases wrote a sweep's JSON with
+:data:`FORMAT` and a ``results`` list: read as a sweep all the same.
+"""
+_SPENT = CountRules(None)
+"""A target's ray counts: whole numbers (the estimates' rays are the readings' N summed: :meth:`DerivedResult._check`)."""
+
+
+def _plot(result: Any, path: Any, quantity: Any, **options: Any) -> Any:
+    from virtspec_mi.applications.targets.plot import plot_derived
+
+    return plot_derived(result, path)
+
+
+def _readings(data: Mapping[str, Any]) -> Result:
+    """
+    A target's readings from their JSON object, checked by every rule of a reading's but
+    the one of the settings' μ: their rays follow the target's weights (Nₖ ∝ |wₖ|), not the
+    μ their settings state (their wavelengths and θi are checked against the settings').
+    """
+
+    if data.get("format") != Result.FORMAT:
+        raise ValueError(f"'readings' must be a hemispherical reading (format {Result.FORMAT!r})")
+    readings = Result._from_dict(data)
+    check_result(readings, sized=False)
+    readings._check_stored(data)
+    check_checksum(data)
+    return readings
+
+
+def _quantities(values: Any, dims: tuple[str, ...] = ()) -> dict[str, tuple[str, str]]:
+    """``(units, long_name)`` of each quantity's variable and its bounds."""
+
+    table = {}
+    for v in values:
+        table[v.name] = (v.units, v.long_name)
+        table[f"{v.name}_lower"] = (v.units, f"certified lower bound of {v.name}")
+        table[f"{v.name}_upper"] = (v.units, f"certified upper bound of {v.name}")
+    return table
 
 
 @dataclass(frozen=True, eq=False)
-class DerivedResult:
+class DerivedResult(Record):
     """
-    Certified derived quantities (see the module docstring).
+    Certified derived quantities (see the module docstring); a result kind (format
+    ``"virtspec-mi derived 1"``): its Dataset has one variable per quantity with its bounds,
+    the tolerance of each functional, and the readings over ``wavelength``.
 
     Attributes
     ----------
@@ -70,12 +121,21 @@ class DerivedResult:
         The rays of each batch, in order (the last is the stopping time).
     """
 
+    FORMAT: ClassVar[str] = FORMAT
+    KIND: ClassVar[str] = "certified target"
+    VARIABLES: ClassVar[dict[str, tuple[str, str]]] = {
+        "functional_tolerance": ("as the functional", "Hoeffding tolerance of the functional's rays"),
+        "functional": ("1", "linear functional certified")}
+    FIGURES: ClassVar[dict[str, Figure]] = {
+        "values": Figure(_plot, "a colour as a swatch with its certified dE00 radius; other values with their "
+                                "certified intervals")}
+
     target: Target
     values: tuple[Value, ...]
     readings: Any
     rays: int
     pilot_rays: int
-    delta: float
+    delta: float = field()
     statements: int
     functional_tolerances: tuple[float, ...]
     colour: Any = None
@@ -155,36 +215,81 @@ class DerivedResult:
     def to_json(self) -> str:
         return json.dumps(self.as_dict())
 
-    def to_dataset(self) -> Any:
-        """An ``xarray.Dataset``: each quantity with its bounds (attrs ``units``, ``long_name``) and the readings."""
+    def _stored(self) -> Any:
+        """Each quantity with its bounds, each functional's tolerance, and the readings (with what they derive)."""
 
         import xarray as xr
 
         readings = self.readings.to_dataset()
-        data = {}
+        readings.attrs = {}
+        data: dict[str, Any] = {}
         for v in self.values:
-            data[v.name] = xr.Variable((), v.value, {"units": v.units, "long_name": v.long_name,
-                                                     "ancillary_variables": f"{v.name}_lower {v.name}_upper"})
-            data[f"{v.name}_lower"] = xr.Variable((), v.lower, {"units": v.units,
-                                                               "long_name": f"certified lower bound of {v.name}"})
-            data[f"{v.name}_upper"] = xr.Variable((), v.upper, {"units": v.units,
-                                                               "long_name": f"certified upper bound of {v.name}"})
+            data[v.name] = ((), v.value, {"ancillary_variables": f"{v.name}_lower {v.name}_upper"})
+            data[f"{v.name}_lower"], data[f"{v.name}_upper"] = ((), v.lower), ((), v.upper)
+        data["functional_tolerance"] = (("functional",), np.asarray(self.functional_tolerances, dtype=np.float64))
         derived = xr.Dataset(data, attrs={"target": self.target.describe(), "delta": self.delta,
-                                          "rays": self.rays, "pilot_rays": self.pilot_rays, "met": int(self.met),
+                                          "statements": int(self.statements), "rays": int(self.rays),
+                                          "pilot_rays": int(self.pilot_rays), "met": int(self.met),
+                                          "seconds": float(self.seconds),
                                           "readings_note": "per-wavelength readings: the rays spent, no joint "
                                                            "per-wavelength certificate"})
         return xr.merge([derived, readings], combine_attrs="override")
 
+    def described(self) -> dict[str, tuple[str, str]]:
+        return {**self.readings.described(), **super().described(), **_quantities(self.values)}
+
+    def _parameter_keys(self) -> dict[str, str] | None:
+        return self.readings._parameter_keys()
+
+    @classmethod
+    def _from_plain(cls, tag: str, data: Any) -> Any:
+        if isinstance(data, dict) and "results" in data:  # a sweep's JSON of an earlier release: this tag, its results
+            return DerivedSweep.from_dict({**data, "format": SWEEP_FORMAT})
+        return super()._from_plain(tag, data)
+
+    @classmethod
+    def _from_dict(cls, data: Mapping[str, Any]) -> "DerivedResult":
+        values = tuple(Value(name, *(float(v) if v is not None else float("nan")
+                                     for v in (item["value"], item["lower"], item["upper"])),
+                             field_value(item, "units", "text"), field_value(item, "long_name", "text"))
+                       for name, item in field_value(data, "values", "object").items())
+        colour = data.get("colour")
+        return cls(RecordedData(field_value(data, "target", "object"), field_value(data, "description", "text")),
+                   values, _readings(field_value(data, "readings", "object")),
+                   int(whole_counts(data["rays"], "rays")), int(whole_counts(data["pilot_rays"], "pilot_rays")),
+                   float(data["delta"]), int(whole_counts(data["statements"], "statements")),
+                   tuple(optional_numbers(data["functional_tolerances"], "functional_tolerances").tolist()),
+                   None if colour is None else RecordedData(colour), field_value(data, "met", "flag"),
+                   float(field_value(data, "seconds", "seconds")))
+
+    def _check(self) -> None:
+        """The estimates' rays are the readings' N summed; every value lies within its certified interval."""
+
+        if int(self.rays) != int(np.sum(self.readings.rays)):
+            raise ValueError(f"'rays' holds {int(self.rays):,}; the readings' rays add up to "
+                             f"{int(np.sum(self.readings.rays)):,}")
+        for v in self.values:
+            if not v.lower <= v.value <= v.upper and not np.isnan([v.lower, v.value, v.upper]).any():
+                raise ValueError(f"the value of {v.name!r} ({v.value:g}) lies outside its interval "
+                                 f"[{v.lower:g}, {v.upper:g}]")
+
 
 @dataclass(frozen=True, eq=False)
-class DerivedSweep:
+class DerivedSweep(Record):
     """
     One target certified at several incidence angles (``vm.sweep(scene, theta_i=...,
     target=...)``): one :class:`DerivedResult` per θi, each certified at its own δ (a
     statement about all angles at once holds at δ × the number of angles, a union bound).
+    A result kind (format ``"virtspec-mi derived sweep 1"``): its Dataset has each quantity
+    and its bounds over ``theta_i`` and the rays of each angle.
     """
 
-    theta_i: tuple[float, ...]
+    FORMAT: ClassVar[str] = SWEEP_FORMAT
+    KIND: ClassVar[str] = "certified target over theta_i"
+    VARIABLES: ClassVar[dict[str, tuple[str, str]]] = {"rays": ("1", "rays traced (pilots included)"),
+                                                       "theta_i": ("degree", "incidence angle")}
+
+    theta_i: tuple[float, ...] = field()
     results: tuple[DerivedResult, ...]
 
     def __getitem__(self, index: int) -> DerivedResult:
@@ -204,9 +309,24 @@ class DerivedSweep:
         return "\n\n".join(parts)
 
     def as_dict(self) -> dict[str, Any]:
-        return {"format": FORMAT, "theta_i": list(self.theta_i), "results": [r.as_dict() for r in self.results]}
+        return {"format": SWEEP_FORMAT, "theta_i": list(self.theta_i), "results": [r.as_dict() for r in self.results]}
 
-    def to_dataset(self) -> Any:
+    @classmethod
+    def _from_dict(cls, data: Mapping[str, Any]) -> "DerivedSweep":
+        results = data["results"]
+        if not isinstance(results, list):
+            raise ValueError("'results' must be a list of certified targets")
+        return cls(tuple(optional_numbers(data["theta_i"], "theta_i").tolist()),
+                   tuple(DerivedResult.from_dict(item) for item in results))
+
+    def _check(self) -> None:
+        if len(self.theta_i) != len(self.results):
+            raise ValueError(f"'theta_i' holds {len(self.theta_i)} angles and 'results' {len(self.results)} targets")
+
+    def described(self) -> dict[str, tuple[str, str]]:
+        return {**super().described(), **_quantities(self.results[0].values)}
+
+    def _stored(self) -> Any:
         """The quantities and their bounds over ``theta_i`` (xarray; the readings left out: see each result's)."""
 
         import xarray as xr
@@ -219,8 +339,6 @@ class DerivedSweep:
                 long_name = v.long_name if not suffix else f"certified {field_name} bound of {v.name}"
                 data[v.name + suffix] = xr.Variable(("theta_i",), np.asarray(values, dtype=np.float64),
                                                     {"units": v.units, "long_name": long_name})
-        data["rays"] = xr.Variable(("theta_i",), np.array([r.total_rays for r in self.results]),
-                                   {"units": "1", "long_name": "rays traced (pilots included)"})
-        return xr.Dataset(data, coords={"theta_i": ("theta_i", np.asarray(self.theta_i),
-                                                    {"units": "degree", "long_name": "incidence angle"})},
+        data["rays"] = xr.Variable(("theta_i",), np.array([r.total_rays for r in self.results], dtype=np.int64))
+        return xr.Dataset(data, coords={"theta_i": ("theta_i", np.asarray(self.theta_i, dtype=np.float64))},
                           attrs={"target": first.target.describe(), "delta_each": first.delta})

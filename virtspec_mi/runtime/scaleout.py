@@ -103,7 +103,7 @@ __all__ = [
 ]
 
 TASK_SECONDS: float = 5.0
-"""Seconds of tracing a task (block of readings) is sized for: long next to Dask's per-task overhead."""
+"""Seconds of tracing a task (a block of readings) is sized for, long next to Dask's per-task overhead."""
 
 DRJIT_THREADS: int = 1
 """Dr.Jit threads per worker process (one Dask thread each: the processes share the cores)."""

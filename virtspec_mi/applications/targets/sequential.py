@@ -8,7 +8,7 @@ default, ``bound="betting"``:
 
 1. the target's functionals on one wavelength grid, fitted to the specimen's data, and
    for a nonlinear target the pilot and the tolerance tⱼ each functional is planned for
-   (:func:`~.measure.plan_target`, without its second pilot; tⱼ for
+   (:func:`~virtspec_mi.applications.targets.measure.plan_target`, without its second pilot; tⱼ for
    :data:`PLANNED_MARGIN` of the target's tolerance at the pilot's point); a linear
    target's tⱼ is its tolerance, and its pilot :data:`BLIND_SHARE` of Hoeffding's rays
    (Nₖ ∝ |wₖ|, the settings' seed). The pilot's counts (its own seed) only size rays and stakes;
@@ -34,7 +34,7 @@ default, ``bound="betting"``:
    interval its rays certify.
 
 :func:`certify_target` picks the route: ``bound="betting"`` this one,
-``bound="hoeffding"`` the one-batch route of :mod:`.measure`, ``bound="auto"`` (the
+``bound="hoeffding"`` the one-batch route of :mod:`~virtspec_mi.applications.targets.measure`, ``bound="auto"`` (the
 default) this one unless a linear target's pilot shows it would not pay (:func:`pays`),
 then Hoeffding's, the pilot's rays counted.
 
@@ -143,7 +143,7 @@ def certify_target(bench: Any, settings: Settings, target: Target, *, scene: str
                    bound: str = "auto") -> DerivedResult:
     """
     Certify ``target``: ``bound="betting"`` by :func:`take_sequential`, ``bound="hoeffding"``
-    by the one-batch route :func:`~.measure.take_target`, ``bound="auto"`` (default) by the
+    by the one-batch route :func:`~virtspec_mi.applications.targets.measure.take_target`, ``bound="auto"`` (default) by the
     betting route unless a linear target's pilot shows it would not pay (:func:`pays`), then
     by Hoeffding's (the result's ``bound`` says which).
     """

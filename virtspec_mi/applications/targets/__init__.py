@@ -17,7 +17,9 @@ certified box. Modules, one job each:
 - :mod:`.difference` — ``vm.colour_difference``; :mod:`.parse` — ``--target`` strings.
 
 The application's row (:class:`TargetsApplication`) extends ``virtspec measure`` with
-``--target`` (:class:`~.parse.TargetFlags`).
+``--target`` (:class:`~.parse.TargetFlags`): it takes the settings a target does not pick
+itself (:data:`~.measure.REFUSED_SETTINGS`, the one list, which ``vm.measure(target=...)``
+and ``vm.sweep(target=...)`` read too) and the command line refuses every other flag.
 """
 
 from __future__ import annotations
@@ -25,7 +27,9 @@ from __future__ import annotations
 from typing import ClassVar
 
 from virtspec_mi.applications.base import Application, Extension
+from virtspec_mi.applications.targets.measure import REFUSED_SETTINGS
 from virtspec_mi.applications.targets.parse import TargetFlags, respond
+from virtspec_mi.settings import Settings
 
 __all__ = ["TargetsApplication"]
 
@@ -35,4 +39,8 @@ class TargetsApplication(Application):
 
     name: ClassVar[str] = "targets"
     summary: ClassVar[str] = "certified derived quantities: colour, bands, indices, fAPAR, albedo"
-    extensions: ClassVar[tuple[Extension, ...]] = (Extension("measure", TargetFlags, respond, "target"),)
+    extensions: ClassVar[tuple[Extension, ...]] = (Extension(
+        "measure", TargetFlags, respond, "target",
+        takes=(*(name for name in Settings.names() if name not in REFUSED_SETTINGS), "defines", "json", "quiet"),
+        reason="a target picks its own wavelengths and rays and is measured at the scene's own specimen parameters; "
+               "its result is printed (--json prints it as JSON; draw result.readings from Python)"),)

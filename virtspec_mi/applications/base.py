@@ -118,3 +118,21 @@ class Application:
     """Its own ``virtspec`` subcommands."""
     extensions: ClassVar[tuple[Extension, ...]] = ()
     """The instruments' subcommands it extends."""
+    example: ClassVar[dict[str, Any]] = {}
+    """
+    A small run of the application, end to end (the contract test's fixture,
+    ``tests/applications/test_applications.py``):
+
+    - ``argv``: a command line of one of its commands (``"{tmp}"`` stands for a folder);
+    - ``inputs``: ``inputs(folder)`` writes the files ``argv`` reads (optional);
+    - ``api``: ``api(folder)``, the same run through its Python function;
+    - ``counts``: ``counts(result)``, what must be identical between the two (exact
+      counts, or values computed from them);
+    - ``outputs``: the files ``argv`` writes in the folder; ``read``: ``read(path)`` the
+      result in one of them (its ``counts`` compared); ``formats``: the suffixes its result
+      is written in (``result.write``) and read back; ``printed``: with ``--json`` in
+      ``argv``, ``printed(data)`` the counts of the JSON object printed;
+    - ``resume``: a longer command line whose run keeps its work in ``checkpoint`` (a file
+      or folder in the folder) meanwhile: interrupted there, it resumes to the same counts;
+    - ``workers``: ``True`` when it traces on Dask workers (``--workers 2``: the same counts).
+    """

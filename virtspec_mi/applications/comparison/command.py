@@ -15,6 +15,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any, ClassVar
 
+import numpy as np
+
 from virtspec_mi.applications.base import Application, Command, Session
 from virtspec_mi.base.checks import number
 from virtspec_mi.colorimetry.cie import DEFAULT_ILLUMINANT, DEFAULT_OBSERVER
@@ -98,9 +100,36 @@ COMPARE = Command(
 """The comparison application's command."""
 
 
+def _inputs(folder: Any) -> None:
+    """The example's result file (a small sweep of the shipped diamond) and a measured spectrum."""
+
+    from pathlib import Path
+
+    from virtspec_mi.runtime.reading import take
+    from virtspec_mi.runtime.scene import loaded
+
+    take("sweep", loaded("diamond_collimated"), wavelengths=[450.0, 550.0, 650.0], rays=4000, seed=1,
+         progress=False).write(Path(folder, "r.nc"))
+    Path(folder, "m.csv").write_text("wavelength,reflectance,uncertainty\n450,0.18,0.01\n550,0.17,0.01\n"
+                                     "650,0.17,0.01\n")
+
+
+def _api(folder: Any) -> Any:
+    from pathlib import Path
+
+    from virtspec_mi.applications.comparison import compare
+    from virtspec_mi.runtime.reading import read_result
+
+    return compare(read_result(Path(folder, "r.nc")), Path(folder, "m.csv"))
+
+
 class ComparisonApplication(Application):
     """Simulated against measured spectra: ``vm.compare``, ``virtspec compare``."""
 
     name: ClassVar[str] = "comparison"
     summary: ClassVar[str] = "a result against a measured spectrum: residuals, the share within tolerance, Delta E"
     commands: ClassVar[tuple[Command, ...]] = (COMPARE,)
+    example: ClassVar[dict[str, Any]] = {
+        "argv": ("compare", "{tmp}/r.nc", "{tmp}/m.csv", "--json"), "inputs": _inputs, "api": _api,
+        "counts": lambda comparison: np.asarray(comparison.residuals, dtype=np.float64),
+        "printed": lambda data: np.asarray(data["residuals"], dtype=np.float64)}

@@ -22,6 +22,8 @@ from __future__ import annotations
 import importlib
 from typing import Any, ClassVar
 
+import numpy as np
+
 from virtspec_mi.applications.base import Application, Command
 from virtspec_mi.applications.fitting.command import FIT
 
@@ -38,9 +40,44 @@ def __getattr__(name: str) -> Any:
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
+_FIT = ("--specimen", "prospect_d", "--free", "Cab=10:80", "--theta-i", "8", "--beam", "collimated", "--delta",
+        "0.2", "--table-points", "3", "--profile-points", "0")
+
+
+def _inputs(folder: Any) -> None:
+    """The example's measured reflectance (a leaf's, at four wavelengths, ±0.03)."""
+
+    from pathlib import Path
+
+    Path(folder, "leaf.csv").write_text("wavelength,value,uncertainty\n500,0.07,0.03\n560,0.12,0.03\n"
+                                        "650,0.06,0.03\n800,0.45,0.03\n")
+
+
+def _api(folder: Any) -> Any:
+    from pathlib import Path
+
+    from virtspec_mi.applications.fitting.inversion import fit
+
+    return fit(Path(folder, "leaf.csv"), "prospect_d", {"Cab": (10.0, 80.0)}, quantities=("reflectance",),
+               theta_i=8.0, beam="collimated", delta=0.2, table_points=3, profile_points=0)
+
+
+def _read(path: Any) -> Any:
+    from virtspec_mi.applications.fitting.result import read_fit
+
+    return read_fit(path)
+
+
 class FittingApplication(Application):
     """A specimen's parameters fitted to a measured spectrum: ``vm.fit``, ``virtspec fit``."""
 
     name: ClassVar[str] = "fitting"
     summary: ClassVar[str] = "a specimen's parameters fitted to a measured spectrum, with a confidence set"
     commands: ClassVar[tuple[Command, ...]] = (FIT,)
+    example: ClassVar[dict[str, Any]] = {
+        "argv": ("fit", "{tmp}/leaf.csv", *_FIT, "--out", "{tmp}/fit.nc"), "inputs": _inputs, "api": _api,
+        "counts": lambda result: np.concatenate([np.ravel(result.estimate), np.ravel(result.intervals), [result.rays]]),
+        "outputs": ("fit.nc",), "read": _read, "formats": (".json", ".nc"),
+        "resume": {"argv": ("fit", "{tmp}/leaf.csv", *_FIT, "--directory", "{tmp}/work", "--out", "{tmp}/again.nc"),
+                   "checkpoint": "work/readings", "out": "again.nc"},
+        "workers": True}

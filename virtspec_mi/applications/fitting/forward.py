@@ -124,9 +124,14 @@ class Forward:
 
     def _sweep(self, parameters: dict[str, Any], mu: float, out: Path | None, workers: Any = None) -> Any:
         wavelengths = list(map(float, self.problem.wavelengths))
-        return take("sweep", self.problem.loaded, parameters=parameters, wavelengths=wavelengths, mu=mu,
-                         delta=self.reading_delta, joint=self.joint, seed=self.seed, out=out, progress=False,
-                         workers=workers, **self.settings)
+        try:
+            return take("sweep", self.problem.loaded, parameters=parameters, wavelengths=wavelengths, mu=mu,
+                        delta=self.reading_delta, joint=self.joint, seed=self.seed, out=out, progress=False,
+                        workers=workers, **self.settings)
+        except KeyboardInterrupt as stop:  # the fit's work is its directory, not one reading's file
+            if self.directory is not None:
+                stop.checkpoint, stop.written = self.directory, None  # type: ignore[attr-defined]
+            raise
 
     def reading(self, values: Sequence[float], mu: float, stage: str) -> Reading:
         """The certified spectrum at ``values`` (to ``mu``), traced, read from the work directory or remembered."""

@@ -24,7 +24,9 @@ and ``vm.sweep(target=...)`` read too) and the command line refuses every other 
 
 from __future__ import annotations
 
-from typing import ClassVar
+from typing import Any, ClassVar
+
+import numpy as np
 
 from virtspec_mi.applications.base import Application, Extension
 from virtspec_mi.applications.targets.measure import REFUSED_SETTINGS
@@ -32,6 +34,16 @@ from virtspec_mi.applications.targets.parse import TargetFlags, respond
 from virtspec_mi.settings import Settings
 
 __all__ = ["TargetsApplication"]
+
+
+def _api(folder: Any) -> Any:
+    """The example's target through Python: ``measure_target`` (``vm.measure(scene, target=...)``)."""
+
+    from virtspec_mi.applications.targets.measure import measure_target
+    from virtspec_mi.applications.targets.targets import band
+    from virtspec_mi.runtime.scene import loaded
+
+    return measure_target(loaded("diamond_collimated"), None, band("B04", tolerance=0.05), {"seed": 1})
 
 
 class TargetsApplication(Application):
@@ -44,3 +56,9 @@ class TargetsApplication(Application):
         takes=(*(name for name in Settings.names() if name not in REFUSED_SETTINGS), "defines", "json", "quiet"),
         reason="a target picks its own wavelengths and rays and is measured at the scene's own specimen parameters; "
                "its result is printed (--json prints it as JSON; draw result.readings from Python)"),)
+    example: ClassVar[dict[str, Any]] = {
+        "argv": ("measure", "diamond_collimated", "--target", "band:B04,tolerance=0.05", "--seed", "1", "--json"),
+        "api": _api,
+        "counts": lambda result: np.array([v.value for v in result.values] + [result.rays, result.pilot_rays]),
+        "printed": lambda data: np.array([v["value"] for v in data["values"].values()]
+                                         + [data["rays"], data["pilot_rays"]])}

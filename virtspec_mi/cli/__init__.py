@@ -18,7 +18,8 @@ instrument through the API (:data:`MEASURING` lists them), e.g.:
   :func:`virtspec_mi.sweep`; ``--densities`` (the paper's Fig. 6);
 - ``virtspec gonio SCENE``: the goniophotometer, :func:`virtspec_mi.gonio` (R and T with
   their certificate and the per-θo table; ``--plot`` draws each wavelength;
-  ``--plot-series``; ``--klems``: :mod:`virtspec_mi.applications.klems.measure`);
+  ``--plot-series``; ``--klems``: the Klems application's extension, an alias of
+  ``virtspec klems``);
 - ``virtspec sphere SCENE``: the integrating sphere, :func:`virtspec_mi.sphere_measure`
   (``--correct``: the reading corrected by the sphere theory, beside it);
 - ``virtspec gloss SCENE``: the gloss meter, ``vm.take("gloss", …)``; an outside
@@ -37,16 +38,24 @@ resumable: finished readings are kept in ``FILE.partial.json``,
 progress bar on a terminal), ``--workers N`` / ``--scheduler ADDRESS`` /
 ``--task-readings K`` (Dask: :mod:`virtspec_mi.runtime.scaleout`; the same counts).
 
-**Files** (:mod:`virtspec_mi.cli.files`) — ``virtspec plot|colour|compare FILE``: every kind of result file (a
+**Files** (:mod:`virtspec_mi.cli.files`) — ``virtspec plot|colour FILE``: every kind of result file (a
 hemispherical reading or sweep, a goniophotometer reading: its R and T, or its lobes; a
 sphere reading: its reading, corrected or hemispherical value), ``--sel NAME=VALUE``
 (repeatable): the label of a dim nearest VALUE (a parameter point, θi, a wavelength).
 
+**Applications** (:mod:`virtspec_mi.cli.applying`) — one subcommand per command of every
+application of the registry (:data:`virtspec_mi.applications.APPLICATIONS`: each declares
+its :class:`~virtspec_mi.applications.base.Command` s): ``virtspec fit``, ``virtspec
+albedo-table``, ``virtspec klems``, ``virtspec compare``; an application's
+:class:`~virtspec_mi.applications.base.Extension` adds flags to an instrument's subcommand
+(``measure --target``, ``gonio --klems``), and every other flag given with them is refused
+in one message (:func:`~virtspec_mi.cli.measuring.refuse_others`).
+
 **Others** — ``virtspec bounds`` (the paper's Table 1 and every ``bound=`` rule),
-``virtspec albedo-table`` (:mod:`virtspec_mi.cli.tables`), ``virtspec fit``
-(:mod:`virtspec_mi.applications.fitting`), ``virtspec scenes`` (the
-shipped scenes: every ``SCENE`` argument takes their names, :mod:`virtspec_mi.scenes`),
-``virtspec llvm {find,check}`` (the libLLVM Dr.Jit uses; ``make setup`` calls it).
+``virtspec scenes`` (the shipped scenes: every ``SCENE`` argument takes their names,
+:mod:`virtspec_mi.scenes`), ``virtspec llvm {find,check}`` (the libLLVM Dr.Jit uses;
+``make setup`` calls it). Every subparser records what runs it: the command line
+dispatches through the rows, with no chain of names.
 
 Errors in the input (bad ranges, unreadable scenes, a bad libLLVM) print one line
 ``virtspec: error: …`` naming the flag (``--theta-i: theta_i must satisfy …``) and exit

@@ -1,6 +1,6 @@
 """
 The applications' subcommands, generated from their rows
-=========================================================
+==========================================================
 
 One subcommand per :class:`~virtspec_mi.applications.base.Command` of every application of
 :data:`virtspec_mi.applications.APPLICATIONS` (outside ones included): its arguments and

@@ -1,6 +1,6 @@
 """
 Exchange formats: the grids, files and bases that renderers and simulation tools read
-====================================================================================
+=======================================================================================
 
 The formats themselves, below every layer that measures (the applications that fill them:
 :mod:`virtspec_mi.applications.tables` and :mod:`virtspec_mi.applications.klems`):

@@ -1,6 +1,6 @@
 """
 ``virtspec compare``: a result against a measured spectrum, declared
-====================================================================
+======================================================================
 
 The comparison application's row, :class:`ComparisonApplication` (here rather than in the
 package's ``__init__``, which holds :func:`~virtspec_mi.applications.comparison.compare`

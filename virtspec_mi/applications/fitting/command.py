@@ -1,6 +1,6 @@
 """
 ``virtspec fit``: the command of :func:`virtspec_mi.applications.fitting.fit`, declared
-====================================================================================
+=========================================================================================
 
 :data:`FIT` is the fitting application's :class:`~virtspec_mi.applications.base.Command`:
 its help and examples, its arguments and flags (:class:`FitFlags`, an

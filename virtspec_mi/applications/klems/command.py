@@ -1,6 +1,6 @@
 """
 ``virtspec klems SCENE`` and its alias ``virtspec gonio --klems FILE``, declared
-===============================================================================
+==================================================================================
 
 :data:`KLEMS` is the Klems application's :class:`~virtspec_mi.applications.base.Command`
 (its flags :class:`KlemsCommandFlags`, :func:`respond`); :data:`GONIO_KLEMS` the

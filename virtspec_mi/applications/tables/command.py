@@ -1,6 +1,6 @@
 """
 ``virtspec albedo-table``: certified directional-albedo tables and engines' drop-in files
-=========================================================================================
+===========================================================================================
 
 :data:`ALBEDO_TABLE` is the tables application's
 :class:`~virtspec_mi.applications.base.Command`: its flags (:class:`TableFlags`: those of

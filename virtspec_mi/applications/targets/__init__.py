@@ -13,7 +13,7 @@ certified box. Modules, one job each:
 - :mod:`.colour` — certified XYZ, L*a*b*, sRGB (``Result.colour()``);
 - :mod:`.bands`, :mod:`.indices` — response functions, Sentinel-2 bands, indices;
 - :mod:`.targets` — ``vm.colour``, ``vm.band``, ``vm.fapar``, ``vm.index``;
-- :mod:`.measure` — a target's rays traced through the engine; :mod:`.result` — its result;
+- :mod:`virtspec_mi.applications.targets.measure` — a target's rays traced through the engine; :mod:`.result` — its result;
 - :mod:`.difference` — ``vm.colour_difference``; :mod:`.parse` — ``--target`` strings.
 
 The application's row (:class:`TargetsApplication`) extends ``virtspec measure`` with

@@ -124,7 +124,7 @@ class DerivedResult:
                 "readings": self.readings.as_dict()}
 
     def plot(self, path: Any = None) -> Any:
-        """A colour swatch with its certified ΔE₀₀ radius, or the values with error bars (:mod:`.plot`)."""
+        """A colour swatch with its certified ΔE₀₀ radius, or the values with error bars (:mod:`virtspec_mi.applications.targets.plot`)."""
 
         from virtspec_mi.applications.targets.plot import plot_derived
 

@@ -3,7 +3,7 @@ Targets: the quantity a user wants, its tolerance, and how to size its rays
 ===========================================================================
 
 A target names a derived quantity and the tolerance it must be certified to; the
-instrument (:mod:`.measure`) picks the wavelengths, the rays per wavelength (Nₖ ∝ |wₖ|,
+instrument (:mod:`virtspec_mi.applications.targets.measure`) picks the wavelengths, the rays per wavelength (Nₖ ∝ |wₖ|,
 :func:`~.functionals.allocate`) and the rays in all. Each target is a small set of linear
 functionals (:class:`~.functionals.Functional`) stated together at δ (δ/m each, a union
 bound), and a map from their certified box to what is reported:
@@ -278,7 +278,7 @@ class ColourTarget(Target):
     """
     The colour of ``quantity`` under ``illuminant`` and ``observer`` with ΔE₀₀ ≤
     ``tolerance_dE00`` over the certified box, from readings every ``step`` nm over
-    the observer's range (within the specimen's data: :mod:`.measure` clips it).
+    the observer's range (within the specimen's data: :mod:`virtspec_mi.applications.targets.measure` clips it).
     """
 
     tolerance_dE00: float = 0.5

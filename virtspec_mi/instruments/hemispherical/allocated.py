@@ -1,6 +1,6 @@
 """
 The spectrophotometer with rays allocated per wavelength: :class:`Allocated`
-============================================================================
+==============================================================================
 
 A derived quantity (a colour, a band, an index: :mod:`virtspec_mi.applications.targets`)
 needs readings at one θi whose rays differ from wavelength to wavelength (Nₖ ∝ |wₖ| of its

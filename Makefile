@@ -51,7 +51,7 @@ demo: setup
 # fast a signal is answered (their bound is a latency, so they must not share the cores). Their
 # signals land at seeded moments, so a failure is run once more: the same moment again, which
 # a defect fails again and a stall of the machine does not.
-SERIAL := tests/test_interrupts_anytime.py tests/test_interrupts.py
+SERIAL := tests/test_interrupts_anytime.py tests/base/test_interrupts.py
 test: setup
 	$(PY) -m pytest -m "slow or not slow" -n 2 --dist loadfile $(addprefix --ignore=,$(SERIAL)) $(PYTEST_ARGS)
 	$(PY) -m pytest -m "slow or not slow" --reruns 1 $(SERIAL) $(PYTEST_ARGS)

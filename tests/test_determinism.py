@@ -3,7 +3,7 @@ Determinism of the goniophotometer and the integrating sphere (issue 22, item 6)
 counts — every fate, every bin, every sum — do not depend on how the rays are cut into
 kernel chunks (``chunk_size``, and the time-bounded chunk sizes of
 :class:`virtspec_mi.kernel.tracer._Pace`, here forced to arbitrary sequences), nor on the
-number of Dr.Jit threads. In-process vs two Dask workers: ``tests/test_scaleout.py``
+number of Dr.Jit threads. In-process vs two Dask workers: ``tests/runtime/test_scaleout.py``
 (``test_a_goniophotometer_reading_and_a_sphere_spectrum_on_two_workers_are_bit_identical``,
 slow; its workers run one Dr.Jit thread each).
 """

@@ -16,7 +16,7 @@ residual for grey Lambertian specimens (SCE, standard 0.99) on two illustrative 
 (:data:`EXAMPLE_SPHERES`; dimensions for illustration, not a particular instrument).
 
 The manual's tables (docs/guide/sphere.md) must equal this script's output
-(``tests/instruments/sphere/test_sphere_theory.py``).
+(``tests/instruments/sphere/test_theory.py``).
 Run: ``.venv/bin/python tools/sphere_conventions.py``.
 """
 

@@ -2,10 +2,10 @@
 Print the manual's sphere validation tables (docs/guide/sphere.md): the simulation against
 ``virtspec_mi.instruments.sphere.theory`` (through the one mapping, ``virtspec_mi.instruments.sphere.model.theory_inputs``) and the correction of
 instrument readings. The manual's tables (docs/guide/sphere.md) must equal this script's output
-(``tests/instruments/sphere/test_sphere_model.py``, a slow test). The same cases are asserted, one by one,
-by ``tests/instruments/sphere/test_sphere_walk.py`` and ``tests/instruments/sphere/test_sphere_model.py``.
+(``tests/instruments/sphere/test_model.py``, a slow test). The same cases are asserted, one by one,
+by ``tests/instruments/sphere/test_walk.py`` and ``tests/instruments/sphere/test_model.py``.
 
-1. The ideal sphere (``tests/instruments/sphere/test_sphere_walk.py``'s grid): 150 mm, three ports
+1. The ideal sphere (``tests/instruments/sphere/test_walk.py``'s grid): 150 mm, three ports
    (sample, entrance, detector) of cap fraction f each, a 0.5 grey Lambertian lit by a
    conical beam, N = 105,967 rays: the detector fraction simulated, against the flat
    model (exact cap fractions, the simulation's geometry), the cap model with cap

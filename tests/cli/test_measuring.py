@@ -193,10 +193,12 @@ def test_the_dask_flags_are_checked_before_any_tracing(command, capsys):
     (["gonio", "--param", "specimen.eta=1.5,2", "--plot", "g.png"], "--plot draws a sweep over wavelength x theta_i "
                                                                      "at one parameter point"),
     (["gonio", "--param", "specimen.eta=1.5", "--plot-series", "g.svg"], "--plot-series draws a sweep"),
-    (["gonio", "--klems", "k.xml", "--out", "g.nc", "--json"], "--klems measures readings of its own (every patch "
-                                                                "centre, its own bins) and writes FILE and FILE.nc: "
-                                                                "it takes none of --out, --json"),
-    (["gonio", "--klems", "k.xml", "--theta-i", "30"], "it takes none of --theta-i"),
+    (["gonio", "--klems", "k.xml", "--out", "g.nc", "--json"], "--klems takes none of --out, --json (it measures "
+                                                                "readings of its own (every patch centre, its own "
+                                                                "bins) and writes FILE and FILE.nc)"),
+    (["gonio", "--klems", "k.xml", "--theta-i", "30", "-D", "a=1"], "--klems takes none of --theta-i, -D"),
+    (["measure", "--target", "band:B04", "--out", "x.nc", "--plot", "p.png", "--mu", "0.01"],
+     "--target takes none of --mu, --out, --plot (a target picks its own wavelengths and rays"),
     (["sweep", "--densities", "2", "3", "--json"], "--json prints one result and --densities a table"),
     (["sphere", "--out", "r.txt"], "--out: out must end in one of .nc, .csv, .json, .zarr"),
     (["measure", "--plot", "r.pdf"], "--plot: plot must end in one of .png, .svg"),

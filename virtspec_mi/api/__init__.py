@@ -216,12 +216,11 @@ def sweep(scene: Any, *, target: Any = None, **keywords: Any) -> Any:
         given = [name for name in ("parameters", "checkpoint", "out", "workers") if run[name]]
         if given:
             raise ValueError(f"{', '.join(given)}: not taken with a target (each angle is one vm.measure(target=...))")
+        from virtspec_mi.applications.targets.measure import REFUSED_SETTINGS
         from virtspec_mi.applications.targets.result import DerivedSweep
 
         scene = loaded(scene, defines)
-        resolved, = resolve("sweep", {k: v for k, v in settings.items() if k not in ("wavelengths", "mu", "rays",
-                                                                                    "bound", "pilot_rays",
-                                                                                    "pilot_delta", "joint")},
+        resolved, = resolve("sweep", {k: v for k, v in settings.items() if k not in REFUSED_SETTINGS},
                             scene_options(scene.bench, Settings))
         angles = incidence_angles(resolved, run["theta_i"], "a sweep")
         return DerivedSweep(tuple(float(t) for t in angles), tuple(

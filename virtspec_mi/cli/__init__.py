@@ -18,7 +18,8 @@ instrument through the API (:data:`MEASURING` lists them), e.g.:
   :func:`virtspec_mi.sweep`; ``--densities`` (the paper's Fig. 6);
 - ``virtspec gonio SCENE``: the goniophotometer, :func:`virtspec_mi.gonio` (R and T with
   their certificate and the per-θo table; ``--plot`` draws each wavelength;
-  ``--plot-series``; ``--klems``: :mod:`virtspec_mi.applications.klems.measure`);
+  ``--plot-series``; ``--klems``: the Klems application's extension, an alias of
+  ``virtspec klems``);
 - ``virtspec sphere SCENE``: the integrating sphere, :func:`virtspec_mi.sphere_measure`
   (``--correct``: the reading corrected by the sphere theory, beside it);
 - ``virtspec gloss SCENE``: the gloss meter, ``vm.take("gloss", …)``; an outside
@@ -37,16 +38,24 @@ resumable: finished readings are kept in ``FILE.partial.json``,
 progress bar on a terminal), ``--workers N`` / ``--scheduler ADDRESS`` /
 ``--task-readings K`` (Dask: :mod:`virtspec_mi.runtime.scaleout`; the same counts).
 
-**Files** (:mod:`virtspec_mi.cli.files`) — ``virtspec plot|colour|compare FILE``: every kind of result file (a
+**Files** (:mod:`virtspec_mi.cli.files`) — ``virtspec plot|colour FILE``: every kind of result file (a
 hemispherical reading or sweep, a goniophotometer reading: its R and T, or its lobes; a
 sphere reading: its reading, corrected or hemispherical value), ``--sel NAME=VALUE``
 (repeatable): the label of a dim nearest VALUE (a parameter point, θi, a wavelength).
 
+**Applications** (:mod:`virtspec_mi.cli.applying`) — one subcommand per command of every
+application of the registry (:data:`virtspec_mi.applications.APPLICATIONS`: each declares
+its :class:`~virtspec_mi.applications.base.Command` s): ``virtspec fit``, ``virtspec
+albedo-table``, ``virtspec klems``, ``virtspec compare``; an application's
+:class:`~virtspec_mi.applications.base.Extension` adds flags to an instrument's subcommand
+(``measure --target``, ``gonio --klems``), and every other flag given with them is refused
+in one message (:func:`~virtspec_mi.cli.measuring.refuse_others`).
+
 **Others** — ``virtspec bounds`` (the paper's Table 1 and every ``bound=`` rule),
-``virtspec albedo-table`` (:mod:`virtspec_mi.cli.tables`), ``virtspec fit``
-(:mod:`virtspec_mi.applications.fitting`), ``virtspec scenes`` (the
-shipped scenes: every ``SCENE`` argument takes their names, :mod:`virtspec_mi.scenes`),
-``virtspec llvm {find,check}`` (the libLLVM Dr.Jit uses; ``make setup`` calls it).
+``virtspec scenes`` (the shipped scenes: every ``SCENE`` argument takes their names,
+:mod:`virtspec_mi.scenes`), ``virtspec llvm {find,check}`` (the libLLVM Dr.Jit uses;
+``make setup`` calls it). Every subparser records what runs it: the command line
+dispatches through the rows, with no chain of names.
 
 Errors in the input (bad ranges, unreadable scenes, a bad libLLVM) print one line
 ``virtspec: error: …`` naming the flag (``--theta-i: theta_i must satisfy …``) and exit
@@ -61,17 +70,19 @@ Baranoski et al. (2001), eqs. (23), (24); Figs. 5 and 6.
 from __future__ import annotations
 
 import argparse
+import functools
 import signal
 import sys
 import textwrap
 from pathlib import Path
 from typing import Any, Sequence
 
-from virtspec_mi.cli.files import add_file_commands, colour, compare, plot
+from virtspec_mi.cli.applying import application_commands, application_flags
+from virtspec_mi.cli.applying import respond as application_respond
+from virtspec_mi.cli.files import add_file_commands, colour, plot
 from virtspec_mi.cli.flags import COMMON_FLAGS, Flag, option_flags
 from virtspec_mi.cli.measuring import (Measuring, common_flags, measuring_commands, measuring_flags, respond,
                                       unrecognized_hint)
-from virtspec_mi.cli.tables import add_table_command, albedo_table
 
 __all__ = ["main", "build_parser", "Measuring", "MEASURING", "measuring_commands", "Flag", "COMMON_FLAGS",
            "common_flags", "option_flags"]
@@ -105,10 +116,14 @@ class _Listing(argparse.HelpFormatter):
 
 
 def build_parser() -> argparse.ArgumentParser:
-    """The ``virtspec`` argument parser (the measurement flags come from the options' fields)."""
+    """
+    The ``virtspec`` argument parser: one subcommand per command of every instrument's and
+    every application's row (their flags from the options' fields), and the command line's
+    own; each subparser records what runs it (``respond``) and itself (``parser``, for the
+    flags an extension refuses).
+    """
 
     from virtspec_mi.base.version import __version__
-    from virtspec_mi.applications.fitting.command import add_fit_command
 
     parser = argparse.ArgumentParser(
         prog="virtspec", description="Virtual spectrophotometer: certified reflectance, transmittance and "
@@ -118,11 +133,16 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--version", action="version", version=f"virtspec-mi {__version__}")
     commands = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
 
-    def command(name: str, summary: str, description: str, examples: str | None = None) -> argparse.ArgumentParser:
-        return commands.add_parser(name, help=summary, description=textwrap.fill(description, 100),
-                                   epilog=_EXAMPLES[name] if examples is None else examples,
-                                   formatter_class=argparse.RawDescriptionHelpFormatter)
+    def command(name: str, summary: str, description: str, examples: str | None = None,
+                run: Any = None) -> argparse.ArgumentParser:
+        sub = commands.add_parser(name, help=summary, description=textwrap.fill(description, 100),
+                                  epilog=_EXAMPLES[name] if examples is None else examples,
+                                  formatter_class=argparse.RawDescriptionHelpFormatter)
+        sub.set_defaults(respond=run or _OWN[name], parser=sub)
+        return sub
 
+    def listed(examples: Sequence[str]) -> str:
+        return "examples:\n" + "\n".join(f"  {line}" for line in examples)
 
     bounds = command("bounds", "rays per reading under every ray budget (Table 1)",
                      "Rays per reading that certify |m/N - rho| < mu with probability >= 1 - delta: the "
@@ -131,12 +151,13 @@ def build_parser() -> argparse.ArgumentParser:
     bounds.add_argument("--delta", type=float, nargs="+", default=[0.001, 0.01, 0.1],
                         help="failure probabilities (default 0.001 0.01 0.1)")
 
-    for row in measuring_commands().values():
-        measuring_flags(command(row.name, row.command.summary, row.command.description,
-                                "examples:\n" + "\n".join(f"  {line}" for line in row.command.examples)), row)
+    for row in measuring_commands().values():  # the instruments' rows
+        measuring_flags(command(row.name, row.command.summary, row.command.description, listed(row.command.examples),
+                                functools.partial(respond, row=row)), row)
     add_file_commands(command)
-    add_fit_command(commands)  # virtspec fit: its flags live with the fitting package
-    add_table_command(command)
+    for declared in application_commands().values():  # the applications' rows
+        application_flags(command(declared.name, declared.summary, declared.description, listed(declared.examples),
+                                  functools.partial(application_respond, command=declared)), declared)
 
     shipped = command("scenes", "the shipped scenes (every SCENE argument takes their names)",
                       "List the scenes shipped with virtspec-mi and their files. Every subcommand that takes a "
@@ -154,6 +175,33 @@ def build_parser() -> argparse.ArgumentParser:
                    "and print its version, or say how to fix it.")
     llvm.add_argument("action", choices=["find", "check"])
     return parser
+
+
+def _bounds(args: argparse.Namespace) -> int:
+    from virtspec_mi.budgets.bounds import format_table_1
+    from virtspec_mi.budgets.rules import format_budgets
+
+    print(format_table_1(args.mu, args.delta))
+    print()
+    print(format_budgets(args.mu, args.delta))
+    return 0
+
+
+def _scenes(args: argparse.Namespace) -> int:
+    from virtspec_mi.scenes import answer
+
+    print(answer(args.path, args.copy, args.destination))
+    return 0
+
+
+def _llvm(args: argparse.Namespace) -> int:
+    from virtspec_mi.base.llvm import main as llvm_main
+
+    return llvm_main([args.action])
+
+
+_OWN = {"bounds": _bounds, "scenes": _scenes, "llvm": _llvm, "colour": colour, "plot": plot}
+"""The command line's own subcommands (:data:`~virtspec_mi.cli.measuring.OWN_COMMANDS`) and what runs each."""
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -179,31 +227,7 @@ def _command(args: argparse.Namespace, exit_status: Any) -> int:
     """Run the command of ``args``; an error or an interrupt becomes a one-line message and the exit status."""
 
     try:
-        if args.command == "bounds":
-            from virtspec_mi.budgets.bounds import format_table_1
-            from virtspec_mi.budgets.rules import format_budgets
-
-            print(format_table_1(args.mu, args.delta))
-            print()
-            print(format_budgets(args.mu, args.delta))
-            return 0
-        if args.command == "scenes":
-            from virtspec_mi.scenes import answer
-
-            print(answer(args.path, args.copy, args.destination))
-            return 0
-        if args.command == "llvm":
-            from virtspec_mi.base.llvm import main as llvm_main
-
-            return llvm_main([args.action])
-        if args.command == "fit":
-            from virtspec_mi.applications.fitting.command import run_fit
-
-            return run_fit(args)
-        handlers = {"colour": colour, "compare": compare, "plot": plot, "albedo-table": albedo_table}
-        if args.command in handlers:
-            return handlers[args.command](args)
-        return respond(args, measuring_commands()[args.command])
+        return args.respond(args)  # the row's: an instrument's command, an application's, or the command line's own
     except KeyboardInterrupt as stop:  # Ctrl-C (SIGINT) or SIGTERM: virtspec_mi.base.interrupts.Interrupted
         return _interrupted(stop, args, exit_status)
     except Exception as error:

@@ -1,11 +1,13 @@
 """
-The subcommands that read result files: ``virtspec colour``, ``compare`` and ``plot``
-=====================================================================================
+The subcommands that read result files: ``virtspec colour`` and ``plot``
+========================================================================
 
 Every kind of result file (a hemispherical reading or sweep, a goniophotometer reading:
 its R and T, or its lobes; a sphere reading: its reading, corrected or hemispherical
 value), ``--sel NAME=VALUE`` (repeatable): the label of a dim nearest VALUE (a
-parameter point, θi, a wavelength).
+parameter point, θi, a wavelength). ``virtspec compare`` is the comparison application's
+(:mod:`virtspec_mi.applications.comparison.command`); it reads its result file with
+:func:`selected` too.
 """
 
 from __future__ import annotations
@@ -18,15 +20,13 @@ from typing import Any, Callable, Sequence
 from virtspec_mi.cli.flags import pairs
 from virtspec_mi.exchange.measured.flags import add_measured_flags, measured_from
 
-__all__ = ["add_file_commands", "colour", "compare", "plot", "selected"]
+__all__ = ["add_file_commands", "colour", "plot", "selected"]
 
 EXAMPLES = {
     "colour": "examples:\n  virtspec colour spectrum.csv\n"
               "  virtspec colour fig5.nc --theta-i 30 --illuminant A --quantity transmittance\n"
               "  virtspec colour lut.nc --sel specimen.thickness=1.6e-4 --sel theta_i=8\n"
               "  virtspec colour sphere.json --quantity hemispherical",
-    "compare": "examples:\n  virtspec compare spectrum.nc measured.csv --plot compare.png\n"
-               "  virtspec compare reading.json npsg.csv --quantity transmittance --json",
     "plot": "examples:\n  virtspec plot fig5.nc --wavelengths 400 550 700 --out fig5.png\n"
             "  virtspec plot spectrum.nc --quantity transmittance\n"
             "  virtspec plot spectrum.nc --against measured.csv --out compare.svg\n"
@@ -37,7 +37,7 @@ EXAMPLES = {
 
 
 def add_file_commands(command: Callable[..., argparse.ArgumentParser]) -> None:
-    """Add ``colour``, ``compare`` and ``plot`` through ``command(name, summary, description, examples)``."""
+    """Add ``colour`` and ``plot`` through ``command(name, summary, description, examples)``."""
 
     from virtspec_mi.api import QUANTITIES
 
@@ -57,23 +57,6 @@ def add_file_commands(command: Callable[..., argparse.ArgumentParser]) -> None:
                         help="colour.MSDS_CMFS name (default CIE 1931 2 degree)")
     colour_parser.add_argument("--json", action="store_true",
                         help="print one JSON object: XYZ, Lab, sRGB and its hex, coverage, note")
-
-    compare_parser = command("compare", "a result against a measured spectrum (residuals, Delta E)",
-                      "Compare one quantity of a result file at one theta_i with a measured spectrum over their "
-                      "common wavelengths (the measured one interpolated onto the result's, never extrapolated): "
-                      "residuals, RMSE, the share of points within the certified tolerance (+ the measurement "
-                      "uncertainty) and Delta E 2000. MEASURED: a colour-science CSV spectral file, a plain "
-                      "wavelength,value[,uncertainty] CSV, a NetCDF file, another result file, or an instrument's or "
-                      "library's file (ASD, SVC .sig, PSR .sed, JCAMP-DX, ENVI .sli, a CSV table of many samples).",
-                      EXAMPLES["compare"])
-    compare_parser.add_argument("result", help="result file of any kind (.nc, .csv, .json, .zarr; also `measure --json` "
-                                        "output)")
-    compare_parser.add_argument("measured", help="measured spectrum (.csv, .txt, .nc, a result file, .asd, .sig, .sed, "
-                                                 ".jdx/.dx, .sli)")
-    comparison_options(compare_parser)
-    selection_option(compare_parser)
-    compare_parser.add_argument("--plot", help="figure .png or .svg: both spectra and the residuals")
-    compare_parser.add_argument("--json", action="store_true", help="print the comparison as one JSON object")
 
     plot_parser = command("plot", "a figure of any result file (or against a measured one)",
                    "Plot one quantity of a result file against theta_i (a sweep over angles: one curve per "
@@ -161,51 +144,6 @@ def colour(args: argparse.Namespace) -> int:
         return 0
     print(heading)
     print(colour.summary())
-    return 0
-
-
-def comparison_options(parser: argparse.ArgumentParser) -> None:
-    """The flags of ``virtspec compare``: quantity, theta_i, uncertainty, illuminant, observer."""
-
-    from virtspec_mi.api import QUANTITIES
-
-    parser.add_argument("--quantity",
-                        help=f"quantity compared: {', '.join(QUANTITIES)} of a reading or goniophotometer file "
-                             "(the measured column of that name; default reflectance), or reading, corrected, "
-                             "hemispherical of a sphere file (default reading; the measured column of what the "
-                             "sphere measures)")
-    parser.add_argument("--theta-i", type=float, help="angle of the result to use (needed if it has several)")
-    parser.add_argument("--uncertainty", type=float,
-                        help="measurement uncertainty, added to the certified tolerance (overrides the file's "
-                             "uncertainty column)")
-    parser.add_argument("--illuminant", default="D65", help="colour.SDS_ILLUMINANTS name for Delta E 2000 "
-                                                            "(default D65)")
-    parser.add_argument("--observer", default="CIE 1931 2 Degree Standard Observer",
-                        help="colour.MSDS_CMFS name (default CIE 1931 2 degree)")
-    add_measured_flags(parser)
-
-
-def compare(args: argparse.Namespace) -> int:
-    from dataclasses import replace
-    from pathlib import Path
-
-    from virtspec_mi.applications.comparison import compare
-    from virtspec_mi.results.plot import check_figure_path
-
-    check_figure_path(args.plot)  # a bad suffix fails before any work
-    result = selected(args.result, args.selections)
-    comparison = compare(result, measured_from(args, args.measured), quantity=args.quantity, theta_i=args.theta_i,
-                         measurement_uncertainty=args.uncertainty, illuminant=args.illuminant,
-                         observer=args.observer)
-    comparison = replace(comparison, result_name=Path(args.result).name)
-    if args.plot:
-        comparison.plot(args.plot)
-    if args.json:
-        print(comparison.sealed_json())  # a comparison's file: vm.read_result reads it
-        return 0
-    print(comparison.summary())
-    if args.plot:
-        print(f"plot: {args.plot}")
     return 0
 
 

@@ -15,7 +15,7 @@ import argparse
 from dataclasses import dataclass
 from typing import Any, Callable, Sequence
 
-__all__ = ["Flag", "COMMON_FLAGS", "SEVERAL", "option_flags", "given", "pairs", "flag_of", "flagged", "dest",
+__all__ = ["Flag", "COMMON_FLAGS", "SEVERAL", "option_flags", "flag_name", "given", "pairs", "flag_of", "flagged", "dest",
            "settings_options"]
 
 
@@ -100,15 +100,17 @@ def flag_of(name: str) -> str:
     return "--" + name.replace("_", "-")
 
 
-def option_flags(parser: argparse.ArgumentParser, kind: Any, words: tuple[str, ...] = ()) -> None:
+def option_flags(parser: argparse.ArgumentParser, kind: Any, words: tuple[str, ...] = (),
+                 scene: bool = True) -> None:
     """
     The one flag builder: one flag per option of ``kind`` (an
     :class:`~virtspec_mi.settings.Options` class: ``--theta-i`` …), in a group named by its
     ``title``, its choices, default and help from the field; a switch (a ``bool`` default)
     is a flag without a value, an option the command line writes as several words (the
-    field's ``words``, or one named in ``words``) takes them all. Values go to the options
-    as given (they validate them: :func:`given`); a flag left out takes the scene's value,
-    else the default.
+    field's ``words``, or one named in ``words``) takes them all, a ``repeat`` option is
+    given once per value, a ``positional`` one is an argument (an application's command).
+    Values go to the options as given (they validate them: :func:`given`); with ``scene``
+    a flag left out takes the scene's value, else the default.
     """
 
     from dataclasses import fields
@@ -120,14 +122,35 @@ def option_flags(parser: argparse.ArgumentParser, kind: Any, words: tuple[str, .
         meta = item.metadata
         if not meta["flag"]:
             continue
-        default = f"default: the scene's, else {shown(item.default) if item.default is not None else meta['unset']}"
-        several = "; several values or start:stop:step ranges, one reading each" if item.name in words else ""
-        text = f"{help_text(item)}{several} ({default})"
+        several = meta["words"] or item.name in words
+        if meta.get("positional"):
+            group.add_argument(item.name, nargs="+" if several else None, metavar=meta.get("metavar") or None,
+                               help=help_text(item))
+            continue
+        value = shown(item.default) if item.default is not None else meta["unset"]
+        default = f"default: the scene's, else {value}" if scene else f"default {value}"
+        each = "; several values or start:stop:step ranges, one reading each" if item.name in words else ""
+        text = f"{help_text(item)}{each}{'; repeatable' if meta.get('repeat') else ''} ({default})"
+        keywords: dict[str, Any] = dict(dest=item.name, help=argparse.SUPPRESS if meta.get("hidden") else text)
+        if meta.get("required"):
+            keywords["required"] = True
+        if meta.get("metavar"):
+            keywords["metavar"] = meta["metavar"]
         if isinstance(item.default, bool):
-            group.add_argument(flag_of(item.name), action="store_true", default=None, help=text)
+            keywords.pop("metavar", None)
+            group.add_argument(flag_name(item), action="store_true", default=None, **keywords)
+        elif meta.get("repeat"):  # several words too: --out A B, as --out A --out B
+            group.add_argument(flag_name(item), action="extend" if several else "append",
+                               nargs="+" if several else None, **keywords)
         else:
-            group.add_argument(flag_of(item.name), nargs="+" if meta["words"] or item.name in words else None,
-                               choices=list(meta["choices"]) if meta["choices"] else None, help=text)
+            group.add_argument(flag_name(item), nargs="+" if several else None,
+                               choices=list(meta["choices"]) if meta["choices"] else None, **keywords)
+
+
+def flag_name(item: Any) -> str:
+    """The command-line flag of the option field ``item``: its ``spelled`` name, else ``--theta-i`` from its name."""
+
+    return item.metadata.get("spelled") or flag_of(item.name)
 
 
 def given(args: argparse.Namespace, kind: Any, several: tuple[str, ...] = (), hint: str = "") -> dict[str, Any]:
@@ -149,13 +172,17 @@ def given(args: argparse.Namespace, kind: Any, several: tuple[str, ...] = (), hi
         value = getattr(args, item.name, None) if item.metadata["flag"] else None
         if value is None:
             continue
-        value = " ".join(value) if isinstance(value, list) else value
+        if item.metadata.get("repeat"):
+            value = tuple(value)
+        elif isinstance(value, list):
+            value = " ".join(value)
         check = getattr(api, SEVERAL[item.name]) if item.name in several else item.metadata["check"]
         try:
             check(value)
         except ValueError as error:
             shown = hint if item.name in SEVERAL and item.name not in several else ""
-            raise ValueError(f"{flag_of(item.name)}: {error}{shown}") from None
+            raise ValueError(f"{flag_name(item) if not item.metadata.get('positional') else item.name.upper()}: "
+                             f"{error}{shown}") from None
         given[item.name] = value
     return given
 

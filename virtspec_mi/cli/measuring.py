@@ -24,8 +24,9 @@ from typing import Any, Callable, Iterator, Sequence
 from virtspec_mi.cli.flags import (COMMON_FLAGS, SEVERAL, dest, flag_of, flagged, given, option_flags, pairs,
                                    settings_options)
 
-__all__ = ["Measuring", "measuring_commands", "OTHER_COMMANDS", "common_flags", "measuring_flags", "respond",
-           "Session", "one_angle", "unrecognized_hint", "report", "run", "drawn", "keywords_of"]
+__all__ = ["Measuring", "measuring_commands", "OWN_COMMANDS", "other_commands", "common_flags", "measuring_flags",
+           "respond", "Session", "one_angle", "unrecognized_hint", "report", "table", "run", "drawn", "keywords_of",
+           "given_flags", "refuse_others"]
 
 
 @dataclass(frozen=True)
@@ -70,7 +71,7 @@ def measuring_commands() -> dict[str, Measuring]:
     rows: dict[str, Measuring] = {}
     for name, instrument in INSTRUMENTS.items():
         for command in instrument.commands:
-            if command.name in rows or command.name in OTHER_COMMANDS:
+            if command.name in rows or command.name in other_commands():
                 owner = rows[command.name].instrument if command.name in rows else "virtspec itself"
                 raise ValueError(f"instrument {name!r} declares the subcommand {command.name!r}, which {owner} "
                                  "already has: give it another name")
@@ -78,8 +79,49 @@ def measuring_commands() -> dict[str, Measuring]:
     return rows
 
 
-OTHER_COMMANDS = ("bounds", "colour", "compare", "plot", "albedo-table", "fit", "scenes", "llvm")
-"""The subcommands that are not an instrument's (the registry's may not take their names)."""
+OWN_COMMANDS = ("bounds", "colour", "plot", "scenes", "llvm")
+"""The subcommands of the command line itself (neither an instrument's nor an application's)."""
+
+
+def other_commands() -> tuple[str, ...]:
+    """The subcommands that are not an instrument's (the registry's may not take their names)."""
+
+    from virtspec_mi.applications import commands
+
+    return (*OWN_COMMANDS, *commands())
+
+
+def given_flags(args: argparse.Namespace) -> dict[str, str]:
+    """
+    Every flag given on the command line of ``args`` (its value not the flag's default),
+    by its destination: ``{"out": "--out", "defines": "-D"}``, in the parser's order.
+    """
+
+    parser = getattr(args, "parser", None)
+    flags: dict[str, str] = {}
+    for action in () if parser is None else parser._actions:
+        if not action.option_strings or action.dest in flags:
+            continue
+        value = getattr(args, action.dest, None)
+        if value is None or value is False or value == [] or value == action.default:
+            continue
+        flags[action.dest] = action.option_strings[-1] if action.option_strings[-1].startswith("--") else \
+            action.option_strings[0]
+    return flags
+
+
+def refuse_others(args: argparse.Namespace, extension: Any) -> None:
+    """
+    ``ValueError`` naming every flag given with ``extension``'s that it neither declares
+    nor :attr:`~virtspec_mi.applications.base.Extension.takes`, in one message
+    (``--klems takes none of --out, --plot: …``).
+    """
+
+    own = set(extension.flags.names()) | set(extension.takes)
+    others = [flag for name, flag in given_flags(args).items() if name not in own]
+    if others:
+        reason = f" ({extension.reason})" if extension.reason else ""
+        raise ValueError(f"{flag_of(extension.active)} takes none of {', '.join(others)}{reason}")
 
 
 def common_flags(parser: argparse.ArgumentParser, command: Measuring) -> None:
@@ -307,6 +349,22 @@ def report(args: argparse.Namespace, result: Any, text: str, figures: Sequence[A
     return 0
 
 
+def table(args: argparse.Namespace, result: Any, figures: Sequence[Any] = ()) -> int:
+    """
+    A command's ``table`` output (:attr:`~virtspec_mi.instruments.command.Command.output`):
+    the readings as a CSV table on stdout, the summary on stderr (nothing there with ``--quiet``).
+    """
+
+    from virtspec_mi.results.io import csv_text
+
+    if not args.quiet:  # the summary on stderr, so that the table can be piped
+        report(args, result, result.summary(), figures, stream=sys.stderr)
+    elif args.csv_plain:  # the report writes it otherwise
+        result.write(args.csv_plain, plain=True)
+    print(csv_text(result.to_dataset()), end="")
+    return 0
+
+
 class Session:
     """
     What a measuring subcommand's hook is given (:class:`virtspec_mi.instruments.command.Session`):
@@ -345,7 +403,10 @@ class Session:
         result = self.take()
         if self.command.one_reading:  # one reading over wavelength: its other labels scalar
             result = result.squeeze(*(d for d in result.dims if d not in ("wavelength", *result.KIND_DIMS)))
-        return self.report(result, result.summary(), self.draw(result))
+        figures = self.draw(result)
+        if self.command.output == "table" and self.keywords["out"] is None and not self.args.json:
+            return table(self.args, result, figures)
+        return self.report(result, result.summary(), figures)
 
     @contextmanager
     def cluster(self) -> Iterator[Any]:
@@ -370,6 +431,7 @@ def respond(args: argparse.Namespace, row: Measuring) -> int:
     for extension in extensions_of(row):  # an application's flag given: the command is the application's
         flags = extension.flags(**given(args, extension.flags))
         if extension.given(flags):
+            refuse_others(args, extension)
             return extension.respond(session, flags)
     respond = row.command.respond
     return session.default() if respond is None else respond(session)

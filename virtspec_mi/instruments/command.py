@@ -79,6 +79,12 @@ class Command:
     the summary, draw. An application extends a command from above with flags of its own
     (:class:`virtspec_mi.applications.base.Extension`), never by a hook named here.
     """
+    output: str = "summary"
+    """
+    What it prints: ``"summary"`` the result's summary; ``"table"`` without ``--out`` or
+    ``--json`` the readings as a CSV table on stdout and the summary on stderr (so that the
+    table can be piped). The command line prints it; the instrument declares it.
+    """
     scene: str = ("Mitsuba XML scene with 'emitter' and 'specimen' disks, or a shipped scene's name "
                   "(virtspec scenes)")
     """The help of its ``SCENE`` argument."""

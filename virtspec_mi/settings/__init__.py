@@ -146,7 +146,9 @@ def whole_number(name: str, low: int, high: int, shown: str) -> Callable[[Any], 
 
 
 def option(default: Any, check: Callable[[Any], Any], help: str, choices: Mapping[str, Any] | None = None, *,
-           words: bool = False, unset: str = "none", flag: bool = True) -> Any:
+           words: bool = False, unset: str = "none", flag: bool = True, positional: bool = False,
+           repeat: bool = False, spelled: str | None = None, metavar: str | None = None, required: bool = False,
+           hidden: bool = False) -> Any:
     """
     A field of an :class:`Options` class: the one definition of one option.
 
@@ -168,10 +170,17 @@ def option(default: Any, check: Callable[[Any], Any], help: str, choices: Mappin
     flag
         ``False``: no command-line flag (a value no one types, e.g. a
         :class:`~virtspec_mi.instruments.sphere.geometry.Sphere`).
+    positional, repeat, spelled, metavar, required, hidden
+        How the command line writes it (an application's command): a positional argument; a flag
+        given once per value (the check receives the tuple of values); a flag spelled
+        otherwise than ``--name`` (``-D``, ``--from``); the word that stands for its value
+        in the help; a flag that must be given; a flag left out of the help.
     """
 
     return field(default=default, metadata={"check": check, "help": help, "choices": choices, "words": words,
-                                            "unset": unset, "flag": flag})
+                                            "unset": unset, "flag": flag, "positional": positional, "repeat": repeat,
+                                            "spelled": spelled, "metavar": metavar, "required": required,
+                                            "hidden": hidden})
 
 
 OptionsT = TypeVar("OptionsT", bound="Options")

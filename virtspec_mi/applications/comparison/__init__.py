@@ -62,19 +62,9 @@ CIE 142-2001 / CIE 015:2018 (CIEDE2000); colour-science ``colour.delta_E``.
 
 from __future__ import annotations
 
-from typing import ClassVar
-
-from virtspec_mi.applications.base import Application
 from virtspec_mi.applications.comparison.measured import MEASURED_SUFFIXES, MeasuredSpectrum, read_measured
+from virtspec_mi.applications.comparison.command import ComparisonApplication
 from virtspec_mi.applications.comparison.result import Comparison, compare
 
 __all__ = ["MeasuredSpectrum", "Comparison", "read_measured", "compare", "MEASURED_SUFFIXES",
            "ComparisonApplication"]
-
-
-class ComparisonApplication(Application):
-    """Simulated against measured spectra: ``vm.compare``, ``virtspec compare``."""
-
-    name: ClassVar[str] = "comparison"
-    summary: ClassVar[str] = "a simulated spectrum against a measured one: residuals, combined tolerance, Delta E 2000"
-    results: ClassVar[tuple[type, ...]] = (Comparison,)

@@ -1,9 +1,13 @@
 """
-``virtspec fit``: the command line of :func:`virtspec_mi.applications.fitting.fit`
-==================================================================================
+``virtspec fit``: the command of :func:`virtspec_mi.applications.fitting.fit`, declared
+=========================================================================================
 
-:func:`add_fit_command` adds the ``fit`` subcommand to ``virtspec``'s parser and
-:func:`run_fit` runs it (the CLI calls both; this module imports nothing of the CLI).
+:data:`FIT` is the fitting application's :class:`~virtspec_mi.applications.base.Command`:
+its help and examples, its arguments and flags (:class:`FitFlags`, an
+:class:`~virtspec_mi.settings.Options` class that the command line's one flag builder turns
+into ``MEASURED``, ``--specimen``, ``--free`` …) and :func:`respond`, which receives the
+command line's session (the flags given, checked; the shared report). Nothing here parses
+or prints by itself.
 
 References
 ----------
@@ -12,194 +16,238 @@ Féret et al. (2017), RSE 193:204–215 (PROSPECT inversion).
 
 from __future__ import annotations
 
-import argparse
-import json
-from typing import Any
+from dataclasses import dataclass
+from typing import Any, ClassVar
 
-from virtspec_mi.exchange.measured.flags import add_measured_flags, measured_from
+from virtspec_mi.applications.base import Command, Session
+from virtspec_mi.applications.comparison.flags import MeasuredFlags
+from virtspec_mi.base.checks import check_delta, number, shown_value
+from virtspec_mi.plugins import specimen_rows
+from virtspec_mi.settings import one_of, option, true_or_false, whole_number
 
-__all__ = ["add_fit_command", "run_fit", "EXAMPLES"]
+__all__ = ["FIT", "FitFlags", "respond", "EXAMPLES"]
 
-EXAMPLES: str = (
-    "examples:\n"
-    "  virtspec fit leaf.csv --specimen prospect_d --free Cab=10:80 --free Cm=0.002:0.02 --quantity both\n"
-    "  virtspec fit leaf_R.csv --transmittance leaf_T.csv --specimen abm_b --free chlorophyll_a=5:40 \\\n"
+EXAMPLES: tuple[str, ...] = (
+    "virtspec fit leaf.csv --specimen prospect_d --free Cab=10:80 --free Cm=0.002:0.02 --quantity both",
+    "virtspec fit leaf_R.csv --transmittance leaf_T.csv --specimen abm_b --free chlorophyll_a=5:40 \\\n"
     "      --free mesophyll_fraction=0.3:0.9 --theta-i 8 --beam collimated --directory fit-work \\\n"
-    "      --out fit.nc --plot fit.png\n"
-    "  virtspec fit leaf.csv --specimen prospect_d --free Cab=10:80 --free Cm=0.002:0.02 --quantity both \\\n"
-    "      --loss windows --window Cab=700:720   (Cm on its published window, 1700-2400 nm)\n"
-    "  virtspec fit library.sli --measured-quantity reflectance --specimen prospect_d --free Cab=10:90 \\\n"
-    "      --uncertainty 0.01 --workers 4 --out fits.csv   (every spectrum of the library: a table of fits)"
+    "      --out fit.nc --plot fit.png",
+    "virtspec fit leaf.csv --specimen prospect_d --free Cab=10:80 --free Cm=0.002:0.02 --quantity both \\\n"
+    "      --loss windows --window Cab=700:720   (Cm on its published window, 1700-2400 nm)",
+    "virtspec fit library.sli --measured-quantity reflectance --specimen prospect_d --free Cab=10:90 \\\n"
+    "      --uncertainty 0.01 --workers 4 --out fits.csv   (every spectrum of the library: a table of fits)",
 )
 
 
-def _pair(text: str) -> tuple[str, str]:
-    name, sep, bounds = text.partition("=")
-    if not sep or not name or ":" not in bounds:
-        raise argparse.ArgumentTypeError(f"--free takes NAME=LOWEST:HIGHEST (got {text!r})")
-    return name.strip(), bounds.strip()
+def _pairs(flag: str, form: str) -> Any:
+    """The check of a repeated ``NAME=LOW:HIGH`` flag: a tuple of (name, text) pairs."""
+
+    def check(values: Any) -> tuple[tuple[str, str], ...]:
+        pairs = []
+        for text in (values,) if isinstance(values, str) else values:
+            if isinstance(text, tuple):  # already checked
+                pairs.append(text)
+                continue
+            name, sep, bounds = str(text).partition("=")
+            if not sep or not name.strip() or ":" not in bounds:
+                raise ValueError(f"{flag} takes {form} (got {text!r})")
+            pairs.append((name.strip(), bounds.strip()))
+        return tuple(pairs)
+    return check
 
 
-def _window(text: str) -> tuple[str, str]:
-    name, sep, intervals = text.partition("=")
-    if not sep or not name or ":" not in intervals:
-        raise argparse.ArgumentTypeError(f"--window takes NAME=LOWEST:HIGHEST[,LOWEST:HIGHEST ...] in nm "
-                                         f"(got {text!r})")
-    return name.strip(), intervals.strip()
+def _text(name: str) -> Any:
+    def check(value: Any) -> str:
+        if not isinstance(value, str) or not value.strip():
+            raise ValueError(f"{name} must be a text (got {shown_value(value)})")
+        return value
+    return check
 
 
-def add_fit_command(commands: Any) -> argparse.ArgumentParser:
-    """Add ``fit`` to the subparsers ``commands`` (an ``add_subparsers`` object); returns its parser."""
-
-    parser = commands.add_parser(
-        "fit", help="a specimen's parameters from a measured spectrum (estimate, confidence set)",
-        description="Fit the free parameters of a specimen to a measured reflectance and/or transmittance: a coarse "
-                    "table, then a local refinement on certified forward readings with common random numbers whose "
-                    "tolerance shrinks to a fraction of the measurement uncertainty; prints the estimate, each "
-                    "parameter's interval from the confidence set, unconstrained parameters, and whether the fit is "
-                    "consistent at all. Resumable with --directory.",
-        epilog=EXAMPLES, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("measured", help="measured spectrum: a wavelength,value,uncertainty CSV (or a colour-science "
-                                         "CSV with uncertainty columns), a NetCDF file, a result file, or an "
-                                         "instrument's or library's file (.asd, .sig, .sed, .jdx/.dx, .sli, a CSV "
-                                         "table of many samples: --sample; give --uncertainty)")
-    from virtspec_mi.plugins import specimen_rows
-
-    parser.add_argument("--specimen", required=True,
-                        help=f"a specimen plugin ({', '.join(specimen_rows())}: the project's and the installed "
-                             "packages' of the entry-point group virtspec_mi.specimens), a shipped scene or an XML "
-                             "scene")
-    parser.add_argument("--free", type=_pair, action="append", required=True, metavar="NAME=LOWEST:HIGHEST",
-                        help="a free parameter and its bounds (repeat for several)")
-    parser.add_argument("--quantity", choices=("reflectance", "transmittance", "both"), default="reflectance",
-                        help="what MEASURED holds (both: its reflectance and transmittance columns)")
-    parser.add_argument("--transmittance", metavar="FILE", help="a measured transmittance file besides MEASURED "
-                                                                "(then MEASURED is the reflectance)")
-    parser.add_argument("--uncertainty", type=float, help="measurement uncertainty (a half-width) of every point, "
-                                                          "overriding the files'")
-    parser.add_argument("--wavelengths", help="wavelengths to fit, e.g. 400:2500:20 (default: the measured ones)")
-    parser.add_argument("--loss", help="the loss minimised: chi2, rmse, max or windows (default chi2, windows with "
-                                       "--window; checked by vm.fit, which names them)")
-    parser.add_argument("--window", type=_window, action="append", default=[], metavar="NAME=LOWEST:HIGHEST",
-                        help="the spectral window (nm) on which a free parameter is estimated (loss windows; repeat "
-                             "for several; PROSPECT-D's Cab, Car, Anth, Cw, Cm default to the published ones)")
-    parser.add_argument("--delta", type=float, default=0.05, help="risk of each candidate's forward spectrum "
-                                                                  "(default 0.05)")
-    parser.add_argument("--mu-fraction", type=float, default=0.5,
-                        help="forward tolerance at the optimum as a fraction of the smallest measurement uncertainty")
-    parser.add_argument("--forward-mu", type=float, help="forward tolerance at the optimum (overrides --mu-fraction)")
-    parser.add_argument("--table", help="Zarr store of the coarse table (read when it exists, else written)")
-    parser.add_argument("--table-points", type=int, help="values per parameter in the table")
-    parser.add_argument("--profile-points", type=int, default=5, help="points of each profile (0: none)")
-    parser.add_argument("--search-wavelengths", type=int, metavar="N",
-                        help="wavelengths the search and the confirmation read when fewer than the fitted ones "
-                             "(default 16; 0: all)")
-    parser.add_argument("--seed", type=int, default=0, help="seed of every forward reading (default 0)")
-    parser.add_argument("--directory", help="work directory: readings kept there; the same command resumes")
-    parser.add_argument("--workers", type=int, metavar="N", help="Dask workers for the table")
-    parser.add_argument("--theta-i", type=float, help="incidence angle of the forward readings (degrees)")
-    parser.add_argument("--beam", help="beam of the forward readings (collimated, conical)")
-    parser.add_argument("--bound", help="ray budget rule of the forward readings (hoeffding, two-stage ...)")
-    parser.add_argument("-D", dest="defines", action="append", default=[], metavar="NAME=VALUE",
-                        help="a parameter of an XML scene")
-    parser.add_argument("--out", help="fit file (.json or .nc)")
-    parser.add_argument("--plot", help="figure (.png, .svg): measured vs fitted, residuals, profiles")
-    parser.add_argument("--json", action="store_true", help="print the fit as one JSON object")
-    parser.add_argument("--progress", action="store_true", help="a line per stage on stderr")
-    add_measured_flags(parser)
-    return parser
+def _positive(name: str) -> Any:
+    def check(value: Any) -> float:
+        value = number(name, value)
+        if not value > 0:
+            raise ValueError(f"{name} must be > 0 (got {shown_value(value)})")
+        return value
+    return check
 
 
-def run_fit(args: argparse.Namespace) -> int:
-    """Run ``virtspec fit`` (errors raise ``ValueError``: the CLI prints them as one line)."""
+def _angle(value: Any) -> float:
+    value = number("theta_i", value)
+    if not 0.0 <= value <= 90.0:
+        raise ValueError(f"theta_i must satisfy 0 <= theta_i <= 90 (got {shown_value(value)})")
+    return value
+
+
+def _defines(values: Any) -> tuple[str, ...]:
+    for text in values:
+        if "=" not in str(text):
+            raise ValueError(f"-D takes NAME=VALUE (got {text!r})")
+    return tuple(values)
+
+
+_QUANTITIES = {"reflectance": "MEASURED is a reflectance", "transmittance": "MEASURED is a transmittance",
+               "both": "MEASURED holds reflectance and transmittance columns"}
+
+
+@dataclass(frozen=True)
+class FitFlags(MeasuredFlags):
+    """
+    The arguments and flags of ``virtspec fit`` (:func:`virtspec_mi.applications.fitting.fit`'s keywords),
+    and how a measured file is read (:class:`~virtspec_mi.applications.comparison.flags.MeasuredFlags`).
+    """
+
+    title: ClassVar[str] = "fit"
+
+    measured: str | None = option(None, _text("measured"), "measured spectrum: a wavelength,value,uncertainty CSV "
+                                  "(or a colour-science CSV with uncertainty columns), a NetCDF file, a result file, "
+                                  "or an instrument's or library's file (.asd, .sig, .sed, .jdx/.dx, .sli, a CSV "
+                                  "table of many samples: --sample; give --uncertainty)",
+                                  positional=True, metavar="MEASURED")
+    specimen: str | None = option(None, _text("specimen"), f"a specimen plugin ({', '.join(specimen_rows())}: the "
+                                  "project's and the installed packages' of the entry-point group "
+                                  "virtspec_mi.specimens), a shipped scene or an XML scene", required=True)
+    free: tuple | None = option(None, _pairs("--free", "NAME=LOWEST:HIGHEST"), "a free parameter and its bounds",
+                                repeat=True, required=True, metavar="NAME=LOWEST:HIGHEST")
+    quantity: str = option("reflectance", one_of("quantity", _QUANTITIES), "what MEASURED holds", _QUANTITIES)
+    transmittance: str | None = option(None, _text("transmittance"), "a measured transmittance file besides MEASURED "
+                                       "(then MEASURED is the reflectance)", metavar="FILE")
+    uncertainty: float | None = option(None, _positive("uncertainty"), "measurement uncertainty (a half-width) of "
+                                       "every point, overriding the files'")
+    wavelengths: str | None = option(None, _text("wavelengths"), "wavelengths to fit, e.g. 400:2500:20", unset="the "
+                                     "measured ones")
+    loss: str | None = option(None, _text("loss"), "the loss minimised: chi2, rmse, max or windows (checked by vm.fit, "
+                              "which names them)", unset="chi2, windows with --window")
+    window: tuple = option((), _pairs("--window", "NAME=LOWEST:HIGHEST[,LOWEST:HIGHEST ...] in nm"),
+                           "the spectral window (nm) on which a free parameter is estimated (loss windows; PROSPECT-D's "
+                           "Cab, Car, Anth, Cw, Cm default to the published ones)", repeat=True,
+                           metavar="NAME=LOWEST:HIGHEST")
+    delta: float = option(0.05, check_delta, "risk of each candidate's forward spectrum")
+    mu_fraction: float = option(0.5, _positive("mu_fraction"), "forward tolerance at the optimum as a fraction of the "
+                                "smallest measurement uncertainty")
+    forward_mu: float | None = option(None, _positive("forward_mu"), "forward tolerance at the optimum (overrides "
+                                      "--mu-fraction)")
+    table: str | None = option(None, _text("table"), "Zarr store of the coarse table (read when it exists, else "
+                               "written)")
+    table_points: int | None = option(None, whole_number("table_points", 1, 10**6, "1 <= table_points"),
+                                      "values per parameter in the table", unset="from the free parameters")
+    profile_points: int = option(5, whole_number("profile_points", 0, 10**6, "0 <= profile_points"),
+                                 "points of each profile (0: none)")
+    search_wavelengths: int | None = option(None, whole_number("search_wavelengths", 0, 10**9,
+                                                               "0 <= search_wavelengths"),
+                                            "wavelengths the search and the confirmation read when fewer than the "
+                                            "fitted ones (0: all)", metavar="N", unset="16")
+    seed: int = option(0, whole_number("seed", 0, 2**32 - 1, "0 <= seed < 2**32"), "seed of every forward reading")
+    directory: str | None = option(None, _text("directory"), "work directory: readings kept there; the same command "
+                                   "resumes")
+    workers: int | None = option(None, whole_number("workers", 1, 4096, "1 <= workers"), "Dask workers for the table",
+                                 metavar="N", unset="in this process")
+    theta_i: float | None = option(None, _angle, "incidence angle of the forward readings (degrees)",
+                                   unset="the specimen scene's")
+    beam: str | None = option(None, _text("beam"), "beam of the forward readings (collimated, conical)",
+                              unset="the specimen scene's")
+    bound: str | None = option(None, _text("bound"), "ray budget rule of the forward readings (hoeffding, "
+                               "two-stage ...)", unset="the specimen scene's")
+    defines: tuple = option((), _defines, "a parameter of an XML scene", repeat=True, spelled="-D",
+                            metavar="NAME=VALUE")
+    out: str | None = option(None, _text("out"), "fit file (.json or .nc); the fits of a file of many spectra: a "
+                             "table (.csv or .nc)")
+    plot: str | None = option(None, _text("plot"), "figure (.png, .svg): measured vs fitted, residuals, profiles")
+    json: bool = option(False, true_or_false("json"), "print the fit as one JSON object")
+    progress: bool = option(False, true_or_false("progress"), "a line per stage on stderr")
+
+
+def respond(session: Session) -> int:
+    """
+    ``virtspec fit``: :func:`~virtspec_mi.applications.fitting.fit` of the flags given, reported;
+    every spectrum of a file of many (no ``--sample``): a table of fits (:func:`_respond_table`).
+    """
 
     from pathlib import Path
 
-    from virtspec_mi.applications.fitting.inversion import fit
     from virtspec_mi.applications.fitting.result import FIT_SUFFIXES
     from virtspec_mi.base.checks import parse_wavelengths
+    from virtspec_mi.exchange.measured.flags import measured_from
 
-    many = not args.transmittance and _many_samples(args)  # every spectrum fitted: a table (its own suffixes)
-    if args.out and not many and Path(args.out).suffix.lower() not in FIT_SUFFIXES:
-        raise ValueError(f"--out: a fit file is {' or '.join(FIT_SUFFIXES)} (got {args.out})")
-    if args.plot and Path(args.plot).suffix.lower() not in (".png", ".svg", ".pdf"):
-        raise ValueError(f"--plot: a figure is .png, .svg or .pdf (got {args.plot})")
-    if args.transmittance:
-        measured: Any = {"reflectance": measured_from(args, args.measured),
-                         "transmittance": measured_from(args, args.transmittance)}
+    flags = session.flags
+    many = not flags.transmittance and _many_samples(flags)  # every spectrum fitted: a table (its own suffixes)
+    if flags.out and not many and Path(flags.out).suffix.lower() not in FIT_SUFFIXES:
+        raise ValueError(f"--out: a fit file is {' or '.join(FIT_SUFFIXES)} (got {flags.out})")
+    if flags.plot and Path(flags.plot).suffix.lower() not in (".png", ".svg", ".pdf"):
+        raise ValueError(f"--plot: a figure is .png, .svg or .pdf (got {flags.plot})")
+    if flags.transmittance:
+        measured: Any = {"reflectance": measured_from(flags, flags.measured),
+                         "transmittance": measured_from(flags, flags.transmittance)}
         quantities = None
     else:
-        measured = measured_from(args, args.measured)
-        quantities = ("reflectance", "transmittance") if args.quantity == "both" else (args.quantity,)
-    defines = {}
-    for item in args.defines:
-        name, sep, value = item.partition("=")
-        if not sep:
-            raise ValueError(f"-D takes NAME=VALUE (got {item!r})")
-        defines[name] = value
-    settings = {name: value for name, value in (("theta_i", args.theta_i), ("beam", args.beam),
-                                                ("bound", args.bound)) if value is not None}
-    search = {} if args.search_wavelengths is None else {"search_wavelengths": args.search_wavelengths or None}
-    args.checkpoint = args.directory  # an interrupt's message names where the readings are kept
-    options = dict(quantities=quantities, measurement_uncertainty=args.uncertainty,
-                   wavelengths=None if args.wavelengths is None else parse_wavelengths(args.wavelengths),
-                   loss=args.loss, windows=dict(args.window) or None, delta=args.delta,
-                   mu_fraction=args.mu_fraction, forward_mu=args.forward_mu, table_points=args.table_points,
-                   profile_points=args.profile_points, seed=args.seed, defines=defines or None,
-                   progress=True if args.progress else None, **search, **settings)
+        measured = measured_from(flags, flags.measured)
+        quantities = ("reflectance", "transmittance") if flags.quantity == "both" else (flags.quantity,)
+    defines = dict(text.partition("=")[::2] for text in flags.defines)
+    settings = {name: value for name, value in (("theta_i", flags.theta_i), ("beam", flags.beam),
+                                                ("bound", flags.bound)) if value is not None}
+    search = {} if flags.search_wavelengths is None else {"search_wavelengths": flags.search_wavelengths or None}
+    session.args.checkpoint = flags.directory  # an interrupt's message names where the readings are kept
+    options = dict(quantities=quantities, measurement_uncertainty=flags.uncertainty,
+                   wavelengths=None if flags.wavelengths is None else parse_wavelengths(flags.wavelengths),
+                   loss=flags.loss, windows=dict(flags.window) or None, delta=flags.delta,
+                   mu_fraction=flags.mu_fraction, forward_mu=flags.forward_mu, table_points=flags.table_points,
+                   profile_points=flags.profile_points, seed=flags.seed, defines=defines or None,
+                   progress=True if flags.progress else None, **search, **settings)
     if many:
-        return _run_table(args, options)
-    result = fit(measured, args.specimen, dict(args.free), table=args.table, directory=args.directory,
-                 workers=args.workers, **options)
-    if args.out:
-        result.write(args.out)
-    if args.plot:
-        result.plot(args.plot)
-    if args.json:
-        print(json.dumps(result.as_dict()))
-        return 0
-    print(result.summary())
-    for label, path in (("fit", args.out), ("plot", args.plot)):
-        if path:
-            print(f"{label}: {path}")
-    return 0
+        return _respond_table(session, measured, options)
+    from virtspec_mi.applications.fitting.inversion import fit
+
+    result = fit(measured, flags.specimen, dict(flags.free), table=flags.table, directory=flags.directory,
+                 workers=flags.workers, **options)
+    if flags.out:
+        result.write(flags.out)
+    if flags.plot:
+        result.plot(flags.plot)
+    return session.report(result, result.summary(), written=[flags.out] if flags.out else [],
+                          figures=[flags.plot] if flags.plot else [])
 
 
-def _many_samples(args: argparse.Namespace) -> bool:
+def _many_samples(flags: FitFlags) -> bool:
     """Whether MEASURED is a file of many spectra and no --sample chose one (then every one is fitted)."""
 
     from virtspec_mi.exchange.measured import format_for, read_samples
+    from virtspec_mi.exchange.measured.flags import measured_from
 
-    if args.sample is not None or format_for(args.measured, args.measured_format) is None:
+    if flags.sample is not None or format_for(flags.measured, flags.measured_format) is None:
         return False
-    return len(read_samples(measured_from(args, args.measured))) > 1
+    return len(read_samples(measured_from(flags, flags.measured))) > 1
 
 
-def _run_table(args: argparse.Namespace, options: dict[str, Any]) -> int:
+def _respond_table(session: Session, measured: Any, options: dict[str, Any]) -> int:
     """``virtspec fit`` of every spectrum of a file of many: a table of fits (on Dask with --workers)."""
 
     from pathlib import Path
 
     from virtspec_mi.applications.fitting.samples import TABLE_SUFFIXES, fit_samples
 
-    if args.out and Path(args.out).suffix.lower() not in TABLE_SUFFIXES:
+    flags = session.flags
+    if flags.out and Path(flags.out).suffix.lower() not in TABLE_SUFFIXES:
         raise ValueError(f"--out: the fits of a file of many spectra are a table, {' or '.join(TABLE_SUFFIXES)} "
-                         f"(got {args.out}); or choose one spectrum with --sample")
-    if args.table or args.plot:
+                         f"(got {flags.out}); or choose one spectrum with --sample")
+    if flags.table or flags.plot:
         raise ValueError("--table and --plot take one spectrum: choose it with --sample (the fits of every "
                          "spectrum share one table in --directory)")
-    table = fit_samples(measured_from(args, args.measured), args.specimen, dict(args.free), workers=args.workers,
-                        directory=args.directory, **options)
-    if args.out:
-        table.write(args.out)
-    if args.json:
-        data = table.to_dataset()
-        print(json.dumps({"source": table.source, "samples": list(table.labels), "parameters": list(table.names),
-                          "estimate": data["estimate"].values.tolist(),
-                          "intervals": table.intervals.tolist(), "consistent": table.consistent.tolist(),
-                          "statistic": table.statistic.tolist()}))
-        return 0
-    print(table.summary())
-    if args.out:
-        print(f"table: {args.out}")
-    return 0
+    table = fit_samples(measured, flags.specimen, dict(flags.free), workers=flags.workers,
+                        directory=flags.directory, **options)
+    if flags.out:
+        table.write(flags.out)
+    data = {"source": table.source, "samples": list(table.labels), "parameters": list(table.names),
+            "estimate": table.to_dataset()["estimate"].values.tolist(), "intervals": table.intervals.tolist(),
+            "consistent": table.consistent.tolist(), "statistic": table.statistic.tolist()}
+    return session.report(table, table.summary(), written=[flags.out] if flags.out else [], data=data)
+
+
+FIT = Command(
+    "fit", "a specimen's parameters from a measured spectrum (estimate, confidence set)",
+    "Fit the free parameters of a specimen to a measured reflectance and/or transmittance: a coarse table, then a "
+    "local refinement on certified forward readings with common random numbers whose tolerance shrinks to a "
+    "fraction of the measurement uncertainty; prints the estimate, each parameter's interval from the confidence "
+    "set, unconstrained parameters, and whether the fit is consistent at all. Resumable with --directory.",
+    EXAMPLES, FitFlags, respond)
+"""The fitting application's command (:class:`~virtspec_mi.applications.fitting.FittingApplication`)."""

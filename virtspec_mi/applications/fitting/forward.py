@@ -20,13 +20,17 @@ certified, not on common random numbers) written to a Zarr store: a look-up tabl
 another fit of the same specimen and wavelengths reuses (``table=``), and that
 ``workers`` spread over Dask.
 
-**Resuming.** With a work ``directory`` every reading is written there as it finishes
-(``reading-<key>.nc``, ``table.zarr``) through the sweep's own ``out=`` and checkpoint
-(:mod:`virtspec_mi.engine.checkpoint`): a fit run again with the same directory reads what
-is there — the optimiser, deterministic under common random numbers, retraces its own path
-— and an interrupted reading resumes from its checkpoint. The file name is a hash of
-everything that decides the counts (scene fingerprint, parameter values, μ, δ, seed,
-wavelengths, settings).
+**Resuming.** With a work ``directory`` every forward reading is kept in the engine's
+:class:`~virtspec_mi.engine.checkpoint.ResultStore` ``DIRECTORY/readings`` (one file per
+reading, written by the sweep's own ``out=`` with its checkpoint meanwhile; the store's
+``identity.json`` names the specimen and its free parameters, so that a fit of another
+specimen is refused there, naming what differs) and the table in ``DIRECTORY/table.zarr``:
+a fit run again with the same directory reads what is there — the optimiser,
+deterministic under common random numbers, retraces its own path — and an interrupted
+reading resumes from its checkpoint. A reading's label in the store is everything else
+that decides its counts (parameter values, μ, δ, seed, joint, wavelengths, settings).
+(Work directories of earlier releases kept ``reading-<hash>.nc`` files of their own:
+they are not read, and those readings are traced again.)
 
 References
 ----------
@@ -36,7 +40,6 @@ Methods in Financial Engineering*, Sect. 4.2 (common random numbers).
 
 from __future__ import annotations
 
-import hashlib
 import json
 import sys
 import time
@@ -48,10 +51,13 @@ import numpy as np
 
 from virtspec_mi.runtime.reading import read_result, take
 from virtspec_mi.applications.fitting.problem import FitProblem
-from virtspec_mi.engine.checkpoint import checkpoint_for
+from virtspec_mi.engine.checkpoint import ResultStore, checkpoint_for
 from virtspec_mi.settings import Settings, resolve
 
-__all__ = ["Reading", "Forward", "FIT_OWNS", "note"]
+__all__ = ["Reading", "Forward", "FIT_OWNS", "STORE", "note"]
+
+STORE: str = "readings"
+"""The folder of a work directory where the forward readings are kept (a :class:`ResultStore`)."""
 
 FIT_OWNS: tuple[str, ...] = ("wavelengths", "mu", "delta", "seed", "joint", "rays")
 """Settings a fit decides itself (refused among the forward settings)."""
@@ -99,25 +105,33 @@ class Forward:
         count = len(problem.wavelengths) * len(problem.quantities)
         self.reading_delta = self.delta / count
         self.joint = len(problem.quantities) > 1
+        self.store = None if directory is None else ResultStore(
+            directory / STORE, {"format": "virtspec-mi fit forward readings 1", "fingerprint": problem.fingerprint,
+                                "keys": list(problem.keys)}, "fit's forward readings")
         self.cache: dict[tuple, Reading] = {}
         self.readings: list[Reading] = []
         self.traced_rays = 0
 
     # -- one candidate ---------------------------------------------------------------
 
-    def _key(self, values: Sequence[float], mu: float) -> str:
-        text = json.dumps({"fingerprint": self.problem.fingerprint, "keys": self.problem.keys,
-                           "values": [repr(float(v)) for v in values], "mu": repr(float(mu)),
+    def _label(self, values: Sequence[float], mu: float) -> str:
+        """The reading's label in the store: what decides its counts beside the store's identity."""
+
+        return json.dumps({"values": [repr(float(v)) for v in values], "mu": repr(float(mu)),
                            "delta": repr(self.reading_delta), "seed": self.seed, "joint": self.joint,
                            "wavelengths": [repr(float(w)) for w in self.problem.wavelengths],
                            "settings": sorted((k, repr(v)) for k, v in self.settings.items())}, sort_keys=True)
-        return hashlib.sha256(text.encode()).hexdigest()[:20]
 
     def _sweep(self, parameters: dict[str, Any], mu: float, out: Path | None, workers: Any = None) -> Any:
         wavelengths = list(map(float, self.problem.wavelengths))
-        return take("sweep", self.problem.loaded, parameters=parameters, wavelengths=wavelengths, mu=mu,
-                         delta=self.reading_delta, joint=self.joint, seed=self.seed, out=out, progress=False,
-                         workers=workers, **self.settings)
+        try:
+            return take("sweep", self.problem.loaded, parameters=parameters, wavelengths=wavelengths, mu=mu,
+                        delta=self.reading_delta, joint=self.joint, seed=self.seed, out=out, progress=False,
+                        workers=workers, **self.settings)
+        except KeyboardInterrupt as stop:  # the fit's work is its directory, not one reading's file
+            if self.directory is not None:
+                stop.checkpoint, stop.written = self.directory, None  # type: ignore[attr-defined]
+            raise
 
     def reading(self, values: Sequence[float], mu: float, stage: str) -> Reading:
         """The certified spectrum at ``values`` (to ``mu``), traced, read from the work directory or remembered."""
@@ -127,10 +141,10 @@ class Forward:
         if memo in self.cache:
             return self.cache[memo]
         started = time.perf_counter()
-        path = None if self.directory is None else self.directory / f"reading-{self._key(values, mu)}.nc"
-        if path is not None and path.exists() and not checkpoint_for(path).exists():
-            result = read_result(path)
-        else:
+        label = self._label(values, mu)
+        result = None if self.store is None else self.store.load(label, read_result)
+        if result is None:
+            path = None if self.store is None else self.store.path(label)  # written whole, its checkpoint meanwhile
             result = self._sweep({key: [float(v)] for key, v in zip(self.problem.keys, values)}, mu, path)
             self.traced_rays += int(np.sum(result.rays_spent))
         result = result.squeeze("theta_i", *self.problem.keys)

@@ -37,7 +37,7 @@ from contextlib import nullcontext
 from dataclasses import dataclass
 from datetime import datetime, timezone
 from pathlib import Path
-from typing import Any, ClassVar
+from typing import Any
 
 import numpy as np
 
@@ -46,13 +46,13 @@ from virtspec_mi.exchange.common import derived_seed
 from virtspec_mi.base.checks import check_delta, check_rays, number, shown_value
 import virtspec_mi.base.interrupts as interrupts
 from virtspec_mi.engine.checkpoint import ResultStore, locked
-from virtspec_mi.settings import Options, one_of, option, true_or_false, whole_number
+from virtspec_mi.settings import true_or_false, whole_number
 from virtspec_mi.engine.readings import check_specimen
 from virtspec_mi.applications.klems.matrices import SIDES, KlemsMeasurement, aggregate, check_escaped, check_klems_output
 from virtspec_mi.exchange.klems_basis import klems_basis
 from virtspec_mi.budgets.binomial import union_hoeffding_rays
 
-__all__ = ["klems_measure", "flipped", "KlemsFlags", "respond"]
+__all__ = ["klems_measure", "flipped"]
 
 
 
@@ -260,68 +260,3 @@ class _Single:
     def bin_counts(self) -> np.ndarray:
         counts = np.asarray(self.reading.bin_counts)[:, [self.column]]
         return np.roll(counts, self.shift, axis=-1)
-
-
-def _klems_file(value: Any) -> str:
-    if not isinstance(value, str) or not value.strip():
-        raise ValueError(f"klems must be a file path (got {value!r})")
-    return value
-
-
-_BASES = {"full": "145 patches", "half": "77 patches", "quarter": "41 patches"}
-
-
-@dataclass(frozen=True)
-class KlemsFlags(Options):
-    """
-    ``virtspec gonio``'s own flags: the Klems matrices instead of one reading
-    (:func:`virtspec_mi.applications.klems.measure.klems_measure`).
-    """
-
-    title: ClassVar[str] = "Klems matrices"
-
-    klems: str | None = option(
-        None, _klems_file, "measure the Klems matrices instead (incidence at every patch centre, front and back; "
-                           "--mu is the certified tolerance of every patch fraction) and write WINDOW 6 XML FILE "
-                           "with its NetCDF sidecar FILE.nc")
-    klems_basis: str = option("full", one_of("klems_basis", _BASES), "Klems basis of --klems", _BASES)
-    isotropic: bool = option(False, true_or_false("isotropic"),
-                             "--klems: one reading per ring, rotated onto its other patches (rotation-invariant "
-                             "specimens)")
-
-
-_COMMON = {"parameters", "points", "defines", "out", "progress", "workers", "task_readings"}
-"""The API keywords of the common flags (refused above by their flags when given)."""
-
-
-def respond(session: Any, flags: KlemsFlags) -> int:
-    """
-    ``virtspec gonio``: its reading (:meth:`Session.default <virtspec_mi.instruments.command.Session.default>`),
-    or with ``--klems FILE`` the Klems matrices (:func:`klems_measure`) written to FILE and
-    its sidecar; ``--mu`` is then the tolerance of every patch fraction.
-    """
-
-    from virtspec_mi.applications.klems.matrices import sidecar_path
-
-    args = session.args
-    if getattr(session.flags, "rgl", None) is not None:
-        raise ValueError("--rgl writes one reading's reflection, --klems measures matrices of its own: give one")
-    common = {"--out": args.out, "--plot": args.plot, "--plot-series": getattr(args, "plot_series", None),
-              "--json": args.json, "--param": args.params, "--points": args.points, "-D": args.defines,
-              "--workers": args.workers, "--scheduler": args.scheduler, "--task-readings": args.task_readings}
-    unused = [flag for flag, value in common.items() if value not in (None, False, [])]
-    taken = {"wavelengths", "mu", "delta", "rays", "seed"}  # what the matrices take; the rest is theirs to decide
-    unused += [f"--{name.replace('_', '-')}" for name, value in session.keywords.items()
-               if name not in taken and name not in _COMMON and value is not None]
-    if unused:
-        raise ValueError(f"--klems measures readings of its own (every patch centre, its own bins) and writes FILE "
-                         f"and FILE.nc: it takes none of {', '.join(unused)}")
-    given = session.keywords
-    measured = klems_measure(args.scene, basis=flags.klems_basis, wavelengths=given.get("wavelengths", 551.0),
-                             epsilon=float(given.get("mu", 0.01)), delta=float(given.get("delta", 0.01)),
-                             rays=None if "rays" not in given else int(given["rays"]),
-                             seed=int(given.get("seed", 0)), isotropic=flags.isotropic, out=flags.klems,
-                             progress=False if args.quiet else None)
-    print(measured.statement())
-    print(f"written: {flags.klems} (certified bounds per patch: {sidecar_path(flags.klems)})")
-    return 0

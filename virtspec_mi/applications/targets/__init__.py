@@ -19,18 +19,34 @@ certified box. Modules, one job each:
 - :mod:`.difference` — ``vm.colour_difference``; :mod:`.parse` — ``--target`` strings.
 
 The application's row (:class:`TargetsApplication`) extends ``virtspec measure`` with
-``--target`` (:class:`~.parse.TargetFlags`).
+``--target`` (:class:`~.parse.TargetFlags`): it takes the settings a target does not pick
+itself (:data:`~.measure.REFUSED_SETTINGS`, the one list, which ``vm.measure(target=...)``
+and ``vm.sweep(target=...)`` read too) and the command line refuses every other flag.
 """
 
 from __future__ import annotations
 
-from typing import ClassVar
+from typing import Any, ClassVar
+
+import numpy as np
 
 from virtspec_mi.applications.base import Application, Extension
+from virtspec_mi.applications.targets.measure import REFUSED_SETTINGS
 from virtspec_mi.applications.targets.parse import TargetFlags, respond
 from virtspec_mi.applications.targets.result import DerivedResult, DerivedSweep
+from virtspec_mi.settings import Settings
 
 __all__ = ["TargetsApplication"]
+
+
+def _api(folder: Any) -> Any:
+    """The example's target through Python: ``measure_target`` (``vm.measure(scene, target=...)``)."""
+
+    from virtspec_mi.applications.targets.measure import measure_target
+    from virtspec_mi.applications.targets.targets import band
+    from virtspec_mi.runtime.scene import loaded
+
+    return measure_target(loaded("diamond_collimated"), None, band("B04", tolerance=0.05), {"seed": 1})
 
 
 class TargetsApplication(Application):
@@ -38,5 +54,15 @@ class TargetsApplication(Application):
 
     name: ClassVar[str] = "targets"
     summary: ClassVar[str] = "certified derived quantities: colour, bands, indices, fAPAR, albedo"
-    extensions: ClassVar[tuple[Extension, ...]] = (Extension("measure", TargetFlags, respond, "target"),)
+    extensions: ClassVar[tuple[Extension, ...]] = (Extension(
+        "measure", TargetFlags, respond, "target",
+        takes=(*(name for name in Settings.names() if name not in REFUSED_SETTINGS), "defines", "json", "quiet"),
+        reason="a target picks its own wavelengths and rays and is measured at the scene's own specimen parameters; "
+               "its result is printed (--json prints it as JSON; draw result.readings from Python)"),)
     results: ClassVar[tuple[type, ...]] = (DerivedResult, DerivedSweep)
+    example: ClassVar[dict[str, Any]] = {
+        "argv": ("measure", "diamond_collimated", "--target", "band:B04,tolerance=0.05", "--seed", "1", "--json"),
+        "api": _api,
+        "counts": lambda result: np.array([v.value for v in result.values] + [result.rays, result.pilot_rays]),
+        "printed": lambda data: np.array([v["value"] for v in data["values"].values()]
+                                         + [data["rays"], data["pilot_rays"]])}

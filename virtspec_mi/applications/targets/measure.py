@@ -17,9 +17,12 @@ target=...)`` calls it):
    fewest rays in all: Nₖ = ⌈cⱼ|wⱼₖ|⌉ for one functional (:func:`~.functionals.allocate`),
    the joint optimum for several sharing wavelengths
    (:func:`~.functionals.allocate_jointly`); wavelengths of zero weight are not traced;
-4. one batched kernel call (:func:`virtspec_mi.engine.readings.trace_allocated`, seed
-   :func:`~virtspec_mi.budgets.twostage.stage_two_seed` of the settings' seed: rays fresh
-   of the pilot's) traces them, each reading with rays of its own;
+4. the spectrophotometer traces them through the instrument seam
+   (:class:`~virtspec_mi.instruments.hemispherical.allocated.Allocated`: its ``init`` plans
+   the allocation, its ``process`` is one batched kernel call at the seed
+   :func:`~virtspec_mi.budgets.twostage.stage_two_seed` of the settings' seed, rays fresh of
+   the pilot's, its ``postprocess`` the readings result), each reading with rays of its own
+   (the pilots too, at their own seeds);
 5. the certificate comes from the rays spent: each functional's Hoeffding tolerance
    (eq. 1 of :mod:`.functionals`) plus its rounding bias, then the target's map (exact
    intervals, or the ΔE₀₀ bound of :mod:`.delta_e`): a :class:`~.result.DerivedResult`.
@@ -47,9 +50,7 @@ from virtspec_mi.budgets.functionals import (Functional, allocate, allocate_join
 from virtspec_mi.applications.targets.result import DerivedResult
 from virtspec_mi.applications.targets.targets import TARGETS, ColourTarget, Target, Value, colour_of
 from virtspec_mi.budgets.twostage import stage_two_seed
-from virtspec_mi.engine.plan import Plan
-from virtspec_mi.engine.readings import trace_allocated
-from virtspec_mi.instruments.base import readings_result
+from virtspec_mi.instruments.hemispherical.allocated import Allocated, Allocation
 from virtspec_mi.plugins.specimen import specimen_of
 from virtspec_mi.runtime.reading import scene_options
 from virtspec_mi.runtime.scene import LoadedScene
@@ -112,14 +113,18 @@ def _grid(functionals: list[Functional]) -> tuple[np.ndarray, np.ndarray]:
     return grid, np.stack([f.at(grid) for f in functionals])
 
 
-def _trace(bench: Any, settings: Settings, grid: np.ndarray, rays: np.ndarray, seed: int) -> tuple[np.ndarray, Any]:
-    """The traced wavelengths (rays > 0) and their tally, each reading from its own key k·stride."""
+def _trace(bench: Any, settings: Settings, grid: np.ndarray, rays: np.ndarray, seed: int, scene: str = "",
+           source: dict | None = None) -> tuple[Allocated, Any]:
+    """
+    The spectrophotometer's allocated reading (:class:`~virtspec_mi.instruments.hemispherical.allocated.Allocated`:
+    its init plans the traced wavelengths, rays > 0, each from its own key k·stride; its
+    process traces them at ``seed``): the instrument (its ``used`` wavelengths, its
+    ``postprocess``) and the tally.
+    """
 
-    used = np.flatnonzero(rays > 0)
-    stride = int(rays.max())
-    readings = [(float(grid[k]), float(settings.theta_i), float(settings.phi_i)) for k in used]
-    tally = trace_allocated(bench, settings.updated(seed=seed), readings, rays[used], offsets=used * stride)
-    return used, tally
+    instrument = Allocated(scene, source)
+    plan = instrument.init(bench, settings, Allocation(grid, rays, seed), np.array([float(settings.theta_i)]), None)
+    return instrument, instrument.process(plan)
 
 
 @dataclass(frozen=True, eq=False)
@@ -161,8 +166,8 @@ def plan_target(bench: Any, settings: Settings, target: Target, refine: bool = T
     counts = np.zeros(len(grid))
     if target.needs_pilot:
         first = np.max([allocate(w, PILOT_TOLERANCE * np.abs(w).sum(), PILOT_DELTA) for w in weights], axis=0)
-        used, tally = _trace(bench, settings, grid, first, settings.seed)
-        counts[used] = _fates(tally.counts, quantity)
+        pilot, tally = _trace(bench, settings, grid, first, settings.seed)
+        counts[pilot.used] = _fates(tally.counts, quantity)
         estimates = weights @ (counts / np.maximum(first, 1))
         pilot_rays = int(first.sum())
     tolerances = np.asarray(target.tolerances(estimates, float(settings.delta)), dtype=np.float64)
@@ -172,8 +177,8 @@ def plan_target(bench: Any, settings: Settings, target: Target, refine: bool = T
         # a costly target: a second pilot of REFINE_SHARE of those rays pins the point down, so the sizing can
         # keep less in reserve (REFINED_MARGIN): its rays (counted) are few beside those it saves
         second = np.where(rays > 0, np.maximum(1, np.ceil(REFINE_SHARE * rays)), 0).astype(np.int64)
-        used, tally = _trace(bench, settings, grid, second, settings.seed ^ REFINE_SEED_MASK)
-        counts[used] += _fates(tally.counts, quantity)
+        pilot, tally = _trace(bench, settings, grid, second, settings.seed ^ REFINE_SEED_MASK)
+        counts[pilot.used] += _fates(tally.counts, quantity)
         pooled = counts / np.maximum(first + second, 1)  # both pilots' rays (sizing only)
         pilot_rays += int(second.sum())
         tolerances = np.asarray(target.tolerances(weights @ pooled, float(settings.delta), REFINED_MARGIN),
@@ -217,9 +222,9 @@ def take_target(bench: Any, settings: Settings, target: Target, *, scene: str = 
     target, functionals, grid, weights = planned.target, planned.functionals, planned.grid, planned.weights
     rays, each, pilot_rays, delta = planned.rays, planned.each, planned.pilot_rays, float(settings.delta)
     quantity = functionals[0].quantity
-    used, tally = _trace(bench, settings, grid, rays, stage_two_seed(settings.seed))
-    plan = Plan(settings.updated(wavelengths=[float(w) for w in grid[used]]), (float(settings.theta_i),), scene=scene)
-    readings = readings_result(bench, plan, tally, scene, source).squeeze("theta_i")
+    instrument, tally = _trace(bench, settings, grid, rays, stage_two_seed(settings.seed), scene, source)
+    used = instrument.used
+    readings = instrument.postprocess(tally).squeeze("theta_i")
     spent = rays[used]
     values = _fates(tally.counts, quantity) / spent
     if not np.all(readings.certified):

@@ -116,13 +116,12 @@ class TargetFlags(Options):
     target: str | None = option(None, _check_target, target_help())
 
 
-_NOT_WITH_TARGET = {"out": "--out", "workers": "--workers/--scheduler", "parameters": "--param"}
-
-
 def measure_target_command(args: Any, keywords: dict[str, Any], report: Callable[..., int]) -> int:
     """
     ``virtspec measure SCENE --target TARGET``: the target measured (``vm.measure(scene,
     target=...)``) and printed by ``report`` (its summary, or with ``--json`` its file: ``as_dict()`` sealed).
+    The flags it does not take were refused by the command line
+    (:attr:`~virtspec_mi.applications.base.Extension.takes`).
     """
 
     from virtspec_mi.applications.targets.sequential import measure_target
@@ -133,11 +132,6 @@ def measure_target_command(args: Any, keywords: dict[str, Any], report: Callable
     except ValueError as error:
         message = str(error)
         raise ValueError(message if message.startswith("--target") else f"--target: {message}") from None
-    for name, flag in _NOT_WITH_TARGET.items():
-        if keywords.get(name):
-            raise ValueError(f"{flag}: not taken with --target (its result is printed; --json prints it as JSON)")
-    if getattr(args, "plot", None):
-        raise ValueError("--plot: not taken with --target (draw result.readings from Python)")
     settings = {k: v for k, v in keywords.items()
                 if k not in ("out", "workers", "task_readings", "points", "parameters", "defines", "progress")}
     result = measure_target(loaded(args.scene, keywords.get("defines") or None), None, target, settings)

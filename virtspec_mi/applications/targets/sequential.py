@@ -66,10 +66,8 @@ from virtspec_mi.applications.targets.result import DerivedResult
 from virtspec_mi.applications.targets.targets import ColourTarget, Target
 from virtspec_mi.budgets.betting import BettingSequence, neyman_rays, prior_variances
 from virtspec_mi.budgets.twostage import stage_two_seed
-from virtspec_mi.engine.plan import Plan
-from virtspec_mi.engine.readings import trace_allocated
 from virtspec_mi.engine.tally import Tally
-from virtspec_mi.instruments.base import readings_result
+from virtspec_mi.instruments.hemispherical.allocated import Allocated, Allocation
 from virtspec_mi.kernel.counts import WEIGHT_ROUNDING, Counts
 from virtspec_mi.settings import Settings
 
@@ -189,14 +187,13 @@ def take_sequential(bench: Any, settings: Settings, target: Target, *, scene: st
     w = weights[:, used]
     prior = planned.pilot_counts
     hoeffding = int(allocate_jointly(weights, np.asarray(planned.tolerances, dtype=np.float64), planned.each).sum())
-    readings = [(float(grid[k]), float(settings.theta_i), float(settings.phi_i)) for k in used]
     pilot_rays = planned.pilot_rays
     if prior is None:  # a linear target: a small pilot of its own (seed: the settings'), Nₖ ∝ |wₖ|
         tolerances = np.asarray(planned.tolerances, dtype=np.float64)
         first = neyman_rays(weights[:, used], 2 * math.log(2 / planned.each) / tolerances ** 2 * BLIND_SHARE,
                             np.full(len(used), 0.25))
-        tally = trace_allocated(bench, settings, readings, np.maximum(first, 1),
-                                offsets=np.arange(len(used)) * int(max(first.max(), 1)))
+        tally = _traced(bench, settings, grid, used, np.maximum(first, 1),
+                        np.arange(len(used)) * int(max(first.max(), 1)), settings.seed, scene, source)
         prior = (np.zeros(len(grid)), np.zeros(len(grid)))
         prior[0][used], prior[1][used] = np.maximum(first, 1), _fates(tally.counts, quantity)
         pilot_rays += int(np.maximum(first, 1).sum())
@@ -228,8 +225,8 @@ def take_sequential(bench: Any, settings: Settings, target: Target, *, scene: st
         for sequence in sequences:
             sequence.stake(batch)  # before the batch is traced: the stakes are predictable
         traced = np.flatnonzero(batch > 0)
-        tally = trace_allocated(bench, settings.updated(seed=seed), [readings[i] for i in traced], batch[traced],
-                                offsets=np.arange(len(used))[traced] * stride + spent[traced])
+        tally = _traced(bench, settings, grid, used[traced], batch[traced],
+                        np.arange(len(used))[traced] * stride + spent[traced], seed, scene, source)
         seconds_traced += tally.seconds
         part = np.zeros(len(used))
         part[traced] = _fates(tally.counts, quantity)
@@ -252,13 +249,40 @@ def take_sequential(bench: Any, settings: Settings, target: Target, *, scene: st
         batch = np.minimum(batch, np.maximum(MOST_RAYS_FACTOR * hoeffding - spent.sum(), 1)).astype(np.int64)
     estimates, certified, reported, colour, met = _certificate(target, functionals, sequences, total, spent, delta,
                                                                final=True)
-    plan = Plan(settings.updated(wavelengths=[float(x) for x in grid[used]]), (float(settings.theta_i),), scene=scene)
-    result = readings_result(bench, plan, Tally(total).with_seconds(seconds_traced), scene, source)
+    final, _ = _allocated(bench, settings, grid, used, np.ones(len(used), dtype=np.int64), None, settings.seed, scene,
+                          source)
+    result = final.postprocess(Tally(total).with_seconds(seconds_traced))
     return DerivedResult(target=target, values=tuple(reported), readings=result.squeeze("theta_i"),
                          rays=int(spent.sum()), pilot_rays=pilot_rays, delta=delta,
                          statements=len(functionals), functional_tolerances=tuple(float(t) for t in certified),
                          colour=colour, met=met, seconds=time.perf_counter() - start, bound="betting",
                          batches=tuple(batches))
+
+
+def _allocated(bench: Any, settings: Settings, grid: np.ndarray, traced: np.ndarray, rays: np.ndarray,
+               offsets: np.ndarray | None, seed: int, scene: str, source: dict | None) -> tuple[Allocated, Any]:
+    """
+    The spectrophotometer's allocated reading (:class:`~virtspec_mi.instruments.hemispherical.allocated.Allocated`)
+    of the wavelengths ``grid[traced]``, ``rays`` each from global indices ``offsets``, at ``seed``: the
+    instrument and its plan (``init``).
+    """
+
+    every, starts = np.zeros(len(grid), dtype=np.int64), np.zeros(len(grid), dtype=np.int64)
+    every[traced] = rays
+    if offsets is not None:
+        starts[traced] = offsets
+    instrument = Allocated(scene, source)
+    plan = instrument.init(bench, settings, Allocation(grid, every, int(seed), None if offsets is None else starts),
+                           np.array([float(settings.theta_i)]), None)
+    return instrument, plan
+
+
+def _traced(bench: Any, settings: Settings, grid: np.ndarray, traced: np.ndarray, rays: np.ndarray,
+            offsets: np.ndarray, seed: int, scene: str, source: dict | None) -> Tally:
+    """One batch through the instrument seam (:func:`_allocated`'s ``process``): its tally."""
+
+    instrument, plan = _allocated(bench, settings, grid, traced, rays, offsets, seed, scene, source)
+    return instrument.process(plan)
 
 
 def _certificate(target: Target, functionals: list, sequences: list[BettingSequence], total: Counts,

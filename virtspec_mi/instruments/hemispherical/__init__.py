@@ -25,7 +25,6 @@ Baranoski et al. (2001), eqs. (2), (23); Figs. 5 and 6.
 from __future__ import annotations
 
 import math
-import sys
 from dataclasses import dataclass
 from typing import Any, ClassVar
 
@@ -73,23 +72,9 @@ class SweepFlags(Options):
 
 
 def _respond_sweep(session: Session) -> int:
-    """``virtspec sweep``: without ``--out`` (or ``--json``) the CSV table on stdout, the summary on stderr."""
+    """``virtspec sweep``: its readings (the command's declared ``table`` output), or a sweep per ``--densities``."""
 
-    from virtspec_mi.results.io import csv_text
-
-    args = session.args
-    if session.flags.densities:
-        return _densities(session)
-    result = session.take()
-    figures = session.draw(result)
-    if session.keywords["out"] is not None or args.json:
-        return session.report(result, result.summary(), figures)
-    if not args.quiet:  # the summary on stderr, so that the table can be piped
-        session.report(result, result.summary(), figures, stream=sys.stderr)
-    elif args.csv_plain:  # the report writes it otherwise
-        result.write(args.csv_plain, plain=True)
-    print(csv_text(result.to_dataset()), end="")
-    return 0
+    return _densities(session) if session.flags.densities else session.default()
 
 
 def _densities(session: Session) -> int:
@@ -157,7 +142,7 @@ _SWEEP = Command(
     figures=(FigureFlag("--plot", "sweep", "the readings against theta_i (one curve per wavelength) or wavelength, with "
                                       "the band of their certified tolerance (one parameter point: draw a parameter "
                                       "sweep with virtspec plot FILE --sel NAME=VALUE)"),),
-    flags=SweepFlags, function="sweep", respond=_respond_sweep)
+    flags=SweepFlags, function="sweep", respond=_respond_sweep, output="table")
 
 
 class Hemispherical(Instrument):

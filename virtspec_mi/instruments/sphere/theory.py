@@ -49,7 +49,7 @@ opposite for a 20 mm port in a 60 mm sphere). Only the *first* landing is affect
 reaches the detector before any wall bounce; a baffle removes even that. Light that
 comes back to the disk from the wall lights it uniformly as far as the wall is
 uniformly bright, which the dark ports spoil only to second order (a NumPy walk of the
-whole exact sphere in ``tests/instruments/sphere/test_sphere_theory.py`` agrees with the flat forms
+whole exact sphere in ``tests/instruments/sphere/test_theory.py`` agrees with the flat forms
 within its noise, where the cap forms are 7σ off).
 
 Throughput (geometric series of wall bounces)

@@ -38,7 +38,7 @@ cos²θt = (a + c²)/n², r_s = −a/(c + n cos θt)², r_p = a(c²(n² + 1) −
 Compared with a float64 Fresnel over a grid of η (|η − 1| from 10⁻¹² to 0.1) and θ
 (10⁶ angles over [0°, 90°], from both sides) it agrees within 10⁻⁴ everywhere except
 within 10⁻⁴ degrees of a critical angle, where F itself has an infinite slope; there is
-no η ≠ 1 left to refuse (``tests/plugins/test_simple_dielectric.py``). Away from η = 1
+no η ≠ 1 left to refuse (``tests/plugins/bsdfs/test_simple_dielectric.py``). Away from η = 1
 ``mi.fresnel`` is used, as before (within 10⁻³ of float64 on the same grid).
 
 References

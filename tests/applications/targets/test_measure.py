@@ -126,7 +126,7 @@ def test_the_cli_measures_a_target(mi, capsys, tmp_path):
     value = data["values"]["band_B08"]
     assert value["lower"] < value["value"] < value["upper"] and value["upper"] - value["value"] <= 0.01
     assert main(["measure", "soybean_abmb", "--target", "band:B04", "--out", "x.nc"]) != 0
-    assert "--out: not taken with --target" in capsys.readouterr().err
+    assert "--target takes none of --out" in capsys.readouterr().err
 
 
 def test_a_sweep_certifies_a_target_at_every_angle(lambertian):

@@ -22,7 +22,7 @@ from virtspec_mi.plugins.leaf_data import (
 SOYBEAN_CONCENTRATIONS = dict(chlorophyll_a=3.9775, chlorophyll_b=1.1613, carotenoids=1.1323,
                               protein=78.7059, cellulose=37.7565, lignin=10.7441)
 D_M = 0.5 * 1.66e-4
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 
 # Mesophyll absorption of the soybean defaults (the NPSG C++ reference's step lookup over the shipped
 # NPSG data, Baranoski & Eng 2007, eqs. 1-3), m^-1:

@@ -122,7 +122,8 @@ def test_a_fit_resumes_from_its_directory_and_reuses_its_table(tmp_path):
     options = dict(FAST, delta=0.1)
     first = vm.fit(measured, "prospect_d", {"Cab": (10, 90)}, directory=tmp_path / "work", **options)
     assert (tmp_path / "work" / "table.zarr").exists() and first.traced_rays == first.rays
-    files = sorted((tmp_path / "work").glob("reading-*.nc"))
+    files = sorted((tmp_path / "work" / "readings").glob("*.nc"))  # the engine's ResultStore
+    assert files and (tmp_path / "work" / "readings" / "identity.json").exists()
     files[len(files) // 2].unlink()  # as if interrupted before that reading
     again = vm.fit(measured, "prospect_d", {"Cab": (10, 90)}, directory=tmp_path / "work", **options)
     np.testing.assert_array_equal(again.estimate, first.estimate)  # common random numbers: the same path

@@ -20,7 +20,7 @@ from virtspec_mi.cli import main
 from virtspec_mi.instruments.sphere.geometry import Baffle, Port, Sphere
 from virtspec_mi.instruments.goniophotometer import GonioOptions
 
-SPHERE_XML = os.path.join(os.path.dirname(__file__), "..", "scenes", "sphere_150mm_8d.xml")
+SPHERE_XML = os.path.join(os.path.dirname(__file__), "..", "..", "scenes", "sphere_150mm_8d.xml")
 
 
 @pytest.fixture(scope="module")
@@ -246,7 +246,7 @@ def test_a_turbid_slab_spectrum_and_a_measured_table_hold_their_data_range(mi):
                    "450 <= wavelength <= 650 nm", "(got 700)")
 
 
-# --- compare's options (the measured files' contents: tests/test_comparison.py) ------------------------------
+# --- compare's options (the measured files' contents: tests/applications/comparison/test_comparison.py) ------------------------------
 
 
 @pytest.mark.parametrize("options, words", [

@@ -30,7 +30,7 @@ from virtspec_mi.kernel import tracer
 
 from killed_runs import ROUGH_XML, signal_when_kept
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 LATENCY_S = 3.0
 """How soon a signalled run must have stopped tracing (about a second on a quiet machine; room for a busy one)."""
 

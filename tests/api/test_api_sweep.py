@@ -24,7 +24,7 @@ from virtspec_mi.budgets.bounds import hoeffding_mu
 from virtspec_mi.references.quadrature import fresnel_reflectance
 from virtspec_mi.engine.checkpoint import CheckpointError
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 
 
 @pytest.fixture(scope="module")

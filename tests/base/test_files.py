@@ -26,7 +26,7 @@ from result_kinds import gonio_from_counts
 from virtspec_mi.base.files import IN_MEMORY, WriteError, atomic_file, cause_of
 
 SUFFIXES = (".nc", ".csv", ".json", ".zarr")
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 
 
 def _no_temporaries(folder: Path) -> None:

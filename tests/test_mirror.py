@@ -1,0 +1,259 @@
+"""
+Tests mirror the package (issue 38 item 5): every module of ``virtspec_mi`` has its test
+file ``tests/<subpackage>/test_<module>.py`` — a package's ``__init__.py`` is tested in
+``tests/<subpackage>/<package>/test_<package>.py``, the root package in
+``tests/test_package.py`` — or is named in :data:`COVERED_ELSEWHERE` with the test files
+that cover it and why. A module with nothing to test of its own (``__main__.py``, or an
+``__init__.py`` that defines no function and no class: re-exports and a docstring) needs
+none. The list names no module that has its mirror file (then it goes), no test file that
+does not exist, and no module that does not exist.
+"""
+
+from __future__ import annotations
+
+import ast
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+PACKAGE = ROOT / "virtspec_mi"
+
+COVERED_ELSEWHERE: dict[str, tuple[tuple[str, ...], str]] = {
+    # module: (the test files that cover it, why it has none of its own)
+    "virtspec_mi.applications.comparison.command": (
+        ("tests/applications/test_applications.py", "tests/cli/test_applying.py"),
+        "its row and command: the contract test runs them, the generated flags are checked there"),
+    "virtspec_mi.applications.fitting": (
+        ("tests/applications/test_applications.py", "tests/applications/fitting/test_inversion.py"),
+        "its row (the contract test) and the lazy names vm.fit reaches"),
+    "virtspec_mi.applications.fitting.command": (
+        ("tests/applications/test_applications.py",
+         "tests/cli/test_applying.py", "tests/applications/fitting/test_inversion.py"),
+        "virtspec fit: the contract test, its flags' checks, test_cli_fit"),
+    "virtspec_mi.applications.fitting.forward": (
+        ("tests/applications/fitting/test_inversion.py", "tests/applications/fitting/test_search.py"),
+        "the forward readings: common random numbers, the ResultStore a fit resumes from"),
+    "virtspec_mi.applications.fitting.problem": (
+        ("tests/applications/fitting/test_inversion.py",),
+        "the fit's inputs, each refused with its reason there"),
+    "virtspec_mi.applications.fitting.result": (
+        ("tests/applications/fitting/test_inversion.py", "tests/applications/test_applications.py"),
+        "FitResult's files and figure; every format read back by the contract test"),
+    "virtspec_mi.applications.klems": (
+        ("tests/applications/test_applications.py",),
+        "its row: the contract test"),
+    "virtspec_mi.applications.klems.command": (
+        ("tests/applications/test_applications.py", "tests/applications/test_base.py", "tests/cli/test_measuring.py"),
+        "virtspec klems and gonio --klems: the contract test, the refused flags"),
+    "virtspec_mi.applications.klems.measure": (
+        ("tests/applications/klems/test_matrices.py", "tests/exchange/test_outputs.py"),
+        "klems_measure measures every file those tests read"),
+    "virtspec_mi.applications.tables": (
+        ("tests/applications/test_applications.py",),
+        "its row: the contract test"),
+    "virtspec_mi.applications.tables.command": (
+        ("tests/applications/test_applications.py",
+         "tests/applications/tables/test_albedo.py", "tests/applications/tables/test_audit.py"),
+        "virtspec albedo-table: the contract test, test_cli_albedo_table, the audit's command line"),
+    "virtspec_mi.applications.tables.engine_tables": (
+        ("tests/applications/tables/test_audit.py", "tests/exchange/test_engine_models.py"),
+        "each engine's tables, audited there"),
+    "virtspec_mi.applications.tables.table": (
+        ("tests/applications/tables/test_albedo.py",),
+        "AlbedoTable, its files and its comparison"),
+    "virtspec_mi.applications.targets.bands": (
+        ("tests/budgets/test_functionals.py", "tests/applications/targets/test_measure.py"),
+        "the bands' response functions"),
+    "virtspec_mi.applications.targets.difference": (
+        ("tests/applications/targets/test_measure.py",),
+        "vm.colour_difference"),
+    "virtspec_mi.applications.targets.indices": (
+        ("tests/applications/targets/test_measure.py",),
+        "the indices measured there"),
+    "virtspec_mi.applications.targets.plot": (
+        ("tests/applications/targets/test_measure.py",),
+        "DerivedResult.plot"),
+    "virtspec_mi.applications.targets.result": (
+        ("tests/applications/targets/test_measure.py",),
+        "DerivedResult and DerivedSweep"),
+    "virtspec_mi.base.version": (
+        ("tests/cli/test_cli.py",),
+        "one constant (virtspec --version)"),
+    "virtspec_mi.budgets.tables": (
+        ("tests/budgets/test_bounds.py", "tests/budgets/test_twostage.py"),
+        "the shipped tables, recomputed there"),
+    "virtspec_mi.cli.flags": (
+        ("tests/cli/test_measuring.py", "tests/cli/test_applying.py"),
+        "the one flag builder: every generated flag and its message"),
+    "virtspec_mi.colorimetry.certified": (
+        ("tests/applications/targets/test_measure.py", "tests/budgets/test_functionals.py"),
+        "certified colours of targets and results"),
+    "virtspec_mi.engine.progress": (
+        ("tests/api/test_api.py", "tests/api/test_api_sweep.py"),
+        "the progress bar of the API's runs"),
+    "virtspec_mi.engine.tally": (
+        ("tests/engine/test_plan.py", "tests/engine/test_readings.py"),
+        "every run's tallies"),
+    "virtspec_mi.exchange.common": (
+        ("tests/applications/klems/test_matrices.py", "tests/applications/tables/test_albedo.py"),
+        "derived seeds of the Klems and table groups"),
+    "virtspec_mi.exchange.conventions": (
+        ("tests/applications/tables/test_albedo.py", "tests/exchange/test_engine_models.py"),
+        "the engines' conventions"),
+    "virtspec_mi.exchange.klems_basis": (
+        ("tests/applications/klems/test_matrices.py",),
+        "the Klems bases"),
+    "virtspec_mi.instruments.command": (
+        ("tests/instruments/test_contract.py",
+         "tests/instruments/test_entry_points.py", "tests/results/test_figures.py"),
+        "the instruments' Command rows"),
+    "virtspec_mi.instruments.goniophotometer.hook": (
+        ("tests/instruments/goniophotometer/test_goniophotometer.py", "tests/instruments/goniophotometer/test_bins.py"),
+        "the exit hook bins every goniophotometer ray"),
+    "virtspec_mi.instruments.goniophotometer.plot": (
+        ("tests/instruments/goniophotometer/test_goniophotometer.py", "tests/results/test_plot.py"),
+        "the lobes' figures"),
+    "virtspec_mi.instruments.goniophotometer.result": (
+        ("tests/instruments/goniophotometer/test_goniophotometer.py", "tests/results/test_kinds.py"),
+        "GonioResult"),
+    "virtspec_mi.instruments.hemispherical": (
+        ("tests/instruments/test_contract.py", "tests/api/test_api.py"),
+        "the spectrophotometer: the contract test's row"),
+    "virtspec_mi.instruments.integrator": (
+        ("tests/settings/test_settings.py", "tests/instruments/goniophotometer/test_goniophotometer.py"),
+        "the spectrophotometer integrator's parameters"),
+    "virtspec_mi.instruments.sphere.integrator": (
+        ("tests/instruments/sphere/test_sphere.py",),
+        "the integrating_sphere integrator"),
+    "virtspec_mi.instruments.sphere.result": (
+        ("tests/instruments/sphere/test_sphere.py", "tests/results/test_kinds.py"),
+        "SphereResult"),
+    "virtspec_mi.kernel.counts": (
+        ("tests/kernel/test_tracer.py", "tests/engine/test_plan.py"),
+        "the fates' counts"),
+    "virtspec_mi.kernel.disk": (
+        ("tests/test_pinned_counts.py", "tests/geometry/test_disks.py"),
+        "the kernel's disk sampling: every count pinned bit for bit"),
+    "virtspec_mi.kernel.hooks": (
+        ("tests/instruments/goniophotometer/test_goniophotometer.py", "tests/instruments/gloss/test_gloss.py"),
+        "the kernel's exit hooks, through the instruments that have one"),
+    "virtspec_mi.kernel.incidence": (
+        ("tests/test_conical.py", "tests/engine/test_readings.py"),
+        "the beams' incidence"),
+    "virtspec_mi.kernel.rng": (
+        ("tests/test_determinism.py", "tests/test_pinned_counts.py"),
+        "keyed random numbers: counts independent of chunks, pinned"),
+    "virtspec_mi.kernel.sources": (
+        ("tests/test_conical.py", "tests/test_pinned_counts.py"),
+        "the beams' sources"),
+    "virtspec_mi.kernel.spectra": (
+        ("tests/applications/targets/test_measure.py", "tests/engine/test_readings.py"),
+        "a specimen's data ranges, refused outside them"),
+    "virtspec_mi.plugins.bsdfs.flipped": (
+        ("tests/applications/klems/test_matrices.py",),
+        "the turned-over specimen of a Klems file"),
+    "virtspec_mi.plugins.bsdfs.microfacet_model": (
+        ("tests/plugins/bsdfs/test_microfacet.py",),
+        "the microfacet plugin's model"),
+    "virtspec_mi.plugins.bsdfs.prospect_model": (
+        ("tests/plugins/bsdfs/test_prospect_d.py",),
+        "PROSPECT-D's model"),
+    "virtspec_mi.plugins.bsdfs.sampled_only": (
+        ("tests/kernel/test_walk.py",),
+        "a test BSDF of the walk"),
+    "virtspec_mi.references.analytic_tables": (
+        ("tests/plugins/bsdfs/test_bsdf_table.py", "tests/plugins/bsdfs/test_tabulated.py"),
+        "the tables' references"),
+    "virtspec_mi.references.slab": (
+        ("tests/plugins/bsdfs/test_turbid_slab.py",),
+        "the slab's reference"),
+    "virtspec_mi.runtime": (
+        ("tests/runtime/test_scaleout.py", "tests/test_pinned_counts.py"),
+        "the Mitsuba variant and the plugins, set up for every reading"),
+    "virtspec_mi.applications.comparison.flags": (
+        ("tests/applications/test_applications.py", "tests/exchange/measured/test_measured.py"),
+        "the measured-file flags of compare and fit: their commands' tests read every format through them"),
+    "virtspec_mi.applications.comparison.measured": (
+        ("tests/applications/comparison/test_comparison.py", "tests/exchange/measured/test_measured.py"),
+        "read_measured: the comparison's tests and every measured format's"),
+    "virtspec_mi.applications.comparison.result": (
+        ("tests/applications/comparison/test_comparison.py", "tests/results/test_kinds.py"),
+        "Comparison and compare: the comparison's tests, its files read back with every kind's"),
+    "virtspec_mi.applications.tables.comparison": (
+        ("tests/applications/tables/test_albedo.py", "tests/results/test_kinds.py"),
+        "TableComparison: a published table held to a certified one, its files read back"),
+    "virtspec_mi.applications.tables.files": (
+        ("tests/applications/tables/test_albedo.py", "tests/results/test_kinds.py"),
+        "the table's .npy and C-header exports, written and read back there"),
+    "virtspec_mi.exchange.measured.base": (
+        ("tests/exchange/measured/test_measured.py", "tests/exchange/measured/test_asd.py"),
+        "the rules every reader goes through: each format's tests"),
+    "virtspec_mi.exchange.measured.flags": (
+        ("tests/exchange/measured/test_measured.py", "tests/applications/fitting/test_samples.py"),
+        "measured_from: the commands that read a measured file"),
+    "virtspec_mi.exchange.rgl": (
+        ("tests/instruments/goniophotometer/test_rgl.py",),
+        "the tensor file, written and loaded in Mitsuba there"),
+    "virtspec_mi.plugins": (
+        ("tests/plugins/test_specimen.py",),
+        "SPECIMENS and the entry-point group of specimens: the specimen protocol's tests"),
+}
+"""Modules covered by other test files: module → (those files, the reason)."""
+
+
+def mirror(path: Path) -> Path:
+    """The test file of the module at ``path``."""
+
+    relative = path.relative_to(PACKAGE)
+    if relative == Path("__init__.py"):
+        return ROOT / "tests" / "test_package.py"
+    folder = relative.parent.parts
+    name = folder[-1] if relative.name == "__init__.py" else relative.stem
+    return ROOT / "tests" / Path(*folder) / f"test_{name}.py"
+
+
+def dotted(path: Path) -> str:
+    relative = path.relative_to(ROOT).with_suffix("")
+    parts = relative.parts[:-1] if relative.name == "__init__" else relative.parts
+    return ".".join(parts)
+
+
+def needs_a_test(path: Path) -> bool:
+    """False for a ``__main__.py`` and an ``__init__.py`` that defines nothing (no function, no class)."""
+
+    if path.name == "__main__.py":
+        return False
+    if path.name != "__init__.py":
+        return True
+    tree = ast.parse(path.read_text())
+    return any(isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef)) for node in tree.body)
+
+
+MODULES = {dotted(path): path for path in sorted(PACKAGE.rglob("*.py"))}
+
+
+def test_every_module_has_its_mirror_test_file_or_is_listed():
+    missing = [f"{name} (tests/{mirror(path).relative_to(ROOT / 'tests')})" for name, path in MODULES.items()
+               if needs_a_test(path) and not mirror(path).exists() and name not in COVERED_ELSEWHERE]
+    assert not missing, "modules without their test file (write it, or list the module in COVERED_ELSEWHERE with " \
+                        "the files that cover it and why):\n  " + "\n  ".join(missing)
+
+
+def test_the_list_names_existing_modules_without_a_mirror_and_existing_test_files():
+    for name, (files, reason) in COVERED_ELSEWHERE.items():
+        assert name in MODULES, f"{name} is no module of virtspec_mi"
+        assert not mirror(MODULES[name]).exists(), f"{name} has its mirror test file: take it off the list"
+        assert reason.strip() and files, name
+        for file in files:
+            assert (ROOT / file).is_file(), f"{name}: {file} does not exist"
+
+
+def test_the_mirror_rule_finds_the_files_it_should():
+    """Planted: a module's, a package's and the root's test files; a docstring-only ``__init__`` needs none."""
+
+    assert mirror(PACKAGE / "engine" / "checkpoint.py") == ROOT / "tests" / "engine" / "test_checkpoint.py"
+    assert mirror(PACKAGE / "instruments" / "gloss" / "__init__.py") == \
+        ROOT / "tests" / "instruments" / "gloss" / "test_gloss.py"
+    assert mirror(PACKAGE / "__init__.py") == ROOT / "tests" / "test_package.py"
+    assert not needs_a_test(PACKAGE / "__main__.py") and needs_a_test(PACKAGE / "engine" / "checkpoint.py")
+    assert not needs_a_test(PACKAGE / "exchange" / "__init__.py") or "def " in (
+        PACKAGE / "exchange" / "__init__.py").read_text()

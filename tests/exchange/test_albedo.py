@@ -263,3 +263,23 @@ def test_the_cosines_are_cosines_and_mu_keeps_one_meaning(capsys):
     assert main(["albedo-table", "--engine", "none", "--mu", "1,0.5", "--alpha", "0.3"]) == 1
     err = capsys.readouterr().err
     assert "--mu: the cosines of incidence are --cosines" in err and "a table's is --epsilon" in err
+
+
+def test_an_engine_order_table_compared_with_its_own_file_is_flagged_nowhere(mi, tmp_path):
+    """Unreal's memory order is [roughness][mu]: the file's canonical (mu, alpha) array is put in it, by any name."""
+
+    table = albedo_table("conductor", engine="unreal", fresnel="split", parts=True, epsilon=0.2, average=False,
+                         progress=False)
+    assert table.order == ("alpha", "mu")
+    table.write(tmp_path / "t.nc")
+    for array in (None, "E"):
+        assert table.compare(tmp_path / "t.nc", array=array).outside == []
+    assert table.compare(tmp_path / "t.nc", array="E_R").outside  # E against E_R: different quantities, flagged
+    with pytest.raises(ValueError, match="array 'rays' is not a quantity of the albedo table"):
+        table.compare(tmp_path / "t.nc", array="rays")
+
+
+def test_numbers_given_as_text_are_refused_by_name(mi):
+    for name in ("epsilon", "delta", "wavelength"):
+        with pytest.raises(ValueError, match=f"{name} must be a number, not text"):
+            albedo_table(engine=None, mu=[1.0], alpha=[0.5], **{name: "0.1"})

@@ -79,13 +79,13 @@ def albedo_options(parser: argparse.ArgumentParser) -> None:
 def albedo_table(args: argparse.Namespace) -> int:
     from virtspec_mi.api import parse_values
     from virtspec_mi.applications.tables.albedo import albedo_table
-    from virtspec_mi.applications.tables.table import read_albedo_table
 
+    _check_paths(args)
     native = (".inc", ".raw", ".png")
     if args.audit or (args.engine in ("filament", "unreal") and any(p.lower().endswith(native) for p in args.out)):
         return engine_tables(args)
     if args.source:
-        table = read_albedo_table(args.source)
+        table = _read_source(args)
         for path in args.out:
             table.check_output(path, overwrite=args.overwrite)  # every output's companions, before any is written
         for path in args.out:
@@ -114,6 +114,49 @@ def albedo_table(args: argparse.Namespace) -> int:
     return 0
 
 
+_MEASURING = ("model", "distribution", "shadowing", "g1", "fresnel", "mu", "alpha", "roughness", "eta", "epsilon",
+              "delta", "bound", "no_average", "parts", "seed", "checkpoint")
+"""The flags (by ``dest``) that shape a measurement: meaningless beside ``--from`` (a table already measured)."""
+
+
+def _check_paths(args: argparse.Namespace) -> None:
+    """
+    Before anything is measured or written: no output (``--out``, ``--figure``,
+    ``--checkpoint``) is an input (``--from``, ``--audit``, ``--compare``) or another
+    output (:func:`virtspec_mi.base.files.check_distinct`); no measuring flag beside ``--from``.
+    """
+
+    from virtspec_mi.base.files import check_distinct
+
+    if args.figure and not args.audit:
+        raise ValueError("--figure draws the heat map of --audit: give --audit PUBLISHED too")
+    check_distinct([*(("--out", path) for path in args.out), ("--figure", args.figure),
+                    ("--checkpoint", args.checkpoint)],
+                   [("--from", args.source), ("--audit", args.audit), ("--compare", args.compare)])
+    if args.source:
+        defaults = argparse.ArgumentParser()
+        albedo_options(defaults)
+        given = [name for name in _MEASURING if getattr(args, name) != defaults.get_default(name)]
+        if given:
+            flags = ", ".join("--" + name.replace("_", "-") if name not in ("mu",) else "--cosines" for name in given)
+            raise ValueError(f"--from TABLE reads a table already measured: {flags} would change nothing (they shape "
+                             "a new measurement); leave them out, or measure anew without --from")
+
+
+def _read_source(args: argparse.Namespace):
+    """The table of ``--from``; an ``--engine`` beside it must be the table's own."""
+
+    from virtspec_mi.applications.tables.table import read_albedo_table
+
+    table = read_albedo_table(args.source)
+    own = table.engine if table.engine in ("cycles", "filament", "unreal") else "none"
+    if args.engine is not None and args.engine != own:
+        grid = f"{own}'s grid" if own != "none" else "a grid of its own (--engine none)"
+        raise ValueError(f"--engine {args.engine}: the table of --from {args.source} is on {grid}; leave --engine out "
+                         f"or give --engine {own}")
+    return table
+
+
 def engine_tables(args: argparse.Namespace) -> int:
     """``--audit`` (and an engine's drop-in files): every channel of the engine's model certified at once."""
 
@@ -126,19 +169,23 @@ def engine_tables(args: argparse.Namespace) -> int:
     for path in args.out:
         if not path.lower().endswith(native):
             raise ValueError(f"--out {path}: an engine table is written as the engine's file or .nc")
+    from virtspec_mi.applications.tables.engine_tables import check_engine_sidecar
+
+    for path in args.out:  # a drop-in file's PATH.json sidecar: never an input, never another program's file
+        if not path.lower().endswith(".nc"):
+            check_engine_sidecar(path, args.overwrite, inputs=[p for p in (args.source, args.audit) if p])
     if args.source:  # a certified engine table written before (--out TABLE.nc)
-        from virtspec_mi.applications.tables.table import read_albedo_table
         from virtspec_mi.applications.tables.engine_tables import EngineTables
 
-        tables = EngineTables.from_table(read_albedo_table(args.source))
+        tables = EngineTables.from_table(_read_source(args))
     else:
         tables = engine_tables(args.engine, epsilon=args.epsilon, delta=args.delta, seed=args.seed, bound=args.bound,
                                progress=False if args.quiet else None, checkpoint=args.checkpoint)
     print(tables.statement())
     print(f"rays {tables.rays:,}; {tables.seconds:g} s")
     for path in args.out:
-        tables.write(path)
-        print(f"written: {path} (provenance: {path}.json)")
+        tables.write(path, overwrite=args.overwrite)
+        print(f"written: {path}" + ("" if path.lower().endswith(".nc") else f" (provenance: {path}.json)"))
     if args.audit:
         report = audit(args.audit, tables)
         print(report.summary())

@@ -90,6 +90,9 @@ def add_fit_command(commands: Any) -> argparse.ArgumentParser:
     parser.add_argument("--forward-mu", type=float, help="forward tolerance at the optimum (overrides --mu-fraction)")
     parser.add_argument("--table", help="Zarr store of the coarse table (read when it exists, else written)")
     parser.add_argument("--table-points", type=int, help="values per parameter in the table")
+    parser.add_argument("--evaluations", type=int, nargs=3, metavar=("A", "B", "C"),
+                        help="readings of each of the three refinement stages (default 12, 6, 3 per free parameter); "
+                             "raise them when a fit says NOT CONVERGED")
     parser.add_argument("--profile-points", type=int, default=5, help="points of each profile (0: none)")
     parser.add_argument("--search-wavelengths", type=int, metavar="N",
                         help="wavelengths the search and the confirmation read when fewer than the fitted ones "
@@ -118,12 +121,17 @@ def run_fit(args: argparse.Namespace) -> int:
     from virtspec_mi.applications.fitting.inversion import fit
     from virtspec_mi.applications.fitting.result import FIT_SUFFIXES
     from virtspec_mi.base.checks import parse_wavelengths
+    from virtspec_mi.base.files import check_distinct
 
     many = not args.transmittance and _many_samples(args)  # every spectrum fitted: a table (its own suffixes)
     if args.out and not many and Path(args.out).suffix.lower() not in FIT_SUFFIXES:
         raise ValueError(f"--out: a fit file is {' or '.join(FIT_SUFFIXES)} (got {args.out})")
     if args.plot and Path(args.plot).suffix.lower() not in (".png", ".svg", ".pdf"):
         raise ValueError(f"--plot: a figure is .png, .svg or .pdf (got {args.plot})")
+    check_distinct([("--out", args.out), ("--plot", args.plot), ("--table", args.table),
+                    ("--directory", args.directory)],
+                   [("MEASURED", args.measured), ("--transmittance", args.transmittance),
+                    ("--specimen", args.specimen)])
     if args.transmittance:
         measured: Any = {"reflectance": measured_from(args, args.measured),
                          "transmittance": measured_from(args, args.transmittance)}
@@ -146,6 +154,7 @@ def run_fit(args: argparse.Namespace) -> int:
                    loss=args.loss, windows=dict(args.window) or None, delta=args.delta,
                    mu_fraction=args.mu_fraction, forward_mu=args.forward_mu, table_points=args.table_points,
                    profile_points=args.profile_points, seed=args.seed, defines=defines or None,
+                   evaluations=None if args.evaluations is None else tuple(args.evaluations),
                    progress=True if args.progress else None, **search, **settings)
     if many:
         return _run_table(args, options)

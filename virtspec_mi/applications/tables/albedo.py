@@ -87,7 +87,7 @@ from typing import Any, Sequence
 import numpy as np
 
 from virtspec_mi.base.version import __version__
-from virtspec_mi.base.checks import check_delta, number, shown_value
+from virtspec_mi.base.checks import check_delta, real, shown_value
 import virtspec_mi.base.interrupts as interrupts
 from virtspec_mi.engine.checkpoint import ResultStore, locked
 from virtspec_mi.settings import true_or_false, whole_number
@@ -103,7 +103,7 @@ __all__ = ["albedo_table"]
 def _check_epsilon(epsilon: Any) -> float:
     """ε of a table: a real number, 0 < ε < 0.5 (as μ: :func:`virtspec_mi.base.checks.check_mu`, named ``epsilon``)."""
 
-    value = number("epsilon", epsilon)
+    value = real("epsilon", epsilon)
     if not 0.0 < value < 0.5:
         raise ValueError(f"epsilon must satisfy 0 < epsilon < 0.5 (got {shown_value(epsilon)})")
     return value
@@ -319,10 +319,10 @@ def albedo_table(
 
     grid = _grid(model, distribution, engine, mu, alpha, roughness, eta)
     bsdf_parameters, model_words, count_scale = bsdf_model(model, distribution, grid.engine, shadowing, g1, fresnel)
-    epsilon, delta = _check_epsilon(epsilon), check_delta(delta)  # any real number type (numpy's float32 too)
+    epsilon, delta = _check_epsilon(epsilon), check_delta(real("delta", delta))  # any real number type, not text
     average, parts = true_or_false("average")(average), true_or_false("parts")(parts)
     seed = _whole("seed", seed, 0, 2**32 - 1)
-    wavelength = number("wavelength", wavelength)
+    wavelength = real("wavelength", wavelength)
     if not 0.0 < wavelength < float("inf"):
         raise ValueError(f"wavelength must be a finite number of nm > 0 (got {shown_value(wavelength)})")
     if bound not in BOUNDS:

@@ -248,3 +248,17 @@ def test_the_table_on_two_dask_workers_gives_the_same_fit():
     there = vm.fit(measured, "prospect_d", {"Cab": (10, 90)}, delta=0.1, workers=2, **FAST)
     np.testing.assert_array_equal(there.candidate_statistic, here.candidate_statistic)
     np.testing.assert_array_equal(there.intervals, here.intervals)
+
+
+def test_one_value_column_is_not_both_quantities(tmp_path):
+    """--quantity both with a file of one value column: refused, never its reflectance used as the transmittance."""
+
+    from virtspec_mi.applications.fitting.problem import fit_problem
+
+    (tmp_path / "one.csv").write_text("400,0.2,0.01\n500,0.3,0.01\n600,0.35,0.01\n")
+    with pytest.raises(ValueError, match=r"one.csv holds one value column: it cannot be both the "
+                                         "reflectance and the transmittance"):
+        fit_problem(tmp_path / "one.csv", "prospect_d", {"Cab": (10, 90)}, quantities=("reflectance", "transmittance"))
+    (tmp_path / "R.csv").write_text("wavelength,reflectance,uncertainty\n400,0.2,0.01\n500,0.3,0.01\n")
+    with pytest.raises(ValueError, match="R.csv holds reflectance, no transmittance column"):
+        fit_problem(tmp_path / "R.csv", "prospect_d", {"Cab": (10, 90)}, quantities=("reflectance", "transmittance"))

@@ -152,3 +152,33 @@ def test_ideal_sphere_detector_fraction_matches_the_theory(rho_w, f):
         assert cap_model == pytest.approx(theory(sphere, 0.5, rho_w, "cap"), rel=1e-9)
         projected = theory(sphere, 0.5, rho_w, "cap", "projected")
         assert abs(detected - cap_model) > abs(detected - flat) and abs(detected - projected) > abs(detected - flat)
+
+
+def test_a_long_walk_reaches_a_safe_point_between_launches_and_keeps_its_counts(monkeypatch):
+    """
+    A white sphere with small ports and a huge max_bounces: the walk is launched LAUNCH_STEPS steps at a time, an
+    interrupt is honoured between two launches (it once ran on for minutes after Ctrl-C), and the counts do not
+    depend on the launches.
+    """
+
+    from types import SimpleNamespace
+
+    import virtspec_mi.base.interrupts as interrupts
+    import virtspec_mi.instruments.sphere.walk as walk
+
+    sphere = Sphere(150, 0.9, (Port("sample", "sample", 180, 0, 12.7), Port("detector", "detector", 90, 90, 2.0)))
+    white = {"type": "diffuse", "reflectance": 1.0}
+    whole = walk_counts(sphere, white, 12.7 * 1.001, 0.999, 300, actions=[6, 0], max_bounces=10**7)
+    monkeypatch.setattr(walk, "LAUNCH_STEPS", 7)
+    safe_points = []
+    monkeypatch.setattr(walk, "interrupts", SimpleNamespace(check=lambda: safe_points.append(1)))
+    launched = walk_counts(sphere, white, 12.7 * 1.001, 0.999, 300, actions=[6, 0], max_bounces=10**7)
+    assert np.array_equal(whole["cross"], launched["cross"]) and whole["wall_reflections"] == launched["wall_reflections"]
+    assert len(safe_points) > 10  # walks of hundreds of steps: many launches, a safe point after each
+
+    def interrupted():
+        raise interrupts.Interrupted()
+
+    monkeypatch.setattr(walk, "interrupts", SimpleNamespace(check=interrupted))
+    with pytest.raises(interrupts.Interrupted):
+        walk_counts(sphere, white, 12.7 * 1.001, 0.999, 300, actions=[6, 0], max_bounces=10**7)

@@ -104,6 +104,42 @@ def test_the_api_takes_over_default_handlers_only_for_the_run():
             signal.signal(s, handler)
 
 
+def test_a_signal_whose_interrupt_was_swallowed_still_stops_the_command_at_its_next_safe_point():
+    """A KeyboardInterrupt raised inside an import lock's weakref callback is "ignored" by Python: the fit ran on."""
+
+    def swallowed():
+        try:
+            _deliver(signal.SIGINT)
+        except Interrupted:
+            pass  # as Python does with an exception raised inside a weakref callback
+
+    with interrupts.catching():
+        swallowed()
+        with pytest.raises(Interrupted):
+            interrupts.check()  # the next safe point
+        interrupts.check()  # raised once
+        swallowed()
+        with pytest.raises(Interrupted):
+            with interrupts.deferred():  # a run that starts after it stops before it begins
+                raise AssertionError("the run began")
+    interrupts.check()  # the command over: nothing kept
+
+
+@pytest.mark.parametrize("argv0, taken", [("-m", True), ("/usr/bin/virtspec", True), ("/usr/bin/python", False)])
+def test_the_command_takes_ctrl_c_from_the_packages_first_line(argv0, taken):
+    """python -m virtspec_mi (argv[0] is '-m' while the package is found) and the console script, not a library user."""
+
+    code = (f"import sys, signal; sys.argv[0] = {argv0!r}; import virtspec_mi; "
+            "print(signal.getsignal(signal.SIGINT) is not signal.default_int_handler, "
+            "signal.getsignal(signal.SIGTERM) is not signal.SIG_DFL)")
+    run = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60)
+    assert run.stdout.split() == [str(taken)] * 2, run.stderr
+    stopped = subprocess.run([sys.executable, "-c", code.replace("print(", "import os; os.kill(os.getpid(), 2); print(")],
+                             capture_output=True, text=True, timeout=60)
+    if taken:
+        assert stopped.returncode == 130 and stopped.stderr == "virtspec: interrupted\n" and not stopped.stdout
+
+
 def test_exit_statuses():
     assert interrupts.exit_status(signal.SIGINT) == 130 and interrupts.exit_status(signal.SIGTERM) == 143
 

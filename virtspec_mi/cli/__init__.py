@@ -172,6 +172,10 @@ def main(argv: Sequence[str] | None = None) -> int:
                 parser.error(f"unrecognized arguments: {' '.join(extra)}{unrecognized_hint(args, extra)}")
         except KeyboardInterrupt as stop:
             return _interrupted(stop, argparse.Namespace(), exit_status)
+        from virtspec_mi.base.interrupts import received
+
+        if received() is not None:  # a Ctrl-C whose KeyboardInterrupt an import swallowed (its lock's callback)
+            return _interrupted(KeyboardInterrupt(received()), args, exit_status, received())
         return _command(args, exit_status)
 
 

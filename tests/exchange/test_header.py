@@ -95,3 +95,10 @@ def test_two_tables_headers_compile_in_one_translation_unit(table, tmp_path, com
     subprocess.run([compiler, *flags, source, "-o", "check"], cwd=tmp_path, check=True, capture_output=True)
     printed = subprocess.run([str(tmp_path / "check")], capture_output=True, text=True).stdout.split()
     assert [float(v) for v in printed] == [table.epsilon, other.epsilon]
+
+
+def test_a_published_array_that_is_not_numbers_is_named():
+    from virtspec_mi.exchange.header import read_table_values
+
+    with pytest.raises(ValueError, match=r"published must be an array of numbers .* \(got a list holding 'a'\)"):
+        read_table_values(["a"] * 6)

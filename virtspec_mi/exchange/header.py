@@ -153,6 +153,16 @@ def _text(path: Path) -> str:
                          ".nc, .csv/.txt of numbers or a C/C++ header") from None
 
 
+def _sample(values: Any) -> str:
+    """What a sequence that is not numbers holds: its first non-number, shown short."""
+
+    for value in np.asarray(values, dtype=object).ravel()[:1000]:
+        if isinstance(value, (str, bytes)) or not np.isscalar(value):
+            text = repr(value)
+            return text if len(text) <= 40 else text[:37] + "..."
+    return "values that are not numbers"
+
+
 def read_table_values(published: Any, array: str | None = None, expected: int | None = None) -> np.ndarray:
     """
     The numbers of a published table, flat in the file's order.
@@ -170,7 +180,11 @@ def read_table_values(published: Any, array: str | None = None, expected: int | 
     """
 
     if isinstance(published, np.ndarray) or isinstance(published, (list, tuple)):
-        values = np.asarray(published, dtype=np.float64).ravel()
+        try:
+            values = np.asarray(published, dtype=np.float64).ravel()
+        except (TypeError, ValueError):
+            raise ValueError(f"published must be an array of numbers (one per cell), a file of one, or a table's .nc "
+                             f"(got a {type(published).__name__} holding {_sample(published)})") from None
     elif isinstance(published, (str, os.PathLike)):
         path = Path(published)
         if not path.is_file():

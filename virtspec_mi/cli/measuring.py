@@ -17,6 +17,7 @@ import argparse
 import functools
 import json
 import sys
+import warnings
 from contextlib import contextmanager
 from dataclasses import dataclass
 from typing import Any, Callable, Iterator, Sequence
@@ -68,12 +69,17 @@ def measuring_commands() -> dict[str, Measuring]:
     from virtspec_mi.instruments import INSTRUMENTS
 
     rows: dict[str, Measuring] = {}
-    for name, instrument in INSTRUMENTS.items():
+    for name, instrument in INSTRUMENTS.items():  # the built-in instruments first: theirs win
         for command in instrument.commands:
             if command.name in rows or command.name in OTHER_COMMANDS:
                 owner = rows[command.name].instrument if command.name in rows else "virtspec itself"
-                raise ValueError(f"instrument {name!r} declares the subcommand {command.name!r}, which {owner} "
-                                 "already has: give it another name")
+                if instrument.__module__.split(".")[0] == "virtspec_mi":
+                    raise ValueError(f"instrument {name!r} declares the subcommand {command.name!r}, which {owner} "
+                                     "already has: give it another name")
+                warnings.warn(f"the outside instrument {name!r} ({instrument.__module__}) declares the subcommand "
+                              f"{command.name!r}, which {owner} already has: that subcommand left out (give it "
+                              "another name)", RuntimeWarning, stacklevel=2)
+                continue
             rows[command.name] = Measuring(name, command)
     return rows
 

@@ -62,7 +62,6 @@ from typing import Any, Sequence
 
 import numpy as np
 
-import virtspec_mi.base.interrupts as interrupts
 from virtspec_mi.kernel.counts import DIRECTION_TOLERANCE, WEIGHT_ROUNDING, Fate
 from virtspec_mi.kernel.hooks import ChunkRays, ExitHook
 from virtspec_mi.kernel.rng import GOLDEN, hash32, to_unit
@@ -118,7 +117,7 @@ _MIN_LANES = 1 << 14  # at least this many lanes (or one per ray): enough packet
 _RAYS_PER_LANE = 8  # otherwise each lane walks about this many rays in turn
 LAUNCH_STEPS: int = 512
 """Steps each lane walks per kernel launch: between two launches the walk reaches a safe point (an interrupt
-is honoured there, :func:`virtspec_mi.base.interrupts.check`), so a white sphere with small ports and a
+is honoured there: :attr:`~virtspec_mi.kernel.hooks.ChunkRays.safe_point`, the engine's), so a white sphere with small ports and a
 large ``max_bounces`` answers Ctrl-C within about a second. The counts do not depend on it."""
 _LOADED: dict[tuple[str, str], Any] = {}  # BSDFs loaded from their plugin dicts, per Mitsuba variant
 
@@ -363,7 +362,8 @@ class SphereLayout(ExitHook):
             dr.eval(*state, fate_out, rare_out, walls_out)
             if not bool(dr.any(state[0] < n, axis=None)):
                 break
-            interrupts.check()  # a signal received during a long walk stops the run here, within a launch
+            if rays.safe_point is not None:  # the engine's: an interrupt during a long walk stops the run here
+                rays.safe_point()
         return fate_out, rare_out, walls_out
 
     # -- one step: state in → one flight and one surface event → state out --------------

@@ -129,6 +129,30 @@ def test_bad_input_is_refused_by_name():
         vm.fit(measured, "prospect_d", {"Cab": (10, 80)}, wavelengths=[420.0, 2400.0])
 
 
+def test_a_fit_interrupted_in_its_table_stage_resumes(tmp_path, monkeypatch):
+    """Stopped before the table's first reading it said "nothing to resume", then refused its own table forever."""
+
+    import virtspec_mi.base.interrupts as interrupts
+    from virtspec_mi.kernel import tracer
+
+    real, calls = tracer.tally_readings, []
+
+    def stopped_once(*args, **kwargs):
+        calls.append(1)
+        if len(calls) == 1:
+            raise interrupts.Interrupted()
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(tracer, "tally_readings", stopped_once)
+    measured, options = synthetic({"Cab": 45.0}, 0.02, seed=6), dict(FAST, evaluations=(2, 1, 1), profile_points=0,
+                                                                   confirm=False)
+    with pytest.raises(KeyboardInterrupt):
+        vm.fit(measured, "prospect_d", {"Cab": (10, 90)}, delta=0.1, directory=tmp_path / "work", **options)
+    assert (tmp_path / "work" / "table.zarr").exists()
+    resumed = vm.fit(measured, "prospect_d", {"Cab": (10, 90)}, delta=0.1, directory=tmp_path / "work", **options)
+    assert resumed.candidate_stage.count("table") == FAST["table_points"]
+
+
 def test_a_fit_resumes_from_its_directory_and_reuses_its_table(tmp_path):
     truth = {"Cab": 30.0}
     measured = synthetic(truth, 0.02, seed=5)

@@ -169,8 +169,6 @@ def test_nothing_absorbing_is_the_lossless_limit_exactly(n):
     combination. Left to rounding, Stokes' formula was taken there and lost ~5e-9 (R + T - 1 up to 6.6e-10).
     """
 
-    from virtspec_mi.plugins.bsdfs.prospect_model import tav
-
     data = prospect_coefficients()
     reflectance, transmittance = prospect_d(N=n, Cab=0.0, Car=0.0, Anth=0.0, Cbrown=0.0, Cw=0.0, Cm=0.0)
     t21 = tav(90.0, data.n) / data.n ** 2

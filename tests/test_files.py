@@ -264,3 +264,13 @@ def test_no_output_may_be_an_input_or_another_output(tmp_path):
         check_distinct([("--out", tmp_path / "a.h"), ("--figure", str(tmp_path / "a.h"))])
     check_distinct([("--out", tmp_path / "fit.json"), ("--plot", None)], [("MEASURED", measured), ("scene", {})])
     assert not same_file(tmp_path / "new.nc", tmp_path / "other.nc")
+
+
+def test_a_long_path_is_shown_by_its_ends_and_length():
+    from virtspec_mi.base.files import WriteError, shown_path
+
+    assert shown_path("/tmp/x.nc") == "/tmp/x.nc"
+    long = "/tmp/" + "b" * 5000 + ".nc"
+    shown = shown_path(long)
+    assert len(shown) < 200 and shown.startswith("/tmp/bbb") and shown.endswith("b.nc (5,008 characters)")
+    assert "(5,008 characters)" in str(WriteError(long, "File name too long"))

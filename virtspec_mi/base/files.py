@@ -42,7 +42,7 @@ from pathlib import Path
 from typing import Any, Callable, Iterable, Iterator
 
 __all__ = ["WriteError", "IN_MEMORY", "atomic_file", "atomic_write", "cause_of", "temporary_name", "flush_directory",
-           "read_netcdf", "same_file", "check_distinct"]
+           "read_netcdf", "same_file", "check_distinct", "shown_path", "os_error_text"]
 
 _FULL = 1 << 20  # a write failing with less free space than this is reported as a full disk
 
@@ -65,7 +65,7 @@ class WriteError(OSError):
         self.filename = str(path)
 
     def _message(self) -> str:
-        return f"could not write {self.path}: {self.cause}" + (f"; {self.kept}" if self.kept else "")
+        return f"could not write {shown_path(self.path)}: {self.cause}" + (f"; {self.kept}" if self.kept else "")
 
     def __str__(self) -> str:
         return self._message()
@@ -75,6 +75,27 @@ class WriteError(OSError):
 
         return WriteError(self.path, self.cause, code=self.errno, kept=kept,
                           result=self.result if result is None else result)
+
+
+def shown_path(path: Any, limit: int = 160) -> str:
+    """
+    A path as a message shows it: whole up to ``limit`` characters, else its start and its
+    end around "…" and its length (a 5,000-character name is not echoed whole).
+    """
+
+    text = os.fsdecode(path) if isinstance(path, (bytes, os.PathLike)) else str(path)
+    if len(text) <= limit:
+        return text
+    return f"{text[:limit - 40]}…{text[-30:]} ({len(text):,} characters)"
+
+
+def os_error_text(error: OSError) -> str:
+    """An ``OSError`` in one line: its reason and the file(s) it names (:func:`shown_path`), never a bare errno."""
+
+    if error.strerror and error.filename is not None:
+        names = " -> ".join(shown_path(name) for name in (error.filename, error.filename2) if name is not None)
+        return f"{error.strerror}: {names}"
+    return str(error)
 
 
 def cause_of(error: BaseException, path: str | os.PathLike) -> tuple[str, int | None]:

@@ -182,6 +182,7 @@ def keywords_of(args: argparse.Namespace, command: Measuring) -> dict[str, Any]:
     figures' suffixes, one reading for ``measure``, no parameter sweep to draw.
     """
 
+    from virtspec_mi.base.files import check_distinct
     from virtspec_mi.results.io import check_output, check_plain_csv
     from virtspec_mi.results.plot import check_figure_path
 
@@ -194,6 +195,8 @@ def keywords_of(args: argparse.Namespace, command: Measuring) -> dict[str, Any]:
     figures = {figure.flag: getattr(args, dest(figure.flag), None) for figure in command.command.all_figures()}
     for flag, path in figures.items():
         flagged(flag, check_figure_path, path)
+    check_distinct([("--out", out), ("--csv-plain", args.csv_plain), *figures.items()],  # none over the scene
+                   [("SCENE", getattr(args, "scene", None))])
     settings = given(args, settings_options(), several=several(command), hint=one_angle(args.command))
     options = instrument_options(command)
     parameters = parsed_parameters(pairs(args.params, "--param"))

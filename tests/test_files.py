@@ -258,7 +258,7 @@ def test_no_output_may_be_an_input_or_another_output(tmp_path):
     os_link.hardlink_to(measured)
     for alias in (measured, tmp_path / "." / "measured.csv", tmp_path / "link.json", os_link):
         assert same_file(alias, measured)
-        with pytest.raises(ValueError, match=f"--out {alias} is MEASURED {measured}, an input of this command"):
+        with pytest.raises(ValueError, match=f"--out {alias} is MEASURED {measured}, an input of this run"):
             check_distinct([("--out", alias)], [("MEASURED", measured)])
     with pytest.raises(ValueError, match="one output would replace the other"):
         check_distinct([("--out", tmp_path / "a.h"), ("--figure", str(tmp_path / "a.h"))])

@@ -246,7 +246,7 @@ def check_distinct(outputs: Iterable[tuple[str, Any]], inputs: Iterable[tuple[st
     for name, path in paths(outputs):
         for other, source in given:
             if same_file(path, source):
-                raise ValueError(f"{name} {path} is {other} {source}, an input of this command: writing it would "
+                raise ValueError(f"{name} {path} is {other} {source}, an input of this run: writing it would "
                                  f"replace what is being read; choose another name for {name}")
         for other, earlier in written:
             if same_file(path, earlier):

@@ -283,3 +283,8 @@ def test_numbers_given_as_text_are_refused_by_name(mi):
     for name in ("epsilon", "delta", "wavelength"):
         with pytest.raises(ValueError, match=f"{name} must be a number, not text"):
             albedo_table(engine=None, mu=[1.0], alpha=[0.5], **{name: "0.1"})
+
+
+def test_two_outputs_of_one_name_are_refused_before_any_ray(mi, tmp_path):
+    with pytest.raises(ValueError, match="one output would replace the other"):
+        albedo_table(engine=None, mu=[1.0], alpha=[0.5], out=[tmp_path / "t.nc", tmp_path / "t.nc"])

@@ -251,3 +251,13 @@ def test_an_e_avg_of_31_values_is_refused_not_skipped(coarse, tmp_path):
         audit(header, coarse)
     with pytest.raises(ValueError, match=r"channel 'E_avg' has shape \(31,\)"):
         audit({"E": coarse.values("E"), "E_avg": np.zeros(31)}, coarse)
+
+
+def test_the_heat_map_never_replaces_the_audited_file(coarse, tmp_path):
+    header = tmp_path / "pub.h"
+    _cycles_header(header, coarse.values("E"), list(coarse.values("E", average=True)))
+    report = audit(header, coarse)
+    (tmp_path / "map.png").symlink_to(header)
+    with pytest.raises(ValueError, match="is the audited table"):
+        report.figure(tmp_path / "map.png")
+    assert "table_ggx_E" in header.read_text()

@@ -88,6 +88,7 @@ import numpy as np
 
 from virtspec_mi.base.version import __version__
 from virtspec_mi.base.checks import check_delta, real, shown_value
+from virtspec_mi.base.files import check_distinct
 import virtspec_mi.base.interrupts as interrupts
 from virtspec_mi.engine.checkpoint import ResultStore, locked
 from virtspec_mi.settings import true_or_false, whole_number
@@ -340,6 +341,7 @@ def albedo_table(
         if not path.parent.exists():
             raise ValueError(f"out {path}: the directory {path.parent} does not exist")
         _check_output(path, bool(average), bool(overwrite))
+    check_distinct([*(("out", path) for path in outs), ("checkpoint", checkpoint)])  # one output never over another
     if checkpoint is None and outs:
         checkpoint = outs[0].with_name(outs[0].name + ".parts")
     quantities = ("E", "E_R", "E_T") if parts else ("E",)

@@ -151,6 +151,10 @@ class Audit:
         flagged cells outlined; written to ``path`` when given. Returns the figure.
         """
 
+        if path is not None:  # never over the table audited
+            from virtspec_mi.base.files import check_distinct
+
+            check_distinct([("path", path)], [("the audited table", None if self.source == "arrays" else self.source)])
         import matplotlib
 
         matplotlib.use("Agg", force=False)

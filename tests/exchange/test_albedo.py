@@ -288,3 +288,30 @@ def test_numbers_given_as_text_are_refused_by_name(mi):
 def test_two_outputs_of_one_name_are_refused_before_any_ray(mi, tmp_path):
     with pytest.raises(ValueError, match="one output would replace the other"):
         albedo_table(engine=None, mu=[1.0], alpha=[0.5], out=[tmp_path / "t.nc", tmp_path / "t.nc"])
+
+
+def test_a_full_disk_mid_table_says_the_table_resumes_from_its_parts(mi, tmp_path, monkeypatch):
+    """It offered an internal group, rescued to a temporary file, as "the result"; the table resumes from its parts."""
+
+    import errno
+
+    from virtspec_mi.base.files import WriteError
+    from virtspec_mi.engine.checkpoint import ResultStore
+
+    real, saved = ResultStore.save, []
+
+    def full_after_one(self, label, result):
+        if saved:
+            raise WriteError(self.directory / "part.nc", "No space left on device", code=errno.ENOSPC, result=result)
+        saved.append(label)
+        return real(self, label, result)
+
+    monkeypatch.setattr(ResultStore, "save", full_after_one)
+    kwargs = dict(engine=None, mu=[1.0, 0.5], alpha=[0.5], epsilon=0.05, progress=False)
+    with pytest.raises(WriteError) as caught:
+        albedo_table(checkpoint=tmp_path / "parts", **kwargs)
+    message = str(caught.value)
+    assert "No space left on device" in message and f"the groups finished before it are kept in {tmp_path / 'parts'}" \
+        in message and "resumes from them" in message and "error.result" not in message
+    monkeypatch.setattr(ResultStore, "save", real)
+    assert albedo_table(checkpoint=tmp_path / "parts", **kwargs).rays > 0  # resumed

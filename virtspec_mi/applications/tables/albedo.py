@@ -88,7 +88,7 @@ import numpy as np
 
 from virtspec_mi.base.version import __version__
 from virtspec_mi.base.checks import check_delta, real, shown_value
-from virtspec_mi.base.files import check_distinct
+from virtspec_mi.base.files import WriteError, check_distinct
 import virtspec_mi.base.interrupts as interrupts
 from virtspec_mi.engine.checkpoint import ResultStore, locked
 from virtspec_mi.settings import true_or_false, whole_number
@@ -99,6 +99,15 @@ from virtspec_mi.budgets.binomial import (binomial_rays, pilot_intervals, stage_
 from virtspec_mi.applications.tables.table import BOUNDS, DISTRIBUTIONS, MODELS, AlbedoTable, _FORMAT, _check_output
 
 __all__ = ["albedo_table"]
+
+
+def _resumes(directory: Path | None, kept: str) -> str:
+    """Where a table whose file could not be written is kept, and how it resumes (a :class:`WriteError`'s ``kept``)."""
+
+    if directory is None:
+        return "the table is not kept (no checkpoint): give checkpoint= (--checkpoint) to keep its groups"
+    return (f"{kept} are kept in {directory}: free some space and run the same command again, it resumes from "
+            "them")
 
 
 def _check_epsilon(epsilon: Any) -> float:
@@ -385,7 +394,10 @@ def albedo_table(
                                        parameters={n: pts[:, k].tolist() for k, n in enumerate(names)}, points=True,
                                        seed=derived_seed(seed, label), sampling="random", progress=False,
                                        **({} if chunk_size is None else {"chunk_size": chunk_size}))
-                    store.save(label, result)
+                    try:
+                        store.save(label, result)
+                    except WriteError as error:  # a full disk: the table resumes from its parts, no group offered
+                        raise error.keeping(_resumes(store.directory, "the groups finished before it")) from None
                     interrupts.check()  # a safe point: the group is saved, none is being written
                 traced_seconds += result.seconds
                 bar.reach(bar.done + len(angles) * len(pts))
@@ -474,8 +486,11 @@ def albedo_table(
             if not table.certified:
                 warnings.warn(f"albedo table: {table.statement()}", RuntimeWarning, stacklevel=2)
             interrupts.check()  # the last safe point before the outputs are written
-            for path in outs:
-                table.write(path, overwrite=overwrite)
+            try:
+                for path in outs:
+                    table.write(path, overwrite=overwrite)
+            except WriteError as error:  # every group is kept: the same call writes the table without tracing
+                raise error.keeping(_resumes(store.directory, "every group of the table"), table) from None
             store.remove()  # the table is returned (and written to every out): its groups are safe
             return table
 

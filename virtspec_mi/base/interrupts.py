@@ -130,7 +130,9 @@ def _handler(signum: int, frame: Any) -> None:
     if _State.depth > 0 and _State.pending is None:
         _State.pending = signum
         return
-    _State.pending, _State.unanswered = None, signum
+    _State.pending = None
+    if _State.catching:  # the command's: raised where the program is, and again at the next safe point if swallowed
+        _State.unanswered = signum
     raise Interrupted(signum)
 
 

@@ -73,7 +73,8 @@ def test_engine_beside_from_must_be_the_tables_own(written, capsys):
     assert main(["albedo-table", "--from", str(written / "T.nc"), "--engine", "cycles"]) == 0
 
 
-@pytest.mark.parametrize("flags, named", [(["--epsilon", "0.01"], "--epsilon"), (["--cosines", "1", "0.5"], "--cosines"),
+@pytest.mark.parametrize("flags, named", [(["--epsilon", "0.01"], "--epsilon"),
+                                          (["--cosines", "1", "0.5"], "--cosines"),
                                           (["--model", "glass"], "--model"), (["--seed", "3"], "--seed")])
 def test_measuring_flags_beside_from_are_refused(written, capsys, flags, named):
     _refused(capsys, ["albedo-table", "--from", str(written / "T.nc"), *flags], named, "--from TABLE reads a table")

@@ -171,7 +171,8 @@ def test_a_long_walk_reaches_a_safe_point_between_launches_and_keeps_its_counts(
     safe_points = []
     launched = walk_counts(sphere, white, 12.7 * 1.001, 0.999, 300, actions=[6, 0], max_bounces=10**7,
                            safe_point=lambda: safe_points.append(1))
-    assert np.array_equal(whole["cross"], launched["cross"]) and whole["wall_reflections"] == launched["wall_reflections"]
+    assert np.array_equal(whole["cross"], launched["cross"])
+    assert whole["wall_reflections"] == launched["wall_reflections"]
     assert len(safe_points) > 10  # walks of hundreds of steps: many launches, a safe point after each
 
     def interrupted():

@@ -403,8 +403,9 @@ def read_fit(path: str | os.PathLike) -> FitResult:
 
 def check_candidates(fit: "FitResult") -> None:
     """
-    A fit read from a file, checked against itself (a record's own rule, run as it is read): what it claims (the verdicts, the
-    intervals, ``consistent``, the unconstrained flags) must be what its candidates give —
+    A fit read from a file, checked against itself (a record's own rule, run as it is read):
+    what it claims (the verdicts, the intervals, ``consistent``, the unconstrained flags) must
+    be what its candidates give —
     each candidate's verdict that of the finest reading of its values (s <= 1), the intervals
     :func:`~virtspec_mi.applications.fitting.inversion.intervals` of them. A file edited
     against its readings (an interval tightened by hand, ``consistent`` flipped) is refused,

@@ -199,7 +199,7 @@ def _edited_fit_files_are_refused(path, netcdf):
     low, high = data["intervals"][0]
     for edit, what in ((lambda d: d.update(intervals=[[low + 0.25 * (high - low), high]]), "intervals"),
                        (lambda d: d.update(consistent=not d["consistent"]), "consistent"),
-                       (lambda d: d.update(candidate_consistent=[True] * len(d["candidate_consistent"])), "verdict")):
+                       (lambda d: d.update(candidate_consistent=[1] * len(d["candidate_consistent"])), "verdict")):
         edited = json.loads(path.read_text())
         edit(edited)
         path.with_name("edited.json").write_text(json.dumps(edited))
@@ -209,7 +209,7 @@ def _edited_fit_files_are_refused(path, netcdf):
         tightened = dataset.load()
     tightened["intervals"].values[0, 0] = low + 0.25 * (high - low)
     tightened.to_netcdf(netcdf.with_name("edited.nc"))
-    with pytest.raises(ValueError, match="intervals .* disagrees"):
+    with pytest.raises(ValueError, match="intervals"):  # the variable edited against the result, or its candidates
         read_fit(netcdf.with_name("edited.nc"))
 
 

@@ -221,8 +221,10 @@ class FitResult(Record):
                                 "quantities": list(self.quantities), "candidate_stage": list(self.candidate_stage),
                                 "unconstrained": list(self.unconstrained)}
         for name in ("consistent", "statistic", "loss_name", "loss", "delta", "mu_fraction", "forward_mu", "rays",
-                     "traced_rays", "seconds", "specimen", "seed", "reading_delta", "search_wavelengths", "converged"):
+                     "traced_rays", "seconds", "specimen", "seed", "reading_delta", "search_wavelengths"):
             data[name] = getattr(self, name)
+        if not self.converged:  # stated only when false: a file of a settled fit is what it was before the field
+            data["converged"] = False
         for name in _ARRAYS:
             data[name] = _plain(getattr(self, name))
         for name in _SPECTRA:
@@ -242,7 +244,7 @@ class FitResult(Record):
                                                           "rays", "traced_rays", "seconds", "seed", "reading_delta",
                                                           "search_wavelengths")}
         attrs = {"version": self.version, "specimen": self.specimen, "loss_name": self.loss_name,
-                 "consistent": int(self.consistent), "converged": int(self.converged), **{k: (float(v) if isinstance(v, float) else int(v))
+                 "consistent": int(self.consistent), **({} if self.converged else {"converged": 0}), **{k: (float(v) if isinstance(v, float) else int(v))
                                                         for k, v in scalars.items()}}
         return xr.Dataset(
             {**spectra,

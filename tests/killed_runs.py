@@ -14,6 +14,17 @@ from pathlib import Path
 from virtspec_mi.engine.checkpoint import checkpoint_for
 
 
+def default_signals() -> None:
+    """
+    A ``preexec_fn``: the child starts with SIGINT and SIGTERM at their default disposition, whatever this
+    process has (``make test`` started as a background job from a script runs with SIGINT ignored, and a
+    child inherits that: a test sending SIGINT must not depend on it).
+    """
+
+    for signum in (signal.SIGINT, signal.SIGTERM):
+        signal.signal(signum, signal.SIG_DFL)
+
+
 def kill_then_resume(command: list[str], out: Path, readings: int, cwd: Path) -> None:
     """
     Run ``command`` (which writes ``out``), SIGKILL it once its checkpoint
@@ -44,7 +55,8 @@ def signal_when_kept(command: list[str], out: Path, signum: int, cwd: Path, igno
     """
 
     partial = checkpoint_for(out)
-    setup = (lambda: signal.signal(signal.SIGINT, signal.SIG_IGN)) if ignore_sigint else None
+    setup = (lambda: (default_signals(), signal.signal(signal.SIGINT, signal.SIG_IGN))) if ignore_sigint else \
+        default_signals
     process = subprocess.Popen(command, cwd=cwd, stderr=subprocess.PIPE, text=True, preexec_fn=setup)
     deadline = time.monotonic() + 300
     while not partial.exists() and process.poll() is None and time.monotonic() < deadline:

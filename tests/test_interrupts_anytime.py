@@ -25,6 +25,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from killed_runs import default_signals
+
 ROOT = Path(__file__).resolve().parents[1]
 LATENCY_S = 1.0
 """The promise: a signalled command has exited within a second."""
@@ -77,7 +79,8 @@ def loaded():
 
 def _interrupt(command: list[str], folder: Path, after: float, signum: int) -> tuple[int, str, float]:
     env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")])}
-    process = subprocess.Popen(command, cwd=folder, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    process = subprocess.Popen(command, cwd=folder, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                               preexec_fn=default_signals)
     assert process.stdout.read(1) == b"R", process.stderr.read()
     time.sleep(after)
     assert process.poll() is None, f"the run ended before the signal: {process.stderr.read()}"
@@ -224,7 +227,7 @@ def test_the_api_interrupted_at_a_random_moment_raises_keyboard_interrupt_to_the
     after = random.Random(f"api:{seed}").uniform(0.05, 1.2)  # 0.94, 0.2, 0.66, 0.52, 0.2, 0.59 s: imports too
     env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")])}
     process = subprocess.Popen([sys.executable, "-c", PROGRAM], cwd=tmp_path, env=env, stdout=subprocess.PIPE,
-                               stderr=subprocess.PIPE)
+                               stderr=subprocess.PIPE, preexec_fn=default_signals)
     assert process.stdout.read(1) == b"R"
     time.sleep(after)
     sent = time.monotonic()

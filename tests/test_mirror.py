@@ -25,10 +25,6 @@ COVERED_ELSEWHERE: dict[str, tuple[tuple[str, ...], str]] = {
     "virtspec_mi.applications.fitting": (
         ("tests/applications/test_applications.py", "tests/applications/fitting/test_inversion.py"),
         "its row (the contract test) and the lazy names vm.fit reaches"),
-    "virtspec_mi.applications.fitting.command": (
-        ("tests/applications/test_applications.py",
-         "tests/cli/test_applying.py", "tests/applications/fitting/test_inversion.py"),
-        "virtspec fit: the contract test, its flags' checks, test_cli_fit"),
     "virtspec_mi.applications.fitting.forward": (
         ("tests/applications/fitting/test_inversion.py", "tests/applications/fitting/test_search.py"),
         "the forward readings: common random numbers, the ResultStore a fit resumes from"),
@@ -50,10 +46,6 @@ COVERED_ELSEWHERE: dict[str, tuple[tuple[str, ...], str]] = {
     "virtspec_mi.applications.tables": (
         ("tests/applications/test_applications.py",),
         "its row: the contract test"),
-    "virtspec_mi.applications.tables.command": (
-        ("tests/applications/test_applications.py",
-         "tests/applications/tables/test_albedo.py", "tests/applications/tables/test_audit.py"),
-        "virtspec albedo-table: the contract test, test_cli_albedo_table, the audit's command line"),
     "virtspec_mi.applications.tables.engine_tables": (
         ("tests/applications/tables/test_audit.py", "tests/exchange/test_engine_models.py"),
         "each engine's tables, audited there"),

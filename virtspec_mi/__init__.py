@@ -10,6 +10,22 @@ working libLLVM, the ``llvm_ad_spectral`` variant and registers the plugins.
 
 from __future__ import annotations
 
+import sys as _sys
+
+if _sys.argv[:1] == ["-m"] or _sys.argv[0].replace("\\", "/").rsplit("/", 1)[-1] in ("virtspec", "virtspec.exe"):
+    # The virtspec command (python -m virtspec_mi, its console script): Ctrl-C taken from the package's first line,
+    # before any import (virtspec_mi.base.interrupts.stop_now, written here with what Python has already loaded):
+    # never Python's traceback, nor a KeyboardInterrupt swallowed inside an import lock's callback.
+    import os as _os
+    import signal as _signal
+
+    def _stop_now(signum: int, frame: Any) -> None:
+        _os.write(2, b"virtspec: interrupted\n" if signum == _signal.SIGINT else b"virtspec: terminated by SIGTERM\n")
+        _os._exit(128 + signum)
+
+    for _signum in (_signal.SIGINT, _signal.SIGTERM):
+        _signal.signal(_signum, _stop_now)
+
 import importlib
 from typing import Any
 

@@ -10,25 +10,17 @@ of the signal (130, 143): nothing is being written then.
 
 import atexit
 import os
-import signal
 import sys
 
+from virtspec_mi.base.interrupts import stopping_at_once
+
 __all__ = ["run"]
-
-
-def _stop_now(signum: int, frame: object) -> None:
-    """Outside the command: nothing to save, so stop at once (no traceback, the signal's exit status)."""
-
-    word = b"interrupted" if signum == signal.SIGINT else b"terminated by " + signal.Signals(signum).name.encode()
-    os.write(2, b"virtspec: " + word + b"\n")
-    os._exit(128 + signum)
 
 
 def run() -> None:
     """The ``virtspec`` command: :func:`virtspec_mi.cli.main` between two signal handlers that stop at once."""
 
-    for signum in (signal.SIGINT, signal.SIGTERM):
-        signal.signal(signum, _stop_now)
+    stopping_at_once()  # (already since the package's first line when run as the command: virtspec_mi/__init__.py)
     from virtspec_mi.cli import main
 
     status = main()

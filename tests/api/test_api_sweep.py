@@ -342,3 +342,14 @@ def test_a_resumed_sweep_says_so_on_stderr(diamond, monkeypatch, tmp_path, capsy
     monkeypatch.undo()
     vm.sweep(diamond, checkpoint=checkpoint, **kwargs)
     assert f"resumed from {checkpoint}: 3 of 10 readings reused" in capsys.readouterr().err
+
+
+def test_out_reaching_the_scene_file_is_refused_before_any_ray(mi, tmp_path):
+    """An output named through a link to the scene read (or the scene itself) never replaces it."""
+
+    scene = tmp_path / "s.xml"
+    scene.write_text((ROOT / "scenes" / "diamond_conical.xml").read_text())
+    (tmp_path / "o.nc").symlink_to(scene)
+    with pytest.raises(ValueError, match=r"out .*o.nc is scene .*s.xml, an input of this run"):
+        vm.sweep(str(scene), rays=100, out=tmp_path / "o.nc")
+    assert scene.read_text().startswith("<?xml")

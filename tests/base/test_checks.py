@@ -160,3 +160,11 @@ def test_public_bound_entries_still_check_what_users_give():
         with pytest.raises(ValueError, match=message):
             call()
     assert vm.hoeffding_rays("0.005", "0.01") == 105_967  # strings read as numbers, as everywhere
+
+
+def test_a_number_parameter_of_a_python_call_refuses_text():
+    with pytest.raises(ValueError, match=r"^epsilon must be a number, not text \(got '0.1'\); write epsilon=0.1$"):
+        checks.real("epsilon", "0.1")
+    with pytest.raises(ValueError, match="write delta=a number"):
+        checks.real("delta", "small")
+    assert checks.real("epsilon", np.float32(0.25)) == 0.25 and checks.real("epsilon", 1) == 1.0

@@ -246,3 +246,31 @@ def test_a_file_size_limit_is_named_and_leaves_the_old_files(tmp_path):
         small = hemispherical_grid().isel(wavelength=0, theta_i=0)
         assert vm.read_result(tmp_path / f"old{suffix}").as_dict() == small.as_dict()  # the old file, whole
     _no_temporaries(tmp_path)
+
+
+def test_no_output_may_be_an_input_or_another_output(tmp_path):
+    from virtspec_mi.base.files import check_distinct, same_file
+
+    measured = tmp_path / "measured.csv"
+    measured.write_text("wavelength,value\n")
+    (tmp_path / "link.json").symlink_to(measured)
+    os_link = tmp_path / "hard.csv"
+    os_link.hardlink_to(measured)
+    for alias in (measured, tmp_path / "." / "measured.csv", tmp_path / "link.json", os_link):
+        assert same_file(alias, measured)
+        with pytest.raises(ValueError, match=f"--out {alias} is MEASURED {measured}, an input of this run"):
+            check_distinct([("--out", alias)], [("MEASURED", measured)])
+    with pytest.raises(ValueError, match="one output would replace the other"):
+        check_distinct([("--out", tmp_path / "a.h"), ("--figure", str(tmp_path / "a.h"))])
+    check_distinct([("--out", tmp_path / "fit.json"), ("--plot", None)], [("MEASURED", measured), ("scene", {})])
+    assert not same_file(tmp_path / "new.nc", tmp_path / "other.nc")
+
+
+def test_a_long_path_is_shown_by_its_ends_and_length():
+    from virtspec_mi.base.files import WriteError, shown_path
+
+    assert shown_path("/tmp/x.nc") == "/tmp/x.nc"
+    long = "/tmp/" + "b" * 5000 + ".nc"
+    shown = shown_path(long)
+    assert len(shown) < 200 and shown.startswith("/tmp/bbb") and shown.endswith("b.nc (5,008 characters)")
+    assert "(5,008 characters)" in str(WriteError(long, "File name too long"))

@@ -28,7 +28,7 @@ from virtspec_mi.engine.checkpoint import checkpoint_for
 from virtspec_mi.base.interrupts import Interrupted
 from virtspec_mi.kernel import tracer
 
-from killed_runs import ROUGH_XML, signal_when_kept
+from killed_runs import ROUGH_XML, default_signals, signal_when_kept
 
 ROOT = Path(__file__).resolve().parents[2]
 LATENCY_S = 3.0
@@ -102,6 +102,43 @@ def test_the_api_takes_over_default_handlers_only_for_the_run():
     finally:
         for s, handler in before.items():
             signal.signal(s, handler)
+
+
+def test_a_signal_whose_interrupt_was_swallowed_still_stops_the_command_at_its_next_safe_point():
+    """A KeyboardInterrupt raised inside an import lock's weakref callback is "ignored" by Python: the fit ran on."""
+
+    def swallowed():
+        try:
+            _deliver(signal.SIGINT)
+        except Interrupted:
+            pass  # as Python does with an exception raised inside a weakref callback
+
+    with interrupts.catching():
+        swallowed()
+        with pytest.raises(Interrupted):
+            interrupts.check()  # the next safe point
+        interrupts.check()  # raised once
+        swallowed()
+        with pytest.raises(Interrupted):
+            with interrupts.deferred():  # a run that starts after it stops before it begins
+                raise AssertionError("the run began")
+    interrupts.check()  # the command over: nothing kept
+
+
+@pytest.mark.parametrize("argv0, taken", [("-m", True), ("/usr/bin/virtspec", True), ("/usr/bin/python", False)])
+def test_the_command_takes_ctrl_c_from_the_packages_first_line(argv0, taken):
+    """python -m virtspec_mi (argv[0] is '-m' while the package is found) and the console script, not a library user."""
+
+    code = (f"import sys, signal; sys.argv[0] = {argv0!r}; import virtspec_mi; "
+            "print(signal.getsignal(signal.SIGINT) is not signal.default_int_handler, "
+            "signal.getsignal(signal.SIGTERM) is not signal.SIG_DFL)")
+    run = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60,
+                         preexec_fn=default_signals)
+    assert run.stdout.split() == [str(taken)] * 2, run.stderr
+    stopped = subprocess.run([sys.executable, "-c", code.replace("print(", "import os; os.kill(os.getpid(), 2); print(")],
+                             capture_output=True, text=True, timeout=60, preexec_fn=default_signals)
+    if taken:
+        assert stopped.returncode == 130 and stopped.stderr == "virtspec: interrupted\n" and not stopped.stdout
 
 
 def test_exit_statuses():
@@ -283,7 +320,8 @@ def test_a_sweep_on_two_workers_stops_on_sigint_to_the_process_group(tmp_path):
     command = _cli("sweep", str(ROOT / "scenes" / "diamond_collimated.xml"), "--theta-i", "0:90:1", "--rays",
                    "20000000", "--chunk-size", "1048576", "--quiet", "--workers", "2", "--out", str(out))
     partial = checkpoint_for(out)
-    process = subprocess.Popen(command, cwd=tmp_path, stderr=subprocess.PIPE, text=True, start_new_session=True)
+    process = subprocess.Popen(command, cwd=tmp_path, stderr=subprocess.PIPE, text=True, start_new_session=True,
+                               preexec_fn=default_signals)
     deadline = time.monotonic() + 300
     while not partial.exists() and process.poll() is None and time.monotonic() < deadline:
         time.sleep(0.01)

@@ -237,3 +237,11 @@ def test_csv_plain_writes_a_spreadsheet_table_beside_the_result(tmp_path):
     same = virtspec("measure", "diamond_conical", "--out", str(tmp_path / "r.csv"), "--csv-plain",
                     str(tmp_path / "r.csv"))
     assert same.returncode == 1 and "is also --out" in same.stderr
+
+
+def test_a_very_long_file_name_is_not_echoed_whole(tmp_path):
+    long = "a" * 5000
+    result = virtspec("measure", long)
+    assert result.returncode == 1 and "Traceback" not in result.stderr
+    assert result.stderr.startswith("virtspec: error: File name too long: aaaa") and "(5,000 characters)" in \
+        result.stderr and len(result.stderr) < 300 and "[Errno" not in result.stderr

@@ -128,3 +128,17 @@ def test_sel_picks_a_parameter_point_and_an_angle_of_any_kind(files, capsys):
                                sweep.sel(theta_i=30, **{"specimen.thickness": 2e-4}).colour().XYZ)
     assert "--sel takes NAME=VALUE (got 'theta_i')" in one_line_error(capsys, "colour", lut, "--sel", "theta_i")
     assert "--sel theta_i takes a number (got 'x')" in one_line_error(capsys, "colour", lut, "--sel", "theta_i=x")
+
+
+def test_a_figure_never_replaces_the_file_it_draws(tmp_path, capsys):
+    """The figure's name reaching the result or the measured file (a link here) is refused before anything is read."""
+
+    result = hemispherical_grid().write(tmp_path / "r.json")
+    before = result.read_bytes()
+    (tmp_path / "fig.png").symlink_to(result)
+    err = one_line_error(capsys, "plot", result, "--out", tmp_path / "fig.png")
+    assert f"--out {tmp_path / 'fig.png'} is FILE {result}" in err
+    measured = write_measured(tmp_path / "m.csv", [400, 500], [0.2, 0.3])
+    (tmp_path / "cmp.svg").symlink_to(measured)
+    err = one_line_error(capsys, "compare", result, measured, "--plot", tmp_path / "cmp.svg")
+    assert "is MEASURED" in err and result.read_bytes() == before and measured.read_text().startswith("wavelength")

@@ -336,3 +336,12 @@ def test_sphere_correct_of_a_transmittance_reading_asks_for_the_sample_reflectan
     status, _, err = run(capsys, "sphere", SPHERE, "--measurement", "transmittance", "--theta-i", "0", "--rays", "500",
                          "--correct")
     assert status == 1 and err.startswith("virtspec: error: --correct: sample_reflectance is required")
+
+
+def test_a_figure_or_file_of_a_measuring_command_never_replaces_its_scene(capsys, tmp_path):
+    scene = tmp_path / "s.xml"
+    scene.write_text(open("scenes/diamond_conical.xml").read())
+    (tmp_path / "p.png").symlink_to(scene)
+    status, _, err = run(capsys, "measure", scene, "--rays", "100", "--plot", tmp_path / "p.png")
+    assert status == 1 and f"--plot {tmp_path / 'p.png'} is SCENE {scene}" in err
+    assert scene.read_text().startswith("<")

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import re
+
 import colour
 import numpy as np
 import pytest
@@ -62,3 +64,15 @@ def test_the_lab_box_is_the_exact_image_of_an_xyz_box():
                         for z in (lower[2], upper[2])])
     at_corners = np.asarray(colour.XYZ_to_Lab(corners / 100, WHITE))  # the extremes are reached there: exact
     assert np.allclose(at_corners.min(axis=0), box.lower) and np.allclose(at_corners.max(axis=0), box.upper)
+
+
+def test_what_is_not_a_colour_is_named_not_a_numpy_error():
+    from types import SimpleNamespace
+
+    from virtspec_mi.applications.targets.difference import colour_difference
+
+    band_result = SimpleNamespace(target=SimpleNamespace(kind="band"), colour=None)  # a band target's result
+    for other, shown in (("red", "'red': not a colour"), (band_result, "the result of a band target: not a colour"),
+                         ([[1, 2], 3], "list [[1, 2], 3]")):
+        with pytest.raises(ValueError, match=r"^b must be a certified colour .* \(got " + re.escape(shown)):
+            colour_difference([50.0, 0.0, 0.0], other)

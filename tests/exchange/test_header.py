@@ -95,3 +95,24 @@ def test_two_tables_headers_compile_in_one_translation_unit(table, tmp_path, com
     subprocess.run([compiler, *flags, source, "-o", "check"], cwd=tmp_path, check=True, capture_output=True)
     printed = subprocess.run([str(tmp_path / "check")], capture_output=True, text=True).stdout.split()
     assert [float(v) for v in printed] == [table.epsilon, other.epsilon]
+
+
+def test_a_published_array_that_is_not_numbers_is_named():
+    from virtspec_mi.exchange.header import read_table_values
+
+    with pytest.raises(ValueError, match=r"published must be an array of numbers .* \(got a list holding 'a'\)"):
+        read_table_values(["a"] * 6)
+
+
+@pytest.mark.parametrize("text, message", [
+    ("mu,alpha0.1,alpha0.5\n0.5,0.9,0.8\n", r"line 1: 'mu' is not a number \(a header row\?"),
+    ("0,9;0,8\n0,7;0,6\n", r"line 1: '0,9' is written with a decimal comma"),
+])
+def test_a_published_text_table_with_a_header_or_decimal_commas_is_refused(tmp_path, text, message):
+    from virtspec_mi.exchange.header import read_table_values
+
+    (tmp_path / "pub.csv").write_text(text)
+    with pytest.raises(ValueError, match=message):
+        read_table_values(tmp_path / "pub.csv")
+    (tmp_path / "ok.csv").write_text("# E over (mu, alpha)\n0.9, 0.8\n0.7 0.6\n")
+    assert read_table_values(tmp_path / "ok.csv").tolist() == [0.9, 0.8, 0.7, 0.6]

@@ -109,3 +109,51 @@ def test_a_broken_entry_point_is_left_out_with_a_warning(monkeypatch):
     assert "'broken' (no_such_module:Nothing) could not be loaded" in messages
     assert "takes the name 'sphere', already taken" in messages
     assert "'plain' (virtspec_mi.settings:Settings) is not a virtspec_mi Instrument class" in messages
+
+
+CLASH = '''\
+from typing import ClassVar
+
+from virtspec_mi.instruments.command import Command
+from virtspec_mi.instruments.hemispherical import Hemispherical
+
+
+class Clash(Hemispherical):
+    name: ClassVar[str] = "clash"
+    commands: ClassVar[tuple] = (Command("fit", "not the fit", "An outside subcommand named as a built-in one.",
+                                         ("virtspec fit x",), one_reading=True),
+                                 Command("measure", "not measure", "Another.", ("virtspec measure x",),
+                                         one_reading=True))
+'''
+
+
+def test_outside_packages_that_exit_or_take_a_builtin_name_are_left_out_and_the_tool_runs(monkeypatch, tmp_path):
+    """One that calls sys.exit(3) at import ended every command; one declaring `fit` or `measure` crashed --help."""
+
+    import virtspec_mi.base.entry_points as rows
+    from virtspec_mi.cli import build_parser
+    from virtspec_mi.cli.measuring import measuring_commands
+
+    (tmp_path / "exits_at_import.py").write_text("import sys\nsys.exit(3)\n")
+    (tmp_path / "raises_at_import.py").write_text("raise RuntimeError('broken outside package')\n")
+    (tmp_path / "clash_instrument.py").write_text(CLASH)
+    monkeypatch.syspath_prepend(str(tmp_path))
+    points = [EntryPoint("exits", "exits_at_import:Nothing", instruments.ENTRY_POINTS),
+              EntryPoint("raises", "raises_at_import:Nothing", instruments.ENTRY_POINTS),
+              EntryPoint("clash", "clash_instrument:Clash", instruments.ENTRY_POINTS)]
+    monkeypatch.setattr(rows, "entry_points", lambda group: points)
+    builtin = tuple(instruments.INSTRUMENTS.values())
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        found = instruments.discovered(builtin)
+        monkeypatch.setattr(instruments, "INSTRUMENTS", found)
+        rows = measuring_commands()
+        parser = build_parser()
+    messages = " | ".join(str(w.message) for w in caught)
+    assert "'exits' (exits_at_import:Nothing) could not be loaded: it exited (SystemExit 3); left out" in messages
+    assert "'raises' (raises_at_import:Nothing) could not be loaded: RuntimeError: broken outside package" in messages
+    assert "the outside instrument 'clash' (clash_instrument) declares the subcommand 'fit', which virtspec itself " \
+           "already has" in messages
+    assert "declares the subcommand 'measure', which hemispherical already has" in messages
+    assert "clash" in found and rows["measure"].instrument == "hemispherical" and "fit" not in rows
+    assert parser.parse_args(["bounds"]).command == "bounds"

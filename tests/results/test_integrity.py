@@ -270,3 +270,33 @@ def test_measure_json_output_is_sealed_and_checked(mi, tmp_path, capsys):
     data["reflected"][1] = 12.5
     path.write_text(json.dumps(data))
     _refused(path, r"'reflected' holds 12\.5 at index \[1\], not a whole number")
+
+
+# -- what a file states beside its counts ----------------------------------------------------------------------------
+
+
+def _at_first(key, value):
+    def edit(data):
+        entry = data[key]
+        while isinstance(entry[0], list):
+            entry = entry[0]
+        entry[0] = value
+
+    return edit
+
+
+@pytest.mark.parametrize("edit, message", [
+    (_at_first("rays_spent", 1), r"'rays_spent' states 1 at index \[0, 0, 0\] where the file's counts give 10000"),
+    (_at_first("certified_mu", 1e-6), r"'certified_mu' states 1e-06 at index \[0, 0, 0\] where the file's counts give"),
+    (_set("settings", "bound", "two-stage"), r"the settings say two-stage .* but the file holds no pilot counts"),
+])
+def test_a_certificate_edited_against_its_counts_is_refused(tmp_path, edit, message):
+    _refused(_written(hemispherical_grid(), tmp_path / "edited.json", edit), message)
+    vm.read_result(_written(hemispherical_grid(), tmp_path / "plain.json"))  # the file as written reads
+
+
+@pytest.mark.parametrize("value, message", [(0, r"options.standard must satisfy 0 < options.standard <= 1 \(got 0\)"),
+                                            (2.0, r"options.standard must satisfy 0 < options.standard <= 1"),
+                                            ("x", r"options.standard must be a number")])
+def test_a_sphere_file_with_an_impossible_standard_is_refused(tmp_path, value, message):
+    _refused(_written(sphere_grid(), tmp_path / "sphere.json", _set("options", "standard", value)), message)

@@ -54,6 +54,7 @@ __all__ = [
     "FLOAT32_MAX",
     "shown_value",
     "number",
+    "real",
     "check_mu",
     "check_delta",
     "check_rays",
@@ -173,6 +174,27 @@ def number(name: str, value: Any) -> float:
     if math.isnan(result):
         raise ValueError(f"{name} must be a number (got NaN)")
     return result
+
+
+def real(name: str, value: Any) -> float:
+    """
+    As :func:`number`, for a parameter of a Python call that takes a number and nothing
+    else: a string (``"0.1"``) is refused too, naming ``name`` (a command line's text is
+    turned into numbers by its parser, before the call).
+    """
+
+    if isinstance(value, (str, bytes)):
+        raise ValueError(f"{name} must be a number, not text (got {value!r}); write {name}={_unquoted(value)}")
+    return number(name, value)
+
+
+def _unquoted(value: str | bytes) -> str:
+    text = value.decode(errors="replace") if isinstance(value, bytes) else value
+    try:
+        float(text)
+    except ValueError:
+        return "a number"
+    return text.strip()
 
 
 def _normal(name: str, value: float, rule: str) -> float:

@@ -16,33 +16,46 @@ from __future__ import annotations
 
 import warnings
 from importlib.metadata import entry_points
+from typing import Any
 
 __all__ = ["discovered"]
+
+
+def _package(point: Any) -> str:
+    """``", package NAME"`` of an entry point, when its metadata says which (else nothing)."""
+
+    dist = getattr(point, "dist", None)
+    name = getattr(dist, "name", None) if dist is not None else None
+    return f", package {name}" if name else ""
 
 
 def discovered(group: str, builtin: tuple[type, ...], base: type) -> dict[str, type]:
     """
     The rows ``builtin`` and those of every installed package's entry point of ``group``,
-    by their ``name``. An entry point that cannot be loaded, is not a subclass of ``base``
-    or takes a name already taken is left out with a ``RuntimeWarning`` naming it (one
-    broken package does not stop the tool).
+    by their ``name``. An entry point that cannot be loaded (an import error, a
+    ``sys.exit()`` at import), is not a subclass of ``base`` or takes a name already taken
+    is left out with a ``RuntimeWarning`` naming it and its package (one broken package
+    does not stop the tool).
     """
 
     word = base.__name__
     found = {row.name: row for row in builtin}
     for point in entry_points(group=group):
+        named = f"{word.lower()} entry point {point.name!r} ({point.value}{_package(point)})"
         try:
             row = point.load()
-        except Exception as error:  # an outside package's import error: reported, not fatal
-            warnings.warn(f"{word.lower()} entry point {point.name!r} ({point.value}) could not be loaded: {error}",
-                          RuntimeWarning, stacklevel=3)
+        except KeyboardInterrupt:
+            raise
+        except BaseException as error:  # an outside package's import error, or its sys.exit(): reported, not fatal
+            cause = f"it exited (SystemExit {error.code!r})" if isinstance(error, SystemExit) else \
+                f"{type(error).__name__}: {error}"
+            warnings.warn(f"{named} could not be loaded: {cause}; left out", RuntimeWarning, stacklevel=3)
             continue
         if not (isinstance(row, type) and issubclass(row, base)):
-            warnings.warn(f"{word.lower()} entry point {point.name!r} ({point.value}) is not a virtspec_mi {word} "
-                          "class: left out", RuntimeWarning, stacklevel=3)
+            warnings.warn(f"{named} is not a virtspec_mi {word} class: left out", RuntimeWarning, stacklevel=3)
         elif row.name in found:
-            warnings.warn(f"{word.lower()} entry point {point.name!r} ({point.value}) takes the name {row.name!r}, "
-                          "already taken: left out", RuntimeWarning, stacklevel=3)
+            warnings.warn(f"{named} takes the name {row.name!r}, already taken: left out", RuntimeWarning,
+                          stacklevel=3)
         else:
             found[row.name] = row
     return found

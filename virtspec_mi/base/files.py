@@ -18,7 +18,10 @@ reaches the disk, written once:
   object itself attached (:attr:`WriteError.result`: a result whose file could not be
   written is not lost with the file).
 
-Nothing here removes a file or a directory it did not create. And one reader:
+Nothing here removes a file or a directory it did not create. :func:`check_distinct`: the
+one rule every command and API function that writes applies before any work — no output
+path may be (by its name, a symbolic link, a hard link or a case-insensitive file system)
+an input of the call or another output of it. And one reader:
 :func:`read_netcdf` (a NetCDF file whole in memory, or a ``ValueError`` naming the file
 and what it holds instead — never xarray's list of backends or a bare library text).
 
@@ -36,10 +39,10 @@ import shutil
 import uuid
 from contextlib import contextmanager
 from pathlib import Path
-from typing import Any, Callable, Iterator
+from typing import Any, Callable, Iterable, Iterator
 
 __all__ = ["WriteError", "IN_MEMORY", "atomic_file", "atomic_write", "cause_of", "temporary_name", "flush_directory",
-           "read_netcdf"]
+           "read_netcdf", "same_file", "check_distinct", "shown_path", "os_error_text"]
 
 _FULL = 1 << 20  # a write failing with less free space than this is reported as a full disk
 
@@ -62,7 +65,7 @@ class WriteError(OSError):
         self.filename = str(path)
 
     def _message(self) -> str:
-        return f"could not write {self.path}: {self.cause}" + (f"; {self.kept}" if self.kept else "")
+        return f"could not write {shown_path(self.path)}: {self.cause}" + (f"; {self.kept}" if self.kept else "")
 
     def __str__(self) -> str:
         return self._message()
@@ -72,6 +75,27 @@ class WriteError(OSError):
 
         return WriteError(self.path, self.cause, code=self.errno, kept=kept,
                           result=self.result if result is None else result)
+
+
+def shown_path(path: Any, limit: int = 160) -> str:
+    """
+    A path as a message shows it: whole up to ``limit`` characters, else its start and its
+    end around "…" and its length (a 5,000-character name is not echoed whole).
+    """
+
+    text = os.fsdecode(path) if isinstance(path, (bytes, os.PathLike)) else str(path)
+    if len(text) <= limit:
+        return text
+    return f"{text[:limit - 40]}…{text[-30:]} ({len(text):,} characters)"
+
+
+def os_error_text(error: OSError) -> str:
+    """An ``OSError`` in one line: its reason and the file(s) it names (:func:`shown_path`), never a bare errno."""
+
+    if error.strerror and error.filename is not None:
+        names = " -> ".join(shown_path(name) for name in (error.filename, error.filename2) if name is not None)
+        return f"{error.strerror}: {names}"
+    return str(error)
 
 
 def cause_of(error: BaseException, path: str | os.PathLike) -> tuple[str, int | None]:
@@ -191,6 +215,44 @@ def flush_directory(path: Path) -> None:
         _flush(path)
     except OSError:  # not every system opens or syncs directories
         pass
+
+
+def same_file(first: str | os.PathLike, second: str | os.PathLike) -> bool:
+    """
+    Whether two paths name one file: the same path once symbolic links are resolved, or
+    two existing paths of one file (a hard link, a case-insensitive file system).
+    """
+
+    if os.path.normcase(os.path.realpath(first)) == os.path.normcase(os.path.realpath(second)):
+        return True
+    try:
+        return os.path.samefile(first, second)
+    except OSError:  # one of them does not exist (yet): not the same file
+        return False
+
+
+def check_distinct(outputs: Iterable[tuple[str, Any]], inputs: Iterable[tuple[str, Any]] = ()) -> None:
+    """
+    Refuse (``ValueError``, before anything is measured or written) an output that would
+    replace an input of the same call or another of its outputs: ``outputs`` and
+    ``inputs`` are ``(name, path)`` pairs (the flag or parameter naming each: ``"--out"``,
+    ``"measured"``; a path ``None`` or not a path — an object, a dict — is left out).
+    """
+
+    def paths(pairs: Iterable[tuple[str, Any]]) -> list[tuple[str, Any]]:
+        return [(name, path) for name, path in pairs if isinstance(path, (str, os.PathLike)) and str(path)]
+
+    given, written = paths(inputs), []
+    for name, path in paths(outputs):
+        for other, source in given:
+            if same_file(path, source):
+                raise ValueError(f"{name} {path} is {other} {source}, an input of this run: writing it would "
+                                 f"replace what is being read; choose another name for {name}")
+        for other, earlier in written:
+            if same_file(path, earlier):
+                raise ValueError(f"{name} {path} is also {other} {earlier}: one output would replace the other; "
+                                 f"give each output its own name")
+        written.append((name, path))
 
 
 def read_netcdf(path: str | os.PathLike, what: str) -> Any:

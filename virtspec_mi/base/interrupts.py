@@ -21,7 +21,14 @@ point comes within about a second. The run then saves its checkpoint and raises
   handlers (main thread only): a SIGINT then comes out as Python's own
   ``KeyboardInterrupt`` (its message naming the checkpoint), a SIGTERM ends the process
   as it would have — each once the checkpoint is saved.
-- :func:`check` — a safe point: raises :class:`Interrupted` for a signal received.
+- :func:`check` — a safe point: raises :class:`Interrupted` for a signal received (and,
+  once more, for one raised where the program was: if that ``KeyboardInterrupt`` was
+  swallowed on its way — raised inside an import lock's callback, Python prints
+  "Exception ignored" and goes on — the run still stops here; so does a run that starts
+  after it, :func:`deferred`).
+- :func:`stop_now` / :func:`stopping_at_once` — the command's handler before its own
+  handling begins (from the first line of the package, when it is the ``virtspec``
+  command) and after it ends: one line and the signal's exit status, at once.
 
 A second signal while one waits for its safe point acts at once.
 """
@@ -36,7 +43,8 @@ from contextlib import contextmanager
 from pathlib import Path
 from typing import Any, Iterator
 
-__all__ = ["SIGNALS", "Interrupted", "catching", "deferred", "check", "exit_status", "received"]
+__all__ = ["SIGNALS", "Interrupted", "catching", "deferred", "check", "exit_status", "received", "stop_now",
+           "stopping_at_once"]
 
 SIGNALS: tuple[int, ...] = (signal.SIGINT, signal.SIGTERM)
 """The signals that stop a run."""
@@ -79,6 +87,27 @@ def exit_status(signum: int) -> int:
     return 128 + int(signum)
 
 
+def stop_now(signum: int, frame: Any) -> None:
+    """
+    The command's handler outside its own handling (while Python imports the package, while
+    it shuts down): nothing is being written, so stop at once — one line, the signal's exit
+    status, no traceback (a ``KeyboardInterrupt`` raised then can also be swallowed, inside
+    an import lock's callback, and the command run on to the end).
+    """
+
+    word = b"interrupted" if signum == signal.SIGINT else b"terminated by " + signal.Signals(signum).name.encode()
+    os.write(2, b"virtspec: " + word + b"\n")
+    os._exit(128 + signum)
+
+
+def stopping_at_once() -> None:
+    """SIGINT and SIGTERM handled by :func:`stop_now` (main thread only), whatever their disposition was."""
+
+    if _main_thread():
+        for signum in SIGNALS:
+            signal.signal(signum, stop_now)
+
+
 class _State:
     pending: int | None = None
     """A signal received inside a run, waiting for its safe point."""
@@ -89,6 +118,9 @@ class _State:
     received: int | None = None
     """The last signal received under :func:`catching` (kept: an interrupt raised inside an import or a C
     extension may come out as another error, e.g. ``SystemError``, or be swallowed by a library)."""
+    unanswered: int | None = None
+    """A signal whose :class:`Interrupted` was raised where the program was (outside a run): raised again at the
+    next safe point, in case it was swallowed on its way (inside an import lock's callback Python ignores it)."""
 
 
 def _handler(signum: int, frame: Any) -> None:
@@ -99,6 +131,8 @@ def _handler(signum: int, frame: Any) -> None:
         _State.pending = signum
         return
     _State.pending = None
+    if _State.catching:  # the command's: raised where the program is, and again at the next safe point if swallowed
+        _State.unanswered = signum
     raise Interrupted(signum)
 
 
@@ -114,15 +148,15 @@ def catching() -> Iterator[None]:
         yield
         return
     previous = {s: signal.getsignal(s) for s in SIGNALS}
+    _State.catching, _State.pending, _State.received, _State.unanswered = True, None, None, None  # none lost
     for s in SIGNALS:
         signal.signal(s, _handler)
-    _State.catching, _State.pending, _State.received = True, None, None
     try:
         yield
     finally:
         for s, handler in previous.items():
             signal.signal(s, handler)
-        _State.catching, _State.pending, _State.received = False, None, None
+        _State.catching, _State.pending, _State.received, _State.unanswered = False, None, None, None
 
 
 @contextmanager
@@ -133,6 +167,9 @@ def deferred() -> Iterator[None]:
     has cleaned up, with the status a SIGTERM gives.
     """
 
+    if _State.unanswered is not None:  # raised outside a run and swallowed on its way (an import's callback)
+        signum, _State.unanswered = _State.unanswered, None
+        raise Interrupted(signum)
     taken = []
     if not _State.catching and _main_thread():
         for s, default in ((signal.SIGINT, signal.default_int_handler), (signal.SIGTERM, signal.SIG_DFL)):
@@ -180,5 +217,8 @@ def check() -> None:
     """A safe point: raise :class:`Interrupted` if a signal was received (else nothing; microseconds)."""
 
     if _State.pending is not None:
-        signum, _State.pending = _State.pending, None
+        signum, _State.pending, _State.unanswered = _State.pending, None, None
+        raise Interrupted(signum)
+    if _State.unanswered is not None:  # raised outside a run and swallowed on its way: raised again, once
+        signum, _State.unanswered = _State.unanswered, None
         raise Interrupted(signum)

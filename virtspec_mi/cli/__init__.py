@@ -220,6 +220,10 @@ def main(argv: Sequence[str] | None = None) -> int:
                 parser.error(f"unrecognized arguments: {' '.join(extra)}{unrecognized_hint(args, extra)}")
         except KeyboardInterrupt as stop:
             return _interrupted(stop, argparse.Namespace(), exit_status)
+        from virtspec_mi.base.interrupts import received
+
+        if received() is not None:  # a Ctrl-C whose KeyboardInterrupt an import swallowed (its lock's callback)
+            return _interrupted(KeyboardInterrupt(received()), args, exit_status, received())
         return _command(args, exit_status)
 
 
@@ -231,13 +235,17 @@ def _command(args: argparse.Namespace, exit_status: Any) -> int:
     except KeyboardInterrupt as stop:  # Ctrl-C (SIGINT) or SIGTERM: virtspec_mi.base.interrupts.Interrupted
         return _interrupted(stop, args, exit_status)
     except Exception as error:
+        from virtspec_mi.base.files import WriteError, os_error_text
         from virtspec_mi.base.interrupts import received
 
         if received() is not None:  # an interrupt raised inside an import or a C extension comes out as another error
             return _interrupted(KeyboardInterrupt(received()), args, exit_status, received())
         if not isinstance(error, (ValueError, RuntimeError, OSError)):
             raise
-        print(f"virtspec: error: {_rescued(error)}", file=sys.stderr)
+        shown = _rescued(error)
+        if isinstance(shown, OSError) and not isinstance(shown, WriteError):  # its file named, shortened if long
+            shown = os_error_text(shown)
+        print(f"virtspec: error: {shown}", file=sys.stderr)
         return 1
 
 

@@ -154,12 +154,14 @@ def plot(args: argparse.Namespace) -> int:
 
     from virtspec_mi.api import parse_theta_i, parse_wavelengths
     from virtspec_mi.applications.comparison import compare
+    from virtspec_mi.base.files import check_distinct
     from virtspec_mi.results.plot import check_figure_path, select
 
     path = Path(args.file)
     against = Path(args.against) if args.against else None
     default = f"{path.stem}_vs_{against.stem}.png" if against is not None else f"{path.stem}.png"
     out = check_figure_path(args.out or path.with_name(default))
+    check_distinct([("--out" if args.out else "the figure", out)], [("FILE", path), ("--against", against)])
     theta_i = parse_theta_i(" ".join(args.theta_i)) if args.theta_i else None
     wavelengths = parse_wavelengths(" ".join(args.wavelengths)) if args.wavelengths else None
     result = selected(path, args.selections)

@@ -17,6 +17,7 @@ import argparse
 import functools
 import json
 import sys
+import warnings
 from contextlib import contextmanager
 from dataclasses import dataclass
 from typing import Any, Callable, Iterator, Sequence
@@ -69,12 +70,17 @@ def measuring_commands() -> dict[str, Measuring]:
     from virtspec_mi.instruments import INSTRUMENTS
 
     rows: dict[str, Measuring] = {}
-    for name, instrument in INSTRUMENTS.items():
+    for name, instrument in INSTRUMENTS.items():  # the built-in instruments first: theirs win
         for command in instrument.commands:
             if command.name in rows or command.name in other_commands():
                 owner = rows[command.name].instrument if command.name in rows else "virtspec itself"
-                raise ValueError(f"instrument {name!r} declares the subcommand {command.name!r}, which {owner} "
-                                 "already has: give it another name")
+                if instrument.__module__.split(".")[0] == "virtspec_mi":
+                    raise ValueError(f"instrument {name!r} declares the subcommand {command.name!r}, which {owner} "
+                                     "already has: give it another name")
+                warnings.warn(f"the outside instrument {name!r} ({instrument.__module__}) declares the subcommand "
+                              f"{command.name!r}, which {owner} already has: that subcommand left out (give it "
+                              "another name)", RuntimeWarning, stacklevel=2)
+                continue
             rows[command.name] = Measuring(name, command)
     return rows
 
@@ -218,6 +224,7 @@ def keywords_of(args: argparse.Namespace, command: Measuring) -> dict[str, Any]:
     figures' suffixes, one reading for ``measure``, no parameter sweep to draw.
     """
 
+    from virtspec_mi.base.files import check_distinct
     from virtspec_mi.results.io import check_output, check_plain_csv
     from virtspec_mi.results.plot import check_figure_path
 
@@ -230,6 +237,8 @@ def keywords_of(args: argparse.Namespace, command: Measuring) -> dict[str, Any]:
     figures = {figure.flag: getattr(args, dest(figure.flag), None) for figure in command.command.all_figures()}
     for flag, path in figures.items():
         flagged(flag, check_figure_path, path)
+    check_distinct([("--out", out), ("--csv-plain", args.csv_plain), *figures.items()],  # none over the scene
+                   [("SCENE", getattr(args, "scene", None))])
     settings = given(args, settings_options(), several=several(command), hint=one_angle(args.command))
     options = instrument_options(command)
     parameters = parsed_parameters(pairs(args.params, "--param"))

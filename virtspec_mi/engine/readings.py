@@ -305,7 +305,7 @@ def _fixed(bench: Any, readings: Sequence[tuple[float, float, float]], settings:
             on_chunk(readings_done)
 
     return tracer.tally_readings(bench, plans, offsets=offsets, hook=hook, on_chunk=chunk_done,
-                                 **kernel_options(settings))
+                                 safe_point=interrupts.check, **kernel_options(settings))
 
 
 def _two_stage(bench: Any, readings: Sequence[tuple[float, float, float]], plan: Plan, offsets: np.ndarray | None,

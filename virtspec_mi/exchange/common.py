@@ -26,6 +26,8 @@ import os
 from pathlib import Path
 from typing import Callable, Iterable
 
+from virtspec_mi.base.files import same_file
+
 __all__ = ["check_companions", "derived_seed"]
 
 
@@ -40,12 +42,12 @@ def check_companions(output: str | os.PathLike, companions: Iterable[str | os.Pa
     """
 
     output = Path(output)
-    taken = {os.path.realpath(path) for path in inputs if Path(path).exists()}
+    taken = [path for path in inputs if isinstance(path, (str, os.PathLike)) and Path(path).exists()]
     for companion in map(Path, companions):
-        real = os.path.realpath(companion)
-        if real in taken or real == os.path.realpath(output):
+        an_input = any(same_file(companion, path) for path in taken)
+        if an_input or same_file(companion, output):
             raise ValueError(f"{output}: its companion file {companion} would replace "
-                             f"{'an input of this run' if real in taken else 'the output itself'}; choose another "
+                             f"{'an input of this run' if an_input else 'the output itself'}; choose another "
                              "output name")
         if companion.is_dir() or (companion.exists() and not overwrite and not ours(companion)):
             raise ValueError(f"{output}: its companion file {companion} already exists and was not written by "

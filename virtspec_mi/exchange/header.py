@@ -153,6 +153,48 @@ def _text(path: Path) -> str:
                          ".nc, .csv/.txt of numbers or a C/C++ header") from None
 
 
+_DECIMAL_COMMA = re.compile(r"[-+]?\d+,\d+(?:[eE][-+]?\d+)?")
+
+
+def _text_values(path: Path) -> np.ndarray:
+    """
+    Every number of a ``.csv`` / ``.txt`` table (fields separated by commas, semicolons, tabs
+    or spaces; ``#`` comments): a line holding anything else — a header row, a word — or a
+    number written with a decimal comma (``0,52`` between semicolons or tabs) is refused
+    naming the line, never read as numbers (a header's ``alpha0.1`` is no cell).
+    """
+
+    values: list[float] = []
+    for number, raw in enumerate(_text(path).splitlines(), 1):
+        line = raw.split("#", 1)[0].strip()
+        if not line:
+            continue
+        if ";" in line or "\t" in line:
+            fields = [f.strip() for f in re.split(r"[;\t]", line) if f.strip()]
+            comma = next((f for f in fields if _DECIMAL_COMMA.fullmatch(f)), None)
+            if comma is not None:
+                raise ValueError(f"published table {path.name}, line {number}: {comma!r} is written with a decimal "
+                                 "comma; write decimal points (0.52)")
+        else:
+            fields = [f for f in re.split(r"[,\s]+", line) if f]
+        for field in fields:
+            if _NUMBER.fullmatch(field) is None and field.lower() not in ("nan", "inf", "-inf", "+inf"):
+                raise ValueError(f"published table {path.name}, line {number}: {field!r} is not a number (a header "
+                                 "row? comment it out with #); the file holds the table's values only")
+            values.append(float(field))
+    return np.array(values, dtype=np.float64)
+
+
+def _sample(values: Any) -> str:
+    """What a sequence that is not numbers holds: its first non-number, shown short."""
+
+    for value in np.asarray(values, dtype=object).ravel()[:1000]:
+        if isinstance(value, (str, bytes)) or not np.isscalar(value):
+            text = repr(value)
+            return text if len(text) <= 40 else text[:37] + "..."
+    return "values that are not numbers"
+
+
 def read_table_values(published: Any, array: str | None = None, expected: int | None = None) -> np.ndarray:
     """
     The numbers of a published table, flat in the file's order.
@@ -170,7 +212,11 @@ def read_table_values(published: Any, array: str | None = None, expected: int | 
     """
 
     if isinstance(published, np.ndarray) or isinstance(published, (list, tuple)):
-        values = np.asarray(published, dtype=np.float64).ravel()
+        try:
+            values = np.asarray(published, dtype=np.float64).ravel()
+        except (TypeError, ValueError):
+            raise ValueError(f"published must be an array of numbers (one per cell), a file of one, or a table's .nc "
+                             f"(got a {type(published).__name__} holding {_sample(published)})") from None
     elif isinstance(published, (str, os.PathLike)):
         path = Path(published)
         if not path.is_file():
@@ -190,8 +236,7 @@ def read_table_values(published: Any, array: str | None = None, expected: int | 
                 raise ValueError(f"variable {name!r} is not in {path.name} (it holds: {', '.join(dataset.data_vars)})")
             values = np.asarray(dataset[name].values, dtype=np.float64).ravel()
         elif suffix in (".csv", ".txt"):
-            text = "\n".join(line.split("#", 1)[0] for line in _text(path).splitlines())
-            values = np.array([float(x) for x in _NUMBER.findall(text)], dtype=np.float64)
+            values = _text_values(path)
         elif suffix in (".h", ".hpp", ".c", ".cpp", ".cc", ".inc"):
             values = _header_values(_text(path), array)
         else:

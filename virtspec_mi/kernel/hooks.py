@@ -65,6 +65,10 @@ class ChunkRays:
     ray_index : callable
         ``ray_index(position, slot)``: the low word of the global ray index (the random
         numbers' counter) of the rays at lane positions ``position`` of readings ``slot``.
+    safe_point : callable or None
+        Called by a hook that runs its own kernels between two of them (a long walk launched
+        in parts): where the caller honours an interrupt (the engine's
+        ``virtspec_mi.base.interrupts.check``); ``None``: nothing to call.
     """
 
     lanes: dict
@@ -74,6 +78,7 @@ class ChunkRays:
     specimen: Any
     column: Callable[[np.ndarray, Any, Any], Any]
     ray_index: Callable[[Any, Any], Any]
+    safe_point: Callable[[], None] | None = None
 
 
 class ExitHook:

@@ -137,6 +137,7 @@ def tally_readings(
     bench: Any, plans: list[ReadingPlan], *, seed: int, chunk_size: int, beam: str, sampling: str,
     offsets: Any = None, hook: ExitHook | None = None, on_chunk: Callable[[int], None] | None = None,
     walk: WalkQueue = WalkQueue(), walk_stats: dict | None = None, chunk_seconds: float | None = CHUNK_SECONDS,
+    safe_point: Callable[[], None] | None = None,
 ) -> KernelTally:
     """
     Trace every reading of ``plans`` on ``bench`` (an object with ``bsdf``, ``geometry``
@@ -157,7 +158,9 @@ def tally_readings(
     reached within about a second even for slow walks. ``seed``, ``beam``
     (``conical``, ``collimated``, ``diffuse``) and ``sampling`` (``jittered``,
     ``random``, ``concentric``) are the settings of those names. ``on_chunk`` (optional)
-    is called after every chunk with the number of readings completed so far.
+    is called after every chunk with the number of readings completed so far;
+    ``safe_point`` (optional) is handed to a hook that launches kernels of its own within a
+    chunk (:attr:`~virtspec_mi.kernel.hooks.ChunkRays.safe_point`: a sphere walk's parts).
 
     ``hook`` (optional, :mod:`virtspec_mi.kernel.hooks`): every ray also gets the hook's
     bin code, tallied per reading into ``bins`` (readings, K) without atomics (32-bit
@@ -192,7 +195,7 @@ def tally_readings(
             np.searchsorted(starts, first + size, side="left"),
         )
         began = time.perf_counter()
-        kernel.run(RaySource(kernel, first, size, slots, starts, offsets), tally)
+        kernel.run(RaySource(kernel, first, size, slots, starts, offsets), tally, safe_point)
         pace.update(size, time.perf_counter() - began)
         first += size
         if on_chunk is not None:  # how many readings are complete (for a progress bar)
@@ -341,7 +344,7 @@ class _Kernel:
 
     # -- one chunk ---------------------------------------------------------------------
 
-    def run(self, source: RaySource, tally: KernelTally) -> None:
+    def run(self, source: RaySource, tally: KernelTally, safe_point: Callable[[], None] | None = None) -> None:
         """
         Add the tallies of the chunk's packed lanes (``source``) to its readings
         (``source.slots``) of ``tally``: fate counts, and with a hook its bins and sums.
@@ -357,7 +360,8 @@ class _Kernel:
             slot = lanes["slot"]
             exits = hook.exits(ChunkRays(lanes=lanes, slot=slot, root=source.root,
                                          wavelengths=source.rows[:, WAVELENGTH], specimen=self.specimen,
-                                         column=source.column, ray_index=source.ray_index))
+                                         column=source.column, ray_index=source.ray_index,
+                                         safe_point=safe_point))
             lanes["bin"], sums = exits
         fate = lanes["fate"]
         # Two 32-bit counts per UInt64 lane: (reflected, transmitted), (specular, regular).

@@ -75,6 +75,7 @@ __all__ = [
     "reading_at",
     "check_result",
     "check_settings",
+    "agree_stored",
     "CHECKSUM",
     "checksum",
     "sealed_text",
@@ -469,6 +470,10 @@ def check_settings(result: Any, sized: bool = True) -> None:
     if sized and getattr(settings, "rays", 0) is None and rays.size and np.any(rays * float(settings.mu) <= 1.0):
         raise ValueError(f"mu = {float(settings.mu):g} ({settings.bound}) cannot be certified with "
                          f"{int(rays.min()):,} rays a reading (no rule holds a fraction within mu with N <= 1/mu)")
+    adaptive = getattr(settings, "adaptive", False)
+    if adaptive and hasattr(result, "pilot") and result.pilot is None:  # two-stage: sized by a pilot, which it keeps
+        raise ValueError(f"the settings say {settings.bound} (each reading sized by a pilot batch) but the file holds "
+                         "no pilot counts: its certificate (mu) would rest on nothing it shows")
 
 
 # -- 6. agreement ---------------------------------------------------------------------
@@ -518,6 +523,26 @@ def agree_values(name: str, theirs: Any, ours: Any, what: str = "variable") -> N
     """``ValueError`` naming ``what`` ``name`` and the first entry where a file's values differ from the result's."""
 
     _agree_values(name, np.asarray(theirs), np.asarray(ours), what)
+
+
+def agree_stored(name: str, stated: Any, computed: Any, exact: bool = False) -> None:
+    """
+    Rule 6 for a value a file states beside the counts it is rebuilt from (a JSON object's
+    ``rays_spent``, ``certified_mu``): it must be what the counts give — exactly for counts,
+    to 1e-9 relative for a derived number (its text form's rounding); NaN (null) only
+    where the counts give NaN. Else ``ValueError`` naming the field, the index and both values.
+    """
+
+    stated = np.atleast_1d(np.asarray(stated, dtype=np.float64))
+    computed = np.atleast_1d(np.asarray(computed, dtype=np.float64))
+    both_nan = np.isnan(stated) & np.isnan(computed)
+    close = stated == computed if exact else np.isclose(stated, computed, rtol=1e-9, atol=0.0)
+    same = both_nan | close
+    if not np.all(same):
+        index = tuple(int(i) for i in np.argwhere(~same)[0])
+        raise ValueError(f"{_quoted(name)} states {_plain_number(stated[index])!r} at index {list(index)} where the "
+                         f"file's counts give {_plain_number(computed[index])!r} (the file was edited against its "
+                         "counts)")
 
 
 def _agree_values(name: str, theirs: np.ndarray, ours: np.ndarray, what: str) -> None:

@@ -41,8 +41,8 @@ from virtspec_mi.budgets.intervals import clopper_pearson
 from virtspec_mi.results.base import ResultBase, attribute, per_count, plain_data, round_up, span
 from virtspec_mi.results.figures import Figure, spectra, sweep
 from virtspec_mi.results.variables import Variable, bounds
-from virtspec_mi.results.integrity import (CountRules, check_counts, check_shapes, field_value, optional_numbers,
-                                           reading_at, whole_counts)
+from virtspec_mi.results.integrity import (CountRules, agree_stored, check_counts, check_shapes, field_value,
+                                           optional_numbers, reading_at, whole_counts)
 from virtspec_mi.settings import Settings
 
 __all__ = ["Result", "plain_data", "COUNT_RULES", "fluctuation"]
@@ -539,13 +539,25 @@ class Result(ResultBase):
         )
 
     def _check_stored(self, data: Mapping[str, Any]) -> None:
-        """The ``absorbed`` counts a JSON object holds (its own, and its pilot's) are the rest of the rays."""
+        """
+        The ``absorbed`` counts a JSON object holds (its own, and its pilot's) are the rest of the rays; the
+        ``rays_spent`` it states are its rays and its pilot's, and the ``certified_mu`` it states the tolerance its
+        counts give (:attr:`certified_mu`): a certificate edited against its counts is refused.
+        """
 
         for group, counts, source in (("", self.counts, data), ("pilot", self.pilot, data.get("pilot"))):
             if counts is not None and isinstance(source, Mapping) and "absorbed" in source:
                 stored = whole_counts(source["absorbed"], "absorbed")
                 check_shapes({"absorbed": (self.dims, stored)}, self.sizes)
                 check_counts(group, {**counts.as_dict(), "absorbed": stored}, _STORED, reading_at(self.dims, self.coords))
+        if data.get("rays_spent") is not None:
+            spent = whole_counts(data["rays_spent"], "rays_spent")
+            check_shapes({"rays_spent": (self.dims, spent)}, self.sizes)
+            agree_stored("rays_spent", spent, self.rays_spent, exact=True)
+        if data.get("certified_mu") is not None:
+            stated = optional_numbers(data["certified_mu"], "certified_mu")
+            check_shapes({"certified_mu": (self.dims, stated)}, self.sizes)
+            agree_stored("certified_mu", stated, self.certified_mu)
 
     def _count_groups(self) -> list[tuple[str, Mapping[str, np.ndarray], CountRules, tuple[str, ...]]]:
         groups = [("", self.counts.as_dict(), COUNT_RULES, self.dims)]

@@ -55,7 +55,7 @@ from virtspec_mi.results.formats import TABLE_ATTRIBUTE, annotate, format_parts
 from virtspec_mi.results.integrity import CHECKSUM, checksum
 
 __all__ = ["SUFFIX", "CHUNK_READINGS", "WRITE_EVERY", "ZarrTable", "regions", "write_result", "read", "is_table",
-           "as_plain", "check_store", "replace_store"]
+           "as_plain", "check_store", "replace_store", "unfinished"]
 
 SUFFIX: str = ".zarr"
 """The suffix of a Zarr result store."""
@@ -325,6 +325,20 @@ def read(path: str | os.PathLike) -> Any:
     if done.dtype.kind != "b" or not done.all():
         raise ValueError(f"is incomplete: {int(np.sum(done == 1))} of {done.size} readings done")
     return dataset
+
+
+def unfinished(path: str | os.PathLike) -> bool:
+    """
+    Whether ``path`` is a store a sweep of this project began and did not finish before
+    any reading was done (interrupted then, it keeps no checkpoint): it holds attributes,
+    but neither a table's nor a whole result's. Such a store is measured again, never refused.
+    """
+
+    path = Path(path)
+    if not path.is_dir():
+        return False
+    attributes = _root_attributes(path)
+    return bool(attributes) and TABLE_ATTRIBUTE not in attributes and "result_json" not in attributes
 
 
 def is_table(dataset: Any) -> bool:

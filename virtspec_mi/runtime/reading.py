@@ -33,7 +33,7 @@ import numpy as np
 
 from virtspec_mi.base import interrupts
 from virtspec_mi.base.checks import parse_theta_i
-from virtspec_mi.base.files import WriteError
+from virtspec_mi.base.files import WriteError, check_distinct
 from virtspec_mi.engine.bench import Bench
 from virtspec_mi.engine.checkpoint import checkpoint_for, claim, kept_in, remove
 from virtspec_mi.engine.parameters import parameter_space
@@ -132,6 +132,7 @@ def _keyed(name: str, what: str, scene: LoadedScene, settings: Settings, options
     if out is not None:
         check_output(out)
         checkpoint = checkpoint if checkpoint is not None else checkpoint_for(out)
+    check_distinct([("out", out), ("checkpoint", checkpoint)], [("scene", scene.given)])  # never over the scene file
     bench = scene.bench
     space = parameter_space(bench, parameters or {}, points=true_or_false("points")(points))
     angles = incidence_angles(settings, theta_i, what)

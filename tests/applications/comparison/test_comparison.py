@@ -306,3 +306,26 @@ def test_cli_compare_plot_and_colour_json(dark_skin, patch_csv, tmp_path):
     assert colour_["hex"].startswith("#") and len(colour_["hex"]) == 7 and colour_["coverage"] > 0.99
     printed = virtspec("compare", path, str(tmp_path / "missing.csv"))
     assert printed.returncode == 1 and "virtspec: error: measured file not found" in printed.stderr
+
+
+@pytest.mark.parametrize("text, message", [
+    ("wavelength,reflectance\n400,0.2\n500,\n600,0.4\n", r"bad.csv, line 3: no reflectance value \(empty or NaN"),
+    ("400,0.2\n500,nan\n600,nan\n", r"line 2: no reflectance value .* and 1 more such rows"),
+    ("wavelength,reflectance,uncertainty\n400,0.2,0.01\n500,0.3,\n", r"line 3: no uncertainty"),
+    ("400;500\n400;0,5\n500;0,6\n", r"line 1: '400,500' holds wavelengths where the other rows hold values"),
+    ("wavelength,transmittance\n400,0.2\n500,0.3\n", r"bad.csv holds transmittance, no reflectance column"),
+])
+def test_gaps_and_headers_of_numbers_are_refused_by_line_never_dropped(tmp_path, text, message):
+    (tmp_path / "bad.csv").write_text(text)
+    with pytest.raises(ValueError, match=message):
+        read_measured(tmp_path / "bad.csv")
+
+
+def test_a_netcdf_spectrum_with_nan_is_refused_by_wavelength(tmp_path):
+    import xarray as xr
+
+    values = np.array([0.2, np.nan, 0.4])
+    xr.Dataset({"reflectance": ("wavelength", values)}, coords={"wavelength": [400.0, 500.0, 600.0]}).to_netcdf(
+        tmp_path / "m.nc")
+    with pytest.raises(ValueError, match=r"m.nc: reflectance is NaN at 1 wavelength \(the first 500 nm, index 1\)"):
+        read_measured(tmp_path / "m.nc")

@@ -57,11 +57,24 @@ def test_round_trip_recovers_the_leaf_inside_its_confidence_set():
 
 def test_a_planted_bias_makes_an_inconsistent_fit():
     truth = {"Cab": 40.0, "Cm": 0.01}
+    # the last stage needs room for a move beyond its simplex (2 + 2 readings) to settle: (8, 4, 2) has none
     result = vm.fit(synthetic(truth, 0.01, seed=2, bias=0.05), "prospect_d", {"Cab": (10, 90), "Cm": (0.002, 0.02)},
-                    delta=0.1, **FAST)
-    assert not result.consistent
+                    delta=0.1, **dict(FAST, evaluations=(8, 4, 4)))
+    assert not result.consistent and result.converged
     assert np.all(np.isnan(result.intervals))
     assert "INCONSISTENT" in result.summary()
+
+
+def test_a_search_out_of_budget_says_it_did_not_converge_not_inconsistent(tmp_path):
+    """Data the model made, a search with no budget: no consistent candidate found, and no verdict on the model."""
+
+    result = vm.fit(synthetic({"Cab": 75.0, "Cm": 0.017}, 0.005, seed=3), "prospect_d",
+                    {"Cab": (10, 90), "Cm": (0.002, 0.02)}, delta=0.1,
+                    **dict(FAST, evaluations=(0, 0, 0), table_points=2, profile_points=0, confirm=False))
+    assert not result.consistent and not result.converged
+    summary = result.summary()
+    assert "NOT CONVERGED" in summary and "INCONSISTENT" not in summary and "--evaluations" in summary
+    assert read_fit(result.write(tmp_path / "fit.json")).converged is False
 
 
 def test_data_that_do_not_see_a_parameter_leave_it_unconstrained():
@@ -116,6 +129,30 @@ def test_bad_input_is_refused_by_name():
         vm.fit(measured, "prospect_d", {"Cab": (10, 80)}, wavelengths=[420.0, 2400.0])
 
 
+def test_a_fit_interrupted_in_its_table_stage_resumes(tmp_path, monkeypatch):
+    """Stopped before the table's first reading it said "nothing to resume", then refused its own table forever."""
+
+    import virtspec_mi.base.interrupts as interrupts
+    from virtspec_mi.kernel import tracer
+
+    real, calls = tracer.tally_readings, []
+
+    def stopped_once(*args, **kwargs):
+        calls.append(1)
+        if len(calls) == 1:
+            raise interrupts.Interrupted()
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(tracer, "tally_readings", stopped_once)
+    measured, options = synthetic({"Cab": 45.0}, 0.02, seed=6), dict(FAST, evaluations=(2, 1, 1), profile_points=0,
+                                                                   confirm=False)
+    with pytest.raises(KeyboardInterrupt):
+        vm.fit(measured, "prospect_d", {"Cab": (10, 90)}, delta=0.1, directory=tmp_path / "work", **options)
+    assert (tmp_path / "work" / "table.zarr").exists()
+    resumed = vm.fit(measured, "prospect_d", {"Cab": (10, 90)}, delta=0.1, directory=tmp_path / "work", **options)
+    assert resumed.candidate_stage.count("table") == FAST["table_points"]
+
+
 def test_a_fit_resumes_from_its_directory_and_reuses_its_table(tmp_path):
     truth = {"Cab": 30.0}
     measured = synthetic(truth, 0.02, seed=5)
@@ -151,6 +188,30 @@ def test_fit_files_and_figure(tmp_path):
     assert (tmp_path / "fit.png").stat().st_size > 10_000
     with pytest.raises(ValueError, match="a fit is written as .nc, .json"):
         result.write(tmp_path / "fit.csv")
+    _edited_fit_files_are_refused(tmp_path / "fit.json", tmp_path / "fit.nc")
+
+
+def _edited_fit_files_are_refused(path, netcdf):
+    """A fit file edited against its own candidates (an interval tightened, ``consistent`` flipped) is refused."""
+
+    import xarray as xr
+
+    data = json.loads(path.read_text())
+    low, high = data["intervals"][0]
+    for edit, what in ((lambda d: d.update(intervals=[[low + 0.25 * (high - low), high]]), "intervals"),
+                       (lambda d: d.update(consistent=not d["consistent"]), "consistent"),
+                       (lambda d: d.update(candidate_consistent=[1] * len(d["candidate_consistent"])), "verdict")):
+        edited = json.loads(path.read_text())
+        edit(edited)
+        path.with_name("edited.json").write_text(json.dumps(edited))
+        with pytest.raises(ValueError, match=f"edited.json: .*{what}.* disagrees with the fit's own candidates"):
+            read_fit(path.with_name("edited.json"))
+    with xr.open_dataset(netcdf) as dataset:
+        tightened = dataset.load()
+    tightened["intervals"].values[0, 0] = low + 0.25 * (high - low)
+    tightened.to_netcdf(netcdf.with_name("edited.nc"))
+    with pytest.raises(ValueError, match="intervals"):  # the variable edited against the result, or its candidates
+        read_fit(netcdf.with_name("edited.nc"))
 
 
 def test_the_specimen_is_loaded_once_for_every_forward_reading(monkeypatch):
@@ -212,3 +273,17 @@ def test_the_table_on_two_dask_workers_gives_the_same_fit():
     there = vm.fit(measured, "prospect_d", {"Cab": (10, 90)}, delta=0.1, workers=2, **FAST)
     np.testing.assert_array_equal(there.candidate_statistic, here.candidate_statistic)
     np.testing.assert_array_equal(there.intervals, here.intervals)
+
+
+def test_one_value_column_is_not_both_quantities(tmp_path):
+    """--quantity both with a file of one value column: refused, never its reflectance used as the transmittance."""
+
+    from virtspec_mi.applications.fitting.problem import fit_problem
+
+    (tmp_path / "one.csv").write_text("400,0.2,0.01\n500,0.3,0.01\n600,0.35,0.01\n")
+    with pytest.raises(ValueError, match=r"one.csv holds one value column: it cannot be both the "
+                                         "reflectance and the transmittance"):
+        fit_problem(tmp_path / "one.csv", "prospect_d", {"Cab": (10, 90)}, quantities=("reflectance", "transmittance"))
+    (tmp_path / "R.csv").write_text("wavelength,reflectance,uncertainty\n400,0.2,0.01\n500,0.3,0.01\n")
+    with pytest.raises(ValueError, match="R.csv holds reflectance, no transmittance column"):
+        fit_problem(tmp_path / "R.csv", "prospect_d", {"Cab": (10, 90)}, quantities=("reflectance", "transmittance"))

@@ -186,3 +186,16 @@ def test_full_basis_file_passes_radiance(mi, tmp_path):
     assert m.counts.shape == (2, 1, 145, 2, 145)
     report = check_klems(path, reader="pyradiance")
     assert report["passed"] and report["checked"] == 580
+
+
+def test_wavelengths_without_photopic_weight_are_refused_before_any_ray(tmp_path, monkeypatch):
+    import virtspec_mi.runtime.reading as reading
+
+    def traced(*args, **kwargs):
+        raise AssertionError("rays were traced before the Visible block's weights were checked")
+
+    monkeypatch.setattr(reading, "take", traced)
+    with pytest.raises(ValueError, match="wavelengths 1000, 1100 nm carry no photopic weight"):
+        klems_measure("diamond_collimated", basis="quarter", wavelengths=[1000, 1100], rays=100,
+                      out=tmp_path / "ir.xml")
+    assert list(tmp_path.iterdir()) == []

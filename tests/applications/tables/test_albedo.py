@@ -263,3 +263,55 @@ def test_the_cosines_are_cosines_and_mu_keeps_one_meaning(capsys):
     assert main(["albedo-table", "--engine", "none", "--mu", "1,0.5", "--alpha", "0.3"]) == 1
     err = capsys.readouterr().err
     assert "--mu: the cosines of incidence are --cosines" in err and "a table's is --epsilon" in err
+
+
+def test_an_engine_order_table_compared_with_its_own_file_is_flagged_nowhere(mi, tmp_path):
+    """Unreal's memory order is [roughness][mu]: the file's canonical (mu, alpha) array is put in it, by any name."""
+
+    table = albedo_table("conductor", engine="unreal", fresnel="split", parts=True, epsilon=0.2, average=False,
+                         progress=False)
+    assert table.order == ("alpha", "mu")
+    table.write(tmp_path / "t.nc")
+    for array in (None, "E"):
+        assert table.compare(tmp_path / "t.nc", array=array).outside == []
+    assert table.compare(tmp_path / "t.nc", array="E_R").outside  # E against E_R: different quantities, flagged
+    with pytest.raises(ValueError, match="array 'rays' is not a quantity of the albedo table"):
+        table.compare(tmp_path / "t.nc", array="rays")
+
+
+def test_numbers_given_as_text_are_refused_by_name(mi):
+    for name in ("epsilon", "delta", "wavelength"):
+        with pytest.raises(ValueError, match=f"{name} must be a number, not text"):
+            albedo_table(engine=None, mu=[1.0], alpha=[0.5], **{name: "0.1"})
+
+
+def test_two_outputs_of_one_name_are_refused_before_any_ray(mi, tmp_path):
+    with pytest.raises(ValueError, match="one output would replace the other"):
+        albedo_table(engine=None, mu=[1.0], alpha=[0.5], out=[tmp_path / "t.nc", tmp_path / "t.nc"])
+
+
+def test_a_full_disk_mid_table_says_the_table_resumes_from_its_parts(mi, tmp_path, monkeypatch):
+    """It offered an internal group, rescued to a temporary file, as "the result"; the table resumes from its parts."""
+
+    import errno
+
+    from virtspec_mi.base.files import WriteError
+    from virtspec_mi.engine.checkpoint import ResultStore
+
+    real, saved = ResultStore.save, []
+
+    def full_after_one(self, label, result):
+        if saved:
+            raise WriteError(self.directory / "part.nc", "No space left on device", code=errno.ENOSPC, result=result)
+        saved.append(label)
+        return real(self, label, result)
+
+    monkeypatch.setattr(ResultStore, "save", full_after_one)
+    kwargs = dict(engine=None, mu=[1.0, 0.5], alpha=[0.5], epsilon=0.05, progress=False)
+    with pytest.raises(WriteError) as caught:
+        albedo_table(checkpoint=tmp_path / "parts", **kwargs)
+    message = str(caught.value)
+    assert "No space left on device" in message and f"the groups finished before it are kept in {tmp_path / 'parts'}" \
+        in message and "resumes from them" in message and "error.result" not in message
+    monkeypatch.setattr(ResultStore, "save", real)
+    assert albedo_table(checkpoint=tmp_path / "parts", **kwargs).rays > 0  # resumed

@@ -214,3 +214,50 @@ def test_an_engine_table_read_back(certified, tmp_path):
     assert back.engine == "cycles" and np.array_equal(back.values("E"), certified.values("E"))
     with pytest.raises(ValueError, match="not an engine table"):
         EngineTables.from_table(dataclasses.replace(certified.table, engine="grid"))
+
+
+@pytest.fixture(scope="module")
+def coarse(mi):
+    """A coarse certified Cycles table (epsilon 0.2: seconds), for the refusals."""
+
+    return engine_tables("cycles", epsilon=0.2, seed=0, progress=False)
+
+
+def test_nan_cells_are_refused_not_passed(coarse):
+    values = coarse.values("E").copy()
+    values[3, 7] = np.nan
+    with pytest.raises(ValueError, match=r"channel 'E': 1 cell not a finite number \(the first at index \(3, 7\)"):
+        audit({"E": values.tolist()}, coarse)  # Python lists, as a user hands them
+    with pytest.raises(ValueError, match="channel 'E' must hold numbers"):
+        audit({"E": [["a"] * 32] * 32}, coarse)
+
+
+def test_a_filament_half_float_nan_is_refused(tmp_path):
+    from virtspec_mi.applications.tables.audit import check_finite
+
+    x, y = np.full((128, 128), 0.5), np.full((128, 128), 0.25)
+    y[5, 9] = np.nan
+    write_filament_inc(tmp_path / "dfg.inc", x, y)
+    read = read_filament_inc(tmp_path / "dfg.inc")
+    assert np.isnan(read["DFG.y"][5, 9])
+    with pytest.raises(ValueError, match=r"DFG.y'?: 1 cell not a finite number \(the first at index \(5, 9\)"):
+        check_finite(read["DFG.y"], "dfg.inc: channel 'DFG.y'")
+
+
+def test_an_e_avg_of_31_values_is_refused_not_skipped(coarse, tmp_path):
+    header = tmp_path / "short.h"
+    _cycles_header(header, coarse.values("E"), list(coarse.values("E", average=True))[:31])
+    with pytest.raises(ValueError, match="table_ggx_Eavg"):
+        audit(header, coarse)
+    with pytest.raises(ValueError, match=r"channel 'E_avg' has shape \(31,\)"):
+        audit({"E": coarse.values("E"), "E_avg": np.zeros(31)}, coarse)
+
+
+def test_the_heat_map_never_replaces_the_audited_file(coarse, tmp_path):
+    header = tmp_path / "pub.h"
+    _cycles_header(header, coarse.values("E"), list(coarse.values("E", average=True)))
+    report = audit(header, coarse)
+    (tmp_path / "map.png").symlink_to(header)
+    with pytest.raises(ValueError, match="is the audited table"):
+        report.figure(tmp_path / "map.png")
+    assert "table_ggx_E" in header.read_text()

@@ -158,3 +158,23 @@ def test_a_costly_colour_gets_a_second_pilot_and_still_holds_the_exact_colour(mi
     exact = weights @ np.interp(grid, np.linspace(300, 1000, 4), values)
     box = result.colour.XYZ_interval
     assert np.all((box[:, 0] <= exact) & (exact <= box[:, 1]))
+
+
+@pytest.mark.parametrize("make, message", [
+    (lambda: vm.band({500: "a"}), r"the response at 500 nm must be a number \(got 'a'\)"),
+    (lambda: vm.band({"x": 1.0}), r"a response dict's wavelength must be a number \(got 'x'\)"),
+    (lambda: vm.band((500, "b")), r"band edge high must be a number \(got 'b'\)"),
+    (lambda: vm.band("B04", tolerance=1e-300), r"tolerance must be at least 2.33e-10 \(got 1e-300\)"),
+    (lambda: vm.band("B04", tolerance="0.01"), r"tolerance must be a number in \(0, 1\], not text"),
+    (lambda: vm.fapar(low="a"), r"low must be a number, not text"),
+    (lambda: vm.albedo(high="x"), r"high must be a number, not text"),
+])
+def test_targets_name_what_is_wrong_never_a_bare_conversion_error(make, message):
+    with pytest.raises(ValueError, match=message):
+        make()
+
+
+def test_an_index_of_a_black_specimen_says_why_it_cannot_be_certified():
+    with pytest.raises(ValueError, match=r"NDVI cannot be certified to \+-0.005 for this specimen: its pilot reads the "
+                                         r"bands at 0 and 0"):
+        vm.index("NDVI").tolerances(np.array([0.0, 0.0]), 0.01)

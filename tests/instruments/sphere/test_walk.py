@@ -23,7 +23,7 @@ from virtspec_mi.instruments.sphere.model import theory_inputs
 R = 75.0
 
 
-def walk_counts(sphere, bsdf, radius, rho_w, rays, *, actions, settings=None, max_bounces=100_000):
+def walk_counts(sphere, bsdf, radius, rho_w, rays, *, actions, settings=None, max_bounces=100_000, safe_point=None):
     """One reading at 551 nm through :class:`SphereLayout` on the kernel's one tally path: its ``cross``
     histogram (hemisphere, sphere fate) and wall reflections."""
 
@@ -39,7 +39,7 @@ def walk_counts(sphere, bsdf, radius, rho_w, rays, *, actions, settings=None, ma
     holder = Holder(0, SPECIMEN, radius, holder_frame(sphere.ports[0].axis, False))
     layout = replace(sphere, wall_reflectance=rho_w).layout([holder], actions, max_bounces, [551.0])
     tally = tally_readings(instrument, [ReadingPlan(551.0, settings.theta_i, settings.phi_i, rays)], hook=layout,
-                           **kernel_options(settings))
+                           safe_point=safe_point, **kernel_options(settings))
     return {"cross": tally.bins[0].reshape(4, layout.codes), **{k: int(v[0]) for k, v in tally.sums.items()}}
 
 
@@ -152,3 +152,32 @@ def test_ideal_sphere_detector_fraction_matches_the_theory(rho_w, f):
         assert cap_model == pytest.approx(theory(sphere, 0.5, rho_w, "cap"), rel=1e-9)
         projected = theory(sphere, 0.5, rho_w, "cap", "projected")
         assert abs(detected - cap_model) > abs(detected - flat) and abs(detected - projected) > abs(detected - flat)
+
+
+def test_a_long_walk_reaches_a_safe_point_between_launches_and_keeps_its_counts(monkeypatch):
+    """
+    A white sphere with small ports and a huge max_bounces: the walk is launched LAUNCH_STEPS steps at a time, an
+    interrupt is honoured between two launches (it once ran on for minutes after Ctrl-C), and the counts do not
+    depend on the launches.
+    """
+
+    import virtspec_mi.base.interrupts as interrupts
+    import virtspec_mi.instruments.sphere.walk as walk
+
+    sphere = Sphere(150, 0.9, (Port("sample", "sample", 180, 0, 12.7), Port("detector", "detector", 90, 90, 2.0)))
+    white = {"type": "diffuse", "reflectance": 1.0}
+    whole = walk_counts(sphere, white, 12.7 * 1.001, 0.999, 300, actions=[6, 0], max_bounces=10**7)
+    monkeypatch.setattr(walk, "LAUNCH_STEPS", 7)
+    safe_points = []
+    launched = walk_counts(sphere, white, 12.7 * 1.001, 0.999, 300, actions=[6, 0], max_bounces=10**7,
+                           safe_point=lambda: safe_points.append(1))
+    assert np.array_equal(whole["cross"], launched["cross"])
+    assert whole["wall_reflections"] == launched["wall_reflections"]
+    assert len(safe_points) > 10  # walks of hundreds of steps: many launches, a safe point after each
+
+    def interrupted():
+        raise interrupts.Interrupted()
+
+    with pytest.raises(interrupts.Interrupted):
+        walk_counts(sphere, white, 12.7 * 1.001, 0.999, 300, actions=[6, 0], max_bounces=10**7,
+                    safe_point=interrupted)

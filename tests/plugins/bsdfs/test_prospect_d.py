@@ -159,3 +159,20 @@ def test_plugin_parameters_through_traverse_and_refusals(mi):
         vm.measure(scene, wavelengths=[380.0], mu=0.05)
     with pytest.raises((ValueError, RuntimeError), match="'Cab' must be a number"):  # Mitsuba wraps it
         mi.load_dict({"type": "prospect_d", "Cab": "lots"})
+
+
+@pytest.mark.parametrize("n", [1.0, 1.5, 2.7])
+def test_nothing_absorbing_is_the_lossless_limit_exactly(n):
+    """
+    All pigments, Cw and Cm zero (allowed): the pile absorbs nothing, so R + T = 1, and T is the lossless limit
+    T = T_top / (1 + (N - 1)(1 - t)) (t: one plate lit isotropically), derived by hand from the model's own
+    combination. Left to rounding, Stokes' formula was taken there and lost ~5e-9 (R + T - 1 up to 6.6e-10).
+    """
+
+    data = prospect_coefficients()
+    reflectance, transmittance = prospect_d(N=n, Cab=0.0, Car=0.0, Anth=0.0, Cbrown=0.0, Cw=0.0, Cm=0.0)
+    t21 = tav(90.0, data.n) / data.n ** 2
+    plate = tav(90.0, data.n) * t21 / (1 - (1 - t21) ** 2)
+    top = tav(40.0, data.n) * t21 / (1 - (1 - t21) ** 2)
+    np.testing.assert_allclose(transmittance, top / (1 + (n - 1) * (1 - plate)), rtol=0, atol=1e-15)
+    np.testing.assert_allclose(reflectance + transmittance, 1.0, rtol=0, atol=1e-15)

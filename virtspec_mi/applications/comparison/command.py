@@ -80,11 +80,13 @@ def respond(session: Session) -> int:
     from pathlib import Path
 
     from virtspec_mi.applications.comparison.result import compare
+    from virtspec_mi.base.files import check_distinct
     from virtspec_mi.exchange.measured.flags import measured_from
     from virtspec_mi.results.plot import check_figure_path
 
     flags = session.flags
     check_figure_path(flags.plot)  # a bad suffix fails before any work
+    check_distinct([("--plot", flags.plot)], [("RESULT", flags.result), ("MEASURED", flags.measured)])
     comparison = compare(session.read(flags.result), measured_from(flags, flags.measured), quantity=flags.quantity, theta_i=flags.theta_i,
                          measurement_uncertainty=flags.uncertainty, illuminant=flags.illuminant,
                          observer=flags.observer)

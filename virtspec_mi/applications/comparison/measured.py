@@ -225,6 +225,9 @@ def _from_result(result: ResultBase, quantity: str, theta_i: float | None, sourc
                                source=source, fractions=False)  # a reading (a sphere's ratio may pass 1): its rules
 
 
+_QUANTITY_NAMES = ("reflectance", "transmittance", "absorptance")
+"""Column names that say which quantity a column holds (never read as another)."""
+
 _DECIMAL_COMMA = re.compile(r"[-+]?\d*,\d+(?:[eE][-+]?\d+)?")
 
 
@@ -254,6 +257,11 @@ def _check_rows(path: Path, lines: list[int], texts: list[list[str]], table: np.
         raise ValueError(f"measured file {path.name}: its numbers look written with decimal commas in a comma-"
                          f"separated file (line {lines[0]}: {','.join(texts[0])!r}); separate the columns with ';' "
                          "or write decimal points")
+    if len(table) > 1 and table.shape[1] > 1 and np.all(table[0, 1:] >= NANOMETRE_FLOOR) \
+            and np.all(np.abs(table[1:, 1:]) < NANOMETRE_FLOOR):  # "400;500" above rows of fractions: a header
+        raise ValueError(f"measured file {path.name}, line {lines[0]}: {','.join(texts[0])!r} holds wavelengths where "
+                         f"the other rows hold values (a header row of numbers?); name the columns "
+                         "(wavelength,reflectance) or comment the line out with #")
     wavelengths = table[:, 0]
     if len(wavelengths) > 1 and wavelengths.max() >= NANOMETRE_FLOOR:
         stray = np.nonzero(wavelengths < NANOMETRE_FLOOR)[0]
@@ -300,11 +308,15 @@ def _read_table(path: Path, quantity: str) -> MeasuredSpectrum:
     table = np.array(rows, dtype=np.float64)
     _check_rows(path, lines, texts, table, header is not None)
     value, uncertainty = _columns(header, width, quantity, path.name)
-    keep = ~np.isnan(table[:, value])
-    note = "" if keep.all() else f"{int((~keep).sum())} rows without a {quantity} value skipped"
-    return MeasuredSpectrum.of(table[keep, 0], table[keep, value],
-                               None if uncertainty is None else table[keep, uncertainty],
-                               quantity=quantity, source=path.name, note=note,
+    for index, what in ((0, "wavelength"), (value, f"{quantity} value"), (uncertainty, "uncertainty")):
+        missing = [] if index is None else np.nonzero(np.isnan(table[:, index]))[0]
+        if len(missing):  # never dropped silently: a gap is the file's to fill or remove
+            k = int(missing[0])
+            more = f" and {len(missing) - 1} more such rows" if len(missing) > 1 else ""
+            raise ValueError(f"measured file {path.name}, line {lines[k]}: no {what} (empty or NaN: "
+                             f"{','.join(texts[k])!r}){more}; give a number or remove the row")
+    return MeasuredSpectrum.of(table[:, 0], table[:, value], None if uncertainty is None else table[:, uncertainty],
+                               quantity=quantity, source=path.name,
                                column=header[value] if header is not None else f"column {value + 1}")
 
 
@@ -321,6 +333,9 @@ def _columns(header: list[str] | None, width: int, quantity: str, name: str) -> 
     candidates = [k for field, k in named.items() if "uncertainty" not in field]
     if quantity in named:
         return named[quantity], uncertainty
+    if len(candidates) == 1 and header[candidates[0]] in _QUANTITY_NAMES:  # named as another quantity: not this one
+        raise ValueError(f"measured file {name} holds {header[candidates[0]]}, no {quantity} column (its columns: "
+                         f"{', '.join(header[1:])}); give a {quantity} file or column")
     if len(candidates) == 1:
         return candidates[0], uncertainty
     raise ValueError(f"quantity must name a column of {name} ({', '.join(header[1:])}; got {quantity!r})")
@@ -353,9 +368,13 @@ def _read_netcdf(path: Path, quantity: str, theta_i: float | None) -> MeasuredSp
     wavelengths = dataset[values.dims[0]].values
     uncertainty = next((dataset[u].squeeze().values for u in (f"{name}_uncertainty", "uncertainty")
                         if u in dataset.data_vars), None)
-    keep = ~np.isnan(values.values)
-    return MeasuredSpectrum.of(wavelengths[keep], values.values[keep],
-                               None if uncertainty is None else uncertainty[keep], quantity=quantity,
+    for what, array in ((str(name), values.values), ("its uncertainty", uncertainty)):
+        missing = [] if array is None else np.nonzero(np.isnan(np.asarray(array, dtype=np.float64)))[0]
+        if len(missing):  # never dropped silently
+            raise ValueError(f"measured file {path.name}: {what} is NaN at {len(missing)} wavelength"
+                             f"{'s' if len(missing) > 1 else ''} (the first {float(wavelengths[missing[0]]):g} nm, "
+                             f"index {int(missing[0])}); give a number there or leave the wavelength out")
+    return MeasuredSpectrum.of(wavelengths, values.values, uncertainty, quantity=quantity,
                                source=path.name, column=str(name))
 
 

@@ -80,6 +80,18 @@ def _angle(value: Any) -> float:
     return value
 
 
+def _evaluations(values: Any) -> tuple[int, int, int]:
+    """Three whole numbers >= 0: the readings of the refinement's three stages."""
+
+    values = values.replace(",", " ").split() if isinstance(values, str) else (
+        (values,) if isinstance(values, int) else tuple(values))
+    whole = whole_number("evaluations", 0, 10**6, "0 <= each <= 10**6")
+    checked = tuple(whole(v) for v in values)
+    if len(checked) != 3:
+        raise ValueError(f"evaluations takes three whole numbers A B C (got {len(checked)})")
+    return checked  # type: ignore[return-value]
+
+
 def _defines(values: Any) -> tuple[str, ...]:
     for text in values:
         if "=" not in str(text):
@@ -132,6 +144,9 @@ class FitFlags(MeasuredFlags):
                                "written)")
     table_points: int | None = option(None, whole_number("table_points", 1, 10**6, "1 <= table_points"),
                                       "values per parameter in the table", unset="from the free parameters")
+    evaluations: tuple[int, int, int] | None = option(
+        None, _evaluations, "readings of each of the three refinement stages; raise them when a fit says NOT "
+        "CONVERGED", words=True, metavar="A B C", unset="12, 6, 3 per free parameter")
     profile_points: int = option(5, whole_number("profile_points", 0, 10**6, "0 <= profile_points"),
                                  "points of each profile (0: none)")
     search_wavelengths: int | None = option(None, whole_number("search_wavelengths", 0, 10**9,
@@ -168,6 +183,7 @@ def respond(session: Session) -> int:
 
     from virtspec_mi.applications.fitting.result import FIT_SUFFIXES
     from virtspec_mi.base.checks import parse_wavelengths
+    from virtspec_mi.base.files import check_distinct
     from virtspec_mi.exchange.measured.flags import measured_from
 
     flags = session.flags
@@ -176,6 +192,10 @@ def respond(session: Session) -> int:
         raise ValueError(f"--out: a fit file is {' or '.join(FIT_SUFFIXES)} (got {flags.out})")
     if flags.plot and Path(flags.plot).suffix.lower() not in (".png", ".svg", ".pdf"):
         raise ValueError(f"--plot: a figure is .png, .svg or .pdf (got {flags.plot})")
+    check_distinct([("--out", flags.out), ("--plot", flags.plot), ("--table", flags.table),
+                    ("--directory", flags.directory)],
+                   [("MEASURED", flags.measured), ("--transmittance", flags.transmittance),
+                    ("--specimen", flags.specimen)])
     if flags.transmittance:
         measured: Any = {"reflectance": measured_from(flags, flags.measured),
                          "transmittance": measured_from(flags, flags.transmittance)}
@@ -193,7 +213,7 @@ def respond(session: Session) -> int:
                    loss=flags.loss, windows=dict(flags.window) or None, delta=flags.delta,
                    mu_fraction=flags.mu_fraction, forward_mu=flags.forward_mu, table_points=flags.table_points,
                    profile_points=flags.profile_points, seed=flags.seed, defines=defines or None,
-                   progress=True if flags.progress else None, **search, **settings)
+                   evaluations=flags.evaluations, progress=True if flags.progress else None, **search, **settings)
     if many:
         return _respond_table(session, measured, options)
     from virtspec_mi.applications.fitting.inversion import fit

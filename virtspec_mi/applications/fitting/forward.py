@@ -52,6 +52,7 @@ import numpy as np
 from virtspec_mi.runtime.reading import read_result, take
 from virtspec_mi.applications.fitting.problem import FitProblem
 from virtspec_mi.engine.checkpoint import ResultStore, checkpoint_for
+from virtspec_mi.results.zarr import unfinished
 from virtspec_mi.settings import Settings, resolve
 
 __all__ = ["Reading", "Forward", "FIT_OWNS", "STORE", "note"]
@@ -174,7 +175,10 @@ class Forward:
 
         keys = self.problem.keys
         started = time.perf_counter()
-        if path is not None and path.exists() and not checkpoint_for(path).exists():
+        finished = path is not None and path.exists() and not checkpoint_for(path).exists()
+        if finished and unfinished(path):  # a table sweep stopped before its first reading: measured again
+            finished = False
+        if finished:
             result = self._check_table(read_result(path), path)
         else:
             note(self.progress, f"fit: table of {int(np.prod([len(g) for g in grid]))} points at mu = {mu:g}")

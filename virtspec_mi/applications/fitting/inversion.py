@@ -77,17 +77,15 @@ from scipy.optimize import minimize
 
 from virtspec_mi.applications.fitting.forward import Forward, Reading, note
 from virtspec_mi.applications.fitting.problem import FitProblem, describe, fit_problem
-from virtspec_mi.applications.fitting.result import FitResult
+from virtspec_mi.applications.fitting.result import UNCONSTRAINED_SHARE, FitResult, intervals
 from virtspec_mi.applications.fitting.search import search_problem, table_start
 from virtspec_mi.applications.fitting.windows import FitWindows, fit_windows, window_loss
-from virtspec_mi.base.checks import number
+from virtspec_mi.base.checks import real
+from virtspec_mi.base.files import check_distinct
 from virtspec_mi.engine.parameters import apply_point, known_parameters
 
 __all__ = ["fit", "LOSSES", "LOSS_NAMES", "SEARCH_WAVELENGTHS", "UNCONSTRAINED_SHARE", "PROFILE_BISECTIONS",
            "consistency", "intervals", "verdicts"]
-
-UNCONSTRAINED_SHARE: float = 0.9
-"""A parameter whose interval covers at least this share of its bounds is flagged unconstrained."""
 
 PROFILE_BISECTIONS: int = 4
 """Bisections at each end of a profile's consistent stretch."""
@@ -157,25 +155,6 @@ def verdicts(readings: Sequence[Reading], statistic: np.ndarray) -> np.ndarray:
         if key not in finest or rank < finest[key][0]:
             finest[key] = (rank, float(s))
     return np.array([finest[tuple(r.values.tolist())][1] <= 1.0 for r in readings], dtype=bool)
-
-
-def intervals(values: np.ndarray, consistent: np.ndarray, bounds: np.ndarray) -> np.ndarray:
-    """
-    (n, 2): each parameter's interval from the consistent candidates' values, each end
-    carried out to the next value of that parameter tested (the bound when none); NaN when
-    no candidate is consistent.
-    """
-
-    found = np.full((values.shape[1], 2), np.nan)
-    if not consistent.any():
-        return found
-    for i in range(values.shape[1]):
-        tested = np.unique(values[:, i])
-        inside = values[consistent, i]
-        low, high = inside.min(), inside.max()
-        below, above = tested[tested < low], tested[tested > high]
-        found[i] = (below.max() if below.size else bounds[i, 0], above.min() if above.size else bounds[i, 1])
-    return found
 
 
 def _table_points(count: int) -> int:
@@ -296,15 +275,19 @@ def fit(measured: Any, specimen: Any, parameters: Mapping[str, Any], *, quantiti
     """
 
     started = time.perf_counter()
-    delta = number("delta", delta)
-    mu_fraction = number("mu_fraction", mu_fraction)
-    forward_mu = None if forward_mu is None else number("forward_mu", forward_mu)
+    delta = real("delta", delta)
+    mu_fraction = real("mu_fraction", mu_fraction)
+    forward_mu = None if forward_mu is None else real("forward_mu", forward_mu)
     loss = ("windows" if windows is not None else "chi2") if loss is None else loss
     if windows is not None and loss != "windows":
         raise ValueError(f"windows= chooses the windows of loss='windows' (got loss={loss!r})")
     _check_choices(loss, delta, mu_fraction, forward_mu, table_points, profile_points, evaluations)
     if search_wavelengths is not None and not (isinstance(search_wavelengths, int) and search_wavelengths >= 2):
         raise ValueError(f"search_wavelengths must be None (all) or a whole number >= 2 (got {search_wavelengths!r})")
+    sources = measured.items() if isinstance(measured, Mapping) else [("measured", measured)]
+    check_distinct([("table", table), ("directory", directory)],  # no output over an input, before any reading
+                   [*((f"measured[{key!r}]" if isinstance(measured, Mapping) else key, path) for key, path in sources),
+                    ("specimen", specimen)])
     problem = fit_problem(measured, specimen, parameters, quantities=quantities, wavelengths=wavelengths,
                           measurement_uncertainty=measurement_uncertainty, defines=defines)
     chosen = fit_windows(windows, problem.names, problem.wavelengths) if loss == "windows" else None
@@ -333,12 +316,14 @@ def fit(measured: Any, specimen: Any, parameters: Mapping[str, Any], *, quantiti
                                                          directory=work, progress=progress, subset=subset[1])
         budget = evaluations if evaluations is not None else tuple(k * count for k in (12, 6, 3))
         step = 0.5 / (points - 1)
+        settled: list[bool] = []
         if chosen is None:
             start = table_start(readings, problem, measure_loss)
-            found = _refine(search, problem, start, target, table_mu, budget, step, measure_loss)
+            found = _refine(search, problem, start, target, table_mu, budget, step, measure_loss, settled=settled)
             estimate = found if search is forward else forward.reading(found.values, target, "estimate")
         else:
-            estimate = _refine_windows(forward, problem, chosen, readings, search, target, table_mu, budget, step)
+            estimate = _refine_windows(forward, problem, chosen, readings, search, target, table_mu, budget, step,
+                                       settled)
         if profile_points:
             for i, name in enumerate(problem.names):
                 count_read = _profile(forward, problem, estimate, i, target, profile_points)
@@ -350,11 +335,12 @@ def fit(measured: Any, specimen: Any, parameters: Mapping[str, Any], *, quantiti
         keys = known_parameters(problem.scene)
         apply_point(problem.bench, [keys.get(k, k) for k in problem.keys], problem.start)
     return _result(problem, forward, estimate, loss_name, measure_loss, delta, target, mu_fraction, seed, started,
-                   None if search is forward else search)
+                   None if search is forward else search, converged=all(settled))
 
 
 def _refine_windows(forward: Forward, problem: FitProblem, chosen: FitWindows, readings: list[Reading],
-                    search: Forward, target: float, ceiling: float, budget: Sequence[int], step: float) -> Reading:
+                    search: Forward, target: float, ceiling: float, budget: Sequence[int], step: float,
+                    settled: list[bool] | None = None) -> Reading:
     """
     One refinement per window (all free parameters free, the loss over that window only), keeping
     its parameter's value; the parameters without a window from a refinement on the full range
@@ -365,22 +351,24 @@ def _refine_windows(forward: Forward, problem: FitProblem, chosen: FitWindows, r
     for i, mask in chosen.masks.items():
         start = table_start(readings, problem, window_loss(mask))
         found = _refine(search, problem, start, target, ceiling, budget, step, window_loss(mask),
-                        label=f"window {problem.names[i]}")
+                        label=f"window {problem.names[i]}", settled=settled)
         values[i] = found.values[i]
     rest = np.isnan(values)
     if rest.any():
         start = table_start(readings, problem, _chi2)
-        found = _refine(search, problem, start, target, ceiling, budget, step, _chi2, label="full range")
+        found = _refine(search, problem, start, target, ceiling, budget, step, _chi2, label="full range",
+                        settled=settled)
         values[rest] = found.values[rest]
     return forward.reading(values, target, "windows estimate")
 
 
 def _refine(forward: Forward, problem: FitProblem, start: np.ndarray, target: float, ceiling: float,
             budget: Sequence[int], step: float, measure_loss: Callable[[Reading, FitProblem], float],
-            label: str = "refine") -> Reading:
+            label: str = "refine", settled: list[bool] | None = None) -> Reading:
     """
     Nelder–Mead from ``start`` in stages of shrinking tolerance (module docstring), on ``forward``'s
     readings (the fit's, or the search's on fewer wavelengths); the best reading at ``target``.
+    Appends to ``settled`` whether the search settled (:func:`_settled`).
     """
 
     x = problem.normalised(start)
@@ -406,12 +394,26 @@ def _refine(forward: Forward, problem: FitProblem, start: np.ndarray, target: fl
         stage_best = min(tried, key=lambda r: measure_loss(r, problem))
         note(forward.progress, f"fit: {label} stage {stage}/{len(_STAGES)} at mu = {mu:g}: {len(tried)} readings, "
                                f"best loss {measure_loss(stage_best, problem):.4g}")
+        moved = float(np.max(np.abs(problem.normalised(stage_best.values) - x)))
         x = problem.normalised(stage_best.values)
-        step /= 2.0
         if last:
             final = stage_best
+            if settled is not None:
+                settled.append(_settled(evaluations, count, moved, step))
+        step /= 2.0
     assert final is not None
     return final
+
+
+def _settled(evaluations: int, count: int, moved: float, step: float) -> bool:
+    """
+    Whether a refinement's last stage settled: it had room for a Nelder–Mead move beyond its
+    first simplex (``count`` + 2 readings) and its best point stayed within the stage's
+    simplex step of where the stage began (a search still travelling has not found the
+    minimum: its estimate cannot show the model fails).
+    """
+
+    return evaluations >= count + 2 and moved <= step * (1.0 + 1e-9)
 
 
 def _confirm_ends(forward: Forward, search: Forward, problem: FitProblem, target: float) -> int:
@@ -489,7 +491,7 @@ def _profile(forward: Forward, problem: FitProblem, estimate: Reading, i: int, t
 
 def _result(problem: FitProblem, forward: Forward, estimate: Reading, loss: str,
             measure_loss: Callable[[Reading, FitProblem], float], delta: float, target: float, mu_fraction: float,
-            seed: int, started: float, searched: Forward | None) -> FitResult:
+            seed: int, started: float, searched: Forward | None, converged: bool = True) -> FitResult:
     readings = forward.readings + ([] if searched is None else searched.readings)
     values = np.array([r.values for r in readings])
     statistic = np.array([consistency(r, problem) for r in readings])
@@ -512,4 +514,4 @@ def _result(problem: FitProblem, forward: Forward, estimate: Reading, loss: str,
         search_wavelengths=0 if searched is None else len(searched.problem.wavelengths),
         seconds=time.perf_counter() - started,
         specimen=describe(problem),
-        seed=int(seed), reading_delta=forward.reading_delta)
+        seed=int(seed), reading_delta=forward.reading_delta, converged=bool(converged))

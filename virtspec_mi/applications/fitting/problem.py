@@ -153,6 +153,14 @@ def _spectra(measured: Any, quantities: Sequence[str] | None) -> dict[str, Measu
         if spectrum.quantity != quantity:
             raise ValueError(f"the measured spectrum {spectrum.source} is a {spectrum.quantity}, given as {quantity}")
         spectra[quantity] = spectrum
+    read = [(q, spectra[q]) for q in spectra if not isinstance(chosen[q], (tuple, list))]
+    for k, (quantity, spectrum) in enumerate(read):  # one file's one column read as two quantities: refused
+        for other, earlier in read[:k]:
+            if str(chosen[quantity]) == str(chosen[other]) and np.array_equal(spectrum.values, earlier.values):
+                raise ValueError(f"the measured file {spectrum.source} holds one value column: "
+                                 f"it cannot be both the {other} and the {quantity}; give a file with a "
+                                 f"reflectance and a transmittance column, or the transmittance on its own "
+                                 f"(--transmittance FILE, measured={{'reflectance': ..., 'transmittance': ...}})")
     return spectra
 
 

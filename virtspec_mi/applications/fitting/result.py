@@ -34,11 +34,14 @@ from virtspec_mi.results.figures import Figure
 from virtspec_mi.results.records import Record
 from virtspec_mi.results.variables import Variable
 
-__all__ = ["FitResult", "read_fit", "FIT_FORMAT", "FIT_SUFFIXES"]
+__all__ = ["FitResult", "read_fit", "FIT_FORMAT", "FIT_SUFFIXES", "UNCONSTRAINED_SHARE", "intervals"]
 
 FIT_FORMAT: str = "virtspec-mi fit 1"
 """The format tag of a fit's files."""
 FIT_SUFFIXES: tuple[str, ...] = (".json", ".nc")
+
+UNCONSTRAINED_SHARE: float = 0.9
+"""A parameter whose interval covers at least this share of its bounds is flagged unconstrained."""
 
 _ARRAYS = ("bounds", "estimate", "intervals", "wavelengths", "candidate_values", "candidate_mu",
            "candidate_statistic", "candidate_loss", "candidate_consistent")
@@ -125,6 +128,9 @@ class FitResult(Record):
     version: str = __version__
     search_wavelengths: int = 0
     """Wavelengths of the search and confirmation readings when fewer than all (0: all; their stages say so)."""
+    converged: bool = True
+    """The refinement settled (its last stage had room to move and stayed within its step): only then does an
+    empty confidence set show that the model cannot reproduce the measurement."""
 
     # -- derived -------------------------------------------------------------------------
 
@@ -181,6 +187,11 @@ class FitResult(Record):
             elif self.statistic > 1.0:
                 lines.append(f"NOT CONVERGED: the estimate itself is inconsistent (s = {self.statistic:.3g} > 1) while "
                              "other candidates pass: the intervals may miss the truth; raise evaluations")
+        elif not self.converged:
+            lines.append(f"NOT CONVERGED: no candidate read so far is consistent (the best found has s = "
+                         f"{self.statistic:.3g} > 1), but the search stopped before it settled, so this says nothing "
+                         "about the model; give it more budget: evaluations= (virtspec fit --evaluations A B C, "
+                         "readings per refinement stage) or table_points= (--table-points)")
         else:
             lines.append(f"INCONSISTENT: no candidate's certified spectrum lies within the measurement uncertainty "
                          f"+ its tolerance (the estimate's largest normalised residual s = {self.statistic:.3g} > 1): "
@@ -212,6 +223,8 @@ class FitResult(Record):
         for name in ("consistent", "statistic", "loss_name", "loss", "delta", "mu_fraction", "forward_mu", "rays",
                      "traced_rays", "seconds", "specimen", "seed", "reading_delta", "search_wavelengths"):
             data[name] = getattr(self, name)
+        if not self.converged:  # stated only when false: a file of a settled fit is what it was before the field
+            data["converged"] = False
         for name in _ARRAYS:
             data[name] = _plain(getattr(self, name))
         for name in _SPECTRA:
@@ -231,7 +244,7 @@ class FitResult(Record):
                                                           "rays", "traced_rays", "seconds", "seed", "reading_delta",
                                                           "search_wavelengths")}
         attrs = {"version": self.version, "specimen": self.specimen, "loss_name": self.loss_name,
-                 "consistent": int(self.consistent), **{k: (float(v) if isinstance(v, float) else int(v))
+                 "consistent": int(self.consistent), **({} if self.converged else {"converged": 0}), **{k: (float(v) if isinstance(v, float) else int(v))
                                                         for k, v in scalars.items()}}
         return xr.Dataset(
             {**spectra,
@@ -250,6 +263,10 @@ class FitResult(Record):
 
     def _file_attrs(self) -> dict[str, Any]:
         return dict(self.data.attrs)
+
+    def _check(self) -> None:
+        super()._check()
+        check_candidates(self)
 
     def _count_groups(self) -> list[tuple[str, Any, CountRules, tuple[str, ...]]]:
         counts = {"rays": whole_counts(self.rays, "rays"), "traced_rays": whole_counts(self.traced_rays, "traced_rays")}
@@ -270,6 +287,7 @@ class FitResult(Record):
             candidate_statistic=array("candidate_statistic"), candidate_loss=array("candidate_loss"),
             candidate_consistent=array("candidate_consistent").astype(bool),
             candidate_stage=tuple(data["candidate_stage"]), search_wavelengths=int(data.get("search_wavelengths", 0)),
+            converged=bool(data.get("converged", True)),
             **{k: data[k] for k in ("statistic", "loss_name", "loss", "delta", "mu_fraction", "forward_mu", "rays",
                                     "traced_rays", "seconds", "specimen", "seed", "reading_delta", "version")})
 
@@ -293,6 +311,7 @@ class FitResult(Record):
                 consistent=bool(data["consistent"]), quantities=tuple(quantities), **fields,
                 candidate_stage=tuple(str(s) for s in dataset["candidate_stage"].values),
                 search_wavelengths=int(data.get("search_wavelengths", 0)),
+                converged=bool(_attribute(data.get("converged", 1))),
                 **{k: _attribute(data[k]) for k in ("statistic", "loss_name", "loss", "delta", "mu_fraction",
                                                     "forward_mu", "rays", "traced_rays", "seconds", "specimen",
                                                     "seed", "reading_delta", "version")})
@@ -344,6 +363,25 @@ class FitResult(Record):
         return figure
 
 
+def intervals(values: np.ndarray, consistent: np.ndarray, bounds: np.ndarray) -> np.ndarray:
+    """
+    (n, 2): each parameter's interval from the consistent candidates' values, each end
+    carried out to the next value of that parameter tested (the bound when none); NaN when
+    no candidate is consistent.
+    """
+
+    found = np.full((values.shape[1], 2), np.nan)
+    if not consistent.any():
+        return found
+    for i in range(values.shape[1]):
+        tested = np.unique(values[:, i])
+        inside = values[consistent, i]
+        low, high = inside.min(), inside.max()
+        below, above = tested[tested < low], tested[tested > high]
+        found[i] = (below.max() if below.size else bounds[i, 0], above.min() if above.size else bounds[i, 1])
+    return found
+
+
 def _plain(values: Any) -> Any:
     array = np.asarray(values, dtype=np.float64)
     return [None if not np.isfinite(v) else float(v) for v in array.ravel()] if array.ndim == 1 else \
@@ -363,3 +401,51 @@ def read_fit(path: str | os.PathLike) -> FitResult:
     """
 
     return FitResult.read(path)
+
+
+def check_candidates(fit: "FitResult") -> None:
+    """
+    A fit read from a file, checked against itself (a record's own rule, run as it is read):
+    what it claims (the verdicts, the intervals, ``consistent``, the unconstrained flags) must
+    be what its candidates give —
+    each candidate's verdict that of the finest reading of its values (s <= 1), the intervals
+    :func:`~virtspec_mi.applications.fitting.inversion.intervals` of them. A file edited
+    against its readings (an interval tightened by hand, ``consistent`` flipped) is refused,
+    naming what disagrees.
+    """
+
+    def refuse(what: str) -> None:
+        raise ValueError(f"{what} disagrees with the fit's own candidates (the file was edited or is damaged); "
+                         "re-run the fit rather than edit its file")
+
+    n, count = len(fit.names), len(fit.candidate_statistic)
+    shapes = {"bounds": (n, 2), "estimate": (n,), "intervals": (n, 2), "candidate_values": (count, n),
+              "candidate_mu": (count,), "candidate_loss": (count,), "candidate_consistent": (count,)}
+    for name, shape in shapes.items():
+        if np.shape(getattr(fit, name)) != shape:
+            refuse(f"{name} (shape {np.shape(getattr(fit, name))}, expected {shape})")
+    if len(fit.candidate_stage) != count or len(fit.unconstrained) != n:
+        refuse("the number of candidate stages or of unconstrained flags")
+    finest: dict[tuple, tuple[float, set]] = {}  # the verdicts of each candidate's finest readings
+    for values, mu, s in zip(fit.candidate_values.tolist(), fit.candidate_mu, fit.candidate_statistic):
+        key, verdict = tuple(values), bool(s <= 1.0)
+        if key not in finest or mu < finest[key][0]:
+            finest[key] = (float(mu), {verdict})
+        elif mu == finest[key][0]:  # one tolerance, a search reading beside a full one: either may be the one judged
+            finest[key][1].add(verdict)
+    given: dict[tuple, bool] = {}
+    for values, stored in zip(fit.candidate_values.tolist(), fit.candidate_consistent):
+        key = tuple(values)
+        if bool(stored) not in finest[key][1] or given.setdefault(key, bool(stored)) != bool(stored):
+            refuse(f"candidate {values}'s verdict {'consistent' if stored else 'inconsistent'} (its finest reading "
+                   f"has s {'>' if stored else '<='} 1)")
+    if bool(fit.consistent) != bool(np.any(fit.candidate_consistent)):
+        refuse(f"consistent = {bool(fit.consistent)}")
+    expected = intervals(fit.candidate_values, np.asarray(fit.candidate_consistent, dtype=bool), fit.bounds)
+    if not np.allclose(fit.intervals, expected, rtol=1e-12, atol=0.0, equal_nan=True):
+        refuse(f"intervals {fit.intervals.tolist()} (the candidates give {expected.tolist()})")
+    span = fit.bounds[:, 1] - fit.bounds[:, 0]
+    flags = tuple(bool(np.isfinite(w) and w >= UNCONSTRAINED_SHARE * s) for w, s in zip(expected[:, 1] - expected[:, 0],
+                                                                                         span))
+    if tuple(map(bool, fit.unconstrained)) != flags:
+        refuse(f"unconstrained = {list(fit.unconstrained)}")

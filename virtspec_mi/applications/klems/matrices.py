@@ -71,14 +71,14 @@ import numpy as np
 
 from virtspec_mi.base.version import __version__
 from virtspec_mi.exchange.common import check_companions
-from virtspec_mi.base.files import atomic_write
+from virtspec_mi.base.files import atomic_write, same_file
 from virtspec_mi.exchange.klems_basis import KlemsBasis, klems_basis
 from virtspec_mi.budgets.intervals import clopper_pearson
 from virtspec_mi.results.integrity import CountRules, field_value, finite_labels, whole_counts
 from virtspec_mi.results.records import Record
 
 __all__ = ["SIDES", "KINDS", "KlemsMeasurement", "klems_from_gonio", "write_klems", "aggregate", "check_escaped", "read_klems",
-           "read_klems_sidecar", "sidecar_path", "check_klems", "check_klems_output"]
+           "read_klems_sidecar", "sidecar_path", "check_klems", "check_klems_output", "photopic_weights"]
 
 SIDES: tuple[str, ...] = ("front", "back")
 """Sides of incidence: the specimen's front (+z, lit by the instrument) and its back."""
@@ -217,17 +217,7 @@ class KlemsMeasurement(Record):
 
         if len(self.wavelengths) == 1:
             return self.bsdf[:, 0], np.ones(1)
-        import colour
-
-        cmfs = colour.MSDS_CMFS["CIE 1931 2 Degree Standard Observer"]
-        d65 = colour.SDS_ILLUMINANTS["D65"]
-        lam = self.wavelengths
-        ybar = np.interp(lam, cmfs.wavelengths, cmfs.values[:, 1], left=0.0, right=0.0)
-        s = np.interp(lam, d65.wavelengths, d65.values, left=0.0, right=0.0)
-        weights = ybar * s
-        if weights.sum() <= 0:
-            raise ValueError("the wavelengths measured carry no photopic weight (all outside 360-830 nm)")
-        weights = weights / weights.sum()
+        weights = photopic_weights(self.wavelengths)
         return np.tensordot(weights, np.moveaxis(self.bsdf, 1, 0), axes=1), weights
 
     # -- files ------------------------------------------------------------------------
@@ -423,12 +413,33 @@ KlemsMeasurement.COMPANIONS = {".xml": sidecar_path}
 
 
 
-def check_klems_output(path: str | os.PathLike, overwrite: bool = False, inputs: Sequence[Any] = ()) -> Path:
+def photopic_weights(wavelengths: Sequence[float]) -> np.ndarray:
+    """
+    The D65 × ȳ weights (summing to 1) of the photopic ``Visible`` block on several
+    ``wavelengths``; ``ValueError`` when none of them carries photopic weight.
+    """
+
+    import colour
+
+    cmfs = colour.MSDS_CMFS["CIE 1931 2 Degree Standard Observer"]
+    d65 = colour.SDS_ILLUMINANTS["D65"]
+    lam = np.asarray(wavelengths, dtype=np.float64)
+    ybar = np.interp(lam, cmfs.wavelengths, cmfs.values[:, 1], left=0.0, right=0.0)
+    weights = ybar * np.interp(lam, d65.wavelengths, d65.values, left=0.0, right=0.0)
+    if not weights.sum() > 0:
+        raise ValueError(f"wavelengths {', '.join(f'{w:g}' for w in lam)} nm carry no photopic weight (a Klems "
+                         "file's Visible block needs one of them within 360-830 nm, or a single wavelength)")
+    return weights / weights.sum()
+
+
+def check_klems_output(path: str | os.PathLike, overwrite: bool = False, inputs: Sequence[Any] = (),
+                       wavelengths: Sequence[float] | None = None) -> Path:
     """
     Refuse (``ValueError``, before anything is measured) a Klems output ``path`` that
     does not end in ``.xml``, whose folder does not exist, that is one of ``inputs``
-    (the scene file measured), or whose sidecar ``.nc`` would replace an input or a
-    file that is not a Klems sidecar (unless ``overwrite``).
+    (the scene file measured), whose sidecar ``.nc`` would replace an input or a
+    file that is not a Klems sidecar (unless ``overwrite``), or whose ``wavelengths``
+    (several) carry no photopic weight for its ``Visible`` block.
     """
 
     path = Path(path)
@@ -437,9 +448,11 @@ def check_klems_output(path: str | os.PathLike, overwrite: bool = False, inputs:
     if not path.parent.is_dir():
         raise ValueError(f"out {path}: the folder {path.parent} does not exist")
     given = [Path(item) for item in inputs if isinstance(item, (str, os.PathLike)) and Path(item).exists()]
-    if any(os.path.realpath(path) == os.path.realpath(item) for item in given):
+    if any(same_file(path, item) for item in given):
         raise ValueError(f"out {path} is the scene file being measured; choose another name for the Klems file")
     check_companions(path, [sidecar_path(path)], _is_sidecar, overwrite, inputs=given)
+    if wavelengths is not None and len(wavelengths) > 1:
+        photopic_weights(wavelengths)
     return path
 
 

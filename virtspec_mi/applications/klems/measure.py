@@ -43,7 +43,7 @@ import numpy as np
 
 from virtspec_mi.base.version import __version__
 from virtspec_mi.exchange.common import derived_seed
-from virtspec_mi.base.checks import check_delta, check_rays, number, shown_value
+from virtspec_mi.base.checks import check_delta, check_rays, real, shown_value
 import virtspec_mi.base.interrupts as interrupts
 from virtspec_mi.engine.checkpoint import ResultStore, locked
 from virtspec_mi.settings import true_or_false, whole_number
@@ -132,7 +132,7 @@ def klems_measure(
     from virtspec_mi.runtime.scene import instrument_scene, loaded
 
     klems = klems_basis(basis)
-    epsilon, delta = number("epsilon", epsilon), check_delta(delta)  # any real number type (numpy's too)
+    epsilon, delta = real("epsilon", epsilon), check_delta(real("delta", delta))  # any real number type, not text
     seed = whole_number("seed", 0, 2**32 - 1, "0 <= seed < 2**32")(seed)
     rays = None if rays is None else check_rays(rays)
     isotropic = true_or_false("isotropic")(isotropic)
@@ -142,7 +142,8 @@ def klems_measure(
     if out is not None:  # before anything is measured: the folder, the scene itself, the sidecar's name
         from virtspec_mi import scenes as shipped
 
-        check_klems_output(out, overwrite=overwrite, inputs=[_resolved(scene, shipped), _resolved(back, shipped)])
+        check_klems_output(out, overwrite=overwrite, inputs=[_resolved(scene, shipped), _resolved(back, shipped)],
+                           wavelengths=lams.tolist())
     mi = mitsuba()
     scenes = [loaded(each) for each in [scene] + ([back] if back not in (None, False) else [])]  # each loaded once
     for each in scenes:

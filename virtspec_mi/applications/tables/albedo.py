@@ -87,7 +87,8 @@ from typing import Any, Sequence
 import numpy as np
 
 from virtspec_mi.base.version import __version__
-from virtspec_mi.base.checks import check_delta, number, shown_value
+from virtspec_mi.base.checks import check_delta, real, shown_value
+from virtspec_mi.base.files import WriteError, check_distinct
 import virtspec_mi.base.interrupts as interrupts
 from virtspec_mi.engine.checkpoint import ResultStore, locked
 from virtspec_mi.settings import true_or_false, whole_number
@@ -100,10 +101,19 @@ from virtspec_mi.applications.tables.table import BOUNDS, DISTRIBUTIONS, MODELS,
 __all__ = ["albedo_table"]
 
 
+def _resumes(directory: Path | None, kept: str) -> str:
+    """Where a table whose file could not be written is kept, and how it resumes (a :class:`WriteError`'s ``kept``)."""
+
+    if directory is None:
+        return "the table is not kept (no checkpoint): give checkpoint= (--checkpoint) to keep its groups"
+    return (f"{kept} are kept in {directory}: free some space and run the same command again, it resumes from "
+            "them")
+
+
 def _check_epsilon(epsilon: Any) -> float:
     """ε of a table: a real number, 0 < ε < 0.5 (as μ: :func:`virtspec_mi.base.checks.check_mu`, named ``epsilon``)."""
 
-    value = number("epsilon", epsilon)
+    value = real("epsilon", epsilon)
     if not 0.0 < value < 0.5:
         raise ValueError(f"epsilon must satisfy 0 < epsilon < 0.5 (got {shown_value(epsilon)})")
     return value
@@ -319,10 +329,10 @@ def albedo_table(
 
     grid = _grid(model, distribution, engine, mu, alpha, roughness, eta)
     bsdf_parameters, model_words, count_scale = bsdf_model(model, distribution, grid.engine, shadowing, g1, fresnel)
-    epsilon, delta = _check_epsilon(epsilon), check_delta(delta)  # any real number type (numpy's float32 too)
+    epsilon, delta = _check_epsilon(epsilon), check_delta(real("delta", delta))  # any real number type, not text
     average, parts = true_or_false("average")(average), true_or_false("parts")(parts)
     seed = _whole("seed", seed, 0, 2**32 - 1)
-    wavelength = number("wavelength", wavelength)
+    wavelength = real("wavelength", wavelength)
     if not 0.0 < wavelength < float("inf"):
         raise ValueError(f"wavelength must be a finite number of nm > 0 (got {shown_value(wavelength)})")
     if bound not in BOUNDS:
@@ -340,6 +350,7 @@ def albedo_table(
         if not path.parent.exists():
             raise ValueError(f"out {path}: the directory {path.parent} does not exist")
         _check_output(path, bool(average), bool(overwrite))
+    check_distinct([*(("out", path) for path in outs), ("checkpoint", checkpoint)])  # one output never over another
     if checkpoint is None and outs:
         checkpoint = outs[0].with_name(outs[0].name + ".parts")
     quantities = ("E", "E_R", "E_T") if parts else ("E",)
@@ -383,7 +394,10 @@ def albedo_table(
                                        parameters={n: pts[:, k].tolist() for k, n in enumerate(names)}, points=True,
                                        seed=derived_seed(seed, label), sampling="random", progress=False,
                                        **({} if chunk_size is None else {"chunk_size": chunk_size}))
-                    store.save(label, result)
+                    try:
+                        store.save(label, result)
+                    except WriteError as error:  # a full disk: the table resumes from its parts, no group offered
+                        raise error.keeping(_resumes(store.directory, "the groups finished before it")) from None
                     interrupts.check()  # a safe point: the group is saved, none is being written
                 traced_seconds += result.seconds
                 bar.reach(bar.done + len(angles) * len(pts))
@@ -472,8 +486,11 @@ def albedo_table(
             if not table.certified:
                 warnings.warn(f"albedo table: {table.statement()}", RuntimeWarning, stacklevel=2)
             interrupts.check()  # the last safe point before the outputs are written
-            for path in outs:
-                table.write(path, overwrite=overwrite)
+            try:
+                for path in outs:
+                    table.write(path, overwrite=overwrite)
+            except WriteError as error:  # every group is kept: the same call writes the table without tracing
+                raise error.keeping(_resumes(store.directory, "every group of the table"), table) from None
             store.remove()  # the table is returned (and written to every out): its groups are safe
             return table
 

@@ -33,7 +33,7 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["ROUNDING", "ChannelAudit", "Audit", "audit"]
+__all__ = ["ROUNDING", "ChannelAudit", "Audit", "audit", "check_finite"]
 
 
 def _half_rounding(values: np.ndarray) -> np.ndarray:
@@ -151,6 +151,10 @@ class Audit:
         flagged cells outlined; written to ``path`` when given. Returns the figure.
         """
 
+        if path is not None:  # never over the table audited
+            from virtspec_mi.base.files import check_distinct
+
+            check_distinct([("path", path)], [("the audited table", None if self.source == "arrays" else self.source)])
         import matplotlib
 
         matplotlib.use("Agg", force=False)
@@ -183,6 +187,16 @@ def _coordinates(table: Any) -> dict[str, np.ndarray]:
     first, second = np.meshgrid(axes[table.order[0]], axes[table.order[1]], indexing="ij")
     mu, roughness = (first, second) if table.order[0] == "mu" else (second, first)
     return {"mu": mu, "roughness": roughness}
+
+
+def check_finite(values: np.ndarray, what: str) -> None:
+    """Refuse (``ValueError``) NaN or infinite cells of ``values``, naming ``what``, how many and the first one."""
+
+    bad = np.argwhere(~np.isfinite(values))
+    if len(bad):
+        first = tuple(int(i) for i in bad[0])
+        raise ValueError(f"{what}: {len(bad):,} cell{'s' if len(bad) > 1 else ''} not a finite number (the first "
+                         f"at index {first}: {values[first]!r}); a published table holds numbers in every cell")
 
 
 def audit(published: str | os.PathLike | dict[str, np.ndarray], certified: Any, *,
@@ -221,6 +235,10 @@ def audit(published: str | os.PathLike | dict[str, np.ndarray], certified: Any, 
     source = "arrays" if isinstance(published, dict) else str(published)
     values = published if isinstance(published, dict) else read_engine_file(published, engine)
     shapes = engine_layout(engine)
+    for key, given in values.items():  # every channel published is whole, judged or not
+        if key in shapes and np.shape(given) != shapes[key]:
+            raise ValueError(f"{source}: channel {key!r} has shape {np.shape(given)}; {engine} lays it out as "
+                             f"{shapes[key]}")
     table = certified.table
     channels: dict[str, ChannelAudit] = {}
     for name in certified.channels:
@@ -229,9 +247,14 @@ def audit(published: str | os.PathLike | dict[str, np.ndarray], certified: Any, 
                 continue
             if key not in values:
                 raise ValueError(f"the published table has no channel {key!r} (it has: {', '.join(values)})")
-            pub = np.asarray(values[key], dtype=np.float64)
+            try:
+                pub = np.asarray(values[key], dtype=np.float64)
+            except (TypeError, ValueError):
+                raise ValueError(f"{source}: channel {key!r} must hold numbers only, in {engine}'s layout "
+                                 f"{shapes[key]}") from None
             if pub.shape != shapes[key]:
                 raise ValueError(f"channel {key!r}: shape {pub.shape}, {engine} lays it out as {shapes[key]}")
+            check_finite(pub, f"{source}: channel {key!r}")
             mine, tol = certified.values(name, average), certified.tolerance(name, average)
             r = ROUNDING[engine](pub) if rounding is None else np.full(pub.shape, float(rounding))
             if average:

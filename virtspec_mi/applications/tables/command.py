@@ -115,15 +115,15 @@ def respond(session: Session) -> int:
     """``virtspec albedo-table``: a table measured (or read), written, compared; or an engine's tables audited."""
 
     from virtspec_mi.applications.tables.albedo import albedo_table
-    from virtspec_mi.applications.tables.table import read_albedo_table
     from virtspec_mi.base.checks import parse_values
 
     flags = session.flags
+    _check_paths(flags)
     native = (".inc", ".raw", ".png")
     if flags.audit or (flags.engine in ("filament", "unreal") and any(p.lower().endswith(native) for p in flags.out)):
         return _engine_tables(session)
     if flags.source:
-        table = read_albedo_table(flags.source)
+        table = _read_source(flags)
         for path in flags.out:
             table.check_output(path, overwrite=flags.overwrite)  # every output's companions, before any is written
         for path in flags.out:
@@ -151,12 +151,53 @@ def respond(session: Session) -> int:
     return session.report(table, "\n".join(lines), written=flags.out)
 
 
+_MEASURING = ("model", "distribution", "shadowing", "g1", "fresnel", "mu", "alpha", "roughness", "eta", "epsilon",
+              "delta", "bound", "no_average", "parts", "seed", "checkpoint")
+"""The flags (by field) that shape a measurement: meaningless beside ``--from`` (a table already measured)."""
+
+
+def _check_paths(flags: TableFlags) -> None:
+    """
+    Before anything is measured or written: no output (``--out``, ``--figure``,
+    ``--checkpoint``) is an input (``--from``, ``--audit``, ``--compare``) or another
+    output (:func:`virtspec_mi.base.files.check_distinct`); no measuring flag beside ``--from``.
+    """
+
+    from virtspec_mi.base.files import check_distinct
+
+    if flags.figure and not flags.audit:
+        raise ValueError("--figure draws the heat map of --audit: give --audit PUBLISHED too")
+    check_distinct([*(("--out", path) for path in flags.out), ("--figure", flags.figure),
+                    ("--checkpoint", flags.checkpoint)],
+                   [("--from", flags.source), ("--audit", flags.audit), ("--compare", flags.compare)])
+    if flags.source:
+        defaults = TableFlags()
+        given = [name for name in _MEASURING if getattr(flags, name) != getattr(defaults, name)]
+        if given:
+            named = ", ".join("--" + name.replace("_", "-") if name != "mu" else "--cosines" for name in given)
+            raise ValueError(f"--from TABLE reads a table already measured: {named} would change nothing (they shape "
+                             "a new measurement); leave them out, or measure anew without --from")
+
+
+def _read_source(flags: TableFlags) -> Any:
+    """The table of ``--from``; an ``--engine`` beside it must be the table's own."""
+
+    from virtspec_mi.applications.tables.table import read_albedo_table
+
+    table = read_albedo_table(flags.source)
+    own = table.engine if table.engine in ("cycles", "filament", "unreal") else "none"
+    if flags.engine is not None and flags.engine != own:
+        grid = f"{own}'s grid" if own != "none" else "a grid of its own (--engine none)"
+        raise ValueError(f"--engine {flags.engine}: the table of --from {flags.source} is on {grid}; leave --engine "
+                         f"out or give --engine {own}")
+    return table
+
+
 def _engine_tables(session: Session) -> int:
     """``--audit`` (and an engine's drop-in files): every channel of the engine's model certified at once."""
 
     from virtspec_mi.applications.tables.audit import audit
-    from virtspec_mi.applications.tables.engine_tables import EngineTables, engine_tables
-    from virtspec_mi.applications.tables.table import read_albedo_table
+    from virtspec_mi.applications.tables.engine_tables import EngineTables, check_engine_sidecar, engine_tables
 
     flags = session.flags
     if flags.engine not in ("cycles", "filament", "unreal"):
@@ -165,16 +206,19 @@ def _engine_tables(session: Session) -> int:
     for path in flags.out:
         if not path.lower().endswith(native):
             raise ValueError(f"--out {path}: an engine table is written as the engine's file or .nc")
+    for path in flags.out:  # a drop-in file's PATH.json sidecar: never an input, never another program's file
+        if not path.lower().endswith(".nc"):
+            check_engine_sidecar(path, flags.overwrite, inputs=[p for p in (flags.source, flags.audit) if p])
     if flags.source:  # a certified engine table written before (--out TABLE.nc)
-        tables = EngineTables.from_table(read_albedo_table(flags.source))
+        tables = EngineTables.from_table(_read_source(flags))
     else:
         tables = engine_tables(flags.engine, epsilon=flags.epsilon, delta=flags.delta, seed=flags.seed,
                                bound=flags.bound, progress=False if flags.quiet else None,
                                checkpoint=flags.checkpoint)
     for path in flags.out:
-        tables.write(path)
+        tables.write(path, overwrite=flags.overwrite)
     text = f"{tables.statement()}\nrays {tables.rays:,}; {tables.seconds:g} s"
-    written = [f"{path} (provenance: {path}.json)" for path in flags.out]
+    written = [path + ("" if path.lower().endswith(".nc") else f" (provenance: {path}.json)") for path in flags.out]
     if not flags.audit:
         return session.report(tables, text, written=written)
     report = audit(flags.audit, tables)

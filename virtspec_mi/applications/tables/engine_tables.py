@@ -54,13 +54,14 @@ from typing import Any
 import numpy as np
 
 from virtspec_mi.base.files import atomic_write
+from virtspec_mi.exchange.common import check_companions
 from virtspec_mi.exchange.engine_models import ENGINE_CHANNELS
 
 _ENGINE_FILES = {"cycles": "Cycles' C header (.h)", "filament": "Filament's dfg.inc (half floats)",
                  "unreal": "Unreal's G16R16 texture (.raw) or a 16-bit PNG (.png)"}
 
 
-__all__ = ["EngineTables", "engine_tables",
+__all__ = ["EngineTables", "engine_tables", "check_engine_sidecar",
            "write_filament_inc", "read_filament_inc", "write_unreal", "read_unreal", "read_engine_file",
            "engine_layout"]
 
@@ -139,16 +140,20 @@ class EngineTables:
         return {"engine": self.engine, "channels": self.channels, "certificate": self.statement(),
                 "file": _ENGINE_FILES[self.engine], "table": self.table.description()}
 
-    def write(self, path: str | os.PathLike, cloth: np.ndarray | None = None) -> Path:
+    def write(self, path: str | os.PathLike, cloth: np.ndarray | None = None, overwrite: bool = False) -> Path:
         """
         The drop-in file by the engine: ``cycles`` ``.h``/``.hpp``; ``filament`` ``.inc``
         (``cloth``: a 128 × 128 third channel to carry along, uncertified); ``unreal``
         ``.raw`` or ``.png``. A ``PATH.json`` sidecar holds the provenance and certificate
-        (the header, the ``.inc`` comments and the PNG's text chunk hold them too). ``.nc``:
-        the certified table itself, every count (:meth:`from_table` reads it back).
+        (the header, the ``.inc`` comments and the PNG's text chunk hold them too); it
+        replaces a ``PATH.json`` only when that is such a sidecar, or with ``overwrite``
+        (else ``ValueError``, before anything is written). ``.nc``: the certified table
+        itself, every count (:meth:`from_table` reads it back).
         """
 
         path = Path(path)
+        if path.suffix.lower() != ".nc":
+            check_engine_sidecar(path, overwrite)
         suffix = path.suffix.lower()
         allowed = {"cycles": (".h", ".hpp"), "filament": (".inc",), "unreal": (".raw", ".png")}[self.engine]
         if suffix == ".nc":  # the certified table itself (read it back with EngineTables.from_table)
@@ -175,6 +180,28 @@ class EngineTables:
                 + " (E_R: reflected rays = int Fc f cos; E_T: rays sent below = int (1 - Fc) f cos; E = both)",
                 f"every value within {np.nanmax(self.table.certified_epsilon()):.4g}, jointly with probability "
                 f">= {1 - self.delta:g}; rays {self.rays:,}"]
+
+
+def check_engine_sidecar(path: str | os.PathLike, overwrite: bool = False, inputs: Any = ()) -> None:
+    """
+    Refuse (``ValueError``) a drop-in file whose ``PATH.json`` sidecar would replace an
+    input (``inputs``), or a file of that name that is not such a sidecar, unless
+    ``overwrite`` (``virtspec albedo-table --overwrite``).
+    """
+
+    path = Path(path)
+    check_companions(path, [path.with_name(path.name + ".json")], _is_engine_sidecar, overwrite, inputs=inputs,
+                     flag="overwrite=True (virtspec albedo-table --overwrite)")
+
+
+def _is_engine_sidecar(path: Path) -> bool:
+    """Whether ``path`` is the provenance sidecar of an engine's drop-in file (:meth:`EngineTables.description`)."""
+
+    try:
+        data = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return False
+    return isinstance(data, dict) and {"engine", "channels", "certificate", "table"} <= set(data)
 
 
 def engine_tables(engine: str, *, epsilon: float = 1e-3, delta: float = 0.01, seed: int = 0,
@@ -363,6 +390,15 @@ def read_unreal(path: str | os.PathLike, width: int = 128, height: int = 32) -> 
     return {"A": texels[..., 0].copy(), "B": texels[..., 1].copy()}
 
 
+def _declares(path: Path, array: str) -> bool:
+    """Whether the C header ``path`` names the array ``array`` at all."""
+
+    import re
+
+    text = path.read_text(encoding="utf-8", errors="replace")
+    return re.search(rf"\b{re.escape(array)}\s*\[", text) is not None
+
+
 def read_engine_file(path: str | os.PathLike, engine: str) -> dict[str, np.ndarray]:
     """
     A published table in the engine's native layout, by channel, in the engine's memory
@@ -379,10 +415,11 @@ def read_engine_file(path: str | os.PathLike, engine: str) -> dict[str, np.ndarr
     shapes = engine_layout(engine)
     if engine == "cycles":
         found = {"E": read_table_values(path, array="table_ggx_E", expected=1024).reshape(shapes["E"])}
-        try:
-            found["E_avg"] = read_table_values(path, array="table_ggx_Eavg", expected=32)
-        except ValueError:
-            pass
+        if _declares(path, "table_ggx_Eavg"):  # present: read whole or refused (31 values are not an E_avg)
+            try:
+                found["E_avg"] = read_table_values(path, array="table_ggx_Eavg", expected=32)
+            except ValueError as error:
+                raise ValueError(f"{path}: table_ggx_Eavg (Cycles' E_avg, 32 values): {error}") from None
         return found
     if engine == "filament":
         return read_filament_inc(path)

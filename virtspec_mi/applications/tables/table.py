@@ -659,9 +659,9 @@ class AlbedoTable(Record):
             tol = self.layout(tol)
         if self.model == "glass":
             mine, tol = mine[SIDES.index(side)], tol[SIDES.index(side)]
-        own = _own_table(published) if array is None else None
+        own = _own_table(published)
         if own is not None:  # an albedo table's .nc: canonical (mu, alpha) order, put in this table's memory order
-            values = own.E_avg if average else self.layout(np.asarray(own.E))
+            values = self.layout(_own_quantity(own, published, array, average), average=average)
             if values is None or np.shape(values) != np.shape(self.layout(average=average)):
                 raise ValueError(f"the published table {published} is an albedo table of another grid "
                                  f"(shape {np.shape(own.E)}; this table's {np.shape(self.E)})")
@@ -706,6 +706,25 @@ def read_albedo_table(path: str | os.PathLike) -> AlbedoTable:
     except ValueError as error:
         text = str(error).replace("albedo table: ", "", 1)
         raise ValueError(text.replace("result file", "albedo table", 1)) from None
+
+
+def _own_quantity(own: "AlbedoTable", published: Any, array: str | None, average: bool) -> np.ndarray | None:
+    """
+    The quantity ``array`` names (default ``E``, ``E_avg`` with ``average``) of an albedo
+    table read from its ``.nc`` (canonical dims, whatever variable is asked for: never the
+    file's raw array reshaped into a memory order).
+    """
+
+    name = array or ("E_avg" if average else "E")
+    base = name[:-len("_avg")] if name.endswith("_avg") else name
+    if base not in ("E", "E_R", "E_T") or name.endswith("_avg") != bool(average):
+        allowed = "E_avg, E_R_avg, E_T_avg (average=True)" if average else "E, E_R, E_T"
+        raise ValueError(f"array {name!r} is not a quantity of the albedo table {published}: one of {allowed}")
+    if base != "E" and base not in own.quantities:
+        raise ValueError(f"array {name!r}: the albedo table {published} holds {', '.join(own.quantities)} only")
+    if average and own.E_avg is None:
+        return None
+    return own.quantity(base, average)
 
 
 def _own_table(published: Any) -> "AlbedoTable | None":

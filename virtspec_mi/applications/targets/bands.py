@@ -28,6 +28,8 @@ ESA (2015). *Sentinel-2 User Handbook*, ESA Standard Document, Issue 1 Rev 2, Ta
 
 from __future__ import annotations
 
+import math
+
 import os
 from dataclasses import dataclass
 from pathlib import Path
@@ -84,6 +86,21 @@ def quadrature_weights(wavelengths: np.ndarray) -> np.ndarray:
     return np.concatenate([[gaps[0] / 2], (gaps[:-1] + gaps[1:]) / 2, [gaps[-1] / 2]])
 
 
+def _nm(what: str, value: Any) -> float:
+    """A number of a band (a wavelength, an edge, a response): text, booleans and NaN refused, naming ``what``."""
+
+    if isinstance(value, (str, bytes, bool, np.bool_)):
+        raise ValueError(f"{what} must be a number (got {value!r}); a band is a Sentinel-2 name, edges (low, high) in "
+                         "nm, a dict {wavelength nm: response} or a two-column file")
+    try:
+        number = float(value)
+    except (TypeError, ValueError):
+        raise ValueError(f"{what} must be a number (got {value!r})") from None
+    if not math.isfinite(number):
+        raise ValueError(f"{what} must be a finite number (got {value!r})")
+    return number
+
+
 def band(response: Any, name: str | None = None, step: float = 1.0) -> Band:
     """
     A :class:`Band` from ``response``: a name of :data:`SENTINEL_2` (``"B04"``, or
@@ -100,11 +117,12 @@ def band(response: Any, name: str | None = None, step: float = 1.0) -> Band:
         made = _rectangle(centre - width / 2, centre + width / 2, step)
         return Band(name or key, made[0], made[1], "Sentinel-2A MSI, rectangular from centre and bandwidth")
     if isinstance(response, (tuple, list)) and len(response) == 2 and all(np.isscalar(v) for v in response):
-        low, high = float(response[0]), float(response[1])
+        low, high = (_nm(f"band edge {which}", v) for which, v in zip(("low", "high"), response))
         made = _rectangle(low, high, step)
         return Band(name or f"{low:g}-{high:g}", made[0], made[1], "rectangular")
     if isinstance(response, Mapping):
-        pairs = sorted((float(k), float(v)) for k, v in response.items())
+        pairs = sorted((_nm("a response dict's wavelength", k), _nm(f"the response at {k!r} nm", v))
+                       for k, v in response.items())
         return _checked(name or "band", np.array([p[0] for p in pairs]), np.array([p[1] for p in pairs]), "given")
     if isinstance(response, str) and not Path(response).is_file() and _edges(response) is not None:
         return band(_edges(response), name, step)  # "650-680": edges in nm, as a text writes them

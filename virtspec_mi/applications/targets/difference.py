@@ -62,11 +62,24 @@ def _box(colour: Any, name: str) -> tuple[np.ndarray, LabBox, float]:
     if hasattr(colour, "Lab"):
         raise ValueError(f"{name}: the colour has no certified interval ({getattr(colour, 'note', '')}); give a "
                          "certified colour or L*a*b* numbers of a colour known exactly")
-    Lab = np.asarray(colour, dtype=np.float64)
+    expected = (f"{name} must be a certified colour (result.colour(), a colour target's result), a result, or CIE "
+                "L*a*b* as three numbers")
+    if isinstance(colour, (str, bytes)) or hasattr(colour, "target"):
+        kind = getattr(getattr(colour, "target", None), "kind", "")
+        what = f"the result of a {kind} target" if hasattr(colour, "target") else repr(colour)
+        raise ValueError(f"{expected} (got {what}: not a colour)")
+    try:
+        Lab = np.asarray(colour, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise ValueError(f"{expected} (got {type(colour).__name__} {_shown(colour)})") from None
     if Lab.shape != (3,) or not np.all(np.isfinite(Lab)):
-        raise ValueError(f"{name} must be a certified colour, a result, or CIE L*a*b* as three numbers "
-                         f"(got {colour!r})")
+        raise ValueError(f"{expected}, finite (got {_shown(colour)})")
     return Lab, LabBox.point(Lab), 0.0
+
+
+def _shown(value: Any) -> str:
+    text = repr(value)
+    return text if len(text) <= 80 else text[:77] + "..."
 
 
 def colour_difference(a: Any, b: Any) -> ColourDifference:

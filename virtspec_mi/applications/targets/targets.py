@@ -44,6 +44,7 @@ from typing import Any, Callable
 import numpy as np
 
 from virtspec_mi.applications.targets.bands import Band, band as make_band
+from virtspec_mi.base.checks import MAX_RAYS, real
 from virtspec_mi.budgets.functionals import Functional
 from virtspec_mi.applications.targets.indices import Index, index_definition
 from virtspec_mi.colorimetry.cie import DEFAULT_ILLUMINANT, DEFAULT_OBSERVER
@@ -74,13 +75,22 @@ class Value:
         return max(self.value - self.lower, self.upper - self.value)
 
 
+_SMALLEST = 1.0 / MAX_RAYS
+"""No rule certifies a fraction within less than 1/N with N rays (N <= MAX_RAYS a reading): the smallest tolerance."""
+
+
 def _check_tolerance(name: str, value: Any, high: float) -> float:
+    if isinstance(value, (str, bytes)):
+        raise ValueError(f"{name} must be a number in (0, {high:g}], not text (got {value!r})")
     try:
         value = float(value)
     except (TypeError, ValueError):
         raise ValueError(f"{name} must be a number in (0, {high:g}] (got {value!r})") from None
     if not 0 < value <= high or not math.isfinite(value):
         raise ValueError(f"{name} must be a number in (0, {high:g}] (got {value!r})")
+    if value < _SMALLEST:
+        raise ValueError(f"{name} must be at least {_SMALLEST:.3g} (got {value:g}): no rule certifies a value within "
+                         f"less with the at most {MAX_RAYS:,} rays a reading may spend")
     return value
 
 
@@ -211,8 +221,9 @@ class FaparTarget(Target):
                 "high": self.high, "step": self.step}
 
 
-def _scaled(shape: np.ndarray, fits: Callable[[np.ndarray], bool]) -> np.ndarray:
-    """About the largest s·``shape`` (bisection on s) for which ``fits`` holds."""
+def _scaled(shape: np.ndarray, fits: Callable[[np.ndarray], bool],
+            unmet: str = "no tolerance of the functionals meets the target at the pilot's point") -> np.ndarray:
+    """About the largest s·``shape`` (bisection on s) for which ``fits`` holds; ``ValueError(unmet)`` if none does."""
 
     low, high = 0.0, 1.0
     while fits(high * shape) and high < 1e6:
@@ -224,7 +235,7 @@ def _scaled(shape: np.ndarray, fits: Callable[[np.ndarray], bool]) -> np.ndarray
         else:
             high = middle
     if low == 0.0:
-        raise ValueError("no tolerance of the functionals meets the target at the pilot's point")
+        raise ValueError(unmet)
     return low * shape
 
 
@@ -260,7 +271,12 @@ class IndexTarget(Target):
             centre = self.index.value(a, b)
             return max(centre - low, high - centre) <= margin * self.tolerance
 
-        return _scaled(shape, fits)
+        pilot = np.asarray(estimates, dtype=np.float64)
+        return _scaled(shape, fits, f"{self.index.name} cannot be certified to +-{self.tolerance:g} for this specimen: "
+                                    f"its pilot reads the bands at {pilot[0]:.3g} and {pilot[1]:.3g}, and a normalised "
+                                    "difference of bands this dark (a + b near 0) is undefined or moves by more than "
+                                    "the tolerance within any interval the rays can give; measure the bands instead "
+                                    f"(--target band:...), or loosen tolerance")
 
     def values(self, estimates: np.ndarray, tolerances: np.ndarray) -> list[Value]:
         bands = _linear_values(self.functionals(), estimates, tolerances)
@@ -403,6 +419,7 @@ def fapar(tolerance: float = 0.002, illuminant: str = "D65", low: float = 400.0,
           step: float = 1.0) -> FaparTarget:
     """fAPAR (absorbed share of PAR photons of ``illuminant``, ``low``–``high`` nm) to ±``tolerance``."""
 
+    low, high = real("low", low), real("high", high)
     if not 0 < low < high:
         raise ValueError(f"low and high must satisfy 0 < low < high nm (got {low!r}, {high!r})")
     target = FaparTarget(_check_tolerance("tolerance", tolerance, 1.0), illuminant, float(low), float(high),
@@ -450,7 +467,7 @@ def albedo(tolerance: float = 0.002, illuminant: str = "D65", low: float | None 
         raise ValueError(f"illuminant must be a name of colour.SDS_ILLUMINANTS, e.g. D65 (got {illuminant!r})")
     light = cs.SDS_ILLUMINANTS[illuminant]
     first, last = float(light.wavelengths[0]), float(light.wavelengths[-1])
-    low, high = first if low is None else float(low), last if high is None else float(high)
+    low, high = first if low is None else real("low", low), last if high is None else real("high", high)
     if not first <= low < high <= last:
         raise ValueError(f"low and high must satisfy {first:g} <= low < high <= {last:g} nm, the data of illuminant "
                          f"{illuminant} (got {low:g}, {high:g})")

@@ -54,7 +54,7 @@ from virtspec_mi.results.integrity import CountRules, field_value, finite_labels
 from virtspec_mi.results.figures import Figure, spectra
 from virtspec_mi.results.variables import READINGS, Variable, bounds
 from virtspec_mi.instruments.sphere.walk import FATES
-from virtspec_mi.settings import Settings
+from virtspec_mi.settings import Settings, share
 
 __all__ = ["CONFIGURATIONS", "COUNT_RULES", "SphereResult"]
 
@@ -186,6 +186,7 @@ class SphereResult(ResultBase):
                  settings: Settings, seconds: float = 0.0, scene: str = "", sphere_parameters: dict | None = None,
                  specimen_radius: float | None = None, version: str = __version__, parameters: dict | None = None,
                  pilot: dict[str, dict[str, Any]] | None = None, source: dict | None = None) -> None:
+        options = _checked_options(options)
         readings = tuple(d for d in dims if d != "configuration")
         checked = {"wall_reflectance": (readings, wall_reflectance)}
         arrays = {"wall_reflectance": (readings, wall_reflectance)}
@@ -673,3 +674,21 @@ def _from_layout_0(data: Any) -> dict[str, Any]:
             "settings": settings, "seconds": plain["seconds"], "scene": plain.get("scene", ""),
             "sphere_parameters": plain.get("sphere_parameters") or {},
             "specimen_radius": plain.get("specimen_radius"), "version": "unknown (written before format 1)"}
+
+
+def _checked_options(options: Any) -> dict[str, Any]:
+    """
+    How a reading was taken, as a file states it, held to the rules it was measured under
+    (:class:`~virtspec_mi.instruments.sphere.SphereOptions`): the standard's reflectance
+    0 < standard <= 1 (a standard of 0 would divide by zero, of 2 double every reading), the
+    measurement a reflectance or a transmittance.
+    """
+
+    if not isinstance(options, Mapping):
+        raise ValueError(f"'options' must be an object (got {type(options).__name__})")
+    options = dict(options)
+    if "standard" in options:
+        options["standard"] = share("options.standard")(options["standard"])
+    if options.get("measurement", "reflectance") not in ("reflectance", "transmittance"):
+        raise ValueError(f"options.measurement must be reflectance or transmittance (got {options['measurement']!r})")
+    return options

@@ -67,7 +67,7 @@ from virtspec_mi.kernel.hooks import ChunkRays, ExitHook
 from virtspec_mi.kernel.rng import GOLDEN, hash32, to_unit
 from virtspec_mi.kernel.walk import CAPPED_COMPONENT
 
-__all__ = ["FATES", "HEMISPHERES", "SPECIMEN", "WALK_BASE", "Holder", "SphereFate", "SphereLayout", "holder_frame"]
+__all__ = ["FATES", "HEMISPHERES", "LAUNCH_STEPS", "SPECIMEN", "WALK_BASE", "Holder", "SphereFate", "SphereLayout", "holder_frame"]
 
 
 class SphereFate(IntEnum):
@@ -115,6 +115,10 @@ _VIOLATION, _ROUNDED = 1, 4
 _LENGTH2 = ((1.0 - DIRECTION_TOLERANCE) ** 2, (1.0 + DIRECTION_TOLERANCE) ** 2)
 _MIN_LANES = 1 << 14  # at least this many lanes (or one per ray): enough packets for every core
 _RAYS_PER_LANE = 8  # otherwise each lane walks about this many rays in turn
+LAUNCH_STEPS: int = 512
+"""Steps each lane walks per kernel launch: between two launches the walk reaches a safe point (an interrupt
+is honoured there: :attr:`~virtspec_mi.kernel.hooks.ChunkRays.safe_point`, the engine's), so a white sphere with small ports and a
+large ``max_bounces`` answers Ctrl-C within about a second. The counts do not depend on it."""
 _LOADED: dict[tuple[str, str], Any] = {}  # BSDFs loaded from their plugin dicts, per Mitsuba variant
 
 
@@ -347,8 +351,19 @@ class SphereLayout(ExitHook):
                     dr.select(more, mi.UInt32(0), out["walls"]),
                     dr.select(more, dr.gather(mi.UInt32, rare, ray, more), out["rare"]))
 
-        dr.while_loop(state, lambda slot, *_: slot < n, body, label="sphere_walk")
-        dr.eval(fate_out, rare_out, walls_out)
+        def steps(*variables):  # body, and one step more of this launch
+            return (*body(*variables[:-1]), variables[-1] + 1)
+
+        budget = dr.opaque(mi.UInt32, LAUNCH_STEPS)
+        while True:  # launches of at most LAUNCH_STEPS steps per lane, a safe point between two
+            *state, _ = dr.while_loop((*state, dr.zeros(mi.UInt32, width)),
+                                      lambda slot, *rest: (slot < n) & (rest[-1] < budget), steps,
+                                      label="sphere_walk")
+            dr.eval(*state, fate_out, rare_out, walls_out)
+            if not bool(dr.any(state[0] < n, axis=None)):
+                break
+            if rays.safe_point is not None:  # the engine's: an interrupt during a long walk stops the run here
+                rays.safe_point()
         return fate_out, rare_out, walls_out
 
     # -- one step: state in → one flight and one surface event → state out --------------

@@ -295,10 +295,13 @@ def _pile(data: ProspectCoefficients, alpha: float, p: dict[str, np.ndarray]) ->
         denominator = a * a * b_n2 - 1
         r_sub = a * (b_n2 - 1) / denominator
         t_sub = b_n1 * (a * a - 1) / denominator
-    lossless = r + t >= 1.0  # no absorption: the limit of the formulae
+    # No absorption (k = 0, or r + t rounded to 1): the limit of the formulae, taken whenever nothing absorbs —
+    # not left to rounding, where Stokes' formula loses ~1e-9 to cancellation (d -> 0) and R + T drifts from 1.
+    lossless = ~positive | (r + t >= 1.0)
     if lossless.any():
         t_lossless = t / (t + (1 - t) * (n_plates - 1))
         t_sub = np.where(lossless, t_lossless, t_sub)
         r_sub = np.where(lossless, 1 - t_lossless, r_sub)
+        r = np.where(lossless, 1 - t, r)  # the lossless plate's own r + t = 1, exactly
     denominator = 1 - r_sub * r
     return top_r + top_t * r_sub * t / denominator, top_t * t_sub / denominator

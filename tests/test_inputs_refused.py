@@ -200,5 +200,5 @@ def test_a_klems_measurements_settings_are_named_not_raw_conversion_errors(keywo
 
 
 def test_an_albedo_tables_wavelength_is_named():
-    with pytest.raises(ValueError, match="wavelength must be a number \\(got 'abc'\\)"):
+    with pytest.raises(ValueError, match="wavelength must be a number, not text \\(got 'abc'\\)"):
         vm.albedo_table(**{**SMALL, "wavelength": "abc"})

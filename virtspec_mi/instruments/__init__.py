@@ -42,8 +42,9 @@ from virtspec_mi.instruments.gloss import GlossMeter
 from virtspec_mi.instruments.goniophotometer import Goniophotometer
 from virtspec_mi.instruments.hemispherical import Hemispherical
 from virtspec_mi.instruments.sphere import IntegratingSphere
+from virtspec_mi.instruments.hemispherical.allocated import Allocated, Allocation
 
-__all__ = ["INSTRUMENTS", "ENTRY_POINTS", "discovered", "commanding", "exported", "exports"]
+__all__ = ["INSTRUMENTS", "ENTRY_POINTS", "ALLOCATING", "Allocation", "discovered", "commanding", "exported", "exports"]
 
 ENTRY_POINTS = "virtspec_mi.instruments"
 """The entry-point group of outside instruments."""
@@ -62,6 +63,15 @@ def discovered(builtin: tuple[type[Instrument], ...]) -> dict[str, type[Instrume
 
 INSTRUMENTS: dict[str, type[Instrument]] = discovered((Hemispherical, Goniophotometer, IntegratingSphere, GlossMeter))
 """Every instrument by name (its ``name``): the built-in ones, then the outside ones (:data:`ENTRY_POINTS`)."""
+
+
+ALLOCATING: type[Instrument] = Allocated
+"""
+The instrument that takes readings with rays allocated per wavelength (an
+:class:`Allocation`: a derived quantity's Nₖ ∝ |wₖ|, a sequential target's next batch) —
+the spectrophotometer's :class:`~virtspec_mi.instruments.hemispherical.allocated.Allocated`,
+no row of its own (no subcommand): how an application finds it without naming it.
+"""
 
 
 def commanding(word: str) -> type[Instrument]:

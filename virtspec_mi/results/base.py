@@ -662,13 +662,15 @@ one class, wherever it lives (beside its instrument).
 def holder(path: str | os.PathLike) -> Path:
     """
     The file that holds the result of ``path``: itself, or the result file an export
-    accompanies (a kind's :attr:`ResultBase.COMPANIONS`, e.g. a Klems XML file's ``.nc`` sidecar).
+    accompanies when it is there (a kind's :attr:`ResultBase.COMPANIONS`, e.g. a Klems XML
+    file's ``.nc`` sidecar); any other file of such a suffix (a scene's XML) is read as
+    itself, and refused by its suffix.
     """
 
     path = Path(path)
     for kind in KINDS.values():
         companion = kind.COMPANIONS.get(path.suffix.lower())
-        if companion is not None:
+        if companion is not None and companion(path).exists():
             return companion(path)
     return path
 

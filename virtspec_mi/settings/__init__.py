@@ -60,6 +60,7 @@ __all__ = [
     "keywords",
     "resolve",
     "one_of",
+    "text",
     "share",
     "true_or_false",
     "whole_number",
@@ -87,6 +88,16 @@ SAMPLINGS: dict[str, str] = {
 
 
 # --- checks shared by the options of every instrument -------------------------------------
+
+
+def text(name: str, what: str = "a text") -> Callable[[Any], str]:
+    """The check of a text that is not empty (a file path, a target's words): ``what`` it must be, in the message."""
+
+    def check(value: Any) -> str:
+        if not isinstance(value, str) or not value.strip():
+            raise ValueError(f"{name} must be {what} (got {shown_value(value)})")
+        return value
+    return check
 
 
 def one_of(name: str, choices: Mapping[str, Any], fold: Callable[[str], str] | None = None) -> Callable[[Any], str]:

@@ -30,14 +30,16 @@ def _exact_band(low: float, high: float) -> float:
 
 
 def test_every_batch_traces_fresh_rays_and_a_seed_gives_one_result(dark, monkeypatch):
+    import virtspec_mi.instruments.hemispherical.allocated as allocated  # the seam's process traces through it
+
     calls = []
-    original = sequential.trace_allocated
+    original = allocated.trace_allocated
 
     def recording(bench, settings, readings, rays, offsets=None):
         calls.append((settings.seed, [r[0] for r in readings], np.asarray(rays), np.asarray(offsets)))
         return original(bench, settings, readings, rays, offsets=offsets)
 
-    monkeypatch.setattr(sequential, "trace_allocated", recording)
+    monkeypatch.setattr(allocated, "trace_allocated", recording)
     target = vm.band((500, 520), tolerance=0.004)
     first = vm.measure(dark, target=target, delta=0.05, seed=3)
     pilot, calls = calls[0], calls[1:]  # a linear target's pilot (sizing only) has a seed of its own
@@ -53,7 +55,7 @@ def test_every_batch_traces_fresh_rays_and_a_seed_gives_one_result(dark, monkeyp
         assert all(a[1] <= b[0] for a, b in zip(spans, spans[1:])), (w, spans)
     spans = sorted(span for spans in ranges.values() for span in spans)
     assert all(a[1] <= b[0] for a, b in zip(spans, spans[1:]))  # no ray twice, across wavelengths either
-    monkeypatch.setattr(sequential, "trace_allocated", original)
+    monkeypatch.setattr(allocated, "trace_allocated", original)
     again = vm.measure(dark, target=target, delta=0.05, seed=3)
     assert again.batches == first.batches and again["band_500-520"] == first["band_500-520"]
     other = vm.measure(dark, target=target, delta=0.05, seed=4)

@@ -21,23 +21,16 @@ from virtspec_mi.applications.comparison.result import Comparison
 from virtspec_mi.base.checks import number
 from virtspec_mi.colorimetry.cie import DEFAULT_ILLUMINANT, DEFAULT_OBSERVER
 from virtspec_mi.kernel.counts import QUANTITIES
-from virtspec_mi.settings import option, true_or_false
+from virtspec_mi.settings import option, text, true_or_false
 
 __all__ = ["ComparisonApplication", "COMPARE", "CompareFlags", "respond"]
 
 
-def _text(name: str) -> Any:
-    def check(value: Any) -> str:
-        if not isinstance(value, str) or not value.strip():
-            raise ValueError(f"{name} must be a text (got {value!r})")
-        return value
-    return check
-
 
 def _selections(values: Any) -> tuple[str, ...]:
-    for text in values:
-        if "=" not in str(text):
-            raise ValueError(f"--sel takes NAME=VALUE (got {text!r})")
+    for item in values:
+        if "=" not in str(item):
+            raise ValueError(f"--sel takes NAME=VALUE (got {item!r})")
     return tuple(values)
 
 
@@ -50,12 +43,12 @@ class CompareFlags(MeasuredFlags):
 
     title: ClassVar[str] = "comparison"
 
-    result: str | None = option(None, _text("result"), "result file of any kind (.nc, .csv, .json, .zarr; also "
+    result: str | None = option(None, text("result"), "result file of any kind (.nc, .csv, .json, .zarr; also "
                                 "`measure --json` output)", positional=True)
-    measured: str | None = option(None, _text("measured"), "measured spectrum (.csv, .txt, .nc, a result file, .asd, "
+    measured: str | None = option(None, text("measured"), "measured spectrum (.csv, .txt, .nc, a result file, .asd, "
                                   ".sig, .sed, .jdx/.dx, .sli)",
                                   positional=True)
-    quantity: str | None = option(None, _text("quantity"), f"quantity compared: {', '.join(QUANTITIES)} of a reading "
+    quantity: str | None = option(None, text("quantity"), f"quantity compared: {', '.join(QUANTITIES)} of a reading "
                                   "or goniophotometer file (the measured column of that name), or reading, corrected, "
                                   "hemispherical of a sphere file (the measured column of what the sphere measures)",
                                   unset="reflectance; a sphere file's reading")
@@ -64,12 +57,12 @@ class CompareFlags(MeasuredFlags):
     uncertainty: float | None = option(None, lambda value: number("uncertainty", value), "measurement uncertainty, "
                                        "added to the certified tolerance (overrides the file's uncertainty column)",
                                        unset="the file's")
-    illuminant: str = option(DEFAULT_ILLUMINANT, _text("illuminant"), "colour.SDS_ILLUMINANTS name for Delta E 2000")
-    observer: str = option(DEFAULT_OBSERVER, _text("observer"), "colour.MSDS_CMFS name")
+    illuminant: str = option(DEFAULT_ILLUMINANT, text("illuminant"), "colour.SDS_ILLUMINANTS name for Delta E 2000")
+    observer: str = option(DEFAULT_OBSERVER, text("observer"), "colour.MSDS_CMFS name")
     selections: tuple = option((), _selections, "keep the label of dim NAME nearest VALUE: a parameter point (e.g. "
                                "specimen.thickness=1.6e-4, point=3), theta_i=8, wavelength=550", repeat=True,
                                spelled="--sel", metavar="NAME=VALUE")
-    plot: str | None = option(None, _text("plot"), "figure .png or .svg: both spectra and the residuals")
+    plot: str | None = option(None, text("plot"), "figure .png or .svg: both spectra and the residuals")
     json: bool = option(False, true_or_false("json"), "print the comparison as one JSON object")
 
 

@@ -16,21 +16,13 @@ ASD Inc. (2017), *ASD File Format*, version 8 (the splices of its detectors).
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any, ClassVar
+from typing import ClassVar
 
-from virtspec_mi.base.checks import shown_value
 from virtspec_mi.exchange.measured.base import MEASURED_QUANTITIES, SCALES
-from virtspec_mi.settings import Options, one_of, option, true_or_false
+from virtspec_mi.settings import Options, one_of, option, text, true_or_false
 
 __all__ = ["MeasuredFlags"]
 
-
-def _text(name: str) -> Any:
-    def check(value: Any) -> str:
-        if not isinstance(value, str) or not value.strip():
-            raise ValueError(f"{name} must be a text (got {shown_value(value)})")
-        return value
-    return check
 
 
 _QUANTITIES = {quantity: f"the file holds a {quantity}" for quantity in MEASURED_QUANTITIES}
@@ -43,7 +35,7 @@ class MeasuredFlags(Options):
 
     title: ClassVar[str] = "measured file"
 
-    sample: str | None = option(None, _text("sample"), "the spectrum of a measured file of many (its label, or its "
+    sample: str | None = option(None, text("sample"), "the spectrum of a measured file of many (its label, or its "
                                 "0-based index)")
     measured_quantity: str | None = option(None, one_of("measured_quantity", _QUANTITIES),
                                            "what the measured file holds, when it does not tell (a file that tells "
@@ -52,6 +44,6 @@ class MeasuredFlags(Options):
                                         "the scale of the measured values, when the file does not tell", _SCALES)
     splice: bool = option(False, true_or_false("splice"), "apply ASD's detector splice correction (ASD files only; "
                           "default: the data as they are)")
-    measured_format: str | None = option(None, _text("measured_format"), "the measured file's format when its "
+    measured_format: str | None = option(None, text("measured_format"), "the measured file's format when its "
                                          "suffix does not tell it (asd, sig, sed, jcamp, envi, table, or an outside "
                                          "package's)")

@@ -23,7 +23,7 @@ from virtspec_mi.applications.base import Command, Session
 from virtspec_mi.applications.comparison.flags import MeasuredFlags
 from virtspec_mi.base.checks import check_delta, number, shown_value
 from virtspec_mi.plugins import specimen_rows
-from virtspec_mi.settings import one_of, option, true_or_false, whole_number
+from virtspec_mi.settings import one_of, option, text, true_or_false, whole_number
 
 __all__ = ["FIT", "FitFlags", "respond", "EXAMPLES"]
 
@@ -44,24 +44,17 @@ def _pairs(flag: str, form: str) -> Any:
 
     def check(values: Any) -> tuple[tuple[str, str], ...]:
         pairs = []
-        for text in (values,) if isinstance(values, str) else values:
-            if isinstance(text, tuple):  # already checked
-                pairs.append(text)
+        for item in (values,) if isinstance(values, str) else values:
+            if isinstance(item, tuple):  # already checked
+                pairs.append(item)
                 continue
-            name, sep, bounds = str(text).partition("=")
+            name, sep, bounds = str(item).partition("=")
             if not sep or not name.strip() or ":" not in bounds:
-                raise ValueError(f"{flag} takes {form} (got {text!r})")
+                raise ValueError(f"{flag} takes {form} (got {item!r})")
             pairs.append((name.strip(), bounds.strip()))
         return tuple(pairs)
     return check
 
-
-def _text(name: str) -> Any:
-    def check(value: Any) -> str:
-        if not isinstance(value, str) or not value.strip():
-            raise ValueError(f"{name} must be a text (got {shown_value(value)})")
-        return value
-    return check
 
 
 def _positive(name: str) -> Any:
@@ -93,9 +86,9 @@ def _evaluations(values: Any) -> tuple[int, int, int]:
 
 
 def _defines(values: Any) -> tuple[str, ...]:
-    for text in values:
-        if "=" not in str(text):
-            raise ValueError(f"-D takes NAME=VALUE (got {text!r})")
+    for item in values:
+        if "=" not in str(item):
+            raise ValueError(f"-D takes NAME=VALUE (got {item!r})")
     return tuple(values)
 
 
@@ -112,24 +105,24 @@ class FitFlags(MeasuredFlags):
 
     title: ClassVar[str] = "fit"
 
-    measured: str | None = option(None, _text("measured"), "measured spectrum: a wavelength,value,uncertainty CSV "
+    measured: str | None = option(None, text("measured"), "measured spectrum: a wavelength,value,uncertainty CSV "
                                   "(or a colour-science CSV with uncertainty columns), a NetCDF file, a result file, "
                                   "or an instrument's or library's file (.asd, .sig, .sed, .jdx/.dx, .sli, a CSV "
                                   "table of many samples: --sample; give --uncertainty)",
                                   positional=True, metavar="MEASURED")
-    specimen: str | None = option(None, _text("specimen"), f"a specimen plugin ({', '.join(specimen_rows())}: the "
+    specimen: str | None = option(None, text("specimen"), f"a specimen plugin ({', '.join(specimen_rows())}: the "
                                   "project's and the installed packages' of the entry-point group "
                                   "virtspec_mi.specimens), a shipped scene or an XML scene", required=True)
     free: tuple | None = option(None, _pairs("--free", "NAME=LOWEST:HIGHEST"), "a free parameter and its bounds",
                                 repeat=True, required=True, metavar="NAME=LOWEST:HIGHEST")
     quantity: str = option("reflectance", one_of("quantity", _QUANTITIES), "what MEASURED holds", _QUANTITIES)
-    transmittance: str | None = option(None, _text("transmittance"), "a measured transmittance file besides MEASURED "
+    transmittance: str | None = option(None, text("transmittance"), "a measured transmittance file besides MEASURED "
                                        "(then MEASURED is the reflectance)", metavar="FILE")
     uncertainty: float | None = option(None, _positive("uncertainty"), "measurement uncertainty (a half-width) of "
                                        "every point, overriding the files'")
-    wavelengths: str | None = option(None, _text("wavelengths"), "wavelengths to fit, e.g. 400:2500:20", unset="the "
+    wavelengths: str | None = option(None, text("wavelengths"), "wavelengths to fit, e.g. 400:2500:20", unset="the "
                                      "measured ones")
-    loss: str | None = option(None, _text("loss"), "the loss minimised: chi2, rmse, max or windows (checked by vm.fit, "
+    loss: str | None = option(None, text("loss"), "the loss minimised: chi2, rmse, max or windows (checked by vm.fit, "
                               "which names them)", unset="chi2, windows with --window")
     window: tuple = option((), _pairs("--window", "NAME=LOWEST:HIGHEST[,LOWEST:HIGHEST ...] in nm"),
                            "the spectral window (nm) on which a free parameter is estimated (loss windows; PROSPECT-D's "
@@ -140,7 +133,7 @@ class FitFlags(MeasuredFlags):
                                 "smallest measurement uncertainty")
     forward_mu: float | None = option(None, _positive("forward_mu"), "forward tolerance at the optimum (overrides "
                                       "--mu-fraction)")
-    table: str | None = option(None, _text("table"), "Zarr store of the coarse table (read when it exists, else "
+    table: str | None = option(None, text("table"), "Zarr store of the coarse table (read when it exists, else "
                                "written)")
     table_points: int | None = option(None, whole_number("table_points", 1, 10**6, "1 <= table_points"),
                                       "values per parameter in the table", unset="from the free parameters")
@@ -154,21 +147,21 @@ class FitFlags(MeasuredFlags):
                                             "wavelengths the search and the confirmation read when fewer than the "
                                             "fitted ones (0: all)", metavar="N", unset="16")
     seed: int = option(0, whole_number("seed", 0, 2**32 - 1, "0 <= seed < 2**32"), "seed of every forward reading")
-    directory: str | None = option(None, _text("directory"), "work directory: readings kept there; the same command "
+    directory: str | None = option(None, text("directory"), "work directory: readings kept there; the same command "
                                    "resumes")
     workers: int | None = option(None, whole_number("workers", 1, 4096, "1 <= workers"), "Dask workers for the table",
                                  metavar="N", unset="in this process")
     theta_i: float | None = option(None, _angle, "incidence angle of the forward readings (degrees)",
                                    unset="the specimen scene's")
-    beam: str | None = option(None, _text("beam"), "beam of the forward readings (collimated, conical)",
+    beam: str | None = option(None, text("beam"), "beam of the forward readings (collimated, conical)",
                               unset="the specimen scene's")
-    bound: str | None = option(None, _text("bound"), "ray budget rule of the forward readings (hoeffding, "
+    bound: str | None = option(None, text("bound"), "ray budget rule of the forward readings (hoeffding, "
                                "two-stage ...)", unset="the specimen scene's")
     defines: tuple = option((), _defines, "a parameter of an XML scene", repeat=True, spelled="-D",
                             metavar="NAME=VALUE")
-    out: str | None = option(None, _text("out"), "fit file (.json or .nc); the fits of a file of many spectra: a "
+    out: str | None = option(None, text("out"), "fit file (.json or .nc); the fits of a file of many spectra: a "
                              "table (.csv or .nc)")
-    plot: str | None = option(None, _text("plot"), "figure (.png, .svg): measured vs fitted, residuals, profiles")
+    plot: str | None = option(None, text("plot"), "figure (.png, .svg): measured vs fitted, residuals, profiles")
     json: bool = option(False, true_or_false("json"), "print the fit as one JSON object")
     progress: bool = option(False, true_or_false("progress"), "a line per stage on stderr")
 
@@ -203,7 +196,7 @@ def respond(session: Session) -> int:
     else:
         measured = measured_from(flags, flags.measured)
         quantities = ("reflectance", "transmittance") if flags.quantity == "both" else (flags.quantity,)
-    defines = dict(text.partition("=")[::2] for text in flags.defines)
+    defines = dict(item.partition("=")[::2] for item in flags.defines)
     settings = {name: value for name, value in (("theta_i", flags.theta_i), ("beam", flags.beam),
                                                 ("bound", flags.bound)) if value is not None}
     search = {} if flags.search_wavelengths is None else {"search_wavelengths": flags.search_wavelengths or None}

@@ -22,19 +22,12 @@ from typing import Any, ClassVar
 
 from virtspec_mi.applications.base import Command, Extension, Session
 from virtspec_mi.base.checks import check_delta, check_rays, number, parse_wavelengths
-from virtspec_mi.settings import Options, one_of, option, true_or_false, whole_number
+from virtspec_mi.settings import Options, one_of, option, text, true_or_false, whole_number
 
 __all__ = ["KLEMS", "GONIO_KLEMS", "KlemsCommandFlags", "KlemsFlags", "respond", "respond_gonio"]
 
 _BASES = {"full": "145 patches", "half": "77 patches", "quarter": "41 patches"}
 
-
-def _file(name: str) -> Any:
-    def check(value: Any) -> str:
-        if not isinstance(value, str) or not value.strip():
-            raise ValueError(f"{name} must be a file path (got {value!r})")
-        return value
-    return check
 
 
 @dataclass(frozen=True)
@@ -43,14 +36,14 @@ class KlemsCommandFlags(Options):
 
     title: ClassVar[str] = "Klems matrices"
 
-    scene: str | None = option(None, _file("scene"), "Mitsuba XML scene with 'emitter' and 'specimen' disks, or a "
+    scene: str | None = option(None, text("scene", "a file path"), "Mitsuba XML scene with 'emitter' and 'specimen' disks, or a "
                                "shipped scene's name (virtspec scenes); its geometry does not matter (collimated beam)",
                                positional=True, metavar="SCENE")
-    out: str | None = option(None, _file("out"), "the WINDOW 6 XML file to write, with its NetCDF sidecar FILE.nc "
+    out: str | None = option(None, text("out", "a file path"), "the WINDOW 6 XML file to write, with its NetCDF sidecar FILE.nc "
                              "(its groups of readings kept in FILE.parts meanwhile: re-run to resume)", required=True,
                              metavar="FILE")
     basis: str = option("full", one_of("basis", _BASES), "Klems basis", _BASES)
-    back: str | None = option(None, _file("back"), "a scene of the back side (e.g. a leaf with -D side=abaxial "
+    back: str | None = option(None, text("back", "a file path"), "a scene of the back side (e.g. a leaf with -D side=abaxial "
                               "written as its own file)", unset="the specimen turned over")
     wavelengths: tuple = option((551.0,), parse_wavelengths, "wavelengths in nm (numbers or start:stop:step)",
                                 words=True)
@@ -62,7 +55,7 @@ class KlemsCommandFlags(Options):
     seed: int = option(0, whole_number("seed", 0, 2**32 - 1, "0 <= seed < 2**32"), "seed of the run")
     isotropic: bool = option(False, true_or_false("isotropic"), "one reading per ring, rotated onto its other patches "
                              "(rotation-invariant specimens)")
-    name: str = option("virtspec-mi specimen", _file("name"), "the specimen's name in the file")
+    name: str = option("virtspec-mi specimen", text("name", "a file path"), "the specimen's name in the file")
     overwrite: bool = option(False, true_or_false("overwrite"), "let the sidecar FILE.nc replace a file of that name "
                              "that is not a Klems sidecar")
     quiet: bool = option(False, true_or_false("quiet"), "no progress bar")
@@ -112,7 +105,7 @@ class KlemsFlags(Options):
     title: ClassVar[str] = "Klems matrices (alias of virtspec klems)"
 
     klems: str | None = option(
-        None, _file("klems"), "measure the Klems matrices instead (an alias of virtspec klems SCENE --out FILE; --mu "
+        None, text("klems", "a file path"), "measure the Klems matrices instead (an alias of virtspec klems SCENE --out FILE; --mu "
                               "is the certified tolerance of every patch fraction) and write WINDOW 6 XML FILE with "
                               "its NetCDF sidecar FILE.nc")
     klems_basis: str = option("full", one_of("klems_basis", _BASES), "Klems basis of --klems", _BASES)

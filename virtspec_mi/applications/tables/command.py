@@ -15,7 +15,7 @@ from dataclasses import dataclass
 from typing import Any, ClassVar
 
 from virtspec_mi.applications.base import Command, Session
-from virtspec_mi.settings import Options, one_of, option, true_or_false, whole_number
+from virtspec_mi.settings import Options, one_of, option, text, true_or_false, whole_number
 
 __all__ = ["ALBEDO_TABLE", "TableFlags", "respond", "EXAMPLES"]
 
@@ -27,13 +27,6 @@ EXAMPLES: tuple[str, ...] = (
     "virtspec albedo-table --engine unreal --audit PreintegratedGF.png --figure audit.png")
 """Its examples (its ``--help``)."""
 
-
-def _text(name: str) -> Any:
-    def check(value: Any) -> str:
-        if not isinstance(value, str) or not value.strip():
-            raise ValueError(f"{name} must be a text (got {value!r})")
-        return value
-    return check
 
 
 def _float(name: str) -> Any:
@@ -72,14 +65,14 @@ class TableFlags(Options):
                           "conductor F: 1, Fc = (1 - wi.m)^5 or 1 - Fc", _choices("one", "fc", "one_minus_fc"))
     engine: str | None = option(None, one_of("engine", _ENGINES), "grid and memory order of that engine", _ENGINES,
                                 unset="cycles, or none with --cosines/--alpha")
-    mu: str | None = option(None, _text("cosines"), "cosines of incidence mu: numbers or start:stop:step",
+    mu: str | None = option(None, text("cosines"), "cosines of incidence mu: numbers or start:stop:step",
                             words=True, spelled="--cosines")
-    alpha: str | None = option(None, _text("alpha"), "roughness alpha: numbers or start:stop:step", words=True)
-    roughness: str | None = option(None, _text("roughness"), "roughness r (alpha = r^2): numbers or start:stop:step",
+    alpha: str | None = option(None, text("alpha"), "roughness alpha: numbers or start:stop:step", words=True)
+    roughness: str | None = option(None, text("roughness"), "roughness r (alpha = r^2): numbers or start:stop:step",
                                    words=True)
-    eta: str | None = option(None, _text("eta"), "glass indices >= 1 (inside: 1/eta): numbers or start:stop:step",
+    eta: str | None = option(None, text("eta"), "glass indices >= 1 (inside: 1/eta): numbers or start:stop:step",
                              words=True)
-    tolerance_flag: str | None = option(None, _text("mu"), "--mu: one meaning per flag", words=True, spelled="--mu",
+    tolerance_flag: str | None = option(None, text("mu"), "--mu: one meaning per flag", words=True, spelled="--mu",
                                         hidden=True)
     epsilon: float = option(1e-3, _float("epsilon"), "tolerance of every value")
     delta: float = option(0.01, _float("delta"), "failure probability of the whole table")
@@ -90,21 +83,21 @@ class TableFlags(Options):
     seed: int = option(0, whole_number("seed", 0, 2**32 - 1, "0 <= seed < 2**32"), "seed of the run")
     out: tuple = option((), _words, "files to write: .nc, .npy, .h (an engine's own: .inc, .raw, .png)", words=True,
                         repeat=True, metavar="FILE")
-    checkpoint: str | None = option(None, _text("checkpoint"), "directory keeping finished groups (resume)",
+    checkpoint: str | None = option(None, text("checkpoint"), "directory keeping finished groups (resume)",
                                     unset="OUT.parts")
-    source: str | None = option(None, _text("from"), "a table .nc to read instead of measuring", spelled="--from",
+    source: str | None = option(None, text("from"), "a table .nc to read instead of measuring", spelled="--from",
                                 metavar="TABLE")
-    compare: str | None = option(None, _text("compare"), "published table (.npy, .nc, .csv, C header) to hold to the "
+    compare: str | None = option(None, text("compare"), "published table (.npy, .nc, .csv, C header) to hold to the "
                                  "certified intervals", metavar="PUBLISHED")
-    array: str | None = option(None, _text("array"), "--compare: the array (header) or variable (.nc) to read")
+    array: str | None = option(None, text("array"), "--compare: the array (header) or variable (.nc) to read")
     side: str = option("outside", one_of("side", _choices("outside", "inside")), "--compare, glass: the side",
                        _choices("outside", "inside"))
     average: bool = option(False, true_or_false("average"), "--compare E_avg instead of E")
     rounding: float = option(0.0, _float("rounding"), "--compare: the published values' rounding")
-    audit: str | None = option(None, _text("audit"), "an engine's published table in its native layout (cycles .h, "
+    audit: str | None = option(None, text("audit"), "an engine's published table in its native layout (cycles .h, "
                                "filament dfg.inc, unreal .raw/.png) to audit against certified tables of its model "
                                "(--engine cycles|filament|unreal)", metavar="PUBLISHED")
-    figure: str | None = option(None, _text("figure"), "--audit: write the heat map of (published - certified)/epsilon "
+    figure: str | None = option(None, text("figure"), "--audit: write the heat map of (published - certified)/epsilon "
                                 "here (--from TABLE.nc: audit against a certified engine table written before)")
     quiet: bool = option(False, true_or_false("quiet"), "no progress bar")
     overwrite: bool = option(False, true_or_false("overwrite"), "let a .npy's NAME.json and NAME_avg.npy replace "

@@ -42,7 +42,7 @@ __all__ = ["TargetsApplication"]
 def _api(folder: Any) -> Any:
     """The example's target through Python: ``measure_target`` (``vm.measure(scene, target=...)``)."""
 
-    from virtspec_mi.applications.targets.measure import measure_target
+    from virtspec_mi.applications.targets.sequential import measure_target
     from virtspec_mi.applications.targets.targets import band
     from virtspec_mi.runtime.scene import loaded
 

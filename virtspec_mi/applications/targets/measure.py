@@ -18,7 +18,7 @@ target=...)`` calls it):
    the joint optimum for several sharing wavelengths
    (:func:`~.functionals.allocate_jointly`); wavelengths of zero weight are not traced;
 4. the spectrophotometer traces them through the instrument seam
-   (:class:`~virtspec_mi.instruments.hemispherical.allocated.Allocated`: its ``init`` plans
+   (:data:`virtspec_mi.instruments.ALLOCATING`: its ``init`` plans
    the allocation, its ``process`` is one batched kernel call at the seed
    :func:`~virtspec_mi.budgets.twostage.stage_two_seed` of the settings' seed, rays fresh of
    the pilot's, its ``postprocess`` the readings result), each reading with rays of its own
@@ -50,7 +50,7 @@ from virtspec_mi.budgets.functionals import (Functional, allocate, allocate_join
 from virtspec_mi.applications.targets.result import DerivedResult
 from virtspec_mi.applications.targets.targets import TARGETS, ColourTarget, Target, Value, colour_of
 from virtspec_mi.budgets.twostage import stage_two_seed
-from virtspec_mi.instruments.hemispherical.allocated import Allocated, Allocation
+from virtspec_mi.instruments import ALLOCATING, Allocation
 from virtspec_mi.plugins.specimen import specimen_of
 from virtspec_mi.runtime.reading import scene_options
 from virtspec_mi.runtime.scene import LoadedScene
@@ -114,16 +114,17 @@ def _grid(functionals: list[Functional]) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _trace(bench: Any, settings: Settings, grid: np.ndarray, rays: np.ndarray, seed: int, scene: str = "",
-           source: dict | None = None) -> tuple[Allocated, Any]:
+           source: dict | None = None, offsets: np.ndarray | None = None) -> tuple[Any, Any]:
     """
-    The spectrophotometer's allocated reading (:class:`~virtspec_mi.instruments.hemispherical.allocated.Allocated`:
-    its init plans the traced wavelengths, rays > 0, each from its own key k·stride; its
-    process traces them at ``seed``): the instrument (its ``used`` wavelengths, its
-    ``postprocess``) and the tally.
+    The spectrophotometer's allocated reading (:data:`virtspec_mi.instruments.ALLOCATING`:
+    its init plans the traced wavelengths, rays > 0, each from its own key k·stride, or from
+    ``offsets`` where given; its process traces them at ``seed``): the instrument (its
+    ``used`` wavelengths, its ``postprocess``) and the tally.
     """
 
-    instrument = Allocated(scene, source)
-    plan = instrument.init(bench, settings, Allocation(grid, rays, seed), np.array([float(settings.theta_i)]), None)
+    instrument = ALLOCATING(scene, source)
+    plan = instrument.init(bench, settings, Allocation(grid, rays, seed, offsets), np.array([float(settings.theta_i)]),
+                           None)
     return instrument, instrument.process(plan)
 
 

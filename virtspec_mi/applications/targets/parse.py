@@ -29,7 +29,7 @@ from dataclasses import dataclass
 from typing import Any, Callable, ClassVar
 
 from virtspec_mi.applications.targets.targets import TARGETS, Target, target_kind
-from virtspec_mi.settings import Options, option
+from virtspec_mi.settings import Options, option, text
 
 __all__ = ["parse_target", "kinds", "TargetFlags", "measure_target_command", "respond", "target_help"]
 
@@ -101,11 +101,6 @@ def target_help() -> str:
             "(the instrument picks the wavelengths and the rays of each)")
 
 
-def _check_target(value: Any) -> str:
-    if not isinstance(value, str) or not value.strip():
-        raise ValueError(f"target must be a text such as colour,dE00=0.5 (got {value!r})")
-    return value
-
 
 @dataclass(frozen=True)
 class TargetFlags(Options):
@@ -113,7 +108,7 @@ class TargetFlags(Options):
 
     title: ClassVar[str] = "derived quantity"
 
-    target: str | None = option(None, _check_target, target_help())
+    target: str | None = option(None, text("target", "a text such as colour,dE00=0.5"), target_help())
 
 
 def measure_target_command(args: Any, keywords: dict[str, Any], report: Callable[..., int]) -> int:

@@ -19,7 +19,7 @@ default, ``bound="betting"``:
    asks for), sized for the information each functional still lacks (the first batch:
    :data:`FIRST_SHARE` of what it needs at the pilot's variances); the stakes are fixed
    *before* the batch is traced, from the rays before it (predictable);
-4. the batch is traced (:func:`~virtspec_mi.engine.readings.trace_allocated`, seed
+4. the batch is traced (the spectrophotometer's allocated reading, :data:`virtspec_mi.instruments.ALLOCATING`, seed
    :func:`~virtspec_mi.budgets.twostage.stage_two_seed` of the settings' seed). Reading k
    continues its own stream of rays: global indices k·S + (rays it traced before), S
    more than any reading can trace (:data:`MOST_RAYS_FACTOR` times Hoeffding's rays in
@@ -54,12 +54,13 @@ import math
 import time
 from dataclasses import fields, replace
 from functools import partial
-from typing import Any
+from typing import Any, Callable
 
 import numpy as np
 
 from virtspec_mi.budgets.functionals import allocate_jointly
-from virtspec_mi.applications.targets.measure import _certified_colour, _colour_values, _fates, plan_target, take_target
+from virtspec_mi.applications.targets.measure import (_certified_colour, _colour_values, _fates, _trace, plan_target,
+                                                      take_target)
 from virtspec_mi.applications.targets.measure import measure_target as checked_target
 from virtspec_mi.runtime.scene import LoadedScene
 from virtspec_mi.applications.targets.result import DerivedResult
@@ -67,7 +68,7 @@ from virtspec_mi.applications.targets.targets import ColourTarget, Target
 from virtspec_mi.budgets.betting import BettingSequence, neyman_rays, prior_variances
 from virtspec_mi.budgets.twostage import stage_two_seed
 from virtspec_mi.engine.tally import Tally
-from virtspec_mi.instruments.hemispherical.allocated import Allocated, Allocation
+from virtspec_mi.instruments import ALLOCATING, Allocation
 from virtspec_mi.kernel.counts import WEIGHT_ROUNDING, Counts
 from virtspec_mi.settings import Settings
 
@@ -91,9 +92,6 @@ MOST_RAYS_FACTOR: float = 4.0
 PLANNED_MARGIN: float = 0.95
 """The share of a nonlinear target's tolerance its functionals' stakes are planned for (from the pilot's point)."""
 
-BOUNDS: tuple[str, ...] = ("auto", "betting", "hoeffding")
-"""A target's certificates: a betting confidence sequence (this module), Hoeffding's (one batch), or ``auto``
-(the default: betting unless a linear target's pilot shows it would not pay, :func:`pays`)."""
 
 PAYS_FACTOR: float = 1.25
 """``auto`` takes the betting route when its predicted rays are at most 1/PAYS_FACTOR of Hoeffding's …"""
@@ -148,9 +146,7 @@ def certify_target(bench: Any, settings: Settings, target: Target, *, scene: str
 
     if bound not in BOUNDS:
         raise ValueError(f"bound must be one of {', '.join(BOUNDS)} for a target (got {bound!r})")
-    if bound == "hoeffding":
-        return take_target(bench, settings, target, scene=scene, source=source)
-    return take_sequential(bench, settings, target, scene=scene, source=source, fallback=bound == "auto")
+    return BOUNDS[bound](bench, settings, target, scene=scene, source=source)
 
 
 def pays(weights: np.ndarray, need: np.ndarray, variances: np.ndarray, means: np.ndarray, hoeffding: int) -> bool:
@@ -249,8 +245,10 @@ def take_sequential(bench: Any, settings: Settings, target: Target, *, scene: st
         batch = np.minimum(batch, np.maximum(MOST_RAYS_FACTOR * hoeffding - spent.sum(), 1)).astype(np.int64)
     estimates, certified, reported, colour, met = _certificate(target, functionals, sequences, total, spent, delta,
                                                                final=True)
-    final, _ = _allocated(bench, settings, grid, used, np.ones(len(used), dtype=np.int64), None, settings.seed, scene,
-                          source)
+    final = ALLOCATING(scene, source)
+    rays = np.zeros(len(grid), dtype=np.int64)
+    rays[used] = 1
+    final.init(bench, settings, Allocation(grid, rays, int(settings.seed)), np.array([float(settings.theta_i)]), None)
     result = final.postprocess(Tally(total).with_seconds(seconds_traced))
     return DerivedResult(target=target, values=tuple(reported), readings=result.squeeze("theta_i"),
                          rays=int(spent.sum()), pilot_rays=pilot_rays, delta=delta,
@@ -259,30 +257,28 @@ def take_sequential(bench: Any, settings: Settings, target: Target, *, scene: st
                          batches=tuple(batches))
 
 
-def _allocated(bench: Any, settings: Settings, grid: np.ndarray, traced: np.ndarray, rays: np.ndarray,
-               offsets: np.ndarray | None, seed: int, scene: str, source: dict | None) -> tuple[Allocated, Any]:
-    """
-    The spectrophotometer's allocated reading (:class:`~virtspec_mi.instruments.hemispherical.allocated.Allocated`)
-    of the wavelengths ``grid[traced]``, ``rays`` each from global indices ``offsets``, at ``seed``: the
-    instrument and its plan (``init``).
-    """
-
-    every, starts = np.zeros(len(grid), dtype=np.int64), np.zeros(len(grid), dtype=np.int64)
-    every[traced] = rays
-    if offsets is not None:
-        starts[traced] = offsets
-    instrument = Allocated(scene, source)
-    plan = instrument.init(bench, settings, Allocation(grid, every, int(seed), None if offsets is None else starts),
-                           np.array([float(settings.theta_i)]), None)
-    return instrument, plan
+BOUNDS: dict[str, Callable[..., DerivedResult]] = {
+    "auto": partial(take_sequential, fallback=True),
+    "betting": partial(take_sequential, fallback=False),
+    "hoeffding": take_target,
+}
+"""
+A target's certificates by name, each its route: ``auto`` (the default: betting unless a
+linear target's pilot shows it would not pay, :func:`pays`), a betting confidence sequence
+(:func:`take_sequential`), Hoeffding's (one batch, :func:`~virtspec_mi.applications.targets.measure.take_target`).
+"""
 
 
 def _traced(bench: Any, settings: Settings, grid: np.ndarray, traced: np.ndarray, rays: np.ndarray,
             offsets: np.ndarray, seed: int, scene: str, source: dict | None) -> Tally:
-    """One batch through the instrument seam (:func:`_allocated`'s ``process``): its tally."""
+    """
+    One batch through the instrument seam (:func:`~virtspec_mi.applications.targets.measure._trace`):
+    the wavelengths ``grid[traced]``, ``rays`` each from global indices ``offsets``, at ``seed``; its tally.
+    """
 
-    instrument, plan = _allocated(bench, settings, grid, traced, rays, offsets, seed, scene, source)
-    return instrument.process(plan)
+    every, starts = np.zeros(len(grid), dtype=np.int64), np.zeros(len(grid), dtype=np.int64)
+    every[traced], starts[traced] = rays, offsets
+    return _trace(bench, settings, grid, every, int(seed), scene, source, starts)[1]
 
 
 def _certificate(target: Target, functionals: list, sequences: list[BettingSequence], total: Counts,

@@ -33,7 +33,7 @@ from virtspec_mi.instruments.goniophotometer.bins import BINNINGS, HEMISPHERES, 
 from virtspec_mi.instruments.base import Instrument, reading_grid, readings_result
 from virtspec_mi.instruments.command import Command, FigureFlag, Session
 from virtspec_mi.instruments.goniophotometer.result import GonioResult
-from virtspec_mi.settings import Options, Settings, one_of, option, true_or_false
+from virtspec_mi.settings import Options, Settings, one_of, option, text, true_or_false
 
 __all__ = ["GonioOptions", "Goniophotometer", "GonioResult", "RglFlags"]
 
@@ -99,11 +99,6 @@ class GonioOptions(Options):
 
 
 
-def _bsdf_file(value: Any) -> str:
-    if not isinstance(value, str) or not value.strip():
-        raise ValueError(f"rgl must be a file path (got {value!r})")
-    return value
-
 
 @dataclass(frozen=True)
 class RglFlags(Options):
@@ -112,7 +107,7 @@ class RglFlags(Options):
     title: ClassVar[str] = "Mitsuba measured BSDF"
 
     rgl: str | None = option(
-        None, _bsdf_file, "also write the reading's reflection as an RGL .bsdf FILE for Mitsuba's measured plugin "
+        None, text("rgl", "a file path"), "also write the reading's reflection as an RGL .bsdf FILE for Mitsuba's measured plugin "
                           "(each node: its bin's f times cos theta_o, with the bin's certified interval; see "
                           "GonioResult.to_rgl)")
 

@@ -72,10 +72,17 @@ def test_xml_block_loads(item, mi):
 @pytest.mark.slow
 @pytest.mark.parametrize("item", PYTHON, ids=[_id(item) for item in PYTHON])
 def test_python_block_runs(item, workdir, monkeypatch):
+    from virtspec_mi.applications.targets.targets import TARGETS
+
     page, index = item
     monkeypatch.chdir(workdir)
     source = code_blocks.blocks(page, "python")[index]
-    exec(compile(source, f"{page.name} python block {index}", "exec"), {"__name__": "__main__"})  # each block a script
+    rows = dict(TARGETS)  # a how-to adds a target's row: the table is left as it was found, for the tests after it
+    try:
+        exec(compile(source, f"{page.name} python block {index}", "exec"), {"__name__": "__main__"})  # a script each
+    finally:
+        TARGETS.clear()
+        TARGETS.update(rows)
 
 
 @pytest.mark.slow

@@ -313,6 +313,40 @@ def test_virtspec_sphere_out_stops_on_sigterm_during_a_long_walk(tmp_path):
 
 
 @pytest.mark.slow
+def test_virtspec_sphere_on_a_white_small_port_sphere_with_a_huge_bounce_cap_stops_on_sigint(tmp_path):
+    """
+    Issue 42's hang: a white sphere (wall reflectance 1) with pin-hole ports (1 mm; the detector 0.5 mm) and
+    ``--max-bounces 10000000``, where a ray walks about 10**5 steps before a port takes it: before the walk ran in
+    launches, one kernel held the process for minutes after Ctrl-C. The signal lands 4 s in, inside the walk
+    (no configuration can finish by then: 2**20 rays of ~10**5 steps), and the command must end within a second,
+    one line, the checkpoint named.
+    """
+
+    scene = tmp_path / "white.xml"
+    text = (ROOT / "scenes" / "sphere_150mm_8d.xml").read_text()
+    text = text.replace('<default name="wall_reflectance" value="0.98"/>',
+                        '<default name="wall_reflectance" value="1"/>')
+    text = text.replace('radius=12.7"', 'radius=1"').replace('radius=6.35"', 'radius=0.5"')
+    text = text.replace('<scale value="12.7"/>', '<scale value="1"/>').replace('<scale value="8"/>',
+                                                                             '<scale value="0.5"/>')
+    scene.write_text(text)
+    out = tmp_path / "white.json"
+    command = _cli("sphere", str(scene), "--rays", str(1 << 20), "--max-bounces", "10000000", "--wavelengths",
+                   "550", "--out", str(out))
+    process = subprocess.Popen(command, cwd=tmp_path, stderr=subprocess.PIPE, text=True, preexec_fn=default_signals)
+    time.sleep(4.0)
+    assert process.poll() is None, f"the walk ended before it could be interrupted: {process.stderr.read()}"
+    sent = time.monotonic()
+    process.send_signal(signal.SIGINT)
+    _, stderr = process.communicate(timeout=150)
+    seconds = time.monotonic() - sent
+    assert process.returncode == 128 + signal.SIGINT, stderr
+    assert "virtspec: interrupted" in stderr and "Traceback" not in stderr, stderr
+    assert len(stderr.strip().splitlines()) == 1, stderr
+    assert seconds < LATENCY_S, seconds
+
+
+@pytest.mark.slow
 def test_a_sweep_on_two_workers_stops_on_sigint_to_the_process_group(tmp_path):
     """Ctrl-C reaches the driver and its worker processes: the driver stops, the workers print nothing."""
 

@@ -39,21 +39,15 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any, Callable, ClassVar, Protocol, Sequence
 
+from virtspec_mi.instruments.command import Subcommand
+
 __all__ = ["Application", "Command", "Extension", "Session"]
 
 
 @dataclass(frozen=True)
-class Command:
-    """One ``virtspec`` subcommand of an application (see the module docstring)."""
+class Command(Subcommand):
+    """One ``virtspec`` subcommand of an application (see the module docstring): its help, its flags, its action."""
 
-    name: str
-    """The subcommand."""
-    summary: str
-    """One line in ``virtspec --help``."""
-    description: str
-    """The head of ``virtspec NAME --help``."""
-    examples: tuple[str, ...]
-    """Command lines shown under ``--help``."""
     flags: type
     """Its arguments and flags: an :class:`~virtspec_mi.settings.Options` class (positional fields are arguments)."""
     respond: Callable[["Session"], int]

@@ -30,7 +30,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Any, Callable, ContextManager, Protocol, Sequence
 
-__all__ = ["Command", "FigureFlag", "Session"]
+__all__ = ["Command", "FigureFlag", "Session", "Subcommand"]
 
 
 @dataclass(frozen=True)
@@ -54,8 +54,8 @@ class FigureFlag:
 
 
 @dataclass(frozen=True)
-class Command:
-    """One ``virtspec`` subcommand of an instrument (see the module docstring)."""
+class Subcommand:
+    """The help of one ``virtspec`` subcommand, an instrument's (:class:`Command`) or an application's."""
 
     name: str
     """The subcommand."""
@@ -65,6 +65,12 @@ class Command:
     """The head of ``virtspec NAME --help``."""
     examples: tuple[str, ...]
     """Command lines shown under ``--help`` (each runs as written from anywhere: shipped scenes by name)."""
+
+
+@dataclass(frozen=True)
+class Command(Subcommand):
+    """One ``virtspec`` subcommand of an instrument (see the module docstring)."""
+
     figures: tuple[FigureFlag, ...] = ()
     """Its figure flags (the first is ``--plot``); none: the result's ``plot`` as ``--plot``."""
     one_reading: bool = False

@@ -10,7 +10,7 @@ SUDO   := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
 APT    ?= apt-get
 PYTEST_ARGS ?=
 
-.PHONY: setup venv llvm demo test test-fast docs lab bench notebooks clean
+.PHONY: setup venv llvm demo test test-slow docs lab bench notebooks clean
 
 setup: $(STAMP) llvm
 
@@ -46,18 +46,23 @@ llvm: $(STAMP)
 demo: setup
 	$(VENV)/bin/virtspec measure diamond_conical --theta-i 70
 
-# The whole suite, slow statistical tests included (plain `pytest` deselects them): on two
-# pytest-xdist workers (whole files each), then, alone on the machine, the tests that time how
-# fast a signal is answered (their bound is a latency, so they must not share the cores). Their
-# signals land at seeded moments, so a failure is run once more: the same moment again, which
-# a defect fails again and a stall of the machine does not.
+# The suite in two steps: every file but two on two pytest-xdist workers (whole files each),
+# then, alone on the machine, the tests that time how fast a signal is answered (their bound is
+# a latency, so they must not share the cores). Their signals land at seeded moments, so a
+# failure is run once more: the same moment again, which a defect fails again and a stall of the
+# machine does not. `make test` runs the tests not marked `slow` (under 10 minutes on a quiet
+# 2-core machine); `make test-slow` the slow ones (large statistical checks, the manual's build
+# and code, the notebooks, the wheel in a fresh environment); CI runs both.
 SERIAL := tests/test_interrupts_anytime.py tests/base/test_interrupts.py
+MARK   ?= not slow
+SUITE   = $(PY) -m pytest -m "$(MARK)" -n 2 --dist loadfile $(addprefix --ignore=,$(SERIAL)) $(PYTEST_ARGS) \
+	  && $(PY) -m pytest -m "$(MARK)" --reruns 1 $(SERIAL) $(PYTEST_ARGS)
 test: setup
-	$(PY) -m pytest -m "slow or not slow" -n 2 --dist loadfile $(addprefix --ignore=,$(SERIAL)) $(PYTEST_ARGS)
-	$(PY) -m pytest -m "slow or not slow" --reruns 1 $(SERIAL) $(PYTEST_ARGS)
+	$(SUITE)
 
-test-fast: setup
-	$(PY) -m pytest $(PYTEST_ARGS)
+test-slow: setup
+	$(MAKE) --no-print-directory MARK=slow test
+
 
 # The manual (Sphinx): docs/_build/html/index.html, warnings are errors (the tests build it too).
 docs: setup

@@ -58,7 +58,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from enum import IntEnum
-from typing import Any, Sequence
+from typing import Any, ClassVar, Sequence
 
 import numpy as np
 
@@ -212,6 +212,14 @@ class SphereLayout(ExitHook):
     sums = ("wall_reflections", "weight_violations", "rounded_weights")
     start_last = 1
     """The ``last`` surface of a walk's start (1: holder 0's plane)."""
+    carried: ClassVar[tuple[tuple[str, float], ...]] = ()
+    """(name, start value) of further per-ray ``Float`` state a subclass's :meth:`step` carries (none here): each
+    starts at its value with every ray and is written back per ray when the ray's walk ends (:meth:`carried_sums`)."""
+
+    def carried_sums(self, carried: dict[str, Any], rays: ChunkRays) -> dict[str, Any]:
+        """Per-ray whole numbers to sum from the :attr:`carried` state of every ray at its walk's end (none here)."""
+
+        return {}
 
     def extra_columns(self, wavelengths: np.ndarray) -> tuple:
         """Further per-reading values :meth:`step` takes as columns (none here; a subclass's)."""
@@ -282,23 +290,26 @@ class SphereLayout(ExitHook):
         dr.eval(start, wo_world, fate, rare, hemisphere, *(() if slot is None else (slot,)))  # one kernel
         walking = dr.compress(fate == _ACTIVE)  # the rays that entered the sphere
         walls = dr.zeros(mi.UInt32, dr.width(fate))
+        carried = {name: dr.full(mi.Float, value, dr.width(fate)) for name, value in self.carried}
         if dr.width(walking):
-            fate, rare, walls = self._loop(walking, start, wo_world, fate, rare, rays)
+            fate, rare, walls = self._loop(walking, start, wo_world, fate, rare, rays, carried)
         code = hemisphere * self.codes + fate
         sums = {"wall_reflections": walls,
                 "weight_violations": dr.select((rare & _VIOLATION) != 0, mi.UInt32(1), mi.UInt32(0)),
-                "rounded_weights": dr.select((rare & _ROUNDED) != 0, mi.UInt32(1), mi.UInt32(0))}
+                "rounded_weights": dr.select((rare & _ROUNDED) != 0, mi.UInt32(1), mi.UInt32(0)),
+                **self.carried_sums(carried, rays)}
         return code, sums
 
     def _loop(self, walking: Any, start: Any, direction: Any, fate: Any, rare: Any,
-              rays: ChunkRays) -> tuple[Any, Any, Any]:
+              rays: ChunkRays, carried: dict[str, Any] | None = None) -> tuple[Any, Any, Any]:
         """
         The one symbolic loop over the rays that entered the sphere (indices ``walking``):
         each of L lanes walks its rays one after the other (rays j, j + L, j + 2L … of
         ``walking``), :meth:`step` by step, and takes the next ray as soon as one ends — so
         a lane never idles behind a long walk of its packet. Per-ray fates, rare bits and
         wall reflections are written back at the rays' indices (the random numbers depend
-        on the ray, not on the lane, so the counts do not depend on L).
+        on the ray, not on the lane, so the counts do not depend on L). ``carried``: per-ray arrays of the
+        :attr:`carried` state, written at the rays' indices when their walks end (none in the plain walk).
         """
 
         import drjit as dr
@@ -316,6 +327,8 @@ class SphereLayout(ExitHook):
         wavelengths = rays.wavelengths.astype(np.float32)
         bsdfs = [_loaded(holder.bsdf, rays.specimen) for holder in self.holders]
         extras = [values.astype(np.float32) for values in self.extra_columns(rays.wavelengths)]
+        carried = carried or {}
+        starts = [(name, value) for name, value in self.carried if name in carried]
 
         def reading_of(ray: Any) -> Any:
             return dr.zeros(mi.UInt32, width) if single else dr.gather(mi.UInt32, rays.slot, ray)
@@ -325,18 +338,22 @@ class SphereLayout(ExitHook):
         state = (slot, ray, reading_of(ray), dr.gather(mi.Point3f, start, ray), dr.gather(mi.Vector3f, direction, ray),
                  dr.full(mi.UInt32, self.start_last, width), dr.full(mi.UInt32, _ACTIVE, width),
                  dr.zeros(mi.UInt32, width),
-                 dr.zeros(mi.UInt32, width), dr.gather(mi.UInt32, rare, ray))
+                 dr.zeros(mi.UInt32, width), dr.gather(mi.UInt32, rare, ray),
+                 *(dr.full(mi.Float, value, width) for _, value in starts))
 
-        def body(slot, ray, reading, p, d, last, state_fate, bounces, walls, state_rare):
+        def body(slot, ray, reading, p, d, last, state_fate, bounces, walls, state_rare, *more_state):
             at = None if single else reading
             out = self.step({"p": p, "d": d, "last": last, "fate": state_fate, "bounces": bounces, "walls": walls,
-                             "rare": state_rare}, rays.ray_index(ray, at), root, rays.column(rho_w, mi.Float, at),
+                             "rare": state_rare, **{name: value for (name, _), value in zip(starts, more_state)}},
+                            rays.ray_index(ray, at), root, rays.column(rho_w, mi.Float, at),
                             rays.column(wavelengths, mi.Float, at), bsdfs,
                             *[rays.column(values, mi.Float, at) for values in extras])
             done = out["fate"] != _ACTIVE
             dr.scatter(fate_out, out["fate"], ray, done)
             dr.scatter(rare_out, out["rare"], ray, done)
             dr.scatter(walls_out, out["walls"], ray, done)
+            for name, _ in starts:
+                dr.scatter(carried[name], out[name], ray, done)
             slot = dr.select(done, slot + stride, slot)
             more = done & (slot < n)
             ray = dr.select(more, dr.gather(mi.UInt32, walking, slot, more), ray)
@@ -349,7 +366,8 @@ class SphereLayout(ExitHook):
                     dr.select(more, mi.UInt32(_ACTIVE), out["fate"]),
                     dr.select(more, mi.UInt32(0), out["bounces"]),
                     dr.select(more, mi.UInt32(0), out["walls"]),
-                    dr.select(more, dr.gather(mi.UInt32, rare, ray, more), out["rare"]))
+                    dr.select(more, dr.gather(mi.UInt32, rare, ray, more), out["rare"]),
+                    *(dr.select(more, mi.Float(value), out[name]) for name, value in starts))
 
         def steps(*variables):  # body, and one step more of this launch
             return (*body(*variables[:-1]), variables[-1] + 1)
@@ -359,7 +377,7 @@ class SphereLayout(ExitHook):
             *state, _ = dr.while_loop((*state, dr.zeros(mi.UInt32, width)),
                                       lambda slot, *rest: (slot < n) & (rest[-1] < budget), steps,
                                       label="sphere_walk")
-            dr.eval(*state, fate_out, rare_out, walls_out)
+            dr.eval(*state, fate_out, rare_out, walls_out, *carried.values())
             if not bool(dr.any(state[0] < n, axis=None)):
                 break
             if rays.safe_point is not None:  # the engine's: an interrupt during a long walk stops the run here

@@ -1,0 +1,219 @@
+"""
+The expected-value detector: each wall bounce scores its chance of reaching the detector
+========================================================================================
+
+:class:`ExpectedSphereLayout` walks the sphere as
+:class:`~virtspec_mi.instruments.sphere.walk.SphereLayout` does (same flights, absorption,
+holders, baffle and caps) but scores detection by its **expected value** at every
+Lambertian re-emission from the sphere wall (next-event estimation; Prokhorov, Mekhontsev
+& Hanssen 2003 score every diffuse bounce of their sphere Monte Carlo alike). Each ray
+carries a weight w (1 at its start) and a score s (0):
+
+- **a wall re-emission** at x (the ray survived absorption, probability ρw, as in the
+  plain walk): the Lambertian emission from a point of a sphere's wall lands uniformly
+  over the sphere's surface (its irradiance is uniform: the sphere's defining property;
+  Goebel 1967), so its next flight ends in the detector's cap with probability exactly
+  f_d = A_cap/(4πR²) = (1 − cos α)/2 — unless the baffle lies in between. A point y drawn
+  uniformly on the detector's cap stands for that flight: when x sees y past the baffle,
+  s += w·f_d, w ← w·(1 − f_d) and the ray flies on to a point z drawn uniformly on the
+  sphere *outside* the detector's cap (the emission conditioned on missing the detector);
+  when the baffle hides y, w is kept and the ray flies to y (into the baffle) with
+  probability f_d, else to z;
+- **a flight that ends in the detector's cap** (from the specimen, a holder or the
+  baffle, whose emission is not a sphere wall's) adds its weight w to s and ends the walk;
+- everything else (absorption, ports, holders, the step cap) is the plain walk's.
+
+The score's mean is the ray's detection probability (each split above keeps the expected
+detected weight: for the seen cap, w·f_d now and w·(1 − f_d) on the rest; for a hidden
+cap, the flight into the baffle with probability f_d·(1 − s_x) and past it with f_d·s_x
+when the cap is seen from x over a share s_x), and s + w never grows (it starts at 1), so
+**every score lies in [0, 1]**: an interval for a bounded mean certifies the detector
+fraction (:func:`virtspec_mi.budgets.scores.score_interval`).
+
+**Exact sums.** A ray's score is rounded to a multiple of 1/:data:`SCORE_SCALE`
+stochastically (up with probability the remainder, random dimension :data:`ROUNDING_DIMENSION`
+of the ray), q = ⌊sS⌋ + [u < sS − ⌊sS⌋], so q/S keeps the score's mean up to the uniform's
+24-bit resolution (E q/S − E s ∈ [0, 2⁻²⁴/S), taken off the interval's lower end) and lies
+in [0, 1]; the walk sums q and q² per reading (``detector_score``,
+``detector_score_squares``) as exact whole numbers, like every count. The score itself is
+computed in the walk's ``float32`` arithmetic, as its geometry is.
+
+Only a sphere whose next flight's chance of detection is known exactly takes it
+(:func:`expected_layout`): knife-edge circular ports, one detector port that counts every
+ray reaching it (no field of view), a Lambertian wall (no mirror share, no wall BSDF),
+the bench's pencil beam; a baffle is allowed (the drawn cap point y tests it). Any other
+sphere is refused with the feature named.
+
+Random numbers: a wall event of step b draws dimensions ``EXPECTED_BASE + 8b + j``
+(j = 0 … 4), apart from the walk's ``WALK_BASE + 4b + j`` for every step cap allowed.
+
+References
+----------
+Goebel (1967), Appl. Opt. 6(1), 125 (the sphere's uniform irradiance, the cap fraction);
+Prokhorov, Mekhontsev & Hanssen (2003), Appl. Opt. 42(19), 3832 (next-event estimation in
+sphere Monte Carlo); Maurer & Pontil (2009), COLT, Theorem 4 (the certificate).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, fields
+from typing import Any, Sequence
+
+from virtspec_mi.kernel.hooks import ChunkRays
+from virtspec_mi.kernel.rng import GOLDEN, hash32, to_unit
+from virtspec_mi.instruments.sphere.walk import _ACTIVE, WALK_BASE, SphereFate, SphereLayout, _vec
+
+__all__ = ["EXPECTED_BASE", "ROUNDING_BIAS", "ROUNDING_DIMENSION", "SCORE_SCALE", "SCORE_SUMS", "SMALLEST_WEIGHT", "ExpectedSphereLayout",
+           "expected_layout"]
+
+SCORE_SCALE: int = 1 << 15
+"""S: a ray's score is summed as a whole number q in [0, S] (q² ≤ 2³⁰: the sums of 2³² rays fit in int64)."""
+
+SCORE_SUMS: tuple[str, str] = ("detector_score", "detector_score_squares")
+"""The per-reading sums of q and q² (:data:`SCORE_SCALE`) the expected-value walk adds to the counts."""
+
+EXPECTED_BASE: int = 1 << 26
+"""First random-number dimension of the expected-value draws (step b: ``EXPECTED_BASE + 8b + j``)."""
+
+ROUNDING_DIMENSION: int = WALK_BASE - 32
+"""The random-number dimension of a ray's stochastic rounding of its score (below a traced beam's)."""
+
+_UNIT_RESOLUTION: float = 2.0 ** -24
+"""The resolution of :func:`~virtspec_mi.kernel.rng.to_unit`: the rounding's bias is below this over S."""
+
+ROUNDING_BIAS: float = _UNIT_RESOLUTION / SCORE_SCALE
+"""E q/S − E s lies in [0, ROUNDING_BIAS): taken off a score interval's lower end."""
+
+SMALLEST_WEIGHT: float = 2.0 ** -20
+"""A walk ends (on the wall) when its weight falls below this: it could still have scored less than its weight,
+so the detector fraction is at most SMALLEST_WEIGHT above the mean score (added to a score interval's upper end)."""
+
+
+@dataclass(frozen=True, eq=False)
+class ExpectedSphereLayout(SphereLayout):
+    """
+    A plain sphere layout scored by the expected-value detector (module docstring). Parameters
+    beyond :class:`~virtspec_mi.instruments.sphere.walk.SphereLayout`'s:
+
+    Parameters
+    ----------
+    detector : tuple
+        (axis (3 floats), R cos α): the detector port's cap, x·c ≥ R cos α.
+    detector_fraction : float
+        f_d = (1 − cos α)/2, the cap's share of the sphere's surface.
+    """
+
+    detector: tuple = ((0.0, 0.0, 1.0), 0.0)
+    detector_fraction: float = 0.0
+
+    carried = (("weight", 1.0), ("score", 0.0))
+    sums = ("wall_reflections", "weight_violations", "rounded_weights", *SCORE_SUMS)
+
+    def carried_sums(self, carried: dict[str, Any], rays: ChunkRays) -> dict[str, Any]:
+        """q and q² of every ray's score, q = ⌊sS⌋ + [u < sS − ⌊sS⌋] (stochastic rounding, module docstring)."""
+
+        import drjit as dr
+        import mitsuba as mi
+
+        score = dr.clip(carried["score"], 0.0, 1.0)  # s + w ≤ 1 holds up to float32 rounding
+        count = dr.width(score)
+        index = rays.ray_index(dr.arange(mi.UInt32, count), rays.slot)
+        root = dr.opaque(mi.UInt32, rays.root)
+        u = to_unit(hash32(index ^ hash32(root + mi.UInt32(ROUNDING_DIMENSION) * GOLDEN)), mi.Float)
+        scaled = score * float(SCORE_SCALE)  # exact: a power of two
+        whole = dr.floor(scaled)
+        q = mi.UInt32(whole) + dr.select(u < scaled - whole, mi.UInt32(1), mi.UInt32(0))
+        return {SCORE_SUMS[0]: q, SCORE_SUMS[1]: q * q}
+
+    def step(self, state: dict, ray_index: Any, root: Any, rho_w: Any, wavelength: Any, bsdfs: list,
+             *columns: Any) -> dict:
+        """The plain walk's step, then the score: a detected flight adds w; a wall re-emission is split."""
+
+        import drjit as dr
+        import mitsuba as mi
+
+        out = super().step(state, ray_index, root, mi.Float(1.0), wavelength, bsdfs, *columns)  # ρw: a weight
+        active = state["fate"] == _ACTIVE
+        weight, score = state["weight"], state["score"]
+        detected = active & (out["fate"] == int(SphereFate.DETECTED))
+        score = score + dr.select(detected, weight, 0.0)
+        diffuse = active & (out["walls"] > state["walls"])  # re-emitted by the sphere wall or the baffle
+        weight = dr.select(diffuse, weight * rho_w, weight)
+        emitted = diffuse & (out["last"] == 0)  # by the sphere wall
+        x = out["p"]
+        keys = [hash32(root + (mi.UInt32(EXPECTED_BASE + j) + 8 * state["bounces"]) * GOLDEN) for j in range(2 if self.baffle is None else 5)]
+        v = [to_unit(hash32(ray_index ^ key), mi.Float) for key in keys]
+        axis, threshold = self.detector
+        radius = self.radius
+        cos_alpha = threshold / radius
+        frame = mi.Frame3f(_vec(axis))
+
+        def on_sphere(cos_theta: Any, u_phi: Any) -> Any:
+            sin_theta = dr.safe_sqrt(1.0 - cos_theta * cos_theta)
+            phi = dr.two_pi * u_phi
+            return radius * frame.to_world(mi.Vector3f(sin_theta * dr.cos(phi), sin_theta * dr.sin(phi), cos_theta))
+
+        inward = -dr.normalize(x)
+
+        def toward(point: Any) -> Any:
+            gap = point - x
+            return dr.select(dr.squared_norm(gap) > 1e-12 * radius * radius, dr.normalize(gap), inward)
+
+        elsewhere = toward(on_sphere(-1.0 + v[0] * (1.0 + cos_alpha), v[1]))  # uniform outside the detector's cap
+        f_d = self.detector_fraction
+        if self.baffle is None:
+            seen = emitted
+            new_d = dr.select(emitted, elsewhere, out["d"])
+        else:
+            cap_point = on_sphere(1.0 - v[2] * (1.0 - cos_alpha), v[3])  # uniform on the detector's cap
+            to_cap = toward(cap_point)
+            centre, normal, baffle_radius = _vec(self.baffle[0]), _vec(self.baffle[1]), self.baffle[2]
+            t_b = dr.dot(centre - x, normal) / dr.dot(to_cap, normal)
+            on_disk = dr.squared_norm(x + t_b * to_cap - centre) <= baffle_radius * baffle_radius
+            hidden = (t_b > 0.0) & (t_b < dr.norm(cap_point - x)) & on_disk
+            seen = emitted & ~hidden
+            into_baffle = emitted & hidden & (v[4] < f_d)
+            new_d = dr.select(emitted, dr.select(into_baffle, to_cap, elsewhere), out["d"])
+        score = score + dr.select(seen, weight * f_d, 0.0)
+        weight = dr.select(seen, weight * (1.0 - f_d), weight)
+        fate = dr.select((out["fate"] == _ACTIVE) & (weight < SMALLEST_WEIGHT), mi.UInt32(int(SphereFate.WALL)),
+                         out["fate"])
+        return {**out, "d": new_d, "fate": fate, "weight": weight, "score": score}
+
+
+_PLAIN_PORT = (("depth", 0.0, "a port wall (depth > 0)"), ("shape", "circle", "a non-circular port"),
+               ("aperture", None, "a holder mask (aperture)"), ("field_of_view", None, "a detector field of view"),
+               ("proud", 0.0, "a specimen standing proud of its port (proud > 0)"))
+
+
+def expected_layout(sphere: Any, holders: Sequence[Any], caps: Sequence[int | None], max_bounces: int,
+                    wavelengths: Sequence[float]) -> ExpectedSphereLayout:
+    """
+    The :class:`ExpectedSphereLayout` of one configuration (the arguments of
+    :meth:`~virtspec_mi.instruments.sphere.geometry.Sphere.layout`), or ``ValueError`` naming
+    ``detector='expected'`` and the feature of ``sphere`` it cannot score exactly.
+    """
+
+    refused = "detector='expected' scores detection where a wall bounce's chance of reaching the detector is exact"
+    for port in sphere.ports:
+        for name, plain, what in _PLAIN_PORT:
+            if getattr(port, name) != plain:
+                raise ValueError(f"{refused}; port {port.name!r} has {what}: use detector='counted' for this sphere")
+    for name, plain, what in (("beam_profile", None, "a traced beam (beam_profile)"),
+                              ("wall_specular", 0.0, "a mirror share of the wall (wall_specular > 0)"),
+                              ("wall_bsdf", None, "a wall BSDF (wall_bsdf)")):
+        if getattr(sphere, name) != plain:
+            raise ValueError(f"{refused}; the sphere has {what}: use detector='counted' for this sphere")
+    detectors = [j for j, action in enumerate(caps) if action == int(SphereFate.DETECTED)]
+    if len(detectors) != 1:
+        raise ValueError(f"{refused}: it needs exactly one detector port (got {len(detectors)}): use "
+                         "detector='counted' for this sphere")
+    layout = sphere.layout(holders, caps, max_bounces, wavelengths)
+    if type(layout) is not SphereLayout:  # a feature the checks above do not name
+        raise ValueError(f"{refused}; this sphere is not a plain one: use detector='counted'")
+    port = sphere.ports[detectors[0]]
+    radius = sphere.radius
+    values = {f.name: getattr(layout, f.name) for f in fields(SphereLayout)}
+    return ExpectedSphereLayout(**values, detector=(tuple(float(v) for v in port.axis),
+                                                    radius * port.cos_half_angle(radius)),
+                                detector_fraction=float(sphere.cap_fraction(port)))

@@ -44,8 +44,10 @@ ray reaching it (no field of view), a Lambertian wall (no mirror share, no wall 
 the bench's pencil beam; a baffle is allowed (the drawn cap point y tests it). Any other
 sphere is refused with the feature named.
 
-Random numbers: a wall event of step b draws dimensions ``EXPECTED_BASE + 8b + j``
-(j = 0 … 4), apart from the walk's ``WALK_BASE + 4b + j`` for every step cap allowed.
+Random numbers: step b's four of the plain walk (``WALK_BASE + 4b + j``), which a wall event
+leaves unused (ρw is a weight, the cosine direction is replaced), draw z (j = 1, 2) and y
+(j = 0, 3); the roulette and the choice of y draw ``EXPECTED_BASE + 2b + j`` (j = 0, 1),
+apart from the walk's for every step cap allowed.
 
 References
 ----------
@@ -59,9 +61,10 @@ from __future__ import annotations
 from dataclasses import dataclass, fields
 from typing import Any, Sequence
 
+from virtspec_mi.kernel.counts import Fate
 from virtspec_mi.kernel.hooks import ChunkRays
 from virtspec_mi.kernel.rng import GOLDEN, hash32, to_unit
-from virtspec_mi.instruments.sphere.walk import _ACTIVE, WALK_BASE, SphereFate, SphereLayout, _vec
+from virtspec_mi.instruments.sphere.walk import _ACTIVE, WALK_BASE, SphereFate, SphereLayout, _vec, holder_frame
 
 __all__ = ["EXPECTED_BASE", "ROUNDING_BIAS", "ROUNDING_DIMENSION", "SCORE_SCALE", "SCORE_SUMS", "SMALLEST_WEIGHT", "ExpectedSphereLayout",
            "expected_layout"]
@@ -73,7 +76,7 @@ SCORE_SUMS: tuple[str, str] = ("detector_score", "detector_score_squares")
 """The per-reading sums of q and q² (:data:`SCORE_SCALE`) the expected-value walk adds to the counts."""
 
 EXPECTED_BASE: int = 1 << 26
-"""First random-number dimension of the expected-value draws (step b: ``EXPECTED_BASE + 8b + j``)."""
+"""First random-number dimension of the expected-value walk's own draws (step b: ``EXPECTED_BASE + 2b + j``, j = 0, 1)."""
 
 ROUNDING_DIMENSION: int = WALK_BASE - 32
 """The random-number dimension of a ray's stochastic rounding of its score (below a traced beam's)."""
@@ -83,6 +86,17 @@ _UNIT_RESOLUTION: float = 2.0 ** -24
 
 ROUNDING_BIAS: float = _UNIT_RESOLUTION / SCORE_SCALE
 """E q/S − E s lies in [0, ROUNDING_BIAS): taken off a score interval's lower end."""
+
+ROULETTE: float = 0.1
+"""θ: a walk whose weight w falls below θ(1 − s) (s its score) plays Russian roulette: it lives on with weight
+θ(1 − s) with probability w/(θ(1 − s)), else ends on the wall (unbiased, and s + w stays ≤ 1)."""
+
+BAFFLE_SPLIT: int = 8
+"""K: a baffle re-emission scores the share of K Lambertian directions that reach the detector and flies on along
+one of those that miss, with its weight times the share that miss (module docstring)."""
+
+_STRIDE: int = 2 + 2 * BAFFLE_SPLIT
+"""Random-number dimensions of the expected-value walk's own per step (``EXPECTED_BASE + _STRIDE·b + j``)."""
 
 SMALLEST_WEIGHT: float = 2.0 ** -20
 """A walk ends (on the wall) when its weight falls below this: it could still have scored less than its weight,
@@ -101,13 +115,31 @@ class ExpectedSphereLayout(SphereLayout):
         (axis (3 floats), R cos α): the detector port's cap, x·c ≥ R cos α.
     detector_fraction : float
         f_d = (1 − cos α)/2, the cap's share of the sphere's surface.
+    detector_frame : tuple
+        (c, e₁, e₂): the detector's axis and two unit vectors normal to it and to each other.
     """
 
     detector: tuple = ((0.0, 0.0, 1.0), 0.0)
     detector_fraction: float = 0.0
+    detector_frame: tuple = ((0.0, 0.0, 1.0), (1.0, 0.0, 0.0), (0.0, 1.0, 0.0))
 
-    carried = (("weight", 1.0), ("score", 0.0))
+    carried = ("weight", "score")
     sums = ("wall_reflections", "weight_violations", "rounded_weights", *SCORE_SUMS)
+
+    def entering(self, lanes: dict) -> Any:
+        """The plain walk's, and the rays the specimen's roulette absorbed at their first interaction: their
+        BSDF sample's weight is their walk's weight (:meth:`carried_starts`) in place of the roulette."""
+
+        return super().entering(lanes) | ((lanes["fate"] == int(Fate.ABSORBED)) & (lanes["weight"] > 0.0))
+
+    def carried_starts(self, lanes: dict) -> dict[str, Any]:
+        """Weight: the first interaction's BSDF weight (at most 1); score: 0."""
+
+        import drjit as dr
+        import mitsuba as mi
+
+        weight = dr.clip(mi.Float(lanes["weight"]), 0.0, 1.0)
+        return {"weight": weight, "score": dr.zeros(mi.Float, dr.width(weight))}
 
     def carried_sums(self, carried: dict[str, Any], rays: ChunkRays) -> dict[str, Any]:
         """q and q² of every ray's score, q = ⌊sS⌋ + [u < sS − ⌊sS⌋] (stochastic rounding, module docstring)."""
@@ -138,20 +170,24 @@ class ExpectedSphereLayout(SphereLayout):
         detected = active & (out["fate"] == int(SphereFate.DETECTED))
         score = score + dr.select(detected, weight, 0.0)
         diffuse = active & (out["walls"] > state["walls"])  # re-emitted by the sphere wall or the baffle
-        weight = dr.select(diffuse, weight * rho_w, weight)
+        weight = dr.select(diffuse, weight * rho_w, weight) * dr.minimum(out["held"], 1.0)  # a disk's BSDF weight
         emitted = diffuse & (out["last"] == 0)  # by the sphere wall
         x = out["p"]
-        keys = [hash32(root + (mi.UInt32(EXPECTED_BASE + j) + 8 * state["bounces"]) * GOLDEN) for j in range(2 if self.baffle is None else 5)]
-        v = [to_unit(hash32(ray_index ^ key), mi.Float) for key in keys]
-        axis, threshold = self.detector
+        # the plain step's numbers of this step (the same expressions: Dr.Jit computes them once); at a wall event
+        # it used none of them (ρw = 1: u0 decides nothing; u1, u2 drew the direction replaced here; u3 is a holder's)
+        keys = [hash32(root + (mi.UInt32(WALK_BASE + j) + 4 * state["bounces"]) * GOLDEN) for j in range(4)]
+        u = [to_unit(hash32(ray_index ^ key), mi.Float) for key in keys]
+        own = [hash32(root + (mi.UInt32(EXPECTED_BASE + j) + _STRIDE * state["bounces"]) * GOLDEN)
+               for j in range(1 if self.baffle is None else 2)]
+        v = [to_unit(hash32(ray_index ^ key), mi.Float) for key in own]
+        axis, e1, e2 = (_vec(column) for column in self.detector_frame)
         radius = self.radius
-        cos_alpha = threshold / radius
-        frame = mi.Frame3f(_vec(axis))
+        cos_alpha = self.detector[1] / radius
 
         def on_sphere(cos_theta: Any, u_phi: Any) -> Any:
             sin_theta = dr.safe_sqrt(1.0 - cos_theta * cos_theta)
-            phi = dr.two_pi * u_phi
-            return radius * frame.to_world(mi.Vector3f(sin_theta * dr.cos(phi), sin_theta * dr.sin(phi), cos_theta))
+            sin_phi, cos_phi = dr.sincos(dr.two_pi * u_phi)
+            return radius * (cos_theta * axis + (sin_theta * cos_phi) * e1 + (sin_theta * sin_phi) * e2)
 
         inward = -dr.normalize(x)
 
@@ -159,26 +195,81 @@ class ExpectedSphereLayout(SphereLayout):
             gap = point - x
             return dr.select(dr.squared_norm(gap) > 1e-12 * radius * radius, dr.normalize(gap), inward)
 
-        elsewhere = toward(on_sphere(-1.0 + v[0] * (1.0 + cos_alpha), v[1]))  # uniform outside the detector's cap
+        elsewhere = toward(on_sphere(-1.0 + u[1] * (1.0 + cos_alpha), u[2]))  # uniform outside the detector's cap
         f_d = self.detector_fraction
         if self.baffle is None:
             seen = emitted
             new_d = dr.select(emitted, elsewhere, out["d"])
         else:
-            cap_point = on_sphere(1.0 - v[2] * (1.0 - cos_alpha), v[3])  # uniform on the detector's cap
+            cap_point = on_sphere(1.0 - u[0] * (1.0 - cos_alpha), u[3])  # uniform on the detector's cap
             to_cap = toward(cap_point)
             centre, normal, baffle_radius = _vec(self.baffle[0]), _vec(self.baffle[1]), self.baffle[2]
             t_b = dr.dot(centre - x, normal) / dr.dot(to_cap, normal)
             on_disk = dr.squared_norm(x + t_b * to_cap - centre) <= baffle_radius * baffle_radius
             hidden = (t_b > 0.0) & (t_b < dr.norm(cap_point - x)) & on_disk
             seen = emitted & ~hidden
-            into_baffle = emitted & hidden & (v[4] < f_d)
+            into_baffle = emitted & hidden & (v[1] < f_d)
             new_d = dr.select(emitted, dr.select(into_baffle, to_cap, elsewhere), out["d"])
         score = score + dr.select(seen, weight * f_d, 0.0)
         weight = dr.select(seen, weight * (1.0 - f_d), weight)
-        fate = dr.select((out["fate"] == _ACTIVE) & (weight < SMALLEST_WEIGHT), mi.UInt32(int(SphereFate.WALL)),
-                         out["fate"])
+        if self.baffle is not None:  # a baffle re-emission: K directions, their hits scored, one miss flown
+            baffle = diffuse & (out["last"] == 3)
+            hits, chosen = dr.if_stmt(
+                (x, state["d"], out["d"], state["bounces"], ray_index, root), baffle,
+                lambda *args: self._split(*args), lambda *_: (mi.Float(0.0), mi.Vector3f(out["d"])),
+                label="sphere_baffle_split")
+            share = hits * (1.0 / BAFFLE_SPLIT)
+            score = score + dr.select(baffle, weight * share, 0.0)
+            weight = dr.select(baffle, weight * (1.0 - share), weight)
+            new_d = dr.select(baffle, chosen, new_d)
+        # roulette: a weight below θ(1 − s) lives on at θ(1 − s) with probability w/(θ(1 − s)) (s + w stays ≤ 1)
+        floor = ROULETTE * (1.0 - score)
+        low = (out["fate"] == _ACTIVE) & (weight < floor)
+        lives = v[0] * floor < weight
+        ended = (low & ~lives) | ((out["fate"] == _ACTIVE) & (weight < SMALLEST_WEIGHT))
+        weight = dr.select(low & lives, floor, weight)
+        fate = dr.select(ended, mi.UInt32(int(SphereFate.WALL)), out["fate"])
         return {**out, "d": new_d, "fate": fate, "weight": weight, "score": score}
+
+
+    @staticmethod
+    def _lives(u: Any, weight: Any) -> Any:
+        """A disk's BSDF weight is the walk's weight (``held``): a ray it returns lives on whatever its weight."""
+
+        return weight > 0.0
+
+    def _split(self, b: Any, incoming: Any, first: Any, bounces: Any, ray_index: Any, root: Any) -> tuple[Any, Any]:
+        """
+        At a baffle point ``b``: :data:`BAFFLE_SPLIT` Lambertian directions (the plain step's ``first`` and K − 1
+        more about the side the ray came from), how many reach the detector's cap (nothing lies between: the
+        baffle clears every holder's plane), and one of those that miss, drawn uniformly (``first`` if all hit).
+        """
+
+        import drjit as dr
+        import mitsuba as mi
+
+        normal = _vec(self.baffle[1])
+        facing = dr.select(dr.dot(incoming, normal) > 0.0, -normal, normal)
+        frame = mi.Frame3f(facing)
+        axis, threshold = _vec(self.detector[0]), self.detector[1]
+        radius2 = self.radius * self.radius
+        keys = [hash32(root + (mi.UInt32(EXPECTED_BASE + 2 + j) + _STRIDE * bounces) * GOLDEN)
+                for j in range(2 * BAFFLE_SPLIT - 1)]
+        w = [to_unit(hash32(ray_index ^ key), mi.Float) for key in keys]
+        directions = [first] + [dr.normalize(frame.to_world(mi.warp.square_to_cosine_hemisphere(
+            mi.Point2f(w[2 * k], w[2 * k + 1])))) for k in range(BAFFLE_SPLIT - 1)]
+        missed = []
+        for d in directions:
+            along = dr.dot(b, d)
+            t = -along + dr.safe_sqrt(along * along - (dr.squared_norm(b) - radius2))
+            missed.append(dr.dot(b + t * d, axis) < threshold)
+        count = sum(dr.select(m, mi.UInt32(1), mi.UInt32(0)) for m in missed)
+        pick = mi.UInt32(dr.floor(w[-1] * mi.Float(count)))
+        chosen, seen = mi.Vector3f(first), mi.UInt32(0)
+        for d, m in zip(directions, missed):
+            chosen = dr.select(m & (seen == pick), d, chosen)
+            seen = seen + dr.select(m, mi.UInt32(1), mi.UInt32(0))
+        return mi.Float(BAFFLE_SPLIT) - mi.Float(count), chosen
 
 
 _PLAIN_PORT = (("depth", 0.0, "a port wall (depth > 0)"), ("shape", "circle", "a non-circular port"),
@@ -214,6 +305,8 @@ def expected_layout(sphere: Any, holders: Sequence[Any], caps: Sequence[int | No
     port = sphere.ports[detectors[0]]
     radius = sphere.radius
     values = {f.name: getattr(layout, f.name) for f in fields(SphereLayout)}
+    frame = holder_frame(port.axis, True)  # columns e₁, e₂, c
     return ExpectedSphereLayout(**values, detector=(tuple(float(v) for v in port.axis),
                                                     radius * port.cos_half_angle(radius)),
-                                detector_fraction=float(sphere.cap_fraction(port)))
+                                detector_fraction=float(sphere.cap_fraction(port)),
+                                detector_frame=tuple(tuple(float(v) for v in frame[:, k]) for k in (2, 0, 1)))

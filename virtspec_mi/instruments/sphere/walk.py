@@ -212,9 +212,21 @@ class SphereLayout(ExitHook):
     sums = ("wall_reflections", "weight_violations", "rounded_weights")
     start_last = 1
     """The ``last`` surface of a walk's start (1: holder 0's plane)."""
-    carried: ClassVar[tuple[tuple[str, float], ...]] = ()
-    """(name, start value) of further per-ray ``Float`` state a subclass's :meth:`step` carries (none here): each
-    starts at its value with every ray and is written back per ray when the ray's walk ends (:meth:`carried_sums`)."""
+    carried: ClassVar[tuple[str, ...]] = ()
+    """Names of further per-ray ``Float`` state a subclass's :meth:`step` carries (none here): each ray starts
+    its walk at its value of :meth:`carried_starts`, and its value at the walk's end goes to :meth:`carried_sums`."""
+
+    def entering(self, lanes: dict) -> Any:
+        """Which first interactions send their ray on (into the sphere, or out through the port): the reflected
+        and transmitted rays (the specimen's roulette kept the others)."""
+
+        first_fate = lanes["fate"]
+        return (first_fate == int(Fate.REFLECTED)) | (first_fate == int(Fate.TRANSMITTED))
+
+    def carried_starts(self, lanes: dict) -> dict[str, Any]:
+        """Every ray's start value of each :attr:`carried` state (none here)."""
+
+        return {}
 
     def carried_sums(self, carried: dict[str, Any], rays: ChunkRays) -> dict[str, Any]:
         """Per-ray whole numbers to sum from the :attr:`carried` state of every ray at its walk's end (none here)."""
@@ -274,7 +286,7 @@ class SphereLayout(ExitHook):
         wo_world = mi.Vector3f(*(wo.x * frame[i, 0] + wo.y * frame[i, 1] + wo.z * frame[i, 2] for i in range(3)))
         target = lanes["target"]
         start = mi.Point3f(*(centre[i] + target.x * frame[i, 0] + target.y * frame[i, 1] for i in range(3)))
-        left = (first_fate == int(Fate.REFLECTED)) | (first_fate == int(Fate.TRANSMITTED))
+        left = self.entering(lanes)
         into = dr.dot(wo_world, _vec(axis)) < 0.0
         fate = dr.select(left, dr.select(into, mi.UInt32(_ACTIVE), mi.UInt32(SphereFate.lost(holder.port))),
                          mi.UInt32(int(SphereFate.HOLDER0)))
@@ -290,7 +302,7 @@ class SphereLayout(ExitHook):
         dr.eval(start, wo_world, fate, rare, hemisphere, *(() if slot is None else (slot,)))  # one kernel
         walking = dr.compress(fate == _ACTIVE)  # the rays that entered the sphere
         walls = dr.zeros(mi.UInt32, dr.width(fate))
-        carried = {name: dr.full(mi.Float, value, dr.width(fate)) for name, value in self.carried}
+        carried = self.carried_starts(lanes)
         if dr.width(walking):
             fate, rare, walls = self._loop(walking, start, wo_world, fate, rare, rays, carried)
         code = hemisphere * self.codes + fate
@@ -308,8 +320,8 @@ class SphereLayout(ExitHook):
         ``walking``), :meth:`step` by step, and takes the next ray as soon as one ends — so
         a lane never idles behind a long walk of its packet. Per-ray fates, rare bits and
         wall reflections are written back at the rays' indices (the random numbers depend
-        on the ray, not on the lane, so the counts do not depend on L). ``carried``: per-ray arrays of the
-        :attr:`carried` state, written at the rays' indices when their walks end (none in the plain walk).
+        on the ray, not on the lane, so the counts do not depend on L). ``carried``: per-ray start values of
+        the :attr:`carried` state, replaced by the values at the walks' ends (none in the plain walk).
         """
 
         import drjit as dr
@@ -327,8 +339,9 @@ class SphereLayout(ExitHook):
         wavelengths = rays.wavelengths.astype(np.float32)
         bsdfs = [_loaded(holder.bsdf, rays.specimen) for holder in self.holders]
         extras = [values.astype(np.float32) for values in self.extra_columns(rays.wavelengths)]
-        carried = carried or {}
-        starts = [(name, value) for name, value in self.carried if name in carried]
+        carried = {} if carried is None else carried
+        starts = [(name, carried[name]) for name in self.carried if name in carried]
+        ends = {name: dr.copy(values) for name, values in starts}  # written per ray below; the starts only read
 
         def reading_of(ray: Any) -> Any:
             return dr.zeros(mi.UInt32, width) if single else dr.gather(mi.UInt32, rays.slot, ray)
@@ -339,7 +352,7 @@ class SphereLayout(ExitHook):
                  dr.full(mi.UInt32, self.start_last, width), dr.full(mi.UInt32, _ACTIVE, width),
                  dr.zeros(mi.UInt32, width),
                  dr.zeros(mi.UInt32, width), dr.gather(mi.UInt32, rare, ray),
-                 *(dr.full(mi.Float, value, width) for _, value in starts))
+                 *(dr.gather(mi.Float, values, ray) for _, values in starts))
 
         def body(slot, ray, reading, p, d, last, state_fate, bounces, walls, state_rare, *more_state):
             at = None if single else reading
@@ -353,7 +366,7 @@ class SphereLayout(ExitHook):
             dr.scatter(rare_out, out["rare"], ray, done)
             dr.scatter(walls_out, out["walls"], ray, done)
             for name, _ in starts:
-                dr.scatter(carried[name], out[name], ray, done)
+                dr.scatter(ends[name], out[name], ray, done)
             slot = dr.select(done, slot + stride, slot)
             more = done & (slot < n)
             ray = dr.select(more, dr.gather(mi.UInt32, walking, slot, more), ray)
@@ -367,7 +380,7 @@ class SphereLayout(ExitHook):
                     dr.select(more, mi.UInt32(0), out["bounces"]),
                     dr.select(more, mi.UInt32(0), out["walls"]),
                     dr.select(more, dr.gather(mi.UInt32, rare, ray, more), out["rare"]),
-                    *(dr.select(more, mi.Float(value), out[name]) for name, value in starts))
+                    *(dr.select(more, dr.gather(mi.Float, values, ray, more), out[name]) for name, values in starts))
 
         def steps(*variables):  # body, and one step more of this launch
             return (*body(*variables[:-1]), variables[-1] + 1)
@@ -377,11 +390,12 @@ class SphereLayout(ExitHook):
             *state, _ = dr.while_loop((*state, dr.zeros(mi.UInt32, width)),
                                       lambda slot, *rest: (slot < n) & (rest[-1] < budget), steps,
                                       label="sphere_walk")
-            dr.eval(*state, fate_out, rare_out, walls_out, *carried.values())
+            dr.eval(*state, fate_out, rare_out, walls_out, *ends.values())
             if not bool(dr.any(state[0] < n, axis=None)):
                 break
             if rays.safe_point is not None:  # the engine's: an interrupt during a long walk stops the run here
                 rays.safe_point()
+        carried.update(ends)
         return fate_out, rare_out, walls_out
 
     # -- one step: state in → one flight and one surface event → state out --------------
@@ -440,6 +454,7 @@ class SphereLayout(ExitHook):
         rare = state["rare"]
 
         # the holders: a flat disk in its port plane, sampled by its BSDF
+        held = mi.Float(1.0)  # the BSDF weight of the disk hit (1: none), for a subclass (unused here: not traced)
         for k, holder in enumerate(self.holders):
             _, _, centre = self.planes[k]
             on_holder = active & (surface == k + 1)
@@ -458,7 +473,8 @@ class SphereLayout(ExitHook):
             wo_world = frame.to_world(wo)
             length2 = dr.squared_norm(wo)
             invalid = ~((length2 >= _LENGTH2[0]) & (length2 <= _LENGTH2[1])) & (w > 0.0)
-            lives = u[3] < w
+            lives = self._lives(u[3], w)
+            held = dr.select(lit, w, held)
             into = dr.dot(wo_world, _vec(self.planes[k][0])) < 0.0
             capped = component == CAPPED_COMPONENT
             code = dr.select(lives, dr.select(into, mi.UInt32(_ACTIVE), lost), mi.UInt32(int(SphereFate.HOLDER0) + k))
@@ -475,7 +491,13 @@ class SphereLayout(ExitHook):
         fate = dr.select((fate == _ACTIVE) & (bounces >= self.max_bounces), mi.UInt32(int(SphereFate.CAPPED)), fate)
         return {"p": dr.select(active, new_p, p), "d": dr.select(active, new_d, d),
                 "last": dr.select(active, surface, last), "fate": fate, "bounces": bounces, "walls": walls,
-                "rare": rare}
+                "rare": rare, "held": held}
+
+    @staticmethod
+    def _lives(u: Any, weight: Any) -> Any:
+        """Whether a ray the disk's BSDF sampled with ``weight`` lives on: Russian roulette (``u < weight``)."""
+
+        return u < weight
 
     @staticmethod
     def _sample(bsdf: Any, frame: Any, q: Any, wi_world: Any, wavelength: Any, u: list,

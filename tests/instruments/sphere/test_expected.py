@@ -184,6 +184,14 @@ def test_the_fraction_interval_is_the_score_interval_with_the_walks_bounds(tmp_p
         SphereResult.from_dict(data)
 
 
+def test_the_error_budget_of_an_expected_value_reading_names_its_certificate():
+    result = vm.sphere_measure(SCENE, rays=3000, seed=1, detector="expected")
+    budget = result.budget(lambda sphere, **kw: vm.sphere_measure(SCENE, sphere=sphere, rays=3000, seed=1,
+                                                                  detector="expected", **kw))
+    assert "empirical Bernstein (readings)" in budget.summary()
+    assert budget.error == pytest.approx(sum(budget.parts.values()))
+
+
 def test_cli_sphere_detector_expected(capsys):
     from virtspec_mi.cli import main
 
@@ -191,5 +199,6 @@ def test_cli_sphere_detector_expected(capsys):
     data = json.loads(capsys.readouterr().out)
     assert data["options"]["detector"] == "expected"
     assert data["counts"]["sample"][SCORE_SUMS[0]][0] > 0
-    assert main(["sphere", SCENE, "--rays", "100", "--detector", "sometimes"]) != 0
-    assert "detector must be one of counted, expected" in capsys.readouterr().err
+    with pytest.raises(SystemExit):
+        main(["sphere", SCENE, "--rays", "100", "--detector", "sometimes"])
+    assert "invalid choice: 'sometimes'" in capsys.readouterr().err

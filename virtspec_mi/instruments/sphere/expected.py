@@ -1,53 +1,71 @@
 """
-The expected-value detector: each wall bounce scores its chance of reaching the detector
-========================================================================================
+The expected-value detector: each bounce scores its chance of reaching the detector
+===================================================================================
 
 :class:`ExpectedSphereLayout` walks the sphere as
-:class:`~virtspec_mi.instruments.sphere.walk.SphereLayout` does (same flights, absorption,
-holders, baffle and caps) but scores detection by its **expected value** at every
-Lambertian re-emission from the sphere wall (next-event estimation; Prokhorov, Mekhontsev
-& Hanssen 2003 score every diffuse bounce of their sphere Monte Carlo alike). Each ray
-carries a weight w (1 at its start) and a score s (0):
+:class:`~virtspec_mi.instruments.sphere.walk.SphereLayout` does (same flights, holders,
+baffle and port caps, same first interaction with the specimen) but scores detection by its
+**expected value** (next-event estimation; Prokhorov, Mekhontsev & Hanssen 2003 score every
+diffuse bounce of their sphere Monte Carlo alike). Each ray carries a weight w and a score s
+(0 at the start):
 
-- **a wall re-emission** at x (the ray survived absorption, probability ρw, as in the
-  plain walk): the Lambertian emission from a point of a sphere's wall lands uniformly
-  over the sphere's surface (its irradiance is uniform: the sphere's defining property;
-  Goebel 1967), so its next flight ends in the detector's cap with probability exactly
-  f_d = A_cap/(4πR²) = (1 − cos α)/2 — unless the baffle lies in between. A point y drawn
-  uniformly on the detector's cap stands for that flight: when x sees y past the baffle,
-  s += w·f_d, w ← w·(1 − f_d) and the ray flies on to a point z drawn uniformly on the
-  sphere *outside* the detector's cap (the emission conditioned on missing the detector);
-  when the baffle hides y, w is kept and the ray flies to y (into the baffle) with
-  probability f_d, else to z;
-- **a flight that ends in the detector's cap** (from the specimen, a holder or the
-  baffle, whose emission is not a sphere wall's) adds its weight w to s and ends the walk;
-- everything else (absorption, ports, holders, the step cap) is the plain walk's.
+- **the start**: w is the first interaction's BSDF weight (at most 1), and a ray the
+  specimen's roulette absorbed walks too (its sampled direction, its weight): the roulette
+  is replaced by its expectation. The first interaction itself — and so the hemispherical
+  counts of the same rays — is the counting route's, ray for ray;
+- **absorption**: the wall and the baffle multiply w by ρw(λ), a disk (specimen, standard)
+  by its BSDF sample's weight, in place of the roulette;
+- **a wall re-emission** at x: the Lambertian emission from a point of a sphere's wall lands
+  uniformly over the sphere's surface (its irradiance is uniform: the sphere's defining
+  property; Goebel 1967), so its next flight ends in the detector's cap with probability
+  exactly f_d = A_cap/(4πR²) = (1 − cos α)/2 — unless the baffle lies in between. A point y
+  drawn uniformly on the cap stands for that flight: when x sees y past the baffle,
+  s += w·f_d, w ← w·(1 − f_d), and the ray flies to a point z drawn uniformly on the sphere
+  *outside* the detector's cap (the emission conditioned on missing the detector); when the
+  baffle hides y, w is kept and the ray flies to y (into the baffle) with probability f_d,
+  else to z;
+- **a baffle re-emission** at b: K = :data:`BAFFLE_SPLIT` Lambertian directions (the plain
+  walk's and K − 1 more), h of which reach the detector's cap (nothing lies between: the
+  baffle clears every holder's plane, and a chord between two points outside a port's
+  segment stays outside it): s += w·h/K, w ← w·(K − h)/K, and the ray flies along one of
+  the K − h that miss, drawn uniformly;
+- **a flight that ends in the detector's cap** (from a disk: the specimen's emission is not
+  a sphere wall's) adds w to s and ends the walk;
+- **Russian roulette**: a weight below θ(1 − s) (θ = :data:`ROULETTE`) lives on as θ(1 − s)
+  with probability w/(θ(1 − s)), else the walk ends on the wall; a weight below
+  :data:`SMALLEST_WEIGHT` ends it.
 
-The score's mean is the ray's detection probability (each split above keeps the expected
-detected weight: for the seen cap, w·f_d now and w·(1 − f_d) on the rest; for a hidden
-cap, the flight into the baffle with probability f_d·(1 − s_x) and past it with f_d·s_x
-when the cap is seen from x over a share s_x), and s + w never grows (it starts at 1), so
-**every score lies in [0, 1]**: an interval for a bounded mean certifies the detector
-fraction (:func:`virtspec_mi.budgets.scores.score_interval`).
+**The score's mean is the detection probability.** Each rule keeps the expected detected
+weight: a roulette or a weight in its place have the same expectation; at a wall point the
+split gives w·f_d·σ now (σ: the share of the cap seen past the baffle) and the rest of the
+emission's outcomes, each with its own probability, later (the flight to z stands for the
+emission conditioned on missing the cap, the flight to a hidden y for its share
+f_d·(1 − σ)); at the baffle the K directions are exchangeable, so the miss flown is a
+Lambertian direction conditioned on missing, with the weight of the misses. The last rule
+ends a walk that could still have scored less than its weight: the detector fraction lies
+in [E s, E s + SMALLEST_WEIGHT].
 
-**Exact sums.** A ray's score is rounded to a multiple of 1/:data:`SCORE_SCALE`
-stochastically (up with probability the remainder, random dimension :data:`ROUNDING_DIMENSION`
-of the ray), q = ⌊sS⌋ + [u < sS − ⌊sS⌋], so q/S keeps the score's mean up to the uniform's
-24-bit resolution (E q/S − E s ∈ [0, 2⁻²⁴/S), taken off the interval's lower end) and lies
-in [0, 1]; the walk sums q and q² per reading (``detector_score``,
-``detector_score_squares``) as exact whole numbers, like every count. The score itself is
-computed in the walk's ``float32`` arithmetic, as its geometry is.
+**Every score lies in [0, 1].** s + w starts at most 1 and no rule raises it (a split moves
+weight into the score; the roulette lifts w to at most 1 − s), so s ≤ 1: an interval for a
+bounded mean certifies the detector fraction (:func:`virtspec_mi.budgets.scores.score_interval`).
 
-Only a sphere whose next flight's chance of detection is known exactly takes it
-(:func:`expected_layout`): knife-edge circular ports, one detector port that counts every
-ray reaching it (no field of view), a Lambertian wall (no mirror share, no wall BSDF),
-the bench's pencil beam; a baffle is allowed (the drawn cap point y tests it). Any other
-sphere is refused with the feature named.
+**Exact sums.** A ray's score is rounded to a multiple of 1/S (S = :data:`SCORE_SCALE`)
+stochastically, q = ⌊sS⌋ + [u < sS − ⌊sS⌋] (u: random dimension
+:data:`ROUNDING_DIMENSION` of the ray), so q/S keeps the score's mean up to the uniform's
+24-bit resolution (E q/S − E s ∈ [0, 2⁻²⁴/S), :data:`ROUNDING_BIAS`) and lies in [0, 1]; the
+walk sums q and q² per reading (``detector_score``, ``detector_score_squares``) as exact
+whole numbers, like every count. The score itself is computed in the walk's ``float32``
+arithmetic, as its geometry is.
 
-Random numbers: step b's four of the plain walk (``WALK_BASE + 4b + j``), which a wall event
+Only a sphere whose wall bounces' chance of detection is known exactly takes it
+(:func:`expected_layout`): knife-edge circular ports, one detector port that counts every ray
+reaching it (no field of view), a Lambertian wall (no mirror share, no wall BSDF), the
+bench's pencil beam; a baffle is allowed. Any other sphere is refused with the feature named.
+
+Random numbers: a step's four of the plain walk (``WALK_BASE + 4b + j``), which a wall event
 leaves unused (ρw is a weight, the cosine direction is replaced), draw z (j = 1, 2) and y
-(j = 0, 3); the roulette and the choice of y draw ``EXPECTED_BASE + 2b + j`` (j = 0, 1),
-apart from the walk's for every step cap allowed.
+(j = 0, 3); the roulette, the choice of y and the baffle's directions draw
+``EXPECTED_BASE + _STRIDE·b + j``, apart from the walk's for every step cap allowed.
 
 References
 ----------

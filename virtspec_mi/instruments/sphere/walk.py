@@ -58,7 +58,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from enum import IntEnum
-from typing import Any, ClassVar, Sequence
+from typing import Any, Sequence
 
 import numpy as np
 
@@ -212,7 +212,7 @@ class SphereLayout(ExitHook):
     sums = ("wall_reflections", "weight_violations", "rounded_weights")
     start_last = 1
     """The ``last`` surface of a walk's start (1: holder 0's plane)."""
-    carried: ClassVar[tuple[str, ...]] = ()
+    carried = ()
     """Names of further per-ray ``Float`` state a subclass's :meth:`step` carries (none here): each ray starts
     its walk at its value of :meth:`carried_starts`, and its value at the walk's end goes to :meth:`carried_sums`."""
 

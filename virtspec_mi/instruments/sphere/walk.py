@@ -34,6 +34,11 @@ a lane whose ray ends takes the next one at once, so a packet of lanes never idl
 behind its longest walk (walk lengths are geometric, and the longest of 16 is about
 three times the mean). Each ray's fate is written back at its own index.
 
+A subclass scores the walk otherwise through a few hooks the plain walk leaves untraced
+(:attr:`SphereLayout.carried` per-ray state with :meth:`SphereLayout.carried_starts` and
+:meth:`SphereLayout.carried_sums`, :meth:`SphereLayout.entering`, ``_lives`` and the step's
+``held``): :mod:`virtspec_mi.instruments.sphere.expected`, the expected-value detector.
+
 Random numbers are counter-based, keyed on (seed, global ray index, dimension)
 (:mod:`virtspec_mi.kernel.rng`): step b draws dimensions ``WALK_BASE + 4b + j``
 (j = 0…3), far above the first interaction's, so counts are exact integers,

@@ -145,8 +145,6 @@ class SphereBudget:
     delta: float
     notes: tuple = ()
     certificate: str = "Clopper-Pearson"
-    """What certifies each reading: ``Clopper-Pearson`` (counted detectors) or ``empirical Bernstein`` (the
-    expected-value detector's mean scores)."""
 
     @property
     def joint_confidence(self) -> float:

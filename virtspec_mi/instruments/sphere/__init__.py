@@ -28,12 +28,13 @@ fraction gets a Clopper–Pearson interval at δ/2, so both hold together with p
 ≥ 1 − δ by the union bound (whatever the dependence between the configurations); the
 ratio's interval is then [ρ_std·p_s⁻/p_r⁺, ρ_std·p_s⁺/p_r⁻] (the extreme combinations).
 Each configuration's N is the settings' rule at (μ, δ/2), so each fraction is within μ
-with probability ≥ 1 − δ/2. With ``detector="expected"`` each fraction is a mean score in [0, 1]
-(:mod:`virtspec_mi.instruments.sphere.expected`: each bounce scores its exact chance of
-reaching the detector) with an empirical Bernstein interval at δ/2
-(:func:`virtspec_mi.budgets.scores.score_interval`), the ratio's interval built alike. The hemispherical reading (the first specimen interaction's
-hemisphere, :mod:`virtspec_mi.kernel.tracer`) comes from the sample configuration's very
-rays; the instrument error is reading − hemispherical.
+with probability ≥ 1 − δ/2. With ``detector="expected"`` each fraction is a mean score in
+[0, 1] (:mod:`virtspec_mi.instruments.sphere.expected`: each bounce scores its exact chance
+of reaching the detector) with an empirical Bernstein interval at δ/2
+(:func:`virtspec_mi.budgets.scores.score_interval`), the ratio's interval built alike. The
+hemispherical reading (the first specimen interaction's hemisphere,
+:mod:`virtspec_mi.kernel.tracer`) comes from the sample configuration's very rays; the
+instrument error is reading − hemispherical.
 
 **Correction:** :meth:`SphereResult.corrected` / :meth:`SphereResult.corrected_interval`
 invert the sphere theory's readout model (:mod:`virtspec_mi.instruments.sphere.theory` with the inputs

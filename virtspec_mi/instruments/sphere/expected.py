@@ -84,7 +84,8 @@ from virtspec_mi.kernel.hooks import ChunkRays
 from virtspec_mi.kernel.rng import GOLDEN, hash32, to_unit
 from virtspec_mi.instruments.sphere.walk import _ACTIVE, WALK_BASE, SphereFate, SphereLayout, _vec, holder_frame
 
-__all__ = ["EXPECTED_BASE", "ROUNDING_BIAS", "ROUNDING_DIMENSION", "SCORE_SCALE", "SCORE_SUMS", "SMALLEST_WEIGHT", "ExpectedSphereLayout",
+__all__ = ["BAFFLE_SPLIT", "EXPECTED_BASE", "ROULETTE", "ROUNDING_BIAS", "ROUNDING_DIMENSION", "SCORE_SCALE",
+           "SCORE_SUMS", "SMALLEST_WEIGHT", "ExpectedSphereLayout",
            "expected_layout"]
 
 SCORE_SCALE: int = 1 << 15
@@ -94,7 +95,7 @@ SCORE_SUMS: tuple[str, str] = ("detector_score", "detector_score_squares")
 """The per-reading sums of q and q² (:data:`SCORE_SCALE`) the expected-value walk adds to the counts."""
 
 EXPECTED_BASE: int = 1 << 26
-"""First random-number dimension of the expected-value walk's own draws (step b: ``EXPECTED_BASE + 2b + j``, j = 0, 1)."""
+"""First random-number dimension of the expected-value walk's own draws (step b: ``EXPECTED_BASE + _STRIDE·b + j``)."""
 
 ROUNDING_DIMENSION: int = WALK_BASE - 32
 """The random-number dimension of a ray's stochastic rounding of its score (below a traced beam's)."""
@@ -160,7 +161,7 @@ class ExpectedSphereLayout(SphereLayout):
         return {"weight": weight, "score": dr.zeros(mi.Float, dr.width(weight))}
 
     def carried_sums(self, carried: dict[str, Any], rays: ChunkRays) -> dict[str, Any]:
-        """q and q² of every ray's score, q = ⌊sS⌋ + [u < sS − ⌊sS⌋] (stochastic rounding, module docstring)."""
+        """q and q² of every ray's score, q = ⌊sS⌋ + [u < sS − ⌊sS⌋] (stochastic rounding: module docstring)."""
 
         import drjit as dr
         import mitsuba as mi
@@ -240,7 +241,7 @@ class ExpectedSphereLayout(SphereLayout):
             score = score + dr.select(baffle, weight * share, 0.0)
             weight = dr.select(baffle, weight * (1.0 - share), weight)
             new_d = dr.select(baffle, chosen, new_d)
-        # roulette: a weight below θ(1 − s) lives on at θ(1 − s) with probability w/(θ(1 − s)) (s + w stays ≤ 1)
+        # roulette: a weight below θ(1 − s) lives on as θ(1 − s) with probability w/(θ(1 − s)); s + w stays ≤ 1
         floor = ROULETTE * (1.0 - score)
         low = (out["fate"] == _ACTIVE) & (weight < floor)
         lives = v[0] * floor < weight

@@ -28,9 +28,13 @@ fraction gets a Clopper–Pearson interval at δ/2, so both hold together with p
 ≥ 1 − δ by the union bound (whatever the dependence between the configurations); the
 ratio's interval is then [ρ_std·p_s⁻/p_r⁺, ρ_std·p_s⁺/p_r⁻] (the extreme combinations).
 Each configuration's N is the settings' rule at (μ, δ/2), so each fraction is within μ
-with probability ≥ 1 − δ/2. The hemispherical reading (the first specimen interaction's
-hemisphere, :mod:`virtspec_mi.kernel.tracer`) comes from the sample configuration's very
-rays; the instrument error is reading − hemispherical.
+with probability ≥ 1 − δ/2. With ``detector="expected"`` each fraction is a mean score in
+[0, 1] (:mod:`virtspec_mi.instruments.sphere.expected`: each bounce scores its exact chance
+of reaching the detector) with an empirical Bernstein interval at δ/2
+(:func:`virtspec_mi.budgets.scores.score_interval`), the ratio's interval built alike. The
+hemispherical reading (the first specimen interaction's hemisphere,
+:mod:`virtspec_mi.kernel.tracer`) comes from the sample configuration's very rays; the
+instrument error is reading − hemispherical.
 
 **Correction:** :meth:`SphereResult.corrected` / :meth:`SphereResult.corrected_interval`
 invert the sphere theory's readout model (:mod:`virtspec_mi.instruments.sphere.theory` with the inputs
@@ -64,11 +68,12 @@ from virtspec_mi.instruments.sphere.walk import FATES, HEMISPHERES, SPECIMEN, Ho
 from virtspec_mi.instruments.sphere.result import CONFIGURATIONS, SphereResult
 from virtspec_mi.instruments.sphere.beam import BeamProfile
 from virtspec_mi.instruments.sphere.real import check_traced_beam
+from virtspec_mi.instruments.sphere.expected import expected_layout
 from virtspec_mi.base.checks import number, shown_value
 from virtspec_mi.results.base import plain_data
 from virtspec_mi.settings import Options, Settings, one_of, option, share, true_or_false, whole_number
 
-__all__ = ["MEASUREMENTS", "SPECULAR", "METHODS", "SphereOptions", "IntegratingSphere", "configurations",
+__all__ = ["MEASUREMENTS", "SPECULAR", "METHODS", "DETECTORS", "SphereOptions", "IntegratingSphere", "configurations",
            "SphereCorrection", "Sphere", "Port", "Baffle", "BeamProfile", "SphereResult"]
 
 MEASUREMENTS: dict[str, str] = {
@@ -78,6 +83,11 @@ MEASUREMENTS: dict[str, str] = {
 SPECULAR: dict[str, str] = {
     "SCI": "specular component included: the specular port closed by a plug of wall material",
     "SCE": "specular component excluded: the specular port open to a light trap",
+}
+DETECTORS: dict[str, str] = {
+    "counted": "every ray reaching the detector port counted (exact counts, Clopper-Pearson)",
+    "expected": "each wall bounce scores its exact chance of reaching the detector (a bounded score per ray, "
+                "empirical Bernstein; a plain sphere: knife-edge circular ports, no field of view, a Lambertian wall)",
 }
 METHODS: dict[str, str] = {
     "substitution": "single beam: sample, then the standard, in the same port (the reference port plugged)",
@@ -113,6 +123,9 @@ class SphereOptions(Options):
                              "reflectance of the Lambertian reference standard, 0 < standard <= 1")
     max_bounces: int = option(100_000, whole_number("max_bounces", 1, 10**7, "1 <= max_bounces <= 10**7"),
                               "step cap of a sphere walk, 1 ... 10**7 (capped walks are counted)")
+    detector: str = option("counted", one_of("detector", DETECTORS),
+                           "how detection is scored: counted rays, or the expected value of each wall bounce",
+                           DETECTORS)
     sphere: Sphere | None = option(
         None, _check_sphere, "the integrating sphere (a virtspec_mi.Sphere; as integrator parameters: diameter, "
                              "wall_reflectance, port_<name>, baffle)", flag=False)
@@ -130,9 +143,13 @@ class SphereOptions(Options):
         return is_sphere_parameter(name)
 
     def as_dict(self) -> dict[str, Any]:
-        """How the reading is taken, as plain data (the sphere is recorded apart: :meth:`Sphere.parameters`)."""
+        """
+        How the reading is taken, as plain data (the sphere is recorded apart: :meth:`Sphere.parameters`); a
+        counted detector is not recorded (the default: files and checkpoints as before the option).
+        """
 
-        return {name: value for name, value in super().as_dict().items() if name != "sphere"}
+        return {name: value for name, value in super().as_dict().items()
+                if name != "sphere" and not (name == "detector" and value == "counted")}
 
 
 def configurations(sphere: Sphere, options: SphereOptions, specimen_radius: float,
@@ -396,7 +413,12 @@ class IntegratingSphere(Instrument):
         if not settings.adaptive and settings.rays is None:  # each detector fraction at delta/2
             settings = settings.updated(rays=settings.updated(delta=settings.delta / DETECTOR_COLUMNS.share)
                                         .rays_per_reading)
-        layouts = tuple(sphere.layout(holders, caps, options.max_bounces, settings.wavelengths)
+        if options.detector == "expected" and settings.adaptive and settings.rays is None:
+            raise ValueError("detector='expected' takes a number of rays fixed before the run (rays=N, or the "
+                             "rule's N at (mu, delta/2) without adaptive): the two-stage pilot sizes counted "
+                             "detector fractions")
+        build = expected_layout if options.detector == "expected" else Sphere.layout
+        layouts = tuple(build(sphere, holders, caps, options.max_bounces, settings.wavelengths)
                         for holders, caps in (setups[name] for name in CONFIGURATIONS))
         self.bench, self.sphere_options = bench, options
         detected = layouts[0].codes_of(SphereFate.DETECTED)  # the detector fraction: a two-stage column

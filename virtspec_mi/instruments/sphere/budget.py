@@ -133,6 +133,8 @@ class SphereBudget:
         Each reading's δ.
     notes
         What the budget could not separate (e.g. substitution without a reference port).
+    certificate
+        What certifies each reading (Clopper–Pearson; the expected-value detector's empirical Bernstein).
     """
 
     error: np.ndarray
@@ -142,6 +144,7 @@ class SphereBudget:
     readings: int
     delta: float
     notes: tuple = ()
+    certificate: str = "Clopper-Pearson"
 
     @property
     def joint_confidence(self) -> float:
@@ -155,7 +158,7 @@ class SphereBudget:
         lines = [f"error budget: reading - hemispherical split into its sources (each a difference of two readings "
                  f"of the same rays; each line's interval holds with probability >= {1 - 2 * self.delta:g}, "
                  f"interactions and all lines at once >= {self.joint_confidence:g}: union bound over {self.readings} "
-                 f"Clopper-Pearson certificates at delta = {self.delta:g})"]
+                 f"{self.certificate} certificates at delta = {self.delta:g})"]
         for name in self.parts:
             value, interval = np.atleast_1d(self.parts[name]), np.atleast_1d(self.intervals[name]).reshape(-1, 2)
             cells = ", ".join(f"{v:+.5f} [{lo:+.5f}, {hi:+.5f}]" for v, (lo, hi) in zip(value.ravel(), interval))
@@ -250,4 +253,6 @@ def sphere_budget(result: Any, take: Callable[..., Any]) -> SphereBudget:
     upper = error_interval[..., 1] - sum(v[..., 0] for v in intervals.values())
     intervals["interactions"] = np.stack([lower, upper], axis=-1)
     return SphereBudget(error=error, error_interval=error_interval, parts=parts, intervals=intervals,
-                        readings=taken + 1, delta=float(result.delta), notes=tuple(notes))
+                        readings=taken + 1, delta=float(result.delta), notes=tuple(notes),
+                        certificate=("empirical Bernstein (readings) and Clopper-Pearson (hemispherical)"
+                                     if getattr(result, "expected", False) else "Clopper-Pearson"))

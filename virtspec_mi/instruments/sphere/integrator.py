@@ -43,6 +43,11 @@ standard : float, default 0.99
     Reflectance of the Lambertian reference standard, 0 < standard ≤ 1.
 max_bounces : integer, default 100000
     Step cap of a sphere walk (capped walks are counted, the reading then not certified).
+detector : string, default "counted"
+    ``counted`` (every ray reaching the detector port counted; Clopper–Pearson) or
+    ``expected`` (each wall bounce scores its exact chance of reaching the detector, a score
+    per ray in [0, 1]; empirical Bernstein; a plain sphere only:
+    :mod:`virtspec_mi.instruments.sphere.expected`).
 
 Notes
 -----

@@ -47,6 +47,7 @@ import numpy as np
 from virtspec_mi.base.version import __version__
 from virtspec_mi.budgets.bounds import hoeffding_mu
 from virtspec_mi.budgets.intervals import clopper_pearson
+from virtspec_mi.budgets.scores import score_interval
 from virtspec_mi.instruments.sphere.geometry import Sphere, sphere_from_parameters
 from virtspec_mi.instruments.sphere.model import correct_readings, theory_inputs
 from virtspec_mi.results.base import ResultBase, attribute, per_count, plain_data, round_up, span, stored
@@ -54,6 +55,7 @@ from virtspec_mi.results.integrity import CountRules, field_value, finite_labels
 from virtspec_mi.results.figures import Figure, spectra
 from virtspec_mi.results.variables import READINGS, Variable, bounds
 from virtspec_mi.instruments.sphere.walk import FATES
+from virtspec_mi.instruments.sphere.expected import ROUNDING_BIAS, SCORE_SCALE, SCORE_SUMS, SMALLEST_WEIGHT
 from virtspec_mi.settings import Settings, share
 
 __all__ = ["CONFIGURATIONS", "COUNT_RULES", "SphereResult"]
@@ -187,6 +189,11 @@ class SphereResult(ResultBase):
                  specimen_radius: float | None = None, version: str = __version__, parameters: dict | None = None,
                  pilot: dict[str, dict[str, Any]] | None = None, source: dict | None = None) -> None:
         options = _checked_options(options)
+        if options.get("detector") == "expected":
+            lacking = [f"{c}.{name}" for c, named in counts.items() for name in SCORE_SUMS if name not in named]
+            if lacking:
+                raise ValueError(f"an expected-value reading (options.detector = 'expected') needs the score sums "
+                                 f"{', '.join(SCORE_SUMS)} of both configurations (lacks {', '.join(lacking)})")
         readings = tuple(d for d in dims if d != "configuration")
         checked = {"wall_reflectance": (readings, wall_reflectance)}
         arrays = {"wall_reflectance": (readings, wall_reflectance)}
@@ -253,16 +260,30 @@ class SphereResult(ResultBase):
         return self.counts[configuration][name] / self.counts[configuration]["rays"]
 
     @property
-    def detector_fraction(self) -> np.ndarray:
-        """p_sample: the detected fraction with the sample."""
+    def expected(self) -> bool:
+        """True when detection was scored by its expected value (``detector="expected"``), not counted."""
 
-        return self.fraction("detected", "sample")
+        return self.options.get("detector", "counted") == "expected"
+
+    def _detected(self, configuration: str) -> np.ndarray:
+        """A configuration's detector fraction: detected/rays, or the mean score (expected-value detector)."""
+
+        if self.expected:
+            counts = self.counts[configuration]
+            return counts[SCORE_SUMS[0]] / (SCORE_SCALE * counts["rays"])
+        return self.fraction("detected", configuration)
+
+    @property
+    def detector_fraction(self) -> np.ndarray:
+        """p_sample: the detected fraction with the sample (the mean score with ``detector="expected"``)."""
+
+        return self._detected("sample")
 
     @property
     def standard_fraction(self) -> np.ndarray:
         """p_standard: the detected fraction with the reference standard (or the open port)."""
 
-        return self.fraction("detected", "standard")
+        return self._detected("standard")
 
     @property
     def fraction_delta(self) -> float:
@@ -271,7 +292,9 @@ class SphereResult(ResultBase):
         return self.delta / 2.0
 
     def fraction_interval(self, configuration: str = "sample") -> np.ndarray:
-        """Clopper–Pearson interval (…, 2) of a configuration's detector fraction at δ/2."""
+        """Clopper–Pearson interval (…, 2) of a configuration's detector fraction at δ/2 (with
+        ``detector="expected"``: the empirical Bernstein interval of its mean score,
+        :func:`virtspec_mi.budgets.scores.score_interval`)."""
 
         return self._intervals[f"fraction_{configuration}"]
 
@@ -283,7 +306,13 @@ class SphereResult(ResultBase):
             counts = self.counts[configuration]
             return np.stack(clopper_pearson(counts[name], counts["rays"], delta), axis=-1)
 
-        out = {f"fraction_{c}": interval(c, "detected", self.fraction_delta) for c in CONFIGURATIONS}
+        def scored(configuration: str, delta: float) -> np.ndarray:
+            counts = self.counts[configuration]
+            return np.stack(score_interval(counts[SCORE_SUMS[0]], counts[SCORE_SUMS[1]], counts["rays"], delta,
+                                           SCORE_SCALE, ROUNDING_BIAS, SMALLEST_WEIGHT), axis=-1)
+
+        fraction = scored if self.expected else (lambda c, delta: interval(c, "detected", delta))
+        out = {f"fraction_{c}": fraction(c, self.fraction_delta) for c in CONFIGURATIONS}
         out["hemispherical"] = interval("sample", self._hemispherical_count, self.delta)
         return out
 
@@ -296,21 +325,22 @@ class SphereResult(ResultBase):
         """
 
         bad = sum(self.counts[c][n] for c in CONFIGURATIONS for n in _UNCERTIFIED)
-        return np.asarray((bad == 0) & (self.counts["standard"]["detected"] > 0))
+        return np.asarray((bad == 0) & ~self.no_light)
 
     @property
     def no_light(self) -> np.ndarray:
         """True where no ray of the standard configuration reached the detector (the reading is undefined)."""
 
-        return np.asarray(self.counts["standard"]["detected"] == 0)
+        return np.asarray(self._detected("standard") == 0)
 
     @property
     def fraction_mu(self) -> np.ndarray:
         """
         Tolerance each detector fraction is certified to at δ/2, per reading: μ for a
         two-stage budget (each fraction sized to it), else what the N spent guarantee under
-        eq. (19) (Hoeffding's μ, which holds for every N; the larger of the two
-        configurations'); NaN where not certified.
+        eq. (19) (Hoeffding's μ, which holds for every N — and for the mean of scores in
+        [0, 1], the expected-value detector's; the larger of the two configurations'); NaN
+        where not certified.
         """
 
         if self.settings.adaptive and self.settings.rays is None:
@@ -497,8 +527,10 @@ class SphereResult(ResultBase):
         options = self.options
         kind = "transmittance" if options["measurement"] == "transmittance" else f"reflectance ({options['specular']})"
         mu = self.fraction_mu
-        lines = [f"integrating sphere {kind}, method = {options['method']}, standard = {self.standard_value:g}; "
-                 f"{self.sphere}",
+        detector = ("; detector: expected value of each wall bounce (mean scores, empirical Bernstein)"
+                    if self.expected else "")
+        lines = [f"integrating sphere {kind}, method = {options['method']}, standard = {self.standard_value:g}"
+                 f"{detector}; {self.sphere}",
                  f"N = {span(self.rays)} rays per configuration and reading; "
                  + (f"each detector fraction certified to {round_up(float(np.nanmax(mu))):g} at delta/2 = "
                     f"{self.fraction_delta:g} (reading interval: both at once, probability >= "
@@ -689,6 +721,8 @@ def _checked_options(options: Any) -> dict[str, Any]:
     options = dict(options)
     if "standard" in options:
         options["standard"] = share("options.standard")(options["standard"])
+    if options.get("detector", "counted") not in ("counted", "expected"):
+        raise ValueError(f"options.detector must be counted or expected (got {options['detector']!r})")
     if options.get("measurement", "reflectance") not in ("reflectance", "transmittance"):
         raise ValueError(f"options.measurement must be reflectance or transmittance (got {options['measurement']!r})")
     return options

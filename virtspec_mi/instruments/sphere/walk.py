@@ -34,6 +34,11 @@ a lane whose ray ends takes the next one at once, so a packet of lanes never idl
 behind its longest walk (walk lengths are geometric, and the longest of 16 is about
 three times the mean). Each ray's fate is written back at its own index.
 
+A subclass scores the walk otherwise through a few hooks the plain walk leaves untraced
+(:attr:`SphereLayout.carried` per-ray state with :meth:`SphereLayout.carried_starts` and
+:meth:`SphereLayout.carried_sums`, :meth:`SphereLayout.entering`, ``_lives`` and the step's
+``held``): :mod:`virtspec_mi.instruments.sphere.expected`, the expected-value detector.
+
 Random numbers are counter-based, keyed on (seed, global ray index, dimension)
 (:mod:`virtspec_mi.kernel.rng`): step b draws dimensions ``WALK_BASE + 4b + j``
 (j = 0…3), far above the first interaction's, so counts are exact integers,
@@ -212,6 +217,26 @@ class SphereLayout(ExitHook):
     sums = ("wall_reflections", "weight_violations", "rounded_weights")
     start_last = 1
     """The ``last`` surface of a walk's start (1: holder 0's plane)."""
+    carried = ()
+    """Names of further per-ray ``Float`` state a subclass's :meth:`step` carries (none here): each ray starts
+    its walk at its value of :meth:`carried_starts`, and its value at the walk's end goes to :meth:`carried_sums`."""
+
+    def entering(self, lanes: dict) -> Any:
+        """Which first interactions send their ray on (into the sphere, or out through the port): the reflected
+        and transmitted rays (the specimen's roulette kept the others)."""
+
+        first_fate = lanes["fate"]
+        return (first_fate == int(Fate.REFLECTED)) | (first_fate == int(Fate.TRANSMITTED))
+
+    def carried_starts(self, lanes: dict) -> dict[str, Any]:
+        """Every ray's start value of each :attr:`carried` state (none here)."""
+
+        return {}
+
+    def carried_sums(self, carried: dict[str, Any], rays: ChunkRays) -> dict[str, Any]:
+        """Per-ray whole numbers to sum from the :attr:`carried` state of every ray at its walk's end (none here)."""
+
+        return {}
 
     def extra_columns(self, wavelengths: np.ndarray) -> tuple:
         """Further per-reading values :meth:`step` takes as columns (none here; a subclass's)."""
@@ -266,7 +291,7 @@ class SphereLayout(ExitHook):
         wo_world = mi.Vector3f(*(wo.x * frame[i, 0] + wo.y * frame[i, 1] + wo.z * frame[i, 2] for i in range(3)))
         target = lanes["target"]
         start = mi.Point3f(*(centre[i] + target.x * frame[i, 0] + target.y * frame[i, 1] for i in range(3)))
-        left = (first_fate == int(Fate.REFLECTED)) | (first_fate == int(Fate.TRANSMITTED))
+        left = self.entering(lanes)
         into = dr.dot(wo_world, _vec(axis)) < 0.0
         fate = dr.select(left, dr.select(into, mi.UInt32(_ACTIVE), mi.UInt32(SphereFate.lost(holder.port))),
                          mi.UInt32(int(SphereFate.HOLDER0)))
@@ -282,23 +307,26 @@ class SphereLayout(ExitHook):
         dr.eval(start, wo_world, fate, rare, hemisphere, *(() if slot is None else (slot,)))  # one kernel
         walking = dr.compress(fate == _ACTIVE)  # the rays that entered the sphere
         walls = dr.zeros(mi.UInt32, dr.width(fate))
+        carried = self.carried_starts(lanes)
         if dr.width(walking):
-            fate, rare, walls = self._loop(walking, start, wo_world, fate, rare, rays)
+            fate, rare, walls = self._loop(walking, start, wo_world, fate, rare, rays, carried)
         code = hemisphere * self.codes + fate
         sums = {"wall_reflections": walls,
                 "weight_violations": dr.select((rare & _VIOLATION) != 0, mi.UInt32(1), mi.UInt32(0)),
-                "rounded_weights": dr.select((rare & _ROUNDED) != 0, mi.UInt32(1), mi.UInt32(0))}
+                "rounded_weights": dr.select((rare & _ROUNDED) != 0, mi.UInt32(1), mi.UInt32(0)),
+                **self.carried_sums(carried, rays)}
         return code, sums
 
     def _loop(self, walking: Any, start: Any, direction: Any, fate: Any, rare: Any,
-              rays: ChunkRays) -> tuple[Any, Any, Any]:
+              rays: ChunkRays, carried: dict[str, Any] | None = None) -> tuple[Any, Any, Any]:
         """
         The one symbolic loop over the rays that entered the sphere (indices ``walking``):
         each of L lanes walks its rays one after the other (rays j, j + L, j + 2L … of
         ``walking``), :meth:`step` by step, and takes the next ray as soon as one ends — so
         a lane never idles behind a long walk of its packet. Per-ray fates, rare bits and
         wall reflections are written back at the rays' indices (the random numbers depend
-        on the ray, not on the lane, so the counts do not depend on L).
+        on the ray, not on the lane, so the counts do not depend on L). ``carried``: per-ray start values of
+        the :attr:`carried` state, replaced by the values at the walks' ends (none in the plain walk).
         """
 
         import drjit as dr
@@ -316,6 +344,9 @@ class SphereLayout(ExitHook):
         wavelengths = rays.wavelengths.astype(np.float32)
         bsdfs = [_loaded(holder.bsdf, rays.specimen) for holder in self.holders]
         extras = [values.astype(np.float32) for values in self.extra_columns(rays.wavelengths)]
+        carried = {} if carried is None else carried
+        starts = [(name, carried[name]) for name in self.carried if name in carried]
+        ends = {name: dr.copy(values) for name, values in starts}  # written per ray below; the starts only read
 
         def reading_of(ray: Any) -> Any:
             return dr.zeros(mi.UInt32, width) if single else dr.gather(mi.UInt32, rays.slot, ray)
@@ -325,18 +356,22 @@ class SphereLayout(ExitHook):
         state = (slot, ray, reading_of(ray), dr.gather(mi.Point3f, start, ray), dr.gather(mi.Vector3f, direction, ray),
                  dr.full(mi.UInt32, self.start_last, width), dr.full(mi.UInt32, _ACTIVE, width),
                  dr.zeros(mi.UInt32, width),
-                 dr.zeros(mi.UInt32, width), dr.gather(mi.UInt32, rare, ray))
+                 dr.zeros(mi.UInt32, width), dr.gather(mi.UInt32, rare, ray),
+                 *(dr.gather(mi.Float, values, ray) for _, values in starts))
 
-        def body(slot, ray, reading, p, d, last, state_fate, bounces, walls, state_rare):
+        def body(slot, ray, reading, p, d, last, state_fate, bounces, walls, state_rare, *more_state):
             at = None if single else reading
             out = self.step({"p": p, "d": d, "last": last, "fate": state_fate, "bounces": bounces, "walls": walls,
-                             "rare": state_rare}, rays.ray_index(ray, at), root, rays.column(rho_w, mi.Float, at),
+                             "rare": state_rare, **{name: value for (name, _), value in zip(starts, more_state)}},
+                            rays.ray_index(ray, at), root, rays.column(rho_w, mi.Float, at),
                             rays.column(wavelengths, mi.Float, at), bsdfs,
                             *[rays.column(values, mi.Float, at) for values in extras])
             done = out["fate"] != _ACTIVE
             dr.scatter(fate_out, out["fate"], ray, done)
             dr.scatter(rare_out, out["rare"], ray, done)
             dr.scatter(walls_out, out["walls"], ray, done)
+            for name, _ in starts:
+                dr.scatter(ends[name], out[name], ray, done)
             slot = dr.select(done, slot + stride, slot)
             more = done & (slot < n)
             ray = dr.select(more, dr.gather(mi.UInt32, walking, slot, more), ray)
@@ -349,7 +384,8 @@ class SphereLayout(ExitHook):
                     dr.select(more, mi.UInt32(_ACTIVE), out["fate"]),
                     dr.select(more, mi.UInt32(0), out["bounces"]),
                     dr.select(more, mi.UInt32(0), out["walls"]),
-                    dr.select(more, dr.gather(mi.UInt32, rare, ray, more), out["rare"]))
+                    dr.select(more, dr.gather(mi.UInt32, rare, ray, more), out["rare"]),
+                    *(dr.select(more, dr.gather(mi.Float, values, ray, more), out[name]) for name, values in starts))
 
         def steps(*variables):  # body, and one step more of this launch
             return (*body(*variables[:-1]), variables[-1] + 1)
@@ -359,11 +395,12 @@ class SphereLayout(ExitHook):
             *state, _ = dr.while_loop((*state, dr.zeros(mi.UInt32, width)),
                                       lambda slot, *rest: (slot < n) & (rest[-1] < budget), steps,
                                       label="sphere_walk")
-            dr.eval(*state, fate_out, rare_out, walls_out)
+            dr.eval(*state, fate_out, rare_out, walls_out, *ends.values())
             if not bool(dr.any(state[0] < n, axis=None)):
                 break
             if rays.safe_point is not None:  # the engine's: an interrupt during a long walk stops the run here
                 rays.safe_point()
+        carried.update(ends)
         return fate_out, rare_out, walls_out
 
     # -- one step: state in → one flight and one surface event → state out --------------
@@ -422,6 +459,7 @@ class SphereLayout(ExitHook):
         rare = state["rare"]
 
         # the holders: a flat disk in its port plane, sampled by its BSDF
+        held = mi.Float(1.0)  # the BSDF weight of the disk hit (1: none), for a subclass (unused here: not traced)
         for k, holder in enumerate(self.holders):
             _, _, centre = self.planes[k]
             on_holder = active & (surface == k + 1)
@@ -440,7 +478,8 @@ class SphereLayout(ExitHook):
             wo_world = frame.to_world(wo)
             length2 = dr.squared_norm(wo)
             invalid = ~((length2 >= _LENGTH2[0]) & (length2 <= _LENGTH2[1])) & (w > 0.0)
-            lives = u[3] < w
+            lives = self._lives(u[3], w)
+            held = dr.select(lit, w, held)
             into = dr.dot(wo_world, _vec(self.planes[k][0])) < 0.0
             capped = component == CAPPED_COMPONENT
             code = dr.select(lives, dr.select(into, mi.UInt32(_ACTIVE), lost), mi.UInt32(int(SphereFate.HOLDER0) + k))
@@ -457,7 +496,13 @@ class SphereLayout(ExitHook):
         fate = dr.select((fate == _ACTIVE) & (bounces >= self.max_bounces), mi.UInt32(int(SphereFate.CAPPED)), fate)
         return {"p": dr.select(active, new_p, p), "d": dr.select(active, new_d, d),
                 "last": dr.select(active, surface, last), "fate": fate, "bounces": bounces, "walls": walls,
-                "rare": rare}
+                "rare": rare, "held": held}
+
+    @staticmethod
+    def _lives(u: Any, weight: Any) -> Any:
+        """Whether a ray the disk's BSDF sampled with ``weight`` lives on: Russian roulette (``u < weight``)."""
+
+        return u < weight
 
     @staticmethod
     def _sample(bsdf: Any, frame: Any, q: Any, wi_world: Any, wavelength: Any, u: list,

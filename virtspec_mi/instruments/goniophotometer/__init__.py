@@ -206,7 +206,7 @@ class Goniophotometer(Instrument):
     """
 
     name: ClassVar[str] = "goniophotometer"
-    exports: ClassVar[tuple[str, ...]] = ("GonioResult", "GonioOptions")
+    exports: ClassVar[tuple[str, ...]] = ("GonioResult", "GonioOptions", "RGLReading")
     options: ClassVar[type[Options] | None] = GonioOptions
     result: ClassVar[type] = GonioResult
     commands: ClassVar[tuple[Command, ...]] = (GONIO_COMMAND,)

@@ -1,6 +1,6 @@
 """
 A goniophotometer reading on the RGL grid as a ``.bsdf`` file: Mitsuba's ``measured`` material
-=============================================================================================
+==============================================================================================
 
 :func:`rgl_export` turns an :class:`~virtspec_mi.instruments.goniophotometer.rgl_reading.RGLReading`
 — a goniophotometer reading binned on the file's own grid (``binning="rgl"``) — into the

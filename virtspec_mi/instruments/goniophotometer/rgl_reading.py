@@ -68,7 +68,7 @@ class RGLReading(ResultBase):
     result : Result
         The spectrophotometer reading of the same rays.
     cell_counts : ndarray
-        Exact per-cell counts, ``int64``, shape (*result dims, K).
+        Exact per-cell counts, ``int64``, shape (the result's dims …, K).
     resolution : int
         n, the grid's nodes per axis.
     guarantee : str
@@ -116,7 +116,7 @@ class RGLReading(ResultBase):
 
         return Result._of(self.data.drop_dims(["cell"]))
 
-    cell_counts = stored("cell_counts", "Exact per-cell counts, ``int64``, shape (*reading dims, K).")
+    cell_counts = stored("cell_counts", "Exact per-cell counts, ``int64``, shape (the reading's dims …, K).")
     resolution = attribute("rgl_resolution", "n, the grid's nodes per axis.", int)
     guarantee = attribute("guarantee", "How N was sized, or ``\"rays\"`` when given.", str)
 

@@ -1,6 +1,6 @@
 """
 The RGL grid as goniophotometer bins: cells of Mitsuba's ``measured`` lookup
-===========================================================================
+============================================================================
 
 Mitsuba's ``measured`` BSDF (Dupuy & Jakob 2018) looks an outgoing direction wo up by the
 half vector m = (wi + wo)/|wi + wo| of the pair: at

@@ -50,11 +50,12 @@ def _evaluate(mi, bsdf, theta_i, phi_i, wavelength, wo):
 
 def _check_mitsuba_returns_the_stored_values(mi, export):
     """
-    At every visible node: relative 1e-4, plus the weight a rounded lookup position gives the node's theta_m
-    neighbours (theta_m and phi_m alike): the plugin's float32 half vector puts theta_m off by up to ~1e-7 rad, so u_1 = sqrt(2 theta_m / pi)
-    is off by at most sqrt(2e-7 / pi) = 2.5e-4 (near theta_m = 0, where the square root is steep): a weight of at
-    most (n - 1) * 2.5e-4 on a neighbour; and 1e-6 of the file's largest value (theta_i computed from a float32 wi
-    weighs the next theta_i slice by ~1e-7). Returns the nodes checked and the largest relative difference seen.
+    At every visible node: relative 1e-4, plus the weight a rounded lookup position gives the node's
+    neighbours (along theta_m and phi_m): the plugin's float32 half vector puts theta_m off by up to ~1e-7 rad, so
+    u_1 = sqrt(2 theta_m / pi) is off by at most sqrt(2e-7 / pi) = 2.5e-4 (near theta_m = 0, where the square root
+    is steep): a weight of at most (n - 1) * 2.5e-4 on a neighbour; and 1e-6 of the file's largest value (theta_i
+    computed from a float32 wi weighs the next theta_i slice by ~1e-7). Returns the nodes checked and the largest
+    relative difference seen.
     """
 
     bsdf = mi.load_dict({"type": "measured", "filename": str(export.path)})

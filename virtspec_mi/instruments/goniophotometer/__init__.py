@@ -78,7 +78,8 @@ class GonioOptions(Options):
     binning: str = option("uniform", one_of("binning", GONIO_BINNINGS), "theta_o binning of a number of bins, or "
                           "rgl: the RGL .bsdf's grid", GONIO_BINNINGS)
     rgl_resolution: int = option(DEFAULT_RESOLUTION, check_resolution,
-                                 "binning rgl: nodes per axis of the .bsdf's grid, 3 ... 1025 (K = 1 + (n - 1)^2 cells)")
+                                 "binning rgl: nodes per axis of the .bsdf's grid, 3 ... 1025 (K = 1 + (n - 1)^2 "
+                                 "cells)")
     fold_phi: bool = option(False, true_or_false("fold_phi"),
                             "fold phi_o to the relative azimuth |phi_o - phi_i| in [0, 180] (isotropic specimens)")
     hemispheres: str = option("both", one_of("hemispheres", HEMISPHERES), "what a number of theta_o bins covers",
@@ -126,7 +127,7 @@ class GonioOptions(Options):
 
 @dataclass(frozen=True)
 class RglFlags(Options):
-    """``virtspec gonio``'s own flag: the reflection measured on the grid of Mitsuba's measured ``.bsdf`` and written."""
+    """``virtspec gonio``'s own flag: the reflection measured on the grid of Mitsuba's measured ``.bsdf``, written."""
 
     title: ClassVar[str] = "Mitsuba measured BSDF"
 
@@ -138,7 +139,7 @@ class RglFlags(Options):
 
 
 def _respond_gonio(session: Session) -> int:
-    """``virtspec gonio``: the reading printed and drawn; with ``--rgl FILE`` taken on the ``.bsdf``'s grid and written."""
+    """``virtspec gonio``: the reading printed and drawn; with ``--rgl FILE`` taken on the ``.bsdf``'s grid, written."""
 
     if session.flags.rgl is None:
         return session.default()

@@ -18,9 +18,9 @@ run = importlib.util.module_from_spec(_spec)
 _spec.loader.exec_module(run)
 
 
-def test_all_twelve_notebooks_are_there():
-    assert [p.name[:2] for p in run.NOTEBOOKS] == ["01", "02", "03", "04", "05", "06", "07", "08", "09", "10", "11",
-                                                  "12"]
+def test_the_notebooks_are_numbered_from_one_without_a_gap():
+    assert [p.name[:2] for p in run.NOTEBOOKS] == [f"{k:02d}" for k in range(1, len(run.NOTEBOOKS) + 1)]
+    assert len(run.NOTEBOOKS) >= 13
 
 
 @pytest.mark.parametrize("path", run.NOTEBOOKS, ids=lambda p: p.stem)

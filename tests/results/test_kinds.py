@@ -67,7 +67,8 @@ def test_the_format_tags_of_the_kinds():
         "gloss": "virtspec-mi gloss 1", "derived": "virtspec-mi derived 1",
         "derived sweep": "virtspec-mi derived sweep 1", "fit": "virtspec-mi fit 1",
         "albedo table": "virtspec-mi albedo table 1", "table comparison": "virtspec-mi table comparison 1",
-        "klems": "virtspec-mi klems 1", "comparison": "virtspec-mi comparison 1"}
+        "klems": "virtspec-mi klems 1", "comparison": "virtspec-mi comparison 1",
+        "rgl": "virtspec-mi rgl 1"}
     assert {instrument.result for instrument in INSTRUMENTS.values()} <= set(KINDS.values())
     assert {kind for application in APPLICATIONS.values() for kind in application.results} == \
         set(KINDS.values()) - {kind for kind in KINDS.values() if kind.__module__.startswith("virtspec_mi.results")

@@ -64,8 +64,10 @@ them makes ``mi.render`` take a goniophotometer reading, kept in
 ``integrator.last_reading`` as a :class:`~virtspec_mi.instruments.goniophotometer.result.GonioResult`;
 :func:`virtspec_mi.gonio` on the scene uses them as its defaults):
 ``theta_o_bins`` (integer or string of edges, default 18 per hemisphere),
-``phi_o_bins`` (integer or string of edges, default 36), ``binning`` (``uniform`` or
-``projected``), ``fold_phi`` (boolean), ``hemispheres`` (``both``, ``reflection``,
+``phi_o_bins`` (integer or string of edges, default 36), ``binning`` (``uniform``,
+``projected``, or ``rgl``: the cells of an RGL ``.bsdf``'s grid, the reading an
+:class:`~virtspec_mi.instruments.goniophotometer.rgl_reading.RGLReading`), ``rgl_resolution``
+(integer, default 32), ``fold_phi`` (boolean), ``hemispheres`` (``both``, ``reflection``,
 ``transmission``), ``guarantee`` (``union``, ``union-exact``, ``dkw``, ``relative``),
 ``relative_tolerance`` and ``brdf_floor`` (floats). A bad bin specification raises
 ``ValueError`` naming the parameter. ``mi.render(scene, seed=s, spp=n)``

@@ -13,7 +13,8 @@ values into per-reading sums: one tally path for every instrument.
 A hook is one of two kinds (:attr:`ExitHook.needs_rays`):
 
 - ``False``: a per-ray function of the ray's outgoing direction, fate and its reading's
-  φi (:meth:`ExitHook.bin`), compiled into the ray kernel itself — and, for a random-walk
+  φi — and, for a hook with :attr:`ExitHook.incidence`, its reading's incidence direction
+  (the RGL grid's half vectors) — (:meth:`ExitHook.bin`), compiled into the ray kernel itself — and, for a random-walk
   specimen on queued lanes, run when each ray's walk ends
   (:class:`virtspec_mi.instruments.goniophotometer.hook.BinLayout`, the goniophotometer's bins);
 - ``True``: the kernel traces every ray's first interaction on its own lane (no queued
@@ -91,6 +92,9 @@ class ExitHook:
     """True: :meth:`exits` continues the traced lanes; False: :meth:`bin` per ray."""
     sums: tuple[str, ...] = ()
     """Names of the per-ray values :meth:`exits` returns, summed per reading."""
+    incidence: bool = False
+    """True: :meth:`bin` also receives each ray's reading's incidence direction ``wi``
+    (specimen frame, unit, towards the emitter; float32)."""
     spectral: bool = False
     """True when the tally depends on the wavelength beyond the specimen's response (the
     readings of a wavelength-independent specimen then do not share rays)."""
@@ -116,8 +120,11 @@ class ExitHook:
 
         return 0
 
-    def bin(self, wo: Any, fate: Any, phi_i: Any) -> Any:
-        """Per-ray bin code (``UInt32`` in [0, K]) from the outgoing direction, fate and φi (degrees)."""
+    def bin(self, wo: Any, fate: Any, phi_i: Any, wi: Any = None) -> Any:
+        """
+        Per-ray bin code (``UInt32`` in [0, K]) from the outgoing direction, fate and φi
+        (degrees); ``wi``, the incidence direction, is given only to a hook with :attr:`incidence`.
+        """
 
         raise NotImplementedError
 

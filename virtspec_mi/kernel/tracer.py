@@ -645,10 +645,17 @@ class _Kernel:
                 "specular": specular, "regular": regular}
 
     def _reading_bin(self, source: RaySource, slot: Any, wo: Any, fate: Any) -> Any:
-        """The hook's bin of rays of readings ``slot`` of the chunk (``None``: a single reading), with their φi."""
+        """
+        The hook's bin of rays of readings ``slot`` of the chunk (``None``: a single reading), with their φi
+        (and, for a hook with ``incidence``, their reading's incidence direction ω).
+        """
 
         phi_i = source.column(self.phi_i[source.slots].astype(np.float32), mi.Float, slot)
-        return self.hook.bin(wo, fate, phi_i)
+        if not self.hook.incidence:
+            return self.hook.bin(wo, fate, phi_i)
+        omega = self.readings[source.slots, 10:13].astype(np.float32)  # each reading's ω (towards the emitter)
+        wi = mi.Vector3f(*(source.column(omega[:, c], mi.Float, slot) for c in range(3)))
+        return self.hook.bin(wo, fate, phi_i, wi)
 
     def _sample(self, si: Any, sample1: Any, sample2: Any) -> tuple[Any, Any]:
         """The specimen BSDF's ``sample`` (importance transport)."""

@@ -204,8 +204,8 @@ def test_gonio_options_defaults_and_unknown_names():
     from virtspec_mi.instruments.goniophotometer import GonioOptions
 
     assert GonioOptions.from_parameters({}).as_dict() == {
-        "theta_o_bins": 18, "phi_o_bins": 36, "binning": "uniform", "fold_phi": False, "hemispheres": "both",
-        "guarantee": "union", "relative_tolerance": None, "brdf_floor": None}
+        "theta_o_bins": 18, "phi_o_bins": 36, "binning": "uniform", "rgl_resolution": 32, "fold_phi": False,
+        "hemispheres": "both", "guarantee": "union", "relative_tolerance": None, "brdf_floor": None}
     with pytest.raises(TypeError, match="theta_bins"):
         GonioOptions().updated(theta_bins=3)
     # strings (XML, command line) are read by the same checks; a boolean is not a number of bins

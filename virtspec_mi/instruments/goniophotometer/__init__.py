@@ -33,9 +33,21 @@ from virtspec_mi.instruments.goniophotometer.bins import BINNINGS, HEMISPHERES, 
 from virtspec_mi.instruments.base import Instrument, reading_grid, readings_result
 from virtspec_mi.instruments.command import Command, FigureFlag, Session
 from virtspec_mi.instruments.goniophotometer.result import GonioResult
+from virtspec_mi.instruments.goniophotometer.rgl_reading import RGLReading
+from virtspec_mi.instruments.goniophotometer.warped import DEFAULT_RESOLUTION, WarpedGrid, check_resolution
 from virtspec_mi.settings import Options, Settings, one_of, option, text, true_or_false
 
-__all__ = ["GonioOptions", "Goniophotometer", "GonioResult", "RglFlags"]
+__all__ = ["GonioOptions", "Goniophotometer", "GonioResult", "RGLReading", "RglFlags", "GONIO_BINNINGS"]
+
+GONIO_BINNINGS: dict[str, str] = {
+    **BINNINGS,
+    "rgl": "the cells of an RGL .bsdf's grid (rgl_resolution nodes per axis), by half vector, reflection only: the "
+           "reading is an RGLReading whose cell means are what the .bsdf stores (collimated beam)",
+}
+"""The goniophotometer's binnings: the θo ones (:data:`~virtspec_mi.instruments.goniophotometer.bins.BINNINGS`)
+and ``rgl``, the grid of Mitsuba's measured plugin (:mod:`virtspec_mi.instruments.goniophotometer.warped`)."""
+
+_THETA_PHI_OPTIONS = ("theta_o_bins", "phi_o_bins", "fold_phi", "hemispheres")
 
 
 def _bin_spec(name: str) -> Any:
@@ -63,7 +75,11 @@ class GonioOptions(Options):
     phi_o_bins: int | tuple[float, ...] = option(
         36, _bin_spec("phi_o_bins"),
         "phi_o bins over [0, 360) (folded: [0, 180]), 1 ... 65536, or phi_o edges in degrees", words=True)
-    binning: str = option("uniform", one_of("binning", BINNINGS), "theta_o binning of a number of bins", BINNINGS)
+    binning: str = option("uniform", one_of("binning", GONIO_BINNINGS), "theta_o binning of a number of bins, or "
+                          "rgl: the RGL .bsdf's grid", GONIO_BINNINGS)
+    rgl_resolution: int = option(DEFAULT_RESOLUTION, check_resolution,
+                                 "binning rgl: nodes per axis of the .bsdf's grid, 3 ... 1025 (K = 1 + (n - 1)^2 "
+                                 "cells)")
     fold_phi: bool = option(False, true_or_false("fold_phi"),
                             "fold phi_o to the relative azimuth |phi_o - phi_i| in [0, 180] (isotropic specimens)")
     hemispheres: str = option("both", one_of("hemispheres", HEMISPHERES), "what a number of theta_o bins covers",
@@ -79,14 +95,23 @@ class GonioOptions(Options):
     def _check_together(self) -> None:
         """The bins are laid out (a bad specification names its option)."""
 
+        if self.binning == "rgl":  # the .bsdf's grid: the θo × φo options have no meaning
+            given = [name for name in _THETA_PHI_OPTIONS
+                     if getattr(self, name) != type(self).__dataclass_fields__[name].default]
+            if given:
+                raise ValueError(f"{', '.join(given)}: no meaning with binning 'rgl' (its cells are the .bsdf's "
+                                 "grid, rgl_resolution nodes per axis, reflection only)")
+            object.__setattr__(self, "_bins", WarpedGrid(self.rgl_resolution))
+            return
         object.__setattr__(self, "_bins", make_bins(self.theta_o_bins, self.phi_o_bins, self.binning, self.fold_phi,
                                                     self.hemispheres))
 
     @property
-    def bins(self) -> GonioBins:
+    def bins(self) -> GonioBins | WarpedGrid:
         """
         The θo × φo bins these options lay out
-        (:func:`virtspec_mi.instruments.goniophotometer.bins.make_bins`).
+        (:func:`virtspec_mi.instruments.goniophotometer.bins.make_bins`), or with ``binning="rgl"`` the
+        .bsdf's grid (:class:`~virtspec_mi.instruments.goniophotometer.warped.WarpedGrid`).
         """
 
         return self._bins  # type: ignore[attr-defined]
@@ -102,22 +127,26 @@ class GonioOptions(Options):
 
 @dataclass(frozen=True)
 class RglFlags(Options):
-    """``virtspec gonio``'s own flag: the reading's reflection also written as Mitsuba's measured ``.bsdf``."""
+    """``virtspec gonio``'s own flag: the reflection measured on the grid of Mitsuba's measured ``.bsdf``, written."""
 
     title: ClassVar[str] = "Mitsuba measured BSDF"
 
     rgl: str | None = option(
-        None, text("rgl", "a file path"), "also write the reading's reflection as an RGL .bsdf FILE for Mitsuba's measured plugin "
-                          "(each node: its bin's f times cos theta_o, with the bin's certified interval; see "
-                          "GonioResult.to_rgl)")
+        None, text("rgl", "a file path"), "measure the reflection on the grid of an RGL .bsdf (binning rgl, "
+                                          "--rgl-resolution nodes per axis, a collimated beam unless --beam is given) "
+                                          "and write FILE for Mitsuba's measured plugin: each node its cell's mean "
+                                          "of f cos(theta_o) with its certified interval (see RGLReading)")
 
 
 def _respond_gonio(session: Session) -> int:
-    """``virtspec gonio``: the reading printed and drawn; with ``--rgl FILE`` its ``.bsdf`` written too."""
+    """``virtspec gonio``: the reading printed and drawn; with ``--rgl FILE`` taken on the ``.bsdf``'s grid, written."""
 
     if session.flags.rgl is None:
         return session.default()
-    result = session.take()
+    overrides: dict[str, Any] = {"binning": "rgl"}
+    if session.keywords.get("beam") is None:
+        overrides["beam"] = "collimated"
+    result = session.take(**overrides)
     status = session.report(result, result.summary(), session.draw(result))
     result.to_rgl(session.flags.rgl)
     if not session.args.json:
@@ -148,6 +177,19 @@ GONIO_COMMAND = Command(
 """``virtspec gonio``: its reading, or with ``--klems`` the Klems matrices (the application's hook, by import path)."""
 
 
+def _check_rgl(settings: Settings, options: GonioOptions, theta_i: np.ndarray) -> None:
+    """The rules of ``binning="rgl"``: a collimated beam, θi below 90°, no relative guarantee."""
+
+    if settings.beam != "collimated":
+        raise ValueError(f"beam must be collimated with binning 'rgl' (got {settings.beam!r}): a cell's mean of "
+                         "f cos(theta_o) is certified for one direction of incidence")
+    if np.any(np.asarray(theta_i) >= 90.0):
+        raise ValueError(f"theta_i must be below 90 degrees with binning 'rgl' (got {np.max(theta_i):g})")
+    if options.guarantee == "relative":
+        raise ValueError("guarantee 'relative' is not available with binning 'rgl' (its cells' solid angles change "
+                         "with theta_i, and some are 0): use union, or give rays")
+
+
 class Goniophotometer(Instrument):
     """
     The goniophotometer (see the module docstring): the spectrophotometer's readings
@@ -165,7 +207,7 @@ class Goniophotometer(Instrument):
     """
 
     name: ClassVar[str] = "goniophotometer"
-    exports: ClassVar[tuple[str, ...]] = ("GonioResult", "GonioOptions")
+    exports: ClassVar[tuple[str, ...]] = ("GonioResult", "GonioOptions", "RGLReading")
     options: ClassVar[type[Options] | None] = GonioOptions
     result: ClassVar[type] = GonioResult
     commands: ClassVar[tuple[Command, ...]] = (GONIO_COMMAND,)
@@ -179,6 +221,9 @@ class Goniophotometer(Instrument):
         """The bins (the kernel hook) and N, or the two-stage columns, of the options."""
 
         bins = options.bins
+        grid = isinstance(bins, WarpedGrid)
+        if grid:
+            _check_rgl(settings, options, theta_i)
         rule, relative, floor = check_gonio_options(options.guarantee, settings.delta, bins.size,
                                                     options.relative_tolerance, options.brdf_floor)
         columns, refusal, self.guarantee = None, "", rule.name
@@ -198,16 +243,23 @@ class Goniophotometer(Instrument):
             settings = settings.updated(rays=rule.rays(settings.mu, settings.delta, bins.size, relative=relative,
                                                        floor=floor, smallest_solid_angle=options.smallest_solid_angle))
         self.bench, self.gonio_options = bench, options
+        described = {"binning": "rgl", "rgl_resolution": bins.resolution} if grid else bins.as_dict()
         self.plan = Plan(settings.updated(theta_i=float(theta_i[0])), theta_i, parameters, hooks=(bins.layout(),),
                          columns=columns, refusal=refusal, scene=self.scene, instrument=self.name,
-                         options={"bins": bins.as_dict(), "guarantee": self.guarantee})
+                         options={"bins": described, "guarantee": self.guarantee})
         return self.plan
 
-    def postprocess(self, tally: Tally) -> GonioResult:
-        """The hemispherical reading of the same rays and its per-bin counts over the readings' dims."""
+    def postprocess(self, tally: Tally) -> GonioResult | RGLReading:
+        """
+        The hemispherical reading of the same rays and its per-bin counts over the readings' dims (with
+        ``binning="rgl"``: its per-cell counts, an :class:`RGLReading`).
+        """
 
         plan, options = self.plan, self.gonio_options
         result = readings_result(self.bench, plan, tally, self.scene, self.source)
+        if isinstance(options.bins, WarpedGrid):
+            return RGLReading(result=result, cell_counts=reading_grid(plan, tally.bins.reshape(-1, options.bins.size)),
+                              resolution=options.bins.resolution, guarantee=self.guarantee)
         bin_counts = reading_grid(plan, tally.bins.reshape(-1, *options.bins.shape))
         return GonioResult(result=result, bin_counts=bin_counts, bins=options.bins, guarantee=self.guarantee,
                            relative_tolerance=options.relative_tolerance, brdf_floor=options.brdf_floor)

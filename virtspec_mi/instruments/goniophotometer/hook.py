@@ -16,6 +16,11 @@ its outgoing direction in the specimen frame, in the ray kernel itself:
   [0, 180]; equal bins arithmetically, given edges by a search;
 - a ray that is absorbed, has no fate or falls outside the bins' range gets code K.
 
+:class:`WarpedLayout` is the other binning (``binning="rgl"``): the cells of an RGL
+``.bsdf``'s grid, found from the half vector of the ray's outgoing direction and its
+reading's incidence direction (the cells:
+:mod:`virtspec_mi.instruments.goniophotometer.warped`).
+
 Dr.Jit and Mitsuba are imported where the bins are computed, not with the module: a
 layout is built (and pickled for a Dask worker) before Mitsuba is set up.
 
@@ -28,14 +33,14 @@ reflectance. NBS Monograph 160.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
 
 from virtspec_mi.kernel.counts import Fate
 from virtspec_mi.kernel.hooks import ExitHook
 
-__all__ = ["BinLayout", "search_edges"]
+__all__ = ["BinLayout", "WarpedLayout", "search_edges"]
 
 # The largest float32 below 1: the key sin²θo of a reflected ray stays below the 90° edge.
 _BELOW_ONE = float(np.nextafter(np.float32(1.0), np.float32(0.0)))
@@ -156,3 +161,46 @@ def search_edges(edges: np.ndarray, key: Any) -> Any:
     last = len(edges) - 1
     below = dr.select(key == float(edges[-1]), mi.UInt32(last), below)
     return below - 1  # no edge <= key: wraps to 2^32 - 1, outside
+
+
+@dataclass(frozen=True, eq=False)
+class WarpedLayout(ExitHook):
+    """
+    The cells of an RGL ``.bsdf``'s n × n grid (identity warp) as the kernel finds them
+    (:mod:`virtspec_mi.instruments.goniophotometer.warped`): a reflected ray's half vector
+    m ∝ wi + wo gives u = (√(2θm/π), (φm − φi + π)/2π), φi = atan2(wi_y, wi_x), in float32
+    as Mitsuba's ``measured`` plugin computes it; the nearest node (i, j) = round(u·(n − 1))
+    names the cell (row n − 1 is row 0; column 0 is one cell; at normal incidence, wi_x =
+    wi_y = 0, each column is one cell). Transmitted, absorbed and unresolved rays get code K.
+
+    Parameters
+    ----------
+    resolution : int
+        n, nodes per axis.
+    """
+
+    resolution: int
+    incidence: ClassVar[bool] = True
+
+    @property
+    def size(self) -> int:
+        return 1 + (self.resolution - 1) ** 2
+
+    def bin(self, wo: Any, fate: Any, phi_i: Any, wi: Any = None) -> Any:
+        """Cell of each reflected ray (K for every other ray)."""
+
+        import drjit as dr
+        import mitsuba as mi
+
+        n1 = self.resolution - 1
+        h = wi + wo
+        theta_m = dr.atan2(dr.sqrt(h.x * h.x + h.y * h.y), h.z)
+        u1 = dr.sqrt(dr.maximum(theta_m, 0.0) * (2.0 / dr.pi))
+        normal = (wi.x == 0.0) & (wi.y == 0.0)
+        u2 = (dr.atan2(h.y, h.x) - dr.select(normal, 0.0, dr.atan2(wi.y, wi.x))) * (0.5 / dr.pi) + 0.5
+        u2 = u2 - dr.floor(u2)
+        c1 = mi.UInt32(dr.clip(mi.Int32(dr.floor(u1 * n1 + 0.5)), 0, n1))
+        c2 = mi.UInt32(dr.clip(mi.Int32(dr.floor(u2 * n1 + 0.5)), 0, n1))
+        c2 = dr.select((c2 == n1) | normal, mi.UInt32(0), c2)
+        cell = dr.select(c1 == 0, mi.UInt32(0), (c1 - 1) * n1 + c2 + 1)
+        return dr.select(fate == int(Fate.REFLECTED), cell, mi.UInt32(self.size))

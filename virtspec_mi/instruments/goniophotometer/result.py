@@ -492,13 +492,15 @@ class GonioResult(ResultBase):
 
     def to_rgl(self, path: str | os.PathLike, resolution: int = 32) -> Any:
         """
-        Write the reflection as an RGL ``.bsdf`` for Mitsuba's ``measured`` plugin; returns the
-        :class:`~virtspec_mi.instruments.goniophotometer.rgl.RGLExport` (nodes, values, certified intervals).
+        Refused: a θo × φo bin's interval certifies the bin's average, not a node of the ``.bsdf``'s grid. An RGL
+        ``.bsdf`` with certified values comes from a reading binned on its grid: ``vm.gonio(…, binning="rgl",
+        rgl_resolution=n, beam="collimated").to_rgl(path)``
+        (:class:`~virtspec_mi.instruments.goniophotometer.rgl_reading.RGLReading`).
         """
 
-        from virtspec_mi.instruments.goniophotometer.rgl import rgl_export
-
-        return rgl_export(self, path, resolution)
+        raise ValueError("an RGL .bsdf stores certified cell means only of a reading binned on its grid: measure "
+                         f"with binning='rgl', rgl_resolution={resolution}, beam='collimated' (virtspec gonio --rgl "
+                         "FILE does); this reading's theta_o x phi_o bins are not the file's cells")
 
     def to_sd(self, quantity: str | None = None, theta_i: float | None = None, *, theta_o: float | None = None,
               phi_o: float | None = None) -> Any:

@@ -45,6 +45,7 @@ Rautiainen (2018), Remote Sens. 10(1), 25; Clopper & Pearson (1934).
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from typing import Any, ClassVar
 
@@ -240,6 +241,19 @@ def double_layout(r: Sphere, t: Sphere, configuration: str, specimen_radius: flo
         transmittance_wall=tuple(float(v) for v in t.wall_reflectance_at(grid)))
 
 
+def _check_beam(r: Sphere, theta_i: float, phi_i: float) -> None:
+    """The beam axis, from the specimen's centre, must meet the reflectance sphere's wall in its entrance port."""
+
+    theta, phi = math.radians(theta_i), math.radians(phi_i)
+    local = np.array([math.sin(theta) * math.cos(phi), math.sin(theta) * math.sin(phi), math.cos(theta)])
+    sample, entrance = r.port("sample"), r.port("entrance")
+    hit = r.wall_point(r.port_plane_centre(sample), holder_frame(sample.axis, False) @ local)
+    if r.port_at(hit) is not entrance:
+        raise ValueError(f"theta_i = {theta_i:g}, phi_i = {phi_i:g}: the beam axis meets the reflectance sphere's "
+                         f"wall outside its entrance port {entrance.name!r} (at {hit.round(2).tolist()} mm); give the "
+                         "angles the entrance port is built for")
+
+
 def port_names(r: Sphere, t: Sphere) -> list[str]:
     """The names of both spheres' ports in the walk's order: the reflectance sphere's, then ``t_<name>``."""
 
@@ -292,6 +306,8 @@ class DoubleSphere(Instrument):
                                  f"(radius {port.radius:g} mm): the specimen must fit in both ports")
         if settings.beam == "diffuse":
             raise ValueError("beam must be 'collimated' or 'conical' for a double-sphere reading (got 'diffuse')")
+        for angle in theta_i:
+            _check_beam(r, float(angle), settings.phi_i)
         if not settings.adaptive and settings.rays is None:
             settings = settings.updated(rays=settings.updated(delta=settings.delta / DOUBLE_COLUMNS.share)
                                         .rays_per_reading)

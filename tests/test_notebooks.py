@@ -18,9 +18,9 @@ run = importlib.util.module_from_spec(_spec)
 _spec.loader.exec_module(run)
 
 
-def test_all_twelve_notebooks_are_there():
+def test_all_thirteen_notebooks_are_there():
     assert [p.name[:2] for p in run.NOTEBOOKS] == ["01", "02", "03", "04", "05", "06", "07", "08", "09", "10", "11",
-                                                  "12"]
+                                                  "12", "13"]
 
 
 @pytest.mark.parametrize("path", run.NOTEBOOKS, ids=lambda p: p.stem)

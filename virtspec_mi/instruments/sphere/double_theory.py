@@ -32,7 +32,11 @@ The instrument's readings (:class:`DoubleSphereModel`):
 
 M_R = ρ_std p_R(sample)/p_R(standard), M_T = p_T(sample)/p_T(open). The same specimen in
 each sphere alone (:meth:`DoubleSphereModel.single`) is the chain with the other sphere
-removed: its detector fraction over the same reference.
+removed: its detector fraction over the same reference. :meth:`DoubleSphereModel.inverted`
+solves the readings for (ρ, τ): the double-sphere algorithm's step of recovering the
+specimen's R and T from both detectors (Mõttus, Hovi & Rautiainen 2017 solve the same
+exchange with sphere constants measured on an empty port and a panel; here the constants
+come from the spheres' description).
 
 Where the walk may differ from the model: light leaving one spot of a disk (the beam's
 first interaction) does not land uniformly (:func:`virtspec_mi.instruments.sphere.theory.spot_landing_density`),
@@ -170,3 +174,22 @@ class DoubleSphereModel:
         standard_r, _ = self.fractions(self.standard, 0.0, present=(True, False))
         _, p_t = self.fractions(rho, tau, present=(False, True))
         return self.standard * p_r / standard_r, p_t / self.open_fraction(present=(False, True))
+
+    def inverted(self, reflectance: float, transmittance: float) -> tuple[float, float]:
+        """
+        (ρ, τ) of the Lambertian specimen whose double-sphere readings are (M_R, M_T) (a
+        bounded least-squares solve, 0 ≤ ρ, τ and ρ + τ ≤ 1 enforced by the bounds of ρ and
+        τ separately; ``ValueError`` where the readings are no such specimen's).
+        """
+
+        from scipy.optimize import least_squares
+
+        target = np.array([reflectance, transmittance], dtype=np.float64)
+        if not np.all(np.isfinite(target)):
+            raise ValueError(f"readings must be finite (got M_R = {reflectance}, M_T = {transmittance})")
+        fit = least_squares(lambda x: np.array(self.readings(*x)) - target, x0=np.clip(target, 0.01, 0.49),
+                            bounds=([0.0, 0.0], [1.0, 1.0]), xtol=1e-12, ftol=1e-12, gtol=1e-12)
+        if np.max(np.abs(fit.fun)) > 1e-6:
+            raise ValueError(f"no Lambertian specimen reads M_R = {reflectance:.5f}, M_T = {transmittance:.5f} in "
+                             f"these spheres (closest misses by {np.max(np.abs(fit.fun)):.2g})")
+        return float(fit.x[0]), float(fit.x[1])

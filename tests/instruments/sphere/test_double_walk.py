@@ -86,3 +86,47 @@ def test_every_ray_ends_in_one_fate_and_the_empty_position_loses_nothing_to_a_sp
     assert int(result.counts["open"]["absorbed_specimen"][0]) == 0
     assert int(result.counts["standard"]["detected_t"][0]) == 0  # an opaque standard: no light behind it
     assert int(result.counts["sample"]["detected_t"][0]) > 0 and int(result.counts["sample"]["detected_r"][0]) > 0
+
+
+def test_without_its_transmittance_sphere_the_double_walk_is_the_single_walk_count_for_count():
+    """
+    The limit: the transmittance sphere absent (every ray the specimen sends behind it lost through the sample
+    port, as in a single sphere), the double walk reproduces the single sphere's reflectance walk exactly — every
+    fate of every ray, in the sample and in the standard configuration.
+    """
+
+    from dataclasses import replace
+
+    from virtspec_mi.engine.plan import kernel_options
+    from virtspec_mi.instruments.sphere import SphereOptions, configurations
+    from virtspec_mi.instruments.sphere.double import DoubleSphereOptions, double_layout
+    from virtspec_mi.instruments.sphere.walk import FATES, SphereFate
+    from virtspec_mi.kernel.tracer import ReadingPlan, tally_readings
+    from virtspec_mi.runtime.scene import find_bench
+    from virtspec_mi.settings import Settings
+
+    vm.mitsuba()
+    register()
+    bench = find_bench(vm.instrument_scene(sheet(0.45, 0.45), specimen_radius=10.0))
+    settings = Settings(theta_i=8, beam="collimated", seed=5)
+    options = DoubleSphereOptions(sphere=REFLECTANCE_SPHERE, transmittance_sphere=TRANSMITTANCE_SPHERE)
+    single = configurations(REFLECTANCE_SPHERE, SphereOptions(sphere=REFLECTANCE_SPHERE), 10.0)
+    for name in ("sample", "standard"):
+        double = double_layout(REFLECTANCE_SPHERE, TRANSMITTANCE_SPHERE, name, 10.0, options, [550.0])
+        spheres = double.spheres
+        alone = replace(double, spheres=(spheres[0], (*spheres[1][:2], False)))
+        plain = REFLECTANCE_SPHERE.layout(*single[name], 100_000, [550.0])
+        counts = []
+        for layout in (alone, plain):
+            tally = tally_readings(bench, [ReadingPlan(550.0, 8.0, 0.0, 20_000)], hook=layout,
+                                   **kernel_options(settings))
+            cross = tally.bins[0].reshape(4, layout.codes)
+            named = {fate: cross[:, k] for k, fate in enumerate(FATES)}
+            named.update({f"lost_{port.name}": cross[:, SphereFate.lost(j)]
+                          for j, port in enumerate(REFLECTANCE_SPHERE.ports)})
+            named["wall_reflections"] = tally.sums["wall_reflections"]
+            counts.append(named)
+        assert int(counts[1]["detected"].sum()) > 0
+        for key, values in counts[1].items():
+            assert np.array_equal(counts[0][key], values), (name, key)
+        assert int(counts[0]["lost_sample"].sum()) > 0 if name == "sample" else True

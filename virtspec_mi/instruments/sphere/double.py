@@ -198,7 +198,7 @@ def double_layout(r: Sphere, t: Sphere, configuration: str, specimen_radius: flo
     axis_r = tuple(float(v) for v in sample.axis)
     axis_t = tuple(float(v) for v in m @ entrance.axis)
     centre = tuple(float(v) for v in r.port_plane_centre(sample))
-    offset_r = float(np.dot(axis_r, centre))
+    offset_r = r.radius * sample.cos_half_angle(r.radius)  # as the single sphere's plane: the same floats
     offset_t = float(np.dot(axis_t, centre))
     disk = {"sample": specimen_bsdf, "standard": {"type": "diffuse", "reflectance": options.standard},
             "open": {"type": "null"}}[configuration]

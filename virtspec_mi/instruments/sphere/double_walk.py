@@ -1,6 +1,6 @@
 """
 The double-sphere walk: a specimen between a reflectance sphere and a transmittance sphere
-=========================================================================================
+==========================================================================================
 
 :class:`DoubleSphereLayout` is :class:`~virtspec_mi.instruments.sphere.walk.SphereLayout`
 for two spheres that share one specimen (IAD's double-sphere configuration, Pickering et

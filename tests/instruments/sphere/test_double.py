@@ -90,3 +90,13 @@ def test_cli_double_sphere(capsys):
     assert np.isfinite(data["transmittance"][0])
     assert main(["double_sphere", SCENE, "--rays", "100", "--theta-i", "40"]) == 1
     assert "entrance port" in capsys.readouterr().err
+
+
+def test_two_dask_workers_give_the_same_counts():
+    """The layouts are plain values: pickled to workers, they walk the same rays to the same fates."""
+
+    keywords = {"wavelengths": [550, 850, 1650], "rays": 2000, "seed": 4}
+    here, there = vm.double_sphere(SCENE, **keywords), vm.double_sphere(SCENE, workers=2, **keywords)
+    for configuration, named in here.counts.items():
+        for name, values in named.items():
+            assert np.array_equal(values, there.counts[configuration][name]), (configuration, name)

@@ -292,7 +292,7 @@ class DoubleSphere(Instrument):
         "double_sphere": "virtspec_mi.instruments.sphere.double_integrator:DoubleSphereIntegrator"}
     example: ClassVar[dict[str, Any]] = {
         "scene": "double_sphere_leaf", "wavelengths": [550, 850], "rays": 3000, "seed": 3,
-        "long": {"wavelengths": "400:2500:20", "rays": 20_000, "readings": 106}}
+        "long": {"wavelengths": "400:2500:20", "rays": 20_000, "readings": 318}}
 
     def init(self, bench: Any, settings: Settings, options: DoubleSphereOptions, theta_i: np.ndarray,
              parameters: ParameterSpace | None) -> Plan:

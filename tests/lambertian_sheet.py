@@ -29,7 +29,9 @@ def register() -> None:
     import drjit as dr
     import mitsuba as mi
 
-    class Sheet(mi.BSDF):
+    from virtspec_mi.plugins.bsdfs.sampled_only import SampledOnlyBSDF  # eval and pdf: zero (sampled only)
+
+    class Sheet(SampledOnlyBSDF):
         def __init__(self, props: Any) -> None:
             super().__init__(props)
             self.rho, self.tau = float(props.get("rho", 0.4)), float(props.get("tau", 0.4))
@@ -50,15 +52,6 @@ def register() -> None:
                                         mi.UInt32(+mi.BSDFFlags.DiffuseTransmission))
             bs.sampled_component = dr.select(reflect, mi.UInt32(0), mi.UInt32(1))
             return bs, mi.Spectrum(dr.select(reflect | transmit, 1.0, 0.0))
-
-        def eval(self, ctx, si, wo, active=True):
-            return mi.Spectrum(0.0)
-
-        def pdf(self, ctx, si, wo, active=True):
-            return mi.Float(0.0)
-
-        def eval_pdf(self, ctx, si, wo, active=True):
-            return mi.Spectrum(0.0), mi.Float(0.0)
 
         def to_string(self) -> str:
             return f"LambertianSheet[rho={self.rho}, tau={self.tau}]"

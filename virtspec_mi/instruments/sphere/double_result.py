@@ -65,6 +65,16 @@ _FRACTION_RULES = CountRules(None, fractions=("wall_reflectance", "transmittance
 _QUANTITIES = ("reflectance", "transmittance", "hemispherical_reflectance", "hemispherical_transmittance")
 
 
+def _reading(name: str, formula: str) -> dict[str, Variable]:
+    """A reading's variable and the two ends of its certified interval."""
+
+    ends = {"lower": 0, "upper": 1}
+    return {name: Variable("1", f"{name} reading: {formula}", lambda r: getattr(r, name), READINGS),
+            **{f"{name}_{end}": Variable("1", f"{end} end of the {name} reading's certified interval",
+                                         lambda r, k=k: getattr(r, f"{name}_interval")[..., k], READINGS)
+               for end, k in ends.items()}}
+
+
 class DoubleSphereResult(ResultBase):
     """
     Double-sphere readings over labelled dims (see the module docstring): one
@@ -129,18 +139,8 @@ class DoubleSphereResult(ResultBase):
         "transmittance_wall": ("1", "reflectance of the transmittance sphere's wall"),
     }
     DERIVED: ClassVar[dict[str, Variable]] = {
-        "reflectance": Variable("1", "reflectance reading: standard * p_R(sample) / p_R(standard)",
-                                lambda r: r.reflectance, READINGS),
-        "reflectance_lower": Variable("1", "lower end of the reflectance reading's certified interval",
-                                      lambda r: r.reflectance_interval[..., 0], READINGS),
-        "reflectance_upper": Variable("1", "upper end of the reflectance reading's certified interval",
-                                      lambda r: r.reflectance_interval[..., 1], READINGS),
-        "transmittance": Variable("1", "transmittance reading: p_T(sample) / p_T(open)",
-                                  lambda r: r.transmittance, READINGS),
-        "transmittance_lower": Variable("1", "lower end of the transmittance reading's certified interval",
-                                        lambda r: r.transmittance_interval[..., 0], READINGS),
-        "transmittance_upper": Variable("1", "upper end of the transmittance reading's certified interval",
-                                        lambda r: r.transmittance_interval[..., 1], READINGS),
+        **_reading("reflectance", "standard * p_R(sample) / p_R(standard)"),
+        **_reading("transmittance", "p_T(sample) / p_T(open)"),
         "hemispherical_reflectance": Variable("1", "hemispherical reflectance of the same rays",
                                               lambda r: r.hemispherical_reflectance, READINGS),
         "hemispherical_transmittance": Variable("1", "hemispherical transmittance of the same rays",

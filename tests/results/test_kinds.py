@@ -33,7 +33,8 @@ def results(mi):
     return {"hemispherical sweep": hemispherical, "hemispherical reading": hemispherical.sel(
         theta_i=30, **{"specimen.thickness": 2e-4}),
         "gonio": gonio_reading(), "sphere": sphere_reading(), "sphere grid": sphere,
-        "sphere point": sphere.sel(point=1, wavelength=550)}
+        "sphere point": sphere.sel(point=1, wavelength=550),
+        "double sphere": vm.double_sphere("double_sphere_leaf", rays=500, wavelengths=[550, 850], seed=2)}
 
 
 def test_every_kind_measured_through_the_api_records_its_scene_and_defines(results, tmp_path):
@@ -47,7 +48,7 @@ def test_every_kind_measured_through_the_api_records_its_scene_and_defines(resul
 
 @pytest.mark.parametrize("suffix", SUFFIXES)
 @pytest.mark.parametrize("name", ["hemispherical sweep", "hemispherical reading", "gonio", "sphere", "sphere grid",
-                                  "sphere point"])
+                                  "sphere point", "double sphere"])
 def test_every_kind_round_trips_exactly_in_every_format(results, tmp_path, name, suffix):
     result = results[name]
     path = result.write(tmp_path / f"result{suffix}")
@@ -64,7 +65,8 @@ def test_the_format_tags_of_the_kinds():
 
     assert {word: kind.FORMAT for word, kind in KINDS.items()} == {
         "result": "virtspec-mi result 1", "gonio": "virtspec-mi gonio 1", "sphere": "virtspec-mi sphere 1",
-        "gloss": "virtspec-mi gloss 1", "derived": "virtspec-mi derived 1",
+        "gloss": "virtspec-mi gloss 1", "double sphere": "virtspec-mi double sphere 1",
+        "derived": "virtspec-mi derived 1",
         "derived sweep": "virtspec-mi derived sweep 1", "fit": "virtspec-mi fit 1",
         "albedo table": "virtspec-mi albedo table 1", "table comparison": "virtspec-mi table comparison 1",
         "klems": "virtspec-mi klems 1", "comparison": "virtspec-mi comparison 1",

@@ -15,7 +15,9 @@ and the ``spectrophotometer`` integrator's ``instrument`` parameter are generate
   :mod:`.goniophotometer`;
 - ``sphere``: a physical integrating sphere (``virtspec sphere``), :mod:`.sphere`;
 - ``gloss``: a specular gloss meter, the example of a fourth instrument (one module, one
-  row), :mod:`.gloss`.
+  row), :mod:`.gloss`;
+- ``double_sphere``: a double integrating sphere (``virtspec double_sphere``), the
+  sphere folder's :mod:`.sphere.double`.
 
 An outside package adds an instrument without editing this one, as xarray's backends do:
 an entry point of the group :data:`ENTRY_POINTS` (``virtspec_mi.instruments``) whose value
@@ -42,6 +44,7 @@ from virtspec_mi.instruments.gloss import GlossMeter
 from virtspec_mi.instruments.goniophotometer import Goniophotometer
 from virtspec_mi.instruments.hemispherical import Hemispherical
 from virtspec_mi.instruments.sphere import IntegratingSphere
+from virtspec_mi.instruments.sphere.double import DoubleSphere
 from virtspec_mi.instruments.hemispherical.allocated import Allocated, Allocation
 
 __all__ = ["INSTRUMENTS", "ENTRY_POINTS", "ALLOCATING", "Allocation", "discovered", "commanding", "exported", "exports"]
@@ -61,7 +64,8 @@ def discovered(builtin: tuple[type[Instrument], ...]) -> dict[str, type[Instrume
     return entry_point_rows(ENTRY_POINTS, builtin, Instrument)
 
 
-INSTRUMENTS: dict[str, type[Instrument]] = discovered((Hemispherical, Goniophotometer, IntegratingSphere, GlossMeter))
+INSTRUMENTS: dict[str, type[Instrument]] = discovered((Hemispherical, Goniophotometer, IntegratingSphere, GlossMeter,
+                                                             DoubleSphere))
 """Every instrument by name (its ``name``): the built-in ones, then the outside ones (:data:`ENTRY_POINTS`)."""
 
 

@@ -443,7 +443,7 @@ class Result(ResultBase):
         else:
             rule = f"{s.bound} bound" if s.rays is None else f"rays given; {s.bound} bound"
         text = f"{counted} ({rule}: {together} < {worst:g} with probability >= {1 - s.delta:g}"
-        if sized_by is None and worst > s.mu * (1 + 1e-9):
+        if sized_by is None and s.rays is None and worst > s.mu * (1 + 1e-9):  # mu sized N (rays given: it did not)
             text += f"; mu = {s.mu:g} was asked: these rays guarantee only {worst:g}"
         if np.any(np.isnan(mu)):
             text += "; some readings NOT CERTIFIED"

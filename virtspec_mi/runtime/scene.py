@@ -44,6 +44,7 @@ from virtspec_mi.engine.bench import EMITTER_ID, SPECIMEN_ID, Bench, SceneError,
 import virtspec_mi.base.interrupts as interrupts
 from virtspec_mi import scenes
 from virtspec_mi.runtime import mitsuba
+from virtspec_mi.plugins.specimen import specimen_of
 from virtspec_mi.settings import SETTING_NAMES
 
 __all__ = [
@@ -308,7 +309,8 @@ def scene_source(scene: Any, bench: Bench, defines: dict[str, Any] | None = None
     What a result records of the scene it measured, for people: ``{"scene": name,
     "defines": {name: value}}``. The name is a shipped scene's name (``"soybean_abmb"``),
     an XML file's name (``"my_leaf.xml"``), else what was given and the specimen's BSDF
-    (``"scene dict, specimen RoughConductor"``); ``defines`` are the XML parameters set
+    by the name a scene gives its plugin (``"scene dict, specimen prospect_d"``; Mitsuba's own
+    BSDFs: their class, ``RoughConductor``); ``defines`` are the XML parameters set
     (``-D``), as strings.
     """
 
@@ -317,8 +319,7 @@ def scene_source(scene: Any, bench: Bench, defines: dict[str, Any] | None = None
         path = Path(scene).resolve()
         name = path.stem if path.parent == scenes.FOLDER else path.name
     else:
-        bsdf = type(bench.bsdf).__name__  # a Python plugin's class; Mitsuba's own: the class behind mi.BSDF
-        bsdf = bench.bsdf.class_name() if bsdf == "BSDF" and hasattr(bench.bsdf, "class_name") else bsdf
+        bsdf = specimen_of(bench.bsdf).name  # the plugin's name, as a scene writes it ("prospect_d")
         name = f"{'scene dict' if isinstance(scene, dict) else 'mi.Scene'}, specimen {bsdf}"
     return {"scene": name, "defines": check_defines(defines)}
 

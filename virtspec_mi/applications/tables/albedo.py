@@ -388,6 +388,7 @@ def albedo_table(
                 groups += 1
                 result = store.load(label, read_result)
                 if result is None:
+                    bar.expect(len(angles) * len(pts))  # the group's kernel chunks move the table's bar
                     with warnings.catch_warnings():  # a group's uncertified readings are reported once, for the table
                         warnings.simplefilter("ignore", RuntimeWarning)
                         result = take("sweep", scene, theta_i=list(angles), beam=beam, rays=int(rays), wavelengths=[wavelength],

@@ -50,6 +50,7 @@ from virtspec_mi.budgets.functionals import (Functional, allocate, allocate_join
 from virtspec_mi.applications.targets.result import DerivedResult
 from virtspec_mi.applications.targets.targets import TARGETS, ColourTarget, Target, Value, colour_of
 from virtspec_mi.budgets.twostage import stage_two_seed
+from virtspec_mi.engine.progress import expect, finished
 from virtspec_mi.instruments import ALLOCATING, Allocation
 from virtspec_mi.plugins.specimen import specimen_of
 from virtspec_mi.runtime.reading import scene_options
@@ -125,7 +126,10 @@ def _trace(bench: Any, settings: Settings, grid: np.ndarray, rays: np.ndarray, s
     instrument = ALLOCATING(scene, source)
     plan = instrument.init(bench, settings, Allocation(grid, rays, seed, offsets), np.array([float(settings.theta_i)]),
                            None)
-    return instrument, instrument.process(plan)
+    expect(int(np.sum(rays)))  # the target's bar, when one is open, moves by these rays as they are traced
+    tally = instrument.process(plan)
+    finished(int(np.sum(rays)))
+    return instrument, tally
 
 
 @dataclass(frozen=True, eq=False)

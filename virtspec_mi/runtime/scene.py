@@ -42,6 +42,7 @@ from virtspec_mi.geometry.disks import (
 )
 from virtspec_mi.engine.bench import EMITTER_ID, SPECIMEN_ID, Bench, SceneError, read_bench
 import virtspec_mi.base.interrupts as interrupts
+from virtspec_mi.base.files import check_name_length
 from virtspec_mi import scenes
 from virtspec_mi.runtime import mitsuba
 from virtspec_mi.plugins.specimen import specimen_of
@@ -62,6 +63,7 @@ def load_scene(scene: Any, defines: dict[str, Any] | None = None) -> Any:
     """
 
     mi = mitsuba()
+    check_name_length("scene", scene)  # a 5,000-character name: refused, shortened, before the file system sees it
     scene = scenes.resolve(scene)
     defines = check_defines(defines, scene)
     if isinstance(scene, mi.Scene):

@@ -54,6 +54,7 @@ from typing import Any
 import numpy as np
 
 from virtspec_mi.base.files import atomic_write
+from virtspec_mi.base.surface import spoken
 from virtspec_mi.exchange.common import check_companions
 from virtspec_mi.exchange.engine_models import ENGINE_CHANNELS
 
@@ -196,7 +197,7 @@ def check_engine_sidecar(path: str | os.PathLike, overwrite: bool = False, input
 
     path = Path(path)
     check_companions(path, [path.with_name(path.name + ".json")], _is_engine_sidecar, overwrite, inputs=inputs,
-                     flag="overwrite=True (virtspec albedo-table --overwrite)")
+                     flag=spoken("overwrite=True", "--overwrite"))
 
 
 def _is_engine_sidecar(path: Path) -> bool:

@@ -49,6 +49,7 @@ from virtspec_mi.budgets.functionals import (Functional, allocate, allocate_join
                                                           union_delta)
 from virtspec_mi.applications.targets.result import DerivedResult
 from virtspec_mi.applications.targets.targets import TARGETS, ColourTarget, Target, Value, colour_of
+from virtspec_mi.base.surface import spoken
 from virtspec_mi.budgets.twostage import stage_two_seed
 from virtspec_mi.engine.progress import expect, finished
 from virtspec_mi.instruments import ALLOCATING, Allocation
@@ -205,8 +206,9 @@ def measure_target(scene: LoadedScene, parameters: Any, target: Target, settings
 
     given = sorted(name for name in REFUSED_SETTINGS if settings.get(name) is not None)
     if given:
+        example = spoken("vm.band('B04', tolerance=0.002)", "--target band:B04,tolerance=0.002")
         raise ValueError(f"{', '.join(given)}: a target picks its own wavelengths and rays (give its tolerance to the "
-                         "target, e.g. vm.band('B04', tolerance=0.002)); leave them out")
+                         f"target, e.g. {example}); leave them out")
     if parameters:
         raise ValueError("parameters: a target is measured at the scene's own specimen parameters (set them in the "
                          "scene or with defines)")

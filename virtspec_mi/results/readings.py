@@ -391,6 +391,11 @@ class Result(ResultBase):
         (a goniophotometer's guarantee over its bins): it replaces "rays given".
         """
 
+        ones = [d for d, n in zip(self.dims, self.shape) if n == 1 and d != "wavelength"]
+        if ones and all(n == 1 for d, n in zip(self.dims, self.shape) if d != "wavelength"):
+            # one reading over wavelength, whether its other labels are dims of one or scalars (a file read back,
+            # a command's squeezed print): one heading for both
+            return Result.summary(self.squeeze(*ones), sized_by)
         s = self.settings
         incidence = ("cosine-weighted over the hemisphere" if s.beam == "diffuse"
                      else f"theta_i = {self._angles()} deg, phi_i = {s.phi_i:g} deg")

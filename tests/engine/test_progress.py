@@ -31,6 +31,7 @@ CHILD = ("import sys; import virtspec_mi.engine.progress as p; p._PROGRESS_AFTER
          "from virtspec_mi.cli import main; sys.exit(main(sys.argv[1:]))")
 SWEEP = ["sweep", "soybean_abmb", "--theta-i", "0", "30", "--wavelengths", "450", "650", "--rays", "20000000",
          "--chunk-size", "1048576"]
+SHORT = [*SWEEP[:-4], "--rays", "5000000"]  # about a second on a quiet machine: over the lowered threshold
 
 
 def _env() -> dict[str, str]:
@@ -79,14 +80,25 @@ def test_a_sweep_in_a_terminal_draws_a_bar_that_moves_within_its_batches():
     assert shown == sorted(shown), shown
 
 
+@pytest.mark.slow
+def test_a_target_in_a_terminal_draws_the_rays_traced_as_they_go():
+    """A certified colour's length is not known in advance: its bar counts the rays and their rate."""
+
+    text, status = _in_a_terminal(["measure", "soybean_abmb", "--target", "colour,dE00=0.5", "--seed", "2"])
+    assert status == 0, text
+    shown = re.findall(r"target: ([\d.]+)([kMG]?) rays \[", text)
+    rays = [float(n) * {"": 1, "k": 1e3, "M": 1e6, "G": 1e9}[unit] for n, unit in shown]
+    assert len([r for r in rays if r > 0]) >= 2 and rays == sorted(rays), (shown, text[-2000:])
+
+
 def test_quiet_in_a_terminal_draws_nothing():
-    text, status = _in_a_terminal(SWEEP + ["--quiet"])
+    text, status = _in_a_terminal(SHORT + ["--quiet"])
     assert status == 0, text
     assert "%|" not in text and "readings:" not in text, text[-2000:]
 
 
 def test_off_a_terminal_nothing_is_drawn():
-    done = subprocess.run([sys.executable, "-c", CHILD, *SWEEP], capture_output=True, text=True, env=_env(),
+    done = subprocess.run([sys.executable, "-c", CHILD, *SHORT], capture_output=True, text=True, env=_env(),
                           timeout=240, stdin=subprocess.DEVNULL)
     assert done.returncode == 0, done.stderr
     assert "%|" not in done.stderr and "%|" not in done.stdout, done.stderr[-2000:]

@@ -194,3 +194,19 @@ def test_a_fit_reads_more_than_foreseen_and_its_bar_grows(drawn):
     with Progress(True, 2, desc="fit") as fit:
         fit.update(3)
     assert fit.total == 3 and drawn[0].total == 3
+
+
+def test_a_bar_dropped_unclosed_by_an_error_does_not_swallow_the_next_runs(drawn):
+    import gc
+
+    def failing() -> None:
+        Progress(False, 10)  # made, then an error before its try: never closed
+        raise ValueError("before the run")
+
+    with pytest.raises(ValueError):
+        failing()
+    gc.collect()
+    with Progress(True, 5) as later:
+        assert later.parent is None
+        later.update(5)
+    assert len(drawn) == 1 and progress._stack() == []

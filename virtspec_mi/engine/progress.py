@@ -21,6 +21,7 @@ from __future__ import annotations
 import sys
 import threading
 import time
+import weakref
 
 __all__ = ["Progress", "expect", "finished", "write"]
 
@@ -31,9 +32,24 @@ _OPEN = threading.local()  # the bars open in this thread, outermost first
 
 
 def _stack() -> list["Progress"]:
-    if not hasattr(_OPEN, "bars"):
-        _OPEN.bars = []
-    return _OPEN.bars
+    """The bars open in this thread, outermost first (a bar dropped unclosed, e.g. by an error, is gone with it)."""
+
+    refs = _OPEN.__dict__.setdefault("bars", [])
+    refs[:] = [ref for ref in refs if ref() is not None]
+    return [ref() for ref in refs]
+
+
+def _push(bar: "Progress") -> None:
+    _stack()
+    _OPEN.bars.append(weakref.ref(bar))
+
+
+def _pop(bar: "Progress") -> None:
+    """Close ``bar`` on the stack, and any bar left open inside it."""
+
+    bars = _stack()
+    if bar in bars:
+        del _OPEN.bars[bars.index(bar):]
 
 
 def expect(units: float) -> None:
@@ -82,7 +98,7 @@ class Progress:
         self._pending = 0.0
         self.elapsed = 0.0
         self._started = self._last = time.perf_counter()
-        bars.append(self)
+        _push(self)
         if progress and self.parent is None:
             self._open()
 
@@ -160,9 +176,7 @@ class Progress:
             print(text, file=sys.stderr, flush=True)
 
     def close(self) -> None:
-        bars = _stack()
-        if self in bars:
-            del bars[bars.index(self):]  # and any bar left open inside it
+        _pop(self)
         if self.bar is not None:
             self.bar.close()
             self.bar = None

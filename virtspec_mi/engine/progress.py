@@ -81,10 +81,10 @@ def write(line: str) -> None:
 class Progress:
     """
     A tqdm bar on stderr, shown per the ``progress`` rule (see the module docstring), over
-    ``total`` units (``unit``, e.g. readings; ``None``: not known in advance, the units done
-    and their rate are shown, once the run has lasted ~2 s when ``progress`` is ``None``). Made while another bar is open, it moves that
-    bar by ``share`` of the step under way there (a fraction: the part of that step this
-    work is) instead of drawing.
+    ``total`` units (``unit``, e.g. readings; ``None``: not known in advance, the units
+    done and their rate are shown, once the run has lasted ~2 s when ``progress`` is
+    ``None``). Made while another bar is open, it moves that bar by ``share`` of the step
+    under way there (a fraction: the part of that step this work is) instead of drawing.
     """
 
     def __init__(self, progress: bool | None, total: float | None, desc: str = "readings", *, unit: str = "reading",

@@ -208,7 +208,8 @@ def respond(session: Session) -> int:
                    loss=flags.loss, windows=dict(flags.window) or None, delta=flags.delta,
                    mu_fraction=flags.mu_fraction, forward_mu=flags.forward_mu, table_points=flags.table_points,
                    profile_points=flags.profile_points, seed=flags.seed, defines=defines or None,
-                   evaluations=flags.evaluations, progress=False if flags.quiet else True if flags.progress else None, **search, **settings)
+                   evaluations=flags.evaluations,
+                   progress=False if flags.quiet else True if flags.progress else None, **search, **settings)
     if many:
         return _respond_table(session, measured, options)
     from virtspec_mi.applications.fitting.inversion import fit

@@ -183,7 +183,10 @@ class EngineTables:
 
 
 def held(channels: dict[str, str]) -> str:
-    """The channels and the quantity each holds, for people: ``DFG.x = E_R, DFG.y = E``; a channel named as its quantity once (``E``)."""
+    """
+    The channels and the quantity each holds, for people: ``DFG.x = E_R, DFG.y = E``; a
+    channel named as its quantity is named once (``E``, not ``E = E``).
+    """
 
     return ", ".join(name if name == quantity else f"{name} = {quantity}" for name, quantity in channels.items())
 

@@ -80,7 +80,7 @@ ISO_2813_STANDARD_INDEX: float = 1.567
 
 
 def standard_reflectance(theta_i: Any) -> np.ndarray:
-    """The reflectance of ISO 2813's black glass standard at ``theta_i`` (degrees): its unpolarised Fresnel reflectance."""
+    """ISO 2813's black glass standard's reflectance at ``theta_i`` (degrees): Fresnel's, unpolarised."""
 
     return fresnel_reflectance(np.asarray(theta_i, dtype=np.float64), ISO_2813_STANDARD_INDEX)
 

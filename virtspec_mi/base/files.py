@@ -106,11 +106,11 @@ def check_name_length(name: str, path: Any) -> None:
         most, whole = 255, 4096
     longest = max(Path(text).parts, key=len, default="")
     if len(os.fsencode(longest)) > most:
-        raise ValueError(f"{name}: a file or folder name holds at most {most} bytes here, {shown_path(longest)} "
-                         f"holds {len(os.fsencode(longest)):,}; give a shorter name")
+        raise ValueError(f"{name}: a file or folder name holds at most {most} bytes here (got "
+                         f"{shown_path(longest)}, {len(os.fsencode(longest)):,} bytes); give a shorter name")
     if len(os.fsencode(text)) >= whole:
-        raise ValueError(f"{name}: a path holds fewer than {whole} bytes here, {shown_path(text)} holds "
-                         f"{len(os.fsencode(text)):,}; give a shorter path")
+        raise ValueError(f"{name}: a path holds fewer than {whole} bytes here (got {shown_path(text)}, "
+                         f"{len(os.fsencode(text)):,} bytes); give a shorter path")
 
 
 def _existing(path: Path) -> Path:

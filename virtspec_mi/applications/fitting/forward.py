@@ -52,6 +52,7 @@ import numpy as np
 from virtspec_mi.runtime.reading import read_result, take
 from virtspec_mi.applications.fitting.problem import FitProblem
 from virtspec_mi.engine.checkpoint import ResultStore, checkpoint_for
+from virtspec_mi.base.surface import spoken
 from virtspec_mi.engine.progress import Progress, expect, write
 from virtspec_mi.results.zarr import unfinished
 from virtspec_mi.settings import Settings, resolve
@@ -210,7 +211,8 @@ class Forward:
         missing = [key for key in self.problem.keys if key not in result.dims]
         if missing:
             raise ValueError(f"the table {path} is no grid over {', '.join(missing)} (its dims: "
-                             f"{', '.join(result.dims)}): make one with sweep(parameters=...)")
+                             f"{', '.join(result.dims)}): make one with "
+                             f"{spoken('sweep(parameters=...)', 'virtspec sweep --param NAME=VALUES --out FILE.zarr')}")
         extra = [d for d in result.dims if d not in (*self.problem.keys, "wavelength", "theta_i")]
         if extra:
             raise ValueError(f"the table {path} also varies {', '.join(extra)}: select one value first")

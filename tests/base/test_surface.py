@@ -85,3 +85,13 @@ def test_a_name_too_long_for_the_file_system_is_refused_naming_the_parameter_not
         with pytest.raises(ValueError, match=rf"^{name}: a file or folder name holds at most \d+ bytes") as refused:
             call()
         assert len(str(refused.value)) < 400 and "give a shorter name" in str(refused.value)
+
+
+def test_a_fits_window_message_names_the_flags_on_the_command_line():
+    from virtspec_mi.applications.fitting.windows import fit_windows
+
+    wavelengths = np.arange(400.0, 800.0, 10.0)
+    with pytest.raises(ValueError, match=r"^loss='windows' needs a window .* give windows=\{name"):
+        fit_windows({}, ["specimen.thickness"], wavelengths)
+    with command_line(), pytest.raises(ValueError, match=r"^--loss windows needs a window .* give --window NAME="):
+        fit_windows({}, ["specimen.thickness"], wavelengths)

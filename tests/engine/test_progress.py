@@ -210,3 +210,16 @@ def test_a_bar_dropped_unclosed_by_an_error_does_not_swallow_the_next_runs(drawn
         assert later.parent is None
         later.update(5)
     assert len(drawn) == 1 and progress._stack() == []
+
+
+def test_progress_true_in_the_api_draws_the_batches_chunks(mi, capsys, monkeypatch):
+    """``vm.sweep(..., progress=True)``: drawn even off a terminal (a notebook), moving within the one batch."""
+
+    import virtspec_mi as vm
+
+    monkeypatch.setattr("tqdm.std.tqdm.monitor_interval", 0)
+    monkeypatch.setenv("TQDM_MININTERVAL", "0")  # every update drawn (tqdm reads it at each bar)
+    vm.sweep("soybean_abmb", theta_i=[0, 30, 60], wavelengths=[450, 550, 650], rays=200_000,
+             chunk_size=1 << 16, progress=True)
+    shown = _percentages(capsys.readouterr().err.replace("\r", "\n"), "readings")
+    assert any(0 < p < 100 for p in shown), shown

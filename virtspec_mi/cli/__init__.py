@@ -245,7 +245,8 @@ def _command(args: argparse.Namespace, exit_status: Any) -> int:
             return _interrupted(KeyboardInterrupt(received()), args, exit_status, received())
         if not isinstance(error, (ValueError, RuntimeError, OSError)):
             raise
-        shown = _rescued(error)
+        with command_line():  # the rescue's words are the command line's too
+            shown = _rescued(error)
         if isinstance(shown, OSError) and not isinstance(shown, WriteError):  # its file named, shortened if long
             shown = os_error_text(shown)
         print(f"virtspec: error: {shown}", file=sys.stderr)

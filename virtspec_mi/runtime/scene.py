@@ -45,7 +45,6 @@ import virtspec_mi.base.interrupts as interrupts
 from virtspec_mi.base.files import check_name_length
 from virtspec_mi import scenes
 from virtspec_mi.runtime import mitsuba
-from virtspec_mi.plugins.specimen import specimen_of
 from virtspec_mi.settings import SETTING_NAMES
 
 __all__ = [
@@ -321,7 +320,9 @@ def scene_source(scene: Any, bench: Bench, defines: dict[str, Any] | None = None
         path = Path(scene).resolve()
         name = path.stem if path.parent == scenes.FOLDER else path.name
     else:
-        bsdf = specimen_of(bench.bsdf).name  # the plugin's name, as a scene writes it ("prospect_d")
+        bsdf = type(bench.bsdf).__name__  # a Python plugin's class; Mitsuba's own: the class behind mi.BSDF
+        bsdf = bench.bsdf.class_name() if bsdf == "BSDF" and hasattr(bench.bsdf, "class_name") else bsdf
+        bsdf = getattr(bench.bsdf, "PLUGIN", "") or bsdf  # a specimen's registered name, as a scene writes it
         name = f"{'scene dict' if isinstance(scene, dict) else 'mi.Scene'}, specimen {bsdf}"
     return {"scene": name, "defines": check_defines(defines)}
 

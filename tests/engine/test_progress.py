@@ -223,3 +223,21 @@ def test_progress_true_in_the_api_draws_the_batches_chunks(mi, capsys, monkeypat
              chunk_size=1 << 16, progress=True)
     shown = _percentages(capsys.readouterr().err.replace("\r", "\n"), "readings")
     assert any(0 < p < 100 for p in shown), shown
+
+
+def test_a_fit_draws_one_bar_over_its_forward_readings(mi, tmp_path, capsys, monkeypatch):
+    """``vm.fit(progress=True)``: one bar (its readings' own bars nested in it), its stage lines above it."""
+
+    import virtspec_mi as vm
+    from virtspec_mi.applications.fitting import _inputs
+
+    monkeypatch.setenv("TQDM_MININTERVAL", "0")
+    _inputs(tmp_path)
+    result = vm.fit(tmp_path / "leaf.csv", "prospect_d", {"Cab": (10.0, 80.0)}, quantities=("reflectance",),
+                    theta_i=8.0, beam="collimated", delta=0.2, table_points=3, profile_points=0, progress=True)
+    err = capsys.readouterr().err.replace("\r", "\n")
+    shown = _percentages(err, "fit")
+    assert shown and any(0 < p < 100 for p in shown), err[-2000:]
+    assert "readings:" not in err  # the forward readings' own bars moved the fit's, drew nothing
+    assert "fit: table of 3 points" in err and result.rays > 0
+    assert progress._stack() == []

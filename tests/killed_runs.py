@@ -34,7 +34,7 @@ def kill_then_resume(command: list[str], out: Path, readings: int, cwd: Path) ->
     """
 
     partial = checkpoint_for(out)
-    process = subprocess.Popen(command, cwd=cwd)
+    process = subprocess.Popen(command, cwd=cwd, preexec_fn=default_signals)
     deadline = time.monotonic() + 120
     while not partial.exists() and process.poll() is None and time.monotonic() < deadline:
         time.sleep(0.005)

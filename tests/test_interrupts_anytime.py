@@ -71,7 +71,7 @@ def _checkpoint(path: str, out: Path) -> Path:
 def loaded():
     """A second process keeping one core busy for the test's length."""
 
-    busy = subprocess.Popen([sys.executable, "-c", "while True: pass"])
+    busy = subprocess.Popen([sys.executable, "-c", "while True: pass"], preexec_fn=default_signals)
     yield busy
     busy.kill()
     busy.wait()

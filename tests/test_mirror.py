@@ -79,9 +79,6 @@ COVERED_ELSEWHERE: dict[str, tuple[tuple[str, ...], str]] = {
     "virtspec_mi.colorimetry.certified": (
         ("tests/applications/targets/test_measure.py", "tests/budgets/test_functionals.py"),
         "certified colours of targets and results"),
-    "virtspec_mi.engine.progress": (
-        ("tests/api/test_api.py", "tests/api/test_api_sweep.py"),
-        "the progress bar of the API's runs"),
     "virtspec_mi.engine.tally": (
         ("tests/engine/test_plan.py", "tests/engine/test_readings.py"),
         "every run's tallies"),

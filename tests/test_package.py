@@ -86,3 +86,16 @@ def test_the_project_has_a_bsd_3_clause_licence_in_its_metadata_and_the_leaf_dat
     prospect = (root / "virtspec_mi/data/prospect-d/LICENSE").read_text()
     assert "MIT License\n\nCopyright (c) 2020-present Jean-Baptiste Féret\n" in prospect
     assert "prospect_d_coefficients.txt" in prospect.split("MIT License")[0]  # says what it covers
+
+
+def test_the_test_extra_brings_jupyter_nbconvert():
+    """A newcomer reaches for ``jupyter nbconvert --execute``: the test extra installs it (issue 42, item 6)."""
+
+    import importlib.util
+    import tomllib
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parents[1]
+    extras = tomllib.loads((root / "pyproject.toml").read_text())["project"]["optional-dependencies"]
+    assert any(requirement.startswith("nbconvert") for requirement in extras["test"])
+    assert importlib.util.find_spec("nbconvert") is not None  # installed where the tests run

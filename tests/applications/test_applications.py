@@ -27,6 +27,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from killed_runs import default_signals
 from virtspec_mi.applications import APPLICATIONS, Application, Command, commands
 from virtspec_mi.cli import build_parser, main
 from virtspec_mi.cli.flags import flag_name
@@ -121,7 +122,8 @@ def test_an_interrupted_command_resumes_to_the_same_counts(name, tmp_path):
     command = [sys.executable, "-m", "virtspec_mi", *words(resume["argv"], tmp_path)]
     environment = {**os.environ, "PYTHONPATH": str(ROOT)}
     checkpoint, out = tmp_path / resume["checkpoint"], tmp_path / resume["out"]
-    run = subprocess.Popen(command, cwd=tmp_path, env=environment, stderr=subprocess.PIPE, text=True)
+    run = subprocess.Popen(command, cwd=tmp_path, env=environment, stderr=subprocess.PIPE, text=True,
+                           preexec_fn=default_signals)
     deadline = time.monotonic() + 300
     while not _kept(checkpoint) and run.poll() is None and time.monotonic() < deadline:
         time.sleep(0.01)

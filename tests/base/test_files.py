@@ -145,10 +145,13 @@ def test_the_command_line_saves_a_result_its_file_could_not_take(diamond, tmp_pa
         _disk_full_midway(patch, ".nc")
         with pytest.raises(WriteError) as info:
             reading.write(out)
-    message = str(_rescued(info.value))
+    from virtspec_mi.base.surface import command_line
+
+    with command_line():
+        message = str(_rescued(info.value))
     rescued = next((tmp_path / "rescue").iterdir())
     assert message == (f"could not write {out}: No space left on device; the result was written to "
-                       f"{rescued} instead (virtspec_mi.read_result reads it)")
+                       f"{rescued} instead (virtspec plot, colour and compare read it)")  # the command line's words
     saved = vm.read_result(rescued)
     np.testing.assert_array_equal(saved.bin_counts, reading.bin_counts)
     for name in ("rays", "reflected", "transmitted"):

@@ -394,3 +394,43 @@ def test_an_interrupted_mi_render_raises_the_interrupt_not_drjits_runtime_error(
     monkeypatch.setattr(tracer._Pace, "update", update)
     with interrupts.catching(), pytest.raises(Interrupted):
         mi.render(scene)
+
+
+# --- the tests' own children: SIGINT at its default, whatever the suite inherited (issue 42, item 7) --------
+
+
+def test_every_test_that_signals_a_child_starts_it_with_the_default_dispositions():
+    """
+    A shell starts a background job with SIGINT ignored, and a child inherits that: every ``subprocess.Popen``
+    of a test file that sends a signal passes a ``preexec_fn`` (``killed_runs.default_signals``) restoring it.
+    """
+
+    import ast
+    import re
+
+    sends = re.compile(r"send_signal\(|killpg\(|os\.kill\((?!os\.getpid)")
+    bare = []
+    for path in sorted((ROOT / "tests").rglob("*.py")):
+        source = path.read_text(encoding="utf-8")
+        if not sends.search(source):
+            continue
+        for node in ast.walk(ast.parse(source)):
+            if isinstance(node, ast.Call) and getattr(node.func, "attr", getattr(node.func, "id", "")) == "Popen":
+                if not any(k.arg == "preexec_fn" for k in node.keywords):
+                    bare.append(f"{path.relative_to(ROOT)}:{node.lineno}")
+    assert not bare, f"children started without preexec_fn=default_signals: {bare}"
+
+
+def test_a_signal_test_passes_when_the_suite_runs_with_sigint_ignored(tmp_path):
+    """``make test`` as a background job of a script: pytest itself runs with SIGINT ignored."""
+
+    def ignoring() -> None:
+        signal.signal(signal.SIGINT, signal.SIG_IGN)  # as a shell does for a background job
+
+    test = "tests/test_interrupts_anytime.py::test_the_api_interrupted_at_a_random_moment_raises_keyboard_interrupt" \
+           "_to_the_caller[1]"
+    run = subprocess.run([sys.executable, "-m", "pytest", test, "-q", "-p", "no:cacheprovider", "-p", "no:randomly"],
+                         cwd=ROOT, capture_output=True, text=True, timeout=600, preexec_fn=ignoring,
+                         env={**os.environ, "PYTHONPATH": os.pathsep.join([str(ROOT),
+                                                                            os.environ.get("PYTHONPATH", "")])})
+    assert run.returncode == 0 and "1 passed" in run.stdout, run.stdout[-3000:] + run.stderr[-2000:]

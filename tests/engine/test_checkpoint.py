@@ -19,7 +19,7 @@ import numpy as np
 import pytest
 
 import virtspec_mi as vm
-from killed_runs import ROUGH_XML, kill_then_resume
+from killed_runs import ROUGH_XML, default_signals, kill_then_resume
 from virtspec_mi.engine.checkpoint import CheckpointError, checkpoint_for, claim
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -66,7 +66,7 @@ def _holder(path: Path) -> subprocess.Popen:
     code = ("import sys\nfrom virtspec_mi.engine.checkpoint import claim\n"
             "with claim(sys.argv[1]):\n    print('held', flush=True)\n    sys.stdin.read()\n")
     process = subprocess.Popen([sys.executable, "-c", code, str(path)], stdin=subprocess.PIPE,
-                               stdout=subprocess.PIPE, text=True, cwd=ROOT)
+                               stdout=subprocess.PIPE, text=True, cwd=ROOT, preexec_fn=default_signals)
     assert process.stdout.readline().strip() == "held"
     return process
 
@@ -114,7 +114,7 @@ def test_two_cli_sweeps_into_one_out_file(tmp_path):
     out = tmp_path / "sweep.nc"
     command = [sys.executable, "-m", "virtspec_mi.cli", "sweep", str(ROOT / "scenes" / "diamond_collimated.xml"),
                "--theta-i", "0:90:1", "--rays", "2000000", "--chunk-size", "1048576", "--quiet", "--out", str(out)]
-    first = subprocess.Popen(command, cwd=tmp_path, stderr=subprocess.PIPE, text=True)
+    first = subprocess.Popen(command, cwd=tmp_path, stderr=subprocess.PIPE, text=True, preexec_fn=default_signals)
     lock = tmp_path / "sweep.nc.partial.json.lock"
     deadline = time.monotonic() + 120
     while not lock.exists() and first.poll() is None and time.monotonic() < deadline:

@@ -22,6 +22,7 @@ import pytest
 
 import virtspec_mi as vm
 import virtspec_mi.base.interrupts as interrupts
+from killed_runs import default_signals
 from virtspec_mi.engine.checkpoint import CheckpointError, locked
 from virtspec_mi.base.files import atomic_write
 from virtspec_mi.base.files import WriteError
@@ -162,7 +163,8 @@ def test_the_command_line_names_the_albedo_checkpoint_and_the_rerun_says_what_it
     command = [sys.executable, "-m", "virtspec_mi", "albedo-table", "--engine", "none", "--cosines", "0.2:1:0.2",
                "--alpha", "0.1:1:0.3", "--epsilon", "0.01", "--out", str(tmp_path / "t.nc")]
     parts = tmp_path / "t.nc.parts"
-    process = subprocess.Popen(command, cwd=tmp_path, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+    process = subprocess.Popen(command, cwd=tmp_path, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True,
+                               preexec_fn=default_signals)
     deadline = time.monotonic() + 120
     while not any(parts.glob("*.nc")) and process.poll() is None and time.monotonic() < deadline:
         time.sleep(0.01)

@@ -34,3 +34,12 @@ def test_a_dict_holding_a_loaded_python_plugin_has_a_fingerprint(mi):
     first, second = loaded(holding[0]), loaded(holding[1])
     assert first.fingerprint == second.fingerprint != front.fingerprint
     assert scene_fingerprint(holding[0], first.bench) == first.fingerprint
+
+
+def test_a_scene_dict_is_named_by_its_specimen_as_the_dict_writes_it(mi):
+    from virtspec_mi.runtime.scene import scene_source
+
+    scene = vm.instrument_scene({"type": "prospect_d"})
+    assert scene_source(scene, loaded(scene).bench)["scene"] == "scene dict, specimen prospect_d"  # not ProspectD
+    rough = vm.instrument_scene({"type": "roughconductor"})
+    assert scene_source(rough, loaded(rough).bench)["scene"] == "scene dict, specimen RoughConductor"

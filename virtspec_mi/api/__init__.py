@@ -120,7 +120,7 @@ def measure(scene: Any, *, target: Any = None, **keywords: Any) -> Any:
     scene = loaded(scene, run["defines"])
     bench = scene.bench
     if target is not None:
-        return _measure_target(scene, parameters, target, settings)
+        return _measure_target(scene, parameters, target, {**settings, "progress": progress})
     settings, = resolve("measure", settings, scene_options(bench, Settings))
     space = parameter_space(bench, parameters or {})
     if space is not None and space.size != 1:
@@ -224,7 +224,8 @@ def sweep(scene: Any, *, target: Any = None, **keywords: Any) -> Any:
                             scene_options(scene.bench, Settings))
         angles = incidence_angles(resolved, run["theta_i"], "a sweep")
         return DerivedSweep(tuple(float(t) for t in angles), tuple(
-            _measure_target(scene, None, target, {**settings, "theta_i": float(t)}) for t in angles))
+            _measure_target(scene, None, target, {**settings, "theta_i": float(t), "progress": run["progress"]})
+            for t in angles))
     return keyed_reading(commanding("sweep").name, "sweep", "a sweep", loaded(scene, defines), settings, **run)
 
 

@@ -42,7 +42,7 @@ from pathlib import Path
 from typing import Any, Callable, Iterable, Iterator
 
 __all__ = ["WriteError", "IN_MEMORY", "atomic_file", "atomic_write", "cause_of", "temporary_name", "flush_directory",
-           "read_netcdf", "same_file", "check_distinct", "shown_path", "os_error_text"]
+           "read_netcdf", "same_file", "check_distinct", "check_name_length", "shown_path", "os_error_text"]
 
 _FULL = 1 << 20  # a write failing with less free space than this is reported as a full disk
 
@@ -87,6 +87,42 @@ def shown_path(path: Any, limit: int = 160) -> str:
     if len(text) <= limit:
         return text
     return f"{text[:limit - 40]}…{text[-30:]} ({len(text):,} characters)"
+
+
+def check_name_length(name: str, path: Any) -> None:
+    """
+    Refuse (``ValueError`` naming ``name``, the limit and the fix) a path the file system
+    cannot name — a part longer than its longest file name (``NAME_MAX``, 255 on most) or
+    the whole longer than its longest path (``PATH_MAX``) — before any file is opened, the
+    path shown shortened (:func:`shown_path`), never echoed whole. Not a path: left alone.
+    """
+
+    if not isinstance(path, (str, os.PathLike)):
+        return
+    text = os.fsdecode(path)
+    try:
+        most, whole = os.pathconf(_existing(Path(text)), "PC_NAME_MAX"), os.pathconf("/", "PC_PATH_MAX")
+    except (OSError, ValueError, AttributeError):
+        most, whole = 255, 4096
+    longest = max(Path(text).parts, key=len, default="")
+    if len(os.fsencode(longest)) > most:
+        raise ValueError(f"{name}: a file or folder name holds at most {most} bytes here (got "
+                         f"{shown_path(longest)}, {len(os.fsencode(longest)):,} bytes); give a shorter name")
+    if len(os.fsencode(text)) >= whole:
+        raise ValueError(f"{name}: a path holds fewer than {whole} bytes here (got {shown_path(text)}, "
+                         f"{len(os.fsencode(text)):,} bytes); give a shorter path")
+
+
+def _existing(path: Path) -> Path:
+    """The nearest folder of ``path`` that exists (the file system whose limits apply)."""
+
+    for folder in [path.parent, *path.parent.parents] if not path.is_absolute() else path.parents:
+        try:
+            if folder.is_dir():
+                return folder
+        except OSError:
+            continue
+    return Path(".")
 
 
 def os_error_text(error: OSError) -> str:
@@ -236,11 +272,15 @@ def check_distinct(outputs: Iterable[tuple[str, Any]], inputs: Iterable[tuple[st
     Refuse (``ValueError``, before anything is measured or written) an output that would
     replace an input of the same call or another of its outputs: ``outputs`` and
     ``inputs`` are ``(name, path)`` pairs (the flag or parameter naming each: ``"--out"``,
-    ``"measured"``; a path ``None`` or not a path — an object, a dict — is left out).
+    ``"measured"``; a path ``None`` or not a path — an object, a dict — is left out). A
+    path the file system cannot name is refused too (:func:`check_name_length`).
     """
 
     def paths(pairs: Iterable[tuple[str, Any]]) -> list[tuple[str, Any]]:
-        return [(name, path) for name, path in pairs if isinstance(path, (str, os.PathLike)) and str(path)]
+        kept = [(name, path) for name, path in pairs if isinstance(path, (str, os.PathLike)) and str(path)]
+        for name, path in kept:
+            check_name_length(name, path)  # a name the system cannot hold: refused here, shortened
+        return kept
 
     given, written = paths(inputs), []
     for name, path in paths(outputs):

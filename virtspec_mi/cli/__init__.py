@@ -230,8 +230,11 @@ def main(argv: Sequence[str] | None = None) -> int:
 def _command(args: argparse.Namespace, exit_status: Any) -> int:
     """Run the command of ``args``; an error or an interrupt becomes a one-line message and the exit status."""
 
+    from virtspec_mi.base.surface import command_line
+
     try:
-        return args.respond(args)  # the row's: an instrument's command, an application's, or the command line's own
+        with command_line():  # messages name flags, not Python (virtspec_mi.base.surface)
+            return args.respond(args)  # the row's: an instrument's command, an application's, or the command line's own
     except KeyboardInterrupt as stop:  # Ctrl-C (SIGINT) or SIGTERM: virtspec_mi.base.interrupts.Interrupted
         return _interrupted(stop, args, exit_status)
     except Exception as error:
@@ -242,7 +245,8 @@ def _command(args: argparse.Namespace, exit_status: Any) -> int:
             return _interrupted(KeyboardInterrupt(received()), args, exit_status, received())
         if not isinstance(error, (ValueError, RuntimeError, OSError)):
             raise
-        shown = _rescued(error)
+        with command_line():  # the rescue's words are the command line's too
+            shown = _rescued(error)
         if isinstance(shown, OSError) and not isinstance(shown, WriteError):  # its file named, shortened if long
             shown = os_error_text(shown)
         print(f"virtspec: error: {shown}", file=sys.stderr)

@@ -131,7 +131,7 @@ def take_keyed_readings(bench: Any, plan: Plan, batch: Any) -> Tally:
             if space is not None:
                 apply_point(bench, space.keys, space.point(p))
             parts.append(trace_readings(bench, plan, g, _readings(plan, theta[members], lam[members]),
-                                        offsets=offsets[members]))
+                                        offsets=offsets[members], share=len(members) / len(batch)))
             order.append(members)
     finally:
         if space is not None:
@@ -141,7 +141,8 @@ def take_keyed_readings(bench: Any, plan: Plan, batch: Any) -> Tally:
 
 
 def trace_readings(bench: Any, plan: Plan, group: int, readings: Sequence[tuple[float, float, float]],
-                   offsets: Sequence[int] | np.ndarray | None = None, progress: bool | None = False) -> Tally:
+                   offsets: Sequence[int] | np.ndarray | None = None, progress: bool | None = False,
+                   share: float = 1.0) -> Tally:
     """
     Trace every (wavelength nm, θi, φi) of ``readings`` with ``plan``'s settings, budget
     and group ``group``'s hook, each with its own independent rays, and return their
@@ -165,7 +166,8 @@ def trace_readings(bench: Any, plan: Plan, group: int, readings: Sequence[tuple[
     :data:`~virtspec_mi.base.checks.MAX_TOTAL_RAYS` rays, and every reading's N (the two-stage
     N₂ included) to :data:`~virtspec_mi.base.checks.MAX_RAYS`. ``progress`` shows the
     readings traced (per chunk; both stages of two-stage) by the rule of
-    :mod:`virtspec_mi.engine.progress`.
+    :mod:`virtspec_mi.engine.progress`; within an enclosing run's bar, the call moves it by
+    ``share`` of the step under way there.
     """
 
     settings = plan.settings
@@ -177,7 +179,7 @@ def trace_readings(bench: Any, plan: Plan, group: int, readings: Sequence[tuple[
     traced_offsets = None if offsets is None else np.asarray(offsets)[traced]
     hook = plan.hook(group)
     pilot = None
-    bar = Progress(progress, total=len(traced) * (2 if plan.adaptive else 1), desc="readings")
+    bar = Progress(progress, total=len(traced) * (2 if plan.adaptive else 1), desc="readings", share=share)
     try:
         if plan.adaptive:
             tally, pilot = _two_stage(bench, traced_readings, plan, traced_offsets, bar, hook)
@@ -213,7 +215,13 @@ def trace_allocated(bench: Any, settings: Settings, readings: Sequence[tuple[flo
     check_readings(len(readings), int(rays.sum()))
     for n in np.unique(rays):
         check_rays_needed(int(n), "the allocation")
-    tally = _fixed(bench, readings, settings, rays, None if offsets is None else np.asarray(offsets))
+    starts = np.concatenate([[0], np.cumsum(rays)])  # the bar moves by rays (an enclosing run's, if any)
+    bar = Progress(False, total=int(rays.sum()), unit="ray")
+    try:
+        tally = _fixed(bench, readings, settings, rays, None if offsets is None else np.asarray(offsets),
+                       lambda done: bar.reach(float(np.interp(done, np.arange(len(starts)), starts))))
+    finally:
+        bar.close()
     return Tally(tally.counts, None, tally.bins, tally.sums)
 
 
@@ -349,10 +357,13 @@ def _run_keyed(bench: Any, plan: Plan, shared: bool, checkpoint: Any, progress: 
     if state.reused:
         bar.note(f"resumed from {checkpoint}: {state.reused} of {size} readings reused")
     finished = runner(todo) if todo else iter(())
+    steps = iter([len(b) // per_unit for b in todo] + [0])  # the batches in the order a runner here takes them
     try:
+        bar.expect(next(steps))  # a batch's kernel chunks move the bar as they finish (nested bars)
         for batch, tally in finished:
             state.record(batch, tally)
             bar.update(len(batch) // per_unit, tally.seconds)
+            bar.expect(next(steps, 0))
             interrupts.check()
     except interrupts.Interrupted as stop:  # the message names the file to resume from
         stop.checkpoint = None if checkpoint is None else Path(checkpoint)

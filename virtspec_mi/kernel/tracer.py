@@ -158,7 +158,8 @@ def tally_readings(
     reached within about a second even for slow walks. ``seed``, ``beam``
     (``conical``, ``collimated``, ``diffuse``) and ``sampling`` (``jittered``,
     ``random``, ``concentric``) are the settings of those names. ``on_chunk`` (optional)
-    is called after every chunk with the number of readings completed so far;
+    is called after every chunk with the number of readings completed so far (a float:
+    the reading under way counts by its share of rays traced);
     ``safe_point`` (optional) is handed to a hook that launches kernels of its own within a
     chunk (:attr:`~virtspec_mi.kernel.hooks.ChunkRays.safe_point`: a sphere walk's parts).
 
@@ -198,8 +199,8 @@ def tally_readings(
         kernel.run(RaySource(kernel, first, size, slots, starts, offsets), tally, safe_point)
         pace.update(size, time.perf_counter() - began)
         first += size
-        if on_chunk is not None:  # how many readings are complete (for a progress bar)
-            on_chunk(int(np.searchsorted(starts[1:], first, side="right")))
+        if on_chunk is not None:  # how many readings are complete, the one under way in part (a progress bar)
+            on_chunk(float(np.interp(first, starts, np.arange(len(starts)))))
     return tally
 
 

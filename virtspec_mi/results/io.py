@@ -56,6 +56,7 @@ from typing import Any
 import numpy as np
 
 from virtspec_mi.base.files import IN_MEMORY, WriteError, atomic_file
+from virtspec_mi.base.surface import spoken
 from virtspec_mi.results.integrity import unsealed
 
 __all__ = [
@@ -148,7 +149,8 @@ def rescue(result: Any, path: str | os.PathLike) -> str:
         write(result, target)
     except WriteError as error:
         return f"a copy could not be written to {target} either ({error.cause}): the result is lost with this process"
-    return f"the result was written to {target} instead (virtspec_mi.read_result reads it)"
+    reader = spoken("virtspec_mi.read_result reads it", "virtspec plot, colour and compare read it")
+    return f"the result was written to {target} instead ({reader})"
 
 
 def check_output(path: str | os.PathLike, name: str = "out") -> Path:

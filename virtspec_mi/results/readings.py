@@ -391,6 +391,11 @@ class Result(ResultBase):
         (a goniophotometer's guarantee over its bins): it replaces "rays given".
         """
 
+        ones = [d for d, n in zip(self.dims, self.shape) if n == 1 and d != "wavelength"]
+        if ones and all(n == 1 for d, n in zip(self.dims, self.shape) if d != "wavelength"):
+            # one reading over wavelength, whether its other labels are dims of one or scalars (a file read back,
+            # a command's squeezed print): one heading for both
+            return Result.summary(self.squeeze(*ones), sized_by)
         s = self.settings
         incidence = ("cosine-weighted over the hemisphere" if s.beam == "diffuse"
                      else f"theta_i = {self._angles()} deg, phi_i = {s.phi_i:g} deg")
@@ -443,7 +448,7 @@ class Result(ResultBase):
         else:
             rule = f"{s.bound} bound" if s.rays is None else f"rays given; {s.bound} bound"
         text = f"{counted} ({rule}: {together} < {worst:g} with probability >= {1 - s.delta:g}"
-        if sized_by is None and worst > s.mu * (1 + 1e-9):
+        if sized_by is None and s.rays is None and worst > s.mu * (1 + 1e-9):  # mu sized N (rays given: it did not)
             text += f"; mu = {s.mu:g} was asked: these rays guarantee only {worst:g}"
         if np.any(np.isnan(mu)):
             text += "; some readings NOT CERTIFIED"

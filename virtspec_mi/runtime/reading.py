@@ -33,7 +33,7 @@ import numpy as np
 
 from virtspec_mi.base import interrupts
 from virtspec_mi.base.checks import parse_theta_i
-from virtspec_mi.base.files import WriteError, check_distinct
+from virtspec_mi.base.files import WriteError, check_distinct, check_name_length
 from virtspec_mi.engine.bench import Bench
 from virtspec_mi.engine.checkpoint import checkpoint_for, claim, kept_in, remove
 from virtspec_mi.engine.parameters import parameter_space
@@ -202,6 +202,7 @@ def _file_path(value: Any, name: str) -> Path | None:
     if not isinstance(value, (str, os.PathLike)):
         raise ValueError(f"{name} must be a file path (str or os.PathLike) or None (got {type(value).__name__} "
                          f"{value!r})")
+    check_name_length(name, value)
     return Path(value)
 
 

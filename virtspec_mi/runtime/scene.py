@@ -42,6 +42,7 @@ from virtspec_mi.geometry.disks import (
 )
 from virtspec_mi.engine.bench import EMITTER_ID, SPECIMEN_ID, Bench, SceneError, read_bench
 import virtspec_mi.base.interrupts as interrupts
+from virtspec_mi.base.files import check_name_length
 from virtspec_mi import scenes
 from virtspec_mi.runtime import mitsuba
 from virtspec_mi.settings import SETTING_NAMES
@@ -61,6 +62,7 @@ def load_scene(scene: Any, defines: dict[str, Any] | None = None) -> Any:
     """
 
     mi = mitsuba()
+    check_name_length("scene", scene)  # a 5,000-character name: refused, shortened, before the file system sees it
     scene = scenes.resolve(scene)
     defines = check_defines(defines, scene)
     if isinstance(scene, mi.Scene):
@@ -308,7 +310,8 @@ def scene_source(scene: Any, bench: Bench, defines: dict[str, Any] | None = None
     What a result records of the scene it measured, for people: ``{"scene": name,
     "defines": {name: value}}``. The name is a shipped scene's name (``"soybean_abmb"``),
     an XML file's name (``"my_leaf.xml"``), else what was given and the specimen's BSDF
-    (``"scene dict, specimen RoughConductor"``); ``defines`` are the XML parameters set
+    by the name a scene gives its plugin (``"scene dict, specimen prospect_d"``; Mitsuba's own
+    BSDFs: their class, ``RoughConductor``); ``defines`` are the XML parameters set
     (``-D``), as strings.
     """
 
@@ -319,6 +322,7 @@ def scene_source(scene: Any, bench: Bench, defines: dict[str, Any] | None = None
     else:
         bsdf = type(bench.bsdf).__name__  # a Python plugin's class; Mitsuba's own: the class behind mi.BSDF
         bsdf = bench.bsdf.class_name() if bsdf == "BSDF" and hasattr(bench.bsdf, "class_name") else bsdf
+        bsdf = getattr(bench.bsdf, "PLUGIN", "") or bsdf  # a specimen's registered name, as a scene writes it
         name = f"{'scene dict' if isinstance(scene, dict) else 'mi.Scene'}, specimen {bsdf}"
     return {"scene": name, "defines": check_defines(defines)}
 

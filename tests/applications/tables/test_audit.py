@@ -261,3 +261,11 @@ def test_the_heat_map_never_replaces_the_audited_file(coarse, tmp_path):
     with pytest.raises(ValueError, match="is the audited table"):
         report.figure(tmp_path / "map.png")
     assert "table_ggx_E" in header.read_text()
+
+
+def test_a_channel_named_as_its_quantity_is_named_once():
+    from virtspec_mi.applications.tables.engine_tables import held
+    from virtspec_mi.exchange.engine_models import ENGINE_CHANNELS
+
+    assert held(ENGINE_CHANNELS["cycles"][1]) == "E"  # not "E = E"
+    assert held(ENGINE_CHANNELS["filament"][1]) == "DFG.x = E_R, DFG.y = E"

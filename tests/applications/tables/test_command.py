@@ -83,3 +83,11 @@ def test_measuring_flags_beside_from_are_refused(written, capsys, flags, named):
 def test_the_figure_needs_an_audit(written, capsys, tmp_path):
     _refused(capsys, ["albedo-table", "--from", str(written / "T.nc"), "--engine", "cycles", "--out",
                       str(tmp_path / "x.h"), "--figure", str(tmp_path / "f.png")], "--figure draws the heat map")
+
+
+def test_the_summary_names_the_grid_as_given(mi, capsys):
+    """A grid of the user's cells is "grid (mu 2 x alpha 2)", an engine's is "cycles grid (...)" (never "grid grid")."""
+
+    assert main(["albedo-table", "--cosines", "1,0.5", "--alpha", "0.3,0.6", "--epsilon", "0.3", "--quiet"]) == 0
+    shown = "".join(capsys.readouterr())
+    assert "; grid (mu 2 x alpha 2)" in shown and "grid grid" not in shown, shown

@@ -79,3 +79,36 @@ def test_a_gloss_meter_reads_at_one_angle(glass):
     meter = INSTRUMENTS["gloss"]
     with pytest.raises(ValueError, match="one theta_i"):
         meter().run(glass, Settings(rays=100), theta_i=[20, 60])
+
+
+def test_gloss_units_against_the_iso_2813_black_glass_standard(mi, tmp_path):
+    """100 GU is the black glass standard (n = 1.567) at each angle: a specimen of that glass reads 100 GU."""
+
+    from virtspec_mi.instruments.gloss import ISO_2813_ANGLES, standard_reflectance
+    from virtspec_mi.references.quadrature import fresnel_reflectance
+
+    assert np.allclose(standard_reflectance(ISO_2813_ANGLES), [0.0491, 0.1001, 0.6191], atol=5e-5)
+    standard = vm.instrument_scene({"type": "simple_dielectric", "eta": 1.567})
+    for theta in ISO_2813_ANGLES:
+        reading = vm.gloss(standard, theta_i=theta, beam="collimated", rays=200_000, cone=1, seed=3)
+        low, high = np.asarray(reading.gloss_units_interval).reshape(-1, 2)[0]
+        assert low <= 100.0 <= high, (theta, low, high)  # the standard's own 100 GU inside the certified interval
+        assert np.allclose(reading.gloss_units, 100 * reading.gloss / fresnel_reflectance(theta, 1.567))
+    text = reading.summary()
+    assert "GU in [" in text and f"g = {float(np.ravel(reading.gloss)[0]):.6f} in [" in text
+    assert "not one of ISO 2813's" not in text
+    other = vm.gloss(standard, theta_i=45, beam="collimated", rays=100, cone=1)
+    assert "not one of ISO 2813's 20, 60, 85" in other.summary()
+
+
+def test_a_gloss_summary_reads_the_same_from_its_file(mi, tmp_path, capsys):
+    """The command's squeezed print and the file read back give one heading and one text."""
+
+    from virtspec_mi.cli import main
+
+    out = tmp_path / "g.nc"
+    assert main(["gloss", "diamond_collimated", "--theta-i", "60", "--rays", "4000", "--out", str(out)]) == 0
+    printed = "".join(capsys.readouterr())
+    back = vm.read_result(out).summary()
+    assert back.splitlines()[:3] == printed.splitlines()[:3]
+    assert "collimated reading, theta_i = 60 deg" in back and "sweep" not in back

@@ -24,6 +24,7 @@ from typing import Any
 import numpy as np
 
 from virtspec_mi.base.checks import NANOMETRE_FLOOR, check_nanometres
+from virtspec_mi.base.surface import spoken
 from virtspec_mi.exchange.measured import MeasuredFile, Samples, format_for, read_samples, suffixes
 from virtspec_mi.kernel.counts import QUANTITIES
 from virtspec_mi.results.base import ResultBase
@@ -199,7 +200,8 @@ def _from_samples(samples: Samples, quantity: str, sample: str | int | None) -> 
 
     if samples.quantity != quantity:
         raise ValueError(f"measured file {samples.source} holds {samples.quantity}, not the {quantity} compared or "
-                         f"fitted (measured_quantity= states what a file that does not tell holds)")
+                         f"fitted ({spoken('measured_quantity=', '--measured-quantity')} states what a file that does "
+                         "not tell holds)")
     wavelengths, values, label = samples.spectrum(sample)
     source = samples.source if len(samples) == 1 else f"{samples.source} [{label}]"
     return MeasuredSpectrum.of(wavelengths, values, quantity=quantity, source=source, note=samples.note)

@@ -163,7 +163,9 @@ class FitFlags(MeasuredFlags):
                              "table (.csv or .nc)")
     plot: str | None = option(None, text("plot"), "figure (.png, .svg): measured vs fitted, residuals, profiles")
     json: bool = option(False, true_or_false("json"), "print the fit as one JSON object")
-    progress: bool = option(False, true_or_false("progress"), "a line per stage on stderr")
+    progress: bool = option(False, true_or_false("progress"), "a progress bar and a line per stage on stderr "
+                            "(default: when stderr is a terminal)")
+    quiet: bool = option(False, true_or_false("quiet"), "no progress bar and no lines on stderr")
 
 
 def respond(session: Session) -> int:
@@ -206,7 +208,8 @@ def respond(session: Session) -> int:
                    loss=flags.loss, windows=dict(flags.window) or None, delta=flags.delta,
                    mu_fraction=flags.mu_fraction, forward_mu=flags.forward_mu, table_points=flags.table_points,
                    profile_points=flags.profile_points, seed=flags.seed, defines=defines or None,
-                   evaluations=flags.evaluations, progress=True if flags.progress else None, **search, **settings)
+                   evaluations=flags.evaluations,
+                   progress=False if flags.quiet else True if flags.progress else None, **search, **settings)
     if many:
         return _respond_table(session, measured, options)
     from virtspec_mi.applications.fitting.inversion import fit

@@ -52,6 +52,8 @@ import numpy as np
 from virtspec_mi.runtime.reading import read_result, take
 from virtspec_mi.applications.fitting.problem import FitProblem
 from virtspec_mi.engine.checkpoint import ResultStore, checkpoint_for
+from virtspec_mi.base.surface import spoken
+from virtspec_mi.engine.progress import Progress, expect, write
 from virtspec_mi.results.zarr import unfinished
 from virtspec_mi.settings import Settings, resolve
 
@@ -102,6 +104,7 @@ class Forward:
         self.directory = directory
         self.workers = workers
         self.progress = progress
+        self.bar: Progress | None = None  # the fit's bar, when it has one (one update per forward reading)
         self.subset = subset  # the problem is the fit's on these of its wavelengths (mask), or None: the fit's own
         count = len(problem.wavelengths) * len(problem.quantities)
         self.reading_delta = self.delta / count
@@ -146,8 +149,11 @@ class Forward:
         result = None if self.store is None else self.store.load(label, read_result)
         if result is None:
             path = None if self.store is None else self.store.path(label)  # written whole, its checkpoint meanwhile
+            expect(1)  # the fit's bar moves with the reading's kernel chunks
             result = self._sweep({key: [float(v)] for key, v in zip(self.problem.keys, values)}, mu, path)
             self.traced_rays += int(np.sum(result.rays_spent))
+        if self.bar is not None:
+            self.bar.update(1)
         result = result.squeeze("theta_i", *self.problem.keys)
         reading = self._from_result(result, values, mu, stage, time.perf_counter() - started)
         self.cache[memo] = reading
@@ -182,6 +188,7 @@ class Forward:
             result = self._check_table(read_result(path), path)
         else:
             note(self.progress, f"fit: table of {int(np.prod([len(g) for g in grid]))} points at mu = {mu:g}")
+            expect(int(np.prod([len(g) for g in grid])))
             result = self._sweep({key: list(map(float, values)) for key, values in zip(keys, grid)}, mu, path,
                                  self.workers)
             self.traced_rays += int(np.sum(result.rays_spent))
@@ -190,6 +197,8 @@ class Forward:
         seconds = time.perf_counter() - started
         readings: list[Reading] = []
         size = int(np.prod([len(np.atleast_1d(result.coords[key])) for key in keys]))
+        if self.bar is not None:
+            self.bar.update(size)
         for index in np.ndindex(*(len(np.atleast_1d(result.coords[key])) for key in keys)):
             point = {key: float(np.atleast_1d(result.coords[key])[i]) for key, i in zip(keys, index)}
             one = result.sel(point)
@@ -202,7 +211,8 @@ class Forward:
         missing = [key for key in self.problem.keys if key not in result.dims]
         if missing:
             raise ValueError(f"the table {path} is no grid over {', '.join(missing)} (its dims: "
-                             f"{', '.join(result.dims)}): make one with sweep(parameters=...)")
+                             f"{', '.join(result.dims)}): make one with "
+                             f"{spoken('sweep(parameters=...)', 'virtspec sweep --param NAME=VALUES --out FILE.zarr')}")
         extra = [d for d in result.dims if d not in (*self.problem.keys, "wavelength", "theta_i")]
         if extra:
             raise ValueError(f"the table {path} also varies {', '.join(extra)}: select one value first")
@@ -224,4 +234,4 @@ def note(progress: bool, line: str) -> None:
     """One line of progress on stderr (when asked)."""
 
     if progress:
-        print(line, file=sys.stderr, flush=True)
+        write(line)  # above the fit's bar, when one is drawn

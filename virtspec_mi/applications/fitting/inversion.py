@@ -83,6 +83,7 @@ from virtspec_mi.applications.fitting.windows import FitWindows, fit_windows, wi
 from virtspec_mi.base.checks import real
 from virtspec_mi.base.files import check_distinct
 from virtspec_mi.engine.parameters import apply_point, known_parameters
+from virtspec_mi.engine.progress import Progress
 
 __all__ = ["fit", "LOSSES", "LOSS_NAMES", "SEARCH_WAVELENGTHS", "UNCONSTRAINED_SHARE", "PROFILE_BISECTIONS",
            "consistency", "intervals", "verdicts"]
@@ -261,7 +262,8 @@ def fit(measured: Any, specimen: Any, parameters: Mapping[str, Any], *, quantiti
     workers
         Dask workers for the table's sweep (as :func:`virtspec_mi.api.sweep`).
     progress
-        ``True``: a line on stderr per stage; default: when stderr is a terminal.
+        ``True``: a progress bar and a line on stderr per stage; ``False``: neither;
+        default: both when stderr is a terminal (the bar once the fit lasts more than ~2 s).
     **settings
         The forward readings' other settings (``theta_i``, ``beam``, ``bound`` …,
         :class:`~virtspec_mi.settings.Settings`); ``mu``, ``delta``, ``seed``, ``joint``,
@@ -291,7 +293,7 @@ def fit(measured: Any, specimen: Any, parameters: Mapping[str, Any], *, quantiti
     problem = fit_problem(measured, specimen, parameters, quantities=quantities, wavelengths=wavelengths,
                           measurement_uncertainty=measurement_uncertainty, defines=defines)
     chosen = fit_windows(windows, problem.names, problem.wavelengths) if loss == "windows" else None
-    progress = sys.stderr.isatty() if progress is None else bool(progress)
+    drawn, progress = progress, sys.stderr.isatty() if progress is None else bool(progress)
     smallest = min(float(problem.uncertainty[q].min()) for q in problem.quantities)
     target = forward_mu if forward_mu is not None else mu_fraction * smallest
     if not 0.0 < target < 0.5:
@@ -305,8 +307,12 @@ def fit(measured: Any, specimen: Any, parameters: Mapping[str, Any], *, quantiti
     measure_loss = LOSSES[loss] if chosen is None else chosen.loss()
     loss_name = loss if chosen is None else chosen.describe(problem.names)
     count = len(problem.names)
+    points = table_points or _table_points(count)
+    budget = evaluations if evaluations is not None else tuple(k * count for k in (12, 6, 3))
+    refinements = 1 if chosen is None else len(chosen.masks) + 1
+    bar = Progress(drawn, points ** count + refinements * sum(budget) + profile_points * count, desc="fit")
+    forward.bar = bar  # one update per forward reading (a longer bar when the fit reads more)
     try:
-        points = table_points or _table_points(count)
         grid = [np.linspace(low, high, points) for low, high in problem.bounds]
         table_mu = max(_TABLE_MU, target)
         readings = forward.table(grid, table_mu, table_path)
@@ -314,7 +320,7 @@ def fit(measured: Any, specimen: Any, parameters: Mapping[str, Any], *, quantiti
         subset = search_problem(problem, search_wavelengths, keep, readings)
         search = forward if subset is None else Forward(subset[0], delta=delta, seed=seed, settings=settings,
                                                          directory=work, progress=progress, subset=subset[1])
-        budget = evaluations if evaluations is not None else tuple(k * count for k in (12, 6, 3))
+        search.bar = bar
         step = 0.5 / (points - 1)
         settled: list[bool] = []
         if chosen is None:
@@ -332,6 +338,7 @@ def fit(measured: Any, specimen: Any, parameters: Mapping[str, Any], *, quantiti
             confirmed = _confirm_ends(forward, search, problem, target)
             note(progress, f"fit: {confirmed} candidates at the confidence set's ends read again at mu = {target:g}")
     finally:
+        bar.close()
         keys = known_parameters(problem.scene)
         apply_point(problem.bench, [keys.get(k, k) for k in problem.keys], problem.start)
     return _result(problem, forward, estimate, loss_name, measure_loss, delta, target, mu_fraction, seed, started,

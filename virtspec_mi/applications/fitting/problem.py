@@ -34,6 +34,7 @@ from typing import Any, Mapping, Sequence
 import numpy as np
 
 from virtspec_mi.base.checks import number
+from virtspec_mi.base.surface import spoken
 from virtspec_mi.applications.comparison import MeasuredSpectrum, read_measured
 from virtspec_mi.engine.bench import Bench
 from virtspec_mi.engine.parameters import PREFIX, apply_point, current_values, known_parameters, parameter_space
@@ -175,7 +176,7 @@ def _on_wavelengths(spectrum: MeasuredSpectrum, wavelengths: np.ndarray, uncerta
     if spectrum.uncertainty is None:
         raise ValueError(f"the measured {spectrum.quantity} of {spectrum.source} has no uncertainty: a fit states "
                          "which parameters are consistent with the measurement, which needs it (an uncertainty "
-                         "column, or measurement_uncertainty=... / --uncertainty)")
+                         f"column, or {spoken('measurement_uncertainty=...', '--uncertainty U')})")
     values = np.interp(wavelengths, spectrum.wavelengths, spectrum.values)
     error = np.interp(wavelengths, spectrum.wavelengths, spectrum.uncertainty)
     if not np.all(error > 0):

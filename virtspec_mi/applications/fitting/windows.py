@@ -54,6 +54,7 @@ from typing import Any, Callable, Mapping
 import numpy as np
 
 from virtspec_mi.applications.fitting.forward import Reading
+from virtspec_mi.base.surface import spoken
 from virtspec_mi.applications.fitting.problem import FitProblem
 from virtspec_mi.base.checks import number
 
@@ -157,12 +158,15 @@ def fit_windows(windows: Mapping[str, Any] | None, names: tuple[str, ...], wavel
         cut = [(max(low, lowest), min(high, highest)) for low, high in published if high >= lowest and low <= highest]
         if not cut:
             raise ValueError(f"the published window of {name!r} ({_text(published)}) lies outside the fitted "
-                             f"wavelengths ({lowest:g}-{highest:g} nm): give windows={{{_short(name)!r}: ...}} or "
-                             "fit another range")
+                             f"wavelengths ({lowest:g}-{highest:g} nm): give "
+                             + spoken(f"windows={{{_short(name)!r}: ...}}", f"--window {_short(name)}=LOWEST:HIGHEST")
+                             + " or fit another range")
         masks[i], text[i] = _mask(name, cut, wavelengths)
     if not masks:
-        raise ValueError(f"loss='windows' needs a window for at least one free parameter ({', '.join(names)}): "
-                         f"give windows={{name: (lowest, highest)}} (published windows: {', '.join(OPTIMAL_WINDOWS)})")
+        loss = spoken("loss='windows'", "--loss windows")
+        window = spoken("windows={name: (lowest, highest)}", "--window NAME=LOWEST:HIGHEST")
+        raise ValueError(f"{loss} needs a window for at least one free parameter ({', '.join(names)}): give {window} "
+                         f"(published windows: {', '.join(OPTIMAL_WINDOWS)})")
     return FitWindows(masks, text)
 
 

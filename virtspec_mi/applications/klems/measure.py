@@ -188,6 +188,7 @@ def klems_measure(
                     part = parts.path(label)  # the reading's out: written whole, with its own checkpoint meanwhile
                     reading = parts.load(label, read_result)
                     if reading is None:
+                        bar.expect(len(patches))  # the group's kernel chunks move the bar
                         reading = take("gonio", side_scene, theta_i=[float(klems.theta[p]) for p in patches], phi_i=phi_i,
                                         beam="collimated", wavelengths=lams.tolist(), rays=n_rays,
                                         seed=derived_seed(seed, label), theta_o_bins=edges.tolist(),

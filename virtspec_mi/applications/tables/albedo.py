@@ -89,6 +89,7 @@ import numpy as np
 from virtspec_mi.base.version import __version__
 from virtspec_mi.base.checks import check_delta, real, shown_value
 from virtspec_mi.base.files import WriteError, check_distinct
+from virtspec_mi.base.surface import spoken
 import virtspec_mi.base.interrupts as interrupts
 from virtspec_mi.engine.checkpoint import ResultStore, locked
 from virtspec_mi.settings import true_or_false, whole_number
@@ -194,8 +195,10 @@ def _grid(model: str, distribution: str, engine: str | None, mu: Any, alpha: Any
         raise ValueError("give alpha or roughness (alpha = roughness^2), not both")
     given = mu is not None or alpha is not None or roughness is not None or eta is not None
     if engine is not None and given:
-        raise ValueError(f"engine={engine!r} fixes the grid: give engine=None with mu, alpha (or roughness)"
-                         + (" and eta" if model == "glass" else ""))
+        raise ValueError(spoken(f"engine={engine!r} fixes the grid: give engine=None with mu, alpha (or roughness)"
+                                + (" and eta" if model == "glass" else ""),
+                                f"--engine {engine} fixes the grid: give --engine none with --cosines, --alpha (or "
+                                "--roughness)" + (" and --eta" if model == "glass" else "")))
     if engine is not None:
         conv: Convention = convention(engine, model)
         return _Grid(model, distribution, conv.mu, conv.alpha, conv.eta, conv.roughness, conv.name, conv.order)
@@ -338,8 +341,9 @@ def albedo_table(
     if bound not in BOUNDS:
         raise ValueError(f"bound must be one of {', '.join(BOUNDS)} (got {bound!r})")
     if parts and model != "glass" and fresnel != "split":
-        raise ValueError("parts=True certifies E_R and E_T of a glass table (model='glass') or of a conductor with "
-                         "fresnel='split'")
+        raise ValueError(spoken("parts=True certifies E_R and E_T of a glass table (model='glass') or of a conductor "
+                                "with fresnel='split'", "--parts certifies E_R and E_T of a glass table (--model "
+                                "glass) or of a conductor with --fresnel split"))
     epsilon, delta = float(epsilon), float(delta)
     sized = epsilon / count_scale  # the counts estimate E/c: held to ε/c, the values c × count/N to ε
     n1 = table_pilot_rays(epsilon) if pilot_rays is None else _whole("pilot_rays", pilot_rays, 1, 2**32 - 1)
@@ -388,6 +392,7 @@ def albedo_table(
                 groups += 1
                 result = store.load(label, read_result)
                 if result is None:
+                    bar.expect(len(angles) * len(pts))  # the group's kernel chunks move the table's bar
                     with warnings.catch_warnings():  # a group's uncertified readings are reported once, for the table
                         warnings.simplefilter("ignore", RuntimeWarning)
                         result = take("sweep", scene, theta_i=list(angles), beam=beam, rays=int(rays), wavelengths=[wavelength],

@@ -135,7 +135,8 @@ def respond(session: Session) -> int:
                              out=list(flags.out) or None, checkpoint=flags.checkpoint,
                              progress=False if flags.quiet else None, overwrite=flags.overwrite, **grid)
     lines = [table.statement(),
-             f"rays {table.rays:,}; {table.provenance.get('seconds_wall', 0):g} s; grid {table.engine} "
+             f"rays {table.rays:,}; {table.provenance.get('seconds_wall', 0):g} s; "
+             f"{'' if table.engine == 'grid' else table.engine + ' '}grid "  # "grid": the cells given, no engine's
              f"({' x '.join(f'{d} {len(getattr(table, d))}' for d in table.dims if d != 'side')})"]
     if flags.compare:
         comparison = table.compare(flags.compare, average=flags.average, side=flags.side, array=flags.array,

@@ -54,6 +54,7 @@ from typing import Any
 import numpy as np
 
 from virtspec_mi.base.files import atomic_write
+from virtspec_mi.base.surface import spoken
 from virtspec_mi.exchange.common import check_companions
 from virtspec_mi.exchange.engine_models import ENGINE_CHANNELS
 
@@ -61,7 +62,7 @@ _ENGINE_FILES = {"cycles": "Cycles' C header (.h)", "filament": "Filament's dfg.
                  "unreal": "Unreal's G16R16 texture (.raw) or a 16-bit PNG (.png)"}
 
 
-__all__ = ["EngineTables", "engine_tables", "check_engine_sidecar",
+__all__ = ["EngineTables", "engine_tables", "check_engine_sidecar", "held",
            "write_filament_inc", "read_filament_inc", "write_unreal", "read_unreal", "read_engine_file",
            "engine_layout"]
 
@@ -131,8 +132,7 @@ class EngineTables:
     def statement(self) -> str:
         """The joint certificate in one sentence."""
 
-        held = ", ".join(f"{name} = {quantity}" for name, quantity in self.channels.items())
-        return f"{self.engine} ({held}): {self.table.statement()}"
+        return f"{self.engine} ({held(self.channels)}): {self.table.statement()}"
 
     def description(self) -> dict[str, Any]:
         """Provenance and certificate (the sidecar of a drop-in file)."""
@@ -176,10 +176,19 @@ class EngineTables:
         return [f"Certified by virtspec-mi {prov.get('virtspec_mi')} (Mitsuba {prov.get('mitsuba')}, "
                 f"{prov.get('variant')}), {prov.get('created')}, seed {prov.get('seed')}",
                 f"model: {prov.get('bsdf_model')}",
-                "channels: " + ", ".join(f"{name} = {q}" for name, q in self.channels.items())
+                "channels: " + held(self.channels)
                 + " (E_R: reflected rays = int Fc f cos; E_T: rays sent below = int (1 - Fc) f cos; E = both)",
                 f"every value within {np.nanmax(self.table.certified_epsilon()):.4g}, jointly with probability "
                 f">= {1 - self.delta:g}; rays {self.rays:,}"]
+
+
+def held(channels: dict[str, str]) -> str:
+    """
+    The channels and the quantity each holds, for people: ``DFG.x = E_R, DFG.y = E``; a
+    channel named as its quantity is named once (``E``, not ``E = E``).
+    """
+
+    return ", ".join(name if name == quantity else f"{name} = {quantity}" for name, quantity in channels.items())
 
 
 def check_engine_sidecar(path: str | os.PathLike, overwrite: bool = False, inputs: Any = ()) -> None:
@@ -191,7 +200,7 @@ def check_engine_sidecar(path: str | os.PathLike, overwrite: bool = False, input
 
     path = Path(path)
     check_companions(path, [path.with_name(path.name + ".json")], _is_engine_sidecar, overwrite, inputs=inputs,
-                     flag="overwrite=True (virtspec albedo-table --overwrite)")
+                     flag=spoken("overwrite=True", "--overwrite"))
 
 
 def _is_engine_sidecar(path: Path) -> bool:

@@ -26,6 +26,7 @@ from typing import Any, ClassVar, Mapping
 
 import numpy as np
 
+from virtspec_mi.base.surface import spoken
 from virtspec_mi.budgets.intervals import clopper_pearson_each
 from virtspec_mi.exchange.common import check_companions
 from virtspec_mi.results.integrity import CountRules, field_value, finite_labels, optional_numbers, whole_counts
@@ -763,7 +764,7 @@ def _check_output(path: Path, average: bool, overwrite: bool) -> None:
         return
     companions = [path.with_suffix(".json")] + ([path.with_name(path.stem + "_avg.npy")] if average else [])
     check_companions(path, companions, lambda companion: _ours(path), overwrite,
-                     flag="overwrite=True (virtspec albedo-table --overwrite)")
+                     flag=spoken("overwrite=True", "--overwrite"))
 
 
 def _ours(npy: Path) -> bool:

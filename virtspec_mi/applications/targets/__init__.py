@@ -57,8 +57,9 @@ class TargetsApplication(Application):
     extensions: ClassVar[tuple[Extension, ...]] = (Extension(
         "measure", TargetFlags, respond, "target",
         takes=(*(name for name in Settings.names() if name not in REFUSED_SETTINGS), "defines", "json", "quiet"),
-        reason="a target picks its own wavelengths and rays and is measured at the scene's own specimen parameters; "
-               "its result is printed (--json prints it as JSON; draw result.readings from Python)"),)
+        reason="a target picks its own wavelengths and rays (give it its tolerance, e.g. --target colour,dE00=0.5 or "
+               "--target band:B04,tolerance=0.002) and is measured at the scene's own specimen parameters; "
+               "its result is printed (--json prints it as JSON, its per-wavelength readings included)"),)
     results: ClassVar[tuple[type, ...]] = (DerivedResult, DerivedSweep)
     example: ClassVar[dict[str, Any]] = {
         "argv": ("measure", "diamond_collimated", "--target", "band:B04,tolerance=0.05", "--seed", "1", "--json"),

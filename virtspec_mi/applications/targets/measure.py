@@ -49,7 +49,9 @@ from virtspec_mi.budgets.functionals import (Functional, allocate, allocate_join
                                                           union_delta)
 from virtspec_mi.applications.targets.result import DerivedResult
 from virtspec_mi.applications.targets.targets import TARGETS, ColourTarget, Target, Value, colour_of
+from virtspec_mi.base.surface import spoken
 from virtspec_mi.budgets.twostage import stage_two_seed
+from virtspec_mi.engine.progress import expect, finished
 from virtspec_mi.instruments import ALLOCATING, Allocation
 from virtspec_mi.plugins.specimen import specimen_of
 from virtspec_mi.runtime.reading import scene_options
@@ -125,7 +127,10 @@ def _trace(bench: Any, settings: Settings, grid: np.ndarray, rays: np.ndarray, s
     instrument = ALLOCATING(scene, source)
     plan = instrument.init(bench, settings, Allocation(grid, rays, seed, offsets), np.array([float(settings.theta_i)]),
                            None)
-    return instrument, instrument.process(plan)
+    expect(int(np.sum(rays)))  # the target's bar, when one is open, moves by these rays as they are traced
+    tally = instrument.process(plan)
+    finished(int(np.sum(rays)))
+    return instrument, tally
 
 
 @dataclass(frozen=True, eq=False)
@@ -201,8 +206,9 @@ def measure_target(scene: LoadedScene, parameters: Any, target: Target, settings
 
     given = sorted(name for name in REFUSED_SETTINGS if settings.get(name) is not None)
     if given:
+        example = spoken("vm.band('B04', tolerance=0.002)", "--target band:B04,tolerance=0.002")
         raise ValueError(f"{', '.join(given)}: a target picks its own wavelengths and rays (give its tolerance to the "
-                         "target, e.g. vm.band('B04', tolerance=0.002)); leave them out")
+                         f"target, e.g. {example}); leave them out")
     if parameters:
         raise ValueError("parameters: a target is measured at the scene's own specimen parameters (set them in the "
                          "scene or with defines)")

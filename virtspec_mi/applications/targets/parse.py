@@ -128,7 +128,7 @@ def measure_target_command(args: Any, keywords: dict[str, Any], report: Callable
         message = str(error)
         raise ValueError(message if message.startswith("--target") else f"--target: {message}") from None
     settings = {k: v for k, v in keywords.items()
-                if k not in ("out", "workers", "task_readings", "points", "parameters", "defines", "progress")}
+                if k not in ("out", "workers", "task_readings", "points", "parameters", "defines")}
     result = measure_target(loaded(args.scene, keywords.get("defines") or None), None, target, settings)
     return report(args, result, result.summary())  # --json: its file (sealed JSON, read by vm.read_result)
 

@@ -31,6 +31,7 @@ from typing import Any, ClassVar, Mapping
 import numpy as np
 
 from virtspec_mi.applications.targets.targets import Target, Value
+from virtspec_mi.base.surface import spoken
 from virtspec_mi.results.figures import Figure
 from virtspec_mi.results.integrity import (CountRules, check_checksum, check_result, field_value, optional_numbers,
                                            whole_counts)
@@ -169,8 +170,8 @@ class DerivedResult(Record):
                  + f", {self.seconds:.3g} s"]
         for v in self.values:
             lines.append(f"  {v.name:<12} = {v.value:11.6f}   in [{v.lower:.6f}, {v.upper:.6f}]   {v.long_name}")
-        lines.append("the per-wavelength readings (result.readings) are the rays spent: they carry no joint "
-                     "per-wavelength certificate of their own")
+        lines.append(f"the per-wavelength readings ({spoken('result.readings', 'in --json')}) are the rays spent: "
+                     "they carry no joint per-wavelength certificate of their own")
         return "\n".join(lines)
 
     @property

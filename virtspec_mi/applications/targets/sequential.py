@@ -67,6 +67,7 @@ from virtspec_mi.applications.targets.result import DerivedResult
 from virtspec_mi.applications.targets.targets import ColourTarget, Target
 from virtspec_mi.budgets.betting import BettingSequence, neyman_rays, prior_variances
 from virtspec_mi.budgets.twostage import stage_two_seed
+from virtspec_mi.engine.progress import Progress
 from virtspec_mi.engine.tally import Tally
 from virtspec_mi.instruments import ALLOCATING, Allocation
 from virtspec_mi.kernel.counts import WEIGHT_ROUNDING, Counts
@@ -132,7 +133,8 @@ def measure_target(scene: LoadedScene, parameters: Any, target: Target, settings
 
     settings = dict(settings)
     bound = settings.pop("bound", None) or "auto"  # a target's certificate: "auto", "betting" or "hoeffding"
-    return checked_target(scene, parameters, target, settings, take=partial(certify_target, bound=bound))
+    with Progress(settings.pop("progress", None), None, desc="target", unit="ray"):  # its length is the batches'
+        return checked_target(scene, parameters, target, settings, take=partial(certify_target, bound=bound))
 
 
 def certify_target(bench: Any, settings: Settings, target: Target, *, scene: str = "", source: dict | None = None,

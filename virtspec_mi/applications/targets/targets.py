@@ -45,6 +45,7 @@ import numpy as np
 
 from virtspec_mi.applications.targets.bands import Band, band as make_band
 from virtspec_mi.base.checks import MAX_RAYS, real
+from virtspec_mi.base.surface import spoken
 from virtspec_mi.budgets.functionals import Functional
 from virtspec_mi.applications.targets.indices import Index, index_definition
 from virtspec_mi.colorimetry.cie import DEFAULT_ILLUMINANT, DEFAULT_OBSERVER
@@ -276,7 +277,7 @@ class IndexTarget(Target):
                                     f"its pilot reads the bands at {pilot[0]:.3g} and {pilot[1]:.3g}, and a normalised "
                                     "difference of bands this dark (a + b near 0) is undefined or moves by more than "
                                     "the tolerance within any interval the rays can give; measure the bands instead "
-                                    f"(--target band:...), or loosen tolerance")
+                                    f"({spoken('vm.band(...)', '--target band:...')}), or loosen tolerance")
 
     def values(self, estimates: np.ndarray, tolerances: np.ndarray) -> list[Value]:
         bands = _linear_values(self.functionals(), estimates, tolerances)
@@ -435,11 +436,21 @@ def index(name: str = "NDVI", /, bands: dict[str, Any] | None = None, tolerance:
     return IndexTarget(index_definition(name, bands), _check_tolerance("tolerance", tolerance, 2.0), float(step))
 
 
-def colour(tolerance_dE00: float = 0.5, illuminant: str = DEFAULT_ILLUMINANT, observer: str = DEFAULT_OBSERVER,
-           quantity: str = "reflectance", step: float = 10.0) -> ColourTarget:
-    """The colour (XYZ, L*a*b*, sRGB) certified to ΔE₀₀ ≤ ``tolerance_dE00`` over its certified box."""
+def colour(tolerance_dE00: float | None = None, illuminant: str = DEFAULT_ILLUMINANT,
+           observer: str = DEFAULT_OBSERVER, quantity: str = "reflectance", step: float = 10.0, *,
+           dE00: float | None = None) -> ColourTarget:
+    """
+    The colour (XYZ, L*a*b*, sRGB) certified to ΔE₀₀ ≤ ``tolerance_dE00`` (default 0.5) over
+    its certified box. ``dE00`` is the same tolerance by its short name, the one a text
+    writes (``--target colour,dE00=0.5``; a text takes ``tolerance_dE00=`` too): give one.
+    """
 
     from virtspec_mi.budgets.functionals import QUANTITIES
+
+    if tolerance_dE00 is not None and dE00 is not None:
+        raise ValueError("tolerance_dE00 and dE00 are one tolerance (dE00 its short name): give one")
+    tolerance_dE00 = 0.5 if tolerance_dE00 is None and dE00 is None else \
+        tolerance_dE00 if tolerance_dE00 is not None else dE00
 
     if quantity not in QUANTITIES:
         raise ValueError(f"quantity must be one of {', '.join(QUANTITIES)} (got {quantity!r})")

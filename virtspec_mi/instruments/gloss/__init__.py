@@ -18,6 +18,20 @@ receptor aperture about the mirror direction. Here the receptor is a cone of hal
   the reading's N rays, so the settings' ray budget certifies |g − p| < μ with
   probability ≥ 1 − δ exactly as it does the reflectance (eq. 23), and a Clopper–Pearson
   interval at δ brackets it. A two-stage rule sizes N from the pilot's gloss counts.
+- **Gloss units** (ISO 2813 §3.3, §5.2): 100 GU is what the meter reads on the primary
+  standard, a polished black glass of refractive index n = 1.567 at 587.6 nm, at each
+  angle: its Fresnel reflectance R_s(θi) (the standard returns nothing from below its
+  surface, and its mirror reflection lies whole in any receptor about the mirror
+  direction under a collimated beam). So GU = 100 g / R_s(θi), and its interval is the
+  gloss fraction's scaled by the same exact factor (R_s: 0.0491 at 20°, 0.1001 at 60°,
+  0.6191 at 85°). The receptor here is a cone, not the standard's rectangular apertures:
+  a gloss value in GU compares with a meter's only as far as the specimen's reflection
+  lies within both.
+
+The angle is the settings' θi (the scene's, else the value given): a gloss reading is
+taken at one of ISO 2813's geometries by giving it, ``theta_i=60`` (all gloss levels),
+``20`` (high gloss) or ``85`` (low gloss, matt); another angle is read as asked, and its
+summary says it is none of ISO 2813's.
 
 The specimen frame, beam and sampling are the spectrophotometer's: with a collimated
 beam every ray comes in along the incidence direction, so a smooth specimen reflects
@@ -48,13 +62,27 @@ from virtspec_mi.instruments.base import Instrument, reading_grid, readings_resu
 from virtspec_mi.instruments.command import Command, FigureFlag
 from virtspec_mi.kernel.counts import Fate
 from virtspec_mi.kernel.hooks import ExitHook
+from virtspec_mi.references.quadrature import fresnel_reflectance
 from virtspec_mi.results.base import attribute, plain_data, stored
 from virtspec_mi.results.readings import Result
 from virtspec_mi.results.integrity import CountRules, whole_counts
 from virtspec_mi.results.variables import Variable, bounds
 from virtspec_mi.settings import Options, Settings, option
 
-__all__ = ["GlossOptions", "MirrorCone", "GlossResult", "GlossMeter"]
+__all__ = ["GlossOptions", "MirrorCone", "GlossResult", "GlossMeter", "ISO_2813_ANGLES", "ISO_2813_STANDARD_INDEX",
+           "standard_reflectance"]
+
+ISO_2813_ANGLES: tuple[float, ...] = (20.0, 60.0, 85.0)
+"""The geometries of ISO 2813 (degrees from the normal): high gloss, all levels, low gloss."""
+
+ISO_2813_STANDARD_INDEX: float = 1.567
+"""Refractive index of ISO 2813's primary standard (polished black glass) at 587.6 nm: 100 GU at every angle."""
+
+
+def standard_reflectance(theta_i: Any) -> np.ndarray:
+    """ISO 2813's black glass standard's reflectance at ``theta_i`` (degrees): Fresnel's, unpolarised."""
+
+    return fresnel_reflectance(np.asarray(theta_i, dtype=np.float64), ISO_2813_STANDARD_INDEX)
 
 
 def _check_cone(value: Any) -> float:
@@ -178,16 +206,48 @@ class GlossResult(Result):
 
         return np.stack(self.interval("gloss"), axis=-1)
 
+    @property
+    def standard(self) -> np.ndarray:
+        """The gloss fraction of ISO 2813's black glass standard at each reading's θi (100 GU), over ``dims``."""
+
+        theta = np.asarray(self.coords["theta_i"], dtype=np.float64)
+        if "theta_i" not in self.dims:
+            return np.broadcast_to(standard_reflectance(theta), self.shape)
+        shape = [len(theta) if d == "theta_i" else 1 for d in self.dims]
+        return np.broadcast_to(standard_reflectance(theta).reshape(shape), self.shape)
+
+    @property
+    def gloss_units(self) -> np.ndarray:
+        """The gloss value in gloss units (GU): 100 g / R_s(θi), R_s the black glass standard's (module docstring)."""
+
+        return 100.0 * self.gloss / self.standard
+
+    @property
+    def gloss_units_interval(self) -> np.ndarray:
+        """The gloss fraction's interval in gloss units (the same exact scaling), shape (…, 2)."""
+
+        return 100.0 * self.gloss_interval / self.standard[..., None]
+
     def summary(self, sized_by: str | None = None) -> str:
         """The gloss fraction of every reading with its certificate, then the hemispherical reading's summary."""
 
+        shown = self.squeeze(*(d for d, n in zip(self.dims, self.shape) if n == 1 and d != "wavelength"))
+        angles = sorted({float(t) for t in np.atleast_1d(shown.coords["theta_i"])})
+        iso = all(any(abs(t - a) < 1e-9 for a in ISO_2813_ANGLES) for t in angles)
         lines = [f"gloss meter, receptor cone {self.cone:g} deg about the mirror direction "
-                 f"(probability >= {1 - self.delta:g} per reading)"]
-        for index in np.ndindex(self.shape):
-            mu, n = self.certified_mu[index], int(self.rays[index])
+                 f"(probability >= {1 - self.delta:g} per reading); GU: 100 = ISO 2813's black glass standard "
+                 f"(n = {ISO_2813_STANDARD_INDEX:g}) at the same angle"
+                 + ("" if iso else f" (theta_i {', '.join(f'{t:g}' for t in angles)} deg: not one of ISO 2813's "
+                                   "20, 60, 85)")]
+        interval, units, span = shown.gloss_interval, shown.gloss_units, shown.gloss_units_interval
+        for index in np.ndindex(shown.shape):
+            mu, n = shown.certified_mu[index], int(shown.rays[index])
             certificate = "NOT CERTIFIED" if np.isnan(mu) else f"|g - p| < {mu:.4g}"
-            labels = ", ".join(f"{dim} {float(np.asarray(self.coords[dim])[k]):g}" for dim, k in zip(self.dims, index))
-            lines.append(f"  {labels}: g = {self.gloss[index]:.6f}, {certificate} (N = {n:,})")
+            labels = ", ".join(f"{dim} {float(np.asarray(shown.coords[dim])[k]):g}"
+                               for dim, k in zip(shown.dims, index))
+            lines.append(f"  {labels}: g = {shown.gloss[index]:.6f} in [{interval[index][0]:.6f}, "
+                         f"{interval[index][1]:.6f}], {certificate} (N = {n:,}); {units[index]:.1f} GU in "
+                         f"[{span[index][0]:.1f}, {span[index][1]:.1f}]")
         return "\n".join(lines) + "\n" + super().summary(sized_by)
 
     def as_dict(self) -> dict[str, Any]:

@@ -185,7 +185,7 @@ def _check_rgl(settings: Settings, options: GonioOptions, theta_i: np.ndarray) -
                          "f cos(theta_o) is certified for one direction of incidence")
     if np.any(np.asarray(theta_i) >= 90.0):
         raise ValueError(f"theta_i must be below 90 degrees with binning 'rgl' (got {np.max(theta_i):g})")
-    if options.guarantee == "relative":
+    if isinstance(rules.guarantee_of(options.guarantee), rules.Relative):
         raise ValueError("guarantee 'relative' is not available with binning 'rgl' (its cells' solid angles change "
                          "with theta_i, and some are 0): use union, or give rays")
 

@@ -65,7 +65,7 @@ from virtspec_mi.colorimetry.delta_e import LabBox, radius
 __all__ = ["PARTS", "lab_jacobian", "facet_weights", "region_boxes", "lab_boxes", "region_colour",
            "facet_tolerances"]
 
-PARTS: int = 6
+PARTS: int = 2
 """The facets' box is split into PARTS³ pieces to enclose the region (finer: tighter, slower)."""
 
 _EPSILON = (6 / 29) ** 3
@@ -102,12 +102,18 @@ def facet_weights(G: np.ndarray, tristimulus: np.ndarray) -> np.ndarray:
 
 
 def region_boxes(G: np.ndarray, low: np.ndarray, high: np.ndarray, floor: np.ndarray, ceiling: np.ndarray,
-                 parts: int = PARTS) -> tuple[np.ndarray, np.ndarray]:
+                 white_xy: np.ndarray, parts: int = PARTS) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """
-    Boxes of XYZ (lower, upper: shape (N, 3)) whose union contains R = {x : ``low`` ≤ G·x ≤
-    ``high``, ``floor`` ≤ x ≤ ``ceiling``} (x ≥ 0 too): the box [low, high] split into
-    ``parts``³ pieces, each mapped through G⁻¹ and enclosed by its interval hull (widened
-    for the inverse's rounding), clipped; pieces that miss the clip are left out.
+    Pieces whose union contains R = {x : ``low`` ≤ G·x ≤ ``high``, ``floor`` ≤ x ≤
+    ``ceiling``}: the box [low, high] split into ``parts``³ pieces P, each with its XYZ
+    hull (G⁻¹P by interval arithmetic, widened for the inverse's rounding, clipped to
+    [max(floor, 0), ceiling]; a piece whose hull misses it is left out) and a CIELAB box
+    containing Lab(G⁻¹P) by the mean-value form about the piece's centre y_c:
+
+        Lab(G⁻¹y) ∈ Lab(G⁻¹y_c) + [J]·G⁻¹·(y − y_c),   [J] ⊇ {∂Lab/∂XYZ(ξ) : ξ in the hull}
+
+    ([J] exact from f′ of CIELAB being non-increasing). Returns (XYZ lower, XYZ upper,
+    Lab lower, Lab upper), each shape (N, 3).
     """
 
     G = np.asarray(G, dtype=np.float64)
@@ -122,11 +128,23 @@ def region_boxes(G: np.ndarray, low: np.ndarray, high: np.ndarray, floor: np.nda
     x, r = centre @ inverse.T, half @ np.abs(inverse).T
     lowest = np.maximum(np.asarray(floor, dtype=np.float64), 0.0)
     ceiling = np.asarray(ceiling, dtype=np.float64)
-    slack = np.abs(np.eye(3) - inverse @ G).sum(axis=1) * np.maximum(np.abs(ceiling), np.abs(lowest)).max()
-    r = r + slack + 1e-12 * (np.abs(x) + r)
+    scale = max(float(np.abs(ceiling).max()), float(np.abs(x).max() + r.max()))
+    r = r + np.abs(np.eye(3) - inverse @ G).sum(axis=1) * scale + 1e-12 * (np.abs(x) + r)
     lower, upper = np.maximum(x - r, lowest), np.minimum(x + r, ceiling)
     keep = np.all(lower <= upper, axis=1)
-    return lower[keep], upper[keep]
+    x, r, half, lower, upper = x[keep], r[keep], half[keep], lower[keep], upper[keep]
+    n = _white_XYZ(white_xy)
+    steep, flat = _df((x - r) / n) / n, _df((x + r) / n) / n  # f' non-increasing: its range over the hull
+    factors = np.array([[0, 116, 0], [500, -500, 0], [0, 200, -200]], dtype=np.float64)
+    J_low = np.minimum(factors[None] * steep[:, None, :], factors[None] * flat[:, None, :])
+    J_high = np.maximum(factors[None] * steep[:, None, :], factors[None] * flat[:, None, :])
+    mid, rad = (J_low + J_high) / 2, (J_high - J_low) / 2
+    M_mid, M_rad = mid @ inverse, rad @ np.abs(inverse)
+    spread = np.einsum("nij,nj->ni", np.abs(M_mid) + M_rad, half)
+    f = _f(x / n)
+    Lab = np.stack([116 * f[:, 1] - 16, 500 * (f[:, 0] - f[:, 1]), 200 * (f[:, 1] - f[:, 2])], axis=1)
+    spread = spread * (1 + 1e-9) + 1e-9 * (np.abs(Lab) + 1.0)  # the point's and the products' rounding
+    return lower, upper, Lab - spread, Lab + spread
 
 
 def lab_boxes(lower: np.ndarray, upper: np.ndarray, white_xy: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -165,10 +183,13 @@ def region_colour(estimate: Colour, G: np.ndarray, low: np.ndarray, high: np.nda
 
     import colour as cs
 
-    lower, upper = region_boxes(G, low, high, floor, ceiling, parts)
+    lower, upper, Lab_low, Lab_high = region_boxes(G, low, high, floor, ceiling, white_xy, parts)
     if len(lower) == 0:  # the facets' box misses what a spectrum can give: the truth is outside only w.p. <= delta
         lower, upper = np.maximum(np.asarray(floor, dtype=np.float64), 0.0)[None], np.asarray(ceiling)[None]
-    Lab_low, Lab_high = lab_boxes(lower, upper, white_xy)
+        Lab_low, Lab_high = lab_boxes(lower, upper, white_xy)
+    else:  # each piece's Lab box within the exact image of its XYZ hull too
+        corner_low, corner_high = lab_boxes(lower, upper, white_xy)
+        Lab_low, Lab_high = np.maximum(Lab_low, corner_low), np.minimum(Lab_high, corner_high)
     de00, deab = _radius(np.asarray(estimate.Lab, dtype=np.float64), Lab_low, Lab_high)
     XYZ_low, XYZ_high = lower.min(axis=0), upper.max(axis=0)
     matrix = _srgb_matrix(tuple(float(v) for v in white_xy))

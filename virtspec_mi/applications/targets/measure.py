@@ -48,6 +48,7 @@ import numpy as np
 from virtspec_mi.budgets.functionals import (Functional, allocate, allocate_jointly, certified_tolerance,
                                                           union_delta)
 from virtspec_mi.applications.targets.result import DerivedResult
+from virtspec_mi.applications.targets.resume import REPLAY, trace_key
 from virtspec_mi.applications.targets.targets import TARGETS, ColourTarget, Target, Value, colour_of
 from virtspec_mi.budgets.twostage import stage_two_seed
 from virtspec_mi.instruments import ALLOCATING, Allocation
@@ -125,7 +126,12 @@ def _trace(bench: Any, settings: Settings, grid: np.ndarray, rays: np.ndarray, s
     instrument = ALLOCATING(scene, source)
     plan = instrument.init(bench, settings, Allocation(grid, rays, seed, offsets), np.array([float(settings.theta_i)]),
                            None)
-    return instrument, instrument.process(plan)
+    checkpoint = REPLAY.get()  # a run with a checkpoint (.resume): a trace it holds is read back, not traced again
+    if checkpoint is None:
+        return instrument, instrument.process(plan)
+    traced = np.asarray(rays)[np.asarray(rays) > 0]
+    key = trace_key(grid, rays, seed, offsets)
+    return instrument, checkpoint.trace(key, traced, lambda: instrument.process(plan))
 
 
 @dataclass(frozen=True, eq=False)

@@ -51,6 +51,7 @@ Neyman (1934), *J. R. Stat. Soc.* 97(4), 558–625 (optimum allocation).
 from __future__ import annotations
 
 import math
+import os
 import time
 from dataclasses import dataclass, fields, replace
 from functools import partial
@@ -64,6 +65,7 @@ from virtspec_mi.applications.targets.measure import (_certified_colour, _colour
 from virtspec_mi.applications.targets.measure import measure_target as checked_target
 from virtspec_mi.runtime.scene import LoadedScene
 from virtspec_mi.applications.targets.result import DerivedResult
+from virtspec_mi.applications.targets.resume import replaying
 from virtspec_mi.applications.targets.joint import facet_tolerances, facet_weights, lab_boxes, lab_jacobian, region_colour
 from virtspec_mi.applications.targets.targets import ColourTarget, Target, colour_of
 from virtspec_mi.budgets.betting import BettingSequence, neyman_rays, prior_variances
@@ -133,11 +135,13 @@ def measure_target(scene: LoadedScene, parameters: Any, target: Target, settings
 
     settings = dict(settings)
     bound = settings.pop("bound", None) or "auto"  # a target's certificate: "auto", "betting" or "hoeffding"
-    return checked_target(scene, parameters, target, settings, take=partial(certify_target, bound=bound))
+    checkpoint = settings.pop("checkpoint", None)  # the run's traces kept there (.resume)
+    return checked_target(scene, parameters, target, settings,
+                          take=partial(certify_target, bound=bound, checkpoint=checkpoint))
 
 
 def certify_target(bench: Any, settings: Settings, target: Target, *, scene: str = "", source: dict | None = None,
-                   bound: str = "auto") -> DerivedResult:
+                   bound: str = "auto", checkpoint: Any = None) -> DerivedResult:
     """
     Certify ``target``: ``bound="betting"`` by :func:`take_sequential`, ``bound="hoeffding"``
     by the one-batch route :func:`~virtspec_mi.applications.targets.measure.take_target`, ``bound="auto"`` (default) by the
@@ -147,7 +151,11 @@ def certify_target(bench: Any, settings: Settings, target: Target, *, scene: str
 
     if bound not in BOUNDS:
         raise ValueError(f"bound must be one of {', '.join(BOUNDS)} for a target (got {bound!r})")
-    return BOUNDS[bound](bench, settings, target, scene=scene, source=source)
+    if checkpoint is not None and (not isinstance(checkpoint, (str, os.PathLike)) or not str(checkpoint).strip()):
+        raise ValueError(f"checkpoint must be a file path (got {checkpoint!r})")
+    identity = {"scene": scene, "settings": settings.as_dict(), "target": target.as_dict(), "bound": bound}
+    with replaying(checkpoint, identity):
+        return BOUNDS[bound](bench, settings, target, scene=scene, source=source)
 
 
 def pays(weights: np.ndarray, need: np.ndarray, variances: np.ndarray, means: np.ndarray, hoeffding: int) -> bool:

@@ -103,3 +103,19 @@ def test_a_checkpoint_of_another_run_is_refused_and_kept(mi, tmp_path):
     assert again["band_500-520"] == first["band_500-520"] and again.batches == first.batches
     with pytest.raises(ValueError, match="checkpoint must be a file path"):
         vm.measure(scene, target=target, checkpoint=3)
+
+
+def test_the_command_line_keeps_a_targets_checkpoint(mi, tmp_path, capsys):
+    from virtspec_mi.cli import main
+
+    path = tmp_path / "b04.json"
+    argv = ["measure", "diamond_collimated", "--target", "band:B04,tolerance=0.05", "--seed", "1", "--json"]
+    assert main([*argv, "--bound", "betting", "--checkpoint", str(path)]) == 0
+    kept = json.loads(capsys.readouterr().out)
+    assert main([*argv, "--bound", "betting"]) == 0
+    plain = json.loads(capsys.readouterr().out)
+    for data in (kept, plain):  # the wall time and the checksum that seals it differ
+        data.pop("seconds"), data.pop("checksum")
+    assert kept == plain and not path.exists()
+    assert main(["measure", "diamond_collimated", "--checkpoint", str(path)]) != 0
+    assert "--checkpoint keeps a target's batches: give --target too" in capsys.readouterr().err

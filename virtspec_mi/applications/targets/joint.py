@@ -17,7 +17,7 @@ CIE XYZ, not from three boxes of X, Y and Z:
    every batch at once (below). Every coordinate and every function of XYZ — X, Y, Z,
    L*, a*, b*, sRGB, ΔE₀₀ — is read off that one set, so all of them hold *together* at δ.
 3. R is covered by small boxes (:func:`region_boxes`: the facets' box split into
-   ``parts``³ pieces, each mapped back through G⁻¹ and enclosed by its interval hull),
+   parts × parts × parts pieces, each mapped back through G⁻¹ and enclosed by its interval hull),
    each box's exact CIELAB image is taken (:func:`~virtspec_mi.colorimetry.delta_e.lab_box`'s
    corner rule), and ΔE₀₀ around the estimate is bounded over each (the rigorous bound of
    :mod:`~virtspec_mi.colorimetry.delta_e`): the radius certified is the largest over the
@@ -105,7 +105,7 @@ def region_boxes(G: np.ndarray, low: np.ndarray, high: np.ndarray, floor: np.nda
                  white_xy: np.ndarray, parts: int = PARTS) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """
     Pieces whose union contains R = {x : ``low`` ≤ G·x ≤ ``high``, ``floor`` ≤ x ≤
-    ``ceiling``}: the box [low, high] split into ``parts``³ pieces P, each with its XYZ
+    ``ceiling``}: the box [low, high] split into parts × parts × parts pieces P, each with its XYZ
     hull (G⁻¹P by interval arithmetic, widened for the inverse's rounding, clipped to
     [max(floor, 0), ceiling]; a piece whose hull misses it is left out) and a CIELAB box
     containing Lab(G⁻¹P) by the mean-value form about the piece's centre y_c:

@@ -16,12 +16,14 @@ CIE XYZ, not from three boxes of X, Y and Z:
    in [0, 1] can give} is one set: with probability ≥ 1 − δ the true XYZ lies in it at
    every batch at once (below). Every coordinate and every function of XYZ — X, Y, Z,
    L*, a*, b*, sRGB, ΔE₀₀ — is read off that one set, so all of them hold *together* at δ.
-3. R is covered by small boxes (:func:`region_boxes`: the facets' box split into
-   parts × parts × parts pieces, each mapped back through G⁻¹ and enclosed by its interval hull),
-   each box's exact CIELAB image is taken (:func:`~virtspec_mi.colorimetry.delta_e.lab_box`'s
-   corner rule), and ΔE₀₀ around the estimate is bounded over each (the rigorous bound of
+3. R is covered by pieces (:func:`region_boxes`: the facets' box split into
+   parts × parts × parts pieces; each piece's XYZ hull by interval arithmetic through
+   G⁻¹, and its CIELAB box by the mean-value form Lab(x) ∈ Lab(x_c) + [J]·G⁻¹·(y − y_c),
+   [J] the range of CIELAB's Jacobian over the hull, intersected with the exact image of
+   the hull by :func:`~virtspec_mi.colorimetry.delta_e.lab_box`'s corner rule), and ΔE₀₀
+   around the estimate is bounded over each piece's box (the rigorous bound of
    :mod:`~virtspec_mi.colorimetry.delta_e`): the radius certified is the largest over the
-   boxes. XYZ, L*a*b* and sRGB intervals are the hulls over the boxes.
+   pieces. XYZ, L*a*b* and sRGB intervals are the hulls over the pieces.
 
 **Theorem.** P(∃ batch B: XYZ* ∉ R_B) ≤ δ.
 *Proof.* XYZ* ∉ R_B only if some facet's interval misses (G·XYZ*)ᵢ = Fᵢ(p*) at batch B.
@@ -30,8 +32,9 @@ its stratified betting capital, :mod:`virtspec_mi.budgets.betting`: its stakes a
 functions of the pilot and of the batches before, the rays of a batch fresh); a union
 over the three facets gives ≤ δ. The cover contains R (each point y of the facets' box
 lies in one piece, and G⁻¹y in its hull: the hull is widened by |I − G⁻¹G|·|x| so that the
-rounding of the inverse cannot leave a point out), and ΔE₀₀'s bound over each box is
-an upper bound. ∎ G only chooses *which* directions are certified: a G that is off (a
+rounding of the inverse cannot leave a point out; Lab of it in the piece's box by the mean
+value theorem, applied to each coordinate on the segment from x_c, which lies in the
+hull), and ΔE₀₀'s bound over each box is an upper bound. ∎ G only chooses *which* directions are certified: a G that is off (a
 pilot far from the truth) widens the region, never invalidates it.
 
 **Why facets, not one product set for X, Y, Z.** The capital of a stratum in

@@ -119,3 +119,38 @@ def test_the_command_line_keeps_a_targets_checkpoint(mi, tmp_path, capsys):
     assert kept == plain and not path.exists()
     assert main(["measure", "diamond_collimated", "--checkpoint", str(path)]) != 0
     assert "--checkpoint keeps a target's batches: give --target too" in capsys.readouterr().err
+
+
+def test_a_sweep_of_a_target_interrupted_resumes_to_the_same_results(mi, tmp_path, monkeypatch):
+    import numpy as np
+
+    import virtspec_mi as vm
+    import virtspec_mi.instruments.hemispherical.allocated as allocated
+
+    scene = vm.instrument_scene({"type": "diffuse", "reflectance": {"type": "regular", "wavelength_min": 300,
+                                 "wavelength_max": 1000, "values": "0.03, 0.05, 0.08, 0.04"}})
+    target = vm.band((500, 520), step=10.0, tolerance=0.01)
+    keywords = dict(theta_i=[0, 30, 60], target=target, delta=0.05, seed=3, bound="betting")
+    whole = vm.sweep(scene, **keywords)
+    original, traced, stop = allocated.trace_allocated, [], [5]
+
+    def failing(*args, **kwargs):  # an interruption after five traces (the second angle under way)
+        if len(traced) == stop[0]:
+            raise KeyboardInterrupt
+        traced.append(1)
+        return original(*args, **kwargs)
+
+    monkeypatch.setattr(allocated, "trace_allocated", failing)
+    path = tmp_path / "sweep.json"
+    with pytest.raises(KeyboardInterrupt):
+        vm.sweep(scene, checkpoint=path, **keywords)
+    assert len(json.loads(path.read_text())["traces"]) == 5
+    traced.clear()
+    stop[0] = -1  # no interruption now; count what is traced again
+    resumed = vm.sweep(scene, checkpoint=path, **keywords)
+    assert not path.exists()
+    total = sum(len(r.batches) + 1 for r in whole)  # each angle: its pilot and its batches
+    assert len(traced) == total - 5 and total > 8
+    for a, b in zip(whole, resumed):
+        assert a.batches == b.batches and a["band_500-520"] == b["band_500-520"]
+        assert np.array_equal(a.readings.rays, b.readings.rays)

@@ -75,7 +75,7 @@ from virtspec_mi.instruments import ALLOCATING, Allocation
 from virtspec_mi.kernel.counts import WEIGHT_ROUNDING, Counts
 from virtspec_mi.settings import Settings
 
-__all__ = ["measure_target", "certify_target", "take_sequential", "pays", "BOUNDS", "PAYS_FACTOR", "LEAST_COUNTS", "PLANNED_MARGIN", "FIRST_SHARE", "BLIND_SHARE", "LEAST_GROWTH", "MOST_BATCHES", "MOST_RAYS_FACTOR", "JOINT_METHOD"]
+__all__ = ["measure_target", "measure_targets", "certify_target", "take_sequential", "pays", "BOUNDS", "PAYS_FACTOR", "LEAST_COUNTS", "PLANNED_MARGIN", "FIRST_SHARE", "BLIND_SHARE", "LEAST_GROWTH", "MOST_BATCHES", "MOST_RAYS_FACTOR", "JOINT_METHOD"]
 
 FIRST_SHARE: float = 0.9
 """The first batch asks for this share of the information a functional needs (pilot's variances)."""
@@ -138,6 +138,24 @@ def measure_target(scene: LoadedScene, parameters: Any, target: Target, settings
     checkpoint = settings.pop("checkpoint", None)  # the run's traces kept there (.resume)
     return checked_target(scene, parameters, target, settings,
                           take=partial(certify_target, bound=bound, checkpoint=checkpoint))
+
+
+def measure_targets(scene: LoadedScene, target: Target, settings: dict[str, Any], angles: tuple[float, ...],
+                    checkpoint: Any = None) -> tuple[DerivedResult, ...]:
+    """
+    ``vm.sweep(scene, target=...)``: :func:`measure_target` at each θi of ``angles`` in
+    turn, every angle's traces kept in one ``checkpoint`` (:mod:`.resume`; removed once
+    the last angle is certified): an interrupted sweep resumes where it stopped, to the
+    same results.
+    """
+
+    if checkpoint is not None and (not isinstance(checkpoint, (str, os.PathLike)) or not str(checkpoint).strip()):
+        raise ValueError(f"checkpoint must be a file path (got {checkpoint!r})")
+    described = target.as_dict() if isinstance(target, Target) else repr(target)
+    identity = {"scene": scene.fingerprint, "settings": {k: settings[k] for k in sorted(settings)},
+                "target": described, "angles": list(angles), "sweep": True}
+    with replaying(checkpoint, identity):
+        return tuple(measure_target(scene, None, target, {**settings, "theta_i": float(t)}) for t in angles)
 
 
 def certify_target(bench: Any, settings: Settings, target: Target, *, scene: str = "", source: dict | None = None,

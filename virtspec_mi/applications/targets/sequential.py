@@ -13,7 +13,9 @@ default, ``bound="betting"``:
    target's tⱼ is its tolerance, and its pilot :data:`BLIND_SHARE` of Hoeffding's rays
    (Nₖ ∝ |wₖ|, the settings' seed). The pilot's counts (its own seed) only size rays and stakes;
 2. each functional j gets a :class:`~virtspec_mi.budgets.betting.BettingSequence` at
-   δ/m (m functionals, union bound), its stakes planned for tⱼ;
+   δ/m (m functionals, union bound), its stakes planned for tⱼ. A colour's functionals
+   are not X, Y and Z but the CIELAB facets L*, a*, b* linearised at the pilot's point,
+   and its certificate is their one joint region of XYZ (:mod:`.joint`);
 3. batch after batch: the rays of the batch go to the wavelengths by Neyman allocation
    (Nₖ ∝ |wⱼₖ|·σ̂ₖ for each j, σ̂ from the rays before the batch; the most any functional
    asks for), sized for the information each functional still lacks (the first batch:
@@ -38,7 +40,8 @@ default, ``bound="betting"``:
 default) this one unless a linear target's pilot shows it would not pay (:func:`pays`),
 then Hoeffding's, the pilot's rays counted.
 
-The batch granularity: a batch asks for at most as much again as all the batches before
+With ``checkpoint=`` every trace is kept on disk and an interrupted run resumes to the
+same result (:mod:`.resume`). The batch granularity: a batch asks for at most as much again as all the batches before
 it (and at least :data:`LEAST_GROWTH` of it), so the rays spent exceed the fewest that
 would have met the target by at most that step.
 
@@ -171,7 +174,9 @@ def certify_target(bench: Any, settings: Settings, target: Target, *, scene: str
         raise ValueError(f"bound must be one of {', '.join(BOUNDS)} for a target (got {bound!r})")
     if checkpoint is not None and (not isinstance(checkpoint, (str, os.PathLike)) or not str(checkpoint).strip()):
         raise ValueError(f"checkpoint must be a file path (got {checkpoint!r})")
-    identity = {"scene": scene, "settings": settings.as_dict(), "target": target.as_dict(), "bound": bound}
+    described = target.as_dict() if isinstance(target, Target) else repr(target)  # plan_target refuses a non-target
+    identity = {} if checkpoint is None else {"scene": scene, "settings": settings.as_dict(), "target": described,
+                                              "bound": bound}
     with replaying(checkpoint, identity):
         return BOUNDS[bound](bench, settings, target, scene=scene, source=source)
 

@@ -18,6 +18,13 @@ seed sets, and the planted error below (coverage far below 0.8) fails it.
 
 The planted error: rays allocated inversely to the weights while the certificate assumes
 Nₖ ∝ |wₖ| (it states (Σ|w|)²/N for Σ w²/Nₖ): the same coverage check catches it.
+
+With ``bound="betting"`` a trial looks at the certificate after every batch and stops at
+the first that meets the target; it covers only when every certificate it looked at held
+the exact values (anytime validity). A colour's is its joint region: XYZ, L*a*b* and
+ΔE₀₀ to the estimate, all at once. The second planted fault: a fixed-sample normal
+interval in place of the sequence, looked at after about 30 batches, is caught by the
+same check (its power is argued in its test).
 """
 
 from __future__ import annotations

@@ -203,8 +203,9 @@ def sweep(scene: Any, *, target: Any = None, **keywords: Any) -> Any:
     target
         A derived quantity (as for :func:`measure`) certified at every θi: a
         :class:`~virtspec_mi.applications.targets.result.DerivedSweep`, each angle at δ
-        (``parameters``, ``out`` and ``workers`` are not taken with it; ``checkpoint`` keeps
-        every angle's batches, :mod:`virtspec_mi.applications.targets.resume`).
+        (``parameters`` and ``out`` are not taken with it; ``checkpoint`` keeps every
+        angle's batches, :mod:`virtspec_mi.applications.targets.resume`; ``workers`` runs
+        each angle on a Dask worker).
 
     References
     ----------
@@ -214,7 +215,7 @@ def sweep(scene: Any, *, target: Any = None, **keywords: Any) -> Any:
     run, settings = RunOptions.split(keywords)
     defines = run.pop("defines")
     if target is not None:
-        given = [name for name in ("parameters", "out", "workers") if run[name]]
+        given = [name for name in ("parameters", "out") if run[name]]
         if given:
             raise ValueError(f"{', '.join(given)}: not taken with a target (each angle is one vm.measure(target=...))")
         from virtspec_mi.applications.targets.measure import REFUSED_SETTINGS
@@ -227,7 +228,8 @@ def sweep(scene: Any, *, target: Any = None, **keywords: Any) -> Any:
         from virtspec_mi.applications.targets.sequential import measure_targets
 
         angles = tuple(float(t) for t in angles)
-        return DerivedSweep(angles, measure_targets(scene, target, settings, angles, run["checkpoint"]))
+        return DerivedSweep(angles, measure_targets(scene, target, settings, angles, run["checkpoint"],
+                                                    run["workers"]))
     return keyed_reading(commanding("sweep").name, "sweep", "a sweep", loaded(scene, defines), settings, **run)
 
 

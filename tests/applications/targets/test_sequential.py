@@ -150,3 +150,19 @@ def test_a_colour_is_certified_from_one_joint_region(dark):
     colour = result.colour
     assert np.all(colour.XYZ_interval[:, 0] <= colour.XYZ) and np.all(colour.XYZ <= colour.XYZ_interval[:, 1])
     assert np.all(colour.Lab_interval[:, 0] <= colour.Lab) and np.all(colour.Lab <= colour.Lab_interval[:, 1])
+
+
+def test_a_targets_sweep_on_two_dask_workers_is_the_in_process_one(mi, tmp_path):
+    scene = {"type": "diffuse", "reflectance": {"type": "regular", "wavelength_min": 300, "wavelength_max": 1000,
+                                                "values": ", ".join(map(str, DARK))}}
+    keywords = dict(theta_i=[0, 30, 60], target=vm.band((500, 520), step=10.0, tolerance=0.01), delta=0.05, seed=3,
+                    bound="betting")
+    here = vm.sweep(vm.instrument_scene(scene), **keywords)
+    there = vm.sweep(vm.instrument_scene(scene), workers=2, **keywords)
+    assert there.theta_i == here.theta_i == (0.0, 30.0, 60.0)
+    for a, b in zip(here, there):
+        assert a.bound == b.bound == "betting" and a.batches == b.batches and a["band_500-520"] == b["band_500-520"]
+        assert np.array_equal(a.readings.rays, b.readings.rays)
+        assert np.array_equal(a.readings.reflectance, b.readings.reflectance)
+    with pytest.raises(ValueError, match="checkpoint and workers: a target's sweep keeps its checkpoint"):
+        vm.sweep(vm.instrument_scene(scene), workers=2, checkpoint=tmp_path / "c.json", **keywords)

@@ -143,15 +143,40 @@ def measure_target(scene: LoadedScene, parameters: Any, target: Target, settings
                           take=partial(certify_target, bound=bound, checkpoint=checkpoint))
 
 
+def _angle_on_worker(scene: Any, defines: dict[str, Any] | None, target: Target, settings: dict[str, Any],
+                     theta_i: float) -> DerivedResult:
+    """One angle of a target's sweep on a Dask worker: the scene loaded there, then :func:`measure_target`."""
+
+    from virtspec_mi.runtime.scaleout import _initialise, _restored
+    from virtspec_mi.runtime.scene import loaded
+
+    _initialise()  # libLLVM, the variant and the plugins in the thread this task runs in (idempotent)
+    return measure_target(loaded(_restored(scene), defines), None, target, {**settings, "theta_i": theta_i})
+
+
 def measure_targets(scene: LoadedScene, target: Target, settings: dict[str, Any], angles: tuple[float, ...],
-                    checkpoint: Any = None) -> tuple[DerivedResult, ...]:
+                    checkpoint: Any = None, workers: Any = None) -> tuple[DerivedResult, ...]:
     """
     ``vm.sweep(scene, target=...)``: :func:`measure_target` at each θi of ``angles`` in
     turn, every angle's traces kept in one ``checkpoint`` (:mod:`.resume`; removed once
     the last angle is certified): an interrupted sweep resumes where it stopped, to the
-    same results.
+    same results. With ``workers`` (as for ``vm.sweep``: :mod:`virtspec_mi.runtime.scaleout`)
+    each angle is one task on a Dask worker, which loads the scene itself: the results are
+    those of the run in this process, bit for bit (each angle's batches are a function of
+    the seed and its counts). A checkpoint is not kept on workers (refused together).
     """
 
+    if workers is not None:
+        if checkpoint is not None:
+            raise ValueError("checkpoint and workers: a target's sweep keeps its checkpoint in this process only; "
+                             "give one of them")
+        from virtspec_mi.runtime.scaleout import connect, portable_scene
+
+        portable = portable_scene(scene.given)
+        with connect(workers) as client:
+            futures = [client.submit(_angle_on_worker, portable, scene.defines, target, settings, float(t), pure=False)
+                       for t in angles]
+            return tuple(client.gather(futures))
     if checkpoint is not None and (not isinstance(checkpoint, (str, os.PathLike)) or not str(checkpoint).strip()):
         raise ValueError(f"checkpoint must be a file path (got {checkpoint!r})")
     described = target.as_dict() if isinstance(target, Target) else repr(target)

@@ -203,7 +203,9 @@ def sweep(scene: Any, *, target: Any = None, **keywords: Any) -> Any:
     target
         A derived quantity (as for :func:`measure`) certified at every θi: a
         :class:`~virtspec_mi.applications.targets.result.DerivedSweep`, each angle at δ
-        (``parameters``, ``checkpoint``, ``out`` and ``workers`` are not taken with it).
+        (``parameters`` and ``out`` are not taken with it; ``checkpoint`` keeps every
+        angle's batches, :mod:`virtspec_mi.applications.targets.resume`; ``workers`` runs
+        each angle on a Dask worker).
 
     References
     ----------
@@ -213,19 +215,20 @@ def sweep(scene: Any, *, target: Any = None, **keywords: Any) -> Any:
     run, settings = RunOptions.split(keywords)
     defines = run.pop("defines")
     if target is not None:
-        given = [name for name in ("parameters", "checkpoint", "out", "workers") if run[name]]
+        given = [name for name in ("parameters", "out") if run[name]]
         if given:
             raise ValueError(f"{', '.join(given)}: not taken with a target (each angle is one vm.measure(target=...))")
         from virtspec_mi.applications.targets.measure import REFUSED_SETTINGS
         from virtspec_mi.applications.targets.result import DerivedSweep
 
         scene = loaded(scene, defines)
-        resolved, = resolve("sweep", {k: v for k, v in settings.items() if k not in REFUSED_SETTINGS},
+        resolved, = resolve("sweep", {k: v for k, v in settings.items() if k not in (*REFUSED_SETTINGS, "bound")},
                             scene_options(scene.bench, Settings))
-        angles = incidence_angles(resolved, run["theta_i"], "a sweep")
-        return DerivedSweep(tuple(float(t) for t in angles), tuple(
-            _measure_target(scene, None, target, {**settings, "theta_i": float(t), "progress": run["progress"]})
-            for t in angles))
+        angles = tuple(float(t) for t in incidence_angles(resolved, run["theta_i"], "a sweep"))
+        from virtspec_mi.applications.targets.sequential import measure_targets
+
+        return DerivedSweep(angles, measure_targets(scene, target, {**settings, "progress": run["progress"]}, angles,
+                                                    run["checkpoint"], run["workers"]))
     return keyed_reading(commanding("sweep").name, "sweep", "a sweep", loaded(scene, defines), settings, **run)
 
 

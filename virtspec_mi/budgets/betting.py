@@ -94,8 +94,14 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-__all__ = ["MAX_BET", "THRESHOLD_SIGMAS", "LADDER", "Side", "lower_bound", "stratified_interval", "stakes",
+__all__ = ["CERTIFICATES", "MAX_BET", "THRESHOLD_SIGMAS", "LADDER", "Side", "lower_bound", "stratified_interval", "stakes",
            "prior_variances", "neyman_rays", "BettingSequence"]
+
+CERTIFICATES: dict[str, str] = {
+    "auto": "a target's default: betting unless a linear target's pilot shows it would not pay, then hoeffding",
+    "betting": "a target: batches until a stratified betting confidence sequence certifies it",
+}
+"""The certificates a *target* takes as ``bound`` besides ``hoeffding`` (a spectrum's rules: ``budgets.rules``)."""
 
 MAX_BET: float = 0.5
 """The largest stake per ray: every factor of eq. (1) stays ≥ 1 − MAX_BET > 0."""

@@ -40,6 +40,7 @@ import math
 from dataclasses import dataclass, field, fields, replace
 from typing import Any, Callable, ClassVar, Mapping, TypeVar
 
+from virtspec_mi.budgets.betting import CERTIFICATES
 from virtspec_mi.budgets.rules import BUDGETS, RayBudget
 from virtspec_mi.base.checks import (
     MAX_CHUNK_SIZE,
@@ -394,7 +395,8 @@ class Settings(Options):
     delta: float = option(0.01, check_delta, "failure probability, 0 < delta < 1")
     rays: int | None = option(None, _rays("rays"), "rays per reading, 1 ... 2**32 - 1 (overrides the bound)",
                               unset="from the rule")
-    bound: str = option("hoeffding", one_of("bound", BUDGETS), "ray budget rule", BUDGETS)
+    bound: str = option("hoeffding", one_of("bound", {**BUDGETS, **CERTIFICATES}),
+                        "ray budget rule (auto and betting: a target's certificate only)", {**BUDGETS, **CERTIFICATES})
     joint: bool = option(False, true_or_false("joint"),
                          "certify reflectance and transmittance together (each at delta/2)")
     pilot_rays: int | None = option(
@@ -417,6 +419,9 @@ class Settings(Options):
         refused here, before tracing.
         """
 
+        if self.bound not in BUDGETS:
+            raise ValueError(f"bound {self.bound} certifies a target (give target=..., --target on the command line); "
+                             f"a spectrum's ray budget rule is one of {', '.join(BUDGETS)}")
         if self.pilot_delta is not None and not 0.0 < self.pilot_delta < self.delta:
             raise ValueError(f"pilot_delta must satisfy 0 < pilot_delta < delta = {shown_value(self.delta)} "
                              f"(got {shown_value(self.pilot_delta)})")

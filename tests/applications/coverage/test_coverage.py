@@ -18,17 +18,28 @@ seed sets, and the planted error below (coverage far below 0.8) fails it.
 
 The planted error: rays allocated inversely to the weights while the certificate assumes
 Nₖ ∝ |wₖ| (it states (Σ|w|)²/N for Σ w²/Nₖ): the same coverage check catches it.
+
+With ``bound="betting"`` a trial looks at the certificate after every batch and stops at
+the first that meets the target; it covers only when every certificate it looked at held
+the exact values (anytime validity). A colour's is its joint region: XYZ, L*a*b* and
+ΔE₀₀ to the estimate, all at once. The second planted fault: a fixed-sample normal
+interval in place of the sequence, looked at after about 30 batches, is caught by the
+same check (its power is argued in its test).
 """
 
 from __future__ import annotations
 
+from types import SimpleNamespace
+
 import numpy as np
 import pytest
-from scipy.stats import binom
+from scipy.stats import binom, norm
 
 import virtspec_mi as vm
 from virtspec_mi.budgets import functionals as functionals_module
 from virtspec_mi.applications.targets import measure as measure_module
+from virtspec_mi.applications.targets import sequential
+from virtspec_mi.budgets.betting import BettingSequence
 
 DELTA = 0.2
 TRIALS = 40
@@ -67,18 +78,21 @@ def _covers(result) -> bool:
     target = result.target
     truths = {f.name: _truth(target, f) for f in target.functionals()}
     if result.colour is not None:
+        import colour
+
+        from virtspec_mi.applications.targets.targets import colour_of
+
         XYZ = np.array([truths[n] for n in "XYZ"])
         box = result.colour.XYZ_interval
         inside = bool(np.all((box[:, 0] <= XYZ) & (XYZ <= box[:, 1])))
+        exact = colour_of(XYZ, target.functionals(), target)
+        lab = result.colour.Lab_interval
+        in_lab = bool(np.all((lab[:, 0] <= exact.Lab) & (exact.Lab <= lab[:, 1])))
+        de00 = float(colour.delta_E(exact.Lab, result.colour.Lab, method="CIE 2000"))
+        if getattr(result, "bound", "hoeffding") == "betting":  # one joint region: every statement at once
+            return inside and in_lab and de00 <= result.colour.dE00_radius
         if inside:  # then the propagated statements must hold too (they are images of the box)
-            import colour
-
-            from virtspec_mi.applications.targets.targets import colour_of
-
-            exact = colour_of(XYZ, target.functionals(), target)
-            lab = result.colour.Lab_interval
             assert np.all((lab[:, 0] - 1e-9 <= exact.Lab) & (exact.Lab <= lab[:, 1] + 1e-9))
-            de00 = float(colour.delta_E(exact.Lab, result.colour.Lab, method="CIE 2000"))
             assert de00 <= result.colour.dE00_radius + 1e-9
         return inside
     if target.kind == "index":
@@ -91,11 +105,31 @@ def coverage(scene, target, trials: int = TRIALS, bound: str = "betting") -> int
     """
     Trials (seeds 0 … trials − 1) whose certified intervals hold the exact values. With
     ``bound="betting"`` each trial looks after every batch and stops at the first at which
-    the target is met (the adaptive stopping the sequence must survive).
+    the target is met (the adaptive stopping the sequence must survive), and a trial
+    covers only when the certificate of **every** batch it looked at held the exact values
+    (anytime validity), the one it stopped at included.
     """
 
-    return sum(_covers(vm.measure(scene, target=target, delta=DELTA, seed=seed, theta_i=8, beam="collimated",
-                                  bound=bound)) for seed in range(trials))
+    looks: list[bool] = []
+    original = sequential._certificate
+
+    def looking(target, functionals, sequences, total, spent, delta, final=False, region=None):
+        _, _, values, colour, _ = original(target, functionals, sequences, total, spent, delta, final=True,
+                                           region=region)
+        looks.append(_covers(SimpleNamespace(target=target, colour=colour, values=values, bound="betting")))
+        return original(target, functionals, sequences, total, spent, delta, final=final, region=region)
+
+    hits = 0
+    sequential._certificate = looking
+    try:
+        for seed in range(trials):
+            looks.clear()
+            result = vm.measure(scene, target=target, delta=DELTA, seed=seed, theta_i=8, beam="collimated",
+                                bound=bound)
+            hits += _covers(result) and all(looks)
+    finally:
+        sequential._certificate = original
+    return hits
 
 
 TARGETS = {
@@ -145,3 +179,50 @@ def test_a_planted_wrong_allocation_is_caught_by_the_coverage_check(scene, monke
     monkeypatch.setattr(functionals_module, "hoeffding_tolerance", assumes_proportional)
     hits = coverage(scene, target, bound="hoeffding")
     assert hits < least_hits(TRIALS, 1 - DELTA), hits
+
+
+class _Wald:
+    """The planted fault's interval: a fixed-sample normal interval at the sequence's δ, recomputed after every batch."""
+
+    def interval(self):
+        rays, hits = (np.sum(getattr(self, name), axis=0).astype(float) for name in ("rays", "hits"))
+        p = hits / np.maximum(rays, 1)
+        half = norm.ppf(1 - self.delta / 2) * float(np.sqrt(np.sum(self.weights ** 2 * p * (1 - p) / rays)))
+        return self.estimate - half, self.estimate + half
+
+
+def _many_looks(monkeypatch) -> None:
+    """About 30 looks before a target is met: a first batch of 2 % of the information, each later one 10 % more."""
+
+    monkeypatch.setattr(sequential, "FIRST_SHARE", 0.02)
+    monkeypatch.setattr(sequential, "MOST_BATCHES", 60)
+    monkeypatch.setattr(sequential, "_next_information",
+                        lambda have, widths, tolerances: np.where(widths <= tolerances, 0.0, 1.1 * have))
+
+
+PEEKED = lambda: vm.band((500, 520), step=10.0, tolerance=0.02)  # noqa: E731 - three wavelengths: cheap looks
+
+
+def test_a_fixed_sample_bound_used_sequentially_is_caught(scene, monkeypatch):
+    """
+    The planted fault: the betting sequence's interval replaced by a fixed-sample normal
+    interval at δ (valid at one sample size fixed in advance, not at a data-dependent
+    one), looked at after every batch until the target is met: about 30 looks (the first
+    batch 2 % of the information, each later one 10 % more). Its power: for a Brownian
+    mean with looks at n₀·1.1ʲ, j = 0 … 30, a two-sided 80 % normal interval misses at some
+    look with probability ≈ 0.73 (20,000 simulated paths; 0.43 with 10 looks), so its hits
+    are about Binomial(40, 0.27): below :func:`least_hits` (40, 0.8) = 24 with probability
+    ≈ 1 − 10⁻⁶. The same looks with the betting sequence (the slow test below) cover.
+    """
+
+    _many_looks(monkeypatch)
+    monkeypatch.setattr(BettingSequence, "interval", _Wald.interval)
+    hits = coverage(scene, PEEKED(), bound="betting")
+    assert hits < least_hits(TRIALS, 1 - DELTA), hits
+
+
+@pytest.mark.slow
+def test_the_betting_sequence_covers_with_the_planted_faults_30_looks(scene, monkeypatch):
+    _many_looks(monkeypatch)
+    hits = coverage(scene, PEEKED(), bound="betting")
+    assert hits >= least_hits(TRIALS, 1 - DELTA), hits

@@ -113,3 +113,56 @@ def test_auto_takes_hoeffdings_route_when_the_pilot_shows_betting_would_not_pay(
         "type": "regular", "wavelength_min": 300, "wavelength_max": 1000, "values": ", ".join(map(str, DARK))}}),
         target=vm.band((500, 520), tolerance=0.004), delta=0.05, seed=3)
     assert dark.bound == "betting"
+
+
+@pytest.mark.parametrize("bound", ["betting", "hoeffding", "auto"])
+def test_the_command_line_takes_a_targets_bound(dark, capsys, bound):
+    import json
+
+    from virtspec_mi.cli import main
+
+    argv = ["measure", "diamond_collimated", "--target", "band:B04,tolerance=0.05", "--seed", "1", "--json"]
+    assert main([*argv, "--bound", bound]) == 0
+    data = json.loads(capsys.readouterr().out)
+    api = vm.measure(vm.scenes.path("diamond_collimated"), target=vm.band("B04", tolerance=0.05), seed=1,
+                     bound=bound)
+    assert data["bound"] == api.bound and data["rays"] == api.rays and data["batches"] == list(api.batches)
+    assert data["bound"] == ("hoeffding" if bound == "auto" else bound)  # auto: the pilot shows betting won't pay
+    assert data["values"]["band_B04"]["value"] == api["band_B04"].value
+
+
+def test_a_targets_certificate_is_refused_for_a_spectrum(dark, capsys):
+    from virtspec_mi.cli import main
+
+    assert main(["measure", "diamond_collimated", "--bound", "betting"]) != 0
+    assert "bound betting certifies a target (give target=..., --target on the command line)" in \
+        capsys.readouterr().err
+    with pytest.raises(ValueError, match="bound auto certifies a target"):
+        vm.measure(dark, bound="auto")
+
+
+def test_a_colour_is_certified_from_one_joint_region(dark):
+    """The betting route's colour: its facets' region, every statement at once (joint.py)."""
+
+    result = vm.measure(dark, target=vm.colour(tolerance_dE00=2.0), delta=0.2, seed=2, bound="betting")
+    assert result.met and "joint XYZ region" in result.colour.method and result.statements == 3
+    assert result.rays == sum(result.batches)
+    colour = result.colour
+    assert np.all(colour.XYZ_interval[:, 0] <= colour.XYZ) and np.all(colour.XYZ <= colour.XYZ_interval[:, 1])
+    assert np.all(colour.Lab_interval[:, 0] <= colour.Lab) and np.all(colour.Lab <= colour.Lab_interval[:, 1])
+
+
+def test_a_targets_sweep_on_two_dask_workers_is_the_in_process_one(mi, tmp_path):
+    scene = {"type": "diffuse", "reflectance": {"type": "regular", "wavelength_min": 300, "wavelength_max": 1000,
+                                                "values": ", ".join(map(str, DARK))}}
+    keywords = dict(theta_i=[0, 30, 60], target=vm.band((500, 520), step=10.0, tolerance=0.01), delta=0.05, seed=3,
+                    bound="betting")
+    here = vm.sweep(vm.instrument_scene(scene), **keywords)
+    there = vm.sweep(vm.instrument_scene(scene), workers=2, **keywords)
+    assert there.theta_i == here.theta_i == (0.0, 30.0, 60.0)
+    for a, b in zip(here, there):
+        assert a.bound == b.bound == "betting" and a.batches == b.batches and a["band_500-520"] == b["band_500-520"]
+        assert np.array_equal(a.readings.rays, b.readings.rays)
+        assert np.array_equal(a.readings.reflectance, b.readings.reflectance)
+    with pytest.raises(ValueError, match="checkpoint and workers: a target's sweep keeps its checkpoint"):
+        vm.sweep(vm.instrument_scene(scene), workers=2, checkpoint=tmp_path / "c.json", **keywords)

@@ -49,12 +49,19 @@ def _api(folder: Any) -> Any:
     return measure_target(loaded("diamond_collimated"), None, band("B04", tolerance=0.05), {"seed": 1})
 
 
+class _TargetExtension(Extension):
+    """``--target`` on ``virtspec measure``; ``--checkpoint`` alone comes here too, to be refused with the reason."""
+
+    def given(self, flags: Any) -> bool:
+        return super().given(flags) or getattr(flags, "checkpoint", None) is not None
+
+
 class TargetsApplication(Application):
     """Certified derived quantities: ``vm.measure(scene, target=...)``, ``virtspec measure --target``."""
 
     name: ClassVar[str] = "targets"
     summary: ClassVar[str] = "certified derived quantities: colour, bands, indices, fAPAR, albedo"
-    extensions: ClassVar[tuple[Extension, ...]] = (Extension(
+    extensions: ClassVar[tuple[Extension, ...]] = (_TargetExtension(
         "measure", TargetFlags, respond, "target",
         takes=(*(name for name in Settings.names() if name not in REFUSED_SETTINGS), "defines", "json", "quiet"),
         reason="a target picks its own wavelengths and rays (give it its tolerance, e.g. --target colour,dE00=0.5 or "

@@ -48,6 +48,7 @@ import numpy as np
 from virtspec_mi.budgets.functionals import (Functional, allocate, allocate_jointly, certified_tolerance,
                                                           union_delta)
 from virtspec_mi.applications.targets.result import DerivedResult
+from virtspec_mi.applications.targets.resume import REPLAY, trace_key
 from virtspec_mi.applications.targets.targets import TARGETS, ColourTarget, Target, Value, colour_of
 from virtspec_mi.base.surface import spoken
 from virtspec_mi.budgets.twostage import stage_two_seed
@@ -127,8 +128,13 @@ def _trace(bench: Any, settings: Settings, grid: np.ndarray, rays: np.ndarray, s
     instrument = ALLOCATING(scene, source)
     plan = instrument.init(bench, settings, Allocation(grid, rays, seed, offsets), np.array([float(settings.theta_i)]),
                            None)
+    checkpoint = REPLAY.get()  # a run with a checkpoint (.resume): a trace it holds is read back, not traced again
     expect(int(np.sum(rays)))  # the target's bar, when one is open, moves by these rays as they are traced
-    tally = instrument.process(plan)
+    if checkpoint is None:
+        tally = instrument.process(plan)
+    else:
+        traced = np.asarray(rays)[np.asarray(rays) > 0]
+        tally = checkpoint.trace(trace_key(grid, rays, seed, offsets), traced, lambda: instrument.process(plan))
     finished(int(np.sum(rays)))
     return instrument, tally
 

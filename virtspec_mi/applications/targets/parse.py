@@ -109,6 +109,10 @@ class TargetFlags(Options):
     title: ClassVar[str] = "derived quantity"
 
     target: str | None = option(None, text("target", "a text such as colour,dE00=0.5"), target_help())
+    checkpoint: str | None = option(None, text("checkpoint", "a file path"),
+                                    "keep the target's traced batches in this JSON file, saved after each: the same "
+                                    "command resumes from it after an interruption, to the same result (removed once "
+                                    "the result is printed)")
 
 
 def measure_target_command(args: Any, keywords: dict[str, Any], report: Callable[..., int]) -> int:
@@ -122,6 +126,9 @@ def measure_target_command(args: Any, keywords: dict[str, Any], report: Callable
     from virtspec_mi.applications.targets.sequential import measure_target
     from virtspec_mi.runtime.scene import loaded
 
+    if args.target is None:
+        raise ValueError("--checkpoint keeps a target's batches: give --target too (a spectrum's sweep keeps its "
+                         "checkpoint beside --out)")
     try:
         target = parse_target(args.target)
     except ValueError as error:
@@ -129,6 +136,8 @@ def measure_target_command(args: Any, keywords: dict[str, Any], report: Callable
         raise ValueError(message if message.startswith("--target") else f"--target: {message}") from None
     settings = {k: v for k, v in keywords.items()
                 if k not in ("out", "workers", "task_readings", "points", "parameters", "defines")}
+    if getattr(args, "checkpoint", None):
+        settings["checkpoint"] = args.checkpoint
     result = measure_target(loaded(args.scene, keywords.get("defines") or None), None, target, settings)
     return report(args, result, result.summary())  # --json: its file (sealed JSON, read by vm.read_result)
 

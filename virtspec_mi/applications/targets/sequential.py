@@ -13,7 +13,9 @@ default, ``bound="betting"``:
    target's tⱼ is its tolerance, and its pilot :data:`BLIND_SHARE` of Hoeffding's rays
    (Nₖ ∝ |wₖ|, the settings' seed). The pilot's counts (its own seed) only size rays and stakes;
 2. each functional j gets a :class:`~virtspec_mi.budgets.betting.BettingSequence` at
-   δ/m (m functionals, union bound), its stakes planned for tⱼ;
+   δ/m (m functionals, union bound), its stakes planned for tⱼ. A colour's functionals
+   are not X, Y and Z but the CIELAB facets L*, a*, b* linearised at the pilot's point,
+   and its certificate is their one joint region of XYZ (:mod:`.joint`);
 3. batch after batch: the rays of the batch go to the wavelengths by Neyman allocation
    (Nₖ ∝ |wⱼₖ|·σ̂ₖ for each j, σ̂ from the rays before the batch; the most any functional
    asks for), sized for the information each functional still lacks (the first batch:
@@ -38,7 +40,8 @@ default, ``bound="betting"``:
 default) this one unless a linear target's pilot shows it would not pay (:func:`pays`),
 then Hoeffding's, the pilot's rays counted.
 
-The batch granularity: a batch asks for at most as much again as all the batches before
+With ``checkpoint=`` every trace is kept on disk and an interrupted run resumes to the
+same result (:mod:`.resume`). The batch granularity: a batch asks for at most as much again as all the batches before
 it (and at least :data:`LEAST_GROWTH` of it), so the rays spent exceed the fewest that
 would have met the target by at most that step.
 
@@ -51,8 +54,9 @@ Neyman (1934), *J. R. Stat. Soc.* 97(4), 558–625 (optimum allocation).
 from __future__ import annotations
 
 import math
+import os
 import time
-from dataclasses import fields, replace
+from dataclasses import dataclass, fields, replace
 from functools import partial
 from typing import Any, Callable
 
@@ -64,7 +68,9 @@ from virtspec_mi.applications.targets.measure import (_certified_colour, _colour
 from virtspec_mi.applications.targets.measure import measure_target as checked_target
 from virtspec_mi.runtime.scene import LoadedScene
 from virtspec_mi.applications.targets.result import DerivedResult
-from virtspec_mi.applications.targets.targets import ColourTarget, Target
+from virtspec_mi.applications.targets.resume import replaying
+from virtspec_mi.applications.targets.joint import facet_tolerances, facet_weights, lab_boxes, lab_jacobian, region_colour
+from virtspec_mi.applications.targets.targets import ColourTarget, Target, colour_of
 from virtspec_mi.budgets.betting import BettingSequence, neyman_rays, prior_variances
 from virtspec_mi.budgets.twostage import stage_two_seed
 from virtspec_mi.engine.progress import Progress
@@ -73,7 +79,7 @@ from virtspec_mi.instruments import ALLOCATING, Allocation
 from virtspec_mi.kernel.counts import WEIGHT_ROUNDING, Counts
 from virtspec_mi.settings import Settings
 
-__all__ = ["measure_target", "certify_target", "take_sequential", "pays", "BOUNDS", "PAYS_FACTOR", "LEAST_COUNTS", "PLANNED_MARGIN", "FIRST_SHARE", "BLIND_SHARE", "LEAST_GROWTH", "MOST_BATCHES", "MOST_RAYS_FACTOR"]
+__all__ = ["measure_target", "measure_targets", "certify_target", "take_sequential", "pays", "BOUNDS", "PAYS_FACTOR", "LEAST_COUNTS", "PLANNED_MARGIN", "FIRST_SHARE", "BLIND_SHARE", "LEAST_GROWTH", "MOST_BATCHES", "MOST_RAYS_FACTOR", "JOINT_METHOD"]
 
 FIRST_SHARE: float = 0.9
 """The first batch asks for this share of the information a functional needs (pilot's variances)."""
@@ -133,12 +139,58 @@ def measure_target(scene: LoadedScene, parameters: Any, target: Target, settings
 
     settings = dict(settings)
     bound = settings.pop("bound", None) or "auto"  # a target's certificate: "auto", "betting" or "hoeffding"
+    checkpoint = settings.pop("checkpoint", None)  # the run's traces kept there (.resume)
     with Progress(settings.pop("progress", None), None, desc="target", unit="ray"):  # its length is the batches'
-        return checked_target(scene, parameters, target, settings, take=partial(certify_target, bound=bound))
+        return checked_target(scene, parameters, target, settings,
+                              take=partial(certify_target, bound=bound, checkpoint=checkpoint))
+
+
+def _angle_on_worker(scene: Any, defines: dict[str, Any] | None, target: Target, settings: dict[str, Any],
+                     theta_i: float) -> DerivedResult:
+    """One angle of a target's sweep on a Dask worker: the scene loaded there, then :func:`measure_target`."""
+
+    from virtspec_mi.runtime.scaleout import _initialise, _restored
+    from virtspec_mi.runtime.scene import loaded
+
+    _initialise()  # libLLVM, the variant and the plugins in the thread this task runs in (idempotent)
+    return measure_target(loaded(_restored(scene), defines), None, target, {**settings, "theta_i": theta_i})
+
+
+def measure_targets(scene: LoadedScene, target: Target, settings: dict[str, Any], angles: tuple[float, ...],
+                    checkpoint: Any = None, workers: Any = None) -> tuple[DerivedResult, ...]:
+    """
+    ``vm.sweep(scene, target=...)``: :func:`measure_target` at each θi of ``angles`` in
+    turn, every angle's traces kept in one ``checkpoint`` (:mod:`.resume`; removed once
+    the last angle is certified): an interrupted sweep resumes where it stopped, to the
+    same results. With ``workers`` (as for ``vm.sweep``: :mod:`virtspec_mi.runtime.scaleout`)
+    each angle is one task on a Dask worker, which loads the scene itself: the results are
+    those of the run in this process, bit for bit (each angle's batches are a function of
+    the seed and its counts). A checkpoint is not kept on workers (refused together).
+    """
+
+    if workers is not None:
+        if checkpoint is not None:
+            raise ValueError("checkpoint and workers: a target's sweep keeps its checkpoint in this process only; "
+                             "give one of them")
+        from virtspec_mi.runtime.scaleout import connect, portable_scene
+
+        portable = portable_scene(scene.given)
+        with connect(workers) as client:
+            futures = [client.submit(_angle_on_worker, portable, scene.defines, target, {**settings, "progress": False},
+                                     float(t), pure=False)
+                       for t in angles]
+            return tuple(client.gather(futures))
+    if checkpoint is not None and (not isinstance(checkpoint, (str, os.PathLike)) or not str(checkpoint).strip()):
+        raise ValueError(f"checkpoint must be a file path (got {checkpoint!r})")
+    described = target.as_dict() if isinstance(target, Target) else repr(target)
+    identity = {"scene": scene.fingerprint, "settings": {k: settings[k] for k in sorted(settings) if k != "progress"},
+                "target": described, "angles": list(angles), "sweep": True}
+    with replaying(checkpoint, identity):
+        return tuple(measure_target(scene, None, target, {**settings, "theta_i": float(t)}) for t in angles)
 
 
 def certify_target(bench: Any, settings: Settings, target: Target, *, scene: str = "", source: dict | None = None,
-                   bound: str = "auto") -> DerivedResult:
+                   bound: str = "auto", checkpoint: Any = None) -> DerivedResult:
     """
     Certify ``target``: ``bound="betting"`` by :func:`take_sequential`, ``bound="hoeffding"``
     by the one-batch route :func:`~virtspec_mi.applications.targets.measure.take_target`, ``bound="auto"`` (default) by the
@@ -148,7 +200,13 @@ def certify_target(bench: Any, settings: Settings, target: Target, *, scene: str
 
     if bound not in BOUNDS:
         raise ValueError(f"bound must be one of {', '.join(BOUNDS)} for a target (got {bound!r})")
-    return BOUNDS[bound](bench, settings, target, scene=scene, source=source)
+    if checkpoint is not None and (not isinstance(checkpoint, (str, os.PathLike)) or not str(checkpoint).strip()):
+        raise ValueError(f"checkpoint must be a file path (got {checkpoint!r})")
+    described = target.as_dict() if isinstance(target, Target) else repr(target)  # plan_target refuses a non-target
+    identity = {} if checkpoint is None else {"scene": scene, "settings": settings.as_dict(), "target": described,
+                                              "bound": bound}
+    with replaying(checkpoint, identity):
+        return BOUNDS[bound](bench, settings, target, scene=scene, source=source)
 
 
 def pays(weights: np.ndarray, need: np.ndarray, variances: np.ndarray, means: np.ndarray, hoeffding: int) -> bool:
@@ -201,11 +259,18 @@ def take_sequential(bench: Any, settings: Settings, target: Target, *, scene: st
             result = take_target(bench, settings, target, scene=scene, source=source)
             return replace(result, pilot_rays=result.pilot_rays + pilot_rays,
                            seconds=time.perf_counter() - start)
-    else:  # stopping on the certificate itself, a nonlinear target keeps less in reserve than one batch must
-        point = weights @ (prior[1] / np.maximum(prior[0], 1))
-        tolerances = np.asarray(target.tolerances(point, delta, PLANNED_MARGIN), dtype=np.float64)
+    region = None
     prior_rays = np.zeros(len(used)) if prior is None else prior[0][used]
     prior_hits = np.zeros(len(used)) if prior is None else prior[1][used]
+    if planned.pilot_counts is not None:  # stopping on the certificate itself: less in reserve than one batch must
+        point = weights @ (prior[1] / np.maximum(prior[0], 1))
+        if isinstance(target, ColourTarget):  # one joint region: facets along CIELAB at the pilot's point (joint)
+            region = _Region.at(point, functionals, w)
+            w = region.facets
+            tolerances = facet_tolerances(region.Lab, w, prior_variances(prior_rays, prior_hits)[1],
+                                          target.tolerance_dE00, PLANNED_MARGIN)
+        else:
+            tolerances = np.asarray(target.tolerances(point, delta, PLANNED_MARGIN), dtype=np.float64)
     sequences = [BettingSequence(row, float(t), each, prior_rays.copy(), prior_hits.copy())
                  for row, t in zip(w, tolerances)]
     need = 2 * math.log(2 / each) / tolerances ** 2  # information at which a planned stake certifies t
@@ -233,7 +298,7 @@ def take_sequential(bench: Any, settings: Settings, target: Target, *, scene: st
             sequence.record(batch, part)
         spent += batch
         batches.append(int(batch.sum()))
-        outcome = _certificate(target, functionals, sequences, total, spent, delta)
+        outcome = _certificate(target, functionals, sequences, total, spent, delta, region=region)
         if outcome[-1] or len(batches) >= MOST_BATCHES or spent.sum() >= MOST_RAYS_FACTOR * hoeffding:
             break
         widths = outcome[1]
@@ -246,7 +311,7 @@ def take_sequential(bench: Any, settings: Settings, target: Target, *, scene: st
         batch = neyman_rays(w, np.maximum(wanted - have, 0.0), variances)
         batch = np.minimum(batch, np.maximum(MOST_RAYS_FACTOR * hoeffding - spent.sum(), 1)).astype(np.int64)
     estimates, certified, reported, colour, met = _certificate(target, functionals, sequences, total, spent, delta,
-                                                               final=True)
+                                                               final=True, region=region)
     final = ALLOCATING(scene, source)
     rays = np.zeros(len(grid), dtype=np.int64)
     rays[used] = 1
@@ -283,8 +348,38 @@ def _traced(bench: Any, settings: Settings, grid: np.ndarray, traced: np.ndarray
     return _trace(bench, settings, grid, every, int(seed), scene, source, starts)[1]
 
 
+@dataclass(frozen=True, eq=False)
+class _Region:
+    """
+    A colour's joint region (:mod:`.joint`): the CIELAB Jacobian ``G`` at the pilot's
+    point, the facets' weights G·W on the traced wavelengths, the tristimulus weights
+    ``tristimulus`` W there, the white, the estimate's Lab at the pilot's point and what
+    a spectrum in [0, 1] can give (``floor``, ``ceiling``).
+    """
+
+    G: np.ndarray
+    facets: np.ndarray
+    tristimulus: np.ndarray
+    white: np.ndarray
+    Lab: np.ndarray
+    floor: np.ndarray
+    ceiling: np.ndarray
+
+    @classmethod
+    def at(cls, point: np.ndarray, functionals: list, tristimulus: np.ndarray) -> "_Region":
+        from virtspec_mi.applications.targets.targets import _white
+
+        white = _white(functionals)
+        XYZ = np.maximum(np.asarray(point, dtype=np.float64), 1e-3)
+        G = lab_jacobian(XYZ, white)
+        Lab = lab_boxes(XYZ[None], XYZ[None], white)[0][0]
+        floor = np.array([f.weights[f.weights < 0].sum() for f in functionals])
+        ceiling = np.array([f.weights[f.weights > 0].sum() for f in functionals])
+        return cls(G, facet_weights(G, tristimulus), np.asarray(tristimulus), np.asarray(white), Lab, floor, ceiling)
+
+
 def _certificate(target: Target, functionals: list, sequences: list[BettingSequence], total: Counts,
-                 spent: np.ndarray, delta: float, final: bool = False) -> tuple:
+                 spent: np.ndarray, delta: float, final: bool = False, region: _Region | None = None) -> tuple:
     """
     What the rays so far certify: each functional's half-width (the symmetric one
     enclosing its interval, plus Σₖ|wₖ|·rounding biasₖ), the reported values and whether
@@ -295,10 +390,12 @@ def _certificate(target: Target, functionals: list, sequences: list[BettingSeque
     certified_readings = (total.weight_violations == 0) & (total.capped == 0) & (total.invalid_directions == 0)
     rounding = total.rounded_weights * WEIGHT_ROUNDING / np.maximum(spent, 1)
     estimates = np.array([s.estimate for s in sequences])
-    widths = []
+    widths, intervals = [], []
     for s, e in zip(sequences, estimates):
         low, high = s.interval()
-        widths.append(max(e - low, high - e, 0.0) + float(np.sum(np.abs(s.weights) * rounding)))
+        bias = float(np.sum(np.abs(s.weights) * rounding))
+        widths.append(max(e - low, high - e, 0.0) + bias)
+        intervals.append((low - bias, high + bias))
     widths = np.array(widths)
     if not np.all(certified_readings):
         if final:
@@ -306,7 +403,14 @@ def _certificate(target: Target, functionals: list, sequences: list[BettingSeque
                              "violations, capped walks or invalid directions): no certified value")
         return estimates, widths, True  # stop: nothing more to certify
     colour = None
-    if isinstance(target, ColourTarget):
+    if region is not None:
+        rays, hits = (np.sum(getattr(sequences[0], name), axis=0) for name in ("rays", "hits"))
+        XYZ = region.tristimulus @ np.where(rays > 0, hits / np.maximum(rays, 1), 0.0)
+        low, high = np.array(intervals).T
+        colour = region_colour(colour_of(XYZ, functionals, target), region.G, low, high, region.floor,
+                               region.ceiling, region.white, delta, int(spent.sum()), JOINT_METHOD)
+        reported = _colour_values(colour)
+    elif isinstance(target, ColourTarget):
         colour = _certified_colour(target, functionals, estimates, widths, delta, int(spent.sum()))
         colour = _with_method(colour)
         reported = _colour_values(colour)
@@ -314,6 +418,13 @@ def _certificate(target: Target, functionals: list, sequences: list[BettingSeque
         reported = target.values(estimates, widths)
     met = bool(target.met(reported))
     return (estimates, widths, reported, colour, met) if final else (estimates, widths, met)
+
+
+JOINT_METHOD: str = ("betting confidence sequences (Spertus, Sridhar & Stark 2024) on the CIELAB facets L*, a*, b* "
+                     "linearised at the pilot's point, each at delta/3, stopped at the first batch that met the "
+                     "target; one joint XYZ region (their intersection) covered by boxes mapped exactly to L*a*b* "
+                     "and sRGB; dE00 a rigorous upper bound over the region")
+"""The method a colour certified from its joint region states (:mod:`.joint`)."""
 
 
 def _with_method(colour: Any) -> Any:

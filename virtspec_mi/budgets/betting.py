@@ -161,6 +161,26 @@ def _edges(floors: np.ndarray, caps: np.ndarray, high: float) -> np.ndarray:
     return np.unique(np.concatenate([[0.0, high], inner[(inner > 0) & (inner < high)]]))
 
 
+def _distinct_pieces(lo: np.ndarray, hi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """
+    Each stratum's pieces [lo, hi) (sorted, shape (strata, P)) without repeats, padded
+    with a repeat of its first: a repeated piece gives the same candidates, value for value.
+    """
+
+    fresh = np.ones(lo.shape, dtype=bool)
+    fresh[:, 1:] = (lo[:, 1:] != lo[:, :-1]) | (hi[:, 1:] != hi[:, :-1])
+    return _kept(fresh, lo, hi)
+
+
+def _kept(kept: np.ndarray, *arrays: np.ndarray) -> tuple[np.ndarray, ...]:
+    """Each row's entries where ``kept`` (its first always is), in order, padded with the row's first."""
+
+    counts = kept.sum(axis=1)
+    order = np.argsort(~kept, axis=1, kind="stable")[:, :int(counts.max())]
+    order = np.where(np.arange(order.shape[1])[None, :] >= counts[:, None], 0, order)
+    return tuple(np.take_along_axis(a, order, axis=1) for a in arrays)
+
+
 def _candidates(rays: np.ndarray, hits: np.ndarray, bets: np.ndarray, floors: np.ndarray, caps: np.ndarray
                 ) -> tuple[np.ndarray, np.ndarray]:
     """
@@ -176,7 +196,7 @@ def _candidates(rays: np.ndarray, hits: np.ndarray, bets: np.ndarray, floors: np
     inner = np.concatenate([floors, caps]).T  # (strata, 2·stakes)
     inner = np.where((inner > 0) & (inner < 1), inner, 1.0)
     edges = np.sort(np.concatenate([np.zeros((len(inner), 1)), inner, np.ones((len(inner), 1))], axis=1), axis=1)
-    lo, hi = edges[:, :-1], edges[:, 1:]  # (strata, P) pieces (empty ones where lo == hi: harmless)
+    lo, hi = _distinct_pieces(edges[:, :-1], edges[:, 1:])  # (strata, P) pieces (empty ones where lo == hi: harmless)
     active = (floors.T[:, :, None] <= lo[:, None, :]) & (caps.T[:, :, None] > lo[:, None, :])  # (strata, stakes, P)
 
     def log_capital(m: np.ndarray) -> np.ndarray:
@@ -188,6 +208,23 @@ def _candidates(rays: np.ndarray, hits: np.ndarray, bets: np.ndarray, floors: np
     points = np.concatenate([lo, hi, np.ones((len(lo), 1))], axis=1)
     values = np.concatenate([log_capital(lo), log_capital(hi), np.zeros((len(lo), 1))], axis=1)
     return points, values
+
+
+def _undominated(slopes: np.ndarray, values: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """
+    Each stratum's candidate lines ν ↦ value + ν·slope (shape (strata, C)) that no other
+    one of its own undercuts at every ν ≥ 0 (another with slope and value both no larger),
+    padded with a repeat of one of them. The minimum over ν ≥ 0 is the same, bit for bit:
+    rounding is monotone, so a line undercut in exact arithmetic is undercut as computed.
+    A stratum's log-capital falls to its least value and rises after it, so few survive.
+    """
+
+    order = np.lexsort((values, slopes), axis=-1)  # by slope, then by value
+    slopes, values = np.take_along_axis(slopes, order, axis=1), np.take_along_axis(values, order, axis=1)
+    lowest = np.minimum.accumulate(values, axis=1)
+    kept = np.ones(values.shape, dtype=bool)  # the first line (least slope, then value) is always kept
+    kept[:, 1:] = values[:, 1:] < lowest[:, :-1]
+    return _kept(kept, slopes, values)
 
 
 def _one_stratum(a: float, rays: np.ndarray, hits: np.ndarray, bets: np.ndarray, floors: np.ndarray,
@@ -243,7 +280,7 @@ def lower_bound(weights: np.ndarray, rays: np.ndarray, hits: np.ndarray, bets: n
         return _one_stratum(float(a[0]), rays[:, 0], hits[:, 0], bets[:, 0], floors[:, 0], caps[:, 0], level)
     points, values = _candidates(rays, hits, bets, floors, caps)
     total = float(a.sum())
-    slopes = a[:, None] * points
+    slopes, values = _undominated(a[:, None] * points, values)
 
     def bound(nu: np.ndarray) -> np.ndarray:  # s(ν) = (Σₖ hₖ(ν) − level)/ν for every ν given
         h = np.zeros(len(nu))

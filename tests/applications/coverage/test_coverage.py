@@ -113,11 +113,10 @@ def coverage(scene, target, trials: int = TRIALS, bound: str = "betting") -> int
     looks: list[bool] = []
     original = sequential._certificate
 
-    def looking(target, functionals, sequences, total, spent, delta, final=False, region=None):
-        _, _, values, colour, _ = original(target, functionals, sequences, total, spent, delta, final=True,
-                                           region=region)
-        looks.append(_covers(SimpleNamespace(target=target, colour=colour, values=values, bound="betting")))
-        return original(target, functionals, sequences, total, spent, delta, final=final, region=region)
+    def looking(target, functionals, sequences, total, spent, delta, region=None):
+        outcome = original(target, functionals, sequences, total, spent, delta, region=region)
+        looks.append(_covers(SimpleNamespace(target=target, colour=outcome[3], values=outcome[2], bound="betting")))
+        return outcome
 
     hits = 0
     sequential._certificate = looking

@@ -310,8 +310,7 @@ def take_sequential(bench: Any, settings: Settings, target: Target, *, scene: st
             wanted = _next_information(have, widths, tolerances)
         batch = neyman_rays(w, np.maximum(wanted - have, 0.0), variances)
         batch = np.minimum(batch, np.maximum(MOST_RAYS_FACTOR * hoeffding - spent.sum(), 1)).astype(np.int64)
-    estimates, certified, reported, colour, met = _certificate(target, functionals, sequences, total, spent, delta,
-                                                               final=True, region=region)
+    estimates, certified, reported, colour, met = outcome  # the last batch's certificate
     final = ALLOCATING(scene, source)
     rays = np.zeros(len(grid), dtype=np.int64)
     rays[used] = 1
@@ -379,12 +378,12 @@ class _Region:
 
 
 def _certificate(target: Target, functionals: list, sequences: list[BettingSequence], total: Counts,
-                 spent: np.ndarray, delta: float, final: bool = False, region: _Region | None = None) -> tuple:
+                 spent: np.ndarray, delta: float, region: _Region | None = None) -> tuple:
     """
-    What the rays so far certify: each functional's half-width (the symmetric one
-    enclosing its interval, plus Σₖ|wₖ|·rounding biasₖ), the reported values and whether
-    the target is met. ``final``: (estimates, half-widths, values, colour, met); else
-    (estimates, half-widths, met).
+    What the rays so far certify: (estimates, half-widths, values, colour, met): each
+    functional's half-width (the symmetric one enclosing its interval, plus
+    Σₖ|wₖ|·rounding biasₖ), the reported values, the colour (or None) and whether the
+    target is met. Readings that escaped their certificate are refused (nothing to certify).
     """
 
     certified_readings = (total.weight_violations == 0) & (total.capped == 0) & (total.invalid_directions == 0)
@@ -398,10 +397,8 @@ def _certificate(target: Target, functionals: list, sequences: list[BettingSeque
         intervals.append((low - bias, high + bias))
     widths = np.array(widths)
     if not np.all(certified_readings):
-        if final:
-            raise ValueError(f"target {target.describe()}: some readings escaped their certificate (weight "
-                             "violations, capped walks or invalid directions): no certified value")
-        return estimates, widths, True  # stop: nothing more to certify
+        raise ValueError(f"target {target.describe()}: some readings escaped their certificate (weight "
+                         "violations, capped walks or invalid directions): no certified value")
     colour = None
     if region is not None:
         rays, hits = (np.sum(getattr(sequences[0], name), axis=0) for name in ("rays", "hits"))
@@ -417,7 +414,7 @@ def _certificate(target: Target, functionals: list, sequences: list[BettingSeque
     else:
         reported = target.values(estimates, widths)
     met = bool(target.met(reported))
-    return (estimates, widths, reported, colour, met) if final else (estimates, widths, met)
+    return estimates, widths, reported, colour, met
 
 
 JOINT_METHOD: str = ("betting confidence sequences (Spertus, Sridhar & Stark 2024) on the CIELAB facets L*, a*, b* "

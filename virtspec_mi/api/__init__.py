@@ -55,7 +55,7 @@ from virtspec_mi.engine.parameters import parameter_space
 from virtspec_mi.instruments import INSTRUMENTS, commanding
 from virtspec_mi.kernel.counts import QUANTITIES
 from virtspec_mi.results.readings import fluctuation
-from virtspec_mi.runtime.reading import RunOptions, incidence_angles, instrument_for, keyed_reading, scene_options
+from virtspec_mi.runtime.reading import RunOptions, instrument_for, keyed_reading, scene_options
 from virtspec_mi.runtime.scene import LoadedScene, loaded
 from virtspec_mi.settings import Settings, resolve
 from virtspec_mi.settings import keywords as signature
@@ -218,17 +218,10 @@ def sweep(scene: Any, *, target: Any = None, **keywords: Any) -> Any:
         given = [name for name in ("parameters", "out") if run[name]]
         if given:
             raise ValueError(f"{', '.join(given)}: not taken with a target (each angle is one vm.measure(target=...))")
-        from virtspec_mi.applications.targets.measure import REFUSED_SETTINGS
-        from virtspec_mi.applications.targets.result import DerivedSweep
+        from virtspec_mi.applications.targets.sweep import target_sweep
 
-        scene = loaded(scene, defines)
-        resolved, = resolve("sweep", {k: v for k, v in settings.items() if k not in (*REFUSED_SETTINGS, "bound")},
-                            scene_options(scene.bench, Settings))
-        angles = tuple(float(t) for t in incidence_angles(resolved, run["theta_i"], "a sweep"))
-        from virtspec_mi.applications.targets.sequential import measure_targets
-
-        return DerivedSweep(angles, measure_targets(scene, target, {**settings, "progress": run["progress"]}, angles,
-                                                    run["checkpoint"], run["workers"]))
+        return target_sweep(loaded(scene, defines), target, settings, run["theta_i"], run["checkpoint"], run["workers"],
+                            run["progress"])
     return keyed_reading(commanding("sweep").name, "sweep", "a sweep", loaded(scene, defines), settings, **run)
 
 

@@ -94,9 +94,14 @@ class Extension:
     """
     reason: str = ""
     """Why it takes no others (the end of that message)."""
+    example: str = ""
+    """Its active flag as given (``--target colour,dE00=0.5``): named when its other flags are given alone."""
 
     def given(self, flags: Any) -> bool:
-        """Whether ``flags`` (an instance of :attr:`flags`) hands the command to the application."""
+        """
+        Whether ``flags`` (an instance of :attr:`flags`) hands the command to the
+        application; its other flags given without :attr:`active` are refused by the command line.
+        """
 
         return getattr(flags, self.active) not in (None, False)
 

@@ -438,9 +438,14 @@ def respond(args: argparse.Namespace, row: Measuring) -> int:
 
     session = Session(args, row)
     for extension in extensions_of(row):  # an application's flag given: the command is the application's
-        flags = extension.flags(**given(args, extension.flags))
+        own = given(args, extension.flags)
+        flags = extension.flags(**own)
         if extension.given(flags):
             refuse_others(args, extension)
             return extension.respond(session, flags)
+        if own:  # its other flags act only with the one that hands the command over
+            names, active = ", ".join(map(flag_of, own)), flag_of(extension.active)
+            raise ValueError(f"{names} {'acts' if len(own) == 1 else 'act'} only with {active}: give {active} too "
+                             f"(e.g. {extension.example}) or leave {names} out")
     respond = row.command.respond
     return session.default() if respond is None else respond(session)

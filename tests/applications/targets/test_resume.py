@@ -118,7 +118,7 @@ def test_the_command_line_keeps_a_targets_checkpoint(mi, tmp_path, capsys):
         data.pop("seconds"), data.pop("checksum")
     assert kept == plain and not path.exists()
     assert main(["measure", "diamond_collimated", "--checkpoint", str(path)]) != 0
-    assert "--checkpoint keeps a target's batches: give --target too" in capsys.readouterr().err
+    assert "--checkpoint acts only with --target: give --target too" in capsys.readouterr().err
 
 
 def test_a_sweep_of_a_target_interrupted_resumes_to_the_same_results(mi, tmp_path, monkeypatch):

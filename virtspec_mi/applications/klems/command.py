@@ -128,5 +128,6 @@ def respond_gonio(session: Any, flags: KlemsFlags) -> int:
 
 GONIO_KLEMS = Extension(
     "gonio", KlemsFlags, respond_gonio, "klems", takes=("wavelengths", "mu", "delta", "rays", "seed", "quiet"),
-    reason="it measures readings of its own (every patch centre, its own bins) and writes FILE and FILE.nc")
+    reason="it measures readings of its own (every patch centre, its own bins) and writes FILE and FILE.nc",
+    example="--klems window.xml")
 """``virtspec gonio --klems FILE``: the documented alias of :data:`KLEMS`."""

@@ -18,8 +18,9 @@ certified box. Modules, one job each:
   default); :mod:`.result` — its result;
 - :mod:`.difference` — ``vm.colour_difference``; :mod:`.parse` — ``--target`` strings.
 
-The application's row (:class:`TargetsApplication`) extends ``virtspec measure`` with
-``--target`` (:class:`~.parse.TargetFlags`): it takes the settings a target does not pick
+The application's row (:class:`TargetsApplication`) extends ``virtspec measure`` and
+``virtspec sweep`` with ``--target`` and ``--checkpoint`` (:class:`~.parse.TargetFlags`;
+:mod:`.sweep` certifies a target at every θi): it takes the settings a target does not pick
 itself (:data:`~.measure.REFUSED_SETTINGS`, the one list, which ``vm.measure(target=...)``
 and ``vm.sweep(target=...)`` read too) and the command line refuses every other flag.
 """
@@ -32,7 +33,7 @@ import numpy as np
 
 from virtspec_mi.applications.base import Application, Extension
 from virtspec_mi.applications.targets.measure import REFUSED_SETTINGS
-from virtspec_mi.applications.targets.parse import TargetFlags, respond
+from virtspec_mi.applications.targets.parse import TargetFlags, respond, respond_sweep
 from virtspec_mi.applications.targets.result import DerivedResult, DerivedSweep
 from virtspec_mi.settings import Settings
 
@@ -49,24 +50,26 @@ def _api(folder: Any) -> Any:
     return measure_target(loaded("diamond_collimated"), None, band("B04", tolerance=0.05), {"seed": 1})
 
 
-class _TargetExtension(Extension):
-    """``--target`` on ``virtspec measure``; ``--checkpoint`` alone comes here too, to be refused with the reason."""
-
-    def given(self, flags: Any) -> bool:
-        return super().given(flags) or getattr(flags, "checkpoint", None) is not None
+_REASON = ("a target picks its own wavelengths and rays (give it its tolerance, e.g. --target colour,dE00=0.5 or "
+           "--target band:B04,tolerance=0.002) and is measured at the scene's own specimen parameters; "
+           "its result is printed (--json prints it as JSON, its per-wavelength readings included)")
+_TAKES = (*(name for name in Settings.names() if name not in REFUSED_SETTINGS), "defines", "json", "quiet")
 
 
 class TargetsApplication(Application):
-    """Certified derived quantities: ``vm.measure(scene, target=...)``, ``virtspec measure --target``."""
+    """
+    Certified derived quantities: ``vm.measure(scene, target=...)``, ``vm.sweep(scene,
+    target=...)``, ``virtspec measure --target`` and ``virtspec sweep --target``.
+    """
 
     name: ClassVar[str] = "targets"
     summary: ClassVar[str] = "certified derived quantities: colour, bands, indices, fAPAR, albedo"
-    extensions: ClassVar[tuple[Extension, ...]] = (_TargetExtension(
-        "measure", TargetFlags, respond, "target",
-        takes=(*(name for name in Settings.names() if name not in REFUSED_SETTINGS), "defines", "json", "quiet"),
-        reason="a target picks its own wavelengths and rays (give it its tolerance, e.g. --target colour,dE00=0.5 or "
-               "--target band:B04,tolerance=0.002) and is measured at the scene's own specimen parameters; "
-               "its result is printed (--json prints it as JSON, its per-wavelength readings included)"),)
+    extensions: ClassVar[tuple[Extension, ...]] = (
+        Extension("measure", TargetFlags, respond, "target", takes=_TAKES, reason=_REASON,
+                  example="--target colour,dE00=0.5"),
+        Extension("sweep", TargetFlags, respond_sweep, "target", takes=(*_TAKES, "workers", "scheduler"),
+                  reason=_REASON + "; --workers traces each angle on a Dask worker",
+                  example="--target colour,dE00=0.5"))
     results: ClassVar[tuple[type, ...]] = (DerivedResult, DerivedSweep)
     example: ClassVar[dict[str, Any]] = {
         "argv": ("measure", "diamond_collimated", "--target", "band:B04,tolerance=0.05", "--seed", "1", "--json"),

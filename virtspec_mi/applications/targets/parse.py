@@ -1,6 +1,6 @@
 """
-Targets written as text: ``virtspec measure --target ...``
-==========================================================
+Targets written as text: ``virtspec measure --target ...``, ``virtspec sweep --target ...``
+===========================================================================================
 
 :func:`parse_target` reads a target from one string, ``KIND[:ARG]...[,NAME=VALUE]...``,
 by the table :data:`~.targets.TARGETS`: ``KIND`` names a row (or one of its spellings,
@@ -31,7 +31,8 @@ from typing import Any, Callable, ClassVar
 from virtspec_mi.applications.targets.targets import TARGETS, Target, target_kind
 from virtspec_mi.settings import Options, option, text
 
-__all__ = ["parse_target", "kinds", "TargetFlags", "measure_target_command", "respond", "target_help"]
+__all__ = ["parse_target", "kinds", "TargetFlags", "measure_target_command", "sweep_target_command", "respond",
+           "respond_sweep", "target_help"]
 
 
 def kinds() -> dict[str, tuple[str, ...]]:
@@ -104,7 +105,7 @@ def target_help() -> str:
 
 @dataclass(frozen=True)
 class TargetFlags(Options):
-    """``virtspec measure``'s own flag: a derived quantity certified instead of the spectrum."""
+    """``virtspec measure``'s and ``sweep``'s own flags: a derived quantity certified instead of the spectrum."""
 
     title: ClassVar[str] = "derived quantity"
 
@@ -126,24 +127,53 @@ def measure_target_command(args: Any, keywords: dict[str, Any], report: Callable
     from virtspec_mi.applications.targets.sequential import measure_target
     from virtspec_mi.runtime.scene import loaded
 
-    if args.target is None:
-        raise ValueError("--checkpoint keeps a target's batches: give --target too (a spectrum's sweep keeps its "
-                         "checkpoint beside --out)")
-    try:
-        target = parse_target(args.target)
-    except ValueError as error:
-        message = str(error)
-        raise ValueError(message if message.startswith("--target") else f"--target: {message}") from None
     settings = {k: v for k, v in keywords.items()
                 if k not in ("out", "workers", "task_readings", "points", "parameters", "defines")}
     if getattr(args, "checkpoint", None):
         settings["checkpoint"] = args.checkpoint
-    result = measure_target(loaded(args.scene, keywords.get("defines") or None), None, target, settings)
+    result = measure_target(loaded(args.scene, keywords.get("defines") or None), None, _parsed(args.target), settings)
     return report(args, result, result.summary())  # --json: its file (sealed JSON, read by vm.read_result)
+
+
+def sweep_target_command(args: Any, keywords: dict[str, Any], report: Callable[..., int]) -> int:
+    """
+    ``virtspec sweep SCENE --theta-i ... --target TARGET``: the target certified at every
+    θi (:func:`~.sweep.target_sweep`, as ``vm.sweep(scene, target=...)``), kept in
+    ``--checkpoint`` or traced on ``--workers``, printed by ``report``.
+    """
+
+    from virtspec_mi.applications.targets.sweep import target_sweep
+    from virtspec_mi.runtime.reading import RunOptions
+    from virtspec_mi.runtime.scene import loaded
+
+    settings = {k: v for k, v in keywords.items() if k not in RunOptions.names()}
+    result = target_sweep(loaded(args.scene, keywords.get("defines") or None), _parsed(args.target), settings,
+                          keywords.get("theta_i"), getattr(args, "checkpoint", None), keywords.get("workers"),
+                          keywords.get("progress"))
+    return report(args, result, result.summary())
+
+
+def _parsed(text: str) -> Target:
+    """The target of ``--target``; a refusal names the flag."""
+
+    try:
+        return parse_target(text)
+    except ValueError as error:
+        message = str(error)
+        raise ValueError(message if message.startswith("--target") else f"--target: {message}") from None
+
+
+def _reporting(session: Any) -> Callable[..., int]:
+    return lambda _, result, text, data=None: session.report(result, text, data=data)
 
 
 def respond(session: Any, flags: TargetFlags) -> int:
     """``virtspec measure --target``: the derived quantity certified (:func:`measure_target_command`)."""
 
-    return measure_target_command(session.args, session.keywords,
-                                  lambda _, result, text, data=None: session.report(result, text, data=data))
+    return measure_target_command(session.args, session.keywords, _reporting(session))
+
+
+def respond_sweep(session: Any, flags: TargetFlags) -> int:
+    """``virtspec sweep --target``: the derived quantity certified at every θi (:func:`sweep_target_command`)."""
+
+    return sweep_target_command(session.args, session.keywords, _reporting(session))

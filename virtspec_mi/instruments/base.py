@@ -56,6 +56,11 @@ class Instrument(ABC):
     """Registry key and command-line subcommand."""
     options: ClassVar[type[Options] | None] = None
     """The instrument's own options beside the settings, or ``None``."""
+    angles: ClassVar[tuple[float, ...] | None] = None
+    """
+    The incidence angles (degrees) it reads when a call gives no ``theta_i`` (a gloss
+    meter: ISO 2813's three); ``None``: the settings' θi, the scene's by default.
+    """
     result: ClassVar[type]
     """The result class the instrument returns."""
     commands: ClassVar[tuple[Any, ...]] = ()

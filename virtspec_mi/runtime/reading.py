@@ -135,7 +135,7 @@ def _keyed(name: str, what: str, scene: LoadedScene, settings: Settings, options
     check_distinct([("out", out), ("checkpoint", checkpoint)], [("scene", scene.given)])  # never over the scene file
     bench = scene.bench
     space = parameter_space(bench, parameters or {}, points=true_or_false("points")(points))
-    angles = incidence_angles(settings, theta_i, what)
+    angles = incidence_angles(settings, INSTRUMENTS[name].angles if theta_i is None else theta_i, what)
     if len(np.unique(settings.wavelengths)) != len(settings.wavelengths):
         raise ValueError(f"wavelengths of {what} must be distinct (got repeated values)")
     instrument = instrument_for(name, scene)

@@ -75,30 +75,46 @@ def test_two_stage_sizes_the_gloss_fraction_from_its_pilot(glass):
     assert abs(reading.gloss[0, 0] - fresnel(60.0, 1.5)) < 0.01
 
 
-def test_a_gloss_meter_reads_at_one_angle(glass):
+def test_several_angles_each_have_their_own_mirror_direction(glass):
     meter = INSTRUMENTS["gloss"]
-    with pytest.raises(ValueError, match="one theta_i"):
-        meter().run(glass, Settings(rays=100), theta_i=[20, 60])
+    reading = meter().run(glass, Settings(rays=20_000, beam="collimated", seed=6), meter.options(cone=1),
+                          theta_i=[20, 60, 85])
+    assert np.array_equal(reading.glossy, reading.reflected)  # each angle's reflected rays lie in its own cone
+    expected = [fresnel(t, 1.5) for t in (20, 60, 85)]
+    low, high = np.moveaxis(np.asarray(reading.gloss_interval).reshape(-1, 3, 2), -1, 0)
+    assert np.all((low <= expected) & (expected <= high))
 
 
-def test_gloss_units_against_the_iso_2813_black_glass_standard(mi, tmp_path):
-    """100 GU is the black glass standard (n = 1.567) at each angle: a specimen of that glass reads 100 GU."""
+def test_without_theta_i_it_reads_at_iso_2813s_three_angles_in_gloss_units(mi):
+    """
+    100 GU is the black glass standard (n = 1.567) at each angle: a specimen of that glass,
+    read without theta_i, gives ISO 2813's 20, 60 and 85 degrees, each 100 GU within its interval.
+    """
 
     from virtspec_mi.instruments.gloss import ISO_2813_ANGLES, standard_reflectance
     from virtspec_mi.references.quadrature import fresnel_reflectance
 
     assert np.allclose(standard_reflectance(ISO_2813_ANGLES), [0.0491, 0.1001, 0.6191], atol=5e-5)
     standard = vm.instrument_scene({"type": "simple_dielectric", "eta": 1.567})
-    for theta in ISO_2813_ANGLES:
-        reading = vm.gloss(standard, theta_i=theta, beam="collimated", rays=200_000, cone=1, seed=3)
-        low, high = np.asarray(reading.gloss_units_interval).reshape(-1, 2)[0]
-        assert low <= 100.0 <= high, (theta, low, high)  # the standard's own 100 GU inside the certified interval
-        assert np.allclose(reading.gloss_units, 100 * reading.gloss / fresnel_reflectance(theta, 1.567))
+    reading = vm.gloss(standard, beam="collimated", rays=200_000, cone=1, seed=3)
+    assert tuple(np.atleast_1d(reading.coords["theta_i"])) == ISO_2813_ANGLES
+    low, high = np.moveaxis(np.asarray(reading.gloss_units_interval).reshape(-1, 2), -1, 0)
+    assert len(low) == 3 and np.all((low <= 100.0) & (100.0 <= high)), (low, high)
+    theta = np.asarray(reading.coords["theta_i"], dtype=float)
+    expected = 100 * np.asarray(reading.gloss).reshape(-1) / fresnel_reflectance(theta, 1.567)
+    assert np.allclose(np.asarray(reading.gloss_units).reshape(-1), expected)
     text = reading.summary()
-    assert "GU in [" in text and f"g = {float(np.ravel(reading.gloss)[0]):.6f} in [" in text
-    assert "not one of ISO 2813's" not in text
-    other = vm.gloss(standard, theta_i=45, beam="collimated", rays=100, cone=1)
-    assert "not one of ISO 2813's 20, 60, 85" in other.summary()
+    assert text.count("GU in [") == 3 and "not one of ISO 2813's" not in text
+    assert all(f"theta_i {t:g}:" in text for t in ISO_2813_ANGLES)
+
+
+def test_angles_given_are_read_as_asked_and_others_than_iso_are_named(mi):
+    standard = vm.instrument_scene({"type": "simple_dielectric", "eta": 1.567})
+    other = vm.gloss(standard, theta_i=[45, 60], beam="collimated", rays=100, cone=1)
+    assert tuple(np.atleast_1d(other.coords["theta_i"])) == (45.0, 60.0)
+    assert "(theta_i 45 deg: not one of ISO 2813's 20, 60, 85)" in other.summary()
+    with pytest.raises(ValueError, match="theta_i"):
+        vm.gloss(standard, theta_i=95, rays=100)
 
 
 def test_a_gloss_summary_reads_the_same_from_its_file(mi, tmp_path, capsys):

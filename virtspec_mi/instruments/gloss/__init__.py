@@ -11,8 +11,9 @@ receptor aperture about the mirror direction. Here the receptor is a cone of hal
 
 - **What a ray's exit adds** (:class:`MirrorCone`, an exit hook of the one tally path:
   :mod:`virtspec_mi.kernel.hooks`): bin 0 for a reflected ray whose outgoing direction
-  lies within the cone (wo · m ≥ cos ``cone``, m the mirror direction), bin 1 (K:
-  not binned) for every other ray. The kernel tallies it exactly per reading.
+  lies within the cone (wo · m ≥ cos ``cone``, m the mirror direction of its reading's
+  incidence direction ω: m = (−ωx, −ωy, ωz)), bin 1 (K: not binned) for every other ray.
+  The kernel tallies it exactly per reading.
 - **Its result** (:class:`GlossResult`): the gloss fraction g = m/N of each reading (the
   share of the N rays that reach the receptor) with its certificate: one proportion of
   the reading's N rays, so the settings' ray budget certifies |g − p| < μ with
@@ -28,10 +29,12 @@ receptor aperture about the mirror direction. Here the receptor is a cone of hal
   a gloss value in GU compares with a meter's only as far as the specimen's reflection
   lies within both.
 
-The angle is the settings' θi (the scene's, else the value given): a gloss reading is
-taken at one of ISO 2813's geometries by giving it, ``theta_i=60`` (all gloss levels),
-``20`` (high gloss) or ``85`` (low gloss, matt); another angle is read as asked, and its
-summary says it is none of ISO 2813's.
+**The angles.** Without ``theta_i`` the meter reads at ISO 2813's three geometries at
+once, :data:`ISO_2813_ANGLES`: 20° (high gloss), 60° (all gloss levels) and 85° (low
+gloss, matt), one reading of each wavelength at each, every one with its own rays, its
+own receptor cone about its own mirror direction and its own certificate (the scene's θi
+is not used: a gloss meter's geometry is the standard's). ``theta_i`` given (one angle or
+several) is read as asked; the summary names any angle that is none of ISO 2813's.
 
 The specimen frame, beam and sampling are the spectrophotometer's: with a collimated
 beam every ray comes in along the incidence direction, so a smooth specimen reflects
@@ -106,25 +109,23 @@ class GlossOptions(Options):
 class MirrorCone(ExitHook):
     """
     The exit hook (plain values, picklable): bin 0 for a reflected ray within ``cone``
-    degrees of the mirror direction of the incidence (``theta_i``, the reading's φi).
+    degrees of the mirror direction of its reading's incidence direction ``wi`` (each
+    reading's own θi and φi).
     """
 
-    theta_i: float
-    """Polar incidence angle, degrees."""
     cone: float
     """Half-angle of the receptor cone, degrees."""
+    incidence: ClassVar[bool] = True
 
     @property
     def size(self) -> int:
         return 1
 
-    def bin(self, wo: Any, fate: Any, phi_i: Any) -> Any:
+    def bin(self, wo: Any, fate: Any, phi_i: Any, wi: Any = None) -> Any:
         import drjit as dr
         import mitsuba as mi
 
-        theta = math.radians(self.theta_i)
-        phi = phi_i * (math.pi / 180.0)
-        mirror = mi.Vector3f(-math.sin(theta) * dr.cos(phi), -math.sin(theta) * dr.sin(phi), math.cos(theta))
+        mirror = mi.Vector3f(-wi.x, -wi.y, wi.z)  # wi points towards the emitter
         inside = (fate == int(Fate.REFLECTED)) & (dr.dot(wo, mirror) >= math.cos(math.radians(self.cone)))
         return dr.select(inside, mi.UInt32(0), mi.UInt32(1))
 
@@ -233,12 +234,12 @@ class GlossResult(Result):
 
         shown = self.squeeze(*(d for d, n in zip(self.dims, self.shape) if n == 1 and d != "wavelength"))
         angles = sorted({float(t) for t in np.atleast_1d(shown.coords["theta_i"])})
-        iso = all(any(abs(t - a) < 1e-9 for a in ISO_2813_ANGLES) for t in angles)
+        others = [t for t in angles if not any(abs(t - a) < 1e-9 for a in ISO_2813_ANGLES)]
         lines = [f"gloss meter, receptor cone {self.cone:g} deg about the mirror direction "
                  f"(probability >= {1 - self.delta:g} per reading); GU: 100 = ISO 2813's black glass standard "
                  f"(n = {ISO_2813_STANDARD_INDEX:g}) at the same angle"
-                 + ("" if iso else f" (theta_i {', '.join(f'{t:g}' for t in angles)} deg: not one of ISO 2813's "
-                                   "20, 60, 85)")]
+                 + (f" (theta_i {', '.join(f'{t:g}' for t in others)} deg: not one of ISO 2813's 20, 60, 85)"
+                    if others else "")]
         interval, units, span = shown.gloss_interval, shown.gloss_units, shown.gloss_units_interval
         for index in np.ndindex(shown.shape):
             mu, n = shown.certified_mu[index], int(shown.rays[index])
@@ -274,20 +275,22 @@ class GlossMeter(Instrument):
     """
 
     name: ClassVar[str] = "gloss"
+    angles: ClassVar[tuple[float, ...] | None] = ISO_2813_ANGLES
     exports: ClassVar[tuple[str, ...]] = ("GlossResult",)
     options: ClassVar[type[Options] | None] = GlossOptions
     result: ClassVar[type] = GlossResult
     commands: ClassVar[tuple[Command, ...]] = (Command(
         "gloss", "a specular gloss meter: the share of rays reflected into a cone about the mirror direction",
-        "Light the specimen at one theta_i (20, 60 or 85 degrees in ISO 2813) and read the share of the rays "
-        "reflected into a receptor cone of half-angle --cone about the mirror direction: the gloss fraction of "
-        "every wavelength with the tolerance its rays guarantee (as the reflectance's, eq. 23) and a "
-        "Clopper-Pearson interval, beside the hemispherical reading of the same rays.",
-        ("virtspec gloss diamond_collimated --theta-i 60 --cone 2",
+        "Light the specimen at ISO 2813's geometries, 20, 60 and 85 degrees (or at the --theta-i given), and read "
+        "the share of the rays reflected into a receptor cone of half-angle --cone about each mirror direction: "
+        "the gloss fraction of every wavelength and angle with the tolerance its rays guarantee (as the "
+        "reflectance's, eq. 23) and a Clopper-Pearson interval, in gloss units against ISO 2813's black glass, "
+        "beside the hemispherical reading of the same rays.",
+        ("virtspec gloss diamond_collimated --cone 2",
+         "virtspec gloss diamond_collimated --theta-i 60",
          "virtspec gloss soybean_abmb --theta-i 20 --wavelengths 450,550,650 --out gloss.nc --plot gloss.png"),
-        figures=(FigureFlag("--plot", "sweep", "the gloss fraction over wavelength with the band of its certified "
-                                          "tolerance"),),
-        one_reading=True),)
+        figures=(FigureFlag("--plot", "sweep", "the gloss fraction against theta_i (one curve per wavelength) or "
+                                          "wavelength, with the band of its certified tolerance"),)),)
     example: ClassVar[dict[str, Any]] = {
         "scene": "diamond_collimated", "theta_i": 60, "wavelengths": [450, 650], "rays": 4000, "cone": 2, "seed": 4,
         "long": {"scene": "soybean_abmb", "theta_i": 20, "wavelengths": "400:2500:5", "rays": 100_000,
@@ -295,14 +298,12 @@ class GlossMeter(Instrument):
 
     def init(self, bench: Any, settings: Settings, options: GlossOptions, theta_i: np.ndarray,
              parameters: ParameterSpace | None) -> Plan:
-        if len(theta_i) != 1:
-            raise ValueError(f"a gloss meter reads at one theta_i, its geometry (got {len(theta_i)} angles)")
         if settings.beam == "diffuse":  # no incidence direction: no mirror direction for the receptor's cone
             raise ValueError("beam must be collimated or conical for a gloss meter (got 'diffuse': a diffuse beam has "
                              "no mirror direction for the receptor's cone about it)")
         self.bench, self.gloss_options = bench, options
         self.plan = Plan(settings.updated(theta_i=float(theta_i[0])), theta_i, parameters,
-                         hooks=(MirrorCone(float(theta_i[0]), options.cone),),
+                         hooks=(MirrorCone(options.cone),),
                          columns=replace(Columns.fates(settings.joint), bins="each"), scene=self.scene,
                          instrument=self.name, options=options.as_dict())
         return self.plan

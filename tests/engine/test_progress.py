@@ -1,7 +1,8 @@
 """
 One progress bar per run (issue 42, new-user item 1): nested bars move the outermost one
 within the step it announced, the bar is drawn in a terminal with updates between a
-batch's start and its end, and nothing is drawn with ``--quiet`` or off a terminal.
+batch's start and its end (a sweep, the integrating sphere, the goniophotometer), and
+nothing is drawn with ``--quiet`` or off a terminal.
 """
 
 from __future__ import annotations
@@ -78,6 +79,25 @@ def test_a_sweep_in_a_terminal_draws_a_bar_that_moves_within_its_batches():
     between = [p for p in shown if 0 < p < 100 and p % 25]
     assert between, f"no update between two readings' ends: {shown}\n{text[-2000:]}"
     assert shown == sorted(shown), shown
+
+
+INSTRUMENTS = {  # a second or two each on a quiet machine: over the lowered threshold
+    "sphere": ["sphere", "sphere_150mm_8d", "--wavelengths", "450,650", "--rays", "2000000", "--chunk-size", "262144"],
+    "gonio": ["gonio", "soybean_abmb", "--theta-i", "0", "30", "--wavelengths", "450,650", "--rays", "4000000",
+              "--chunk-size", "1048576"],
+}
+
+
+@pytest.mark.parametrize("command", sorted(INSTRUMENTS))
+def test_the_sphere_and_the_goniophotometer_draw_their_bar_in_a_terminal_and_none_when_quiet(command):
+    text, status = _in_a_terminal(INSTRUMENTS[command])
+    assert status == 0, text
+    shown = _percentages(text, "readings")
+    assert [p for p in shown if 0 < p < 100], f"no update between the start and the end: {shown}\n{text[-2000:]}"
+    assert shown == sorted(shown), shown
+    quiet, status = _in_a_terminal([*INSTRUMENTS[command], "--quiet"])
+    assert status == 0, quiet
+    assert "%|" not in quiet and "readings:" not in quiet, quiet[-2000:]
 
 
 @pytest.mark.slow
@@ -212,26 +232,39 @@ def test_a_bar_dropped_unclosed_by_an_error_does_not_swallow_the_next_runs(drawn
     assert len(drawn) == 1 and progress._stack() == []
 
 
-def test_progress_true_in_the_api_draws_the_batches_chunks(mi, capsys, monkeypatch):
+@pytest.fixture
+def every_update(monkeypatch):
+    """Real tqdm bars that draw every update, however fast (tqdm's default waits 0.1 s between two)."""
+
+    import tqdm.std
+
+    drawing = tqdm.std.tqdm.__init__
+
+    def drawn_always(self, *args, **kwargs):
+        drawing(self, *args, **{**kwargs, "mininterval": 0, "miniters": 0})
+
+    monkeypatch.setattr("tqdm.std.tqdm.monitor_interval", 0)
+    monkeypatch.setattr(tqdm.std.tqdm, "__init__", drawn_always)
+
+
+def test_progress_true_in_the_api_draws_the_batches_chunks(mi, capsys, every_update):
     """``vm.sweep(..., progress=True)``: drawn even off a terminal (a notebook), moving within the one batch."""
 
     import virtspec_mi as vm
 
-    monkeypatch.setattr("tqdm.std.tqdm.monitor_interval", 0)
-    monkeypatch.setenv("TQDM_MININTERVAL", "0")  # every update drawn (tqdm reads it at each bar)
     vm.sweep("soybean_abmb", theta_i=[0, 30, 60], wavelengths=[450, 550, 650], rays=200_000,
              chunk_size=1 << 16, progress=True)
-    shown = _percentages(capsys.readouterr().err.replace("\r", "\n"), "readings")
-    assert any(0 < p < 100 for p in shown), shown
+    err = capsys.readouterr().err.replace("\r", "\n")
+    shown = _percentages(err, "readings")
+    assert any(0 < p < 100 for p in shown), err[-3000:]
 
 
-def test_a_fit_draws_one_bar_over_its_forward_readings(mi, tmp_path, capsys, monkeypatch):
+def test_a_fit_draws_one_bar_over_its_forward_readings(mi, tmp_path, capsys, every_update):
     """``vm.fit(progress=True)``: one bar (its readings' own bars nested in it), its stage lines above it."""
 
     import virtspec_mi as vm
     from virtspec_mi.applications.fitting import _inputs
 
-    monkeypatch.setenv("TQDM_MININTERVAL", "0")
     _inputs(tmp_path)
     result = vm.fit(tmp_path / "leaf.csv", "prospect_d", {"Cab": (10.0, 80.0)}, quantities=("reflectance",),
                     theta_i=8.0, beam="collimated", delta=0.2, table_points=3, profile_points=0, progress=True)

@@ -76,3 +76,21 @@ ROUGH_XML = """<scene version="3.0.0">
         <bsdf type="roughdielectric"><float name="alpha" value="0.3"/><float name="int_ior" value="1.5"/></bsdf></shape>
 </scene>"""
 """A scene of Mitsuba's rough dielectric (alpha = 0.3, eta = 1.5) in the paper's instrument, as an XML file's text."""
+
+
+class Interrupting:
+    """
+    ``owner.name`` replaced (through ``monkeypatch``) by a call that raises
+    ``KeyboardInterrupt`` — a Ctrl-C at that point — once it has been called ``after``
+    times (``after = -1``: never); :attr:`calls` counts the calls that went through.
+    """
+
+    def __init__(self, monkeypatch, owner, name: str, after: int) -> None:
+        self.original, self.after, self.calls = getattr(owner, name), after, 0
+        monkeypatch.setattr(owner, name, self)
+
+    def __call__(self, *args, **kwargs):
+        if self.calls == self.after:
+            raise KeyboardInterrupt
+        self.calls += 1
+        return self.original(*args, **kwargs)

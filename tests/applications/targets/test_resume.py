@@ -16,7 +16,7 @@ from pathlib import Path
 
 import pytest
 
-from killed_runs import default_signals
+from killed_runs import Interrupting, default_signals
 
 CHILD = '''
 import json, sys, time
@@ -132,25 +132,16 @@ def test_a_sweep_of_a_target_interrupted_resumes_to_the_same_results(mi, tmp_pat
     target = vm.band((500, 520), step=10.0, tolerance=0.01)
     keywords = dict(theta_i=[0, 30, 60], target=target, delta=0.05, seed=3, bound="betting")
     whole = vm.sweep(scene, **keywords)
-    original, traced, stop = allocated.trace_allocated, [], [5]
-
-    def failing(*args, **kwargs):  # an interruption after five traces (the second angle under way)
-        if len(traced) == stop[0]:
-            raise KeyboardInterrupt
-        traced.append(1)
-        return original(*args, **kwargs)
-
-    monkeypatch.setattr(allocated, "trace_allocated", failing)
+    traces = Interrupting(monkeypatch, allocated, "trace_allocated", after=5)  # the second angle under way
     path = tmp_path / "sweep.json"
     with pytest.raises(KeyboardInterrupt):
         vm.sweep(scene, checkpoint=path, **keywords)
     assert len(json.loads(path.read_text())["traces"]) == 5
-    traced.clear()
-    stop[0] = -1  # no interruption now; count what is traced again
+    traces.calls, traces.after = 0, -1  # no interruption now; count what is traced again
     resumed = vm.sweep(scene, checkpoint=path, **keywords)
     assert not path.exists()
     total = sum(len(r.batches) + 1 for r in whole)  # each angle: its pilot and its batches
-    assert len(traced) == total - 5 and total > 8
+    assert traces.calls == total - 5 and total > 8
     for a, b in zip(whole, resumed):
         assert a.batches == b.batches and a["band_500-520"] == b["band_500-520"]
         assert np.array_equal(a.readings.rays, b.readings.rays)

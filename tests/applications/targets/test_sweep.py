@@ -12,6 +12,7 @@ import numpy as np
 import pytest
 
 import virtspec_mi as vm
+from killed_runs import Interrupting
 from virtspec_mi.cli import main
 
 ARGV = ["sweep", "diamond_collimated", "--theta-i", "0", "45", "--target", "band:B04,tolerance=0.05", "--seed", "1",
@@ -42,24 +43,15 @@ def test_an_interrupted_command_line_sweep_resumes_to_the_same_results(mi, tmp_p
 
     assert main([*ARGV, "--json"]) == 0
     whole = json.loads(capsys.readouterr().out)
-    original, traced, stop = allocated.trace_allocated, [], [3]
-
-    def interrupted(*args, **kwargs):  # Ctrl-C after three traces: the second angle under way
-        if len(traced) == stop[0]:
-            raise KeyboardInterrupt
-        traced.append(1)
-        return original(*args, **kwargs)
-
-    monkeypatch.setattr(allocated, "trace_allocated", interrupted)
+    traces = Interrupting(monkeypatch, allocated, "trace_allocated", after=3)  # the second angle under way
     path = tmp_path / "sweep.json"
     assert main([*ARGV, "--json", "--checkpoint", str(path)]) == 130
     assert str(path) in capsys.readouterr().err and len(json.loads(path.read_text())["traces"]) == 3
-    traced.clear()
-    stop[0] = -1
+    traces.calls, traces.after = 0, -1
     assert main([*ARGV, "--json", "--checkpoint", str(path)]) == 0
     resumed = json.loads(capsys.readouterr().out)
     assert _values(resumed) == _values(whole) and not path.exists()
-    assert len(traced) == sum(len(angle["batches"]) + 1 for angle in whole["results"]) - 3
+    assert traces.calls == sum(len(angle["batches"]) + 1 for angle in whole["results"]) - 3
 
 
 @pytest.mark.parametrize("extra, message", [

@@ -39,6 +39,7 @@ from virtspec_mi.base.version import __version__
 from virtspec_mi.budgets.bounds import hoeffding_mu
 from virtspec_mi.budgets.intervals import clopper_pearson
 from virtspec_mi.instruments.sphere.geometry import Sphere, sphere_from_parameters
+from virtspec_mi.instruments.sphere.result import Configured
 from virtspec_mi.results.base import ResultBase, attribute, per_count, plain_data, round_up, span, stored
 from virtspec_mi.results.figures import Figure, spectra
 from virtspec_mi.results.integrity import CountRules, field_value, finite_labels, whole_counts
@@ -75,7 +76,7 @@ def _reading(name: str, formula: str) -> dict[str, Variable]:
                for end, k in ends.items()}}
 
 
-class DoubleSphereResult(ResultBase):
+class DoubleSphereResult(Configured, ResultBase):
     """
     Double-sphere readings over labelled dims (see the module docstring): one
     ``xarray.Dataset`` (:attr:`data`), every count over the readings' dims and
@@ -117,6 +118,7 @@ class DoubleSphereResult(ResultBase):
         The scene's name and ``-D`` defines.
     """
 
+    CONFIGURATIONS: ClassVar[tuple[str, ...]] = CONFIGURATIONS
     FORMAT: ClassVar[str] = "virtspec-mi double sphere 1"
     KIND: ClassVar[str] = "double-sphere reading"
     KIND_DIMS: ClassVar[tuple[str, ...]] = ("configuration",)
@@ -155,36 +157,18 @@ class DoubleSphereResult(ResultBase):
                  version: str = __version__, parameters: dict | None = None, source: dict | None = None) -> None:
         options = _checked_options(options)
         readings = tuple(d for d in dims if d != "configuration")
-        if set(counts) != set(CONFIGURATIONS):
+        if not counts:
             raise ValueError(f"'counts' must hold the counts of the configurations {', '.join(CONFIGURATIONS)} "
-                             f"(got {sorted(counts)})")
-        names = list(counts["sample"])
-        for configuration in CONFIGURATIONS[1:]:
-            if set(counts[configuration]) != set(names):
-                raise ValueError(f"counts[{configuration!r}] must count what counts['sample'] counts "
-                                 f"({sorted(set(counts[configuration]) ^ set(names))} in only one)")
+                             "(got none)")
         checked = {"wall_reflectance": (readings, wall_reflectance), "transmittance_wall": (readings, transmittance_wall)}
-        checked.update({f"counts.{c}.{name}": (readings, values) for c, named in counts.items()
-                        for name, values in named.items()})
-        arrays = {"wall_reflectance": (readings, wall_reflectance), "transmittance_wall": (readings, transmittance_wall)}
-        arrays.update({name: ((*readings, "configuration"),
-                              np.stack([np.asarray(counts[c][name]) for c in CONFIGURATIONS], axis=-1))
-                       for name in names})
+        arrays = {"wall_reflectance": (readings, wall_reflectance), "transmittance_wall": (readings, transmittance_wall),
+                  **self._configured("counts", counts, readings, checked)}
         labels = {**coords, "configuration": np.array(CONFIGURATIONS, dtype=object)}
         attrs = {"spheres": spheres, "options": dict(options), "settings": settings, "seconds": float(seconds),
                  "scene": scene, "sphere_parameters": dict(sphere_parameters or {}),
                  "transmittance_parameters": dict(transmittance_parameters or {}),
                  "specimen_radius": specimen_radius, "version": version, "parameters": parameters, "source": source}
         self._store((*readings, "configuration"), labels, arrays, attrs, checked)
-
-    @cached_property
-    def counts(self) -> dict[str, dict[str, np.ndarray]]:
-        """Per configuration: every count by name over the readings' dims."""
-
-        names = [str(n) for n in self.data.data_vars if "configuration" in self.data.variables[n].dims]
-        axis = self.dims.index("configuration")
-        return {c: {name: np.take(self.data.variables[name].values, k, axis=axis) for name in names}
-                for k, c in enumerate(CONFIGURATIONS)}
 
     wall_reflectance = stored("wall_reflectance", "ρw of the reflectance sphere per reading.")
     transmittance_wall = stored("transmittance_wall", "ρw of the transmittance sphere per reading.")
@@ -205,17 +189,6 @@ class DoubleSphereResult(ResultBase):
         """The transmittance sphere."""
 
         return sphere_from_parameters(self.transmittance_parameters)
-
-    @property
-    def rays(self) -> np.ndarray:
-        """N per reading and configuration, shape (…, 3)."""
-
-        return np.stack([self.counts[c]["rays"] for c in CONFIGURATIONS], axis=-1)
-
-    def fraction(self, name: str, configuration: str = "sample") -> np.ndarray:
-        """A count of ``configuration`` over its rays (e.g. ``fraction("detected_t", "open")``)."""
-
-        return self.counts[configuration][name] / self.counts[configuration]["rays"]
 
     @property
     def fraction_delta(self) -> float:

@@ -50,19 +50,15 @@ from typing import Any
 
 import numpy as np
 
-from virtspec_mi.kernel.counts import DIRECTION_TOLERANCE, WEIGHT_ROUNDING, Fate
+from virtspec_mi.kernel.counts import Fate
 from virtspec_mi.kernel.hooks import ChunkRays
 from virtspec_mi.kernel.rng import GOLDEN, hash32, to_unit
-from virtspec_mi.kernel.walk import CAPPED_COMPONENT
-from virtspec_mi.instruments.sphere.walk import (_ACTIVE, _ROUNDED, _VIOLATION, WALK_BASE, SphereFate, SphereLayout,
-                                                 _vec)
+from virtspec_mi.instruments.sphere.walk import _ACTIVE, WALK_BASE, SphereFate, SphereLayout, _vec
 
 __all__ = ["START", "DoubleSphereLayout"]
 
 START: int = 0xFFFF
 """``last`` of a walk's start on the specimen: the sphere is chosen by the direction there."""
-
-_LENGTH2 = ((1.0 - DIRECTION_TOLERANCE) ** 2, (1.0 + DIRECTION_TOLERANCE) ** 2)
 
 
 @dataclass(frozen=True, eq=False)
@@ -134,35 +130,19 @@ class DoubleSphereLayout(SphereLayout):
         import mitsuba as mi
 
         lanes = rays.lanes
-        frame = self.holders[0].frame
-        centre = self.planes[self.entries[0]][2]
         first_fate = lanes["fate"]
-        wo = lanes["wo"]
-        wo_world = mi.Vector3f(*(wo.x * frame[i, 0] + wo.y * frame[i, 1] + wo.z * frame[i, 2] for i in range(3)))
-        target = lanes["target"]
-        start = mi.Point3f(*(centre[i] + target.x * frame[i, 0] + target.y * frame[i, 1] for i in range(3)))
+        start, wo_world = self._leaving_specimen(lanes, self.planes[self.entries[0]][2])
         left = (first_fate == int(Fate.REFLECTED)) | (first_fate == int(Fate.TRANSMITTED))
-        fate = dr.select(left, self._toward(dr.dot(wo_world, _vec(self.specimen_axis)) < 0.0),
-                         mi.UInt32(int(SphereFate.HOLDER0)))
-        fate = dr.select(first_fate == int(Fate.CAPPED), mi.UInt32(int(SphereFate.CAPPED)), fate)
-        fate = dr.select(first_fate == int(Fate.INVALID), mi.UInt32(int(SphereFate.INVALID)), fate)
-        first_rare = lanes["rare"]
-        rare = dr.select((first_rare & 1) != 0, mi.UInt32(_VIOLATION), 0) | dr.select(
-            (first_rare & 4) != 0, mi.UInt32(_ROUNDED), 0)
-        hemisphere = dr.select(first_fate == int(Fate.REFLECTED),
-                               dr.select(lanes["specular"], mi.UInt32(3), mi.UInt32(1)),
-                               dr.select(first_fate == int(Fate.TRANSMITTED), mi.UInt32(2), mi.UInt32(0)))
+        fate = self._first_fate(lanes, dr.select(
+            left, self._toward(dr.dot(wo_world, _vec(self.specimen_axis)) < 0.0), mi.UInt32(int(SphereFate.HOLDER0))))
+        rare, hemisphere = self._first_rare_and_hemisphere(lanes)
         slot = rays.slot
         dr.eval(start, wo_world, fate, rare, hemisphere, *(() if slot is None else (slot,)))
         walking = dr.compress(fate == _ACTIVE)
         walls = dr.zeros(mi.UInt32, dr.width(fate))
         if dr.width(walking):
             fate, rare, walls = self._loop(walking, start, wo_world, fate, rare, rays)
-        code = hemisphere * self.codes + fate
-        sums = {"wall_reflections": walls,
-                "weight_violations": dr.select((rare & _VIOLATION) != 0, mi.UInt32(1), mi.UInt32(0)),
-                "rounded_weights": dr.select((rare & _ROUNDED) != 0, mi.UInt32(1), mi.UInt32(0))}
-        return code, sums
+        return hemisphere * self.codes + fate, self._walk_sums(walls, rare)
 
     # -- one step ---------------------------------------------------------------------------
 
@@ -252,18 +232,9 @@ class DoubleSphereLayout(SphereLayout):
             p_centre = self.planes[seen[0]][2]
             q = x - _vec(p_centre)
             lit = on_holder & (dr.squared_norm(q) <= holder.radius * holder.radius)
-            frame = mi.Frame3f(_vec(holder.frame[:, 0]), _vec(holder.frame[:, 1]), _vec(holder.frame[:, 2]))
-            wo, w, component = dr.if_stmt(
-                (q, d, lit, *u, wavelength), lit,
-                lambda q_, d_, lit_, u0, u1, u2, u3, lam, bsdf=bsdfs[h], frame=frame: self._sample(
-                    bsdf, frame, q_, -d_, lam, [u0, u1, u2, u3], lit_),
-                lambda *_: (mi.Vector3f(0.0, 0.0, 1.0), mi.Float(0.0), mi.UInt32(0)),
-                label="double_sphere_holder")
-            wo_world = frame.to_world(wo)
-            length2 = dr.squared_norm(wo)
-            invalid = ~((length2 >= _LENGTH2[0]) & (length2 <= _LENGTH2[1])) & (w > 0.0)
+            wo_world, w, invalid, capped = self._holder_sampled(holder, bsdfs[h], q, d, lit, u, wavelength,
+                                                                "double_sphere_holder")
             lives = u[3] < w
-            capped = component == CAPPED_COMPONENT
             if len(seen) == 2:  # the specimen: on to the side it sends the ray to
                 into_r = dr.dot(wo_world, _vec(self.specimen_axis)) < 0.0
                 code = self._toward(into_r)
@@ -275,14 +246,7 @@ class DoubleSphereLayout(SphereLayout):
                 into = dr.dot(wo_world, _vec(self.planes[k][0])) < 0.0
                 code = dr.select(into, mi.UInt32(_ACTIVE), mi.UInt32(SphereFate.lost(self.planes[k][7])))
             code = dr.select(lives, code, mi.UInt32(int(SphereFate.HOLDER0) + min(h, 1)))
-            code = dr.select(invalid, mi.UInt32(int(SphereFate.INVALID)), code)
-            code = dr.select(capped, mi.UInt32(int(SphereFate.CAPPED)), code)
-            fate = dr.select(lit, code, fate)
-            exact = (w >= 0.0) & (w <= 1.0)
-            rounded = ~exact & (w >= -WEIGHT_ROUNDING) & (w <= 1.0 + WEIGHT_ROUNDING)
-            rare = rare | dr.select(lit & ~exact & ~rounded & ~capped, mi.UInt32(_VIOLATION), 0) \
-                | dr.select(lit & rounded, mi.UInt32(_ROUNDED), 0)
-            new_d = dr.select(lit, wo_world, new_d)
+            fate, rare, new_d = self._holder_settled(lit, code, w, invalid, capped, wo_world, fate, rare, new_d)
 
         bounces = state["bounces"] + dr.select(active, mi.UInt32(1), mi.UInt32(0))
         fate = dr.select((fate == _ACTIVE) & (bounces >= self.max_bounces), mi.UInt32(int(SphereFate.CAPPED)), fate)

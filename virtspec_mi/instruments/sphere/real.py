@@ -48,7 +48,7 @@ from typing import Any, Sequence
 
 import numpy as np
 
-from virtspec_mi.kernel.counts import WEIGHT_ROUNDING, Fate
+from virtspec_mi.kernel.counts import WEIGHT_ROUNDING
 from virtspec_mi.kernel.hooks import ChunkRays
 from virtspec_mi.kernel.rng import GOLDEN, hash32, to_unit
 from virtspec_mi.kernel.walk import CAPPED_COMPONENT
@@ -224,21 +224,12 @@ class RealSphereLayout(SphereLayout):
         start = mi.Point3f(point - (dr.dot(point, _vec(axis)) / dr.dot(direction, _vec(axis))) * direction)
         direction = mi.Vector3f(direction)
         fate = dr.full(mi.UInt32, _ACTIVE, count)
-        first_rare = lanes["rare"]
-        rare = dr.select((first_rare & 1) != 0, mi.UInt32(_VIOLATION), 0) | dr.select(
-            (first_rare & 4) != 0, mi.UInt32(_ROUNDED), 0)
-        hemisphere = dr.select(first_fate == int(Fate.REFLECTED),
-                               dr.select(lanes["specular"], mi.UInt32(3), mi.UInt32(1)),
-                               dr.select(first_fate == int(Fate.TRANSMITTED), mi.UInt32(2), mi.UInt32(0)))
+        rare, hemisphere = self._first_rare_and_hemisphere(lanes)
         slot = rays.slot
         dr.eval(start, direction, fate, rare, hemisphere, *(() if slot is None else (slot,)))
         fate, rare, walls = self._loop(dr.arange(mi.UInt32, count), start, direction, fate, rare, rays)
-        code = hemisphere * self.codes + fate
-        sums = {"wall_reflections": walls,
-                "weight_violations": dr.select((rare & _VIOLATION) != 0, mi.UInt32(1), mi.UInt32(0)),
-                "rounded_weights": dr.select((rare & _ROUNDED) != 0, mi.UInt32(1), mi.UInt32(0)),
-                "beam_spill": dr.select((rare & SPILL) != 0, mi.UInt32(1), mi.UInt32(0))}
-        return code, sums
+        return hemisphere * self.codes + fate, {
+            **self._walk_sums(walls, rare), "beam_spill": dr.select((rare & SPILL) != 0, mi.UInt32(1), mi.UInt32(0))}
 
     # -- one step ---------------------------------------------------------------------------
 
@@ -432,28 +423,11 @@ class RealSphereLayout(SphereLayout):
             lit = on_holder & in_disk
             if k == 0 and self.beam is not None:
                 rare = rare | dr.select(active & (state["bounces"] == 0) & ~lit, mi.UInt32(SPILL), 0)
-            frame = mi.Frame3f(_vec(holder.frame[:, 0]), _vec(holder.frame[:, 1]), _vec(holder.frame[:, 2]))
-            wo, w, component = dr.if_stmt(
-                (q, d, lit, *u, wavelength), lit,
-                lambda q_, d_, lit_, u0, u1, u2, u3, lam, bsdf=bsdfs[k], frame=frame: self._sample(
-                    bsdf, frame, q_, -d_, lam, [u0, u1, u2, u3], lit_),
-                lambda *_: (mi.Vector3f(0.0, 0.0, 1.0), mi.Float(0.0), mi.UInt32(0)),
-                label="sphere_holder")
-            wo_world = frame.to_world(wo)
-            length2 = dr.squared_norm(wo)
-            invalid = ~((length2 >= _LENGTH2[0]) & (length2 <= _LENGTH2[1])) & (w > 0.0)
+            wo_world, w, invalid, capped = self._holder_sampled(holder, bsdfs[k], q, d, lit, u, wavelength)
             lives = u[3] < w
             into = dr.dot(wo_world, _vec(self.planes[k][0])) < 0.0
-            capped = component == CAPPED_COMPONENT
             code = dr.select(lives, dr.select(into, mi.UInt32(_ACTIVE), lost), mi.UInt32(int(SphereFate.HOLDER0) + k))
-            code = dr.select(invalid, mi.UInt32(int(SphereFate.INVALID)), code)
-            code = dr.select(capped, mi.UInt32(int(SphereFate.CAPPED)), code)
-            fate = dr.select(lit, code, fate)
-            exact = (w >= 0.0) & (w <= 1.0)
-            rounded = ~exact & (w >= -WEIGHT_ROUNDING) & (w <= 1.0 + WEIGHT_ROUNDING)
-            rare = rare | dr.select(lit & ~exact & ~rounded & ~capped, mi.UInt32(_VIOLATION), 0) \
-                | dr.select(lit & rounded, mi.UInt32(_ROUNDED), 0)
-            new_d = dr.select(lit, wo_world, new_d)
+            fate, rare, new_d = self._holder_settled(lit, code, w, invalid, capped, wo_world, fate, rare, new_d)
             tube = self._holder_tube(k)
             if tube >= 0:  # back from a recessed disk: into its cylinder
                 next_last = dr.select(on_holder, mi.UInt32(TUBE + tube), next_last)

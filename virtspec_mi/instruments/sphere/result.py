@@ -58,7 +58,7 @@ from virtspec_mi.instruments.sphere.walk import FATES
 from virtspec_mi.instruments.sphere.expected import ROUNDING_BIAS, SCORE_SCALE, SCORE_SUMS, SMALLEST_WEIGHT
 from virtspec_mi.settings import Settings, share
 
-__all__ = ["CONFIGURATIONS", "COUNT_RULES", "SphereResult"]
+__all__ = ["CONFIGURATIONS", "COUNT_RULES", "Configured", "SphereResult"]
 
 CONFIGURATIONS: tuple[str, ...] = ("sample", "standard")
 """The two simulated configurations of every reading."""
@@ -80,7 +80,68 @@ hemispheres hold at most its rays. Sums over the walk (``wall_reflections``, ``w
 _FRACTION_RULES = CountRules(None, fractions=("wall_reflectance",))
 
 
-class SphereResult(ResultBase):
+class Configured:
+    """
+    Counts kept per configuration of a sphere reading (:attr:`CONFIGURATIONS`, in order),
+    over the readings' dims and ``configuration``: the constructor's check and layout of
+    them (:meth:`_configured`), and :attr:`counts`, :attr:`rays` and :meth:`fraction`.
+    The single sphere's result and the double sphere's share it.
+    """
+
+    CONFIGURATIONS: ClassVar[tuple[str, ...]]
+    """The configurations of a reading, in the order of the ``configuration`` dim."""
+
+    @classmethod
+    def _configured(cls, prefix: str, groups: Mapping[str, Mapping[str, Any]], readings: tuple[str, ...],
+                    checked: dict[str, Any]) -> dict[str, Any]:
+        """
+        ``groups`` (configuration → name → counts; ``prefix`` names them: ``counts``,
+        ``pilot``) added to ``checked`` and laid out as arrays over the readings' dims and
+        ``configuration`` (``pilot_…`` for the pilot's); every configuration counts the same names.
+        """
+
+        configurations = cls.CONFIGURATIONS
+        for configuration, named in groups.items():
+            checked.update({f"{prefix}.{configuration}.{name}": (readings, values) for name, values in named.items()})
+        if groups and set(groups) != set(configurations):
+            raise ValueError(f"'{prefix}' must hold the counts of the configurations {', '.join(configurations)} "
+                             f"(got {sorted(groups)})")
+        names = list(groups.get(configurations[0], {}))
+        for configuration in configurations[1:] if groups else ():
+            if set(groups[configuration]) != set(names):
+                raise ValueError(f"{prefix}[{configuration!r}] must count what {prefix}[{configurations[0]!r}] counts "
+                                 f"({sorted(set(groups[configuration]) ^ set(names))} in only one)")
+        return {("" if prefix == "counts" else f"{prefix}_") + name: (
+            (*readings, "configuration"), np.stack([np.asarray(groups[c][name]) for c in configurations], axis=-1))
+            for name in names}
+
+    def _groups(self, prefix: str) -> dict[str, dict[str, np.ndarray]]:
+        data = self.data  # type: ignore[attr-defined]
+        names = [str(n) for n in data.data_vars if "configuration" in data.variables[n].dims]
+        names = [n[len(prefix):] for n in names if n.startswith(prefix) and (prefix or not n.startswith("pilot_"))]
+        axis = self.dims.index("configuration")  # type: ignore[attr-defined]
+        return {c: {name: np.take(data.variables[prefix + name].values, k, axis=axis) for name in names}
+                for k, c in enumerate(self.CONFIGURATIONS)}
+
+    @cached_property
+    def counts(self) -> dict[str, dict[str, np.ndarray]]:
+        """Per configuration: every count by name over the readings' dims."""
+
+        return self._groups("")
+
+    @property
+    def rays(self) -> np.ndarray:
+        """N per reading and configuration, shape (…, configurations), in the order of :attr:`CONFIGURATIONS`."""
+
+        return np.stack([self.counts[c]["rays"] for c in self.CONFIGURATIONS], axis=-1)
+
+    def fraction(self, name: str, configuration: str = "sample") -> np.ndarray:
+        """A count of ``configuration`` over its rays (e.g. ``fraction("lost_entrance")``)."""
+
+        return self.counts[configuration][name] / self.counts[configuration]["rays"]
+
+
+class SphereResult(Configured, ResultBase):
     """
     Sphere readings over labelled dims: the exact counts of both configurations and
     everything derived from them (see the module docstring). One ``xarray.Dataset``
@@ -131,6 +192,7 @@ class SphereResult(ResultBase):
         The scene's name and ``-D`` defines (:func:`virtspec_mi.runtime.scene.scene_source`), or ``None``.
     """
 
+    CONFIGURATIONS: ClassVar[tuple[str, ...]] = CONFIGURATIONS
     FORMAT: ClassVar[str] = "virtspec-mi sphere 1"
     VARIABLES: ClassVar[dict[str, tuple[str, str]]] = {
         "configuration": ("1", "sphere configuration (sample or standard in the beam)"),
@@ -196,21 +258,8 @@ class SphereResult(ResultBase):
                                  f"{', '.join(SCORE_SUMS)} of both configurations (lacks {', '.join(lacking)})")
         readings = tuple(d for d in dims if d != "configuration")
         checked = {"wall_reflectance": (readings, wall_reflectance)}
-        arrays = {"wall_reflectance": (readings, wall_reflectance)}
-        for prefix, groups in (("counts", counts), ("pilot", pilot or {})):
-            for configuration, named in groups.items():
-                checked.update({f"{prefix}.{configuration}.{name}": (readings, values)
-                                for name, values in named.items()})
-            if groups and set(groups) != set(CONFIGURATIONS):
-                raise ValueError(f"'{prefix}' must hold the counts of the configurations {', '.join(CONFIGURATIONS)} "
-                                 f"(got {sorted(groups)})")
-            names = list(groups.get("sample", {}))
-            if groups and set(groups["standard"]) != set(names):
-                raise ValueError(f"{prefix}['standard'] must count what {prefix}['sample'] counts "
-                                 f"({sorted(set(groups['standard']) ^ set(names))} in only one)")
-            arrays.update({("" if prefix == "counts" else "pilot_") + name: (
-                (*readings, "configuration"), np.stack([np.asarray(groups[c][name]) for c in CONFIGURATIONS], axis=-1))
-                for name in names})
+        arrays = {"wall_reflectance": (readings, wall_reflectance), **self._configured("counts", counts, readings, checked),
+                  **self._configured("pilot", pilot or {}, readings, checked)}
         labels = {**coords, "configuration": np.array(CONFIGURATIONS, dtype=object)}  # variable-length text
         attrs = {"sphere": sphere, "cap_fractions": dict(cap_fractions), "options": dict(options),
                  "settings": settings, "seconds": float(seconds), "scene": scene,
@@ -219,23 +268,10 @@ class SphereResult(ResultBase):
         self._store((*readings, "configuration"), labels, arrays, attrs, checked)
 
     @cached_property
-    def counts(self) -> dict[str, dict[str, np.ndarray]]:
-        """Per configuration (``"sample"``, ``"standard"``): every count by name over the readings' dims."""
-
-        return self._groups("")
-
-    @cached_property
     def pilot(self) -> dict[str, dict[str, np.ndarray]] | None:
         """Two-stage pilot counts per configuration (spent, not in the estimates); ``None`` for budgets sized ahead."""
 
         return self._groups("pilot_") if "pilot_rays" in self.data else None
-
-    def _groups(self, prefix: str) -> dict[str, dict[str, np.ndarray]]:
-        names = [str(n) for n in self.data.data_vars if "configuration" in self.data.variables[n].dims]
-        names = [n[len(prefix):] for n in names if n.startswith(prefix) and (prefix or not n.startswith("pilot_"))]
-        axis = self.dims.index("configuration")
-        return {c: {name: np.take(self.data.variables[prefix + name].values, k, axis=axis) for name in names}
-                for k, c in enumerate(CONFIGURATIONS)}
 
     wall_reflectance = stored("wall_reflectance", "ρw per reading (over the readings' dims).")
     sphere = attribute("sphere", "The sphere in words.", str)
@@ -246,18 +282,7 @@ class SphereResult(ResultBase):
         "sphere_parameters", "The sphere's description (:meth:`~virtspec_mi.instruments.sphere.geometry.Sphere.parameters`).")
     specimen_radius = attribute("specimen_radius", "Radius of the specimen disk (mm), or ``None``.")
 
-    @property
-    def rays(self) -> np.ndarray:
-        """N per reading and configuration, shape (…, 2) (``sample``, ``standard``)."""
-
-        return np.stack([self.counts[c]["rays"] for c in CONFIGURATIONS], axis=-1)
-
-    # -- counts and fractions ---------------------------------------------------------
-
-    def fraction(self, name: str, configuration: str = "sample") -> np.ndarray:
-        """A count of ``configuration`` over its rays (e.g. ``fraction("lost_entrance")``)."""
-
-        return self.counts[configuration][name] / self.counts[configuration]["rays"]
+    # -- counts and fractions (counts, rays, fraction: Configured) ---------------------------
 
     @property
     def expected(self) -> bool:

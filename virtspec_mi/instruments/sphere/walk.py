@@ -285,24 +285,13 @@ class SphereLayout(ExitHook):
         lanes = rays.lanes
         holder = self.holders[0]
         axis, _, centre = self.planes[0]
-        frame = holder.frame
-        first_fate = lanes["fate"]
-        wo = lanes["wo"]
-        wo_world = mi.Vector3f(*(wo.x * frame[i, 0] + wo.y * frame[i, 1] + wo.z * frame[i, 2] for i in range(3)))
-        target = lanes["target"]
-        start = mi.Point3f(*(centre[i] + target.x * frame[i, 0] + target.y * frame[i, 1] for i in range(3)))
+        start, wo_world = self._leaving_specimen(lanes, centre)
         left = self.entering(lanes)
         into = dr.dot(wo_world, _vec(axis)) < 0.0
-        fate = dr.select(left, dr.select(into, mi.UInt32(_ACTIVE), mi.UInt32(SphereFate.lost(holder.port))),
-                         mi.UInt32(int(SphereFate.HOLDER0)))
-        fate = dr.select(first_fate == int(Fate.CAPPED), mi.UInt32(int(SphereFate.CAPPED)), fate)
-        fate = dr.select(first_fate == int(Fate.INVALID), mi.UInt32(int(SphereFate.INVALID)), fate)
-        first_rare = lanes["rare"]
-        rare = dr.select((first_rare & 1) != 0, mi.UInt32(_VIOLATION), 0) | dr.select(
-            (first_rare & 4) != 0, mi.UInt32(_ROUNDED), 0)
-        hemisphere = dr.select(first_fate == int(Fate.REFLECTED),
-                               dr.select(lanes["specular"], mi.UInt32(3), mi.UInt32(1)),
-                               dr.select(first_fate == int(Fate.TRANSMITTED), mi.UInt32(2), mi.UInt32(0)))
+        fate = self._first_fate(lanes, dr.select(
+            left, dr.select(into, mi.UInt32(_ACTIVE), mi.UInt32(SphereFate.lost(holder.port))),
+            mi.UInt32(int(SphereFate.HOLDER0))))
+        rare, hemisphere = self._first_rare_and_hemisphere(lanes)
         slot = rays.slot
         dr.eval(start, wo_world, fate, rare, hemisphere, *(() if slot is None else (slot,)))  # one kernel
         walking = dr.compress(fate == _ACTIVE)  # the rays that entered the sphere
@@ -310,12 +299,97 @@ class SphereLayout(ExitHook):
         carried = self.carried_starts(lanes)
         if dr.width(walking):
             fate, rare, walls = self._loop(walking, start, wo_world, fate, rare, rays, carried)
-        code = hemisphere * self.codes + fate
-        sums = {"wall_reflections": walls,
+        return hemisphere * self.codes + fate, {**self._walk_sums(walls, rare), **self.carried_sums(carried, rays)}
+
+    # -- what every walk starts and ends with (the single, real and double spheres) ---------------
+
+    def _leaving_specimen(self, lanes: dict, centre: Sequence[float]) -> tuple[Any, Any]:
+        """Where the rays leave the specimen (holder 0, its port plane's ``centre``) and their direction, in the world."""
+
+        import mitsuba as mi
+
+        frame = self.holders[0].frame
+        wo, target = lanes["wo"], lanes["target"]
+        wo_world = mi.Vector3f(*(wo.x * frame[i, 0] + wo.y * frame[i, 1] + wo.z * frame[i, 2] for i in range(3)))
+        start = mi.Point3f(*(centre[i] + target.x * frame[i, 0] + target.y * frame[i, 1] for i in range(3)))
+        return start, wo_world
+
+    @staticmethod
+    def _first_fate(lanes: dict, fate: Any) -> Any:
+        """``fate``, unless the first interaction was capped or gave an invalid direction."""
+
+        import drjit as dr
+        import mitsuba as mi
+
+        first_fate = lanes["fate"]
+        fate = dr.select(first_fate == int(Fate.CAPPED), mi.UInt32(int(SphereFate.CAPPED)), fate)
+        return dr.select(first_fate == int(Fate.INVALID), mi.UInt32(int(SphereFate.INVALID)), fate)
+
+    @staticmethod
+    def _first_rare_and_hemisphere(lanes: dict) -> tuple[Any, Any]:
+        """The first interaction's rare bits (weight violation, rounded weight) and its hemisphere code."""
+
+        import drjit as dr
+        import mitsuba as mi
+
+        first_fate, first_rare = lanes["fate"], lanes["rare"]
+        rare = dr.select((first_rare & 1) != 0, mi.UInt32(_VIOLATION), 0) | dr.select(
+            (first_rare & 4) != 0, mi.UInt32(_ROUNDED), 0)
+        hemisphere = dr.select(first_fate == int(Fate.REFLECTED),
+                               dr.select(lanes["specular"], mi.UInt32(3), mi.UInt32(1)),
+                               dr.select(first_fate == int(Fate.TRANSMITTED), mi.UInt32(2), mi.UInt32(0)))
+        return rare, hemisphere
+
+    @staticmethod
+    def _walk_sums(walls: Any, rare: Any) -> dict[str, Any]:
+        """Each ray's wall reflections, weight violation and rounded weight (0 or 1 each)."""
+
+        import drjit as dr
+        import mitsuba as mi
+
+        return {"wall_reflections": walls,
                 "weight_violations": dr.select((rare & _VIOLATION) != 0, mi.UInt32(1), mi.UInt32(0)),
-                "rounded_weights": dr.select((rare & _ROUNDED) != 0, mi.UInt32(1), mi.UInt32(0)),
-                **self.carried_sums(carried, rays)}
-        return code, sums
+                "rounded_weights": dr.select((rare & _ROUNDED) != 0, mi.UInt32(1), mi.UInt32(0))}
+
+    def _holder_sampled(self, holder: Holder, bsdf: Any, q: Any, d: Any, lit: Any, u: list, wavelength: Any,
+                        label: str = "sphere_holder") -> tuple[Any, Any, Any, Any]:
+        """
+        A holder disk's BSDF sampled at the rays that hit it (``lit``; packets without one
+        skip it): their direction out (world), weight, and whether it is invalid or capped.
+        """
+
+        import drjit as dr
+        import mitsuba as mi
+
+        frame = mi.Frame3f(_vec(holder.frame[:, 0]), _vec(holder.frame[:, 1]), _vec(holder.frame[:, 2]))
+        wo, w, component = dr.if_stmt(
+            (q, d, lit, *u, wavelength), lit,
+            lambda q_, d_, lit_, u0, u1, u2, u3, lam, bsdf=bsdf, frame=frame: self._sample(
+                bsdf, frame, q_, -d_, lam, [u0, u1, u2, u3], lit_),
+            lambda *_: (mi.Vector3f(0.0, 0.0, 1.0), mi.Float(0.0), mi.UInt32(0)),
+            label=label)
+        length2 = dr.squared_norm(wo)
+        invalid = ~((length2 >= _LENGTH2[0]) & (length2 <= _LENGTH2[1])) & (w > 0.0)
+        return frame.to_world(wo), w, invalid, component == CAPPED_COMPONENT
+
+    @staticmethod
+    def _holder_settled(lit: Any, code: Any, w: Any, invalid: Any, capped: Any, wo_world: Any, fate: Any,
+                        rare: Any, new_d: Any) -> tuple[Any, Any, Any]:
+        """
+        The rays that hit a holder: their fate (``code``, unless invalid or capped), the
+        rare bits of their weight (violation, rounding) and their new direction.
+        """
+
+        import drjit as dr
+        import mitsuba as mi
+
+        code = dr.select(invalid, mi.UInt32(int(SphereFate.INVALID)), code)
+        code = dr.select(capped, mi.UInt32(int(SphereFate.CAPPED)), code)
+        exact = (w >= 0.0) & (w <= 1.0)
+        rounded = ~exact & (w >= -WEIGHT_ROUNDING) & (w <= 1.0 + WEIGHT_ROUNDING)
+        rare = rare | dr.select(lit & ~exact & ~rounded & ~capped, mi.UInt32(_VIOLATION), 0) \
+            | dr.select(lit & rounded, mi.UInt32(_ROUNDED), 0)
+        return dr.select(lit, code, fate), rare, dr.select(lit, wo_world, new_d)
 
     def _loop(self, walking: Any, start: Any, direction: Any, fate: Any, rare: Any,
               rays: ChunkRays, carried: dict[str, Any] | None = None) -> tuple[Any, Any, Any]:
@@ -468,29 +542,12 @@ class SphereLayout(ExitHook):
             lost = mi.UInt32(SphereFate.lost(holder.port))
             fate = dr.select(on_holder & ~in_disk, lost, fate)
             lit = on_holder & in_disk
-            frame = mi.Frame3f(_vec(holder.frame[:, 0]), _vec(holder.frame[:, 1]), _vec(holder.frame[:, 2]))
-            wo, w, component = dr.if_stmt(  # packets without a hit on this disk skip its BSDF
-                (q, d, lit, *u, wavelength), lit,
-                lambda q_, d_, lit_, u0, u1, u2, u3, lam, bsdf=bsdfs[k], frame=frame: self._sample(
-                    bsdf, frame, q_, -d_, lam, [u0, u1, u2, u3], lit_),
-                lambda *_: (mi.Vector3f(0.0, 0.0, 1.0), mi.Float(0.0), mi.UInt32(0)),
-                label="sphere_holder")
-            wo_world = frame.to_world(wo)
-            length2 = dr.squared_norm(wo)
-            invalid = ~((length2 >= _LENGTH2[0]) & (length2 <= _LENGTH2[1])) & (w > 0.0)
+            wo_world, w, invalid, capped = self._holder_sampled(holder, bsdfs[k], q, d, lit, u, wavelength)
             lives = self._lives(u[3], w)
             held = dr.select(lit, w, held)
             into = dr.dot(wo_world, _vec(self.planes[k][0])) < 0.0
-            capped = component == CAPPED_COMPONENT
             code = dr.select(lives, dr.select(into, mi.UInt32(_ACTIVE), lost), mi.UInt32(int(SphereFate.HOLDER0) + k))
-            code = dr.select(invalid, mi.UInt32(int(SphereFate.INVALID)), code)
-            code = dr.select(capped, mi.UInt32(int(SphereFate.CAPPED)), code)
-            fate = dr.select(lit, code, fate)
-            exact = (w >= 0.0) & (w <= 1.0)
-            rounded = ~exact & (w >= -WEIGHT_ROUNDING) & (w <= 1.0 + WEIGHT_ROUNDING)
-            rare = rare | dr.select(lit & ~exact & ~rounded & ~capped, mi.UInt32(_VIOLATION), 0) \
-                | dr.select(lit & rounded, mi.UInt32(_ROUNDED), 0)
-            new_d = dr.select(lit, wo_world, new_d)
+            fate, rare, new_d = self._holder_settled(lit, code, w, invalid, capped, wo_world, fate, rare, new_d)
 
         bounces = state["bounces"] + dr.select(active, mi.UInt32(1), mi.UInt32(0))
         fate = dr.select((fate == _ACTIVE) & (bounces >= self.max_bounces), mi.UInt32(int(SphereFate.CAPPED)), fate)

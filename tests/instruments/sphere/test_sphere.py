@@ -209,6 +209,18 @@ def test_two_stage_sizes_each_configurations_detector_fraction():
     assert grey.counts["sample"]["rays"][0] != grey.counts["standard"]["rays"][0]  # each sized from its own pilot
 
 
+def test_a_two_stage_reading_and_its_pilot_are_written_and_read_back(tmp_path):
+    """The pilot's counts are its first interactions' fates, held to their own rules: every format reads back."""
+
+    result = vm.sphere_measure(SCENE, bound="two-stage", mu=0.05, wavelengths="500, 600", seed=3)
+    for suffix in (".nc", ".json", ".csv"):
+        back = vm.read_result(result.write(tmp_path / f"two_stage{suffix}"))
+        for configuration in ("sample", "standard"):
+            for name, values in result.pilot[configuration].items():
+                assert np.array_equal(back.pilot[configuration][name], values), (suffix, configuration, name)
+        assert back.summary() == result.summary()
+
+
 def test_a_sphere_reading_over_theta_i_and_parameters_is_keyed_like_a_sweep():
     """Several theta_i and specimen parameter points: labelled dims, each reading the one-angle reading's counts."""
 
@@ -223,3 +235,38 @@ def test_a_sphere_reading_over_theta_i_and_parameters_is_keyed_like_a_sweep():
     assert np.array_equal(one.counts["sample"]["detected"][:, 0], both.counts["sample"]["detected"][:, 0, 0])
     with pytest.raises(ValueError, match="theta_i = 40"):
         vm.sphere_measure(scene, theta_i=[8, 40], rays=100)
+
+
+def test_a_tolerance_on_the_reading_is_met_with_the_rays_a_pilot_sized(tmp_path):
+    """
+    tolerance=: a pilot (the seed's second stream) sizes N for the reading's interval to
+    lie within ±tolerance; the reading is then the same call's with rays=N (the same
+    counts), its pilot kept beside it, the tolerance met and stated, and the file says it too.
+    """
+
+    result = vm.sphere_measure(SCENE, tolerance=0.02, wavelengths=[450, 650], seed=2)
+    interval, reading = result.reading_interval, result.reading
+    assert result.tolerance == 0.02 and np.all(result.tolerance_met)
+    assert np.all(np.maximum(reading - interval[..., 0], interval[..., 1] - reading) <= 0.02)
+    assert np.all(result.pilot["sample"]["rays"] == 50_000) and np.all(result.pilot["standard"]["rays"] == 50_000)
+    rays = int(result.counts["sample"]["rays"].flat[0])
+    assert np.all(result.rays == rays) and 10_000 < rays < 5_000_000
+    same = vm.sphere_measure(SCENE, rays=rays, wavelengths=[450, 650], seed=2)
+    for configuration in ("sample", "standard"):
+        assert np.array_equal(same.counts[configuration]["detected"], result.counts[configuration]["detected"])
+    assert np.all(result.fraction_mu == pytest.approx(hoeffding_mu(rays, 0.005)))  # what N guarantees, not mu
+    text = result.summary()
+    assert "tolerance +-0.02 on the reading (rays sized by a pilot of 50,000 per configuration): met by every" in text
+    result.write(tmp_path / "tolerance.nc")
+    back = vm.read_result(tmp_path / "tolerance.nc")
+    assert back.tolerance == 0.02 and np.array_equal(back.tolerance_met, result.tolerance_met)
+    assert back.summary() == text
+
+
+def test_a_tolerance_is_refused_beside_rays_a_two_stage_bound_or_expected_scores():
+    for extra in ({"rays": 1000}, {"bound": "two-stage"}, {"detector": "expected"}):
+        with pytest.raises(ValueError, match="tolerance = 0.02 sizes the rays from a pilot of counted detector"):
+            vm.sphere_measure(SCENE, tolerance=0.02, wavelengths=[550], **extra)
+    for bad in (0, 1, -0.1, "wide"):
+        with pytest.raises(ValueError, match="tolerance"):
+            vm.sphere_measure(SCENE, tolerance=bad, wavelengths=[550])

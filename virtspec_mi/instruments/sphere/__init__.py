@@ -52,12 +52,14 @@ from __future__ import annotations
 
 import math
 import warnings
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any, ClassVar
 
 import numpy as np
 
+from virtspec_mi.budgets.ratio import ratio_rays
 from virtspec_mi.budgets.rules import DETECTOR_COLUMNS
+from virtspec_mi.budgets.twostage import stage_two_seed
 from virtspec_mi.engine.parameters import ParameterSpace
 from virtspec_mi.engine.plan import Columns, Plan
 from virtspec_mi.engine.tally import Tally
@@ -70,10 +72,11 @@ from virtspec_mi.instruments.sphere.beam import BeamProfile
 from virtspec_mi.instruments.sphere.real import check_traced_beam
 from virtspec_mi.instruments.sphere.expected import expected_layout
 from virtspec_mi.base.checks import number, shown_value
+from virtspec_mi.base.surface import spoken
 from virtspec_mi.results.base import plain_data
 from virtspec_mi.settings import Options, Settings, one_of, option, share, true_or_false, whole_number
 
-__all__ = ["MEASUREMENTS", "SPECULAR", "METHODS", "DETECTORS", "SphereOptions", "IntegratingSphere", "configurations",
+__all__ = ["MEASUREMENTS", "SPECULAR", "METHODS", "DETECTORS", "TOLERANCE_PILOT_RAYS", "SphereOptions", "IntegratingSphere", "configurations",
            "SphereCorrection", "Sphere", "Port", "Baffle", "BeamProfile", "SphereResult"]
 
 MEASUREMENTS: dict[str, str] = {
@@ -93,6 +96,24 @@ METHODS: dict[str, str] = {
     "substitution": "single beam: sample, then the standard, in the same port (the reference port plugged)",
     "comparison": "sample and standard both mounted (sample and reference ports), then swapped",
 }
+
+
+TOLERANCE_PILOT_RAYS: int = 50_000
+"""
+The pilot's rays per configuration and reading that size a reading to its ``tolerance``
+(unless ``pilot_rays`` is given): at the shipped 150 mm sphere's detector fractions
+(0.027 and 0.059) the reading's N is then 1.3 times the least that meets ±0.005 (8.4·10⁶
+against 6.5·10⁶ from the true fractions; 2.7·10⁷ with a pilot of 2,000).
+"""
+
+
+def _check_tolerance(value: Any) -> float | None:
+    if value is None:
+        return None
+    tolerance = number("tolerance", value)
+    if not 0.0 < tolerance < 1.0:
+        raise ValueError(f"tolerance must satisfy 0 < tolerance < 1 (got {shown_value(value)})")
+    return tolerance
 
 
 def _check_sphere(value: Any) -> Sphere:
@@ -126,6 +147,9 @@ class SphereOptions(Options):
     detector: str = option("counted", one_of("detector", DETECTORS),
                            "how detection is scored: counted rays, or the expected value of each wall bounce",
                            DETECTORS)
+    tolerance: float | None = option(
+        None, _check_tolerance, "half-width the reading's certified interval is sized for, 0 < tolerance < 1: a pilot "
+                                "sizes the rays of both configurations (two-stage; counted detector)")
     sphere: Sphere | None = option(
         None, _check_sphere, "the integrating sphere (a virtspec_mi.Sphere; as integrator parameters: diameter, "
                              "wall_reflectance, port_<name>, baffle)", flag=False)
@@ -149,7 +173,8 @@ class SphereOptions(Options):
         """
 
         return {name: value for name, value in super().as_dict().items()
-                if name != "sphere" and not (name == "detector" and value == "counted")}
+                if name != "sphere" and not (name == "detector" and value == "counted")
+                and not (name == "tolerance" and value is None)}
 
 
 def configurations(sphere: Sphere, options: SphereOptions, specimen_radius: float,
@@ -410,6 +435,15 @@ class IntegratingSphere(Instrument):
         setups = configurations(sphere, options, bench.geometry.specimen_radius)
         for angle in theta_i:
             _check_beam(sphere, options, settings.updated(theta_i=float(angle)), setups["sample"][0][0].frame)
+        if options.tolerance is not None:  # a pilot first sizes both configurations for the reading's tolerance
+            if options.detector == "expected" or settings.rays is not None or settings.adaptive:
+                raise ValueError(f"tolerance = {options.tolerance:g} sizes the rays from a pilot of counted detector "
+                                 "fractions: give it " + spoken("without rays, without a two-stage bound and with "
+                                                                "detector='counted'",
+                                                                "without --rays, without --bound two-stage and with "
+                                                                "--detector counted"))
+            pilot = settings.pilot_rays or TOLERANCE_PILOT_RAYS
+            settings = settings.updated(rays=pilot)  # the pilot's rays; process sizes the reading's from its counts
         if not settings.adaptive and settings.rays is None:  # each detector fraction at delta/2
             settings = settings.updated(rays=settings.updated(delta=settings.delta / DETECTOR_COLUMNS.share)
                                         .rays_per_reading)
@@ -427,6 +461,31 @@ class IntegratingSphere(Instrument):
                          instrument=self.name, options={"sphere": sphere.parameters(), **options.as_dict()})
         return self.plan
 
+    def process(self, plan: Plan, *, checkpoint: Any = None, progress: bool | None = False,
+                runner: Any = None) -> Tally:
+        """
+        The plan traced; with ``tolerance``, ``plan`` is the pilot's (its rays, the seed's
+        second stream: :func:`~virtspec_mi.budgets.twostage.stage_two_seed`), whose detector
+        counts size the reading's N (:func:`~virtspec_mi.budgets.ratio.ratio_rays`, the most
+        any reading needs), then the reading itself is traced at the settings' seed with N
+        rays — the counts of the same call with ``rays=N`` — its pilot's counts kept beside.
+        """
+
+        tolerance = self.sphere_options.tolerance
+        if tolerance is None:
+            return super().process(plan, checkpoint=checkpoint, progress=progress, runner=runner)
+        settings = plan.settings
+        pilot = super().process(replace(plan, settings=settings.updated(seed=stage_two_seed(settings.seed))),
+                                progress=progress, runner=runner)
+        detected = _named_counts(self.sphere_options.sphere, plan.hook(0), pilot.bins, pilot.sums)["detected"]
+        half = len(detected) // 2  # flat readings: the sample's, then the standard's (engine.plan)
+        standard = 1.0 if self.sphere_options.measurement == "transmittance" else self.sphere_options.standard
+        rays = ratio_rays(detected[:half], detected[half:], int(settings.rays), tolerance, standard, settings.delta,
+                          settings.pilot_delta_value)
+        self.plan = replace(plan, settings=settings.updated(rays=int(rays.max())))
+        tally = super().process(self.plan, checkpoint=checkpoint, progress=progress, runner=runner)
+        return replace(tally, pilot=pilot.counts)
+
     def postprocess(self, tally: Tally) -> SphereResult:
         """The readout: named counts of both configurations over the readings' dims, the sphere and its mode."""
 
@@ -435,9 +494,9 @@ class IntegratingSphere(Instrument):
         named = {**_named_counts(sphere, plan.hook(0), tally.bins, tally.sums), "rays": tally.counts.rays}
         counts = {name: {key: reading_grid(plan, values, g, theta_dim=False) for key, values in named.items()}
                   for g, name in enumerate(CONFIGURATIONS)}
-        pilot = None if tally.pilot is None else {
+        pilot = None if tally.pilot is None else {  # its stored counts (absorbed: what the others leave)
             name: {key: reading_grid(plan, values, g, theta_dim=False) for key, values in tally.pilot.as_dict().items()
-                   if key != "largest_weight"} for g, name in enumerate(CONFIGURATIONS)}
+                   if key not in ("largest_weight", "absorbed")} for g, name in enumerate(CONFIGURATIONS)}
         shape = counts["sample"]["rays"].shape
         rho_w = sphere.wall_reflectance_at(plan.wavelengths).reshape(-1, *(1,) * (len(shape) - 1))
         return SphereResult(dims=dims, coords=coords, counts=counts, pilot=pilot,

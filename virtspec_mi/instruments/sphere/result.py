@@ -47,12 +47,14 @@ import numpy as np
 from virtspec_mi.base.version import __version__
 from virtspec_mi.budgets.bounds import hoeffding_mu
 from virtspec_mi.budgets.intervals import clopper_pearson
+from virtspec_mi.base.checks import number
 from virtspec_mi.budgets.scores import score_interval
 from virtspec_mi.instruments.sphere.geometry import Sphere, sphere_from_parameters
 from virtspec_mi.instruments.sphere.model import correct_readings, theory_inputs
 from virtspec_mi.results.base import ResultBase, attribute, per_count, plain_data, round_up, span, stored
 from virtspec_mi.results.integrity import CountRules, field_value, finite_labels, whole_counts
 from virtspec_mi.results.figures import Figure, spectra
+from virtspec_mi.results.readings import COUNT_RULES as FATE_RULES
 from virtspec_mi.results.variables import READINGS, Variable, bounds
 from virtspec_mi.instruments.sphere.walk import FATES
 from virtspec_mi.instruments.sphere.expected import ROUNDING_BIAS, SCORE_SCALE, SCORE_SUMS, SMALLEST_WEIGHT
@@ -368,12 +370,29 @@ class SphereResult(Configured, ResultBase):
         where not certified.
         """
 
-        if self.settings.adaptive and self.settings.rays is None:
+        if self.settings.adaptive and self.settings.rays is None and self.tolerance is None:
             mu = np.full(self.certified.shape, float(self.settings.mu))
         else:
             mu = np.maximum(*(per_count(self.counts[c]["rays"], lambda n: hoeffding_mu(n, self.fraction_delta))
                               for c in CONFIGURATIONS))
         return np.where(self.certified, mu, np.nan)
+
+    @property
+    def tolerance(self) -> float | None:
+        """The half-width the reading's interval was sized for (``tolerance=``), or ``None``."""
+
+        value = self.options.get("tolerance")
+        return None if value is None else float(value)
+
+    @property
+    def tolerance_met(self) -> np.ndarray:
+        """Per reading: whether its certified interval lies within ± :attr:`tolerance` of the reading (all True without one)."""
+
+        if self.tolerance is None:
+            return np.ones(self.certified.shape, dtype=bool)
+        interval, reading = self.reading_interval, self.reading
+        half = np.maximum(reading - interval[..., 0], interval[..., 1] - reading)
+        return np.asarray(self.certified & (half <= self.tolerance))
 
     # -- the readout ------------------------------------------------------------------
 
@@ -563,6 +582,13 @@ class SphereResult(Configured, ResultBase):
                     "NOT CERTIFIED: no light reached the detector" if np.all(self.no_light) else
                     "NOT CERTIFIED (capped walks, invalid directions or weight violations)")
                  + f"; {self.seconds * 1e3:.1f} ms"]
+        if self.tolerance is not None:
+            met = self.tolerance_met
+            lines.append(f"tolerance +-{self.tolerance:g} on the reading (rays sized by a pilot of "
+                         f"{span(self.pilot['sample']['rays']) if self.pilot else '?'} per configuration): "
+                         + ("met by every reading" if np.all(met) else
+                            f"NOT MET by {int(np.sum(~met))} of {met.size} readings (their intervals are still "
+                            "certified; give more pilot rays or a larger tolerance)"))
         fixed = [f"{name} = {float(value):g}" for name, value in self.coords.items() if not self.coord_dims(name)]
         if fixed:
             lines.append("at " + ", ".join(fixed))
@@ -662,8 +688,9 @@ class SphereResult(Configured, ResultBase):
     def _count_groups(self) -> list[tuple[str, Mapping[str, np.ndarray], CountRules, tuple[str, ...]]]:
         """Each configuration's counts (and its pilot's), and the wall reflectance of every reading."""
 
-        groups = [(f"{prefix}[{c!r}]", named[c], COUNT_RULES, self.reading_dims)
-                  for prefix, named in (("counts", self.counts), ("pilot", self.pilot or {})) for c in named]
+        groups = [(f"{prefix}[{c!r}]", named[c], rules, self.reading_dims)  # a pilot's: the first interaction's fates
+                  for prefix, named, rules in (("counts", self.counts, COUNT_RULES),
+                                               ("pilot", self.pilot or {}, FATE_RULES)) for c in named]
         return [*groups, ("", {"wall_reflectance": self.wall_reflectance}, _FRACTION_RULES, self.reading_dims)]
 
     @classmethod
@@ -750,4 +777,9 @@ def _checked_options(options: Any) -> dict[str, Any]:
         raise ValueError(f"options.detector must be counted or expected (got {options['detector']!r})")
     if options.get("measurement", "reflectance") not in ("reflectance", "transmittance"):
         raise ValueError(f"options.measurement must be reflectance or transmittance (got {options['measurement']!r})")
+    if options.get("tolerance") is not None:
+        tolerance = number("options.tolerance", options["tolerance"])
+        if not 0 < tolerance < 1:
+            raise ValueError(f"options.tolerance must satisfy 0 < tolerance < 1 (got {options['tolerance']!r})")
+        options["tolerance"] = tolerance
     return options

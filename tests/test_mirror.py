@@ -149,12 +149,6 @@ COVERED_ELSEWHERE: dict[str, tuple[tuple[str, ...], str]] = {
     "virtspec_mi.plugins.bsdfs.sampled_only": (
         ("tests/kernel/test_walk.py",),
         "a test BSDF of the walk"),
-    "virtspec_mi.references.analytic_tables": (
-        ("tests/plugins/bsdfs/test_bsdf_table.py", "tests/plugins/bsdfs/test_tabulated.py"),
-        "the tables' references"),
-    "virtspec_mi.references.slab": (
-        ("tests/plugins/bsdfs/test_turbid_slab.py",),
-        "the slab's reference"),
     "virtspec_mi.runtime": (
         ("tests/runtime/test_scaleout.py", "tests/test_pinned_counts.py"),
         "the Mitsuba variant and the plugins, set up for every reading"),

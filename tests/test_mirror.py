@@ -79,9 +79,6 @@ COVERED_ELSEWHERE: dict[str, tuple[tuple[str, ...], str]] = {
     "virtspec_mi.colorimetry.certified": (
         ("tests/applications/targets/test_measure.py", "tests/budgets/test_functionals.py"),
         "certified colours of targets and results"),
-    "virtspec_mi.engine.tally": (
-        ("tests/engine/test_plan.py", "tests/engine/test_readings.py"),
-        "every run's tallies"),
     "virtspec_mi.exchange.common": (
         ("tests/applications/klems/test_matrices.py", "tests/applications/tables/test_albedo.py"),
         "derived seeds of the Klems and table groups"),
@@ -116,9 +113,6 @@ COVERED_ELSEWHERE: dict[str, tuple[tuple[str, ...], str]] = {
     "virtspec_mi.instruments.sphere.result": (
         ("tests/instruments/sphere/test_sphere.py", "tests/results/test_kinds.py"),
         "SphereResult"),
-    "virtspec_mi.kernel.counts": (
-        ("tests/kernel/test_tracer.py", "tests/engine/test_plan.py"),
-        "the fates' counts"),
     "virtspec_mi.kernel.disk": (
         ("tests/test_pinned_counts.py", "tests/geometry/test_disks.py"),
         "the kernel's disk sampling: every count pinned bit for bit"),
@@ -134,9 +128,6 @@ COVERED_ELSEWHERE: dict[str, tuple[tuple[str, ...], str]] = {
     "virtspec_mi.kernel.sources": (
         ("tests/test_conical.py", "tests/test_pinned_counts.py"),
         "the beams' sources"),
-    "virtspec_mi.kernel.spectra": (
-        ("tests/applications/targets/test_measure.py", "tests/engine/test_readings.py"),
-        "a specimen's data ranges, refused outside them"),
     "virtspec_mi.plugins.bsdfs.flipped": (
         ("tests/applications/klems/test_matrices.py",),
         "the turned-over specimen of a Klems file"),

@@ -70,9 +70,6 @@ COVERED_ELSEWHERE: dict[str, tuple[tuple[str, ...], str]] = {
     "virtspec_mi.base.version": (
         ("tests/cli/test_cli.py",),
         "one constant (virtspec --version)"),
-    "virtspec_mi.budgets.tables": (
-        ("tests/budgets/test_bounds.py", "tests/budgets/test_twostage.py"),
-        "the shipped tables, recomputed there"),
     "virtspec_mi.cli.flags": (
         ("tests/cli/test_measuring.py", "tests/cli/test_applying.py"),
         "the one flag builder: every generated flag and its message"),

@@ -110,18 +110,9 @@ COVERED_ELSEWHERE: dict[str, tuple[tuple[str, ...], str]] = {
     "virtspec_mi.instruments.sphere.result": (
         ("tests/instruments/sphere/test_sphere.py", "tests/results/test_kinds.py"),
         "SphereResult"),
-    "virtspec_mi.kernel.disk": (
-        ("tests/test_pinned_counts.py", "tests/geometry/test_disks.py"),
-        "the kernel's disk sampling: every count pinned bit for bit"),
     "virtspec_mi.kernel.hooks": (
         ("tests/instruments/goniophotometer/test_goniophotometer.py", "tests/instruments/gloss/test_gloss.py"),
         "the kernel's exit hooks, through the instruments that have one"),
-    "virtspec_mi.kernel.incidence": (
-        ("tests/test_conical.py", "tests/engine/test_readings.py"),
-        "the beams' incidence"),
-    "virtspec_mi.kernel.rng": (
-        ("tests/test_determinism.py", "tests/test_pinned_counts.py"),
-        "keyed random numbers: counts independent of chunks, pinned"),
     "virtspec_mi.kernel.sources": (
         ("tests/test_conical.py", "tests/test_pinned_counts.py"),
         "the beams' sources"),

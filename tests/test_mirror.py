@@ -110,12 +110,6 @@ COVERED_ELSEWHERE: dict[str, tuple[tuple[str, ...], str]] = {
     "virtspec_mi.instruments.sphere.result": (
         ("tests/instruments/sphere/test_sphere.py", "tests/results/test_kinds.py"),
         "SphereResult"),
-    "virtspec_mi.kernel.hooks": (
-        ("tests/instruments/goniophotometer/test_goniophotometer.py", "tests/instruments/gloss/test_gloss.py"),
-        "the kernel's exit hooks, through the instruments that have one"),
-    "virtspec_mi.kernel.sources": (
-        ("tests/test_conical.py", "tests/test_pinned_counts.py"),
-        "the beams' sources"),
     "virtspec_mi.plugins.bsdfs.flipped": (
         ("tests/applications/klems/test_matrices.py",),
         "the turned-over specimen of a Klems file"),

@@ -76,15 +76,9 @@ COVERED_ELSEWHERE: dict[str, tuple[tuple[str, ...], str]] = {
     "virtspec_mi.colorimetry.certified": (
         ("tests/applications/targets/test_measure.py", "tests/budgets/test_functionals.py"),
         "certified colours of targets and results"),
-    "virtspec_mi.exchange.common": (
-        ("tests/applications/klems/test_matrices.py", "tests/applications/tables/test_albedo.py"),
-        "derived seeds of the Klems and table groups"),
     "virtspec_mi.exchange.conventions": (
         ("tests/applications/tables/test_albedo.py", "tests/exchange/test_engine_models.py"),
         "the engines' conventions"),
-    "virtspec_mi.exchange.klems_basis": (
-        ("tests/applications/klems/test_matrices.py",),
-        "the Klems bases"),
     "virtspec_mi.instruments.command": (
         ("tests/instruments/test_contract.py",
          "tests/instruments/test_entry_points.py", "tests/results/test_figures.py"),

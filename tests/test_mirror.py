@@ -95,18 +95,9 @@ COVERED_ELSEWHERE: dict[str, tuple[tuple[str, ...], str]] = {
     "virtspec_mi.instruments.sphere.result": (
         ("tests/instruments/sphere/test_sphere.py", "tests/results/test_kinds.py"),
         "SphereResult"),
-    "virtspec_mi.plugins.bsdfs.flipped": (
-        ("tests/applications/klems/test_matrices.py",),
-        "the turned-over specimen of a Klems file"),
-    "virtspec_mi.plugins.bsdfs.microfacet_model": (
-        ("tests/plugins/bsdfs/test_microfacet.py",),
-        "the microfacet plugin's model"),
     "virtspec_mi.plugins.bsdfs.prospect_model": (
         ("tests/plugins/bsdfs/test_prospect_d.py",),
         "PROSPECT-D's model"),
-    "virtspec_mi.plugins.bsdfs.sampled_only": (
-        ("tests/kernel/test_walk.py",),
-        "a test BSDF of the walk"),
     "virtspec_mi.runtime": (
         ("tests/runtime/test_scaleout.py", "tests/test_pinned_counts.py"),
         "the Mitsuba variant and the plugins, set up for every reading"),

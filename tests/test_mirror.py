@@ -95,9 +95,6 @@ COVERED_ELSEWHERE: dict[str, tuple[tuple[str, ...], str]] = {
     "virtspec_mi.instruments.sphere.result": (
         ("tests/instruments/sphere/test_sphere.py", "tests/results/test_kinds.py"),
         "SphereResult"),
-    "virtspec_mi.plugins.bsdfs.prospect_model": (
-        ("tests/plugins/bsdfs/test_prospect_d.py",),
-        "PROSPECT-D's model"),
     "virtspec_mi.runtime": (
         ("tests/runtime/test_scaleout.py", "tests/test_pinned_counts.py"),
         "the Mitsuba variant and the plugins, set up for every reading"),

@@ -119,9 +119,6 @@ COVERED_ELSEWHERE: dict[str, tuple[tuple[str, ...], str]] = {
     "virtspec_mi.exchange.measured.flags": (
         ("tests/exchange/measured/test_measured.py", "tests/applications/fitting/test_samples.py"),
         "measured_from: the commands that read a measured file"),
-    "virtspec_mi.exchange.rgl": (
-        ("tests/instruments/goniophotometer/test_rgl.py",),
-        "the tensor file, written and loaded in Mitsuba there"),
     "virtspec_mi.plugins": (
         ("tests/plugins/test_specimen.py",),
         "SPECIMENS and the entry-point group of specimens: the specimen protocol's tests"),

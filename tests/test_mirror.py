@@ -113,12 +113,6 @@ COVERED_ELSEWHERE: dict[str, tuple[tuple[str, ...], str]] = {
     "virtspec_mi.applications.tables.files": (
         ("tests/applications/tables/test_albedo.py", "tests/results/test_kinds.py"),
         "the table's .npy and C-header exports, written and read back there"),
-    "virtspec_mi.exchange.measured.base": (
-        ("tests/exchange/measured/test_measured.py", "tests/exchange/measured/test_asd.py"),
-        "the rules every reader goes through: each format's tests"),
-    "virtspec_mi.exchange.measured.flags": (
-        ("tests/exchange/measured/test_measured.py", "tests/applications/fitting/test_samples.py"),
-        "measured_from: the commands that read a measured file"),
     "virtspec_mi.plugins": (
         ("tests/plugins/test_specimen.py",),
         "SPECIMENS and the entry-point group of specimens: the specimen protocol's tests"),

@@ -95,9 +95,6 @@ COVERED_ELSEWHERE: dict[str, tuple[tuple[str, ...], str]] = {
     "virtspec_mi.instruments.sphere.result": (
         ("tests/instruments/sphere/test_sphere.py", "tests/results/test_kinds.py"),
         "SphereResult"),
-    "virtspec_mi.runtime": (
-        ("tests/runtime/test_scaleout.py", "tests/test_pinned_counts.py"),
-        "the Mitsuba variant and the plugins, set up for every reading"),
     "virtspec_mi.applications.comparison.flags": (
         ("tests/applications/test_applications.py", "tests/exchange/measured/test_measured.py"),
         "the measured-file flags of compare and fit: their commands' tests read every format through them"),
@@ -113,9 +110,6 @@ COVERED_ELSEWHERE: dict[str, tuple[tuple[str, ...], str]] = {
     "virtspec_mi.applications.tables.files": (
         ("tests/applications/tables/test_albedo.py", "tests/results/test_kinds.py"),
         "the table's .npy and C-header exports, written and read back there"),
-    "virtspec_mi.plugins": (
-        ("tests/plugins/test_specimen.py",),
-        "SPECIMENS and the entry-point group of specimens: the specimen protocol's tests"),
 }
 """Modules covered by other test files: module → (those files, the reason)."""
 

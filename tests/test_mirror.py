@@ -52,15 +52,6 @@ COVERED_ELSEWHERE: dict[str, tuple[tuple[str, ...], str]] = {
     "virtspec_mi.applications.tables.table": (
         ("tests/applications/tables/test_albedo.py",),
         "AlbedoTable, its files and its comparison"),
-    "virtspec_mi.applications.targets.bands": (
-        ("tests/budgets/test_functionals.py", "tests/applications/targets/test_measure.py"),
-        "the bands' response functions"),
-    "virtspec_mi.applications.targets.difference": (
-        ("tests/applications/targets/test_measure.py",),
-        "vm.colour_difference"),
-    "virtspec_mi.applications.targets.indices": (
-        ("tests/applications/targets/test_measure.py",),
-        "the indices measured there"),
     "virtspec_mi.applications.targets.plot": (
         ("tests/applications/targets/test_measure.py",),
         "DerivedResult.plot"),

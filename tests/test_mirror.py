@@ -58,9 +58,6 @@ COVERED_ELSEWHERE: dict[str, tuple[tuple[str, ...], str]] = {
     "virtspec_mi.applications.targets.result": (
         ("tests/applications/targets/test_measure.py",),
         "DerivedResult and DerivedSweep"),
-    "virtspec_mi.cli.flags": (
-        ("tests/cli/test_measuring.py", "tests/cli/test_applying.py"),
-        "the one flag builder: every generated flag and its message"),
     "virtspec_mi.instruments.command": (
         ("tests/instruments/test_contract.py",
          "tests/instruments/test_entry_points.py", "tests/results/test_figures.py"),

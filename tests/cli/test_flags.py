@@ -48,7 +48,7 @@ def test_one_flag_per_setting_with_its_choices_and_switches(settings_parser):
     assert "; several values or start:stop:step ranges, one reading each (default: the scene's, else 0)" in \
         helps["theta_i"]
     sceneless = argparse.ArgumentParser()
-    option_flags(sceneless, settings)
+    option_flags(sceneless, settings, scene=False)
     assert {action.dest: action.help for action in sceneless._actions}["mu"].endswith("(default 0.005)")
 
 

@@ -49,9 +49,6 @@ COVERED_ELSEWHERE: dict[str, tuple[tuple[str, ...], str]] = {
     "virtspec_mi.applications.tables.engine_tables": (
         ("tests/applications/tables/test_audit.py", "tests/exchange/test_engine_models.py"),
         "each engine's tables, audited there"),
-    "virtspec_mi.applications.tables.table": (
-        ("tests/applications/tables/test_albedo.py",),
-        "AlbedoTable, its files and its comparison"),
     "virtspec_mi.applications.targets.plot": (
         ("tests/applications/targets/test_measure.py",),
         "DerivedResult.plot"),
@@ -92,12 +89,6 @@ COVERED_ELSEWHERE: dict[str, tuple[tuple[str, ...], str]] = {
     "virtspec_mi.applications.comparison.result": (
         ("tests/applications/comparison/test_comparison.py", "tests/results/test_kinds.py"),
         "Comparison and compare: the comparison's tests, its files read back with every kind's"),
-    "virtspec_mi.applications.tables.comparison": (
-        ("tests/applications/tables/test_albedo.py", "tests/results/test_kinds.py"),
-        "TableComparison: a published table held to a certified one, its files read back"),
-    "virtspec_mi.applications.tables.files": (
-        ("tests/applications/tables/test_albedo.py", "tests/results/test_kinds.py"),
-        "the table's .npy and C-header exports, written and read back there"),
 }
 """Modules covered by other test files: module → (those files, the reason)."""
 

@@ -28,9 +28,6 @@ COVERED_ELSEWHERE: dict[str, tuple[tuple[str, ...], str]] = {
     "virtspec_mi.applications.fitting.forward": (
         ("tests/applications/fitting/test_inversion.py", "tests/applications/fitting/test_search.py"),
         "the forward readings: common random numbers, the ResultStore a fit resumes from"),
-    "virtspec_mi.applications.fitting.problem": (
-        ("tests/applications/fitting/test_inversion.py",),
-        "the fit's inputs, each refused with its reason there"),
     "virtspec_mi.applications.fitting.result": (
         ("tests/applications/fitting/test_inversion.py", "tests/applications/test_applications.py"),
         "FitResult's files and figure; every format read back by the contract test"),

@@ -52,10 +52,6 @@ COVERED_ELSEWHERE: dict[str, tuple[tuple[str, ...], str]] = {
     "virtspec_mi.applications.targets.result": (
         ("tests/applications/targets/test_measure.py",),
         "DerivedResult and DerivedSweep"),
-    "virtspec_mi.instruments.command": (
-        ("tests/instruments/test_contract.py",
-         "tests/instruments/test_entry_points.py", "tests/results/test_figures.py"),
-        "the instruments' Command rows"),
     "virtspec_mi.instruments.goniophotometer.hook": (
         ("tests/instruments/goniophotometer/test_goniophotometer.py", "tests/instruments/goniophotometer/test_bins.py"),
         "the exit hook bins every goniophotometer ray"),

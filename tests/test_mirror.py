@@ -46,12 +46,6 @@ COVERED_ELSEWHERE: dict[str, tuple[tuple[str, ...], str]] = {
     "virtspec_mi.applications.tables.engine_tables": (
         ("tests/applications/tables/test_audit.py", "tests/exchange/test_engine_models.py"),
         "each engine's tables, audited there"),
-    "virtspec_mi.applications.targets.plot": (
-        ("tests/applications/targets/test_measure.py",),
-        "DerivedResult.plot"),
-    "virtspec_mi.applications.targets.result": (
-        ("tests/applications/targets/test_measure.py",),
-        "DerivedResult and DerivedSweep"),
     "virtspec_mi.instruments.goniophotometer.hook": (
         ("tests/instruments/goniophotometer/test_goniophotometer.py", "tests/instruments/goniophotometer/test_bins.py"),
         "the exit hook bins every goniophotometer ray"),

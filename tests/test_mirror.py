@@ -22,27 +22,18 @@ COVERED_ELSEWHERE: dict[str, tuple[tuple[str, ...], str]] = {
     "virtspec_mi.applications.comparison.command": (
         ("tests/applications/test_applications.py", "tests/cli/test_applying.py"),
         "its row and command: the contract test runs them, the generated flags are checked there"),
-    "virtspec_mi.applications.fitting": (
-        ("tests/applications/test_applications.py", "tests/applications/fitting/test_inversion.py"),
-        "its row (the contract test) and the lazy names vm.fit reaches"),
     "virtspec_mi.applications.fitting.forward": (
         ("tests/applications/fitting/test_inversion.py", "tests/applications/fitting/test_search.py"),
         "the forward readings: common random numbers, the ResultStore a fit resumes from"),
     "virtspec_mi.applications.fitting.result": (
         ("tests/applications/fitting/test_inversion.py", "tests/applications/test_applications.py"),
         "FitResult's files and figure; every format read back by the contract test"),
-    "virtspec_mi.applications.klems": (
-        ("tests/applications/test_applications.py",),
-        "its row: the contract test"),
     "virtspec_mi.applications.klems.command": (
         ("tests/applications/test_applications.py", "tests/applications/test_base.py", "tests/cli/test_measuring.py"),
         "virtspec klems and gonio --klems: the contract test, the refused flags"),
     "virtspec_mi.applications.klems.measure": (
         ("tests/applications/klems/test_matrices.py", "tests/exchange/test_outputs.py"),
         "klems_measure measures every file those tests read"),
-    "virtspec_mi.applications.tables": (
-        ("tests/applications/test_applications.py",),
-        "its row: the contract test"),
     "virtspec_mi.applications.tables.engine_tables": (
         ("tests/applications/tables/test_audit.py", "tests/exchange/test_engine_models.py"),
         "each engine's tables, audited there"),

@@ -37,9 +37,6 @@ COVERED_ELSEWHERE: dict[str, tuple[tuple[str, ...], str]] = {
     "virtspec_mi.applications.tables.engine_tables": (
         ("tests/applications/tables/test_audit.py", "tests/exchange/test_engine_models.py"),
         "each engine's tables, audited there"),
-    "virtspec_mi.instruments.goniophotometer.hook": (
-        ("tests/instruments/goniophotometer/test_goniophotometer.py", "tests/instruments/goniophotometer/test_bins.py"),
-        "the exit hook bins every goniophotometer ray"),
     "virtspec_mi.instruments.goniophotometer.plot": (
         ("tests/instruments/goniophotometer/test_goniophotometer.py", "tests/results/test_plot.py"),
         "the lobes' figures"),

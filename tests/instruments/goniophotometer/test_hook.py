@@ -7,7 +7,8 @@ directions (fixed seed) exactly as NumPy does from the definitions (θo = acos z
 atan2(y, x), bins by ``searchsorted``), keeping away from edges by a margin far above float32
 rounding; the hemisphere is the ray's fate; an absorbed ray, or one outside the bins, gets
 code K. :func:`search_edges` closes the last bin and sends keys outside the edges beyond the
-bins. The pairing puts the two bins beside the mirror azimuth in one word.
+bins. The pairing puts the two bins beside the mirror azimuth in one word. The RGL cells
+(:class:`~virtspec_mi.instruments.goniophotometer.hook.WarpedLayout`) are tested in ``test_warped.py``.
 
 References
 ----------

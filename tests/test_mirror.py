@@ -43,9 +43,6 @@ COVERED_ELSEWHERE: dict[str, tuple[tuple[str, ...], str]] = {
     "virtspec_mi.instruments.goniophotometer.result": (
         ("tests/instruments/goniophotometer/test_goniophotometer.py", "tests/results/test_kinds.py"),
         "GonioResult"),
-    "virtspec_mi.instruments.hemispherical": (
-        ("tests/instruments/test_contract.py", "tests/api/test_api.py"),
-        "the spectrophotometer: the contract test's row"),
     "virtspec_mi.instruments.sphere.result": (
         ("tests/instruments/sphere/test_sphere.py", "tests/results/test_kinds.py"),
         "SphereResult"),

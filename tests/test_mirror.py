@@ -49,9 +49,6 @@ COVERED_ELSEWHERE: dict[str, tuple[tuple[str, ...], str]] = {
     "virtspec_mi.applications.comparison.flags": (
         ("tests/applications/test_applications.py", "tests/exchange/measured/test_measured.py"),
         "the measured-file flags of compare and fit: their commands' tests read every format through them"),
-    "virtspec_mi.applications.comparison.result": (
-        ("tests/applications/comparison/test_comparison.py", "tests/results/test_kinds.py"),
-        "Comparison and compare: the comparison's tests, its files read back with every kind's"),
 }
 """Modules covered by other test files: module → (those files, the reason)."""
 

@@ -46,9 +46,6 @@ COVERED_ELSEWHERE: dict[str, tuple[tuple[str, ...], str]] = {
     "virtspec_mi.instruments.sphere.result": (
         ("tests/instruments/sphere/test_sphere.py", "tests/results/test_kinds.py"),
         "SphereResult"),
-    "virtspec_mi.applications.comparison.flags": (
-        ("tests/applications/test_applications.py", "tests/exchange/measured/test_measured.py"),
-        "the measured-file flags of compare and fit: their commands' tests read every format through them"),
 }
 """Modules covered by other test files: module → (those files, the reason)."""
 

@@ -19,9 +19,6 @@ PACKAGE = ROOT / "virtspec_mi"
 
 COVERED_ELSEWHERE: dict[str, tuple[tuple[str, ...], str]] = {
     # module: (the test files that cover it, why it has none of its own)
-    "virtspec_mi.applications.comparison.command": (
-        ("tests/applications/test_applications.py", "tests/cli/test_applying.py"),
-        "its row and command: the contract test runs them, the generated flags are checked there"),
     "virtspec_mi.applications.fitting.forward": (
         ("tests/applications/fitting/test_inversion.py", "tests/applications/fitting/test_search.py"),
         "the forward readings: common random numbers, the ResultStore a fit resumes from"),

@@ -25,9 +25,6 @@ COVERED_ELSEWHERE: dict[str, tuple[tuple[str, ...], str]] = {
     "virtspec_mi.applications.fitting.result": (
         ("tests/applications/fitting/test_inversion.py", "tests/applications/test_applications.py"),
         "FitResult's files and figure; every format read back by the contract test"),
-    "virtspec_mi.applications.klems.command": (
-        ("tests/applications/test_applications.py", "tests/applications/test_base.py", "tests/cli/test_measuring.py"),
-        "virtspec klems and gonio --klems: the contract test, the refused flags"),
     "virtspec_mi.applications.klems.measure": (
         ("tests/applications/klems/test_matrices.py", "tests/exchange/test_outputs.py"),
         "klems_measure measures every file those tests read"),

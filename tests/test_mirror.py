@@ -25,9 +25,6 @@ COVERED_ELSEWHERE: dict[str, tuple[tuple[str, ...], str]] = {
     "virtspec_mi.applications.fitting.result": (
         ("tests/applications/fitting/test_inversion.py", "tests/applications/test_applications.py"),
         "FitResult's files and figure; every format read back by the contract test"),
-    "virtspec_mi.applications.klems.measure": (
-        ("tests/applications/klems/test_matrices.py", "tests/exchange/test_outputs.py"),
-        "klems_measure measures every file those tests read"),
     "virtspec_mi.applications.tables.engine_tables": (
         ("tests/applications/tables/test_audit.py", "tests/exchange/test_engine_models.py"),
         "each engine's tables, audited there"),

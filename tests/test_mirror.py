@@ -28,9 +28,6 @@ COVERED_ELSEWHERE: dict[str, tuple[tuple[str, ...], str]] = {
     "virtspec_mi.instruments.goniophotometer.plot": (
         ("tests/instruments/goniophotometer/test_goniophotometer.py", "tests/results/test_plot.py"),
         "the lobes' figures"),
-    "virtspec_mi.instruments.goniophotometer.result": (
-        ("tests/instruments/goniophotometer/test_goniophotometer.py", "tests/results/test_kinds.py"),
-        "GonioResult"),
     "virtspec_mi.instruments.sphere.result": (
         ("tests/instruments/sphere/test_sphere.py", "tests/results/test_kinds.py"),
         "SphereResult"),

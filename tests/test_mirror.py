@@ -25,9 +25,6 @@ COVERED_ELSEWHERE: dict[str, tuple[tuple[str, ...], str]] = {
     "virtspec_mi.applications.tables.engine_tables": (
         ("tests/applications/tables/test_audit.py", "tests/exchange/test_engine_models.py"),
         "each engine's tables, audited there"),
-    "virtspec_mi.instruments.sphere.result": (
-        ("tests/instruments/sphere/test_sphere.py", "tests/results/test_kinds.py"),
-        "SphereResult"),
 }
 """Modules covered by other test files: module → (those files, the reason)."""
 

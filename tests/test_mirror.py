@@ -19,9 +19,6 @@ PACKAGE = ROOT / "virtspec_mi"
 
 COVERED_ELSEWHERE: dict[str, tuple[tuple[str, ...], str]] = {
     # module: (the test files that cover it, why it has none of its own)
-    "virtspec_mi.applications.tables.engine_tables": (
-        ("tests/applications/tables/test_audit.py", "tests/exchange/test_engine_models.py"),
-        "each engine's tables, audited there"),
 }
 """Modules covered by other test files: module → (those files, the reason)."""
 

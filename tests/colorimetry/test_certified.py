@@ -55,7 +55,8 @@ def test_functionals_are_x_y_z_of_the_quantity():
     functionals = colour_functionals(GRID, "transmittance")
     assert [f.name for f in functionals] == ["X", "Y", "Z"]
     np.testing.assert_array_equal(np.stack([f.weights for f in functionals]), tristimulus_weights(GRID))
-    assert functionals[1].quantity == "transmittance" and "tristimulus value Y of the transmittance" in functionals[1].long_name
+    assert functionals[1].quantity == "transmittance"
+    assert "tristimulus value Y of the transmittance" in functionals[1].long_name
 
 
 def certified(tolerance: float, seed: int = 1) -> tuple[CertifiedColour, np.ndarray]:

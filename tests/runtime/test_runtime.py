@@ -9,8 +9,6 @@ Mitsuba 3, ``mi.set_variant``, ``mi.register_bsdf``, ``mi.register_integrator``.
 
 from __future__ import annotations
 
-import pytest
-
 from virtspec_mi import runtime
 from virtspec_mi.plugins import SPECIMENS
 

@@ -72,7 +72,8 @@ def test_arrays_distributions_and_spectra_are_read():
     read = read_measured(sd, "transmittance")
     assert read.source == "patch" and read.quantity == "transmittance" and read.uncertainty is None
     assert read_measured(read) is read
-    with pytest.raises(ValueError, match=r"measured must be a file path, a colour.SpectralDistribution, .* \(got int\)"):
+    with pytest.raises(ValueError, match=r"measured must be a file path, a colour.SpectralDistribution, "
+                                         r".* \(got int\)"):
         read_measured(42)
     with pytest.raises(ValueError, match=r"quantity must be one of reflectance, transmittance, absorptance "
                                          r"\(got 'colour'\)"):

@@ -15,7 +15,6 @@ Baranoski et al. (2001), Sect. 5; CIE 015:2018, §8.3 (CIEDE2000).
 
 from __future__ import annotations
 
-import json
 from dataclasses import replace
 
 import colour

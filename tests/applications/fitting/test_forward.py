@@ -85,5 +85,6 @@ def test_a_table_of_less_certainty_is_refused(problem, tmp_path):
 def test_a_store_of_another_fit_is_refused(problem, tmp_path):
     Forward(problem, delta=0.2, seed=3, settings=SETTINGS, directory=tmp_path).reading([25.0], 0.05, "search")
     other = fit_problem((WAVELENGTHS, np.array([0.1, 0.45]), np.full(2, 0.03)), "prospect_d", {"N": (1.2, 2.5)})
-    with pytest.raises(ValueError, match=r"readings belongs to a different fit's forward readings \(differs in: keys\)"):
+    with pytest.raises(ValueError, match=r"readings belongs to a different fit's forward readings "
+                                         r"\(differs in: keys\)"):
         Forward(other, delta=0.2, seed=3, settings=SETTINGS, directory=tmp_path).reading([1.5], 0.05, "search")

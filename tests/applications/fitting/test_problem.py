@@ -63,7 +63,8 @@ def test_measurement_uncertainty_given_for_the_fit(mi):
     ({"Chl": (10, 80)}, r"the specimen prospect_d has no parameter 'Chl' \(its parameters: .*Cab \(ug/cm2, 0-150\)"),
     ({"Cab": 10}, r"the bounds of free parameter 'Cab' must be \(lowest, highest\) \(got 10\)"),
     ({"Cab": (80, 10)}, r"the bounds of free parameter 'Cab' must be finite with lowest < highest \(got 80, 10\)"),
-    ({"Cab": (10, 200)}, r"PROSPECT-D: 'Cab' \(chlorophylls a \+ b\) must satisfy 0 <= Cab <= 150 ug/cm2 \(got 200.0\)"),
+    ({"Cab": (10, 200)},
+     r"PROSPECT-D: 'Cab' \(chlorophylls a \+ b\) must satisfy 0 <= Cab <= 150 ug/cm2 \(got 200.0\)"),
 ])
 def test_bad_parameters_are_refused_naming_them(mi, parameters, message):
     with pytest.raises(ValueError, match=message):

@@ -138,7 +138,8 @@ def test_a_cycles_header_and_its_average(tmp_path):
     e, e_avg = grid((32, 32), 1000, 7), np.linspace(0.5, 1.0, 32)
 
     def array(name, values):
-        return f"static const float {name}[{values.size}] = {{" + ", ".join(f"{v:.6f}f" for v in values.ravel()) + "};\n"
+        numbers = ", ".join(f"{v:.6f}f" for v in values.ravel())
+        return f"static const float {name}[{values.size}] = {{{numbers}}};\n"
 
     (tmp_path / "ggx.h").write_text(array("table_ggx_E", e) + array("table_ggx_Eavg", e_avg))
     found = read_engine_file(tmp_path / "ggx.h", "cycles")

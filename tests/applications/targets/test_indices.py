@@ -29,7 +29,8 @@ def test_values_are_normalised_differences():
         Index.value(0.0, 0.0)
 
 
-@pytest.mark.parametrize("a, b", [((0.40, 0.48), (0.05, 0.07)), ((0.1, 0.3), (0.2, 0.25)), ((-0.02, 0.03), (0.9, 1.05))])
+@pytest.mark.parametrize("a, b", [((0.40, 0.48), (0.05, 0.07)), ((0.1, 0.3), (0.2, 0.25)),
+                                  ((-0.02, 0.03), (0.9, 1.05))])
 def test_the_interval_is_the_range_over_the_clipped_box(a, b):
     low, high = NDVI.interval(a, b)
     grid_a = np.linspace(max(a[0], 0.0), min(a[1], 1.0), 41)

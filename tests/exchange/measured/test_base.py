@@ -25,7 +25,6 @@ from virtspec_mi.exchange.measured.base import (
     MeasuredFile,
     MeasuredFormat,
     RawSpectra,
-    Samples,
     number_rows,
     refuse,
     settle,
@@ -130,7 +129,8 @@ def test_repeated_labels_are_made_distinct_and_samples_are_picked():
 
 def test_measured_file_refuses_bad_options_by_name():
     assert MeasuredFile("x.asd", quantity="reflectance", scale="percent").splice is False
-    with pytest.raises(ValueError, match=r"measured_quantity must be one of reflectance, transmittance \(got 'colour'\)"):
+    with pytest.raises(ValueError, match=r"measured_quantity must be one of reflectance, transmittance "
+                                         r"\(got 'colour'\)"):
         MeasuredFile("x.asd", quantity="colour")
     with pytest.raises(ValueError, match=r"measured_scale must be one of fraction, percent \(got 'permille'\)"):
         MeasuredFile("x.asd", scale="permille")

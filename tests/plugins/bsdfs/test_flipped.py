@@ -60,7 +60,8 @@ def test_eval_and_pdf_are_the_nested_ones_at_the_mirrored_directions(mi, pair):
         np.testing.assert_array_equal(a, b)
         assert np.any(b != 0)
         np.testing.assert_array_equal(np.array(flipped.pdf(ctx, interaction(mi, wi), vector(mi, wo))),
-                                      np.array(nested.pdf(ctx, interaction(mi, mirrored(wi)), vector(mi, mirrored(wo)))))
+                                      np.array(nested.pdf(ctx, interaction(mi, mirrored(wi)),
+                                                          vector(mi, mirrored(wo)))))
         value, pdf = flipped.eval_pdf(ctx, interaction(mi, wi), vector(mi, wo))
         np.testing.assert_array_equal(np.array(value), a)
 

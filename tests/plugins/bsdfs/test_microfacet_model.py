@@ -53,7 +53,8 @@ def test_a_ggx_statement_names_the_exact_g1():
 
 @pytest.mark.parametrize("arguments, message", [
     (("phong", "separable", "exact", "one"), r"'distribution' must be one of ggx, beckmann \(got 'phong'\)"),
-    (("ggx", "smith", "exact", "one"), r"'shadowing' must be one of separable, height_correlated, unreal \(got 'smith'\)"),
+    (("ggx", "smith", "exact", "one"),
+     r"'shadowing' must be one of separable, height_correlated, unreal \(got 'smith'\)"),
     (("ggx", "separable", "approx", "one"), r"'g1' must be one of exact, walter \(got 'approx'\)"),
     (("ggx", "separable", "exact", "schlick"), r"'fresnel' must be one of one, fc, one_minus_fc, split"),
     (("ggx", "separable", "walter", "one"), r"g1='walter' is the Beckmann fit"),

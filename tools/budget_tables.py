@@ -4,7 +4,7 @@ Regenerate ``virtspec_mi/budgets/tables.py``: the shipped ray-budget tables.
 The exact rule (``virtspec_mi.budgets.bounds.exact_rays``) and the two-stage sizing
 (``virtspec_mi.budgets.twostage.stage_two_rays``) take 10–1000 ms per uncached (μ, δ) or pilot
 count; the tables make the common settings cost microseconds. Tests recompute a
-sample of the entries (``tests/budgets/test_bounds.py``, ``tests/budgets/test_twostage.py``).
+sample of the entries (``tests/budgets/test_tables.py``).
 Run: ``.venv/bin/python tools/budget_tables.py [OUT]`` (minutes; OUT defaults to the
 package's ``virtspec_mi/budgets/tables.py``).
 """

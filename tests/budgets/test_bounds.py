@@ -132,23 +132,6 @@ def test_exact_rays_brute_force(mu, delta):
     assert n < top
 
 
-def test_shipped_exact_table_matches_the_computation():
-    from virtspec_mi.budgets.tables import EXACT
-
-    assert EXACT[(0.005, 0.01)] == 66_501
-    for key in [(0.05, 0.2), (0.05, 0.001), (0.02, 0.01), (0.01, 0.1), (0.005, 0.2)]:
-        assert bounds._exact_rays(*key, 0.0, 1.0) == EXACT[key], key
-
-
-@pytest.mark.slow
-def test_shipped_exact_table_matches_the_computation_everywhere():
-    from virtspec_mi.budgets.tables import EXACT
-
-    for key, n in EXACT.items():
-        if key[0] >= 0.005:
-            assert bounds._exact_rays(*key, 0.0, 1.0) == n, key
-
-
 # --- issue 12: the bounds never divide by zero, overflow or hang --------------------------------
 
 

@@ -92,16 +92,6 @@ def test_the_fit_names_each_parameter_with_its_units_and_bounds():
         vm.fit(measured, "prospect_d", {"Chl": (10, 80)})
 
 
-def test_a_class_without_the_protocol_is_refused_naming_what_it_lacks(mi, tmp_path, monkeypatch):
-    (tmp_path / "bare_bsdf.py").write_text(
-        "import mitsuba as mi\n\n\nclass Bare(mi.BSDF):\n    wavelength_range = None\n\n\nclass NotABSDF:\n    pass\n")
-    monkeypatch.syspath_prepend(str(tmp_path))
-    with pytest.raises(TypeError, match="declares no PARAMETERS, wavelength_independent, check_wavelengths"):
-        load_specimen("bare", "bare_bsdf:Bare")
-    with pytest.raises(TypeError, match="not a Mitsuba BSDF class"):
-        load_specimen("nota", "bare_bsdf:NotABSDF")
-
-
 @pytest.fixture
 def reread():
     """The installed packages' specimens read again in the test, and after it (the cache of the real ones)."""

@@ -41,7 +41,7 @@ J. Amer. Statist. Assoc. 58, 13–30 (the exponential bound behind eq. (23)).
 The exact failure probability, its lattice jump points and the exact rule's N (66,501
 at μ = 0.005, δ = 0.01) are computed by this module (:func:`max_miss_probability`,
 :func:`exact_rays`); ``tools/budget_tables.py`` tabulates them into
-:mod:`virtspec_mi.budgets.tables` and ``tests/budgets/test_bounds.py`` recomputes the tables.
+:mod:`virtspec_mi.budgets.tables` and ``tests/budgets/test_tables.py`` recomputes the tables.
 """
 
 from __future__ import annotations

@@ -36,7 +36,7 @@ Clopper, C.J., Pearson, E.S. (1934). Biometrika 26, 404–413 (the pilot's inter
 Baranoski et al. (2001), eq. (23), for comparison. The expected rays and the exact
 miss probability are computed by :func:`two_stage_law` (the mixture over the pilot
 count); ``tools/budget_tables.py`` tabulates the sizing at the defaults and
-``tests/budgets/test_twostage.py`` recomputes it.
+``tests/budgets/test_tables.py`` recomputes it.
 """
 
 from __future__ import annotations

@@ -126,16 +126,6 @@ def _sphere():
                                  vm.Port("detector", "detector", 90, 90, 6.35)))
 
 
-def test_mi_render_gives_the_sphere_table():
-    mi = vm.mitsuba()
-    scene = mi.load_file(SCENE)
-    table = np.array(mi.render(scene, spp=5000))
-    reading = scene.integrator().last_reading
-    assert table.shape == (1, 4)
-    assert table[0] == pytest.approx([reading.reading[0], reading.hemispherical[0], reading.detector_fraction[0],
-                                      reading.standard_fraction[0]], rel=1e-6)
-
-
 def test_cli_sphere(capsys):
     from virtspec_mi.cli import main
 

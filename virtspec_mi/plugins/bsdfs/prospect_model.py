@@ -216,7 +216,7 @@ def check_prospect_parameters(values: dict[str, Any]) -> dict[str, np.ndarray]:
         if not np.all(np.isfinite(value) & (value >= low) & (value <= high)):
             bad = value[~(np.isfinite(value) & (value >= low) & (value <= high))].ravel()[0]
             raise ValueError(f"PROSPECT-D: '{name}' ({meaning}) must satisfy {low:g} <= {name} <= {high:g} "
-                             f"{unit} (got {bad!r})".rstrip())
+                             f"{unit} (got {float(bad)!r})".rstrip())
         checked[name] = value
     return checked
 

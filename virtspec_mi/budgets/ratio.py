@@ -1,6 +1,6 @@
 """
 Rays for a ratio of two proportions to a stated tolerance: an integrating sphere's reading
-=========================================================================================
+==========================================================================================
 
 An integrating sphere reads R = s · p₁/p₂ (s: the standard's value; p₁, p₂: the detector
 fractions with the sample and with the standard, each m/N of its own rays). Its certified

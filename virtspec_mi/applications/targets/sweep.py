@@ -1,6 +1,6 @@
 """
 A target certified at every θi of a sweep: ``vm.sweep(scene, target=...)``, ``virtspec sweep --target``
-======================================================================================================
+=======================================================================================================
 
 :func:`target_sweep` resolves the angles of a sweep as the spectrophotometer's sweep does
 (the scene's θi when none is given) and certifies the target at each, every angle at its

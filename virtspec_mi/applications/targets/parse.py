@@ -137,9 +137,9 @@ def measure_target_command(args: Any, keywords: dict[str, Any], report: Callable
 
 def sweep_target_command(args: Any, keywords: dict[str, Any], report: Callable[..., int]) -> int:
     """
-    ``virtspec sweep SCENE --theta-i ... --target TARGET``: the target certified at every
-    θi (:func:`~.sweep.target_sweep`, as ``vm.sweep(scene, target=...)``), kept in
-    ``--checkpoint`` or traced on ``--workers``, printed by ``report``.
+    ``virtspec sweep SCENE --target TARGET``: the target certified at every θi of
+    ``--theta-i`` (:func:`~.sweep.target_sweep`, as ``vm.sweep(scene, target=…)``), kept
+    in ``--checkpoint`` or traced on ``--workers``, printed by ``report``.
     """
 
     from virtspec_mi.applications.targets.sweep import target_sweep

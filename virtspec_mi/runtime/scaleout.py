@@ -250,7 +250,10 @@ def local_cluster(n_workers: int) -> Iterator[Any]:
     """
     A ``distributed.Client`` on a ``LocalCluster`` of ``n_workers`` processes, one thread
     each, started with ``spawn`` (never ``fork``: Dr.Jit's threads do not survive it) — the
-    setting held while the cluster lives, so a restarted worker is spawned too.
+    setting held while the cluster lives, so a restarted worker is spawned too. Its
+    processes log nothing below ``CRITICAL``: a task's failure reaches the driver through
+    its future, and a Ctrl-C that stops the scheduler first must not print a worker's
+    heartbeat traceback ("Failed to communicate with scheduler") on the user's terminal.
     """
 
     import dask
@@ -258,7 +261,7 @@ def local_cluster(n_workers: int) -> Iterator[Any]:
 
     with dask.config.set({"distributed.worker.multiprocessing-method": "spawn"}):
         with LocalCluster(n_workers=n_workers, processes=True, threads_per_worker=1, dashboard_address=":0",
-                          silence_logs=logging.ERROR) as cluster, Client(cluster) as client:
+                          silence_logs=logging.CRITICAL) as cluster, Client(cluster) as client:
             yield client
 
 

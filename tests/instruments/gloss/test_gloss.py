@@ -128,3 +128,14 @@ def test_a_gloss_summary_reads_the_same_from_its_file(mi, tmp_path, capsys):
     back = vm.read_result(out).summary()
     assert back.splitlines()[:3] == printed.splitlines()[:3]
     assert "collimated reading, theta_i = 60 deg" in back and "sweep" not in back
+
+
+def test_a_three_angle_reading_reads_back_to_the_same_summary(mi, tmp_path):
+    """ISO 2813's three angles in one result: every format gives back the same counts and the same summary."""
+
+    reading = vm.gloss("diamond_collimated", wavelengths=[450, 650], rays=4000, cone=2, seed=5)
+    assert tuple(np.atleast_1d(reading.coords["theta_i"])) == (20.0, 60.0, 85.0)
+    for suffix in (".nc", ".json", ".csv"):
+        back = vm.read_result(reading.write(tmp_path / f"iso{suffix}"))
+        assert np.array_equal(back.glossy, reading.glossy), suffix
+        assert back.summary() == reading.summary(), suffix

@@ -32,34 +32,45 @@ import numpy as np
 
 from virtspec_mi.budgets.intervals import clopper_pearson
 
-__all__ = ["MOST_RATIO_RAYS", "ratio_interval", "ratio_half_width", "ratio_rays"]
+__all__ = ["MOST_RATIO_RAYS", "ratio_bounds", "half_width", "ratio_interval", "ratio_half_width", "ratio_rays"]
 
 MOST_RATIO_RAYS: int = 2**31
 """The most rays :func:`ratio_rays` gives a reading (a tolerance that needs more is refused, naming it)."""
 
 
-def ratio_interval(k1: np.ndarray, n1: np.ndarray, k2: np.ndarray, n2: np.ndarray, standard: float,
-                   delta: float) -> np.ndarray:
+def ratio_bounds(first: np.ndarray, second: np.ndarray, standard: float) -> np.ndarray:
     """
-    [s·p₁⁻/p₂⁺, s·p₁⁺/p₂⁻] from counts k₁ of n₁ and k₂ of n₂ (each fraction's
-    Clopper–Pearson interval at δ/2), last axis of length 2; infinite above when p₂⁻ = 0.
+    [s·p₁⁻/p₂⁺, s·p₁⁺/p₂⁻] from the two fractions' intervals ``first`` and ``second``
+    (last axis: lower, upper), last axis of length 2: the extreme combinations, which hold
+    whenever both intervals do (infinite above when p₂⁻ = 0).
     """
 
-    low1, high1 = clopper_pearson.unchecked(k1, n1, delta / 2)
-    low2, high2 = clopper_pearson.unchecked(k2, n2, delta / 2)
+    first, second = np.asarray(first, dtype=np.float64), np.asarray(second, dtype=np.float64)
     with np.errstate(divide="ignore", invalid="ignore"):
-        return standard * np.stack([low1 / high2, np.where(low2 > 0, high1 / np.where(low2 > 0, low2, 1), np.inf)],
-                                   axis=-1)
+        return standard * np.stack([first[..., 0] / second[..., 1], first[..., 1] / second[..., 0]], axis=-1)
+
+
+def half_width(estimate: np.ndarray, interval: np.ndarray) -> np.ndarray:
+    """The larger distance from ``estimate`` to an end of ``interval`` (last axis: lower, upper)."""
+
+    return np.maximum(estimate - interval[..., 0], interval[..., 1] - estimate)
+
+
+def ratio_interval(k1: np.ndarray, n1: np.ndarray, k2: np.ndarray, n2: np.ndarray, standard: float,
+                   delta: float) -> np.ndarray:
+    """:func:`ratio_bounds` of counts k₁ of n₁ and k₂ of n₂ (each fraction's Clopper–Pearson interval at δ/2)."""
+
+    return ratio_bounds(np.stack(clopper_pearson.unchecked(k1, n1, delta / 2), axis=-1),
+                        np.stack(clopper_pearson.unchecked(k2, n2, delta / 2), axis=-1), standard)
 
 
 def ratio_half_width(k1: np.ndarray, n1: np.ndarray, k2: np.ndarray, n2: np.ndarray, standard: float,
                      delta: float) -> np.ndarray:
-    """The larger distance from s·(k₁/n₁)/(k₂/n₂) to an end of :func:`ratio_interval` (infinite when k₂ = 0)."""
+    """:func:`half_width` of s·(k₁/n₁)/(k₂/n₂) in :func:`ratio_interval` (infinite when k₂ = 0)."""
 
-    interval = ratio_interval(k1, n1, k2, n2, standard, delta)
     with np.errstate(divide="ignore", invalid="ignore"):
         estimate = standard * (np.asarray(k1) / np.asarray(n1)) / (np.asarray(k2) / np.asarray(n2))
-        half = np.maximum(estimate - interval[..., 0], interval[..., 1] - estimate)
+        half = half_width(estimate, ratio_interval(k1, n1, k2, n2, standard, delta))
     return np.where(np.asarray(k2) > 0, half, np.inf)
 
 

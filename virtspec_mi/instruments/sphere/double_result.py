@@ -38,6 +38,7 @@ import numpy as np
 from virtspec_mi.base.version import __version__
 from virtspec_mi.budgets.bounds import hoeffding_mu
 from virtspec_mi.budgets.intervals import clopper_pearson
+from virtspec_mi.budgets.ratio import ratio_bounds
 from virtspec_mi.instruments.sphere.geometry import Sphere, sphere_from_parameters
 from virtspec_mi.instruments.sphere.result import Configured
 from virtspec_mi.results.base import ResultBase, attribute, per_count, plain_data, round_up, span, stored
@@ -236,8 +237,7 @@ class DoubleSphereResult(Configured, ResultBase):
     def _ratio(self, name: str, reference: str, scale: float) -> tuple[np.ndarray, np.ndarray]:
         with np.errstate(divide="ignore", invalid="ignore"):
             value = scale * self.fraction(name, "sample") / self.fraction(name, reference)
-            low, high = self.fraction_interval(name, "sample"), self.fraction_interval(name, reference)
-            interval = scale * np.stack([low[..., 0] / high[..., 1], low[..., 1] / high[..., 0]], axis=-1)
+        interval = ratio_bounds(self.fraction_interval(name, "sample"), self.fraction_interval(name, reference), scale)
         return value, np.where(self.certified[..., None], interval, np.nan)
 
     @property

@@ -47,6 +47,7 @@ import numpy as np
 from virtspec_mi.base.version import __version__
 from virtspec_mi.budgets.bounds import hoeffding_mu
 from virtspec_mi.budgets.intervals import clopper_pearson
+from virtspec_mi.budgets.ratio import half_width, ratio_bounds
 from virtspec_mi.base.checks import number
 from virtspec_mi.budgets.scores import score_interval
 from virtspec_mi.instruments.sphere.geometry import Sphere, sphere_from_parameters
@@ -390,9 +391,7 @@ class SphereResult(Configured, ResultBase):
 
         if self.tolerance is None:
             return np.ones(self.certified.shape, dtype=bool)
-        interval, reading = self.reading_interval, self.reading
-        half = np.maximum(reading - interval[..., 0], interval[..., 1] - reading)
-        return np.asarray(self.certified & (half <= self.tolerance))
+        return np.asarray(self.certified & (half_width(self.reading, self.reading_interval) <= self.tolerance))
 
     # -- the readout ------------------------------------------------------------------
 
@@ -414,10 +413,7 @@ class SphereResult(Configured, ResultBase):
         """The reading's certified interval [ρ_std·p_s⁻/p_r⁺, ρ_std·p_s⁺/p_r⁻], last axis of length 2: it holds
         with probability ≥ 1 − δ (NaN where uncertified)."""
 
-        sample, standard = self.fraction_interval("sample"), self.fraction_interval("standard")
-        with np.errstate(divide="ignore", invalid="ignore"):
-            out = self.standard_value * np.stack([sample[..., 0] / standard[..., 1],
-                                                  sample[..., 1] / standard[..., 0]], axis=-1)
+        out = ratio_bounds(self.fraction_interval("sample"), self.fraction_interval("standard"), self.standard_value)
         return np.where(self.certified[..., None], out, np.nan)
 
     @property

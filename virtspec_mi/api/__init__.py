@@ -106,9 +106,11 @@ def measure(scene: Any, *, target: Any = None, **keywords: Any) -> Any:
         ``pilot_rays``, ``pilot_delta`` and ``joint`` are then the target's to
         decide (giving one is an error); ``parameters`` are not taken. ``bound`` is then the
         target's certificate: ``"betting"`` (sequential batches, a betting confidence
-        sequence, :mod:`virtspec_mi.applications.targets.sequential`), ``"hoeffding"``
-        (one batch sized by Hoeffding's bound) or ``"auto"`` (default: betting unless a
-        linear target's pilot shows it would not pay).
+        sequence, :mod:`virtspec_mi.applications.targets.sequential`), ``"two-stage"``
+        (a linear target's wavelengths pooled into one proportion, the exact two-stage
+        rule, :mod:`virtspec_mi.applications.targets.pooled`), ``"hoeffding"`` (one batch
+        sized by Hoeffding's bound) or ``"auto"`` (default: two-stage for a linear target,
+        betting for the others).
 
     References
     ----------

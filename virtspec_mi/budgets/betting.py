@@ -98,10 +98,13 @@ __all__ = ["CERTIFICATES", "MAX_BET", "THRESHOLD_SIGMAS", "LADDER", "Side", "low
            "prior_variances", "neyman_rays", "BettingSequence"]
 
 CERTIFICATES: dict[str, str] = {
-    "auto": "a target's default: betting unless a linear target's pilot shows it would not pay, then hoeffding",
+    "auto": "a target's default: two-stage (pooled) for a linear target of one-signed weights, betting for any other",
     "betting": "a target: batches until a stratified betting confidence sequence certifies it",
 }
-"""The certificates a *target* takes as ``bound`` besides ``hoeffding`` (a spectrum's rules: ``budgets.rules``)."""
+"""
+The certificates a *target* takes as ``bound`` besides ``two-stage`` and ``hoeffding``
+(a spectrum's rules, ``budgets.rules``, which a target's pooled readings follow too).
+"""
 
 MAX_BET: float = 0.5
 """The largest stake per ray: every factor of eq. (1) stays ≥ 1 − MAX_BET > 0."""

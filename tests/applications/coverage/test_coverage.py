@@ -17,7 +17,9 @@ binomial quantile) — so a correct implementation fails it at most once in a th
 seed sets, and the planted error below (coverage far below 0.8) fails it.
 
 The planted error: rays allocated inversely to the weights while the certificate assumes
-Nₖ ∝ |wₖ| (it states (Σ|w|)²/N for Σ w²/Nₖ): the same coverage check catches it.
+Nₖ ∝ |wₖ| (it states (Σ|w|)²/N for Σ w²/Nₖ): the same coverage check catches it. With
+``bound="two-stage"`` (pooled readings of a linear target) the planted error is a draw
+of the wavelengths that ignores the weights: caught too.
 
 With ``bound="betting"`` a trial looks at the certificate after every batch and stops at
 the first that meets the target; it covers only when every certificate it looked at held
@@ -140,18 +142,43 @@ TARGETS = {
 }
 
 
-@pytest.mark.parametrize("bound", ["betting", "hoeffding"])
-@pytest.mark.parametrize("kind", sorted(TARGETS))
+LINEAR = ("albedo", "band", "fapar")
+"""The kinds pooled two-stage readings take (bound="two-stage": linear, weights of one sign)."""
+
+ROUTES = [(kind, bound) for kind in sorted(TARGETS) for bound in ("betting", "two-stage", "hoeffding")
+          if bound != "two-stage" or kind in LINEAR]
+
+
+@pytest.mark.parametrize(("kind", "bound"), ROUTES)
 def test_the_exact_value_lies_inside_the_certified_interval_at_least_1_minus_delta_of_the_time(scene, kind, bound):
     hits = coverage(scene, TARGETS[kind](), bound=bound)
     assert hits >= least_hits(TRIALS, 1 - DELTA), (kind, bound, hits)
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("kind", sorted(TARGETS))
-def test_coverage_over_400_seeds(scene, kind):
+@pytest.mark.parametrize(("kind", "bound"), [(kind, "betting") for kind in sorted(TARGETS)]
+                         + [(kind, "two-stage") for kind in LINEAR])
+def test_coverage_over_400_seeds(scene, kind, bound):
     trials = 400
-    assert coverage(scene, TARGETS[kind](), trials) >= least_hits(trials, 1 - DELTA)
+    assert coverage(scene, TARGETS[kind](), trials, bound=bound) >= least_hits(trials, 1 - DELTA)
+
+
+def test_a_planted_draw_that_ignores_the_weights_is_caught(scene, monkeypatch):
+    """
+    Pooled readings whose wavelengths are drawn uniformly while the estimate takes them as
+    drawn by the weights: the count is then a proportion of the unweighted mean, 0.55
+    here against the band's 0.68, far beyond its tolerance — caught by the same check,
+    which the right draw passes.
+    """
+
+    from virtspec_mi.applications.targets import pooled
+
+    target = vm.band({500: 1.0, **{510 + 10 * i: 0.02 for i in range(10)}}, tolerance=0.02)
+    assert coverage(scene, target, bound="two-stage") >= least_hits(TRIALS, 1 - DELTA)
+    right = pooled.pooled_rays
+    monkeypatch.setattr(pooled, "pooled_rays", lambda weights, rays, seed, stage, functional: right(
+        np.asarray(weights) != 0, rays, seed, stage, functional))
+    assert coverage(scene, target, bound="two-stage") < least_hits(TRIALS, 1 - DELTA)
 
 
 def test_a_planted_wrong_allocation_is_caught_by_the_coverage_check(scene, monkeypatch):

@@ -11,14 +11,12 @@ import pytest
 
 import virtspec_mi as vm
 import virtspec_mi.applications.targets.sequential as sequential
-
-DARK = [0.03, 0.05, 0.08, 0.04]
+from dark_specimen import DARK, dark_scene, recorded_traces
 
 
 @pytest.fixture(scope="module")
 def dark(mi):
-    return vm.instrument_scene({"type": "diffuse", "reflectance": {
-        "type": "regular", "wavelength_min": 300, "wavelength_max": 1000, "values": ", ".join(map(str, DARK))}})
+    return dark_scene()
 
 
 def _exact_band(low: float, high: float) -> float:
@@ -30,18 +28,9 @@ def _exact_band(low: float, high: float) -> float:
 
 
 def test_every_batch_traces_fresh_rays_and_a_seed_gives_one_result(dark, monkeypatch):
-    import virtspec_mi.instruments.hemispherical.allocated as allocated  # the seam's process traces through it
-
-    calls = []
-    original = allocated.trace_allocated
-
-    def recording(bench, settings, readings, rays, offsets=None):
-        calls.append((settings.seed, [r[0] for r in readings], np.asarray(rays), np.asarray(offsets)))
-        return original(bench, settings, readings, rays, offsets=offsets)
-
-    monkeypatch.setattr(allocated, "trace_allocated", recording)
+    calls = recorded_traces(monkeypatch)  # the seam's process traces through trace_allocated
     target = vm.band((500, 520), tolerance=0.004)
-    first = vm.measure(dark, target=target, delta=0.05, seed=3)
+    first = vm.measure(dark, target=target, delta=0.05, seed=3, bound="betting")
     pilot, calls = calls[0], calls[1:]  # a linear target's pilot (sizing only) has a seed of its own
     assert len(first.batches) >= 2 and len(calls) == len(first.batches)
     assert pilot[0] != calls[0][0] and int(pilot[2].sum()) == first.pilot_rays
@@ -55,22 +44,21 @@ def test_every_batch_traces_fresh_rays_and_a_seed_gives_one_result(dark, monkeyp
         assert all(a[1] <= b[0] for a, b in zip(spans, spans[1:])), (w, spans)
     spans = sorted(span for spans in ranges.values() for span in spans)
     assert all(a[1] <= b[0] for a, b in zip(spans, spans[1:]))  # no ray twice, across wavelengths either
-    monkeypatch.setattr(allocated, "trace_allocated", original)
-    again = vm.measure(dark, target=target, delta=0.05, seed=3)
+    again = vm.measure(dark, target=target, delta=0.05, seed=3, bound="betting")
     assert again.batches == first.batches and again["band_500-520"] == first["band_500-520"]
-    other = vm.measure(dark, target=target, delta=0.05, seed=4)
+    other = vm.measure(dark, target=target, delta=0.05, seed=4, bound="betting")
     assert other["band_500-520"].value != first["band_500-520"].value
 
 
 def test_sampling_stops_at_the_first_batch_that_meets_the_target(dark, monkeypatch):
     target = vm.band((500, 520), tolerance=0.004)
-    result = vm.measure(dark, target=target, delta=0.05, seed=5)
+    result = vm.measure(dark, target=target, delta=0.05, seed=5, bound="betting")
     assert result.met and result.bound == "betting" and len(result.batches) >= 2
     assert result.rays == sum(result.batches) == int(np.sum(result.readings.rays))
     value = result["band_500-520"]
     assert value.half_width <= 0.004 and value.lower <= _exact_band(500, 520) <= value.upper
     monkeypatch.setattr(sequential, "MOST_BATCHES", len(result.batches) - 1)
-    shorter = vm.measure(dark, target=target, delta=0.05, seed=5)
+    shorter = vm.measure(dark, target=target, delta=0.05, seed=5, bound="betting")
     assert shorter.batches == result.batches[:-1] and not shorter.met  # the last batch was needed
     assert "NOT MET" in shorter.summary()
     data = result.as_dict()
@@ -80,7 +68,7 @@ def test_sampling_stops_at_the_first_batch_that_meets_the_target(dark, monkeypat
 
 def test_fewer_rays_than_hoeffding_where_the_reflectance_is_small(dark):
     target = vm.band((450, 600), tolerance=0.002)
-    betting = vm.measure(dark, target=target, delta=0.05, seed=1)
+    betting = vm.measure(dark, target=target, delta=0.05, seed=1, bound="betting")
     hoeffding = vm.measure(dark, target=target, delta=0.05, seed=1, bound="hoeffding")
     assert betting.met and hoeffding.met and hoeffding.bound == "hoeffding" and not hoeffding.batches
     assert betting.total_rays < hoeffding.total_rays / 2, (betting.total_rays, hoeffding.total_rays)  # pilot included
@@ -95,27 +83,23 @@ def test_a_colour_stops_on_its_own_certificate(dark):
 
 
 def test_a_bound_a_target_does_not_take_is_refused(dark):
-    with pytest.raises(ValueError, match="bound must be one of auto, betting, hoeffding for a target"):
+    with pytest.raises(ValueError, match="bound must be one of auto, betting, two-stage, hoeffding for a target"):
         vm.measure(dark, target=vm.band("B04"), bound="chebyshev")
 
 
-def test_auto_takes_hoeffdings_route_when_the_pilot_shows_betting_would_not_pay(mi):
-    """The soybean leaf's B04 to +-0.01: few rays per wavelength, a handful in the rarer fate each."""
+def test_auto_pools_a_linear_target_and_bets_on_any_other(dark):
+    """The choice is the target's kind alone: a band is pooled, an index and a colour take the sequence."""
 
-    leaf = vm.scenes.path("soybean_abmb")
-    target = vm.band("B04", tolerance=0.01)
-    auto = vm.measure(leaf, target=target, seed=2)
-    hoeffding = vm.measure(leaf, target=target, seed=2, bound="hoeffding")
-    assert auto.bound == "hoeffding" and not auto.batches and auto.met
-    assert auto.rays == hoeffding.rays and auto["band_B04"] == hoeffding["band_B04"]  # the same route, same rays
-    assert 0 < auto.pilot_rays < auto.rays / 8  # its pilot (1/16 of Hoeffding's rays) is counted
-    dark = vm.measure(vm.instrument_scene({"type": "diffuse", "reflectance": {
-        "type": "regular", "wavelength_min": 300, "wavelength_max": 1000, "values": ", ".join(map(str, DARK))}}),
-        target=vm.band((500, 520), tolerance=0.004), delta=0.05, seed=3)
-    assert dark.bound == "betting"
+    band = vm.band((500, 520), tolerance=0.004)
+    auto = vm.measure(dark, target=band, delta=0.05, seed=3)
+    pooled = vm.measure(dark, target=band, delta=0.05, seed=3, bound="two-stage")
+    assert auto.bound == "two-stage" and auto.as_dict()["values"] == pooled.as_dict()["values"]
+    assert auto.rays == pooled.rays and auto.pilot_rays == pooled.pilot_rays  # the same route, the same rays
+    index = vm.measure(dark, target=vm.index("NDVI", tolerance=0.05), delta=0.2, seed=1)
+    assert index.bound == "betting" and index.batches
 
 
-@pytest.mark.parametrize("bound", ["betting", "hoeffding", "auto"])
+@pytest.mark.parametrize("bound", ["betting", "two-stage", "hoeffding", "auto"])
 def test_the_command_line_takes_a_targets_bound(dark, capsys, bound):
     import json
 
@@ -127,7 +111,7 @@ def test_the_command_line_takes_a_targets_bound(dark, capsys, bound):
     api = vm.measure(vm.scenes.path("diamond_collimated"), target=vm.band("B04", tolerance=0.05), seed=1,
                      bound=bound)
     assert data["bound"] == api.bound and data["rays"] == api.rays and data["batches"] == list(api.batches)
-    assert data["bound"] == ("hoeffding" if bound == "auto" else bound)  # auto: the pilot shows betting won't pay
+    assert data["bound"] == ("two-stage" if bound == "auto" else bound)  # auto: a band is pooled
     assert data["values"]["band_B04"]["value"] == api["band_B04"].value
 
 

@@ -14,8 +14,9 @@ certified box. Modules, one job each:
 - :mod:`.bands`, :mod:`.indices` — response functions, Sentinel-2 bands, indices;
 - :mod:`.targets` — ``vm.colour``, ``vm.band``, ``vm.fapar``, ``vm.index``;
 - :mod:`~virtspec_mi.applications.targets.measure` — a target's rays traced through the engine (Hoeffding, one batch);
-  :mod:`.sequential` — batches until a betting confidence sequence certifies it (the
-  default); :mod:`.result` — its result;
+  :mod:`.sequential` — batches until a betting confidence sequence certifies it (a colour's
+  and an index's default); :mod:`.pooled` — a linear target's wavelengths pooled into one
+  proportion, the exact two-stage rule (a band's and fAPAR's default); :mod:`.result` — its result;
 - :mod:`.difference` — ``vm.colour_difference``; :mod:`.parse` — ``--target`` strings.
 
 The application's row (:class:`TargetsApplication`) extends ``virtspec measure`` and

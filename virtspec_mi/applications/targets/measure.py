@@ -40,7 +40,7 @@ Hoeffding (1963), Theorem 2; Baranoski et al. (2001), eq. (2).
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, fields, replace
 from typing import Any, Callable
 
 import numpy as np
@@ -53,13 +53,15 @@ from virtspec_mi.applications.targets.targets import TARGETS, ColourTarget, Targ
 from virtspec_mi.base.surface import spoken
 from virtspec_mi.budgets.twostage import stage_two_seed
 from virtspec_mi.engine.progress import expect, finished
+from virtspec_mi.engine.tally import Tally
 from virtspec_mi.instruments import ALLOCATING, Allocation
+from virtspec_mi.kernel.counts import Counts
 from virtspec_mi.plugins.specimen import specimen_of
 from virtspec_mi.runtime.reading import scene_options
 from virtspec_mi.runtime.scene import LoadedScene
 from virtspec_mi.settings import Settings, resolve
 
-__all__ = ["measure_target", "take_target", "plan_target", "TargetPlan", "PILOT_TOLERANCE", "PILOT_DELTA", "REFUSED_SETTINGS"]
+__all__ = ["measure_target", "take_target", "plan_target", "prepared", "check_certified", "add_counts", "spent_readings", "TargetPlan", "PILOT_TOLERANCE", "PILOT_DELTA", "REFUSED_SETTINGS"]
 
 PILOT_TOLERANCE: float = 0.003
 """A pilot's tolerance on each functional, as a share of its Σ|w| (about 80,000 rays per functional at PILOT_DELTA)."""
@@ -158,10 +160,12 @@ class TargetPlan:
     pilot_counts: tuple[np.ndarray, np.ndarray] | None = None  # (rays, counts) per grid wavelength: sizing only
 
 
-def plan_target(bench: Any, settings: Settings, target: Target, refine: bool = True) -> TargetPlan:
+def prepared(bench: Any, settings: Settings, target: Target
+             ) -> tuple[Target, list[Functional], np.ndarray, np.ndarray, float]:
     """
-    Steps 1–3 of the module docstring (the pilot traced when the target needs one): the rays, not yet traced
-    (``refine``: a second pilot for a costly nonlinear target).
+    Step 1 of the module docstring: the target fitted to the specimen's data, its
+    functionals, their wavelength grid and weights (m × n), and δ of each (δ/m); a
+    ``target`` that is not one: ``ValueError`` naming the constructors.
     """
 
     if not isinstance(target, Target):
@@ -170,9 +174,53 @@ def plan_target(bench: Any, settings: Settings, target: Target, refine: bool = T
                          f"text such as 'colour,dE00=0.5' is read by parse_target) (got {target!r})")
     target = _specimen_fit(target, bench)
     functionals = target.functionals()
-    quantity = functionals[0].quantity
     grid, weights = _grid(functionals)
-    each = union_delta(float(settings.delta), len(functionals))
+    return target, functionals, grid, weights, union_delta(float(settings.delta), len(functionals))
+
+
+def check_certified(target: Target, counts: Counts) -> None:
+    """``ValueError`` when some of ``counts``' readings escaped their certificate: nothing to certify."""
+
+    if np.any(counts.weight_violations) or np.any(counts.capped) or np.any(counts.invalid_directions):
+        raise ValueError(f"target {target.describe()}: some readings escaped their certificate (weight violations, "
+                         "capped walks or invalid directions): no certified value")
+
+
+def add_counts(total: Counts, part: Counts, index: np.ndarray) -> None:
+    """Add ``part``'s counts into readings ``index`` of ``total`` (the largest weight: the larger)."""
+
+    for item in fields(total):
+        name = item.name
+        if name == "largest_weight":
+            mine, theirs = getattr(total, name)[index], getattr(part, name)
+            getattr(total, name)[index] = np.where(np.isnan(mine), theirs, np.fmax(mine, theirs))
+        else:
+            getattr(total, name)[index] += getattr(part, name)
+
+
+def spent_readings(bench: Any, settings: Settings, grid: np.ndarray, used: np.ndarray, total: Counts,
+                   seconds: float, scene: str = "", source: dict | None = None) -> Any:
+    """
+    The readings of the rays a route spent in several traces: ``total``, the counts of the
+    wavelengths ``grid[used]`` summed over the traces, as the allocated reading's result
+    (``theta_i`` squeezed), ``seconds`` its tracing time.
+    """
+
+    final = ALLOCATING(scene, source)
+    rays = np.zeros(len(grid), dtype=np.int64)
+    rays[used] = 1
+    final.init(bench, settings, Allocation(grid, rays, int(settings.seed)), np.array([float(settings.theta_i)]), None)
+    return final.postprocess(Tally(total).with_seconds(seconds)).squeeze("theta_i")
+
+
+def plan_target(bench: Any, settings: Settings, target: Target, refine: bool = True) -> TargetPlan:
+    """
+    Steps 1–3 of the module docstring (the pilot traced when the target needs one): the rays, not yet traced
+    (``refine``: a second pilot for a costly nonlinear target).
+    """
+
+    target, functionals, grid, weights, each = prepared(bench, settings, target)
+    quantity = functionals[0].quantity
     pilot_rays = 0
     estimates = None
     counts = np.zeros(len(grid))
@@ -240,9 +288,7 @@ def take_target(bench: Any, settings: Settings, target: Target, *, scene: str = 
     readings = instrument.postprocess(tally).squeeze("theta_i")
     spent = rays[used]
     values = _fates(tally.counts, quantity) / spent
-    if not np.all(readings.certified):
-        raise ValueError(f"target {target.describe()}: some readings escaped their certificate (weight violations, "
-                         "capped walks or invalid directions): no certified value")
+    check_certified(target, tally.counts)
     rounding = np.asarray(readings.rounding_bias, dtype=np.float64)
     estimates = weights[:, used] @ values
     certified = np.array([certified_tolerance(Functional(f.name, grid[used], w[used], f.quantity), spent, each,

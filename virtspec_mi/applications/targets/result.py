@@ -84,6 +84,17 @@ def _quantities(values: Any, dims: tuple[str, ...] = ()) -> dict[str, tuple[str,
     return table
 
 
+_ROUTE_WORDS: dict[str, tuple[str, Any]] = {
+    "betting": ("N_k in proportion to |w_k| sigma_k",
+                lambda batches: f"betting confidence sequence, stopped after batch {len(batches)} of rays "
+                                f"{', '.join(f'{b:,}' for b in batches)}"),
+    "two-stage": ("each ray's wavelength drawn with probability |w_k|/sum|w|",
+                  lambda batches: "pooled two-stage exact rule, a pilot then one batch per functional"),
+}
+"""How a summary names each route's allocation and certificate (its ``bound``; any other: Hoeffding's)."""
+_HOEFFDING_WORDS: tuple[str, Any] = ("N_k proportional to |w_k|", lambda batches: "Hoeffding 1963")
+
+
 @dataclass(frozen=True, eq=False)
 class DerivedResult(Record):
     """
@@ -117,9 +128,11 @@ class DerivedResult(Record):
         Wall time of the whole measurement (pilot, sizing, tracing, certificate).
     bound : str
         The certificate: ``"betting"`` (a betting confidence sequence over batches,
-        :mod:`.sequential`) or ``"hoeffding"`` (one batch, Hoeffding 1963).
+        :mod:`.sequential`), ``"two-stage"`` (pooled two-stage readings, :mod:`.pooled`) or
+        ``"hoeffding"`` (one batch, Hoeffding 1963).
     batches : tuple of int
-        The rays of each batch, in order (the last is the stopping time).
+        The rays of each batch, in order (betting: the last is the stopping time;
+        two-stage: each functional's second batch).
     """
 
     FORMAT: ClassVar[str] = FORMAT
@@ -176,14 +189,11 @@ class DerivedResult(Record):
 
     @property
     def _allocation_words(self) -> str:
-        return "N_k in proportion to |w_k| sigma_k" if self.bound == "betting" else "N_k proportional to |w_k|"
+        return _ROUTE_WORDS.get(self.bound, _HOEFFDING_WORDS)[0]
 
     @property
     def _bound_words(self) -> str:
-        if self.bound == "betting":
-            return (f"betting confidence sequence, stopped after batch {len(self.batches)} of rays "
-                    f"{', '.join(f'{b:,}' for b in self.batches)}")
-        return "Hoeffding 1963"
+        return _ROUTE_WORDS.get(self.bound, _HOEFFDING_WORDS)[1](self.batches)
 
     def __repr__(self) -> str:
         head = ", ".join(f"{v.name} = {v.value:.5g} [{v.lower:.5g}, {v.upper:.5g}]" for v in self.values[:3])
@@ -261,7 +271,8 @@ class DerivedResult(Record):
                    float(data["delta"]), int(whole_counts(data["statements"], "statements")),
                    tuple(optional_numbers(data["functional_tolerances"], "functional_tolerances").tolist()),
                    None if colour is None else RecordedData(colour), field_value(data, "met", "flag"),
-                   float(field_value(data, "seconds", "seconds")))
+                   float(field_value(data, "seconds", "seconds")), field_value(data, "bound", "text") if "bound" in data else "hoeffding",
+                   tuple(int(b) for b in whole_counts(data.get("batches", []), "batches")))
 
     def _check(self) -> None:
         """The estimates' rays are the readings' N summed; every value lies within its certified interval."""

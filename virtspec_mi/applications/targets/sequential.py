@@ -35,10 +35,12 @@ default, ``bound="betting"``:
    Hoeffding's rays or :data:`MOST_BATCHES` batches stops and says "NOT MET", with the
    interval its rays certify.
 
-:func:`certify_target` picks the route: ``bound="betting"`` this one,
-``bound="hoeffding"`` the one-batch route of :mod:`~virtspec_mi.applications.targets.measure`, ``bound="auto"`` (the
-default) this one unless a linear target's pilot shows it would not pay (:func:`pays`),
-then Hoeffding's, the pilot's rays counted.
+:func:`certify_target` picks the route: ``bound="betting"`` this one, ``bound="two-stage"``
+pooled two-stage readings (:mod:`.pooled`), ``bound="hoeffding"`` the one-batch route of
+:mod:`~virtspec_mi.applications.targets.measure`, ``bound="auto"`` (the default,
+:func:`take_auto`) the pooled readings for a linear target whose weights have one sign
+(every band, fAPAR, albedo: they need fewer rays, ``benchmarks/betting.py``), this one
+for any other (an index, a colour).
 
 With ``checkpoint=`` every trace is kept on disk and an interrupted run resumes to the
 same result (:mod:`.resume`). The batch granularity: a batch asks for at most as much again as all the batches before
@@ -56,18 +58,19 @@ from __future__ import annotations
 import math
 import os
 import time
-from dataclasses import dataclass, fields, replace
+from dataclasses import dataclass, replace
 from functools import partial
 from typing import Any, Callable
 
 import numpy as np
 
 from virtspec_mi.budgets.functionals import allocate_jointly
-from virtspec_mi.applications.targets.measure import (_certified_colour, _colour_values, _fates, _trace, plan_target,
-                                                      take_target)
+from virtspec_mi.applications.targets.measure import (_certified_colour, _colour_values, _fates, _trace, add_counts,
+                                                      check_certified, plan_target, spent_readings, take_target)
 from virtspec_mi.applications.targets.measure import measure_target as checked_target
 from virtspec_mi.runtime.scene import LoadedScene
 from virtspec_mi.applications.targets.result import DerivedResult
+from virtspec_mi.applications.targets.pooled import poolable, take_pooled
 from virtspec_mi.applications.targets.resume import replaying
 from virtspec_mi.applications.targets.joint import facet_tolerances, facet_weights, lab_boxes, lab_jacobian, region_colour
 from virtspec_mi.applications.targets.targets import ColourTarget, Target, colour_of
@@ -75,11 +78,10 @@ from virtspec_mi.budgets.betting import BettingSequence, neyman_rays, prior_vari
 from virtspec_mi.budgets.twostage import stage_two_seed
 from virtspec_mi.engine.progress import Progress
 from virtspec_mi.engine.tally import Tally
-from virtspec_mi.instruments import ALLOCATING, Allocation
 from virtspec_mi.kernel.counts import WEIGHT_ROUNDING, Counts
 from virtspec_mi.settings import Settings
 
-__all__ = ["measure_target", "measure_targets", "certify_target", "take_sequential", "pays", "BOUNDS", "PAYS_FACTOR", "LEAST_COUNTS", "PLANNED_MARGIN", "FIRST_SHARE", "BLIND_SHARE", "LEAST_GROWTH", "MOST_BATCHES", "MOST_RAYS_FACTOR", "JOINT_METHOD"]
+__all__ = ["measure_target", "measure_targets", "certify_target", "take_sequential", "take_auto", "BOUNDS", "PLANNED_MARGIN", "FIRST_SHARE", "BLIND_SHARE", "LEAST_GROWTH", "MOST_BATCHES", "MOST_RAYS_FACTOR", "JOINT_METHOD"]
 
 FIRST_SHARE: float = 0.9
 """The first batch asks for this share of the information a functional needs (pilot's variances)."""
@@ -98,25 +100,6 @@ MOST_RAYS_FACTOR: float = 4.0
 
 PLANNED_MARGIN: float = 0.95
 """The share of a nonlinear target's tolerance its functionals' stakes are planned for (from the pilot's point)."""
-
-
-PAYS_FACTOR: float = 1.25
-"""``auto`` takes the betting route when its predicted rays are at most 1/PAYS_FACTOR of Hoeffding's …"""
-
-LEAST_COUNTS: float = 20.0
-"""… and its strata expect at least this many rays in the rarer fate each (|w|-weighted mean)."""
-
-
-def _add(total: Counts, part: Counts, index: np.ndarray) -> None:
-    """Add ``part``'s counts into readings ``index`` of ``total`` (the largest weight: the larger)."""
-
-    for item in fields(total):
-        name = item.name
-        if name == "largest_weight":
-            mine, theirs = getattr(total, name)[index], getattr(part, name)
-            getattr(total, name)[index] = np.where(np.isnan(mine), theirs, np.fmax(mine, theirs))
-        else:
-            getattr(total, name)[index] += getattr(part, name)
 
 
 def _next_information(have: np.ndarray, widths: np.ndarray, tolerances: np.ndarray) -> np.ndarray:
@@ -192,10 +175,8 @@ def measure_targets(scene: LoadedScene, target: Target, settings: dict[str, Any]
 def certify_target(bench: Any, settings: Settings, target: Target, *, scene: str = "", source: dict | None = None,
                    bound: str = "auto", checkpoint: Any = None) -> DerivedResult:
     """
-    Certify ``target``: ``bound="betting"`` by :func:`take_sequential`, ``bound="hoeffding"``
-    by the one-batch route :func:`~virtspec_mi.applications.targets.measure.take_target`, ``bound="auto"`` (default) by the
-    betting route unless a linear target's pilot shows it would not pay (:func:`pays`), then
-    by Hoeffding's (the result's ``bound`` says which).
+    Certify ``target`` by the route :data:`BOUNDS` names ``bound`` (the result's ``bound``
+    says which route ``auto`` took), with every trace kept in ``checkpoint`` when given.
     """
 
     if bound not in BOUNDS:
@@ -209,31 +190,9 @@ def certify_target(bench: Any, settings: Settings, target: Target, *, scene: str
         return BOUNDS[bound](bench, settings, target, scene=scene, source=source)
 
 
-def pays(weights: np.ndarray, need: np.ndarray, variances: np.ndarray, means: np.ndarray, hoeffding: int) -> bool:
-    """
-    Whether the betting route is expected to beat Hoeffding's, from a pilot only: the
-    Neyman rays for the information ``need`` (Gaussian) cost at most 1/:data:`PAYS_FACTOR`
-    of ``hoeffding``'s rays, and the strata expect at least :data:`LEAST_COUNTS` rays in the
-    rarer fate each (weighted by |w|: with fewer, each stratum's test is in its small-count
-    regime, where the sequence stays wide). A rule of thumb, measured on the shipped
-    specimens (``benchmarks/betting.py``); it decides the bound before any estimate is
-    traced, so either certificate stays valid.
-    """
-
-    rays = neyman_rays(weights, need, variances)
-    rarer = rays * np.minimum(means, 1 - means)
-    share = np.abs(np.atleast_2d(weights)).sum(axis=0)
-    typical = float(np.sum(share * rarer) / np.sum(share))
-    return bool(PAYS_FACTOR * rays.sum() <= hoeffding and typical >= LEAST_COUNTS)
-
-
-def take_sequential(bench: Any, settings: Settings, target: Target, *, scene: str = "", source: dict | None = None,
-                    fallback: bool = False) -> DerivedResult:
-    """
-    Certify ``target`` on ``bench`` with ``settings`` by batches until it is met (the module
-    docstring); ``fallback``: a linear target whose pilot shows the betting route would not
-    pay (:func:`pays`) is certified by Hoeffding's route instead, its pilot's rays counted.
-    """
+def take_sequential(bench: Any, settings: Settings, target: Target, *, scene: str = "", source: dict | None = None
+                    ) -> DerivedResult:
+    """Certify ``target`` on ``bench`` with ``settings`` by batches until it is met (the module docstring)."""
 
     start = time.perf_counter()
     planned = plan_target(bench, settings, target, refine=False)
@@ -253,12 +212,6 @@ def take_sequential(bench: Any, settings: Settings, target: Target, *, scene: st
         prior = (np.zeros(len(grid)), np.zeros(len(grid)))
         prior[0][used], prior[1][used] = np.maximum(first, 1), _fates(tally.counts, quantity)
         pilot_rays += int(np.maximum(first, 1).sum())
-        v = prior_variances(prior[0][used], prior[1][used])
-        need = 2 * math.log(2 / planned.each) / tolerances ** 2
-        if fallback and not pays(weights[:, used], need, v[1], v[0], hoeffding):
-            result = take_target(bench, settings, target, scene=scene, source=source)
-            return replace(result, pilot_rays=result.pilot_rays + pilot_rays,
-                           seconds=time.perf_counter() - start)
     region = None
     prior_rays = np.zeros(len(used)) if prior is None else prior[0][used]
     prior_hits = np.zeros(len(used)) if prior is None else prior[1][used]
@@ -293,7 +246,7 @@ def take_sequential(bench: Any, settings: Settings, target: Target, *, scene: st
         seconds_traced += tally.seconds
         part = np.zeros(len(used))
         part[traced] = _fates(tally.counts, quantity)
-        _add(total, tally.counts, traced)
+        add_counts(total, tally.counts, traced)
         for sequence in sequences:
             sequence.record(batch, part)
         spent += batch
@@ -311,27 +264,38 @@ def take_sequential(bench: Any, settings: Settings, target: Target, *, scene: st
         batch = neyman_rays(w, np.maximum(wanted - have, 0.0), variances)
         batch = np.minimum(batch, np.maximum(MOST_RAYS_FACTOR * hoeffding - spent.sum(), 1)).astype(np.int64)
     estimates, certified, reported, colour, met = outcome  # the last batch's certificate
-    final = ALLOCATING(scene, source)
-    rays = np.zeros(len(grid), dtype=np.int64)
-    rays[used] = 1
-    final.init(bench, settings, Allocation(grid, rays, int(settings.seed)), np.array([float(settings.theta_i)]), None)
-    result = final.postprocess(Tally(total).with_seconds(seconds_traced))
-    return DerivedResult(target=target, values=tuple(reported), readings=result.squeeze("theta_i"),
+    readings = spent_readings(bench, settings, grid, used, total, seconds_traced, scene, source)
+    return DerivedResult(target=target, values=tuple(reported), readings=readings,
                          rays=int(spent.sum()), pilot_rays=pilot_rays, delta=delta,
                          statements=len(functionals), functional_tolerances=tuple(float(t) for t in certified),
                          colour=colour, met=met, seconds=time.perf_counter() - start, bound="betting",
                          batches=tuple(batches))
 
 
+def take_auto(bench: Any, settings: Settings, target: Target, *, scene: str = "", source: dict | None = None
+              ) -> DerivedResult:
+    """
+    ``bound="auto"``: a linear target whose functionals each weigh with one sign
+    (:func:`~.pooled.poolable`) by pooled two-stage readings (:func:`~.pooled.take_pooled`),
+    any other by the betting route (:func:`take_sequential`). The choice depends on the
+    target alone, before any ray.
+    """
+
+    route = take_pooled if isinstance(target, Target) and not poolable(target) else take_sequential
+    return route(bench, settings, target, scene=scene, source=source)
+
+
 BOUNDS: dict[str, Callable[..., DerivedResult]] = {
-    "auto": partial(take_sequential, fallback=True),
-    "betting": partial(take_sequential, fallback=False),
+    "auto": take_auto,
+    "betting": take_sequential,
+    "two-stage": take_pooled,
     "hoeffding": take_target,
 }
 """
-A target's certificates by name, each its route: ``auto`` (the default: betting unless a
-linear target's pilot shows it would not pay, :func:`pays`), a betting confidence sequence
-(:func:`take_sequential`), Hoeffding's (one batch, :func:`~virtspec_mi.applications.targets.measure.take_target`).
+A target's certificates by name, each its route: ``auto`` (the default, :func:`take_auto`),
+a betting confidence sequence (:func:`take_sequential`), pooled two-stage readings
+(:func:`~.pooled.take_pooled`), Hoeffding's (one batch,
+:func:`~virtspec_mi.applications.targets.measure.take_target`).
 """
 
 
@@ -386,7 +350,7 @@ def _certificate(target: Target, functionals: list, sequences: list[BettingSeque
     target is met. Readings that escaped their certificate are refused (nothing to certify).
     """
 
-    certified_readings = (total.weight_violations == 0) & (total.capped == 0) & (total.invalid_directions == 0)
+    check_certified(target, total)
     rounding = total.rounded_weights * WEIGHT_ROUNDING / np.maximum(spent, 1)
     estimates = np.array([s.estimate for s in sequences])
     widths, intervals = [], []
@@ -396,9 +360,6 @@ def _certificate(target: Target, functionals: list, sequences: list[BettingSeque
         widths.append(max(e - low, high - e, 0.0) + bias)
         intervals.append((low - bias, high + bias))
     widths = np.array(widths)
-    if not np.all(certified_readings):
-        raise ValueError(f"target {target.describe()}: some readings escaped their certificate (weight "
-                         "violations, capped walks or invalid directions): no certified value")
     colour = None
     if region is not None:
         rays, hits = (np.sum(getattr(sequences[0], name), axis=0) for name in ("rays", "hits"))

@@ -1,10 +1,10 @@
 """
 A target that survives interruption (applications/targets/resume.py): a betting run
-checkpointed after every batch, killed with SIGKILL mid-sequence, resumed, gives the
-result of the uninterrupted run bit for bit (the wall time excepted), tracing only the
-batches the file did not hold; a checkpoint of another run is refused and left as it is.
+checkpointed after every batch, and a pooled two-stage run after every trace, killed
+with SIGKILL mid-run, resumed, gives the result of the uninterrupted run bit for bit (the
+wall time excepted), tracing only the batches the file did not hold; a checkpoint of
+another run is refused and left as it is.
 """
-
 from __future__ import annotations
 
 import json
@@ -39,25 +39,32 @@ allocated.trace_allocated = counting
 scene = vm.instrument_scene({"type": "diffuse", "reflectance": {"type": "regular", "wavelength_min": 300,
                              "wavelength_max": 1000, "values": "0.03, 0.05, 0.08, 0.04"}})
 keywords = {} if sys.argv[1] == "-" else {"checkpoint": sys.argv[1]}
-result = vm.measure(scene, target=vm.band((500, 520), step=10.0, tolerance=0.004), delta=0.05, seed=3,
-                    bound="betting", **keywords)
+bands = [(500, 520)] if sys.argv[3] == "betting" else [(500, 520), (600, 620), (700, 720)]
+result = vm.measure(scene, target=vm.band(*bands, step=10.0, tolerance=0.004), delta=0.05, seed=3,
+                    bound=sys.argv[3], **keywords)
 data = result.as_dict()
 data.pop("seconds", None)
 print(json.dumps({"result": data, "traced": len(traced)}, sort_keys=True))
 '''
 
 
-def _run(tmp_path: Path, checkpoint: str, pace: str = "fast") -> dict:
-    done = subprocess.run([sys.executable, str(tmp_path / "child.py"), checkpoint, pace], capture_output=True,
+def _run(tmp_path: Path, checkpoint: str, bound: str, pace: str = "fast") -> dict:
+    done = subprocess.run([sys.executable, str(tmp_path / "child.py"), checkpoint, pace, bound], capture_output=True,
                           text=True, check=True, cwd=tmp_path, preexec_fn=default_signals)
     return json.loads(done.stdout.strip().splitlines()[-1])
 
 
-def test_a_target_killed_mid_sequence_resumes_to_the_same_result(mi, tmp_path):
+@pytest.mark.parametrize("bound", ["betting", "two-stage"])
+def test_a_target_killed_mid_sequence_resumes_to_the_same_result(mi, tmp_path, bound):
+    """
+    Betting: one band in many small batches; two-stage: three bands, a pilot and a second
+    batch each (six traces). Killed once three traces are kept: mid-run either way.
+    """
+
     (tmp_path / "child.py").write_text(CHILD)
     checkpoint = tmp_path / "target.partial.json"
-    process = subprocess.Popen([sys.executable, str(tmp_path / "child.py"), str(checkpoint), "slow"], cwd=tmp_path,
-                               preexec_fn=default_signals, stdout=subprocess.DEVNULL)
+    process = subprocess.Popen([sys.executable, str(tmp_path / "child.py"), str(checkpoint), "slow", bound],
+                               cwd=tmp_path, preexec_fn=default_signals, stdout=subprocess.DEVNULL)
     deadline = time.monotonic() + 300
     kept = 0
     while process.poll() is None and time.monotonic() < deadline:
@@ -72,11 +79,11 @@ def test_a_target_killed_mid_sequence_resumes_to_the_same_result(mi, tmp_path):
     process.wait()
     assert process.returncode == -signal.SIGKILL, "the run ended before it could be interrupted"
     kept = len(json.loads(checkpoint.read_text())["traces"])  # the file is whole after the kill
-    resumed = _run(tmp_path, str(checkpoint))
-    whole = _run(tmp_path, "-")
+    resumed = _run(tmp_path, str(checkpoint), bound)
+    whole = _run(tmp_path, "-", bound)
     assert resumed["result"] == whole["result"]  # bit-identical: every count, interval, batch, reading
-    batches = whole["result"]["batches"]
-    assert len(batches) > kept >= 3 and whole["result"]["bound"] == "betting"
+    traces = len(whole["result"]["batches"]) * (2 if bound == "two-stage" else 1)  # betting: its pilot is one more
+    assert traces > kept >= 3 and whole["result"]["bound"] == bound
     assert resumed["traced"] == whole["traced"] - kept  # only what the file did not hold was traced again
     assert not checkpoint.exists()  # removed once the result is returned
 

@@ -5,6 +5,7 @@ with SIGKILL mid-run, resumed, gives the result of the uninterrupted run bit for
 wall time excepted), tracing only the batches the file did not hold; a checkpoint of
 another run is refused and left as it is.
 """
+
 from __future__ import annotations
 
 import json

@@ -15,8 +15,8 @@ from scipy.stats import chi2
 import virtspec_mi as vm
 from dark_specimen import dark_scene, exact, recorded_traces
 from killed_runs import Interrupting
-from virtspec_mi.applications.targets.pooled import poolable, pooled_rays
-from virtspec_mi.budgets.bounds import hoeffding_rays
+from virtspec_mi.applications.targets.pooled import pilot_pays, poolable, pooled_rays
+from virtspec_mi.budgets.bounds import exact_rays, hoeffding_rays
 from virtspec_mi.budgets.twostage import two_stage_law
 
 @pytest.fixture(scope="module")
@@ -53,6 +53,16 @@ def test_a_band_is_certified_with_fewer_rays_than_hoeffdings_route(dark):
     assert again["band_450-600"] == value and np.array_equal(again.readings.rays, pooled.readings.rays)
     assert "pooled two-stage exact rule" in pooled.summary()
     assert "drawn with probability |w_k|/sum|w|" in pooled.summary()
+
+
+def test_a_loose_tolerance_takes_the_exact_rule_without_a_pilot(dark):
+    """A pilot of 10/mu rays would cost about as much as it saves: N is the exact rule's over every p."""
+
+    assert pilot_pays(0.002, 0.01) and pilot_pays(0.04, 0.01) and not pilot_pays(0.05, 0.01)
+    target = vm.band((450, 600), tolerance=0.2)
+    loose = vm.measure(dark, target=target, delta=0.05, seed=1)
+    assert loose.pilot_rays == 0 and loose.rays == exact_rays(0.2, 0.05) < hoeffding_rays(0.2, 0.05)
+    assert loose.met and loose.values[0].lower <= exact(target.functionals()[0]) <= loose.values[0].upper
 
 
 def test_the_rules_exact_miss_probability_is_at_most_delta():

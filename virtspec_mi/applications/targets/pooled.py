@@ -14,7 +14,9 @@ two-stage exact rule (:mod:`virtspec_mi.budgets.twostage`), ``bound="two-stage"`
 
 1. each functional j gets its own pilot (the settings' seed) of n₁ = ⌈10/μⱼ⌉ rays,
    μⱼ = tⱼ/Wⱼ (tⱼ its tolerance), whose Clopper–Pearson interval at δ₁ = δⱼ/10 locates p̄
-   (δⱼ = δ/m, m functionals, union bound);
+   (δⱼ = δ/m, m functionals, union bound). At a loose tolerance, where the pilot would
+   cost more than :data:`PILOT_SHARE` of the exact rule's N (:func:`pilot_pays`), there is
+   no pilot and N₂ is the exact rule's N over every p̄ at δⱼ (a spectrum's ``bound="exact"``);
 2. N₂ = the least N whose exact binomial law misses p̄ by μⱼ with probability at most
    δⱼ − δ₁ for every p̄ in that interval (:func:`~virtspec_mi.budgets.twostage.stage_two_rays`),
    N₂ fresh rays (the seed :func:`~virtspec_mi.budgets.twostage.stage_two_seed`);
@@ -45,6 +47,7 @@ two-stage guarantee: :mod:`virtspec_mi.budgets.twostage`.
 from __future__ import annotations
 
 import time
+from statistics import NormalDist
 from typing import Any
 
 import numpy as np
@@ -53,12 +56,16 @@ from virtspec_mi.applications.targets.measure import (_fates, _trace, add_counts
                                                       spent_readings)
 from virtspec_mi.applications.targets.result import DerivedResult
 from virtspec_mi.applications.targets.targets import Target
+from virtspec_mi.budgets.bounds import exact_rays
 from virtspec_mi.budgets.twostage import (default_pilot_delta, default_pilot_rays, most_second_rays, stage_two_rays,
                                           stage_two_seed)
 from virtspec_mi.kernel.counts import WEIGHT_ROUNDING, Counts
 from virtspec_mi.settings import Settings
 
-__all__ = ["poolable", "pooled_rays", "take_pooled"]
+__all__ = ["poolable", "pilot_pays", "pooled_rays", "take_pooled", "PILOT_SHARE"]
+
+PILOT_SHARE: float = 0.25
+"""A functional takes a pilot when it costs at most this share of the exact rule's N without one (:func:`pilot_pays`)."""
 
 
 def poolable(target: Target) -> str:
@@ -75,6 +82,18 @@ def poolable(target: Target) -> str:
         if np.any(w > 0) and np.any(w < 0):
             return f"{functional.name} weighs some wavelengths positively and others negatively"
     return ""
+
+
+def pilot_pays(mu: float, delta: float) -> bool:
+    """
+    Whether a functional at μ and δ takes a pilot: when its ⌈10/μ⌉ rays cost at most
+    :data:`PILOT_SHARE` of the exact rule's N over every p̄ (normal approximation,
+    z²/(4μ²)); else the exact rule's N alone (a loose tolerance: the pilot would cost
+    about as much as it saves). Decided from μ and δ alone, before any ray.
+    """
+
+    z = NormalDist().inv_cdf(1 - delta / 2)
+    return default_pilot_rays(mu) <= PILOT_SHARE * z * z / (4 * mu * mu)
 
 
 def pooled_rays(weights: np.ndarray, rays: int, seed: int, stage: int, functional: int) -> np.ndarray:
@@ -108,15 +127,18 @@ def take_pooled(bench: Any, settings: Settings, target: Target, *, scene: str = 
     quantity, pilot_delta = functionals[0].quantity, default_pilot_delta(each)
     scales = np.abs(weights).sum(axis=1)
     mus = np.minimum(tolerances / scales, 0.5)
-    pilots = [default_pilot_rays(float(mu)) for mu in mus]
+    pilots = [default_pilot_rays(float(mu)) if pilot_pays(float(mu), each) else 0 for mu in mus]
     # one stride per stage, more than any functional's rays there: every functional's rays from ranges of their own
     strides = (max(pilots), max(most_second_rays(float(mu), each, pilot_delta) for mu in mus))
     total = Counts.zeros(len(grid))
     estimates, certified, seconds, batches = [], [], 0.0, []
     for j, (w, t, scale, mu, pilot) in enumerate(zip(weights, tolerances, scales, mus, pilots)):
-        hits, _, _ = _pooled_trace(bench, settings, grid, w, pilot, settings.seed, (0, j, strides[0]), quantity,
-                                   scene, source)
-        second = int(stage_two_rays([[int(hits)]], pilot, float(mu), each, pilot_delta)[0])
+        if pilot:
+            hits, _, _ = _pooled_trace(bench, settings, grid, w, pilot, settings.seed, (0, j, strides[0]), quantity,
+                                       scene, source)
+            second = int(stage_two_rays([[int(hits)]], pilot, float(mu), each, pilot_delta)[0])
+        else:  # the exact rule over every p̄, as a spectrum's bound="exact"
+            second = exact_rays(float(mu), each)
         assert second <= strides[1], "the exact rule never asks for more than Hoeffding's N (most_second_rays)"
         hits, tally, rays = _pooled_trace(bench, settings, grid, w, second, stage_two_seed(settings.seed),
                                           (1, j, strides[1]), quantity, scene, source)

@@ -74,6 +74,13 @@ def test_map_concatenate_and_put_keep_fields_by_name():
     target.put(np.array([4, 1]), picked)
     np.testing.assert_array_equal(target.rays, [0, 100, 0, 0, 50])
     assert np.isnan(target.largest_weight).all()
+    target.add(np.array([4, 1]), picked)  # added where put wrote: twice the counts
+    np.testing.assert_array_equal(target.rays, [0, 200, 0, 0, 100])
+    for weights in ([1.5, np.nan], [1.2, 2.5]):  # readings 4 and 1: the larger weight is kept; NaN (none) loses
+        weighed = picked.map(np.copy)
+        weighed.largest_weight[:] = weights
+        target.add(np.array([4, 1]), weighed)
+    np.testing.assert_array_equal(target.largest_weight, [np.nan, 2.5, np.nan, np.nan, 1.5])
     assert counts.rays[0] == 100  # the source is not changed
 
 

@@ -128,6 +128,16 @@ class Counts:
         for item in fields(self):
             getattr(self, item.name)[index] = getattr(other, item.name)
 
+    def add(self, index: Any, other: "Counts") -> None:
+        """Add ``other``'s counts into readings ``index`` of these (in place; the largest weight: the larger)."""
+
+        for item in fields(self):
+            mine = getattr(self, item.name)
+            if item.name == "largest_weight":
+                mine[index] = np.fmax(mine[index], other.largest_weight)  # fmax keeps a weight over NaN (none)
+            else:
+                mine[index] += getattr(other, item.name)
+
     def as_dict(self) -> dict[str, np.ndarray]:
         """Every field by name (``absorbed`` included)."""
 

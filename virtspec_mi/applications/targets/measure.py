@@ -40,7 +40,7 @@ Hoeffding (1963), Theorem 2; Baranoski et al. (2001), eq. (2).
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, fields, replace
+from dataclasses import dataclass, replace
 from typing import Any, Callable
 
 import numpy as np
@@ -61,7 +61,7 @@ from virtspec_mi.runtime.reading import scene_options
 from virtspec_mi.runtime.scene import LoadedScene
 from virtspec_mi.settings import Settings, resolve
 
-__all__ = ["measure_target", "take_target", "plan_target", "prepared", "check_certified", "add_counts", "spent_readings", "TargetPlan", "PILOT_TOLERANCE", "PILOT_DELTA", "REFUSED_SETTINGS"]
+__all__ = ["measure_target", "take_target", "plan_target", "prepared", "check_certified", "spent_readings", "TargetPlan", "PILOT_TOLERANCE", "PILOT_DELTA", "REFUSED_SETTINGS"]
 
 PILOT_TOLERANCE: float = 0.003
 """A pilot's tolerance on each functional, as a share of its Σ|w| (about 80,000 rays per functional at PILOT_DELTA)."""
@@ -184,18 +184,6 @@ def check_certified(target: Target, counts: Counts) -> None:
     if np.any(counts.weight_violations) or np.any(counts.capped) or np.any(counts.invalid_directions):
         raise ValueError(f"target {target.describe()}: some readings escaped their certificate (weight violations, "
                          "capped walks or invalid directions): no certified value")
-
-
-def add_counts(total: Counts, part: Counts, index: np.ndarray) -> None:
-    """Add ``part``'s counts into readings ``index`` of ``total`` (the largest weight: the larger)."""
-
-    for item in fields(total):
-        name = item.name
-        if name == "largest_weight":
-            mine, theirs = getattr(total, name)[index], getattr(part, name)
-            getattr(total, name)[index] = np.where(np.isnan(mine), theirs, np.fmax(mine, theirs))
-        else:
-            getattr(total, name)[index] += getattr(part, name)
 
 
 def spent_readings(bench: Any, settings: Settings, grid: np.ndarray, used: np.ndarray, total: Counts,

@@ -52,8 +52,7 @@ from typing import Any
 
 import numpy as np
 
-from virtspec_mi.applications.targets.measure import (_fates, _trace, add_counts, check_certified, prepared,
-                                                      spent_readings)
+from virtspec_mi.applications.targets.measure import _fates, _trace, check_certified, prepared, spent_readings
 from virtspec_mi.applications.targets.result import DerivedResult
 from virtspec_mi.applications.targets.targets import Target
 from virtspec_mi.budgets.bounds import exact_rays
@@ -145,7 +144,7 @@ def take_pooled(bench: Any, settings: Settings, target: Target, *, scene: str = 
         traced = np.flatnonzero(rays > 0)
         counts = tally.counts
         check_certified(target, counts)
-        add_counts(total, counts, traced)
+        total.add(traced, counts)
         seconds += tally.seconds
         sign = -1.0 if np.any(w < 0) else 1.0
         estimates.append(sign * scale * hits / second)

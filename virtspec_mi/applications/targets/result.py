@@ -271,7 +271,8 @@ class DerivedResult(Record):
                    float(data["delta"]), int(whole_counts(data["statements"], "statements")),
                    tuple(optional_numbers(data["functional_tolerances"], "functional_tolerances").tolist()),
                    None if colour is None else RecordedData(colour), field_value(data, "met", "flag"),
-                   float(field_value(data, "seconds", "seconds")), field_value(data, "bound", "text") if "bound" in data else "hoeffding",
+                   float(field_value(data, "seconds", "seconds")),
+                   field_value(data, "bound", "text") if "bound" in data else "hoeffding",
                    tuple(int(b) for b in whole_counts(data.get("batches", []), "batches")))
 
     def _check(self) -> None:

@@ -65,8 +65,8 @@ from typing import Any, Callable
 import numpy as np
 
 from virtspec_mi.budgets.functionals import allocate_jointly
-from virtspec_mi.applications.targets.measure import (_certified_colour, _colour_values, _fates, _trace, add_counts,
-                                                      check_certified, plan_target, spent_readings, take_target)
+from virtspec_mi.applications.targets.measure import (_certified_colour, _colour_values, _fates, _trace, check_certified,
+                                                      plan_target, spent_readings, take_target)
 from virtspec_mi.applications.targets.measure import measure_target as checked_target
 from virtspec_mi.runtime.scene import LoadedScene
 from virtspec_mi.applications.targets.result import DerivedResult
@@ -246,7 +246,7 @@ def take_sequential(bench: Any, settings: Settings, target: Target, *, scene: st
         seconds_traced += tally.seconds
         part = np.zeros(len(used))
         part[traced] = _fates(tally.counts, quantity)
-        add_counts(total, tally.counts, traced)
+        total.add(traced, tally.counts)
         for sequence in sequences:
             sequence.record(batch, part)
         spent += batch
